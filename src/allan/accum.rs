@@ -1,0 +1,1 @@
+//! Streaming accumulators (work in progress).

@@ -1,0 +1,1 @@
+//! Equivalent degrees of freedom and confidence intervals (work in progress).

@@ -1,0 +1,1 @@
+//! Power-law noise identification (work in progress).

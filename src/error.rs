@@ -1,0 +1,33 @@
+//! Errors that reach the user, and the exit status each maps to (CONTRACT.md: 2 for usage or
+//! configuration errors, 1 for anything else).
+
+use std::path::PathBuf;
+
+/// An error in what the user asked for or gave us: a bad option, a bad config or descriptor key,
+/// an unreadable input row. Exit status 2.
+#[derive(Debug, thiserror::Error)]
+pub enum UsageError {
+    #[error("{0}")]
+    Option(String),
+    #[error("{file}: line {line}: {problem}")]
+    Input {
+        file: PathBuf,
+        line: u64,
+        problem: String,
+    },
+    #[error("{file}: key `{key}`: {problem}")]
+    Config {
+        file: PathBuf,
+        key: String,
+        problem: String,
+    },
+}
+
+/// The exit status for an error chain: 2 when a [`UsageError`] is anywhere in it, else 1.
+pub fn exit_status(err: &anyhow::Error) -> i32 {
+    if err.chain().any(|e| e.downcast_ref::<UsageError>().is_some()) {
+        2
+    } else {
+        1
+    }
+}

@@ -1,0 +1,1 @@
+//! Text-column input (work in progress).

@@ -1,0 +1,25 @@
+//! allanscope: live, exact Allan-family statistics for inertial sensors on a test stand.
+//!
+//! # Layout
+//!
+//! The modules follow the flow of data, one stage each, and name the type that crosses
+//! each boundary:
+//!
+//! ```text
+//! input (text columns) / frame (descriptor, decoder)      bytes -> Sample
+//!   -> allan (accumulators, batch reference, edf)         Sample -> Curve
+//!   -> model (terms, fit, aggregate)                      Curve -> Fit
+//!   -> sink (JSON lines)                                  Curve/Fit -> record
+//! sim (noise, effects, writer)                            model file -> capture
+//! ```
+//!
+//! Numerical stages (`allan`, `model`, `sim`) are plain synchronous code: they never know where
+//! samples came from and never await. I/O lives at the edges (`input`, `frame`, `sink`, `cli`).
+#![forbid(unsafe_code)]
+
+pub mod allan;
+pub mod cli;
+pub mod error;
+pub mod input;
+pub mod model;
+pub mod sink;

@@ -1,0 +1,1 @@
+//! JSON-lines records (work in progress).
