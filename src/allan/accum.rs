@@ -1,1 +1,930 @@
-//! Streaming accumulators (work in progress).
+//! Streaming accumulators for the overlapping Allan, overlapping Hadamard and modified Allan
+//! variances (THEORY.md section 1), updated sample by sample and readable at any moment.
+//!
+//! # How it works
+//!
+//! Phase points `x_k` (the running sum of increments) and their running sum `C_k = x_0 + ... +
+//! x_{k-1}` (the "double running sum" MVAR needs: its inner sum of `m` second differences is a
+//! third difference of `C`) enter a *stream* at stride 1. Every cluster size `m` (a *level*)
+//! reads a stream of stride `s`: `s = 1` in exact mode, and in bounded mode the largest divisor
+//! of `m` not above `max(1, m/L)`, so each level sees at least `L` stream points per cluster
+//! (THEORY.md section 1, "Streaming with bounded memory"). Streams of larger strides are
+//! decimations of smaller ones. Each stream keeps only the points its levels still need (about
+//! `4L` of them in bounded mode), so memory does not grow with the run; in exact mode stream 1
+//! keeps everything and every level uses every difference.
+//!
+//! New points are processed in blocks (the stream's unprocessed tail), so the inner loops run
+//! over contiguous slices. Reading a curve first processes the tail.
+//!
+//! # Precision
+//!
+//! Integer counts ([`IntRepr`]): phase in `i64`, `C` in `i128`, both with wrapping arithmetic, so
+//! every difference is exact (a difference is exact modulo 2^64 or 2^128 and its true value is far
+//! smaller). The phase of a 24-hour 1 kHz run of `i32` increments stays below `8.64e7 * 2^31 <
+//! 2^63`; third differences of `C` at `m <= 2^30` stay below `2^95`. Floating input
+//! ([`FloatRepr`]): phase and `C` are double-double numbers (about 106 bits), and differences are
+//! taken as nested first differences of the high and low parts, so cancellation happens between
+//! nearly equal doubles, which is exact (Sterbenz). Sums of squares use four partial sums per
+//! block and a compensated sum across blocks.
+//!
+//! # Gaps
+//!
+//! A gap (lost frames, an empty or NaN row) ends the phase segment: the phase after it is known
+//! only up to a constant, so no difference spans it (THEORY.md section 1, "Gaps"). Sums and counts
+//! carry on; the streams restart.
+
+use super::batch::CompensatedSum;
+use super::Stat;
+
+/// Which statistics to accumulate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StatSet {
+    pub avar: bool,
+    pub hvar: bool,
+    pub mvar: bool,
+}
+
+impl StatSet {
+    pub const ALL: StatSet = StatSet {
+        avar: true,
+        hvar: true,
+        mvar: true,
+    };
+
+    pub fn contains(self, stat: Stat) -> bool {
+        match stat {
+            Stat::Avar => self.avar,
+            Stat::Hvar => self.hvar,
+            Stat::Mvar => self.mvar,
+        }
+    }
+
+    pub fn only(stat: Stat) -> StatSet {
+        StatSet {
+            avar: stat == Stat::Avar,
+            hvar: stat == Stat::Hvar,
+            mvar: stat == Stat::Mvar,
+        }
+    }
+}
+
+/// Overlap of the estimates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Overlap {
+    /// The exact overlapping estimate: every difference, memory grows with the run.
+    Full,
+    /// Bounded memory: differences at stride `max(1, m/L)` (`L >= 1`).
+    Bounded(u64),
+}
+
+/// The default `L` of bounded mode.
+///
+/// Chosen from Greenhall's edf of the decimated estimator against full overlap (measured in
+/// BENCHMARKS.md, "Choosing L"): at `L = 16` the overlapping ADEV keeps at least 97% of the full
+/// overlap's degrees of freedom for every power-law noise from white PM to random-walk FM, while
+/// memory per channel stays a few tens of kilobytes.
+pub const DEFAULT_L: u64 = 16;
+
+/// Which cluster sizes `m` to compute.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum TauSpec {
+    /// `m = 1, 2, 4, 8, ...`
+    Octave,
+    /// `m = 1, 2, 4, 10, 20, 40, 100, ...` (Stable32's decade spacing)
+    Decade,
+    /// An explicit list of cluster sizes.
+    List(Vec<u64>),
+}
+
+/// Largest cluster size considered by the open-ended tau specs: 2^40 samples is 35 years at 1 kHz.
+const MAX_M: u64 = 1 << 40;
+
+impl TauSpec {
+    /// The cluster sizes, ascending and without duplicates.
+    pub fn cluster_sizes(&self) -> Vec<u64> {
+        let mut ms: Vec<u64> = match self {
+            TauSpec::Octave => (0..=40).map(|j| 1u64 << j).collect(),
+            TauSpec::Decade => {
+                let mut v = Vec::new();
+                let mut decade = 1u64;
+                while decade <= MAX_M {
+                    for f in [1, 2, 4] {
+                        v.push(f * decade);
+                    }
+                    decade *= 10;
+                }
+                v
+            }
+            TauSpec::List(list) => list.iter().copied().filter(|&m| m >= 1).collect(),
+        };
+        ms.sort_unstable();
+        ms.dedup();
+        ms
+    }
+}
+
+/// Settings of one channel's accumulator.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AccumConfig {
+    /// Sampling step in seconds.
+    pub tau0_s: f64,
+    pub stats: StatSet,
+    pub overlap: Overlap,
+    pub taus: TauSpec,
+    /// Also accumulate the lag-1 autocorrelations used to identify the noise type per tau.
+    pub noise_id: bool,
+}
+
+impl AccumConfig {
+    pub fn new(tau0_s: f64) -> AccumConfig {
+        AccumConfig {
+            tau0_s,
+            stats: StatSet::ALL,
+            overlap: Overlap::Bounded(DEFAULT_L),
+            taus: TauSpec::Octave,
+            noise_id: true,
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Number representations
+
+/// A double-double number `hi + lo`, `|lo| <= ulp(hi)/2`.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Dd {
+    pub hi: f64,
+    pub lo: f64,
+}
+
+impl Dd {
+    /// `self + v`, with the rounding error of the sum carried in `lo` (Knuth's two-sum).
+    #[inline(always)]
+    fn add_f64(self, v: f64) -> Dd {
+        let s = self.hi + v;
+        let bb = s - self.hi;
+        let err = (self.hi - (s - bb)) + (v - bb);
+        Dd::renorm(s, err + self.lo)
+    }
+
+    #[inline(always)]
+    fn add_dd(self, o: Dd) -> Dd {
+        let s = self.hi + o.hi;
+        let bb = s - self.hi;
+        let err = (self.hi - (s - bb)) + (o.hi - bb);
+        Dd::renorm(s, err + self.lo + o.lo)
+    }
+
+    #[inline(always)]
+    fn renorm(s: f64, e: f64) -> Dd {
+        let hi = s + e;
+        Dd {
+            hi,
+            lo: e - (hi - s),
+        }
+    }
+
+    pub fn value(self) -> f64 {
+        self.hi + self.lo
+    }
+}
+
+/// How phase and its running sum are represented for one kind of input.
+pub trait Repr: 'static {
+    /// One increment as it arrives.
+    type Inc: Copy;
+    /// A phase point.
+    type X: Copy + Default + std::fmt::Debug;
+    /// A point of the running sum of phase.
+    type C: Copy + Default + std::fmt::Debug;
+    fn zero_x() -> Self::X {
+        Self::X::default()
+    }
+    fn step(x: Self::X, d: Self::Inc) -> Self::X;
+    fn accumulate(c: Self::C, x: Self::X) -> Self::C;
+    /// `a - b`
+    fn d1(a: Self::X, b: Self::X) -> f64;
+    /// `a - 2b + c`
+    fn d2(a: Self::X, b: Self::X, c: Self::X) -> f64;
+    /// `a - 3b + 3c - d`
+    fn d3(a: Self::X, b: Self::X, c: Self::X, d: Self::X) -> f64;
+    /// `a - 3b + 3c - d` on the running sum.
+    fn c3(a: Self::C, b: Self::C, c: Self::C, d: Self::C) -> f64;
+}
+
+/// Integer counts, summed exactly.
+#[derive(Debug, Clone)]
+pub struct IntRepr;
+
+impl Repr for IntRepr {
+    type Inc = i64;
+    type X = i64;
+    type C = i128;
+    #[inline(always)]
+    fn step(x: i64, d: i64) -> i64 {
+        x.wrapping_add(d)
+    }
+    #[inline(always)]
+    fn accumulate(c: i128, x: i64) -> i128 {
+        c.wrapping_add(x as i128)
+    }
+    #[inline(always)]
+    fn d1(a: i64, b: i64) -> f64 {
+        a.wrapping_sub(b) as f64
+    }
+    #[inline(always)]
+    fn d2(a: i64, b: i64, c: i64) -> f64 {
+        a.wrapping_sub(b).wrapping_sub(b.wrapping_sub(c)) as f64
+    }
+    #[inline(always)]
+    fn d3(a: i64, b: i64, c: i64, d: i64) -> f64 {
+        let ab = a.wrapping_sub(b);
+        let bc = b.wrapping_sub(c);
+        let cd = c.wrapping_sub(d);
+        ab.wrapping_sub(bc)
+            .wrapping_sub(bc.wrapping_sub(cd)) as f64
+    }
+    #[inline(always)]
+    fn c3(a: i128, b: i128, c: i128, d: i128) -> f64 {
+        let ab = a.wrapping_sub(b);
+        let bc = b.wrapping_sub(c);
+        let cd = c.wrapping_sub(d);
+        ab.wrapping_sub(bc)
+            .wrapping_sub(bc.wrapping_sub(cd)) as f64
+    }
+}
+
+/// Floating-point increments or phase, carried in double-double.
+#[derive(Debug, Clone)]
+pub struct FloatRepr;
+
+/// Nested differences of double-double numbers: the high parts are subtracted first, pairwise
+/// between neighbours (exact when they are close), then the low parts.
+#[inline(always)]
+fn dd_d2(a: Dd, b: Dd, c: Dd) -> f64 {
+    let hi = (a.hi - b.hi) - (b.hi - c.hi);
+    let lo = (a.lo - b.lo) - (b.lo - c.lo);
+    hi + lo
+}
+
+#[inline(always)]
+fn dd_d3(a: Dd, b: Dd, c: Dd, d: Dd) -> f64 {
+    let (ab, bc, cd) = (a.hi - b.hi, b.hi - c.hi, c.hi - d.hi);
+    let hi = (ab - bc) - (bc - cd);
+    let (abl, bcl, cdl) = (a.lo - b.lo, b.lo - c.lo, c.lo - d.lo);
+    let lo = (abl - bcl) - (bcl - cdl);
+    hi + lo
+}
+
+impl Repr for FloatRepr {
+    type Inc = f64;
+    type X = Dd;
+    type C = Dd;
+    #[inline(always)]
+    fn step(x: Dd, d: f64) -> Dd {
+        x.add_f64(d)
+    }
+    #[inline(always)]
+    fn accumulate(c: Dd, x: Dd) -> Dd {
+        c.add_dd(x)
+    }
+    #[inline(always)]
+    fn d1(a: Dd, b: Dd) -> f64 {
+        (a.hi - b.hi) + (a.lo - b.lo)
+    }
+    #[inline(always)]
+    fn d2(a: Dd, b: Dd, c: Dd) -> f64 {
+        dd_d2(a, b, c)
+    }
+    #[inline(always)]
+    fn d3(a: Dd, b: Dd, c: Dd, d: Dd) -> f64 {
+        dd_d3(a, b, c, d)
+    }
+    #[inline(always)]
+    fn c3(a: Dd, b: Dd, c: Dd, d: Dd) -> f64 {
+        dd_d3(a, b, c, d)
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Streams and levels
+
+/// Points of one stream since the start of the segment, of which the first `base` were dropped.
+#[derive(Debug, Clone)]
+struct Buf<T> {
+    data: Vec<T>,
+    /// Segment-relative stream index of `data[0]`.
+    base: u64,
+    /// Index into `data` where this block's new points begin (for decimating children).
+    new_from: usize,
+}
+
+impl<T: Copy> Buf<T> {
+    fn new() -> Self {
+        Buf {
+            data: Vec::new(),
+            base: 0,
+            new_from: 0,
+        }
+    }
+    fn end(&self) -> u64 {
+        self.base + self.data.len() as u64
+    }
+    fn clear(&mut self) {
+        self.data.clear();
+        self.base = 0;
+        self.new_from = 0;
+    }
+    /// Drops points before segment index `keep_from`.
+    fn trim(&mut self, keep_from: u64) {
+        if keep_from > self.base {
+            let n = ((keep_from - self.base) as usize).min(self.data.len());
+            self.data.drain(..n);
+            self.base += n as u64;
+        }
+        self.new_from = self.data.len();
+    }
+}
+
+#[derive(Debug, Clone)]
+struct Stream<R: Repr> {
+    stride: u64,
+    /// Index of the stream this one decimates (itself for stride 1).
+    parent: usize,
+    /// `stride / parent.stride`.
+    factor: u64,
+    x: Buf<R::X>,
+    c: Buf<R::C>,
+    /// Whether any level reads the `C` points.
+    needs_c: bool,
+}
+
+/// Sum of squared differences of one statistic at one level.
+#[derive(Debug, Clone, Copy, Default)]
+struct SqSum {
+    sum: CompensatedSum,
+    count: u64,
+    /// Segment-relative stream index of the next difference to take.
+    next: u64,
+}
+
+/// Moments for the lag-1 autocorrelation of one differenced series (noise identification).
+#[derive(Debug, Clone, Copy, Default)]
+struct LagMoments {
+    /// The first value seen, subtracted from every value so the moments do not cancel.
+    shift: Option<f64>,
+    n: u64,
+    sum: f64,
+    sum_sq: f64,
+    sum_lag: f64,
+}
+
+impl LagMoments {
+    #[inline(always)]
+    fn add(&mut self, a: f64, b: f64) {
+        let s = *self.shift.get_or_insert(a);
+        let (a, b) = (a - s, b - s);
+        self.n += 1;
+        self.sum += a + b;
+        self.sum_sq += a * a + b * b;
+        self.sum_lag += a * b;
+    }
+
+    /// Lag-1 autocorrelation of the series, its mean removed.
+    fn r1(&self) -> Option<f64> {
+        if self.n < 2 {
+            return None;
+        }
+        let n = self.n as f64;
+        let mean = self.sum / (2.0 * n);
+        let var = self.sum_sq / (2.0 * n) - mean * mean;
+        let cov = self.sum_lag / n - mean * mean;
+        (var > 0.0).then(|| (cov / var).clamp(-1.0, 1.0))
+    }
+}
+
+#[derive(Debug, Clone)]
+struct Level {
+    m: u64,
+    stream: usize,
+    /// Cluster size in stream points: `m / stride`.
+    mp: u64,
+    avar: SqSum,
+    hvar: SqSum,
+    mvar: SqSum,
+    /// Next term of the noise-identification moments (a multiple of `mp`; span `4 mp`).
+    nid_next: u64,
+    lag: [LagMoments; 3],
+}
+
+/// What a level holds at the moment it is read.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LevelReading {
+    /// Cluster size.
+    pub m: u64,
+    /// Samples between successive differences (1 = full overlap).
+    pub stride: u64,
+    /// Averaging time in seconds.
+    pub tau_s: f64,
+    /// `(variance in u^2/s^2, number of differences)` per statistic, `None` when no difference
+    /// has been taken yet or the statistic is off.
+    pub avar: Option<(f64, u64)>,
+    pub hvar: Option<(f64, u64)>,
+    pub mvar: Option<(f64, u64)>,
+    /// Lag-1 autocorrelations (lag `m`) of the `m`-averaged rate and of its first and second
+    /// differences, for noise identification.
+    pub lag1: [Option<f64>; 3],
+}
+
+impl LevelReading {
+    pub fn get(&self, stat: Stat) -> Option<(f64, u64)> {
+        match stat {
+            Stat::Avar => self.avar,
+            Stat::Hvar => self.hvar,
+            Stat::Mvar => self.mvar,
+        }
+    }
+}
+
+/// Points of stream 1 gathered before the levels are updated: large enough that the inner loops
+/// run over long slices, small enough to stay in L1 cache with its history.
+const BLOCK: usize = 2048;
+
+/// The streaming accumulator of one channel, generic over the number representation.
+#[derive(Debug, Clone)]
+pub struct Engine<R: Repr> {
+    cfg: AccumConfig,
+    streams: Vec<Stream<R>>,
+    levels: Vec<Level>,
+    /// Is a phase segment open (false at the start and after a gap)?
+    open: bool,
+    x_cur: R::X,
+    c_cur: R::C,
+    /// Phase points received in all segments.
+    n_points: u64,
+    /// Increments accounted for, gaps included (for `t_data`).
+    n_steps: u64,
+    /// Number of segments started.
+    segments: u64,
+}
+
+impl<R: Repr> Engine<R> {
+    pub fn new(cfg: AccumConfig) -> Engine<R> {
+        let ms = cfg.taus.cluster_sizes();
+        let mut strides: Vec<u64> = vec![1];
+        let mut level_strides = Vec::with_capacity(ms.len());
+        for &m in &ms {
+            let s = match cfg.overlap {
+                Overlap::Full => 1,
+                Overlap::Bounded(l) => largest_divisor_at_most(m, (m / l.max(1)).max(1)),
+            };
+            level_strides.push(s);
+            if !strides.contains(&s) {
+                strides.push(s);
+            }
+        }
+        strides.sort_unstable();
+        let mut streams: Vec<Stream<R>> = Vec::with_capacity(strides.len());
+        for (i, &s) in strides.iter().enumerate() {
+            // Parent: the largest smaller stride that divides this one.
+            let parent = (0..i).rev().find(|&j| s % strides[j] == 0).unwrap_or(0);
+            streams.push(Stream {
+                stride: s,
+                parent,
+                factor: if i == 0 { 1 } else { s / strides[parent] },
+                x: Buf::new(),
+                c: Buf::new(),
+                needs_c: false,
+            });
+        }
+        let levels: Vec<Level> = ms
+            .iter()
+            .zip(&level_strides)
+            .map(|(&m, &s)| {
+                let stream = strides.iter().position(|&t| t == s).unwrap_or(0);
+                Level {
+                    m,
+                    stream,
+                    mp: m / s,
+                    avar: SqSum::default(),
+                    hvar: SqSum::default(),
+                    mvar: SqSum::default(),
+                    nid_next: 0,
+                    lag: [LagMoments::default(); 3],
+                }
+            })
+            .collect();
+        if cfg.stats.mvar {
+            // A stream carries C points if it, or any stream decimated from it, feeds an MVAR level.
+            for lv in &levels {
+                let mut s = lv.stream;
+                loop {
+                    streams[s].needs_c = true;
+                    if s == 0 {
+                        break;
+                    }
+                    s = streams[s].parent;
+                }
+            }
+        }
+        Engine {
+            cfg,
+            streams,
+            levels,
+            open: false,
+            x_cur: R::zero_x(),
+            c_cur: R::C::default(),
+            n_points: 0,
+            n_steps: 0,
+            segments: 0,
+        }
+    }
+
+    pub fn config(&self) -> &AccumConfig {
+        &self.cfg
+    }
+
+    /// Phase points received so far, all segments together.
+    pub fn phase_points(&self) -> u64 {
+        self.n_points
+    }
+
+    /// Seconds of data accounted for, gaps included.
+    pub fn t_data_s(&self) -> f64 {
+        self.n_steps as f64 * self.cfg.tau0_s
+    }
+
+    /// Number of contiguous segments so far.
+    pub fn segments(&self) -> u64 {
+        self.segments
+    }
+
+    /// Feeds one increment `d_k` (THEORY.md section 1).
+    #[inline]
+    pub fn push_increment(&mut self, d: R::Inc) {
+        if !self.open {
+            self.start_segment(R::zero_x());
+        }
+        let x = R::step(self.x_cur, d);
+        self.append_point(x);
+        self.n_steps += 1;
+    }
+
+    /// Feeds `missing` lost increments: the segment ends here.
+    pub fn push_gap(&mut self, missing: u64) {
+        if missing == 0 {
+            return;
+        }
+        self.close_segment();
+        self.n_steps += missing;
+    }
+
+    /// Ends the current phase segment without accounting for time (a phase point was missing).
+    pub fn break_segment(&mut self) {
+        self.close_segment();
+    }
+
+    /// Feeds one phase point directly (phase input).
+    pub fn push_phase(&mut self, x: R::X) {
+        if !self.open {
+            self.start_segment(x);
+        } else {
+            self.append_point(x);
+            self.n_steps += 1;
+        }
+    }
+
+    fn start_segment(&mut self, x0: R::X) {
+        for s in &mut self.streams {
+            s.x.clear();
+            s.c.clear();
+        }
+        for lv in &mut self.levels {
+            lv.avar.next = 0;
+            lv.hvar.next = 0;
+            lv.mvar.next = 0;
+            lv.nid_next = 0;
+        }
+        self.open = true;
+        self.segments += 1;
+        self.x_cur = x0;
+        self.c_cur = R::C::default();
+        // C_0 = 0 and C_1 = x_0: the running sum is one point ahead of the phase, so that with
+        // P phase points the C stream holds C_0..C_P and MVAR has P - 3m + 1 terms.
+        let s0 = &mut self.streams[0];
+        s0.x.data.push(x0);
+        if s0.needs_c {
+            s0.c.data.push(self.c_cur);
+            self.c_cur = R::accumulate(self.c_cur, x0);
+            s0.c.data.push(self.c_cur);
+        }
+        self.n_points += 1;
+    }
+
+    #[inline(always)]
+    fn append_point(&mut self, x: R::X) {
+        let s0 = &mut self.streams[0];
+        if s0.needs_c {
+            self.c_cur = R::accumulate(self.c_cur, x);
+            s0.c.data.push(self.c_cur);
+        }
+        s0.x.data.push(x);
+        self.x_cur = x;
+        self.n_points += 1;
+        if s0.x.data.len() - s0.x.new_from >= BLOCK {
+            self.process();
+        }
+    }
+
+    fn close_segment(&mut self) {
+        if self.open {
+            self.process();
+            self.open = false;
+        }
+    }
+
+    /// Decimates the new points down the streams, updates every level, trims the streams.
+    fn process(&mut self) {
+        // Decimation, parents before children (streams are sorted by stride).
+        for i in 1..self.streams.len() {
+            let (head, tail) = self.streams.split_at_mut(i);
+            let child = &mut tail[0];
+            let parent = &head[child.parent];
+            decimate(&parent.x, &mut child.x, child.factor);
+            if child.needs_c {
+                decimate(&parent.c, &mut child.c, child.factor);
+            }
+        }
+        let stats = self.cfg.stats;
+        let nid = self.cfg.noise_id;
+        for lv in &mut self.levels {
+            let st = &self.streams[lv.stream];
+            update_level::<R>(lv, st, stats, nid);
+        }
+        // Trim: each stream keeps what its levels still need.
+        let mut keep: Vec<u64> = self.streams.iter().map(|s| s.x.end()).collect();
+        let mut keep_c: Vec<u64> = self.streams.iter().map(|s| s.c.end()).collect();
+        for lv in &self.levels {
+            let k = &mut keep[lv.stream];
+            if stats.avar {
+                *k = (*k).min(lv.avar.next);
+            }
+            if stats.hvar {
+                *k = (*k).min(lv.hvar.next);
+            }
+            if nid {
+                *k = (*k).min(lv.nid_next);
+            }
+            if stats.mvar {
+                keep_c[lv.stream] = keep_c[lv.stream].min(lv.mvar.next);
+            }
+        }
+        for (i, s) in self.streams.iter_mut().enumerate() {
+            // A child decimates only new points, so nothing is kept for children.
+            s.x.trim(keep[i]);
+            s.c.trim(keep_c[i]);
+        }
+    }
+
+    /// Processes pending points and reads every level.
+    pub fn read(&mut self) -> Vec<LevelReading> {
+        if self.open {
+            self.process();
+        }
+        let tau0 = self.cfg.tau0_s;
+        let stats = self.cfg.stats;
+        self.levels
+            .iter()
+            .map(|lv| {
+                let tau = lv.m as f64 * tau0;
+                let stride = self.streams[lv.stream].stride;
+                let fin = |q: &SqSum, on: bool, denom: f64| {
+                    (on && q.count > 0).then(|| (q.sum.value() / (denom * q.count as f64), q.count))
+                };
+                let mf = lv.m as f64;
+                LevelReading {
+                    m: lv.m,
+                    stride,
+                    tau_s: tau,
+                    // THEORY.md section 1: AVAR divides by 2 tau^2, HVAR by 6 tau^2, MVAR by 2 m^2 tau^2.
+                    avar: fin(&lv.avar, stats.avar, 2.0 * tau * tau),
+                    hvar: fin(&lv.hvar, stats.hvar, 6.0 * tau * tau),
+                    mvar: fin(&lv.mvar, stats.mvar, 2.0 * mf * mf * tau * tau),
+                    lag1: [lv.lag[0].r1(), lv.lag[1].r1(), lv.lag[2].r1()],
+                }
+            })
+            .filter(|r| r.avar.is_some() || r.hvar.is_some() || r.mvar.is_some())
+            .collect()
+    }
+
+    /// Bytes held by the streams (the part of memory that could grow with the run).
+    pub fn stream_bytes(&self) -> usize {
+        self.streams
+            .iter()
+            .map(|s| {
+                s.x.data.capacity() * std::mem::size_of::<R::X>()
+                    + s.c.data.capacity() * std::mem::size_of::<R::C>()
+            })
+            .sum()
+    }
+}
+
+impl Engine<FloatRepr> {
+    /// Feeds one phase value in u (phase input); a non-finite value ends the segment.
+    pub fn push_phase_f64(&mut self, x: f64) {
+        if x.is_finite() {
+            self.push_phase(Dd { hi: x, lo: 0.0 });
+        } else {
+            self.break_segment();
+        }
+    }
+}
+
+fn largest_divisor_at_most(m: u64, cap: u64) -> u64 {
+    if cap >= m {
+        return m;
+    }
+    (1..=cap).rev().find(|d| m % d == 0).unwrap_or(1)
+}
+
+/// Appends to `child` every `factor`-th point of `parent`'s new points (segment-relative index
+/// divisible by `factor`).
+fn decimate<T: Copy>(parent: &Buf<T>, child: &mut Buf<T>, factor: u64) {
+    let first_new = parent.base + parent.new_from as u64;
+    let end = parent.end();
+    // First index >= first_new that is a multiple of factor.
+    let mut k = first_new.div_ceil(factor) * factor;
+    while k < end {
+        child.data.push(parent.data[(k - parent.base) as usize]);
+        k += factor;
+    }
+}
+
+/// Sum of `f(i)^2` for `i in 0..n`, four partial sums so the loop can run on vector lanes.
+#[inline(always)]
+fn sum_sq(n: usize, f: impl Fn(usize) -> f64) -> f64 {
+    let mut acc = [0.0f64; 4];
+    let n4 = n - n % 4;
+    let mut i = 0;
+    while i < n4 {
+        for (l, a) in acc.iter_mut().enumerate() {
+            let v = f(i + l);
+            *a += v * v;
+        }
+        i += 4;
+    }
+    let mut rest = 0.0;
+    for j in n4..n {
+        let v = f(j);
+        rest += v * v;
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + rest
+}
+
+fn update_level<R: Repr>(lv: &mut Level, st: &Stream<R>, stats: StatSet, nid: bool) {
+    let mp = lv.mp;
+    let x = &st.x;
+    // AVAR: x_{k+2m} - 2 x_{k+m} + x_k (THEORY.md section 1).
+    if stats.avar {
+        let q = &mut lv.avar;
+        if x.end() > q.next + 2 * mp {
+            let n = (x.end() - 2 * mp - q.next) as usize;
+            let o = (q.next - x.base) as usize;
+            let m = mp as usize;
+            let a = &x.data[o..o + n];
+            let b = &x.data[o + m..o + m + n];
+            let c = &x.data[o + 2 * m..o + 2 * m + n];
+            q.sum.add(sum_sq(n, |i| R::d2(c[i], b[i], a[i])));
+            q.count += n as u64;
+            q.next += n as u64;
+        }
+    }
+    // HVAR: x_{k+3m} - 3 x_{k+2m} + 3 x_{k+m} - x_k (THEORY.md section 1).
+    if stats.hvar {
+        let q = &mut lv.hvar;
+        if x.end() > q.next + 3 * mp {
+            let n = (x.end() - 3 * mp - q.next) as usize;
+            let o = (q.next - x.base) as usize;
+            let m = mp as usize;
+            let a = &x.data[o..o + n];
+            let b = &x.data[o + m..o + m + n];
+            let c = &x.data[o + 2 * m..o + 2 * m + n];
+            let d = &x.data[o + 3 * m..o + 3 * m + n];
+            q.sum.add(sum_sq(n, |i| R::d3(d[i], c[i], b[i], a[i])));
+            q.count += n as u64;
+            q.next += n as u64;
+        }
+    }
+    // MVAR: the inner sum of m second differences is C_{j+3m} - 3C_{j+2m} + 3C_{j+m} - C_j
+    // (THEORY.md section 1 with C the running sum of phase); with stride s the stream holds
+    // C at every s-th index, and mp = m/s.
+    if stats.mvar {
+        let q = &mut lv.mvar;
+        let c = &st.c;
+        if c.end() > q.next + 3 * mp {
+            let n = (c.end() - 3 * mp - q.next) as usize;
+            let o = (q.next - c.base) as usize;
+            let m = mp as usize;
+            let a = &c.data[o..o + n];
+            let b = &c.data[o + m..o + m + n];
+            let cc = &c.data[o + 2 * m..o + 2 * m + n];
+            let d = &c.data[o + 3 * m..o + 3 * m + n];
+            q.sum.add(sum_sq(n, |i| R::c3(d[i], cc[i], b[i], a[i])));
+            q.count += n as u64;
+            q.next += n as u64;
+        }
+    }
+    // Noise identification (Riley and Greenhall 2004): lag-1 products of the non-overlapping
+    // m-averaged rate (first phase differences at cluster m, taken every m samples) and of its
+    // first and second differences (second and third phase differences).
+    if nid {
+        let m = mp as usize;
+        while x.end() > lv.nid_next + 4 * mp {
+            let o = (lv.nid_next - x.base) as usize;
+            let p = |j: usize| x.data[o + j * m];
+            let (x0, x1, x2, x3, x4) = (p(0), p(1), p(2), p(3), p(4));
+            lv.lag[0].add(R::d1(x1, x0), R::d1(x2, x1));
+            lv.lag[1].add(R::d2(x2, x1, x0), R::d2(x3, x2, x1));
+            lv.lag[2].add(R::d3(x3, x2, x1, x0), R::d3(x4, x3, x2, x1));
+            lv.nid_next += mp;
+        }
+    }
+}
+
+/// A channel's accumulator for whichever kind of input it receives.
+#[derive(Debug, Clone)]
+pub enum ChannelAccumulator {
+    /// Integer counts (frame fields); the reading is scaled by `scale` (u per count).
+    Counts { engine: Engine<IntRepr>, scale: f64 },
+    /// Floating increments or phase in u.
+    Real(Engine<FloatRepr>),
+}
+
+impl ChannelAccumulator {
+    pub fn counts(cfg: AccumConfig, scale: f64) -> Self {
+        ChannelAccumulator::Counts {
+            engine: Engine::new(cfg),
+            scale,
+        }
+    }
+
+    pub fn real(cfg: AccumConfig) -> Self {
+        ChannelAccumulator::Real(Engine::new(cfg))
+    }
+
+    pub fn push_gap(&mut self, missing: u64) {
+        match self {
+            ChannelAccumulator::Counts { engine, .. } => engine.push_gap(missing),
+            ChannelAccumulator::Real(e) => e.push_gap(missing),
+        }
+    }
+
+    pub fn phase_points(&self) -> u64 {
+        match self {
+            ChannelAccumulator::Counts { engine, .. } => engine.phase_points(),
+            ChannelAccumulator::Real(e) => e.phase_points(),
+        }
+    }
+
+    pub fn t_data_s(&self) -> f64 {
+        match self {
+            ChannelAccumulator::Counts { engine, .. } => engine.t_data_s(),
+            ChannelAccumulator::Real(e) => e.t_data_s(),
+        }
+    }
+
+    pub fn config(&self) -> &AccumConfig {
+        match self {
+            ChannelAccumulator::Counts { engine, .. } => engine.config(),
+            ChannelAccumulator::Real(e) => e.config(),
+        }
+    }
+
+    pub fn stream_bytes(&self) -> usize {
+        match self {
+            ChannelAccumulator::Counts { engine, .. } => engine.stream_bytes(),
+            ChannelAccumulator::Real(e) => e.stream_bytes(),
+        }
+    }
+
+    /// Readings in u^2/s^2 (counts scaled).
+    pub fn read(&mut self) -> Vec<LevelReading> {
+        match self {
+            ChannelAccumulator::Counts { engine, scale } => {
+                let s2 = *scale * *scale;
+                let sc = |v: Option<(f64, u64)>| v.map(|(var, n)| (var * s2, n));
+                engine
+                    .read()
+                    .into_iter()
+                    .map(|r| LevelReading {
+                        avar: sc(r.avar),
+                        hvar: sc(r.hvar),
+                        mvar: sc(r.mvar),
+                        ..r
+                    })
+                    .collect()
+            }
+            ChannelAccumulator::Real(e) => e.read(),
+        }
+    }
+}

@@ -1,0 +1,93 @@
+//! Helpers shared by the integration tests: where the reference data lives, a reader for
+//! Stable32 result tables, and the named tolerances.
+#![allow(dead_code)]
+
+use std::io::{BufRead, BufReader, Read};
+use std::path::{Path, PathBuf};
+
+/// Relative agreement of the streaming estimate with the batch formulas (issue: 1e-12).
+pub const STREAM_VS_BATCH_REL: f64 = 1e-12;
+
+/// The crate's own fixtures folder.
+pub fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures")
+}
+
+/// `../shared/reference` beside the repository, when it exists. Tests that need it print a
+/// plain message and return when it does not (CI clones main with shared/ beside it).
+pub fn shared_reference() -> Option<PathBuf> {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/reference");
+    if p.is_dir() {
+        Some(p)
+    } else {
+        eprintln!(
+            "NOTE: {} does not exist; the tests on the large reference recordings are skipped",
+            p.display()
+        );
+        None
+    }
+}
+
+/// Numbers of a text file, one per line (first column), `#` lines and blank lines skipped;
+/// gzip when the name ends in `.gz`.
+pub fn read_column(path: &Path) -> Vec<f64> {
+    let file = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let reader: Box<dyn Read> = if path.extension().is_some_and(|e| e == "gz") {
+        Box::new(flate2::read::GzDecoder::new(file))
+    } else {
+        Box::new(file)
+    };
+    let mut out = Vec::new();
+    for line in BufReader::new(reader).lines() {
+        let line = line.unwrap();
+        let t = line.trim();
+        if t.is_empty() || t.starts_with('#') {
+            continue;
+        }
+        let first = t.split_whitespace().next().unwrap();
+        out.push(first.parse::<f64>().unwrap_or_else(|e| panic!("{}: {t}: {e}", path.display())));
+    }
+    out
+}
+
+/// One row of a Stable32 table: `AF Tau # Alpha MinSigma Sigma MaxSigma`.
+#[derive(Debug, Clone, Copy)]
+pub struct Stable32Row {
+    pub af: u64,
+    pub tau: f64,
+    pub n: u64,
+    pub alpha: i32,
+    pub min_sigma: f64,
+    pub sigma: f64,
+    pub max_sigma: f64,
+}
+
+/// Reads a Stable32 table (Latin-1 text, `#` header lines).
+pub fn read_stable32(path: &Path) -> Vec<Stable32Row> {
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let text: String = bytes.iter().map(|&b| b as char).collect();
+    text.lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with('#'))
+        .map(|l| {
+            let c: Vec<&str> = l.split_whitespace().collect();
+            assert_eq!(c.len(), 7, "{}: {l}", path.display());
+            Stable32Row {
+                af: c[0].parse().unwrap(),
+                tau: c[1].parse().unwrap(),
+                n: c[2].parse().unwrap(),
+                alpha: c[3].parse().unwrap(),
+                min_sigma: c[4].parse().unwrap(),
+                sigma: c[5].parse().unwrap(),
+                max_sigma: c[6].parse().unwrap(),
+            }
+        })
+        .collect()
+}
+
+/// Half a unit in the last of `digits` significant digits of `printed`: the most a correctly
+/// rounded print can differ from the value behind it.
+pub fn half_unit(printed: f64, digits: i32) -> f64 {
+    let exp = printed.abs().log10().floor() as i32;
+    0.5 * 10f64.powi(exp - (digits - 1))
+}
