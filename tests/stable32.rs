@@ -66,7 +66,11 @@ fn check_table(data: Data, stat: Stat, table: &Path, tau0: f64) -> f64 {
         );
         worst = worst.max((sigma - row.sigma).abs() / row.sigma);
     }
-    eprintln!("{}: {} rows, worst relative {worst:.2e}", table.display(), rows.len());
+    eprintln!(
+        "{}: {} rows, worst relative {worst:.2e}",
+        table.display(),
+        rows.len()
+    );
     worst
 }
 
@@ -178,7 +182,10 @@ fn nbs14_sp1065() {
     let y1000 = read_column(&dir.join("nbs14_1000pt_freq.txt"));
     assert_eq!((x10.len(), y1000.len()), (10, 1000));
     let mut checked = 0;
-    for line in refs.lines().filter(|l| !l.starts_with('#') && !l.trim().is_empty()) {
+    for line in refs
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+    {
         let c: Vec<&str> = line.split_whitespace().collect();
         let stat = match c[1] {
             "OADEV" => Stat::Avar,
@@ -196,7 +203,13 @@ fn nbs14_sp1065() {
         let got = run(data, stat, vec![m], 1.0);
         let sigma = got[0].1;
         // The published values carry 7 significant digits.
-        let digits = c[3].trim_start_matches('-').replace(['.', '-'], "").split('e').next().unwrap().len() as i32;
+        let digits = c[3]
+            .trim_start_matches('-')
+            .replace(['.', '-'], "")
+            .split('e')
+            .next()
+            .unwrap()
+            .len() as i32;
         let tol = half_unit(expected, digits.min(7)) + 1e-9 * expected;
         assert!(
             (sigma - expected).abs() <= tol,

@@ -241,16 +241,14 @@ impl Repr for IntRepr {
         let ab = a.wrapping_sub(b);
         let bc = b.wrapping_sub(c);
         let cd = c.wrapping_sub(d);
-        ab.wrapping_sub(bc)
-            .wrapping_sub(bc.wrapping_sub(cd)) as f64
+        ab.wrapping_sub(bc).wrapping_sub(bc.wrapping_sub(cd)) as f64
     }
     #[inline(always)]
     fn c3(a: i128, b: i128, c: i128, d: i128) -> f64 {
         let ab = a.wrapping_sub(b);
         let bc = b.wrapping_sub(c);
         let cd = c.wrapping_sub(d);
-        ab.wrapping_sub(bc)
-            .wrapping_sub(bc.wrapping_sub(cd)) as f64
+        ab.wrapping_sub(bc).wrapping_sub(bc.wrapping_sub(cd)) as f64
     }
 }
 
@@ -740,11 +738,28 @@ impl Engine<FloatRepr> {
     }
 }
 
+/// The largest divisor of `m` not above `cap` (`cap >= 1`): the stride of a level in bounded mode.
 fn largest_divisor_at_most(m: u64, cap: u64) -> u64 {
     if cap >= m {
         return m;
     }
-    (1..=cap).rev().find(|d| m % d == 0).unwrap_or(1)
+    // m / d is a divisor <= cap for every divisor d >= m / cap; the smallest such d gives the
+    // largest one. Divisors come in pairs around sqrt(m), so search each side up to sqrt(m).
+    let mut d = m.div_ceil(cap);
+    while d.saturating_mul(d) <= m {
+        if m % d == 0 {
+            return m / d;
+        }
+        d += 1;
+    }
+    let mut e = cap.min(m.isqrt());
+    while e > 1 {
+        if m % e == 0 {
+            return e;
+        }
+        e -= 1;
+    }
+    1
 }
 
 /// Appends to `child` every `factor`-th point of `parent`'s new points (segment-relative index
@@ -926,5 +941,23 @@ impl ChannelAccumulator {
             }
             ChannelAccumulator::Real(e) => e.read(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::largest_divisor_at_most;
+
+    #[test]
+    fn strides_are_the_largest_divisors_under_the_cap() {
+        // Checked against a brute-force scan.
+        for m in 1..400u64 {
+            for cap in 1..=m {
+                let brute = (1..=cap).rev().find(|d| m % d == 0).unwrap();
+                assert_eq!(largest_divisor_at_most(m, cap), brute, "m={m} cap={cap}");
+            }
+        }
+        assert_eq!(largest_divisor_at_most(1 << 40, (1 << 40) / 3), 1 << 38);
+        assert_eq!(largest_divisor_at_most(1_000_003, 62), 1, "a prime");
     }
 }

@@ -45,7 +45,11 @@ pub fn read_column(path: &Path) -> Vec<f64> {
             continue;
         }
         let first = t.split_whitespace().next().unwrap();
-        out.push(first.parse::<f64>().unwrap_or_else(|e| panic!("{}: {t}: {e}", path.display())));
+        out.push(
+            first
+                .parse::<f64>()
+                .unwrap_or_else(|e| panic!("{}: {t}: {e}", path.display())),
+        );
     }
     out
 }
