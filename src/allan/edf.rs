@@ -403,6 +403,50 @@ mod tests {
     }
 
     #[test]
+    fn white_fm_strided_is_the_exact_covariance_sum() {
+        // THEORY.md section 4: edf = 2 AVAR^2 / Var(AVAR_hat) = M^2 c(0)^2 / sum_{k,l} c(k-l)^2
+        // for Gaussian differences z_k taken every `stride` samples. For white FM (unit variance
+        // per sample) c(h) = 2m - 3|h| for |h| <= m and -(2m - |h|) for m <= |h| <= 2m (the
+        // autocorrelation of the -1/+1 window of length 2m). With m (d+1) > J_MAX the paper's
+        // filter is F = infinity, sampled Brownian phase, which is this process exactly, and its
+        // lags reach 3m > 2m, so nothing is cut off.
+        let m = 64u64;
+        let n = 64 * 40 + 1;
+        let c = |h: i64| -> f64 {
+            let (h, m) = (h.abs(), m as i64);
+            if h <= m {
+                (2 * m - 3 * h) as f64
+            } else if h <= 2 * m {
+                -((2 * m - h) as f64)
+            } else {
+                0.0
+            }
+        };
+        let mut last = f64::INFINITY;
+        for stride in [1u64, 2, 8, 32, 64] {
+            let mt = 1 + (n - 1 - 2 * m) / stride; // differences that fit
+            let mut sum = 0.0;
+            for k in 0..mt as i64 {
+                for l in 0..mt as i64 {
+                    sum += c((k - l) * stride as i64).powi(2);
+                }
+            }
+            let exact = (mt as f64 * c(0)).powi(2) / sum;
+            let got = edf(Stat::Avar, 0, m, stride, n).unwrap();
+            // Full overlap has J = 3m = 192 > J_MAX lags: the paper's table 2 takes over.
+            let tol = if 3 * m / stride > J_MAX {
+                TABLE_FIT
+            } else {
+                EXACT
+            };
+            assert!(rel(got, exact) < tol, "stride {stride}: {got} vs {exact}");
+            // Sparser differences never add degrees of freedom.
+            assert!(got <= last, "stride {stride}: {got} > {last}");
+            last = got;
+        }
+    }
+
+    #[test]
     fn white_pm_non_overlapped_is_the_closed_form() {
         // Non-overlapped AVAR of white PM: z_k = x_{k+2} - 2x_{k+1} + x_k (in units of m) has
         // correlations -4/6 and 1/6 at lags 1 and 2, so
