@@ -87,7 +87,7 @@ fn stat_of(name: &str) -> Stat {
 
 #[test]
 fn phase_dat_octave_and_all_tau() {
-    let dir = fixtures().join("stable32");
+    let dir = fixtures().join("stable32/phasedat");
     let x = read_column(&dir.join("PHASE.DAT"));
     assert_eq!(x.len(), 1001);
     for t in [
