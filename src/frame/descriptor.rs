@@ -1250,4 +1250,148 @@ mod tests {
             assert_eq!(embedded.name, *name);
         }
     }
+
+    fn problems(text: &str) -> Vec<(String, String, String)> {
+        let e =
+            FrameDescriptor::from_toml_str(text, Path::new("bad.toml")).expect_err("should fail");
+        e.problems
+            .iter()
+            .map(|p| match p {
+                UsageError::Config { file, key, problem } => {
+                    (file.display().to_string(), key.clone(), problem.clone())
+                }
+                other => panic!("not a config error: {other}"),
+            })
+            .collect()
+    }
+
+    /// Four independent mistakes are all reported, each with the file and its key.
+    #[test]
+    fn several_problems_reported_together() {
+        let text = r#"
+rate_hz = 250.0
+length = 42
+colour = "red"
+[sync]
+bytes = [0xAA, 0x55]
+[checksum]
+algorithm = "CRC-16/FOO"
+range = [2, 39]
+at = 40
+[[channels]]
+name = "g1"
+offset = 4
+type = "i33"
+scale = 0.004
+unit = "arcsec"
+kind = "increment"
+[[channels]]
+name = "g2"
+offset = 40
+type = "i32"
+scale = 0.004
+unit = "arcsec"
+kind = "increment"
+"#;
+        let p = problems(text);
+        let keys: Vec<&str> = p.iter().map(|(_, k, _)| k.as_str()).collect();
+        assert_eq!(
+            keys,
+            vec![
+                "checksum.algorithm",
+                "channels[0].type",
+                "channels[1].offset",
+                "colour"
+            ],
+            "{p:?}"
+        );
+        assert!(p.iter().all(|(f, _, _)| f == "bad.toml"));
+        assert!(p[0].2.contains("unknown checksum `CRC-16/FOO`"));
+        assert!(p[1].2.contains("unknown type `i33`"));
+        assert!(p[2].2.contains("runs past the message length 42"));
+        assert!(p[3].2.contains("unknown key"));
+    }
+
+    /// Key paths inside [[messages]]; a bad [interleave] name; the error maps to exit status 2.
+    #[test]
+    fn message_key_paths_and_exit_status() {
+        let text = r#"
+rate_hz = 100.0
+[sync]
+bytes = [0x0E]
+id_offset = 1
+[interleave]
+message = "nope"
+count = 5
+[[messages]]
+name = "inertial"
+id = [0x02]
+lenght = 44
+[messages.checksum]
+algorithm = "sum16"
+range = [0, 40]
+at = 42
+[[messages.channels]]
+name = "gx"
+offset = 18
+type = "i32"
+scale = 1.0
+unit = "rad"
+kind = "velocity"
+"#;
+        let p = problems(text);
+        let keys: Vec<&str> = p.iter().map(|(_, k, _)| k.as_str()).collect();
+        assert!(keys.contains(&"messages[0].length"), "{p:?}");
+        assert!(keys.contains(&"messages[0].lenght"), "{p:?}");
+        assert!(keys.contains(&"messages[0].channels[0].kind"), "{p:?}");
+        let e = FrameDescriptor::from_toml_str(text, Path::new("bad.toml")).expect_err("fails");
+        let msg = e.to_string();
+        assert!(
+            msg.contains("bad.toml: key `messages[0].lenght`: unknown key"),
+            "{msg}"
+        );
+        assert_eq!(crate::error::exit_status(&anyhow::Error::from(e)), 2);
+
+        // With the length fixed: the odd sum16 coverage and the unknown interleave name remain.
+        let fixed = text
+            .replace("lenght", "length")
+            .replace("velocity", "increment");
+        let p = problems(&fixed);
+        let keys: Vec<&str> = p.iter().map(|(_, k, _)| k.as_str()).collect();
+        assert_eq!(
+            keys,
+            vec!["messages[0].checksum.range", "interleave.message"],
+            "{p:?}"
+        );
+    }
+
+    /// TOML syntax errors are reported with the file.
+    #[test]
+    fn syntax_error() {
+        let p = problems("rate_hz = = 3");
+        assert_eq!(p.len(), 1);
+        assert_eq!(p[0].1, "(syntax)");
+    }
+
+    /// Names resolve (search path or embedded copy); paths load; unknown names and missing files
+    /// are usage errors.
+    #[test]
+    fn load_by_name_and_path() {
+        let d = FrameDescriptor::load("siu8").unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(d.frame_len(), 42);
+        assert_eq!(d.rate_hz, 250.0);
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/frames/kvh1750.toml");
+        let d =
+            FrameDescriptor::load(path.to_str().expect("utf8")).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(d.frame_len(), 36);
+        assert_eq!(d.source, path);
+        let e = FrameDescriptor::load("no_such_format").expect_err("unknown");
+        assert!(e
+            .to_string()
+            .contains("unknown frame format `no_such_format`"));
+        let e = FrameDescriptor::load("missing/dir/x.toml").expect_err("missing");
+        assert!(e
+            .to_string()
+            .contains("missing/dir/x.toml: key `(file)`: cannot read"));
+    }
 }
