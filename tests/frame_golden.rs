@@ -329,6 +329,38 @@ fn hg4930_golden_messages() {
     assert!(matches!(&ev[2], FrameEvent::Frame(f) if f.seq == 2));
     assert_eq!((h.frames, h.missing, h.crc_errors), (2, 1, 0));
 
+    // A control message lost (slot 3) costs no frame; a damaged inertial message (slot 12, one
+    // bit flipped in delta-angle X) is one checksum error and one missing frame, reported by
+    // the first control message after it; the frame at slot 18 is seq 3.
+    let mut damaged = Vec::new();
+    for slot in 0u16..19 {
+        let mut m = if slot % 6 == 0 {
+            hg_by_hand(0x02, slot, Some(incs[usize::from(slot / 6) % 3]))
+        } else {
+            hg_by_hand(0x01, slot, None)
+        };
+        if slot == 12 {
+            m[20] ^= 0x04;
+        }
+        if slot != 3 {
+            damaged.extend(&m);
+        }
+    }
+    let (ev, h) = decode_all(&desc, &damaged);
+    assert_eq!(ev.len(), 4, "{ev:?}");
+    assert_eq!(ev[2], FrameEvent::Gap { missing: 1 });
+    assert!(matches!(&ev[3], FrameEvent::Frame(f) if f.seq == 3));
+    assert_eq!(
+        (
+            h.frames,
+            h.missing,
+            h.crc_errors,
+            h.bytes_skipped,
+            h.resyncs
+        ),
+        (3, 1, 1, 44, 1)
+    );
+
     // Encoder: frame k = inertial at slot 6k followed by the controls at slots 6k+1..6k+5.
     let mut enc = Vec::new();
     for (k, v) in incs.iter().enumerate() {

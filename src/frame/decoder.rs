@@ -502,4 +502,20 @@ mod tests {
         assert!(matches!(t.observe(true, 2, &mut br), Placement::Duplicate));
         assert_eq!(br, 0);
     }
+
+    /// The `health` record carries the CONTRACT.md field names.
+    #[test]
+    fn health_serializes_contract_fields() {
+        let v = serde_json::to_value(Health::default()).expect("serialize");
+        for k in [
+            "frames",
+            "crc_errors",
+            "resyncs",
+            "missing",
+            "duplicates",
+            "bytes_skipped",
+        ] {
+            assert_eq!(v[k], serde_json::json!(0), "{k}");
+        }
+    }
 }

@@ -748,12 +748,12 @@ fn parse_descriptor(ctx: &mut Ctx, table: &Table, source: &Path) -> Option<Frame
         }
         for (i, t) in tables.into_iter().enumerate() {
             let mut m = Tbl::new(t, format!("messages[{i}]"), MESSAGE_KEYS);
-            let msg = parse_message(ctx, &mut m, order, true, i);
+            let msg = parse_message(ctx, &mut m, order, true);
             m.finish(ctx);
             messages.push(msg);
         }
     } else {
-        let msg = parse_message(ctx, &mut top, order, false, 0);
+        let msg = parse_message(ctx, &mut top, order, false);
         messages.push(msg);
     }
 
@@ -919,7 +919,6 @@ fn parse_message(
     m: &mut Tbl<'_>,
     order: ByteOrder,
     multi: bool,
-    index: usize,
 ) -> Option<MessageSpec> {
     let name = if multi {
         m.string(ctx, "name", true).unwrap_or("").to_string()
@@ -1126,7 +1125,6 @@ fn parse_message(
             _ => ok = false,
         }
     }
-    let _ = index;
     if !ok {
         return None;
     }

@@ -54,8 +54,8 @@ pub struct ChannelInfo {
 /// One good frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DecodedFrame {
-    /// The frame counter unwrapped across its modulus (starts at the first counter value seen;
-    /// a running index when the format has no counter).
+    /// The frame counter unwrapped across its modulus: starts at the first counter value seen
+    /// (at 0 for formats with `[interleave]`); a running index when the format has no counter.
     pub seq: u64,
     /// One entry per channel, in [`FrameDescriptor::channels`] order; None where the status
     /// field marks the channel invalid.
