@@ -20,6 +20,7 @@
 pub mod allan;
 pub mod cli;
 pub mod error;
+pub mod frame;
 pub mod input;
 pub mod model;
 pub mod sink;
