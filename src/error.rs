@@ -25,7 +25,10 @@ pub enum UsageError {
 
 /// The exit status for an error chain: 2 when a [`UsageError`] is anywhere in it, else 1.
 pub fn exit_status(err: &anyhow::Error) -> i32 {
-    if err.chain().any(|e| e.downcast_ref::<UsageError>().is_some()) {
+    if err
+        .chain()
+        .any(|e| e.downcast_ref::<UsageError>().is_some())
+    {
         2
     } else {
         1

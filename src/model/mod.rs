@@ -1,4 +1,5 @@
 //! The noise model: the five-term Allan-variance model (THEORY.md section 2), its fit and
 //! run-to-run aggregation. Works on curves only; never sees samples.
 
+pub mod nnls;
 pub mod terms;
