@@ -1,5 +1,6 @@
 //! The noise model: the five-term Allan-variance model (THEORY.md section 2), its fit and
 //! run-to-run aggregation. Works on curves only; never sees samples.
 
+pub mod avar_cov;
 pub mod nnls;
 pub mod terms;
