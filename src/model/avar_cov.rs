@@ -275,9 +275,9 @@ fn assemble(acc: Vals, m1: u64, m2: u64, big_m1: u64, big_m2: u64) -> PairSums {
         }
         let g = g_cont(h as f64, fm1, fm2);
         s.quad[NQ][NQ] += n * gq * gq;
-        for t in 0..3 {
-            s.quad[NQ][t + 1] += n * gq * g[t];
-            s.quad[t + 1][NQ] += n * gq * g[t];
+        for (t, gt) in g.iter().enumerate() {
+            s.quad[NQ][t + 1] += n * gq * gt;
+            s.quad[t + 1][NQ] += n * gq * gt;
         }
         s.lin[NQ] += n * gq;
     }
