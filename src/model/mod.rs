@@ -2,5 +2,6 @@
 //! run-to-run aggregation. Works on curves only; never sees samples.
 
 pub mod avar_cov;
+pub mod fit;
 pub mod nnls;
 pub mod terms;
