@@ -293,11 +293,21 @@ pub struct CovPoint {
     pub count: u64,
 }
 
+/// Lag sums of one pair computed at counts `(M1, M2)`.
+type CountedSums = ((u64, u64), PairSums);
+
 /// Covariance matrices of AVAR estimates, with the per-pair lag sums cached (they depend only on
 /// `(m1, m2, M1, M2)`, not on the coefficients or `tau0`).
+///
+/// Live refits see the counts `M` grow between calls. With a count tolerance `eps > 0`
+/// ([`AvarCovariance::with_count_tolerance`]), sums computed at counts within a fraction `eps` of
+/// the requested ones are reused, scaled by `M2 / M2'`: the pair count is `n(h) = M2 + psi(h)`
+/// with `psi` fixed by the cluster sizes, so the scaled sums are off by at most about
+/// `eps * (2 m_max / M2)`, relative (the edge share of the overlap range times the count change).
 #[derive(Debug, Default, Clone)]
 pub struct AvarCovariance {
-    cache: HashMap<(u64, u64, u64, u64), PairSums>,
+    cache: HashMap<(u64, u64), Vec<CountedSums>>,
+    count_tolerance: f64,
 }
 
 impl AvarCovariance {
@@ -305,22 +315,57 @@ impl AvarCovariance {
         Self::default()
     }
 
+    /// Reuse lag sums computed at counts within the fraction `eps` of the requested ones.
+    pub fn with_count_tolerance(eps: f64) -> Self {
+        Self {
+            cache: HashMap::new(),
+            count_tolerance: eps.max(0.0),
+        }
+    }
+
     /// Number of cached pairs.
     pub fn cached_pairs(&self) -> usize {
-        self.cache.len()
+        self.cache.values().map(Vec::len).sum()
     }
 
     fn sums(&mut self, a: CovPoint, b: CovPoint) -> PairSums {
         // The sums are symmetric under swapping the two estimates (h -> -h).
-        let key = if (a.m, a.count) <= (b.m, b.count) {
+        let (m1, m2, c1, c2) = if (a.m, a.count) <= (b.m, b.count) {
             (a.m, b.m, a.count, b.count)
         } else {
             (b.m, a.m, b.count, a.count)
         };
-        *self
-            .cache
-            .entry(key)
-            .or_insert_with(|| pair_sums(key.0, key.1, key.2, key.3))
+        let eps = self.count_tolerance;
+        let entries = self.cache.entry((m1, m2)).or_default();
+        if let Some((_, s)) = entries.iter().find(|(k, _)| *k == (c1, c2)) {
+            return *s;
+        }
+        if eps > 0.0 {
+            let close = |x: u64, y: u64| (x as f64 - y as f64).abs() <= eps * y as f64;
+            if let Some(((_, k2), s)) = entries
+                .iter()
+                .find(|((k1, k2), _)| close(*k1, c1) && close(*k2, c2))
+            {
+                let f = c2 as f64 / *k2 as f64;
+                let mut out = *s;
+                for row in out.quad.iter_mut() {
+                    for v in row.iter_mut() {
+                        *v *= f;
+                    }
+                }
+                for v in out.lin.iter_mut() {
+                    *v *= f;
+                }
+                return out;
+            }
+        }
+        let s = pair_sums(m1, m2, c1, c2);
+        // Keep a few count versions per pair (the live case moves forward; old ones go).
+        if entries.len() >= 4 {
+            entries.remove(0);
+        }
+        entries.push(((c1, c2), s));
+        s
     }
 
     /// `Cov(AVAR_hat_i, AVAR_hat_j)` in (u/s)^4 for the five-term model with

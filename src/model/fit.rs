@@ -261,6 +261,15 @@ impl Fitter {
         Self::default()
     }
 
+    /// A fitter for live refits, whose curves gain differences between calls: covariance lag
+    /// sums are reused while the counts stay within the fraction `eps` (see
+    /// [`AvarCovariance::with_count_tolerance`]; 0.02 keeps the covariance within ~1e-3).
+    pub fn with_count_tolerance(eps: f64) -> Self {
+        Self {
+            cov: AvarCovariance::with_count_tolerance(eps),
+        }
+    }
+
     /// Fit the AVAR curve `points` (THEORY.md section 2).
     pub fn fit(&mut self, points: &[CurvePoint], opts: &FitOptions) -> Result<FitResult, FitError> {
         let prob = select(points, opts)?;
