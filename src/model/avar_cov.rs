@@ -97,11 +97,15 @@ fn inner_b(u: f64, m: f64) -> f64 {
 /// Cross-covariances `(g_N, g_B, g_K)` of `D_{m1}(l + h)` and `D_{m2}(l)` at (real) lag `h`.
 fn g_cont(h: f64, m1: f64, m2: f64) -> [f64; 3] {
     let mut g = [0.0; 3];
+    // White and random-walk rate are exactly 0 outside [-2 m1, 2 m2] (all lags of one sign).
+    let inside = h >= -2.0 * m1 && h <= 2.0 * m2;
     for (j, b) in A.iter().enumerate() {
         let u = h - j as f64 * m2;
-        g[0] += b * inner_n(u, m1);
         g[1] += b * inner_b(u, m1);
-        g[2] += b * inner_k(u, m1);
+        if inside {
+            g[0] += b * inner_n(u, m1);
+            g[2] += b * inner_k(u, m1);
+        }
     }
     g
 }
