@@ -1,4 +1,9 @@
 //! The noise model: the five-term Allan-variance model (THEORY.md section 2), its fit and
 //! run-to-run aggregation. Works on curves only; never sees samples.
 
+pub mod aggregate;
+pub mod avar_cov;
+pub mod fit;
+pub mod nnls;
 pub mod terms;
+pub mod units;

@@ -1,0 +1,71 @@
+//! Run-to-run statistics of fitted coefficients (THEORY.md section 2, the seed paper's table 2):
+//! over the runs where a coefficient is determined, the mean, the sample standard deviation
+//! (n - 1), the Student 95% interval of the mean, and the paper's `mean +- 1.96 sd / sqrt(n)`.
+
+use serde::{Deserialize, Serialize};
+use statrs::distribution::{ContinuousCDF, StudentsT};
+
+/// Two-sided 95% normal quantile, as the seed paper used it.
+const Z95: f64 = 1.96;
+
+/// Statistics of one coefficient over runs.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RunStats {
+    /// Runs where the value is determined (not "-").
+    pub n: usize,
+    pub mean: f64,
+    /// Sample standard deviation (divisor n - 1); `None` for one run.
+    pub sd: Option<f64>,
+    /// Student-t 95% interval of the mean, `mean +- t_{0.975, n-1} sd / sqrt(n)`.
+    pub ci_t: Option<[f64; 2]>,
+    /// The seed paper's interval, `mean +- 1.96 sd / sqrt(n)`.
+    pub ci_z: Option<[f64; 2]>,
+}
+
+/// Statistics over the determined values (`None` entries are the paper's "-" runs). `None` when
+/// no run determined the coefficient.
+pub fn run_stats(values: &[Option<f64>]) -> Option<RunStats> {
+    let v: Vec<f64> = values
+        .iter()
+        .flatten()
+        .copied()
+        .filter(|x| x.is_finite())
+        .collect();
+    let n = v.len();
+    if n == 0 {
+        return None;
+    }
+    let mean = v.iter().sum::<f64>() / n as f64;
+    if n == 1 {
+        return Some(RunStats {
+            n,
+            mean,
+            sd: None,
+            ci_t: None,
+            ci_z: None,
+        });
+    }
+    let sd = (v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1) as f64).sqrt();
+    let se = sd / (n as f64).sqrt();
+    let t = StudentsT::new(0.0, 1.0, (n - 1) as f64)
+        .map(|d| d.inverse_cdf(0.975))
+        .unwrap_or(f64::NAN);
+    Some(RunStats {
+        n,
+        mean,
+        sd: Some(sd),
+        ci_t: t.is_finite().then_some([mean - t * se, mean + t * se]),
+        ci_z: Some([mean - Z95 * se, mean + Z95 * se]),
+    })
+}
+
+/// Statistics for each of Q, N, B, K, R over runs; `runs[r][i]` is run r's coefficient i when
+/// determined.
+pub fn aggregate(runs: &[[Option<f64>; 5]]) -> [Option<RunStats>; 5] {
+    std::array::from_fn(|i| run_stats(&runs.iter().map(|r| r[i]).collect::<Vec<_>>()))
+}
+
+/// One run's determined values from a fit (the `value` of CONTRACT.md's `coef`).
+pub fn determined_values(fit: &crate::model::fit::FitResult) -> [Option<f64>; 5] {
+    std::array::from_fn(|i| fit.coef[i].determined.then_some(fit.coef[i].value))
+}
