@@ -747,14 +747,14 @@ fn largest_divisor_at_most(m: u64, cap: u64) -> u64 {
     // largest one. Divisors come in pairs around sqrt(m), so search each side up to sqrt(m).
     let mut d = m.div_ceil(cap);
     while d.saturating_mul(d) <= m {
-        if m % d == 0 {
+        if m.is_multiple_of(d) {
             return m / d;
         }
         d += 1;
     }
     let mut e = cap.min(m.isqrt());
     while e > 1 {
-        if m % e == 0 {
+        if m.is_multiple_of(e) {
             return e;
         }
         e -= 1;

@@ -9,6 +9,7 @@
 
 pub mod accum;
 pub mod batch;
+pub mod curve;
 pub mod edf;
 pub mod noise_id;
 

@@ -1,1 +1,7 @@
-//! JSON-lines records (work in progress).
+//! Where results go: JSON-lines records (CONTRACT.md) to standard output or a file.
+//!
+//! [`records`] defines the records as typed structs (the contract's field names, units in
+//! their doc comments); [`json`] writes them one per line.
+
+pub mod json;
+pub mod records;

@@ -1,0 +1,137 @@
+//! The JSON-lines records of CONTRACT.md, as serde structs. Field names and units here are the
+//! contract: scripts read them. Extra fields may be added; none may be renamed.
+
+use serde::{Deserialize, Serialize};
+
+use crate::allan::{Curve, Stat};
+
+/// A non-finite number (an undefined edf or interval) is written as JSON `null`.
+fn finite(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
+}
+
+/// `curve`: one statistic of one channel. Arrays are parallel, one entry per tau.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct CurveRecord {
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub channel: String,
+    pub unit: String,
+    pub stat: Stat,
+    /// Seconds of data consumed.
+    pub t_data: f64,
+    /// True once the input has ended.
+    pub r#final: bool,
+    /// Averaging times in s.
+    pub tau: Vec<f64>,
+    /// Deviations in u/s.
+    pub sigma: Vec<f64>,
+    /// 95% interval of sigma, u/s.
+    pub lo: Vec<Option<f64>>,
+    pub hi: Vec<Option<f64>>,
+    /// Equivalent degrees of freedom.
+    pub edf: Vec<Option<f64>>,
+    /// Number of differences averaged.
+    pub count: Vec<u64>,
+    /// Cluster sizes (tau / tau0).
+    pub m: Vec<u64>,
+    /// Power-law noise exponent of S_y used for the edf at each tau.
+    pub alpha: Vec<i32>,
+    /// Run index (0-based) when several inputs are analyzed.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub run: Option<usize>,
+}
+
+impl CurveRecord {
+    pub fn new(channel: &str, unit: &str, curve: &Curve, final_: bool, run: Option<usize>) -> Self {
+        let p = &curve.points;
+        CurveRecord {
+            kind: "curve".into(),
+            channel: channel.into(),
+            unit: unit.into(),
+            stat: curve.stat,
+            t_data: curve.t_data_s,
+            r#final: final_,
+            tau: p.iter().map(|q| q.tau_s).collect(),
+            sigma: p.iter().map(|q| q.sigma()).collect(),
+            lo: p.iter().map(|q| finite(q.sigma_lo)).collect(),
+            hi: p.iter().map(|q| finite(q.sigma_hi)).collect(),
+            edf: p.iter().map(|q| finite(q.edf)).collect(),
+            count: p.iter().map(|q| q.count).collect(),
+            m: p.iter().map(|q| q.m).collect(),
+            alpha: p.iter().map(|q| q.alpha).collect(),
+            run,
+        }
+    }
+}
+
+/// `fit`: the five-term model of one channel.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct FitRecord {
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub channel: String,
+    pub unit: String,
+    pub r#final: bool,
+    pub t_data: f64,
+    /// `{Q, N, B, K, R}`, each `{value, lo, hi, determined}` (THEORY.md section 2 units).
+    pub coef: serde_json::Value,
+    /// Goodness of fit, near 1 when the model explains the curve.
+    pub gof: Option<f64>,
+    /// The fit method (`model`, `paper`, `slopes`, `loglog`).
+    pub method: String,
+    /// The same coefficients in datasheet units, where the unit is known.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub datasheet: Option<serde_json::Value>,
+    /// Q divided by LSB/sqrt(12), where the LSB is known (the seed paper's comparison).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub q_over_lsb: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub run: Option<usize>,
+}
+
+/// `health`: what the decoder saw (CONTRACT.md).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, Default)]
+pub struct HealthRecord {
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub frames: u64,
+    pub crc_errors: u64,
+    pub resyncs: u64,
+    pub missing: u64,
+    pub duplicates: u64,
+    pub bytes_skipped: u64,
+    #[serde(flatten)]
+    pub extra: serde_json::Map<String, serde_json::Value>,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub run: Option<usize>,
+}
+
+/// `summary`: one at the end of each run.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct SummaryRecord {
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub input: String,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub run: Option<usize>,
+    pub channels: Vec<String>,
+    /// Sampling step, s.
+    pub tau0: f64,
+    /// Seconds of data consumed, gaps included.
+    pub t_data: f64,
+    /// Samples accepted per channel.
+    pub samples: Vec<u64>,
+    /// Phase segments per channel (1 + the number of gaps).
+    pub segments: Vec<u64>,
+    /// Input rows or frames that could not be read and were skipped as gaps.
+    pub bad_rows: u64,
+    pub overlap: String,
+    /// Wall-clock seconds spent.
+    pub elapsed_s: f64,
+    /// Datasheet limits judged, when a stand config gives them.
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub limits: Vec<serde_json::Value>,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub pass: Option<bool>,
+}
