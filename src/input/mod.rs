@@ -1,1 +1,16 @@
-//! Text-column input (work in progress).
+//! Inputs that are not frames: text columns (CONTRACT.md, "Text columns").
+//!
+//! A reader turns bytes into [`Chunk`]s of rows; it knows nothing of statistics.
+
+pub mod text;
+
+use crate::frame::FrameEvent;
+
+/// What an input stage hands to the analysis: a batch of steps.
+#[derive(Debug, Clone)]
+pub enum Chunk {
+    /// Row-major values, `width` per row, one row per step; NaN marks a missing value.
+    Rows { values: Vec<f64>, width: usize },
+    /// Decoded frames and the gaps between them.
+    Frames(Vec<FrameEvent>),
+}
