@@ -22,4 +22,5 @@ pub mod cli;
 pub mod error;
 pub mod input;
 pub mod model;
+pub mod sim;
 pub mod sink;
