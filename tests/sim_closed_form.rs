@@ -38,10 +38,10 @@ fn model(text: &str) -> SimModel {
     SimModel::from_toml_str(text, Path::new("test.toml")).expect("model parses")
 }
 
-fn octaves() -> Vec<u64> {
+fn octaves(n_inc: usize) -> Vec<u64> {
     let mut v = Vec::new();
     let mut m = 1u64;
-    while m as usize <= N_INC / MIN_BLOCKS {
+    while m as usize <= n_inc / MIN_BLOCKS {
         v.push(m);
         m *= 2;
     }
@@ -49,9 +49,9 @@ fn octaves() -> Vec<u64> {
 }
 
 /// OAVAR of channel 0 of a simulated record at the octave cluster sizes.
-fn simulated_avar(model: &SimModel, seed: u64, ms: &[u64]) -> Vec<f64> {
+fn simulated_avar(model: &SimModel, seed: u64, ms: &[u64], n_inc: usize) -> Vec<f64> {
     let mut sim = Simulator::new(model, seed);
-    let mut d = vec![0.0; N_INC];
+    let mut d = vec![0.0; n_inc];
     sim.fill_channel(0, &mut d);
     let x = phase_from_increments(&d);
     ms.iter()
@@ -68,11 +68,12 @@ struct Ensemble {
     ms: Vec<u64>,
     mean: Vec<f64>,
     sd: Vec<f64>,
+    seeds: u64,
 }
 
 impl Ensemble {
     fn z(&self, i: usize, closed: f64) -> f64 {
-        (self.mean[i] - closed) / (self.sd[i] / (SEEDS as f64).sqrt())
+        (self.mean[i] - closed) / (self.sd[i] / (self.seeds as f64).sqrt())
     }
 }
 
@@ -80,9 +81,19 @@ impl Ensemble {
 /// asserts the criterion and returns the statistics. Seeds are drawn from the case's name, so
 /// cases do not share noise.
 fn check_ensemble(name: &str, make: impl Fn(u64) -> String) -> Ensemble {
-    let ms = octaves();
+    check_ensemble_sized(name, SEEDS, N_INC, make)
+}
+
+/// [`check_ensemble`] with a given number of seeds and record length.
+fn check_ensemble_sized(
+    name: &str,
+    seeds: u64,
+    n_inc: usize,
+    make: impl Fn(u64) -> String,
+) -> Ensemble {
+    let ms = octaves(n_inc);
     let j = ms.len();
-    let limit = z_limit(j);
+    let limit = z_limit(j, seeds);
     let salt: u64 = std::env::var("SIM_TEST_SALT")
         .ok()
         .and_then(|v| v.parse().ok())
@@ -90,29 +101,30 @@ fn check_ensemble(name: &str, make: impl Fn(u64) -> String) -> Ensemble {
     let base = fnv1a(name.as_bytes()) % 1_000_000 + 1000 * salt;
     let mut runs: Vec<Vec<f64>> = Vec::new();
     let mut closed = vec![0.0; j];
-    for s in 0..SEEDS {
+    for s in 0..seeds {
         let m = model(&make(s));
-        runs.push(simulated_avar(&m, base + s, &ms));
+        runs.push(simulated_avar(&m, base + s, &ms, n_inc));
         for (c, &mm) in closed.iter_mut().zip(&ms) {
-            *c += m.avar_closed_form(0, mm, N_INC as u64) / SEEDS as f64;
+            *c += m.avar_closed_form(0, mm, n_inc as u64) / seeds as f64;
         }
     }
     let mut e = Ensemble {
         ms: ms.clone(),
         mean: Vec::new(),
         sd: Vec::new(),
+        seeds,
     };
     for i in 0..j {
         let vals: Vec<f64> = runs.iter().map(|r| r[i]).collect();
-        let mean = vals.iter().sum::<f64>() / SEEDS as f64;
-        let var = vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (SEEDS - 1) as f64;
+        let mean = vals.iter().sum::<f64>() / seeds as f64;
+        let var = vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (seeds - 1) as f64;
         e.mean.push(mean);
         e.sd.push(var.sqrt());
     }
     let mut worst: f64 = 0.0;
     println!(
         "{name}: |z| limit {limit:.2} (t_{}, family 95% over {j} taus)",
-        SEEDS - 1
+        seeds - 1
     );
     for (i, &m) in ms.iter().enumerate() {
         let z = e.z(i, closed[i]);
@@ -130,8 +142,8 @@ fn check_ensemble(name: &str, make: impl Fn(u64) -> String) -> Ensemble {
 }
 
 /// Two-sided Student-t quantile at a family-wise 95% level over `j` taus (Bonferroni).
-fn z_limit(j: usize) -> f64 {
-    StudentsT::new(0.0, 1.0, (SEEDS - 1) as f64)
+fn z_limit(j: usize, seeds: u64) -> f64 {
+    StudentsT::new(0.0, 1.0, (seeds - 1) as f64)
         .expect("valid t")
         .inverse_cdf(1.0 - 0.025 / j as f64)
 }
@@ -169,12 +181,36 @@ fn rate_random_walk_k() {
     let rect = terms::rate_random_walk_rectangle_avar(0.02, 0.01, e.ms[0]);
     let z = e.z(0, rect);
     println!("K: z against the rectangle-rule form at m = 1: {z:.1}");
-    assert!(z.abs() > 10.0 * z_limit(e.ms.len()), "{z}");
+    assert!(z.abs() > 10.0 * z_limit(e.ms.len(), e.seeds), "{z}");
 }
 
 #[test]
 fn flicker_b() {
     check_ensemble("B", |_| channel("B = 0.3"));
+}
+
+/// Seeds and length of the long flicker run: 8 x 2^23 increments at tau0 = 4 ms (9.3 hours
+/// each), octaves up to m = 2^17, i.e. tau from 4 ms to 524 s (5.1 decades) of the bank's
+/// default 6-decade band.
+const LONG_SEEDS: u64 = 8;
+const LONG_N_INC: usize = 1 << 23;
+
+#[test]
+fn flicker_b_five_decades() {
+    let e = check_ensemble_sized("B long", LONG_SEEDS, LONG_N_INC, |_| {
+        "rate_hz = 250\n[[channel]]\nname = \"x\"\nunit = \"u\"\nB = 0.3\n".to_string()
+    });
+    let flat = terms::flicker_avar(0.3).sqrt();
+    let worst = e
+        .mean
+        .iter()
+        .map(|v| (v.sqrt() / flat - 1.0).abs())
+        .fold(0.0, f64::max);
+    println!(
+        "B long: simulated ADEV within {:.2}% of B sqrt(2 ln2 / pi) from m = 1 to {}",
+        worst * 100.0,
+        e.ms[e.ms.len() - 1]
+    );
 }
 
 #[test]
@@ -236,8 +272,8 @@ fn mixture() {
 
 fn deterministic_case(name: &str, text: &str) {
     let m = model(text);
-    let ms = octaves();
-    let sim = simulated_avar(&m, 1, &ms);
+    let ms = octaves(N_INC);
+    let sim = simulated_avar(&m, 1, &ms, N_INC);
     let mut worst: f64 = 0.0;
     for (v, &mm) in sim.iter().zip(&ms) {
         let c = m.avar_closed_form(0, mm, N_INC as u64);
@@ -397,6 +433,16 @@ fn determinism() {
     // Pinned: the capture of this model and seed, as produced when the generator was written.
     // A change here means every capture from a given seed changes (e.g. a new rand_distr).
     println!("fnv1a {:#018x}", fnv1a(&a));
+    assert_eq!(
+        fnv1a(&a),
+        0x77de_bc56_9106_8c8a,
+        "the pinned capture changed"
+    );
+    // First rows by hand: g4 = -12.586 arcsec/s * 0.004 s + noise, a4 = 9.8166 m/s^2 * 0.004 s
+    // + noise, both whole LSBs; the temperature starts at start_c.
+    let first: Vec<&str> = text.lines().nth(1).expect("row").split(',').collect();
+    assert_eq!(first.len(), 3);
+    assert_eq!(first[2], "20.000");
     println!("{}", text.lines().take(3).collect::<Vec<_>>().join("\n"));
 }
 
