@@ -227,7 +227,9 @@ impl ChannelSim {
     /// The output over step `k` (1-based) starting at `t_prev_s`: (increment in u, count).
     #[inline]
     fn step(&mut self, k: u64, t_prev_s: f64, temp_integral: f64) -> (f64, Option<i64>) {
-        let rng = &mut self.rng;
+        // a local copy keeps the generator's state in registers across the draws
+        let mut local = self.rng.clone();
+        let rng = &mut local;
         let mut d = self.const_inc;
         if self.white_rate != 0.0 {
             d += self.white_rate * normal(rng);
@@ -262,6 +264,7 @@ impl ChannelSim {
         if let Some(q) = &mut self.white_phase {
             d += q.step(normal(rng));
         }
+        self.rng = local;
         match &mut self.quant {
             Some((lsb, inv, rem)) => {
                 *rem += d;
