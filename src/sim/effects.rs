@@ -286,3 +286,30 @@ impl TemperatureState {
         (temp, integral)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::Rotation;
+
+    /// The rotation recurrence against direct `cos` after a million steps (250 Hz, 1.3 Hz: 1.1
+    /// hours, 5200 turns): the phase error stays below 1e-9 rad.
+    #[test]
+    fn rotation_stays_on_phase() {
+        let (omega, tau0, phase) = (2.0 * std::f64::consts::PI * 1.3, 0.004, 0.7);
+        let mut rot = Rotation::new(omega, tau0, phase);
+        let n = 1_000_000u64;
+        let mut sum_drop = 0.0;
+        for _ in 0..n {
+            sum_drop += rot.step_cos_drop();
+        }
+        // the drops telescope: cos(phase) - cos(theta_n)
+        let theta = omega * tau0 * n as f64 + phase;
+        assert!((sum_drop - (phase.cos() - theta.cos())).abs() < 1e-9);
+        assert!(
+            (rot.sin() - theta.sin()).abs() < 1e-9,
+            "{} vs {}",
+            rot.sin(),
+            theta.sin()
+        );
+    }
+}

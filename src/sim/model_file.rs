@@ -166,10 +166,18 @@ impl SimModel {
 
     /// Parse and check a model given as TOML text; `file` names it in errors.
     pub fn from_toml_str(text: &str, file: &Path) -> Result<SimModel, UsageError> {
-        let table: toml::Table = toml::from_str(text).map_err(|e| UsageError::Config {
-            file: file.to_path_buf(),
-            key: String::new(),
-            problem: format!("not valid TOML: {}", e.message()),
+        let table: toml::Table = toml::from_str(text).map_err(|e| {
+            let line = e
+                .span()
+                .map(|r| text[..r.start.min(text.len())].matches('\n').count() + 1);
+            UsageError::Config {
+                file: file.to_path_buf(),
+                key: String::new(),
+                problem: match line {
+                    Some(l) => format!("not valid TOML at line {l}: {}", e.message()),
+                    None => format!("not valid TOML: {}", e.message()),
+                },
+            }
         })?;
         let mut errs = Problems::default();
         let model = parse_model(&table, &mut errs);
