@@ -23,4 +23,5 @@ pub mod error;
 pub mod frame;
 pub mod input;
 pub mod model;
+pub mod sim;
 pub mod sink;

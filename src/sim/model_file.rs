@@ -1,0 +1,770 @@
+//! Noise-model files (TOML, `config/models/`): parsed into a checked [`SimModel`] before anything
+//! is simulated. Every problem is reported with the file and the key (all of them, the first as
+//! the error's key); unknown keys are rejected.
+//!
+//! ```toml
+//! rate_hz = 250.0                 # or tau0_s = 0.004 (exactly one of them)
+//! description = "free text"       # optional
+//!
+//! [stand]                         # optional: Earth rate and gravity on each sensor axis
+//! latitude_deg = 56.8
+//! gravity_m_s2 = 9.8166           # optional; default WGS-84 normal gravity at the latitude
+//!
+//! [temperature]                   # optional: the unit's temperature, also output per step
+//! start_c = 20.0                  # T(t) = final + (start - final) e^{-t/time_constant}
+//! final_c = 32.0                  #        + sine_amplitude sin(2 pi t / sine_period)
+//! time_constant_s = 900.0
+//! sine_amplitude_c = 0.5          # optional, default 0
+//! sine_period_s = 3600.0          # required when sine_amplitude_c is not 0
+//! reference_c = 32.0              # optional, default final_c: zero temperature-driven bias
+//!
+//! [[channel]]
+//! name = "g4"                     # CSV column name
+//! unit = "arcsec"                 # u; the stand needs arcsec | deg | rad (gyro) or m/s (accelerometer)
+//! lsb = 0.004                     # optional: quantization step of the integrated signal (u)
+//! axis = "down"                   # optional: up|down|north|south|east|west or [east, north, up]
+//! bias = 0.0                      # u/s, default 0
+//! Q = 0.0                         # u            white phase
+//! N = 0.254                       # u/sqrt(s)    white rate
+//! B = 0.225                       # u/s          flicker rate
+//! K = 1.826e-2                    # u/s/sqrt(s)  rate random walk
+//! R = 0.891e-4                    # u/s^2        rate ramp
+//! flicker_band_s = [0.004, 1.0e4] # optional: tau range where B is flat; default [tau0, 1e6 tau0]
+//! temperature_coefficient = 0.01  # optional: u/s per degC of T(t) - reference_c
+//! gauss_markov = [{ sigma = 0.1, tau_c = 2.0 }]                     # u/s, s (table or list)
+//! sinusoid = [{ amplitude = 0.05, frequency = 1.3, phase = 0.0 }]   # u/s, Hz, rad (table or list)
+//! output_filter = { time_constant = 0.01 }                          # s
+//! warmup = { amplitude = 0.5, time_constant = 600.0 }               # u/s, s
+//! bias_jumps = { mean_interval = 1800.0, rms_size = 0.01 }          # s, u/s
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use crate::error::UsageError;
+use crate::model::terms;
+
+use super::effects::TemperatureProfile;
+use super::noise::FlickerBank;
+
+/// Earth rotation rate (WGS-84), rad/s.
+pub const EARTH_RATE_RAD_S: f64 = 7.292_115e-5;
+/// Arcseconds per radian.
+pub const ARCSEC_PER_RAD: f64 = 180.0 * 3600.0 / std::f64::consts::PI;
+/// Default upper end of the flicker band in units of tau0 (six decades).
+pub const FLICKER_BAND_DECADES_DEFAULT: f64 = 6.0;
+
+/// A checked noise model: the sampling step, the stand, the temperature, the channels.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimModel {
+    /// Sampling step in seconds.
+    pub tau0_s: f64,
+    pub stand: Option<Stand>,
+    pub temperature: Option<TemperatureProfile>,
+    pub channels: Vec<ChannelModel>,
+}
+
+/// The test stand: where it is, so Earth rate and gravity can be projected on each axis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stand {
+    pub latitude_deg: f64,
+    /// Local gravity in m/s^2.
+    pub gravity_m_s2: f64,
+}
+
+/// What a channel's unit measures, for the stand projection.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SensorKind {
+    /// A gyro; the unit is this many u per radian.
+    Angle { u_per_rad: f64 },
+    /// An accelerometer in m/s (delta-velocity).
+    Velocity,
+    /// Neither; cannot take an `axis`.
+    Other,
+}
+
+/// One channel's noise model.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChannelModel {
+    pub name: String,
+    pub unit: String,
+    /// Quantization step of the integrated signal (u); counts are whole LSBs with the remainder
+    /// carried.
+    pub lsb: Option<f64>,
+    /// Constant bias in u/s (the stand's projection is added on top).
+    pub bias: f64,
+    /// White phase, u.
+    pub q: f64,
+    /// White rate, u/sqrt(s).
+    pub n: f64,
+    /// Flicker rate, u/s.
+    pub b: f64,
+    /// Rate random walk, u/s/sqrt(s).
+    pub k: f64,
+    /// Rate ramp, u/s^2.
+    pub r: f64,
+    /// The tau range (s) where the flicker bank is flat.
+    pub flicker_band_s: (f64, f64),
+    /// The bank realising `b` (None when `b == 0`).
+    pub flicker: Option<FlickerBank>,
+    /// Sensor axis in the local level frame (east, north, up), unit length.
+    pub axis_enu: Option<[f64; 3]>,
+    pub kind: SensorKind,
+    /// u/s per degC.
+    pub temperature_coefficient: f64,
+    pub gauss_markov: Vec<GaussMarkov>,
+    pub sinusoids: Vec<Sinusoid>,
+    pub output_filter: Option<OutputFilterSpec>,
+    pub warmup: Option<Warmup>,
+    pub bias_jumps: Option<BiasJumps>,
+}
+
+/// First-order Gauss-Markov rate noise: stationary sd `sigma` (u/s), correlation time `tau_c_s`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GaussMarkov {
+    pub sigma: f64,
+    pub tau_c_s: f64,
+}
+
+/// Sinusoidal rate `amplitude sin(2 pi frequency t + phase)`: u/s, Hz, rad.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sinusoid {
+    pub amplitude: f64,
+    pub frequency_hz: f64,
+    pub phase_rad: f64,
+}
+
+/// The unit's first-order low-pass of its own output.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OutputFilterSpec {
+    pub time_constant_s: f64,
+}
+
+/// Bias `amplitude e^{-t/time_constant}` after power-on: u/s, s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Warmup {
+    pub amplitude: f64,
+    pub time_constant_s: f64,
+}
+
+/// Bias steps at Poisson times: mean interval (s), rms size (u/s).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BiasJumps {
+    pub mean_interval_s: f64,
+    pub rms_size: f64,
+}
+
+impl SimModel {
+    /// Read and check a model file.
+    pub fn load(path: &Path) -> anyhow::Result<SimModel> {
+        let text = std::fs::read_to_string(path).map_err(|e| UsageError::Config {
+            file: path.to_path_buf(),
+            key: String::new(),
+            problem: format!("cannot read: {e}"),
+        })?;
+        Ok(Self::from_toml_str(&text, path)?)
+    }
+
+    /// Parse and check a model given as TOML text; `file` names it in errors.
+    pub fn from_toml_str(text: &str, file: &Path) -> Result<SimModel, UsageError> {
+        let table: toml::Table = toml::from_str(text).map_err(|e| {
+            let line = e
+                .span()
+                .map(|r| text[..r.start.min(text.len())].matches('\n').count() + 1);
+            UsageError::Config {
+                file: file.to_path_buf(),
+                key: String::new(),
+                problem: match line {
+                    Some(l) => format!("not valid TOML at line {l}: {}", e.message()),
+                    None => format!("not valid TOML: {}", e.message()),
+                },
+            }
+        })?;
+        let mut errs = Problems::default();
+        let model = parse_model(&table, &mut errs);
+        match (errs.list.is_empty(), model) {
+            (true, Some(m)) => Ok(m),
+            _ => Err(errs.into_error(file)),
+        }
+    }
+
+    /// Rate (u/s) the stand puts on channel `ch`: Earth rate for a gyro, specific force (+g up)
+    /// for an accelerometer, projected on the channel's axis; 0 without a stand or an axis.
+    /// Earth rate in the local level frame is `Omega (0, cos lat, sin lat)`, the specific force
+    /// at rest `(0, 0, g)`: a gyro along the vertical sees `Omega sin(lat)`.
+    pub fn stand_rate(&self, ch: usize) -> f64 {
+        let (Some(stand), Some(c)) = (self.stand, self.channels.get(ch)) else {
+            return 0.0;
+        };
+        let Some(axis) = c.axis_enu else {
+            return 0.0;
+        };
+        match c.kind {
+            SensorKind::Angle { u_per_rad } => {
+                let lat = stand.latitude_deg.to_radians();
+                EARTH_RATE_RAD_S * u_per_rad * (axis[1] * lat.cos() + axis[2] * lat.sin())
+            }
+            SensorKind::Velocity => stand.gravity_m_s2 * axis[2],
+            SensorKind::Other => 0.0,
+        }
+    }
+
+    /// The model's Allan variance (u^2/s^2) of channel `ch` at cluster `m`, for a record of
+    /// `n_increments` starting at power-on, from the exact discrete closed forms of
+    /// [`crate::model::terms`]: Q (with `lsb / sqrt(12)` added in quadrature), N (through the
+    /// output filter when there is one), the flicker bank, K, R, Gauss-Markov, sinusoids (times
+    /// the output filter's gain), warm-up, bias jumps (as K) and the temperature-driven bias
+    /// (its settling as a warm-up, its sine as a sinusoid).
+    ///
+    /// Not included: the output filter's effect on terms other than N and the sinusoids (small
+    /// where those terms matter, at tau >> the filter's time constant), and the cross terms
+    /// between the deterministic parts (ramp, warm-up, sinusoids, temperature) on a finite
+    /// record, which average out over many periods.
+    pub fn avar_closed_form(&self, ch: usize, m: u64, n_increments: u64) -> f64 {
+        let Some(c) = self.channels.get(ch) else {
+            return f64::NAN;
+        };
+        let tau0 = self.tau0_s;
+        let tau = m as f64 * tau0;
+        let q2 = c.q * c.q + c.lsb.map_or(0.0, |l| terms::quantization_q(l).powi(2));
+        let mut v = terms::white_phase_avar(q2.sqrt(), tau);
+        let filter = c.output_filter.map(|f| f.time_constant_s);
+        v += match filter {
+            Some(t) if c.n > 0.0 => terms::filtered_white_rate_avar(c.n, t, tau0, m),
+            _ => terms::white_rate_avar(c.n, tau),
+        };
+        if let Some(bank) = &c.flicker {
+            v += bank.avar(tau);
+        }
+        v += terms::rate_random_walk_avar(c.k, tau);
+        v += terms::rate_ramp_avar(c.r, tau);
+        for g in &c.gauss_markov {
+            v += terms::gauss_markov_avar(g.sigma, g.tau_c_s, tau);
+        }
+        let gain =
+            |f_hz: f64| filter.map_or(1.0, |t| terms::output_filter_power_gain(t, tau0, f_hz));
+        for s in &c.sinusoids {
+            v += gain(s.frequency_hz) * terms::sinusoid_avar(s.amplitude, s.frequency_hz, tau);
+        }
+        if let Some(w) = c.warmup {
+            v += terms::warmup_avar(w.amplitude, w.time_constant_s, tau0, m, n_increments);
+        }
+        if let Some(j) = c.bias_jumps {
+            v += terms::bias_jumps_avar(j.mean_interval_s, j.rms_size, tau);
+        }
+        if let (Some(t), true) = (&self.temperature, c.temperature_coefficient != 0.0) {
+            let a = c.temperature_coefficient * (t.start_c - t.final_c);
+            if a != 0.0 {
+                v += terms::warmup_avar(a, t.time_constant_s, tau0, m, n_increments);
+            }
+            if t.sine_amplitude_c != 0.0 {
+                let f = 1.0 / t.sine_period_s;
+                let amp = c.temperature_coefficient * t.sine_amplitude_c;
+                v += gain(f) * terms::sinusoid_avar(amp, f, tau);
+            }
+        }
+        v
+    }
+}
+
+/// WGS-84 normal gravity at a latitude (Somigliana's formula), m/s^2.
+pub fn normal_gravity_m_s2(latitude_deg: f64) -> f64 {
+    let s2 = latitude_deg.to_radians().sin().powi(2);
+    9.780_325_335_9 * (1.0 + 0.001_931_852_652_41 * s2) / (1.0 - 0.006_694_379_990_13 * s2).sqrt()
+}
+
+/// The sensor kind a unit name implies.
+pub fn sensor_kind(unit: &str) -> SensorKind {
+    match unit {
+        "arcsec" => SensorKind::Angle {
+            u_per_rad: ARCSEC_PER_RAD,
+        },
+        "deg" => SensorKind::Angle {
+            u_per_rad: 180.0 / std::f64::consts::PI,
+        },
+        "rad" => SensorKind::Angle { u_per_rad: 1.0 },
+        "m/s" => SensorKind::Velocity,
+        _ => SensorKind::Other,
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Parsing: a small key walker that records every problem with its key path.
+
+#[derive(Default)]
+struct Problems {
+    list: Vec<(String, String)>,
+}
+
+impl Problems {
+    fn push(&mut self, key: &str, problem: impl Into<String>) {
+        self.list.push((key.to_string(), problem.into()));
+    }
+
+    fn into_error(self, file: &Path) -> UsageError {
+        let mut it = self.list.into_iter();
+        let (key, mut problem) = it
+            .next()
+            .unwrap_or_else(|| (String::new(), "invalid model".to_string()));
+        let rest: Vec<String> = it.map(|(k, p)| format!("`{k}`: {p}")).collect();
+        if !rest.is_empty() {
+            problem = format!("{problem} (also: {})", rest.join("; "));
+        }
+        UsageError::Config {
+            file: PathBuf::from(file),
+            key,
+            problem,
+        }
+    }
+}
+
+/// One table being read: remembers which keys were taken, so the rest can be rejected.
+struct Keys<'a> {
+    table: &'a toml::Table,
+    prefix: String,
+    taken: Vec<&'static str>,
+}
+
+impl<'a> Keys<'a> {
+    fn new(table: &'a toml::Table, prefix: &str) -> Self {
+        Self {
+            table,
+            prefix: prefix.to_string(),
+            taken: Vec::new(),
+        }
+    }
+
+    fn path(&self, key: &str) -> String {
+        if self.prefix.is_empty() {
+            key.to_string()
+        } else {
+            format!("{}.{key}", self.prefix)
+        }
+    }
+
+    fn get(&mut self, key: &'static str) -> Option<&'a toml::Value> {
+        self.taken.push(key);
+        self.table.get(key)
+    }
+
+    /// A finite number (integer or float), if present.
+    fn num(&mut self, key: &'static str, errs: &mut Problems) -> Option<f64> {
+        let v = self.get(key)?;
+        let x = match v {
+            toml::Value::Float(f) => *f,
+            toml::Value::Integer(i) => *i as f64,
+            other => {
+                errs.push(
+                    &self.path(key),
+                    format!("expected a number, found {}", other.type_str()),
+                );
+                return None;
+            }
+        };
+        if !x.is_finite() {
+            errs.push(&self.path(key), "must be finite");
+            return None;
+        }
+        Some(x)
+    }
+
+    /// A number that must be > 0 (`strict`) or >= 0.
+    fn num_pos(&mut self, key: &'static str, strict: bool, errs: &mut Problems) -> Option<f64> {
+        let x = self.num(key, errs)?;
+        if (strict && x <= 0.0) || x < 0.0 {
+            let what = if strict { "> 0" } else { ">= 0" };
+            errs.push(&self.path(key), format!("must be {what}, got {x}"));
+            return None;
+        }
+        Some(x)
+    }
+
+    fn required(&mut self, key: &'static str, x: Option<f64>, errs: &mut Problems) -> f64 {
+        if x.is_none() && !self.table.contains_key(key) {
+            errs.push(&self.path(key), "missing");
+        }
+        x.unwrap_or(f64::NAN)
+    }
+
+    fn string(&mut self, key: &'static str, errs: &mut Problems) -> Option<&'a str> {
+        let v = self.get(key)?;
+        match v.as_str() {
+            Some(s) => Some(s),
+            None => {
+                errs.push(
+                    &self.path(key),
+                    format!("expected a string, found {}", v.type_str()),
+                );
+                None
+            }
+        }
+    }
+
+    /// A table, or a list of tables; each with its key path.
+    fn tables(&mut self, key: &'static str, errs: &mut Problems) -> Vec<(String, &'a toml::Table)> {
+        let path = self.path(key);
+        match self.get(key) {
+            None => Vec::new(),
+            Some(toml::Value::Table(t)) => vec![(path, t)],
+            Some(toml::Value::Array(a)) => {
+                let mut out = Vec::new();
+                for (i, v) in a.iter().enumerate() {
+                    match v.as_table() {
+                        Some(t) => out.push((format!("{path}[{i}]"), t)),
+                        None => errs.push(
+                            &format!("{path}[{i}]"),
+                            format!("expected a table, found {}", v.type_str()),
+                        ),
+                    }
+                }
+                out
+            }
+            Some(other) => {
+                errs.push(
+                    &path,
+                    format!(
+                        "expected a table or a list of tables, found {}",
+                        other.type_str()
+                    ),
+                );
+                Vec::new()
+            }
+        }
+    }
+
+    /// At most one table.
+    fn table(
+        &mut self,
+        key: &'static str,
+        errs: &mut Problems,
+    ) -> Option<(String, &'a toml::Table)> {
+        let v = self.tables(key, errs);
+        if v.len() > 1 {
+            errs.push(&self.path(key), "expected one table, found a list");
+        }
+        v.into_iter().next()
+    }
+
+    /// Reject every key not taken, listing the allowed ones.
+    fn finish(self, errs: &mut Problems) {
+        for k in self.table.keys() {
+            if !self.taken.contains(&k.as_str()) {
+                errs.push(
+                    &self.path(k),
+                    format!("unknown key (allowed: {})", self.taken.join(", ")),
+                );
+            }
+        }
+    }
+}
+
+fn parse_model(table: &toml::Table, errs: &mut Problems) -> Option<SimModel> {
+    let mut top = Keys::new(table, "");
+    let _ = top.string("description", errs);
+    let rate = top.num_pos("rate_hz", true, errs);
+    let tau0 = top.num_pos("tau0_s", true, errs);
+    let tau0_s = match (rate, tau0) {
+        (Some(r), None) => 1.0 / r,
+        (None, Some(t)) => t,
+        (Some(_), Some(_)) => {
+            errs.push("tau0_s", "give either rate_hz or tau0_s, not both");
+            f64::NAN
+        }
+        (None, None) => {
+            if !table.contains_key("rate_hz") && !table.contains_key("tau0_s") {
+                errs.push("rate_hz", "missing (or give tau0_s)");
+            }
+            f64::NAN
+        }
+    };
+    let stand = top
+        .table("stand", errs)
+        .map(|(p, t)| parse_stand(t, &p, errs));
+    let temperature = top
+        .table("temperature", errs)
+        .map(|(p, t)| parse_temperature(t, &p, errs));
+    let channel_tables = top.tables("channel", errs);
+    top.finish(errs);
+    if channel_tables.is_empty() {
+        errs.push("channel", "at least one [[channel]] is needed");
+    }
+    let mut channels = Vec::new();
+    for (path, t) in channel_tables {
+        if let Some(c) = parse_channel(
+            t,
+            &path,
+            tau0_s,
+            temperature.is_some(),
+            stand.is_some(),
+            errs,
+        ) {
+            if channels.iter().any(|o: &ChannelModel| o.name == c.name) {
+                errs.push(
+                    &format!("{path}.name"),
+                    format!("duplicate channel name `{}`", c.name),
+                );
+            }
+            channels.push(c);
+        }
+    }
+    errs.list.is_empty().then_some(SimModel {
+        tau0_s,
+        stand,
+        temperature,
+        channels,
+    })
+}
+
+fn parse_stand(t: &toml::Table, path: &str, errs: &mut Problems) -> Stand {
+    let mut k = Keys::new(t, path);
+    let lat = k.num("latitude_deg", errs);
+    let latitude_deg = k.required("latitude_deg", lat, errs);
+    if latitude_deg.abs() > 90.0 {
+        errs.push(
+            &k.path("latitude_deg"),
+            format!("must be within [-90, 90], got {latitude_deg}"),
+        );
+    }
+    let gravity_m_s2 = k
+        .num_pos("gravity_m_s2", true, errs)
+        .unwrap_or_else(|| normal_gravity_m_s2(latitude_deg));
+    k.finish(errs);
+    Stand {
+        latitude_deg,
+        gravity_m_s2,
+    }
+}
+
+fn parse_temperature(t: &toml::Table, path: &str, errs: &mut Problems) -> TemperatureProfile {
+    let mut k = Keys::new(t, path);
+    let s = k.num("start_c", errs);
+    let start_c = k.required("start_c", s, errs);
+    let f = k.num("final_c", errs);
+    let final_c = k.required("final_c", f, errs);
+    let tc = k.num_pos("time_constant_s", true, errs);
+    let time_constant_s = k.required("time_constant_s", tc, errs);
+    let sine_amplitude_c = k.num("sine_amplitude_c", errs).unwrap_or(0.0);
+    let period = k.num_pos("sine_period_s", true, errs);
+    let sine_period_s = if sine_amplitude_c != 0.0 {
+        k.required("sine_period_s", period, errs)
+    } else {
+        period.unwrap_or(1.0)
+    };
+    let reference_c = k.num("reference_c", errs).unwrap_or(final_c);
+    k.finish(errs);
+    TemperatureProfile {
+        start_c,
+        final_c,
+        time_constant_s,
+        sine_amplitude_c,
+        sine_period_s,
+        reference_c,
+    }
+}
+
+fn parse_axis(v: &toml::Value, path: &str, errs: &mut Problems) -> Option<[f64; 3]> {
+    let raw = match v {
+        toml::Value::String(s) => match s.as_str() {
+            "east" => [1.0, 0.0, 0.0],
+            "west" => [-1.0, 0.0, 0.0],
+            "north" => [0.0, 1.0, 0.0],
+            "south" => [0.0, -1.0, 0.0],
+            "up" => [0.0, 0.0, 1.0],
+            "down" => [0.0, 0.0, -1.0],
+            other => {
+                errs.push(
+                    path,
+                    format!("unknown direction `{other}` (allowed: up, down, north, south, east, west, or [east, north, up])"),
+                );
+                return None;
+            }
+        },
+        toml::Value::Array(a) => {
+            let nums: Vec<f64> = a
+                .iter()
+                .filter_map(|x| x.as_float().or(x.as_integer().map(|i| i as f64)))
+                .collect();
+            if a.len() != 3 || nums.len() != 3 || nums.iter().any(|x| !x.is_finite()) {
+                errs.push(path, "expected three numbers [east, north, up]");
+                return None;
+            }
+            [nums[0], nums[1], nums[2]]
+        }
+        other => {
+            errs.push(
+                path,
+                format!(
+                    "expected a direction name or [east, north, up], found {}",
+                    other.type_str()
+                ),
+            );
+            return None;
+        }
+    };
+    let norm = (raw[0] * raw[0] + raw[1] * raw[1] + raw[2] * raw[2]).sqrt();
+    if norm == 0.0 {
+        errs.push(path, "must not be the zero vector");
+        return None;
+    }
+    Some([raw[0] / norm, raw[1] / norm, raw[2] / norm])
+}
+
+fn parse_channel(
+    t: &toml::Table,
+    path: &str,
+    tau0_s: f64,
+    has_temperature: bool,
+    has_stand: bool,
+    errs: &mut Problems,
+) -> Option<ChannelModel> {
+    let n_before = errs.list.len();
+    let mut k = Keys::new(t, path);
+    let name = k.string("name", errs).unwrap_or("").to_string();
+    if !t.contains_key("name") {
+        errs.push(&k.path("name"), "missing");
+    } else if name.is_empty() || name.contains([',', '"', '\n', '\r']) {
+        errs.push(
+            &k.path("name"),
+            "must be non-empty, without commas, quotes or line breaks",
+        );
+    }
+    let unit = k.string("unit", errs).unwrap_or("").to_string();
+    if !t.contains_key("unit") {
+        errs.push(&k.path("unit"), "missing");
+    }
+    let kind = sensor_kind(&unit);
+    let lsb = k.num_pos("lsb", true, errs);
+    let bias = k.num("bias", errs).unwrap_or(0.0);
+    let q = k.num_pos("Q", false, errs).unwrap_or(0.0);
+    let n = k.num_pos("N", false, errs).unwrap_or(0.0);
+    let b = k.num_pos("B", false, errs).unwrap_or(0.0);
+    let kk = k.num_pos("K", false, errs).unwrap_or(0.0);
+    let r = k.num("R", errs).unwrap_or(0.0);
+    let band_path = k.path("flicker_band_s");
+    let flicker_band_s = match k.get("flicker_band_s") {
+        None => (tau0_s, tau0_s * 10f64.powf(FLICKER_BAND_DECADES_DEFAULT)),
+        Some(v) => {
+            let nums: Vec<f64> = v
+                .as_array()
+                .map(|a| {
+                    a.iter()
+                        .filter_map(|x| x.as_float().or(x.as_integer().map(|i| i as f64)))
+                        .collect()
+                })
+                .unwrap_or_default();
+            if nums.len() != 2 || !(nums[0] > 0.0 && nums[1] > nums[0] && nums[1].is_finite()) {
+                errs.push(
+                    &band_path,
+                    "expected [tau_lo_s, tau_hi_s] with 0 < tau_lo_s < tau_hi_s",
+                );
+                (tau0_s, tau0_s * 10f64.powf(FLICKER_BAND_DECADES_DEFAULT))
+            } else {
+                (nums[0], nums[1])
+            }
+        }
+    };
+    let axis_path = k.path("axis");
+    let axis_enu = k.get("axis").and_then(|v| parse_axis(v, &axis_path, errs));
+    if axis_enu.is_some() && kind == SensorKind::Other {
+        errs.push(
+            &axis_path,
+            format!(
+                "an axis needs a unit of angle (arcsec, deg, rad) or velocity (m/s), not `{unit}`"
+            ),
+        );
+    }
+    if axis_enu.is_some() && !has_stand {
+        errs.push(
+            &axis_path,
+            "an axis needs a [stand] table (latitude) to project on",
+        );
+    }
+    let temperature_coefficient = k.num("temperature_coefficient", errs).unwrap_or(0.0);
+    if temperature_coefficient != 0.0 && !has_temperature {
+        errs.push(
+            &k.path("temperature_coefficient"),
+            "needs a top-level [temperature] profile",
+        );
+    }
+    let mut gauss_markov = Vec::new();
+    for (p, tt) in k.tables("gauss_markov", errs) {
+        let mut e = Keys::new(tt, &p);
+        let s = e.num_pos("sigma", false, errs);
+        let sigma = e.required("sigma", s, errs);
+        let tc = e.num_pos("tau_c", true, errs);
+        let tau_c_s = e.required("tau_c", tc, errs);
+        e.finish(errs);
+        gauss_markov.push(GaussMarkov { sigma, tau_c_s });
+    }
+    let mut sinusoids = Vec::new();
+    for (p, tt) in k.tables("sinusoid", errs) {
+        let mut e = Keys::new(tt, &p);
+        let a = e.num("amplitude", errs);
+        let amplitude = e.required("amplitude", a, errs);
+        let f = e.num_pos("frequency", true, errs);
+        let frequency_hz = e.required("frequency", f, errs);
+        let phase_rad = e.num("phase", errs).unwrap_or(0.0);
+        e.finish(errs);
+        sinusoids.push(Sinusoid {
+            amplitude,
+            frequency_hz,
+            phase_rad,
+        });
+    }
+    let output_filter = k.table("output_filter", errs).map(|(p, tt)| {
+        let mut e = Keys::new(tt, &p);
+        let tc = e.num_pos("time_constant", true, errs);
+        let time_constant_s = e.required("time_constant", tc, errs);
+        e.finish(errs);
+        OutputFilterSpec { time_constant_s }
+    });
+    let warmup = k.table("warmup", errs).map(|(p, tt)| {
+        let mut e = Keys::new(tt, &p);
+        let a = e.num("amplitude", errs);
+        let amplitude = e.required("amplitude", a, errs);
+        let tc = e.num_pos("time_constant", true, errs);
+        let time_constant_s = e.required("time_constant", tc, errs);
+        e.finish(errs);
+        Warmup {
+            amplitude,
+            time_constant_s,
+        }
+    });
+    let bias_jumps = k.table("bias_jumps", errs).map(|(p, tt)| {
+        let mut e = Keys::new(tt, &p);
+        let mi = e.num_pos("mean_interval", true, errs);
+        let mean_interval_s = e.required("mean_interval", mi, errs);
+        let rs = e.num_pos("rms_size", false, errs);
+        let rms_size = e.required("rms_size", rs, errs);
+        e.finish(errs);
+        BiasJumps {
+            mean_interval_s,
+            rms_size,
+        }
+    });
+    k.finish(errs);
+    if errs.list.len() > n_before {
+        return None;
+    }
+    let flicker = (b > 0.0).then(|| FlickerBank::design(b, flicker_band_s.0, flicker_band_s.1));
+    Some(ChannelModel {
+        name,
+        unit,
+        lsb,
+        bias,
+        q,
+        n,
+        b,
+        k: kk,
+        r,
+        flicker_band_s,
+        flicker,
+        axis_enu,
+        kind,
+        temperature_coefficient,
+        gauss_markov,
+        sinusoids,
+        output_filter,
+        warmup,
+        bias_jumps,
+    })
+}
