@@ -18,6 +18,7 @@
 #![forbid(unsafe_code)]
 
 pub mod allan;
+pub mod analysis;
 pub mod cli;
 pub mod error;
 pub mod frame;

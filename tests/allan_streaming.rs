@@ -4,7 +4,7 @@
 mod common;
 
 use allanscope::allan::accum::{
-    AccumConfig, Engine, FloatRepr, IntRepr, LevelReading, Overlap, StatSet, TauSpec,
+    AccumConfig, Engine, FloatRepr, IntRepr, LevelReading, Overlap, TauSpec,
 };
 use allanscope::allan::batch::{mvar, oavar, ohvar, phase_from_increments, BatchPoint};
 use allanscope::allan::Stat;

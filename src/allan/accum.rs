@@ -908,6 +908,13 @@ impl ChannelAccumulator {
         }
     }
 
+    pub fn segments(&self) -> u64 {
+        match self {
+            ChannelAccumulator::Counts { engine, .. } => engine.segments(),
+            ChannelAccumulator::Real(e) => e.segments(),
+        }
+    }
+
     pub fn config(&self) -> &AccumConfig {
         match self {
             ChannelAccumulator::Counts { engine, .. } => engine.config(),

@@ -65,7 +65,14 @@ pub fn build_curves(
 
 /// One point: its edf for noise `alpha` and its 95% interval (NaN where the edf is undefined,
 /// e.g. a run too short for Greenhall's algorithm at that tau).
-fn point(stat: Stat, r: &LevelReading, var: f64, count: u64, alpha: i32, n_phase: u64) -> CurvePoint {
+fn point(
+    stat: Stat,
+    r: &LevelReading,
+    var: f64,
+    count: u64,
+    alpha: i32,
+    n_phase: u64,
+) -> CurvePoint {
     // The edf is defined for the noise types the statistic converges for; a type it cannot
     // take (e.g. alpha = -3 for AVAR) falls back to the nearest it can.
     let lowest = if stat == Stat::Hvar { -4 } else { -2 };

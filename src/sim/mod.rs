@@ -34,6 +34,8 @@ pub use model_file::{ChannelModel, SimModel};
 use noise::{FlickerState, IntegratedGaussMarkov, RateRandomWalk, WhitePhase};
 pub use writer::{simulate_to_writer, OutputFormat};
 
+pub mod capture;
+
 /// The random generator of every channel stream.
 pub type SimRng = Xoshiro256PlusPlus;
 

@@ -135,3 +135,37 @@ pub struct SummaryRecord {
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub pass: Option<bool>,
 }
+
+/// `aggregate`: run-to-run statistics of one coefficient of one channel (the seed paper's
+/// table 2).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct AggregateRecord {
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub channel: String,
+    pub unit: String,
+    /// `Q`, `N`, `B`, `K` or `R`.
+    pub coef: String,
+    /// Runs in which the coefficient was determined.
+    pub n: usize,
+    pub mean: Option<f64>,
+    /// Sample standard deviation (n - 1).
+    pub sd: Option<f64>,
+    /// Student 95% interval of the mean.
+    pub ci_t: Option<[f64; 2]>,
+    /// The seed paper's `mean +- 1.96 sd / sqrt(n)`.
+    pub ci_z: Option<[f64; 2]>,
+}
+
+/// Any record, written as its own JSON object.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum Record {
+    Curve(CurveRecord),
+    Fit(FitRecord),
+    Health(HealthRecord),
+    Aggregate(AggregateRecord),
+    Summary(SummaryRecord),
+    /// Records of other stages (e.g. the diagnosis), already as JSON.
+    Other(serde_json::Value),
+}

@@ -1,0 +1,369 @@
+//! One run's analysis: per-channel accumulators fed with [`Chunk`]s, read into curves, fitted,
+//! and turned into records. Plain synchronous code: the pipeline runs it on a worker thread and
+//! tests and benchmarks call it directly. It never knows where the samples came from.
+
+use std::time::Instant;
+
+use crate::allan::accum::{AccumConfig, ChannelAccumulator, Overlap};
+use crate::allan::curve::{build_curves, AlphaSource};
+use crate::allan::{Curve, Stat};
+use crate::frame::{ChannelValue, FrameEvent};
+use crate::input::Chunk;
+use crate::model::fit::{FitOptions, FitResult, Fitter};
+use crate::model::units::{datasheet, quantization_ratio, SensorKind};
+use crate::sink::records::{CurveRecord, FitRecord, Record, SummaryRecord};
+
+/// What the values of a text column are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum InputKind {
+    /// Increments over each step, in u (the default; THEORY.md section 1).
+    #[default]
+    Increments,
+    /// Rate samples in u/s: the increment is `y * tau0`.
+    Rate,
+    /// Phase, the running sum of increments, in u.
+    Phase,
+}
+
+/// One channel as the input describes it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChannelSetup {
+    pub name: String,
+    pub unit: String,
+    /// Position of the channel's value in each row of the input.
+    pub column: usize,
+    /// `Some(lsb)` when values arrive as integer counts of `lsb` u (frame fields): they are
+    /// accumulated exactly and scaled at read-out.
+    pub counts_lsb: Option<f64>,
+}
+
+/// Settings of one run's analysis.
+#[derive(Debug, Clone)]
+pub struct AnalysisOptions {
+    pub accum: AccumConfig,
+    pub kind: InputKind,
+    /// Data-seconds between interim records; `None`: final records only.
+    pub every_s: Option<f64>,
+    /// The five-term fit, or `None` for curves only.
+    pub fit: Option<FitOptions>,
+    /// Run index when several inputs are analyzed.
+    pub run: Option<usize>,
+}
+
+struct ChannelState {
+    setup: ChannelSetup,
+    acc: ChannelAccumulator,
+    fitter: Fitter,
+    last_fit: Option<FitResult>,
+}
+
+/// A run in progress.
+pub struct RunAnalysis {
+    input: String,
+    opts: AnalysisOptions,
+    channels: Vec<ChannelState>,
+    next_emit_s: f64,
+    bad_rows: u64,
+    started: Instant,
+}
+
+/// The power-law exponent of S_y for the term that dominates the model at a tau: Q is white
+/// phase (+2), N white rate (0), B flicker rate (-1), K random-walk rate (-2); the ramp R is
+/// deterministic and is given the random-walk type, the steepest AVAR supports.
+const TERM_ALPHA: [i32; 5] = [2, 0, -1, -2, -2];
+
+impl RunAnalysis {
+    pub fn new(input: &str, channels: Vec<ChannelSetup>, opts: AnalysisOptions) -> RunAnalysis {
+        let channels = channels
+            .into_iter()
+            .map(|setup| ChannelState {
+                acc: match setup.counts_lsb {
+                    Some(lsb) => ChannelAccumulator::counts(opts.accum.clone(), lsb),
+                    None => ChannelAccumulator::real(opts.accum.clone()),
+                },
+                setup,
+                fitter: Fitter::new(),
+                last_fit: None,
+            })
+            .collect();
+        RunAnalysis {
+            input: input.into(),
+            next_emit_s: opts.every_s.unwrap_or(f64::INFINITY),
+            opts,
+            channels,
+            bad_rows: 0,
+            started: Instant::now(),
+        }
+    }
+
+    pub fn channel_names(&self) -> Vec<String> {
+        self.channels.iter().map(|c| c.setup.name.clone()).collect()
+    }
+
+    /// Seconds of data consumed (the longest channel).
+    pub fn t_data_s(&self) -> f64 {
+        self.channels
+            .iter()
+            .map(|c| c.acc.t_data_s())
+            .fold(0.0, f64::max)
+    }
+
+    /// Counts rows the input could not read (they were fed as gaps).
+    pub fn add_bad_rows(&mut self, n: u64) {
+        self.bad_rows += n;
+    }
+
+    /// Feeds a chunk; interim records that fall due inside it are appended to `out`.
+    pub fn push_chunk(&mut self, chunk: &Chunk, out: &mut Vec<Record>) {
+        let tau0 = self.opts.accum.tau0_s;
+        match chunk {
+            Chunk::Rows { values, width } => {
+                for row in values.chunks_exact(*width) {
+                    self.push_row(row, tau0);
+                    self.emit_if_due(out);
+                }
+            }
+            Chunk::Frames(events) => {
+                for ev in events {
+                    match ev {
+                        FrameEvent::Frame(f) => {
+                            for ch in &mut self.channels {
+                                match f.values.get(ch.setup.column).copied().flatten() {
+                                    Some(ChannelValue::Count(c)) => match &mut ch.acc {
+                                        ChannelAccumulator::Counts { engine, .. } => {
+                                            engine.push_increment(c)
+                                        }
+                                        ChannelAccumulator::Real(e) => e.push_increment(
+                                            c as f64 * ch.setup.counts_lsb.unwrap_or(1.0),
+                                        ),
+                                    },
+                                    Some(ChannelValue::Real(v)) => match &mut ch.acc {
+                                        ChannelAccumulator::Real(e) => e.push_increment(v),
+                                        // A real value on a counts channel cannot be summed
+                                        // exactly: the descriptor said integers.
+                                        ChannelAccumulator::Counts { engine, .. } => {
+                                            engine.push_gap(1)
+                                        }
+                                    },
+                                    None => ch.acc.push_gap(1),
+                                }
+                            }
+                        }
+                        FrameEvent::Gap { missing } => {
+                            for ch in &mut self.channels {
+                                ch.acc.push_gap(*missing);
+                            }
+                        }
+                    }
+                    self.emit_if_due(out);
+                }
+            }
+        }
+    }
+
+    #[inline]
+    fn push_row(&mut self, row: &[f64], tau0: f64) {
+        let kind = self.opts.kind;
+        for ch in &mut self.channels {
+            let v = row[ch.setup.column];
+            match &mut ch.acc {
+                ChannelAccumulator::Real(e) => match kind {
+                    InputKind::Phase => e.push_phase_f64(v),
+                    _ if v.is_nan() => e.push_gap(1),
+                    InputKind::Increments => e.push_increment(v),
+                    InputKind::Rate => e.push_increment(v * tau0),
+                },
+                ChannelAccumulator::Counts { engine, .. } => {
+                    if v.is_finite() && v.fract() == 0.0 && v.abs() < 9.0e15 {
+                        engine.push_increment(v as i64)
+                    } else {
+                        engine.push_gap(1)
+                    }
+                }
+            }
+        }
+    }
+
+    fn emit_if_due(&mut self, out: &mut Vec<Record>) {
+        if self.t_data_s() >= self.next_emit_s {
+            out.extend(self.records(false));
+            let every = self.opts.every_s.unwrap_or(f64::INFINITY);
+            while self.next_emit_s <= self.t_data_s() {
+                self.next_emit_s += every;
+            }
+        }
+    }
+
+    /// Curve and fit records of every channel as of now.
+    pub fn records(&mut self, final_: bool) -> Vec<Record> {
+        let run = self.opts.run;
+        let mut out = Vec::new();
+        for ch in &mut self.channels {
+            let (curves, fit) = analyze_channel(ch, &self.opts);
+            for c in &curves {
+                out.push(Record::Curve(CurveRecord::new(
+                    &ch.setup.name,
+                    &ch.setup.unit,
+                    c,
+                    final_,
+                    run,
+                )));
+            }
+            if let Some(f) = fit {
+                out.push(Record::Fit(fit_record(
+                    &ch.setup,
+                    &f,
+                    final_,
+                    ch.acc.t_data_s(),
+                    run,
+                )));
+                ch.last_fit = Some(f);
+            }
+        }
+        out
+    }
+
+    /// The final fits, one per channel (`None` where no fit could be made), after [`records`].
+    ///
+    /// [`records`]: RunAnalysis::records
+    pub fn last_fits(&self) -> Vec<(String, String, Option<FitResult>)> {
+        self.channels
+            .iter()
+            .map(|c| {
+                (
+                    c.setup.name.clone(),
+                    c.setup.unit.clone(),
+                    c.last_fit.clone(),
+                )
+            })
+            .collect()
+    }
+
+    /// The `summary` record of the run.
+    pub fn summary(&self) -> SummaryRecord {
+        SummaryRecord {
+            kind: "summary".into(),
+            input: self.input.clone(),
+            run: self.opts.run,
+            channels: self.channel_names(),
+            tau0: self.opts.accum.tau0_s,
+            t_data: self.t_data_s(),
+            samples: self.channels.iter().map(|c| c.acc.phase_points()).collect(),
+            segments: self.channels.iter().map(|c| c.acc.segments()).collect(),
+            bad_rows: self.bad_rows,
+            overlap: match self.opts.accum.overlap {
+                Overlap::Full => "full".into(),
+                Overlap::Bounded(l) => l.to_string(),
+            },
+            elapsed_s: self.started.elapsed().as_secs_f64(),
+            limits: Vec::new(),
+            pass: None,
+        }
+    }
+
+    /// Current curves of one channel (for tests and the diagnosis).
+    pub fn curves(&mut self, channel: usize) -> Vec<Curve> {
+        let ch = &mut self.channels[channel];
+        analyze_channel(ch, &self.opts).0
+    }
+}
+
+/// Reads a channel's accumulator into curves, fits the AVAR curve, and re-derives each tau's
+/// noise type from the fitted model (the term that dominates there) for the final edf.
+fn analyze_channel(
+    ch: &mut ChannelState,
+    opts: &AnalysisOptions,
+) -> (Vec<Curve>, Option<FitResult>) {
+    let readings = ch.acc.read();
+    let cfg = &opts.accum;
+    let (n, t) = (ch.acc.phase_points(), ch.acc.t_data_s());
+    let curves = build_curves(&readings, cfg.stats, cfg.tau0_s, n, t, AlphaSource::Lag1);
+    let Some(fit_opts) = &opts.fit else {
+        return (curves, None);
+    };
+    let Some(avar) = curves.iter().find(|c| c.stat == Stat::Avar) else {
+        return (curves, None);
+    };
+    let first = match ch.fitter.fit(&avar.points, fit_opts) {
+        Ok(f) => f,
+        Err(e) => {
+            tracing::debug!("{}: {e}", ch.setup.name);
+            return (curves, None);
+        }
+    };
+    // The noise type at each tau from the model, then the curves and the fit once more with
+    // the edf that type gives.
+    let alphas: Vec<i32> = readings
+        .iter()
+        .map(|r| {
+            let b = crate::model::terms::basis(r.tau_s);
+            let (i, _) = (0..5)
+                .map(|i| (i, b[i] * first.c[i]))
+                .fold((1, f64::MIN), |a, x| if x.1 > a.1 { x } else { a });
+            TERM_ALPHA[i]
+        })
+        .collect();
+    let curves = build_curves(
+        &readings,
+        cfg.stats,
+        cfg.tau0_s,
+        n,
+        t,
+        AlphaSource::Given(&alphas),
+    );
+    let fit = curves
+        .iter()
+        .find(|c| c.stat == Stat::Avar)
+        .and_then(|c| ch.fitter.fit(&c.points, fit_opts).ok())
+        .unwrap_or(first);
+    (curves, Some(fit))
+}
+
+fn sensor_kind(unit: &str) -> Option<SensorKind> {
+    match unit {
+        "arcsec" => Some(SensorKind::GyroArcsec),
+        "m/s" => Some(SensorKind::AccelMps),
+        _ => None,
+    }
+}
+
+fn fit_record(
+    setup: &ChannelSetup,
+    f: &FitResult,
+    final_: bool,
+    t_data_s: f64,
+    run: Option<usize>,
+) -> FitRecord {
+    let native: [f64; 5] = std::array::from_fn(|i| f.coef[i].value);
+    let datasheet = sensor_kind(&setup.unit).map(|k| {
+        let d = datasheet(native, k);
+        let mut m = serde_json::Map::new();
+        for (i, name) in crate::model::terms::TERM_NAMES.iter().enumerate() {
+            m.insert(
+                (*name).into(),
+                serde_json::json!({
+                    "value": f.coef[i].determined.then_some(d.values[i]),
+                    "unit": d.units[i],
+                }),
+            );
+        }
+        serde_json::Value::Object(m)
+    });
+    let q = &f.coef[0];
+    FitRecord {
+        kind: "fit".into(),
+        channel: setup.name.clone(),
+        unit: setup.unit.clone(),
+        r#final: final_,
+        t_data: t_data_s,
+        coef: f.coef_json(),
+        gof: f.gof.is_finite().then_some(f.gof),
+        method: f.method.name().into(),
+        datasheet,
+        q_over_lsb: setup
+            .counts_lsb
+            .filter(|_| q.determined)
+            .map(|lsb| quantization_ratio(q.value, lsb)),
+        run,
+    }
+}
