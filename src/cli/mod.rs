@@ -1,24 +1,21 @@
-//! The command line: argument parsing and one function per subcommand. `main.rs` only calls
+//! The command line: argument parsing here, one file per subcommand beside it. `main.rs` only calls
 //! [`main_with_args`] and maps errors to exit statuses (CONTRACT.md: 2 for usage and
 //! configuration errors, 1 for anything else).
 
-use std::io::{BufRead, BufReader, Read, Write};
+mod analyze;
+mod simulate;
+
+use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 
 use crate::allan::accum::{AccumConfig, Overlap, StatSet, TauSpec, DEFAULT_L};
-use crate::analysis::{AnalysisOptions, ChannelSetup, InputKind, RunAnalysis};
+use crate::analysis::{AnalysisOptions, ChannelSetup, InputKind};
 use crate::error::UsageError;
-use crate::frame::{Decoder, FrameDescriptor};
-use crate::input::text::{TextReader, BATCH_ROWS};
-use crate::input::Chunk;
-use crate::model::aggregate::run_stats;
 use crate::model::fit::{FitMethod, FitOptions};
-use crate::model::terms::TERM_NAMES;
 use crate::sink::json::JsonLines;
-use crate::sink::records::{AggregateRecord, HealthRecord, Record};
 
 #[derive(Debug, Parser)]
 #[command(
@@ -123,12 +120,12 @@ where
         anyhow::Error::new(UsageError::Option(e.to_string()))
     })?;
     match cli.command {
-        Command::Analyze(a) => analyze(&a),
-        Command::Simulate(s) => simulate(&s),
+        Command::Analyze(a) => analyze::run(&a),
+        Command::Simulate(s) => simulate::run(&s),
     }
 }
 
-fn usage(msg: impl Into<String>) -> anyhow::Error {
+pub(crate) fn usage(msg: impl Into<String>) -> anyhow::Error {
     anyhow::Error::new(UsageError::Option(msg.into()))
 }
 
@@ -210,7 +207,7 @@ pub fn parse_duration_s(s: &str) -> Result<f64> {
 }
 
 /// The analysis options common to every run of a command.
-fn analysis_options(d: &DataArgs, tau0_s: f64) -> Result<AnalysisOptions> {
+pub(crate) fn analysis_options(d: &DataArgs, tau0_s: f64) -> Result<AnalysisOptions> {
     if !(tau0_s.is_finite() && tau0_s > 0.0) {
         return Err(usage(format!(
             "--tau0 {tau0_s}: must be a positive number of seconds"
@@ -249,7 +246,7 @@ fn analysis_options(d: &DataArgs, tau0_s: f64) -> Result<AnalysisOptions> {
     })
 }
 
-fn open_input(input: &str) -> Result<Box<dyn Read + Send>> {
+pub(crate) fn open_input(input: &str) -> Result<Box<dyn Read + Send>> {
     if input == "-" {
         Ok(Box::new(std::io::stdin()))
     } else {
@@ -264,7 +261,7 @@ fn open_input(input: &str) -> Result<Box<dyn Read + Send>> {
     }
 }
 
-fn output(d: &DataArgs) -> Result<JsonLines> {
+pub(crate) fn output(d: &DataArgs) -> Result<JsonLines> {
     Ok(match &d.out {
         Some(p) => {
             let f = std::fs::File::create(p)
@@ -275,7 +272,7 @@ fn output(d: &DataArgs) -> Result<JsonLines> {
     })
 }
 
-fn select_channels(
+pub(crate) fn select_channels(
     all: Vec<ChannelSetup>,
     wanted: &Option<Vec<String>>,
     input: &str,
@@ -295,266 +292,6 @@ fn select_channels(
         }
     }
     Ok(all.into_iter().filter(|c| w.contains(&c.name)).collect())
-}
-
-/// Capacity of the channel between the reader thread and the analysis: a few chunks, so
-/// reading runs ahead of the analysis by at most that much memory.
-const CHUNK_QUEUE: usize = 4;
-
-/// Text columns the analysis does not treat as channels (the simulator's temperature column).
-const AUXILIARY_COLUMNS: [&str; 1] = ["temperature_c"];
-
-fn analyze(a: &AnalyzeArgs) -> Result<()> {
-    let d = &a.data;
-    let mut sink = output(d)?;
-    let descriptor = if d.format == "csv" {
-        None
-    } else {
-        Some(FrameDescriptor::load(&d.format).map_err(anyhow::Error::new)?)
-    };
-    let tau0 = match (&descriptor, d.tau0) {
-        (_, Some(t)) => t,
-        (Some(desc), None) => desc.tau0_s(),
-        (None, None) => return Err(usage("--tau0 is required for --format csv")),
-    };
-    let base = analysis_options(d, tau0)?;
-    let several = a.inputs.len() > 1;
-    let mut fits = Vec::new();
-    for (run, input) in a.inputs.iter().enumerate() {
-        let mut opts = base.clone();
-        opts.run = several.then_some(run);
-        let analysis = match &descriptor {
-            None => analyze_text(input, d, opts, &mut sink)?,
-            Some(desc) => analyze_frames(input, desc, d, opts, &mut sink)?,
-        };
-        fits.push(analysis.last_fits());
-    }
-    if several {
-        for r in aggregate_records(&fits) {
-            sink.write(&r)?;
-        }
-    }
-    sink.flush()?;
-    Ok(())
-}
-
-/// Reads a text input on a thread of its own and feeds the analysis on this one.
-fn analyze_text(
-    input: &str,
-    d: &DataArgs,
-    opts: AnalysisOptions,
-    sink: &mut JsonLines,
-) -> Result<RunAnalysis> {
-    let path = PathBuf::from(input);
-    let reader = TextReader::new(BufReader::with_capacity(1 << 16, open_input(input)?), &path)
-        .map_err(anyhow::Error::new)?;
-    let setups: Vec<ChannelSetup> = reader
-        .names()
-        .iter()
-        .enumerate()
-        .filter(|(_, n)| !AUXILIARY_COLUMNS.contains(&n.as_str()))
-        .map(|(i, n)| ChannelSetup {
-            name: n.clone(),
-            unit: d.unit.clone(),
-            column: i,
-            counts_lsb: None,
-        })
-        .collect();
-    let setups = select_channels(setups, &d.channels, input)?;
-    let width = reader.names().len();
-    let mut analysis = RunAnalysis::new(input, setups, opts);
-    let (tx, rx) = crossbeam_channel::bounded::<Chunk>(CHUNK_QUEUE);
-    let reader_thread = std::thread::spawn(move || -> Result<u64> {
-        let mut reader = reader;
-        loop {
-            let mut values = Vec::with_capacity(BATCH_ROWS * width);
-            let n = reader
-                .read_rows(&mut values, BATCH_ROWS)
-                .with_context(|| format!("reading {}", path.display()))?;
-            if n == 0 {
-                return Ok(reader.bad_rows());
-            }
-            if tx.send(Chunk::Rows { values, width }).is_err() {
-                return Ok(reader.bad_rows());
-            }
-        }
-    });
-    run_chunks(&mut analysis, rx, sink)?;
-    let bad = reader_thread
-        .join()
-        .map_err(|_| anyhow::anyhow!("the reader thread panicked"))??;
-    analysis.add_bad_rows(bad);
-    finish_run(&mut analysis, None, sink)?;
-    Ok(analysis)
-}
-
-/// Replays a capture of frames: a reader thread decodes, the analysis runs here.
-fn analyze_frames(
-    input: &str,
-    desc: &FrameDescriptor,
-    d: &DataArgs,
-    opts: AnalysisOptions,
-    sink: &mut JsonLines,
-) -> Result<RunAnalysis> {
-    let setups: Vec<ChannelSetup> = desc
-        .channels()
-        .into_iter()
-        .enumerate()
-        .map(|(i, c)| ChannelSetup {
-            name: c.name,
-            unit: c.unit,
-            column: i,
-            counts_lsb: c.scale,
-        })
-        .collect();
-    let setups = select_channels(setups, &d.channels, input)?;
-    let mut analysis = RunAnalysis::new(input, setups, opts);
-    let mut src = open_input(input)?;
-    let mut decoder = Decoder::new(desc.clone());
-    let (tx, rx) = crossbeam_channel::bounded::<Chunk>(CHUNK_QUEUE);
-    let path = input.to_string();
-    let reader_thread = std::thread::spawn(move || -> Result<Decoder> {
-        let mut buf = vec![0u8; 1 << 16];
-        loop {
-            let n = src
-                .read(&mut buf)
-                .with_context(|| format!("reading {path}"))?;
-            if n == 0 {
-                decoder.finish();
-            } else {
-                decoder.push(&buf[..n]);
-            }
-            let events: Vec<_> = decoder.drain().collect();
-            if !events.is_empty() && tx.send(Chunk::Frames(events)).is_err() {
-                return Ok(decoder);
-            }
-            if n == 0 {
-                return Ok(decoder);
-            }
-        }
-    });
-    run_chunks(&mut analysis, rx, sink)?;
-    let decoder = reader_thread
-        .join()
-        .map_err(|_| anyhow::anyhow!("the reader thread panicked"))??;
-    let h = decoder.health();
-    let mut health = HealthRecord {
-        kind: "health".into(),
-        frames: h.frames,
-        crc_errors: h.crc_errors,
-        resyncs: h.resyncs,
-        missing: h.missing,
-        duplicates: h.duplicates,
-        bytes_skipped: h.bytes_skipped,
-        extra: serde_json::Map::new(),
-        run: analysis.summary().run,
-    };
-    if let Ok(serde_json::Value::Object(all)) = serde_json::to_value(h) {
-        for (k, v) in all {
-            if !matches!(
-                k.as_str(),
-                "frames" | "crc_errors" | "resyncs" | "missing" | "duplicates" | "bytes_skipped"
-            ) {
-                health.extra.insert(k, v);
-            }
-        }
-    }
-    finish_run(&mut analysis, Some(health), sink)?;
-    Ok(analysis)
-}
-
-fn run_chunks(
-    analysis: &mut RunAnalysis,
-    rx: crossbeam_channel::Receiver<Chunk>,
-    sink: &mut JsonLines,
-) -> Result<()> {
-    let mut out = Vec::new();
-    for chunk in rx {
-        analysis.push_chunk(&chunk, &mut out);
-        if !out.is_empty() {
-            for r in out.drain(..) {
-                sink.write(&r)?;
-            }
-            sink.flush()?;
-        }
-    }
-    Ok(())
-}
-
-fn finish_run(
-    analysis: &mut RunAnalysis,
-    health: Option<HealthRecord>,
-    sink: &mut JsonLines,
-) -> Result<()> {
-    for r in analysis.records(true) {
-        sink.write(&r)?;
-    }
-    if let Some(h) = health {
-        sink.write(&h)?;
-    }
-    sink.write(&analysis.summary())?;
-    sink.flush()?;
-    Ok(())
-}
-
-/// `aggregate` records (the seed paper's table 2) from the final fits of several runs.
-pub fn aggregate_records(
-    runs: &[Vec<(String, String, Option<crate::model::fit::FitResult>)>],
-) -> Vec<Record> {
-    let mut out = Vec::new();
-    let Some(first) = runs.first() else {
-        return out;
-    };
-    for (ci, (name, unit, _)) in first.iter().enumerate() {
-        for (ti, term) in TERM_NAMES.iter().enumerate() {
-            let values: Vec<Option<f64>> = runs
-                .iter()
-                .map(|r| {
-                    r.get(ci)
-                        .filter(|(n, _, _)| n == name)
-                        .and_then(|(_, _, f)| f.as_ref())
-                        .filter(|f| f.coef[ti].determined)
-                        .map(|f| f.coef[ti].value)
-                })
-                .collect();
-            let s = run_stats(&values);
-            out.push(Record::Aggregate(AggregateRecord {
-                kind: "aggregate".into(),
-                channel: name.clone(),
-                unit: unit.clone(),
-                coef: (*term).into(),
-                n: s.as_ref().map_or(0, |s| s.n),
-                mean: s.as_ref().map(|s| s.mean),
-                sd: s.as_ref().and_then(|s| s.sd),
-                ci_t: s.as_ref().and_then(|s| s.ci_t),
-                ci_z: s.as_ref().and_then(|s| s.ci_z),
-            }));
-        }
-    }
-    out
-}
-
-fn simulate(s: &SimulateArgs) -> Result<()> {
-    let duration = parse_duration_s(&s.duration)?;
-    let model = crate::sim::SimModel::load(&s.model)?;
-    let f = std::fs::File::create(&s.out)
-        .with_context(|| format!("cannot create {}", s.out.display()))?;
-    let mut w = std::io::BufWriter::with_capacity(1 << 16, f);
-    let steps = if s.format == "csv" {
-        crate::sim::simulate_to_writer(
-            &model,
-            duration,
-            s.seed,
-            crate::sim::OutputFormat::Csv,
-            &mut w,
-        )?
-    } else {
-        let desc = FrameDescriptor::load(&s.format).map_err(anyhow::Error::new)?;
-        crate::sim::capture::simulate_to_frames(&model, &desc, duration, s.seed, &mut w)?
-    };
-    w.flush()?;
-    tracing::info!("{}: {steps} steps written", s.out.display());
-    Ok(())
 }
 
 /// Reads a whole text file of JSON lines into values (for `aggregate`, `plot`, tests).
