@@ -210,6 +210,16 @@ pub trait Repr: 'static {
     fn d3(a: Self::X, b: Self::X, c: Self::X, d: Self::X) -> f64;
     /// `a - 3b + 3c - d` on the running sum.
     fn c3(a: Self::C, b: Self::C, c: Self::C, d: Self::C) -> f64;
+    /// The same, where the caller has proved the result fits a narrower type (see
+    /// [`Engine`]'s `spread`); the default is [`Repr::c3`].
+    #[inline(always)]
+    fn c3_narrow(a: Self::C, b: Self::C, c: Self::C, d: Self::C) -> f64 {
+        Self::c3(a, b, c, d)
+    }
+    /// `|d - reference|` as a whole number of counts, saturating; 0 where not needed (floats).
+    fn deviation(_d: Self::Inc, _reference: Self::Inc) -> u64 {
+        0
+    }
 }
 
 /// Integer counts, summed exactly.
@@ -248,7 +258,27 @@ impl Repr for IntRepr {
         let ab = a.wrapping_sub(b);
         let bc = b.wrapping_sub(c);
         let cd = c.wrapping_sub(d);
+        let v = ab.wrapping_sub(bc).wrapping_sub(bc.wrapping_sub(cd));
+        // i128 -> f64 is a library call; nearly every value fits in i64, whose conversion is
+        // one instruction (and exact in the same cases).
+        let low = v as i64;
+        if low as i128 == v {
+            low as f64
+        } else {
+            v as f64
+        }
+    }
+    /// On the low 64 bits: exact modulo 2^64, so exact whenever the true value fits in i64.
+    #[inline(always)]
+    fn c3_narrow(a: i128, b: i128, c: i128, d: i128) -> f64 {
+        let (a, b, c, d) = (a as i64, b as i64, c as i64, d as i64);
+        let ab = a.wrapping_sub(b);
+        let bc = b.wrapping_sub(c);
+        let cd = c.wrapping_sub(d);
         ab.wrapping_sub(bc).wrapping_sub(bc.wrapping_sub(cd)) as f64
+    }
+    fn deviation(d: i64, reference: i64) -> u64 {
+        d.abs_diff(reference)
     }
 }
 
@@ -444,6 +474,10 @@ impl LevelReading {
     }
 }
 
+/// Smallest step between the starts of noise-identification block pairs: at m = 1 a 3-hour
+/// 250 Hz run still gives 170 000 pairs, far more than the lag-1 estimate needs.
+const NID_MIN_STEP: u64 = 16;
+
 /// Points of stream 1 gathered before the levels are updated: large enough that the inner loops
 /// run over long slices, small enough to stay in L1 cache with its history.
 const BLOCK: usize = 2048;
@@ -464,6 +498,12 @@ pub struct Engine<R: Repr> {
     n_steps: u64,
     /// Number of segments started.
     segments: u64,
+    /// The first increment, and the largest `|d - first|` seen since: MVAR's inner sum at
+    /// cluster m is at most `2 m^2 spread` in magnitude (each of its m second differences is a
+    /// difference of two sums of m increments, and a constant offset cancels), which decides
+    /// when its third difference of the running sum fits in 64 bits.
+    first_inc: Option<R::Inc>,
+    spread: u64,
 }
 
 impl<R: Repr> Engine<R> {
@@ -535,6 +575,8 @@ impl<R: Repr> Engine<R> {
             n_points: 0,
             n_steps: 0,
             segments: 0,
+            first_inc: None,
+            spread: 0,
         }
     }
 
@@ -562,6 +604,10 @@ impl<R: Repr> Engine<R> {
     pub fn push_increment(&mut self, d: R::Inc) {
         if !self.open {
             self.start_segment(R::zero_x());
+        }
+        match self.first_inc {
+            Some(r) => self.spread = self.spread.max(R::deviation(d, r)),
+            None => self.first_inc = Some(d),
         }
         let x = R::step(self.x_cur, d);
         self.append_point(x);
@@ -655,9 +701,15 @@ impl<R: Repr> Engine<R> {
         }
         let stats = self.cfg.stats;
         let nid = self.cfg.noise_id;
+        let spread = self.spread;
         for lv in &mut self.levels {
             let st = &self.streams[lv.stream];
-            update_level::<R>(lv, st, stats, nid);
+            // 2 m^2 spread < 2^62 leaves a factor 2 below i64's range.
+            let narrow = (lv.m as u128)
+                .saturating_mul(lv.m as u128)
+                .saturating_mul(2 * spread as u128 + 1)
+                < (1u128 << 62);
+            update_level::<R>(lv, st, stats, nid, narrow);
         }
         // Trim: each stream keeps what its levels still need.
         let mut keep: Vec<u64> = self.streams.iter().map(|s| s.x.end()).collect();
@@ -796,7 +848,7 @@ fn sum_sq(n: usize, f: impl Fn(usize) -> f64) -> f64 {
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + rest
 }
 
-fn update_level<R: Repr>(lv: &mut Level, st: &Stream<R>, stats: StatSet, nid: bool) {
+fn update_level<R: Repr>(lv: &mut Level, st: &Stream<R>, stats: StatSet, nid: bool, narrow: bool) {
     let mp = lv.mp;
     let x = &st.x;
     // AVAR: x_{k+2m} - 2 x_{k+m} + x_k (THEORY.md section 1).
@@ -844,7 +896,11 @@ fn update_level<R: Repr>(lv: &mut Level, st: &Stream<R>, stats: StatSet, nid: bo
             let b = &c.data[o + m..o + m + n];
             let cc = &c.data[o + 2 * m..o + 2 * m + n];
             let d = &c.data[o + 3 * m..o + 3 * m + n];
-            q.sum.add(sum_sq(n, |i| R::c3(d[i], cc[i], b[i], a[i])));
+            q.sum.add(if narrow {
+                sum_sq(n, |i| R::c3_narrow(d[i], cc[i], b[i], a[i]))
+            } else {
+                sum_sq(n, |i| R::c3(d[i], cc[i], b[i], a[i]))
+            });
             q.count += n as u64;
             q.next += n as u64;
         }
@@ -852,8 +908,11 @@ fn update_level<R: Repr>(lv: &mut Level, st: &Stream<R>, stats: StatSet, nid: bo
     // Noise identification (Riley and Greenhall 2004): lag-1 products of the non-overlapping
     // m-averaged rate (first phase differences at cluster m, taken every m samples) and of its
     // first and second differences (second and third phase differences).
+    // At short clusters every block would give far more pairs than the identification needs,
+    // so pairs start every NID_MIN_STEP points at least (lag-1 is still between adjacent blocks).
     if nid {
         let m = mp as usize;
+        let step = mp.max(NID_MIN_STEP);
         while x.end() > lv.nid_next + 4 * mp {
             let o = (lv.nid_next - x.base) as usize;
             let p = |j: usize| x.data[o + j * m];
@@ -861,7 +920,7 @@ fn update_level<R: Repr>(lv: &mut Level, st: &Stream<R>, stats: StatSet, nid: bo
             lv.lag[0].add(R::d1(x1, x0), R::d1(x2, x1));
             lv.lag[1].add(R::d2(x2, x1, x0), R::d2(x3, x2, x1));
             lv.lag[2].add(R::d3(x3, x2, x1, x0), R::d3(x4, x3, x2, x1));
-            lv.nid_next += mp;
+            lv.nid_next += step;
         }
     }
 }
