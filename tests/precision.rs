@@ -85,7 +85,7 @@ fn accel_counts(seed: u64) -> impl FnMut() -> i64 {
     let mut k = 0u64;
     move || {
         k += 1;
-        if k % 4096 == 0 {
+        if k.is_multiple_of(4096) {
             walk += (r.next() % 3) as i64 - 1;
         }
         186 + walk / 8 + (r.next() % 15) as i64 - 7
