@@ -18,7 +18,8 @@ fn main() {
                 let mut worst = f64::INFINITY;
                 for &m in &ms {
                     let stride = (m / l).max(1);
-                    let (Some(b), Some(f)) = (edf(stat, alpha, m, stride, n), edf(stat, alpha, m, 1, n))
+                    let (Some(b), Some(f)) =
+                        (edf(stat, alpha, m, stride, n), edf(stat, alpha, m, 1, n))
                     else {
                         continue;
                     };

@@ -38,8 +38,12 @@ fn white_phase_noise_on_avar_loses_edf_in_proportion_to_the_stride() {
     for j in 8..=14 {
         let m = 1u64 << j;
         let stride = m / DEFAULT_L;
-        let ratio = edf(Stat::Avar, 2, m, stride, n).unwrap() / edf(Stat::Avar, 2, m, 1, n).unwrap();
+        let ratio =
+            edf(Stat::Avar, 2, m, stride, n).unwrap() / edf(Stat::Avar, 2, m, 1, n).unwrap();
         let expected = 1.0 / stride as f64;
-        assert!((ratio / expected - 1.0).abs() < 0.2, "m={m}: {ratio:.4e} vs {expected:.4e}");
+        assert!(
+            (ratio / expected - 1.0).abs() < 0.2,
+            "m={m}: {ratio:.4e} vs {expected:.4e}"
+        );
     }
 }

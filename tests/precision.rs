@@ -3,7 +3,9 @@
 //! 64-bit third difference could overflow, and floating input over 1e9 samples of a 1 g
 //! accelerometer checked against the exact integer computation.
 
-use allanscope::allan::accum::{AccumConfig, Engine, FloatRepr, IntRepr, Overlap, StatSet, TauSpec};
+use allanscope::allan::accum::{
+    AccumConfig, Engine, FloatRepr, IntRepr, Overlap, StatSet, TauSpec,
+};
 use allanscope::allan::Stat;
 
 struct XorShift(u64);
@@ -72,7 +74,11 @@ fn integer_mvar_takes_the_128_bit_path_when_64_bits_could_overflow() {
         let (var, n) = r.mvar.unwrap();
         let (ev, en) = exact_mvar(&d, r.m as usize);
         assert_eq!(n, en, "m={}", r.m);
-        assert!((var - ev).abs() <= 1e-12 * ev, "m={}: {var:e} vs exact {ev:e}", r.m);
+        assert!(
+            (var - ev).abs() <= 1e-12 * ev,
+            "m={}: {var:e} vs exact {ev:e}",
+            r.m
+        );
     }
     assert_eq!(readings.len(), 4);
 }
@@ -130,7 +136,11 @@ fn float_input_keeps_full_precision_over_1e9_samples() {
             let vb = vb * LSB * LSB;
             let rel = (va - vb).abs() / vb;
             worst = worst.max(rel);
-            assert!(rel < 1e-10, "{stat:?} m={}: float {va:e}, exact {vb:e}", a.m);
+            assert!(
+                rel < 1e-10,
+                "{stat:?} m={}: float {va:e}, exact {vb:e}",
+                a.m
+            );
         }
     }
     eprintln!("1e9 samples: worst relative difference float vs exact {worst:.2e}");
