@@ -221,6 +221,16 @@ pub trait Repr: 'static {
     fn c3_narrow(a: Self::C, b: Self::C, c: Self::C, d: Self::C) -> f64 {
         Self::c3(a, b, c, d)
     }
+    /// `a - 2b + c` where the caller has proved `|result| < 2^51`; the default is [`Repr::d2`].
+    #[inline(always)]
+    fn d2_narrow(a: Self::X, b: Self::X, c: Self::X) -> f64 {
+        Self::d2(a, b, c)
+    }
+    /// `a - 3b + 3c - d` where the caller has proved `|result| < 2^51`.
+    #[inline(always)]
+    fn d3_narrow(a: Self::X, b: Self::X, c: Self::X, d: Self::X) -> f64 {
+        Self::d3(a, b, c, d)
+    }
     /// `|d - reference|` as a whole number of counts, saturating; 0 where not needed (floats).
     fn deviation(_d: Self::Inc, _reference: Self::Inc) -> u64 {
         0
@@ -273,18 +283,38 @@ impl Repr for IntRepr {
             v as f64
         }
     }
-    /// On the low 64 bits: exact modulo 2^64, so exact whenever the true value fits in i64.
+    /// On the low 64 bits: exact modulo 2^64, so exact whenever the true value fits (the
+    /// caller proves `|result| < 2^51`).
     #[inline(always)]
     fn c3_narrow(a: i128, b: i128, c: i128, d: i128) -> f64 {
         let (a, b, c, d) = (a as i64, b as i64, c as i64, d as i64);
         let ab = a.wrapping_sub(b);
         let bc = b.wrapping_sub(c);
         let cd = c.wrapping_sub(d);
-        ab.wrapping_sub(bc).wrapping_sub(bc.wrapping_sub(cd)) as f64
+        small_i64_to_f64(ab.wrapping_sub(bc).wrapping_sub(bc.wrapping_sub(cd)))
     }
     fn deviation(d: i64, reference: i64) -> u64 {
         d.abs_diff(reference)
     }
+    #[inline(always)]
+    fn d2_narrow(a: i64, b: i64, c: i64) -> f64 {
+        small_i64_to_f64(a.wrapping_sub(b).wrapping_sub(b.wrapping_sub(c)))
+    }
+    #[inline(always)]
+    fn d3_narrow(a: i64, b: i64, c: i64, d: i64) -> f64 {
+        let ab = a.wrapping_sub(b);
+        let bc = b.wrapping_sub(c);
+        let cd = c.wrapping_sub(d);
+        small_i64_to_f64(ab.wrapping_sub(bc).wrapping_sub(bc.wrapping_sub(cd)))
+    }
+}
+
+/// `v as f64` for `|v| < 2^51`, exactly, by the 1.5 * 2^52 bias trick: an integer add and a
+/// float subtract, both of which run on vector lanes (AVX2 has no i64 -> f64 conversion).
+#[inline(always)]
+fn small_i64_to_f64(v: i64) -> f64 {
+    const MAGIC: f64 = 6_755_399_441_055_744.0; // 1.5 * 2^52
+    f64::from_bits(v.wrapping_add(MAGIC.to_bits() as i64) as u64) - MAGIC
 }
 
 /// Floating-point increments or phase, carried in double-double.
@@ -709,12 +739,16 @@ impl<R: Repr> Engine<R> {
         let spread = self.spread;
         for lv in &mut self.levels {
             let st = &self.streams[lv.stream];
-            // 2 m^2 spread < 2^62 leaves a factor 2 below i64's range.
-            let narrow = (lv.m as u128)
-                .saturating_mul(lv.m as u128)
-                .saturating_mul(2 * spread as u128 + 1)
-                < (1u128 << 62);
-            update_level::<R>(lv, st, stats, nid, narrow);
+            // Bounds from the spread (see `spread`): |second difference| <= 2 m spread,
+            // |third difference| <= 4 m spread, |MVAR inner sum| <= 2 m^2 spread.
+            let m = lv.m as u128;
+            let s = spread as u128 + 1;
+            let bounds = Narrow {
+                d2: (2 * m).saturating_mul(s) < (1 << 51),
+                d3: (4 * m).saturating_mul(s) < (1 << 51),
+                c3: m.saturating_mul(m).saturating_mul(2 * s) < (1 << 51),
+            };
+            update_level::<R>(lv, st, stats, nid, bounds);
         }
         // Trim: each stream keeps what its levels still need.
         let mut keep: Vec<u64> = self.streams.iter().map(|s| s.x.end()).collect();
@@ -832,28 +866,77 @@ fn decimate<T: Copy>(parent: &Buf<T>, child: &mut Buf<T>, factor: u64) {
     }
 }
 
-/// Sum of `f(i)^2` for `i in 0..n`, four partial sums so the loop can run on vector lanes.
+/// Sum of `f(a_i, b_i, c_i)^2` over equal-length slices, in four partial sums over
+/// `chunks_exact(4)` so the loop has no bounds checks and runs on vector lanes.
 #[inline(always)]
-fn sum_sq(n: usize, f: impl Fn(usize) -> f64) -> f64 {
+fn sum_sq3<T: Copy>(a: &[T], b: &[T], c: &[T], f: impl Fn(T, T, T) -> f64) -> f64 {
     let mut acc = [0.0f64; 4];
-    let n4 = n - n % 4;
-    let mut i = 0;
-    while i < n4 {
-        for (l, a) in acc.iter_mut().enumerate() {
-            let v = f(i + l);
-            *a += v * v;
-        }
-        i += 4;
-    }
+    let (ca, cb, cc) = (a.chunks_exact(4), b.chunks_exact(4), c.chunks_exact(4));
     let mut rest = 0.0;
-    for j in n4..n {
-        let v = f(j);
+    for ((x, y), z) in ca
+        .remainder()
+        .iter()
+        .zip(cb.remainder())
+        .zip(cc.remainder())
+    {
+        let v = f(*x, *y, *z);
         rest += v * v;
+    }
+    for ((x, y), z) in ca.zip(cb).zip(cc) {
+        for l in 0..4 {
+            let v = f(x[l], y[l], z[l]);
+            acc[l] += v * v;
+        }
     }
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + rest
 }
 
-fn update_level<R: Repr>(lv: &mut Level, st: &Stream<R>, stats: StatSet, nid: bool, narrow: bool) {
+/// The same with four slices.
+#[inline(always)]
+fn sum_sq4<T: Copy>(a: &[T], b: &[T], c: &[T], d: &[T], f: impl Fn(T, T, T, T) -> f64) -> f64 {
+    let mut acc = [0.0f64; 4];
+    let (ca, cb, cc, cd) = (
+        a.chunks_exact(4),
+        b.chunks_exact(4),
+        c.chunks_exact(4),
+        d.chunks_exact(4),
+    );
+    let mut rest = 0.0;
+    let rem = ca
+        .remainder()
+        .iter()
+        .zip(cb.remainder())
+        .zip(cc.remainder())
+        .zip(cd.remainder());
+    for (((w, x), y), z) in rem {
+        let v = f(*w, *x, *y, *z);
+        rest += v * v;
+    }
+    for (((w, x), y), z) in ca.zip(cb).zip(cc).zip(cd) {
+        for l in 0..4 {
+            let v = f(w[l], x[l], y[l], z[l]);
+            acc[l] += v * v;
+        }
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + rest
+}
+
+/// Which differences of a level are proved below 2^51 in magnitude (integer input), so they
+/// can take the narrow, vectorizable conversions.
+#[derive(Debug, Clone, Copy)]
+struct Narrow {
+    d2: bool,
+    d3: bool,
+    c3: bool,
+}
+
+fn update_level<R: Repr>(
+    lv: &mut Level,
+    st: &Stream<R>,
+    stats: StatSet,
+    nid: bool,
+    narrow: Narrow,
+) {
     let mp = lv.mp;
     let x = &st.x;
     // AVAR: x_{k+2m} - 2 x_{k+m} + x_k (THEORY.md section 1).
@@ -866,7 +949,11 @@ fn update_level<R: Repr>(lv: &mut Level, st: &Stream<R>, stats: StatSet, nid: bo
             let a = &x.data[o..o + n];
             let b = &x.data[o + m..o + m + n];
             let c = &x.data[o + 2 * m..o + 2 * m + n];
-            q.sum.add(sum_sq(n, |i| R::d2(c[i], b[i], a[i])));
+            q.sum.add(if narrow.d2 {
+                sum_sq3(a, b, c, |a, b, c| R::d2_narrow(c, b, a))
+            } else {
+                sum_sq3(a, b, c, |a, b, c| R::d2(c, b, a))
+            });
             q.count += n as u64;
             q.next += n as u64;
         }
@@ -882,7 +969,11 @@ fn update_level<R: Repr>(lv: &mut Level, st: &Stream<R>, stats: StatSet, nid: bo
             let b = &x.data[o + m..o + m + n];
             let c = &x.data[o + 2 * m..o + 2 * m + n];
             let d = &x.data[o + 3 * m..o + 3 * m + n];
-            q.sum.add(sum_sq(n, |i| R::d3(d[i], c[i], b[i], a[i])));
+            q.sum.add(if narrow.d3 {
+                sum_sq4(a, b, c, d, |a, b, c, d| R::d3_narrow(d, c, b, a))
+            } else {
+                sum_sq4(a, b, c, d, |a, b, c, d| R::d3(d, c, b, a))
+            });
             q.count += n as u64;
             q.next += n as u64;
         }
@@ -901,10 +992,10 @@ fn update_level<R: Repr>(lv: &mut Level, st: &Stream<R>, stats: StatSet, nid: bo
             let b = &c.data[o + m..o + m + n];
             let cc = &c.data[o + 2 * m..o + 2 * m + n];
             let d = &c.data[o + 3 * m..o + 3 * m + n];
-            q.sum.add(if narrow {
-                sum_sq(n, |i| R::c3_narrow(d[i], cc[i], b[i], a[i]))
+            q.sum.add(if narrow.c3 {
+                sum_sq4(a, b, cc, d, |a, b, c, d| R::c3_narrow(d, c, b, a))
             } else {
-                sum_sq(n, |i| R::c3(d[i], cc[i], b[i], a[i]))
+                sum_sq4(a, b, cc, d, |a, b, c, d| R::c3(d, c, b, a))
             });
             q.count += n as u64;
             q.next += n as u64;
