@@ -359,6 +359,7 @@ fn fit_record(
         coef: f.coef_json(),
         gof: f.gof.is_finite().then_some(f.gof),
         method: f.method.name().into(),
+        model_c: f.c.to_vec(),
         datasheet,
         q_over_lsb: setup
             .counts_lsb

@@ -278,3 +278,71 @@ fn bad_input_exits_2_with_a_message_and_bad_rows_are_counted() {
     assert_eq!(s.bad_rows, 1);
     assert_eq!(s.segments, [2]);
 }
+
+#[test]
+fn plot_draws_each_channel_with_its_intervals_and_model() {
+    let csv = write_csv(
+        "plot.csv",
+        &[
+            ("gx", &white_increments(20_000, 5)),
+            ("gy", &white_increments(20_000, 6)),
+        ],
+    );
+    let jsonl = tmp("plot.jsonl");
+    let out = exe()
+        .args([
+            "analyze",
+            csv.to_str().unwrap(),
+            "--tau0",
+            "0.01",
+            "--unit",
+            "arcsec",
+            "--out",
+        ])
+        .arg(&jsonl)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let svg = tmp("plot.svg");
+    let out = exe()
+        .args(["plot", jsonl.to_str().unwrap(), "-o", svg.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&svg).unwrap();
+    let recs: Vec<Record> = std::fs::read_to_string(&jsonl)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let points: usize = recs
+        .iter()
+        .filter_map(|r| match r {
+            Record::Curve(c) if c.r#final && c.stat.name() == "avar" => Some(c.tau.len()),
+            _ => None,
+        })
+        .sum();
+    // One marker per point, one interval bar per point, two data lines and two model lines.
+    assert_eq!(text.matches("<circle").count(), points);
+    assert_eq!(text.matches("stroke-dasharray").count(), 2);
+    assert_eq!(text.matches("<polyline").count(), 4);
+    assert!(text.contains("Allan deviation (arcsec/s)"));
+    assert!(text.contains(">gx<") && text.contains(">gy<"));
+    // Nothing to plot is a usage error.
+    let out = exe()
+        .args([
+            "plot",
+            jsonl.to_str().unwrap(),
+            "-o",
+            "/tmp/x.svg",
+            "--channels",
+            "zz",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}

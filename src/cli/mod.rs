@@ -3,6 +3,7 @@
 //! configuration errors, 1 for anything else).
 
 mod analyze;
+mod plot;
 mod simulate;
 
 use std::io::{BufRead, BufReader, Read};
@@ -35,6 +36,30 @@ pub enum Command {
     Analyze(AnalyzeArgs),
     /// Write a capture (frames of a descriptor, or text columns) from a noise model.
     Simulate(SimulateArgs),
+    /// Allan-deviation plot (SVG) from the JSON lines allanscope wrote.
+    Plot(PlotArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct PlotArgs {
+    /// JSON-lines files written by `analyze` or `listen`.
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// The SVG file to write.
+    #[arg(short = 'o', long = "out")]
+    pub out: PathBuf,
+    /// Which statistic: avar, hvar or mvar.
+    #[arg(long, default_value = "avar")]
+    pub stat: String,
+    /// Only these channels.
+    #[arg(long, value_delimiter = ',')]
+    pub channels: Option<Vec<String>>,
+    /// Title on top of the plot.
+    #[arg(long)]
+    pub title: Option<String>,
+    /// Leave out the fitted model lines.
+    #[arg(long)]
+    pub no_model: bool,
 }
 
 /// Options shared by the commands that read data (CONTRACT.md).
@@ -122,6 +147,7 @@ where
     match cli.command {
         Command::Analyze(a) => analyze::run(&a),
         Command::Simulate(s) => simulate::run(&s),
+        Command::Plot(p) => plot::run(&p),
     }
 }
 

@@ -4,4 +4,5 @@
 //! their doc comments); [`json`] writes them one per line.
 
 pub mod json;
+pub mod plot;
 pub mod records;

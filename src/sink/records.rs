@@ -80,6 +80,11 @@ pub struct FitRecord {
     pub gof: Option<f64>,
     /// The fit method (`model`, `paper`, `slopes`, `loglog`).
     pub method: String,
+    /// The fitted linear coefficients `(Q^2, N^2, B^2, K^2, R^2)` of THEORY.md section 2,
+    /// determined or not: the model curve `AVAR(tau) = sum c_i basis_i(tau)` (for plots and
+    /// the diagnosis).
+    #[serde(default)]
+    pub model_c: Vec<f64>,
     /// The same coefficients in datasheet units, where the unit is known.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub datasheet: Option<serde_json::Value>,
