@@ -541,34 +541,3 @@ fn model_syntax_error_names_the_line() {
         "{msg}"
     );
 }
-
-/// Speed: `cargo test --release --test sim_closed_form -- --ignored speed --nocapture`.
-#[test]
-#[ignore]
-fn speed() {
-    let text = "rate_hz = 250\n[stand]\nlatitude_deg = 56.8\n\
-        [temperature]\nstart_c = 20\nfinal_c = 30\ntime_constant_s = 600\nsine_amplitude_c = 0.5\nsine_period_s = 3600\n\
-        [[channel]]\nname = \"a\"\nunit = \"m/s\"\naxis = \"up\"\nlsb = 2.104e-4\nQ = 6.84e-4\nN = 2.811e-4\n\
-        B = 0.403e-4\nK = 2.228e-6\nR = 6.020e-8\ntemperature_coefficient = 1e-5\n\
-        gauss_markov = { sigma = 1e-4, tau_c = 3.0 }\nsinusoid = { amplitude = 1e-4, frequency = 2.5 }\n\
-        output_filter = { time_constant = 0.008 }\nwarmup = { amplitude = 1e-3, time_constant = 300 }\n\
-        bias_jumps = { mean_interval = 600, rms_size = 1e-5 }\n";
-    let five =
-        "rate_hz = 250\n[[channel]]\nname = \"a\"\nunit = \"m/s\"\nlsb = 2.104e-4\nQ = 6.84e-4\n\
-        N = 2.811e-4\nB = 0.403e-4\nK = 2.228e-6\nR = 6.020e-8\n";
-    for (name, t) in [("every term and effect", text), ("five terms + lsb", five)] {
-        let m = model(t);
-        let mut sim = Simulator::new(&m, 1);
-        let n = 20_000_000u64;
-        let start = std::time::Instant::now();
-        let mut acc = 0.0;
-        for _ in 0..n {
-            acc += sim.next_step().increments[0];
-        }
-        let secs = start.elapsed().as_secs_f64();
-        println!(
-            "{name}: {:.1} M samples/s (checksum {acc:.3})",
-            n as f64 / secs / 1e6
-        );
-    }
-}
