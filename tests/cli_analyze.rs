@@ -346,3 +346,43 @@ fn plot_draws_each_channel_with_its_intervals_and_model() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn report_is_one_page_with_plots_tables_and_health() {
+    let jsonl = tmp("report.jsonl");
+    let capture = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/fixtures/captures/siu8_stand_5min_seed1.siu8"
+    );
+    let out = exe()
+        .args(["analyze", capture, "--format", "siu8", "--out"])
+        .arg(&jsonl)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let html = tmp("report.html");
+    let out = exe()
+        .args([
+            "report",
+            jsonl.to_str().unwrap(),
+            "-o",
+            html.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&html).unwrap();
+    // Two units (arcsec gyros, m/s accelerometers): two inline plots; eight fit rows; health.
+    assert_eq!(text.matches("<svg").count(), 2);
+    assert_eq!(text.matches("<tr><td class=\"l\">").count(), 8);
+    assert!(text.contains("75000 frames, 0 checksum errors"));
+    assert!(!text.contains("src=\"http"), "self-contained");
+}

@@ -4,6 +4,7 @@
 
 mod analyze;
 mod plot;
+mod report;
 mod simulate;
 
 use std::io::{BufRead, BufReader, Read};
@@ -38,6 +39,21 @@ pub enum Command {
     Simulate(SimulateArgs),
     /// Allan-deviation plot (SVG) from the JSON lines allanscope wrote.
     Plot(PlotArgs),
+    /// One self-contained HTML page: plots, coefficient tables, diagnosis, pass/fail.
+    Report(ReportArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct ReportArgs {
+    /// JSON-lines files written by allanscope (one section each).
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// The HTML file to write.
+    #[arg(short = 'o', long = "out")]
+    pub out: PathBuf,
+    /// Title of the page.
+    #[arg(long, default_value = "allanscope test report")]
+    pub title: String,
 }
 
 #[derive(Debug, Args)]
@@ -148,6 +164,7 @@ where
         Command::Analyze(a) => analyze::run(&a),
         Command::Simulate(s) => simulate::run(&s),
         Command::Plot(p) => plot::run(&p),
+        Command::Report(r) => report::run(&r),
     }
 }
 

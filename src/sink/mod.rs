@@ -6,3 +6,4 @@
 pub mod json;
 pub mod plot;
 pub mod records;
+pub mod report;
