@@ -19,7 +19,7 @@ fn esc(s: &str) -> String {
 
 fn num(v: &Value) -> String {
     match v.as_f64() {
-        Some(x) if x == 0.0 => "0".into(),
+        Some(0.0) => "0".into(),
         Some(x) if (1e-3..1e4).contains(&x.abs()) => format!("{x:.4}"),
         Some(x) => format!("{x:.4e}"),
         None => "&ndash;".into(),
