@@ -21,6 +21,7 @@ pub mod allan;
 pub mod cli;
 pub mod error;
 pub mod frame;
+pub mod gap;
 pub mod input;
 pub mod model;
 pub mod sim;
