@@ -12,7 +12,7 @@
 //! `--mode calibrate` draws clean runs only and prints the null quantiles of the statistics the
 //! thresholds are set from; `--mode speed` times one 3-hour 250 Hz channel.
 
-use allanscope::gap::diagnose::{detect_jumps, GapProblem, ModelSpec};
+use allanscope::gap::diagnose::{detect_jumps, fit_warmup, GapProblem, ModelSpec};
 use allanscope::gap::{diagnose, DiagnoseOptions, EffectKind, EffectParams, GapConfig, GapEvidence};
 use allanscope::model::terms;
 use allanscope::sim::{SimModel, Simulator};
@@ -215,7 +215,7 @@ fn name(k: Option<EffectKind>) -> &'static str {
     k.map_or("none", |k| k.name())
 }
 
-fn calibrate(i: u64, seed: u64, tau0: f64, t_run: f64) -> (f64, f64, f64, Vec<f64>) {
+fn calibrate(i: u64, seed: u64, tau0: f64, t_run: f64) -> (f64, f64, f64, Vec<f64>, f64, bool) {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i));
     let d = draw(&mut rng, None, t_run, tau0);
     let inc = simulate(&d, tau0, t_run, seed.wrapping_add(7919 * i));
@@ -227,11 +227,14 @@ fn calibrate(i: u64, seed: u64, tau0: f64, t_run: f64) -> (f64, f64, f64, Vec<f6
     let g = base.gap();
     let zmax = prob.z(&base.model).iter().fold(0.0f64, |a, z| a.max(z.abs()));
     let mut best = 0.0f64;
-    for k in [EffectKind::GaussMarkov, EffectKind::Sinusoid, EffectKind::OutputFilter, EffectKind::Warmup] {
+    for k in [EffectKind::GaussMarkov, EffectKind::Sinusoid, EffectKind::OutputFilter] {
         if let Some((_, f)) = prob.scan(&ModelSpec::default(), k) {
             best = best.max((base.chi2 - f.chi2) / k.n_params() as f64);
         }
     }
+    let c5: [f64; 5] = std::array::from_fn(|i| base.coef[i]);
+    let w = fit_warmup(&snap.block_means, snap.block_len as f64 * tau0, t_run, &c5, &[]).map_or(0.0, |w| w.w_stat);
+    let flagged = diagnose(&snap, &opts).expect("diag").verdict != allanscope::gap::Verdict::Consistent;
     let jz: Vec<f64> = [4.5, 5.0, 5.5, 6.0]
         .iter()
         .map(|&z| {
@@ -239,7 +242,7 @@ fn calibrate(i: u64, seed: u64, tau0: f64, t_run: f64) -> (f64, f64, f64, Vec<f6
                 .map_or(0.0, |f| f.sizes.len() as f64)
         })
         .collect();
-    (g, zmax, best, jz)
+    (g, zmax, best, jz, w, flagged)
 }
 
 fn quantiles(mut v: Vec<f64>) -> String {
@@ -287,8 +290,32 @@ fn main() {
         return;
     }
 
+    if mode == "one" {
+        let i: u64 = get("--draw", "0").parse().expect("--draw");
+        let kinds: Vec<Option<EffectKind>> = vec![None, Some(EffectKind::GaussMarkov), Some(EffectKind::Sinusoid), Some(EffectKind::OutputFilter), Some(EffectKind::Warmup), Some(EffectKind::BiasJumps)];
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i));
+        let d = draw(&mut rng, kinds[(i as usize) % kinds.len()], t_run, tau0);
+        println!("{d:?}");
+        let inc = simulate(&d, tau0, t_run, seed.wrapping_add(7919 * i));
+        let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
+        let snap = ev.snapshot();
+        let opts = DiagnoseOptions::default();
+        let prob = GapProblem::new(&snap, &opts).expect("problem");
+        let base = prob.gls(&ModelSpec::default()).expect("gls");
+        println!("base chi2 {:.2} exp {:.2} G {:.3} coef {:?}", base.chi2, base.expected, base.gap(), base.coef);
+        for k in [EffectKind::GaussMarkov, EffectKind::Sinusoid, EffectKind::OutputFilter, EffectKind::Warmup] {
+            if let Some((sh, f)) = prob.scan(&ModelSpec::default(), k) {
+                println!("{:?}: shape {sh:.4} chi2 {:.2} exp {:.2} G {:.3} coef {:?}", k, f.chi2, f.expected, f.gap(), f.coef);
+            }
+        }
+        let diag = diagnose(&snap, &opts).expect("diag");
+        println!("{diag:#?}");
+        println!("blocks: {:?}", snap.block_means.iter().take(20).collect::<Vec<_>>());
+        return;
+    }
+
     if mode == "calibrate" {
-        let res: Vec<(f64, f64, f64, Vec<f64>)> = std::thread::scope(|s| {
+        let res: Vec<(f64, f64, f64, Vec<f64>, f64, bool)> = std::thread::scope(|s| {
             let hs: Vec<_> = (0..threads)
                 .map(|t| {
                     s.spawn(move || {
@@ -305,6 +332,8 @@ fn main() {
         println!("G0:       {}", quantiles(res.iter().map(|r| r.0).collect()));
         println!("max|z|:   {}", quantiles(res.iter().map(|r| r.1).collect()));
         println!("best dchi2/param: {}", quantiles(res.iter().map(|r| r.2).collect()));
+        println!("warm-up W: {}", quantiles(res.iter().map(|r| r.4).collect()));
+        println!("flagged (not consistent): {:.3}", res.iter().filter(|r| r.5).count() as f64 / res.len() as f64);
         for (k, z) in [4.5, 5.0, 5.5, 6.0].iter().enumerate() {
             let frac = res.iter().filter(|r| r.3[k] > 0.0).count() as f64 / res.len() as f64;
             println!("jump false alarm at z {z}: {frac:.3}");

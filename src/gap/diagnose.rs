@@ -51,15 +51,19 @@ pub struct Thresholds {
     pub add_chi2: f64,
     /// Robust z of a block-mean difference that counts as a bias jump.
     pub jump_z: f64,
+    /// Drop of the block-mean residual sum of squares (in robust block variances) that a
+    /// warm-up must bring ([`fit_warmup`]).
+    pub warmup_w: f64,
 }
 
 impl Default for Thresholds {
     fn default() -> Self {
         Self {
-            gap_crit: 2.0,
-            band_z: 3.0,
-            add_chi2: 8.0,
+            gap_crit: 1.55,
+            band_z: 2.5,
+            add_chi2: 3.0,
             jump_z: 5.5,
+            warmup_w: 16.0,
         }
     }
 }
@@ -82,6 +86,7 @@ impl Default for DiagnoseOptions {
             tau_max_fraction: 0.1,
             max_effects: 2,
             candidates: EffectKind::ALL.to_vec(),
+
             thresholds: Thresholds::default(),
         }
     }
@@ -570,80 +575,109 @@ pub fn diagnose(snap: &EvidenceSnapshot, opts: &DiagnoseOptions) -> Result<Diagn
     let regions = prob.regions(&base.model, th.band_z);
     let flagged = gap_before > th.gap_crit;
 
-    let mut spec = ModelSpec::default();
-    let mut cur = base.clone();
     let mut effects: Vec<AddedEffect> = Vec::new();
-    if flagged {
-        while effects.len() < opts.max_effects {
-            let mut best: Option<(EffectKind, f64, GlsFit, f64)> = None;
-            for &kind in &opts.candidates {
-                if kind == EffectKind::BiasJumps || effects.iter().any(|e| e.params.kind() == kind) {
-                    continue;
-                }
-                if let Some((sh, f)) = prob.scan(&spec, kind) {
-                    let score = (cur.chi2 - f.chi2) / kind.n_params() as f64;
-                    if best.as_ref().is_none_or(|b| score > b.3) {
-                        best = Some((kind, sh, f, score));
+    let block_s = snap.block_len as f64 * snap.tau0_s;
+    let t_run = snap.n_increments as f64 * snap.tau0_s;
+    let stationary: Vec<EffectKind> = opts
+        .candidates
+        .iter()
+        .copied()
+        .filter(|k| !matches!(k, EffectKind::BiasJumps | EffectKind::Warmup))
+        .collect();
+
+    // 1. Stationary effects on the curve, while the gap stays significant.
+    let mut offset = vec![0.0; j];
+    let (mut spec, mut cur) = if flagged {
+        add_stationary(&prob, &stationary, &offset, &mut effects, base.clone(), opts)
+    } else {
+        (spec_from(&prob, &effects, &offset), base.clone())
+    };
+
+    // 2. A warm-up, in time: the block means against the model found so far.
+    let mut warm_curve: Option<Vec<f64>> = None;
+    let mut time_flag = false;
+    if opts.candidates.contains(&EffectKind::Warmup) {
+        let c5: [f64; 5] = std::array::from_fn(|i| cur.coef.get(i).copied().unwrap_or(0.0));
+        let stat_params: Vec<EffectParams> = effects.iter().map(|e| e.params).collect();
+        let warm = fit_warmup(&snap.block_means, block_s, t_run, &c5, &stat_params);
+        if let Some(w) = warm.filter(|w| w.w_stat > th.warmup_w) {
+            time_flag = true;
+            // Its AVAR, exact for the estimator on this record, enters as a fixed offset.
+            let col = effect_column(EffectKind::Warmup, w.time_constant_s, &prob.ms, prob.tau0_s, prob.n_inc);
+            for (o, c) in offset.iter_mut().zip(&col) {
+                *o += w.amplitude * w.amplitude * c;
+            }
+            // Keep only the stationary effects still needed beside it, then look again.
+            let mut kept: Vec<AddedEffect> = Vec::new();
+            for e in &effects {
+                let others: Vec<AddedEffect> =
+                    effects.iter().filter(|o| *o != e).copied().collect();
+                let with = prob.gls(&spec_from(&prob, &effects, &offset));
+                let without = prob.gls(&spec_from(&prob, &others, &offset));
+                if let (Some(a), Some(b)) = (with, without) {
+                    if (b.chi2 - a.chi2) / e.params.kind().n_params() as f64 >= th.add_chi2 {
+                        kept.push(*e);
                     }
                 }
             }
-            let Some((kind, sh, f, score)) = best else {
-                break;
-            };
-            if score < th.add_chi2 {
-                break;
-            }
-            let delta = cur.chi2 - f.chi2;
-            effects.push(AddedEffect {
-                params: params_of(kind, sh, &f),
+            let prev = cur.clone();
+            let f = prob
+                .gls(&spec_from(&prob, &kept, &offset))
+                .unwrap_or_else(|| prev.clone());
+            effects = vec![AddedEffect {
+                params: EffectParams::Warmup {
+                    amplitude: w.amplitude,
+                    time_constant_s: w.time_constant_s,
+                },
                 gap_after: f.gap(),
-                delta_chi2: delta,
-            });
-            spec = prob.spec_with(&spec, kind, sh);
-            cur = f;
-            if cur.gap() <= th.gap_crit {
-                break;
+                delta_chi2: base.chi2 - f.chi2,
+            }];
+            let mut rest = kept;
+            for e in rest.iter_mut() {
+                e.gap_after = f.gap();
             }
+            effects.extend(rest);
+            cur = f;
+            if cur.gap() > th.gap_crit {
+                let (sp, c2) = add_stationary(&prob, &stationary, &offset, &mut effects, cur.clone(), opts);
+                spec = sp;
+                cur = c2;
+            } else {
+                spec = spec_from(&prob, &effects, &offset);
+            }
+            warm_curve = Some(w.block_curve(snap.block_means.len(), block_s));
         }
     }
-    let mut gap_after = cur.gap();
+    let _ = &spec;
 
-    // Bias jumps, in time. A warm-up in the model explains the first blocks' decay.
-    let skip_s = effects
-        .iter()
-        .find_map(|e| match e.params {
-            EffectParams::Warmup {
-                time_constant_s, ..
-            } => Some(5.0 * time_constant_s),
-            _ => None,
-        })
-        .unwrap_or(0.0);
+    // 3. Bias jumps, in time (after the warm-up is taken out of the block means).
     let jumps = if opts.candidates.contains(&EffectKind::BiasJumps) {
-        detect_jumps(
-            &snap.block_means,
-            snap.block_len as f64 * snap.tau0_s,
-            th.jump_z,
-            skip_s,
-        )
+        let resid: Vec<f64> = match &warm_curve {
+            Some(wc) => snap.block_means.iter().zip(wc).map(|(b, w)| b - w).collect(),
+            None => snap.block_means.clone(),
+        };
+        detect_jumps(&resid, block_s, th.jump_z, 0.0)
     } else {
         None
     };
-    let jump_flag = jumps.as_ref().is_some_and(|f| !f.sizes.is_empty());
-    if let (true, Some(f)) = (jump_flag, &jumps) {
+    if let Some(f) = jumps.as_ref().filter(|f| !f.sizes.is_empty()) {
+        time_flag = true;
         let rms = (f.sizes.iter().map(|s| s * s).sum::<f64>() / f.sizes.len() as f64).sqrt();
-        // On the curve the jumps are part of K (their law is a rate random walk's), so the gap
-        // statistic is unchanged by naming them.
+        // On the curve the jumps are part of K (their law is a rate random walk's), so naming
+        // them leaves the gap statistic as it is.
         effects.push(AddedEffect {
             params: EffectParams::BiasJumps {
                 count: f.sizes.len() as u64,
                 rms_size: rms,
             },
-            gap_after,
+            gap_after: cur.gap(),
             delta_chi2: 0.0,
         });
     }
+    let flagged = flagged || time_flag;
+    let mut gap_after = cur.gap();
     gap_after = if gap_after.is_finite() { gap_after } else { gap_before };
-    let verdict = if !flagged && !jump_flag {
+    let verdict = if !flagged {
         Verdict::Consistent
     } else if gap_after <= th.gap_crit {
         Verdict::Explained
@@ -668,6 +702,67 @@ pub fn diagnose(snap: &EvidenceSnapshot, opts: &DiagnoseOptions) -> Result<Diagn
         jumps,
         residual_shape,
     })
+}
+
+/// The model spec of the stationary effects in `effects` (warm-ups and jumps are in `offset`
+/// or nowhere), their shapes fixed and amplitudes free.
+fn spec_from(prob: &GapProblem, effects: &[AddedEffect], offset: &[f64]) -> ModelSpec {
+    let mut spec = ModelSpec {
+        offset: Some(offset.to_vec()),
+        ..ModelSpec::default()
+    };
+    for e in effects {
+        let kind = e.params.kind();
+        if matches!(kind, EffectKind::GaussMarkov | EffectKind::Sinusoid | EffectKind::OutputFilter) {
+            spec = prob.spec_with(&spec, kind, e.params.shape());
+        }
+    }
+    spec
+}
+
+/// Adds stationary effects one at a time (the best drop of `r' S^-1 r` per parameter, if it
+/// exceeds the threshold) while the gap stays above its critical value.
+fn add_stationary(
+    prob: &GapProblem,
+    kinds: &[EffectKind],
+    offset: &[f64],
+    effects: &mut Vec<AddedEffect>,
+    start: GlsFit,
+    opts: &DiagnoseOptions,
+) -> (ModelSpec, GlsFit) {
+    let th = opts.thresholds;
+    let mut spec = spec_from(prob, effects, offset);
+    let mut cur = start;
+    let mut added = 0;
+    while added < opts.max_effects && cur.gap() > th.gap_crit {
+        let mut best: Option<(EffectKind, f64, GlsFit, f64)> = None;
+        for &kind in kinds {
+            if effects.iter().any(|e| e.params.kind() == kind) {
+                continue;
+            }
+            if let Some((sh, f)) = prob.scan(&spec, kind) {
+                let score = (cur.chi2 - f.chi2) / kind.n_params() as f64;
+                if best.as_ref().is_none_or(|b| score > b.3) {
+                    best = Some((kind, sh, f, score));
+                }
+            }
+        }
+        let Some((kind, sh, f, score)) = best else {
+            break;
+        };
+        if score < th.add_chi2 {
+            break;
+        }
+        effects.push(AddedEffect {
+            params: params_of(kind, sh, &f),
+            gap_after: f.gap(),
+            delta_chi2: cur.chi2 - f.chi2,
+        });
+        spec = prob.spec_with(&spec, kind, sh);
+        cur = f;
+        added += 1;
+    }
+    (spec, cur)
 }
 
 /// A few words on the shape of what the model leaves.
@@ -821,6 +916,138 @@ pub fn detect_jumps(
         }
     }
     best
+}
+
+/// A warm-up fitted to the block means.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WarmupFinding {
+    /// `A` of `A e^{-t/T}`, u/s.
+    pub amplitude: f64,
+    pub time_constant_s: f64,
+    /// Drop of the residual sum of squares against a line, in robust block variances.
+    pub w_stat: f64,
+}
+
+impl WarmupFinding {
+    /// The warm-up's mean over each block.
+    pub fn block_curve(&self, n_blocks: usize, block_s: f64) -> Vec<f64> {
+        (0..n_blocks)
+            .map(|i| self.amplitude * warmup_block_shape(i, block_s, self.time_constant_s))
+            .collect()
+    }
+}
+
+/// Mean of `e^{-t/T}` over block `i` of length `tb`: `(T/tb)(e^{-i tb/T} - e^{-(i+1) tb/T})`.
+fn warmup_block_shape(i: usize, tb: f64, t: f64) -> f64 {
+    let a = i as f64 * tb / t;
+    t / tb * (-a).exp() * -(-tb / t).exp_m1()
+}
+
+/// Generalised covariance `G(t)` of the phase (u^2) under the five-term model `c` plus
+/// stationary effects (avar_cov.rs's table; Gauss-Markov `-S(t)/2` with the structure
+/// function `S(t) = 2 s^2 T^2 (t/T - 1 + e^{-t/T})`; sinusoid `A^2 cos(w t) / (2 w^2)`). Valid
+/// under filters that annihilate polynomials of degree <= 1, such as a second difference.
+fn phase_gcov(c: &[f64; 5], effects: &[EffectParams], t: f64) -> f64 {
+    let at = t.abs();
+    let mut g = if at == 0.0 { c[0] } else { 0.0 };
+    g += -c[1] * at / 2.0;
+    if at > 0.0 {
+        g += c[2] / (2.0 * std::f64::consts::PI) * at * at * at.ln();
+    }
+    g += c[3] * at * at * at / 12.0;
+    for e in effects {
+        match *e {
+            EffectParams::GaussMarkov { sigma, tau_c_s } => {
+                let x = at / tau_c_s;
+                g -= sigma * sigma * tau_c_s * tau_c_s * (x - 1.0 + (-x).exp());
+            }
+            EffectParams::Sinusoid {
+                amplitude,
+                frequency_hz,
+            } => {
+                let w = 2.0 * std::f64::consts::PI * frequency_hz;
+                g += amplitude * amplitude * (w * at).cos() / (2.0 * w * w);
+            }
+            _ => {}
+        }
+    }
+    g
+}
+
+/// Covariance (u^2/s^2) of the first differences of block-mean rates `d_i = b_{i+1} - b_i`
+/// (second differences of phase at lag `tb`, divided by `tb`) at lags `0..n`.
+fn block_diff_acov(c: &[f64; 5], effects: &[EffectParams], tb: f64, n: usize) -> Vec<f64> {
+    const A: [f64; 3] = [1.0, -2.0, 1.0];
+    (0..n)
+        .map(|h| {
+            let mut v = 0.0;
+            for (i, ai) in A.iter().enumerate() {
+                for (j, aj) in A.iter().enumerate() {
+                    v += ai * aj * phase_gcov(c, effects, (h as f64 + j as f64 - i as f64) * tb);
+                }
+            }
+            v / (tb * tb)
+        })
+        .collect()
+}
+
+/// A warm-up in the block means: generalised least squares of the first differences of the
+/// block-mean rate on `r + A (e_{i+1} - e_i)`, `e_i` the block mean of `e^{-t/T}` (the warm-up
+/// of THEORY.md section 3 over a linear drift `r`), with the covariance of the differences from
+/// the fitted model (five terms `c` plus the stationary `effects`). `T` is scanned on a log grid
+/// from half a block to a quarter of the run. The statistic is the drop of the whitened
+/// residual sum of squares against the drift alone (about chi-squared with one degree of
+/// freedom, plus the scan's look-elsewhere, when there is no warm-up).
+pub fn fit_warmup(
+    block_means: &[f64],
+    block_s: f64,
+    t_run_s: f64,
+    c: &[f64; 5],
+    effects: &[EffectParams],
+) -> Option<WarmupFinding> {
+    if block_means.len() < 24 || block_means.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let d: Vec<f64> = block_means.windows(2).map(|p| p[1] - p[0]).collect();
+    let n = d.len();
+    let acov = block_diff_acov(c, effects, block_s, n);
+    let sigma = DMatrix::from_fn(n, n, |i, j| acov[i.abs_diff(j)]);
+    let chol = sigma.cholesky()?;
+    let white = |v: DVector<f64>| chol.l().solve_lower_triangular(&v);
+    let yw = white(DVector::from_column_slice(&d))?;
+    let ones = white(DVector::from_element(n, 1.0))?;
+    let r0 = {
+        let beta = ones.dot(&yw) / ones.norm_squared();
+        (&yw - &ones * beta).norm_squared()
+    };
+    let grid = Grid {
+        lo: block_s / 2.0,
+        hi: t_run_s / 4.0,
+        per_decade: 24.0,
+    };
+    let mut best: Option<(f64, f64, f64)> = None; // (T, A, rss)
+    for t in grid.points() {
+        let e: Vec<f64> = (0..=n).map(|i| warmup_block_shape(i, block_s, t)).collect();
+        let de = DVector::from_iterator(n, e.windows(2).map(|p| p[1] - p[0]));
+        let Some(ew) = white(de) else { continue };
+        let x = DMatrix::from_columns(&[ones.clone(), ew]);
+        let Some(beta) = (x.transpose() * &x)
+            .try_inverse()
+            .map(|inv| inv * x.transpose() * &yw)
+        else {
+            continue;
+        };
+        let rss = (&yw - &x * &beta).norm_squared();
+        if best.is_none_or(|b| rss < b.2) {
+            best = Some((t, beta[1], rss));
+        }
+    }
+    let (t, a, rss) = best?;
+    Some(WarmupFinding {
+        amplitude: a,
+        time_constant_s: t,
+        w_stat: r0 - rss,
+    })
 }
 
 fn median(v: &[f64]) -> f64 {
