@@ -13,7 +13,9 @@
 //! thresholds are set from; `--mode speed` times one 3-hour 250 Hz channel.
 
 use allanscope::gap::diagnose::{detect_jumps, fit_warmup, GapProblem, ModelSpec};
-use allanscope::gap::{diagnose, DiagnoseOptions, EffectKind, EffectParams, GapConfig, GapEvidence};
+use allanscope::gap::{
+    diagnose, DiagnoseOptions, EffectKind, EffectParams, GapConfig, GapEvidence,
+};
 use allanscope::model::terms;
 use allanscope::sim::{SimModel, Simulator};
 use rand::{RngExt, SeedableRng};
@@ -116,11 +118,9 @@ fn model_toml(d: &Draw, tau0: f64) -> String {
         Some(EffectParams::Sinusoid {
             amplitude,
             frequency_hz,
-        }) => {
-            s += &format!(
-                "sinusoid = {{ amplitude = {amplitude}, frequency = {frequency_hz}, phase = 0.3 }}\n"
-            )
-        }
+        }) => s += &format!(
+            "sinusoid = {{ amplitude = {amplitude}, frequency = {frequency_hz}, phase = 0.3 }}\n"
+        ),
         Some(EffectParams::OutputFilter { time_constant_s }) => {
             s += &format!("output_filter = {{ time_constant = {time_constant_s} }}\n")
         }
@@ -128,7 +128,9 @@ fn model_toml(d: &Draw, tau0: f64) -> String {
             amplitude,
             time_constant_s,
         }) => {
-            s += &format!("warmup = {{ amplitude = {amplitude}, time_constant = {time_constant_s} }}\n")
+            s += &format!(
+                "warmup = {{ amplitude = {amplitude}, time_constant = {time_constant_s} }}\n"
+            )
         }
         Some(EffectParams::BiasJumps { count, rms_size }) => {
             let t = 1.0; // placeholder replaced below
@@ -145,7 +147,10 @@ fn model_toml(d: &Draw, tau0: f64) -> String {
 fn simulate(d: &Draw, tau0: f64, t_run: f64, seed: u64) -> Vec<f64> {
     let mut toml = model_toml(d, tau0);
     if let Some(EffectParams::BiasJumps { count, .. }) = d.effect {
-        toml = toml.replace(&format!("MEANINT{count}"), &format!("{}", t_run / count as f64));
+        toml = toml.replace(
+            &format!("MEANINT{count}"),
+            &format!("{}", t_run / count as f64),
+        );
     }
     let model = SimModel::from_toml_str(&toml, Path::new("<blind>")).expect("generated model");
     let mut sim = Simulator::new(&model, seed);
@@ -183,11 +188,19 @@ fn run_one(i: u64, seed: u64, tau0: f64, t_run: f64, kinds: &[Option<EffectKind>
     let diag = diagnose(&snap, &DiagnoseOptions::default()).expect("diagnosis");
     let first = diag.effects.first().map(|e| e.params);
     let (mut shape_err, mut amp_err) = (f64::NAN, f64::NAN);
-    if let (Some(t), Some(f)) = (d.effect, diag.effects.iter().find(|e| Some(e.params.kind()) == kind))
-    {
+    if let (Some(t), Some(f)) = (
+        d.effect,
+        diag.effects.iter().find(|e| Some(e.params.kind()) == kind),
+    ) {
         let f = f.params;
         match (t, f) {
-            (EffectParams::BiasJumps { count, rms_size }, EffectParams::BiasJumps { count: c2, rms_size: r2 }) => {
+            (
+                EffectParams::BiasJumps { count, rms_size },
+                EffectParams::BiasJumps {
+                    count: c2,
+                    rms_size: r2,
+                },
+            ) => {
                 shape_err = rel(c2 as f64, count as f64);
                 amp_err = rel(r2, rms_size);
             }
@@ -225,16 +238,31 @@ fn calibrate(i: u64, seed: u64, tau0: f64, t_run: f64) -> (f64, f64, f64, Vec<f6
     let prob = GapProblem::new(&snap, &opts).expect("problem");
     let base = prob.gls(&ModelSpec::default()).expect("gls");
     let g = base.gap();
-    let zmax = prob.z(&base.model).iter().fold(0.0f64, |a, z| a.max(z.abs()));
+    let zmax = prob
+        .z(&base.model)
+        .iter()
+        .fold(0.0f64, |a, z| a.max(z.abs()));
     let mut best = 0.0f64;
-    for k in [EffectKind::GaussMarkov, EffectKind::Sinusoid, EffectKind::OutputFilter] {
+    for k in [
+        EffectKind::GaussMarkov,
+        EffectKind::Sinusoid,
+        EffectKind::OutputFilter,
+    ] {
         if let Some((_, f)) = prob.scan(&ModelSpec::default(), k) {
             best = best.max((base.chi2 - f.chi2) / k.n_params() as f64);
         }
     }
     let c5: [f64; 5] = std::array::from_fn(|i| base.coef[i]);
-    let w = fit_warmup(&snap.block_means, snap.block_len as f64 * tau0, t_run, &c5, &[]).map_or(0.0, |w| w.w_stat);
-    let flagged = diagnose(&snap, &opts).expect("diag").verdict != allanscope::gap::Verdict::Consistent;
+    let w = fit_warmup(
+        &snap.block_means,
+        snap.block_len as f64 * tau0,
+        t_run,
+        &c5,
+        &[],
+    )
+    .map_or(0.0, |w| w.w_stat);
+    let flagged =
+        diagnose(&snap, &opts).expect("diag").verdict != allanscope::gap::Verdict::Consistent;
     let jz: Vec<f64> = [4.5, 5.0, 5.5, 6.0]
         .iter()
         .map(|&z| {
@@ -248,7 +276,14 @@ fn calibrate(i: u64, seed: u64, tau0: f64, t_run: f64) -> (f64, f64, f64, Vec<f6
 fn quantiles(mut v: Vec<f64>) -> String {
     v.sort_by(|a, b| a.total_cmp(b));
     let q = |p: f64| v[((v.len() as f64 - 1.0) * p).round() as usize];
-    format!("median {:.3} q90 {:.3} q95 {:.3} q99 {:.3} max {:.3}", q(0.5), q(0.9), q(0.95), q(0.99), q(1.0))
+    format!(
+        "median {:.3} q90 {:.3} q95 {:.3} q99 {:.3} max {:.3}",
+        q(0.5),
+        q(0.9),
+        q(0.95),
+        q(0.99),
+        q(1.0)
+    )
 }
 
 fn main() {
@@ -271,7 +306,12 @@ fn main() {
         let tau0 = 0.004;
         let n = (3.0 * 3600.0 / tau0) as usize;
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
-        let d = draw(&mut rng, Some(EffectKind::GaussMarkov), n as f64 * tau0, tau0);
+        let d = draw(
+            &mut rng,
+            Some(EffectKind::GaussMarkov),
+            n as f64 * tau0,
+            tau0,
+        );
         let inc = simulate(&d, tau0, n as f64 * tau0, seed);
         let t = Instant::now();
         let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
@@ -292,8 +332,16 @@ fn main() {
 
     if mode == "one" {
         let i: u64 = get("--draw", "0").parse().expect("--draw");
-        let kinds: Vec<Option<EffectKind>> = vec![None, Some(EffectKind::GaussMarkov), Some(EffectKind::Sinusoid), Some(EffectKind::OutputFilter), Some(EffectKind::Warmup), Some(EffectKind::BiasJumps)];
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i));
+        let kinds: Vec<Option<EffectKind>> = vec![
+            None,
+            Some(EffectKind::GaussMarkov),
+            Some(EffectKind::Sinusoid),
+            Some(EffectKind::OutputFilter),
+            Some(EffectKind::Warmup),
+            Some(EffectKind::BiasJumps),
+        ];
+        let mut rng =
+            Xoshiro256PlusPlus::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i));
         let d = draw(&mut rng, kinds[(i as usize) % kinds.len()], t_run, tau0);
         println!("{d:?}");
         let inc = simulate(&d, tau0, t_run, seed.wrapping_add(7919 * i));
@@ -302,15 +350,36 @@ fn main() {
         let opts = DiagnoseOptions::default();
         let prob = GapProblem::new(&snap, &opts).expect("problem");
         let base = prob.gls(&ModelSpec::default()).expect("gls");
-        println!("base chi2 {:.2} exp {:.2} G {:.3} coef {:?}", base.chi2, base.expected, base.gap(), base.coef);
-        for k in [EffectKind::GaussMarkov, EffectKind::Sinusoid, EffectKind::OutputFilter, EffectKind::Warmup] {
+        println!(
+            "base chi2 {:.2} exp {:.2} G {:.3} coef {:?}",
+            base.chi2,
+            base.expected,
+            base.gap(),
+            base.coef
+        );
+        for k in [
+            EffectKind::GaussMarkov,
+            EffectKind::Sinusoid,
+            EffectKind::OutputFilter,
+            EffectKind::Warmup,
+        ] {
             if let Some((sh, f)) = prob.scan(&ModelSpec::default(), k) {
-                println!("{:?}: shape {sh:.4} chi2 {:.2} exp {:.2} G {:.3} coef {:?}", k, f.chi2, f.expected, f.gap(), f.coef);
+                println!(
+                    "{:?}: shape {sh:.4} chi2 {:.2} exp {:.2} G {:.3} coef {:?}",
+                    k,
+                    f.chi2,
+                    f.expected,
+                    f.gap(),
+                    f.coef
+                );
             }
         }
         let diag = diagnose(&snap, &opts).expect("diag");
         println!("{diag:#?}");
-        println!("blocks: {:?}", snap.block_means.iter().take(20).collect::<Vec<_>>());
+        println!(
+            "blocks: {:?}",
+            snap.block_means.iter().take(20).collect::<Vec<_>>()
+        );
         return;
     }
 
@@ -326,14 +395,25 @@ fn main() {
                     })
                 })
                 .collect();
-            hs.into_iter().flat_map(|h| h.join().expect("thread")).collect()
+            hs.into_iter()
+                .flat_map(|h| h.join().expect("thread"))
+                .collect()
         });
         println!("clean draws: {}", res.len());
         println!("G0:       {}", quantiles(res.iter().map(|r| r.0).collect()));
         println!("max|z|:   {}", quantiles(res.iter().map(|r| r.1).collect()));
-        println!("best dchi2/param: {}", quantiles(res.iter().map(|r| r.2).collect()));
-        println!("warm-up W: {}", quantiles(res.iter().map(|r| r.4).collect()));
-        println!("flagged (not consistent): {:.3}", res.iter().filter(|r| r.5).count() as f64 / res.len() as f64);
+        println!(
+            "best dchi2/param: {}",
+            quantiles(res.iter().map(|r| r.2).collect())
+        );
+        println!(
+            "warm-up W: {}",
+            quantiles(res.iter().map(|r| r.4).collect())
+        );
+        println!(
+            "flagged (not consistent): {:.3}",
+            res.iter().filter(|r| r.5).count() as f64 / res.len() as f64
+        );
         for (k, z) in [4.5, 5.0, 5.5, 6.0].iter().enumerate() {
             let frac = res.iter().filter(|r| r.3[k] > 0.0).count() as f64 / res.len() as f64;
             println!("jump false alarm at z {z}: {frac:.3}");
@@ -362,7 +442,9 @@ fn main() {
                 })
             })
             .collect();
-        hs.into_iter().flat_map(|h| h.join().expect("thread")).collect()
+        hs.into_iter()
+            .flat_map(|h| h.join().expect("thread"))
+            .collect()
     });
     res.sort_by_key(|r| r.0);
     let elapsed = t0.elapsed().as_secs_f64();
@@ -371,13 +453,24 @@ fn main() {
         for (i, o) in &res {
             text += &format!(
                 "{i},{},{:.3},{},{},{:.3},{:.3},{:.4},{:.4},\"{:?}\",\"{:?}\"\n",
-                name(o.truth), o.rho, name(o.named), o.verdict, o.gap_before, o.gap_after,
-                o.shape_err, o.amp_err, o.truth_params, o.found_params
+                name(o.truth),
+                o.rho,
+                name(o.named),
+                o.verdict,
+                o.gap_before,
+                o.gap_after,
+                o.shape_err,
+                o.amp_err,
+                o.truth_params,
+                o.found_params
             );
         }
         std::fs::write(&csv, text).expect("csv");
     }
-    println!("{} draws, duration {t_run} s, tau0 {tau0} s, {elapsed:.0} s wall", res.len());
+    println!(
+        "{} draws, duration {t_run} s, tau0 {tau0} s, {elapsed:.0} s wall",
+        res.len()
+    );
     // Confusion matrix: truth rows, first named effect columns.
     print!("| truth \\ named | n |");
     for k in &kinds {
@@ -396,7 +489,10 @@ fn main() {
             print!(" {} |", rows.iter().filter(|o| o.named == *k).count());
         }
         let right = rows.iter().filter(|o| o.named == *t).count();
-        let big: Vec<_> = rows.iter().filter(|o| o.rho >= 0.3 || t.is_none()).collect();
+        let big: Vec<_> = rows
+            .iter()
+            .filter(|o| o.rho >= 0.3 || t.is_none())
+            .collect();
         let right_big = big.iter().filter(|o| o.named == *t).count();
         println!(
             " {right}/{} ({:.0}%) | {right_big}/{} ({:.0}%) |",
@@ -410,11 +506,35 @@ fn main() {
     println!("| effect | n named right | shape err median abs | shape err q90 abs | amp err median abs | amp err q90 abs |");
     println!("|---|---|---|---|---|---|");
     for t in kinds.iter().flatten() {
-        let mut se: Vec<f64> = res.iter().map(|r| &r.1).filter(|o| o.truth == Some(*t) && o.shape_err.is_finite()).map(|o| o.shape_err.abs()).collect();
-        let mut ae: Vec<f64> = res.iter().map(|r| &r.1).filter(|o| o.truth == Some(*t) && o.amp_err.is_finite()).map(|o| o.amp_err.abs()).collect();
+        let mut se: Vec<f64> = res
+            .iter()
+            .map(|r| &r.1)
+            .filter(|o| o.truth == Some(*t) && o.shape_err.is_finite())
+            .map(|o| o.shape_err.abs())
+            .collect();
+        let mut ae: Vec<f64> = res
+            .iter()
+            .map(|r| &r.1)
+            .filter(|o| o.truth == Some(*t) && o.amp_err.is_finite())
+            .map(|o| o.amp_err.abs())
+            .collect();
         se.sort_by(|a, b| a.total_cmp(b));
         ae.sort_by(|a, b| a.total_cmp(b));
-        let q = |v: &Vec<f64>, p: f64| if v.is_empty() { f64::NAN } else { v[((v.len() as f64 - 1.0) * p).round() as usize] };
-        println!("| {} | {} | {:.3} | {:.3} | {:.3} | {:.3} |", t.name(), se.len(), q(&se, 0.5), q(&se, 0.9), q(&ae, 0.5), q(&ae, 0.9));
+        let q = |v: &Vec<f64>, p: f64| {
+            if v.is_empty() {
+                f64::NAN
+            } else {
+                v[((v.len() as f64 - 1.0) * p).round() as usize]
+            }
+        };
+        println!(
+            "| {} | {} | {:.3} | {:.3} | {:.3} | {:.3} |",
+            t.name(),
+            se.len(),
+            q(&se, 0.5),
+            q(&se, 0.9),
+            q(&ae, 0.5),
+            q(&ae, 0.9)
+        );
     }
 }

@@ -62,7 +62,7 @@ impl Default for Thresholds {
             gap_crit: 1.55,
             band_z: 2.5,
             add_chi2: 3.0,
-            jump_z: 5.5,
+            jump_z: 5.0,
             warmup_w: 16.0,
         }
     }
@@ -257,7 +257,8 @@ impl GapProblem {
                 sigma_hi: f64::NAN,
             })
             .collect();
-        let base = fit(&cps, &FitOptions::default()).map_err(|e| DiagnoseError::Fit(e.to_string()))?;
+        let base =
+            fit(&cps, &FitOptions::default()).map_err(|e| DiagnoseError::Fit(e.to_string()))?;
         let c_init = base.c;
         let tau0 = snap.tau0_s;
         // Full-overlap counts: the bounded estimator's stride-s differences stand for the
@@ -270,7 +271,10 @@ impl GapProblem {
             })
             .collect();
         let cov = AvarCovariance::new().matrix(tau0, &cov_pts, &c_init);
-        let a: Vec<f64> = pts.iter().map(|p| base.model_avar(p.tau_s).max(1e-300)).collect();
+        let a: Vec<f64> = pts
+            .iter()
+            .map(|p| base.model_avar(p.tau_s).max(1e-300))
+            .collect();
         let j = pts.len();
         let mut s = DMatrix::from_fn(j, j, |r, c| cov[(r, c)] / (a[r] * a[c]));
         let s_diag: Vec<f64> = (0..j).map(|i| s[(i, i)]).collect();
@@ -314,7 +318,13 @@ impl GapProblem {
         let j = self.len();
         let k = 5 + spec.extra.len();
         let filt = spec.filter_tc_s.map(|t| {
-            effect_column(EffectKind::OutputFilter, t, &self.ms, self.tau0_s, self.n_inc)
+            effect_column(
+                EffectKind::OutputFilter,
+                t,
+                &self.ms,
+                self.tau0_s,
+                self.n_inc,
+            )
         });
         DMatrix::from_fn(j, k, |r, c| {
             if c < 5 {
@@ -482,8 +492,13 @@ impl GapProblem {
         if kind == EffectKind::OutputFilter {
             s.filter_tc_s = Some(shape);
         } else {
-            s.extra
-                .push(effect_column(kind, shape, &self.ms, self.tau0_s, self.n_inc));
+            s.extra.push(effect_column(
+                kind,
+                shape,
+                &self.ms,
+                self.tau0_s,
+                self.n_inc,
+            ));
         }
         s
     }
@@ -566,11 +581,16 @@ fn params_of(kind: EffectKind, shape: f64, fit: &GlsFit) -> EffectParams {
 }
 
 /// Diagnoses one channel's evidence.
-pub fn diagnose(snap: &EvidenceSnapshot, opts: &DiagnoseOptions) -> Result<Diagnosis, DiagnoseError> {
+pub fn diagnose(
+    snap: &EvidenceSnapshot,
+    opts: &DiagnoseOptions,
+) -> Result<Diagnosis, DiagnoseError> {
     let prob = GapProblem::new(snap, opts)?;
     let th = opts.thresholds;
     let j = prob.len();
-    let base = prob.gls(&ModelSpec::default()).ok_or(DiagnoseError::Fit("base GLS".into()))?;
+    let base = prob
+        .gls(&ModelSpec::default())
+        .ok_or(DiagnoseError::Fit("base GLS".into()))?;
     let gap_before = base.gap();
     let regions = prob.regions(&base.model, th.band_z);
     let flagged = gap_before > th.gap_crit;
@@ -588,7 +608,14 @@ pub fn diagnose(snap: &EvidenceSnapshot, opts: &DiagnoseOptions) -> Result<Diagn
     // 1. Stationary effects on the curve, while the gap stays significant.
     let mut offset = vec![0.0; j];
     let (mut spec, mut cur) = if flagged {
-        add_stationary(&prob, &stationary, &offset, &mut effects, base.clone(), opts)
+        add_stationary(
+            &prob,
+            &stationary,
+            &offset,
+            &mut effects,
+            base.clone(),
+            opts,
+        )
     } else {
         (spec_from(&prob, &effects, &offset), base.clone())
     };
@@ -603,7 +630,13 @@ pub fn diagnose(snap: &EvidenceSnapshot, opts: &DiagnoseOptions) -> Result<Diagn
         if let Some(w) = warm.filter(|w| w.w_stat > th.warmup_w) {
             time_flag = true;
             // Its AVAR, exact for the estimator on this record, enters as a fixed offset.
-            let col = effect_column(EffectKind::Warmup, w.time_constant_s, &prob.ms, prob.tau0_s, prob.n_inc);
+            let col = effect_column(
+                EffectKind::Warmup,
+                w.time_constant_s,
+                &prob.ms,
+                prob.tau0_s,
+                prob.n_inc,
+            );
             for (o, c) in offset.iter_mut().zip(&col) {
                 *o += w.amplitude * w.amplitude * c;
             }
@@ -639,7 +672,8 @@ pub fn diagnose(snap: &EvidenceSnapshot, opts: &DiagnoseOptions) -> Result<Diagn
             effects.extend(rest);
             cur = f;
             if cur.gap() > th.gap_crit {
-                let (sp, c2) = add_stationary(&prob, &stationary, &offset, &mut effects, cur.clone(), opts);
+                let (sp, c2) =
+                    add_stationary(&prob, &stationary, &offset, &mut effects, cur.clone(), opts);
                 spec = sp;
                 cur = c2;
             } else {
@@ -653,7 +687,12 @@ pub fn diagnose(snap: &EvidenceSnapshot, opts: &DiagnoseOptions) -> Result<Diagn
     // 3. Bias jumps, in time (after the warm-up is taken out of the block means).
     let jumps = if opts.candidates.contains(&EffectKind::BiasJumps) {
         let resid: Vec<f64> = match &warm_curve {
-            Some(wc) => snap.block_means.iter().zip(wc).map(|(b, w)| b - w).collect(),
+            Some(wc) => snap
+                .block_means
+                .iter()
+                .zip(wc)
+                .map(|(b, w)| b - w)
+                .collect(),
             None => snap.block_means.clone(),
         };
         detect_jumps(&resid, block_s, th.jump_z, 0.0)
@@ -676,7 +715,11 @@ pub fn diagnose(snap: &EvidenceSnapshot, opts: &DiagnoseOptions) -> Result<Diagn
     }
     let flagged = flagged || time_flag;
     let mut gap_after = cur.gap();
-    gap_after = if gap_after.is_finite() { gap_after } else { gap_before };
+    gap_after = if gap_after.is_finite() {
+        gap_after
+    } else {
+        gap_before
+    };
     let verdict = if !flagged {
         Verdict::Consistent
     } else if gap_after <= th.gap_crit {
@@ -713,7 +756,10 @@ fn spec_from(prob: &GapProblem, effects: &[AddedEffect], offset: &[f64]) -> Mode
     };
     for e in effects {
         let kind = e.params.kind();
-        if matches!(kind, EffectKind::GaussMarkov | EffectKind::Sinusoid | EffectKind::OutputFilter) {
+        if matches!(
+            kind,
+            EffectKind::GaussMarkov | EffectKind::Sinusoid | EffectKind::OutputFilter
+        ) {
             spec = prob.spec_with(&spec, kind, e.params.shape());
         }
     }
@@ -882,7 +928,7 @@ pub fn detect_jumps(
         let med = median(&d);
         let mad = median(&d.iter().map(|v| (v - med).abs()).collect::<Vec<_>>());
         let sd = 1.4826 * mad;
-        if !(sd > 0.0) {
+        if sd.is_nan() || sd <= 0.0 {
             continue;
         }
         let mut times = Vec::new();
@@ -1073,7 +1119,9 @@ pub fn holdout_gap(
 ) -> Result<(f64, f64), DiagnoseError> {
     let prob = GapProblem::new(snap, opts)?;
     let j = prob.len();
-    let base = prob.gls(&ModelSpec::default()).ok_or(DiagnoseError::Fit("base GLS".into()))?;
+    let base = prob
+        .gls(&ModelSpec::default())
+        .ok_or(DiagnoseError::Fit("base GLS".into()))?;
     let mut spec = ModelSpec {
         offset: Some(vec![0.0; j]),
         ..ModelSpec::default()
@@ -1094,6 +1142,8 @@ pub fn holdout_gap(
             }
         }
     }
-    let after = prob.gls(&spec).ok_or(DiagnoseError::Fit("holdout GLS".into()))?;
+    let after = prob
+        .gls(&spec)
+        .ok_or(DiagnoseError::Fit("holdout GLS".into()))?;
     Ok((base.gap(), after.gap()))
 }

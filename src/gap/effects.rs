@@ -50,11 +50,25 @@ impl EffectKind {
 /// A fitted effect with CONTRACT.md's parameters (rate units u/s, times s, frequencies Hz).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum EffectParams {
-    GaussMarkov { sigma: f64, tau_c_s: f64 },
-    Sinusoid { amplitude: f64, frequency_hz: f64 },
-    OutputFilter { time_constant_s: f64 },
-    Warmup { amplitude: f64, time_constant_s: f64 },
-    BiasJumps { count: u64, rms_size: f64 },
+    GaussMarkov {
+        sigma: f64,
+        tau_c_s: f64,
+    },
+    Sinusoid {
+        amplitude: f64,
+        frequency_hz: f64,
+    },
+    OutputFilter {
+        time_constant_s: f64,
+    },
+    Warmup {
+        amplitude: f64,
+        time_constant_s: f64,
+    },
+    BiasJumps {
+        count: u64,
+        rms_size: f64,
+    },
 }
 
 impl EffectParams {
@@ -72,7 +86,9 @@ impl EffectParams {
     pub fn to_json(&self) -> serde_json::Value {
         use serde_json::json;
         match *self {
-            EffectParams::GaussMarkov { sigma, tau_c_s } => json!({"sigma": sigma, "tau_c": tau_c_s}),
+            EffectParams::GaussMarkov { sigma, tau_c_s } => {
+                json!({"sigma": sigma, "tau_c": tau_c_s})
+            }
             EffectParams::Sinusoid {
                 amplitude,
                 frequency_hz,
@@ -128,7 +144,9 @@ impl Grid {
         if !(self.lo > 0.0 && self.hi > self.lo) {
             return Vec::new();
         }
-        let n = ((self.hi / self.lo).log10() * self.per_decade).ceil().max(1.0) as usize;
+        let n = ((self.hi / self.lo).log10() * self.per_decade)
+            .ceil()
+            .max(1.0) as usize;
         (0..=n)
             .map(|i| self.lo * (self.hi / self.lo).powf(i as f64 / n as f64))
             .collect()
@@ -138,7 +156,13 @@ impl Grid {
 /// The column an effect of unit amplitude adds at each cluster size `ms` (AVAR, u^2/s^2 per
 /// (u/s)^2), THEORY.md section 3 via [`crate::model::terms`]. For the output filter it is the
 /// replacement of the N column: filtered white rate of unit N.
-pub fn effect_column(kind: EffectKind, shape: f64, ms: &[u64], tau0_s: f64, n_inc: u64) -> Vec<f64> {
+pub fn effect_column(
+    kind: EffectKind,
+    shape: f64,
+    ms: &[u64],
+    tau0_s: f64,
+    n_inc: u64,
+) -> Vec<f64> {
     ms.iter()
         .map(|&m| {
             let tau = m as f64 * tau0_s;

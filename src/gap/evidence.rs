@@ -193,7 +193,10 @@ impl GapEvidence {
             Some(n) if n >= nseg => n.div_ceil(nseg),
             _ => INITIAL_SEGMENT,
         };
-        let main = Engine::new(accum_cfg(cfg.tau0_s, TauSpec::List(cfg.dense_cluster_sizes())));
+        let main = Engine::new(accum_cfg(
+            cfg.tau0_s,
+            TauSpec::List(cfg.dense_cluster_sizes()),
+        ));
         let seg_engine = Engine::new(accum_cfg(cfg.tau0_s, TauSpec::List(segment_ms(seg_len))));
         let block_len = (seg_len / BLOCKS_PER_SEGMENT).max(1);
         Self {
@@ -358,7 +361,13 @@ impl GapEvidence {
         let mut block_means: Vec<f64> = self
             .blocks
             .iter()
-            .map(|&(s, n)| if n > 0 { s / (n as f64 * tau0) } else { f64::NAN })
+            .map(|&(s, n)| {
+                if n > 0 {
+                    s / (n as f64 * tau0)
+                } else {
+                    f64::NAN
+                }
+            })
             .collect();
         if self.cur_block.1 > 0 && self.block_pos * 2 >= self.block_len {
             block_means.push(self.cur_block.0 / (self.cur_block.1 as f64 * tau0));
@@ -384,7 +393,10 @@ mod tests {
     fn dense_sizes_are_four_per_octave() {
         // By construction: 1..7, then {4,5,6,7} * 2^k.
         let ms = dense_ms(4, 64);
-        assert_eq!(ms, vec![1, 2, 3, 4, 5, 6, 7, 8, 10, 12, 14, 16, 20, 24, 28, 32, 40, 48, 56]);
+        assert_eq!(
+            ms,
+            vec![1, 2, 3, 4, 5, 6, 7, 8, 10, 12, 14, 16, 20, 24, 28, 32, 40, 48, 56, 64]
+        );
     }
 
     #[test]

@@ -126,7 +126,10 @@ impl DiagnosisRecord {
     /// The JSON line (no trailing newline).
     pub fn to_json_line(&self) -> String {
         serde_json::to_string(self).unwrap_or_else(|e| {
-            format!("{{\"type\":\"diagnosis\",\"channel\":\"{}\",\"error\":\"{e}\"}}", self.channel)
+            format!(
+                "{{\"type\":\"diagnosis\",\"channel\":\"{}\",\"error\":\"{e}\"}}",
+                self.channel
+            )
         })
     }
 }
