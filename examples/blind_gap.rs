@@ -118,9 +118,11 @@ fn model_toml(d: &Draw, tau0: f64) -> String {
         Some(EffectParams::Sinusoid {
             amplitude,
             frequency_hz,
-        }) => s += &format!(
+        }) => {
+            s += &format!(
             "sinusoid = {{ amplitude = {amplitude}, frequency = {frequency_hz}, phase = 0.3 }}\n"
-        ),
+        )
+        }
         Some(EffectParams::OutputFilter { time_constant_s }) => {
             s += &format!("output_filter = {{ time_constant = {time_constant_s} }}\n")
         }
