@@ -22,6 +22,7 @@ pub mod analysis;
 pub mod cli;
 pub mod error;
 pub mod frame;
+pub mod gap;
 pub mod input;
 pub mod model;
 pub mod sim;

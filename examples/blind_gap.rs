@@ -1,0 +1,542 @@
+//! Blind benchmark of the sim-to-real diagnosis (docs/gap.md).
+//!
+//! A generator draws a base five-term model (VOG4-like, each coefficient scaled by a
+//! log-uniform factor) and a hidden effect (or none) with parameters from wide ranges, simulates
+//! a capture with `allanscope::sim`, and runs the diagnosis, which never sees the draw.
+//!
+//! ```text
+//! cargo run --release --example blind_gap -- [--draws 240] [--seed 1] [--duration 3600]
+//!     [--tau0 0.004] [--threads 2] [--mode bench|calibrate|speed] [--csv FILE]
+//! ```
+//!
+//! `--mode calibrate` draws clean runs only and prints the null quantiles of the statistics the
+//! thresholds are set from; `--mode speed` times one 3-hour 250 Hz channel.
+
+use allanscope::gap::diagnose::{detect_jumps, fit_warmup, GapProblem, ModelSpec};
+use allanscope::gap::{
+    diagnose, DiagnoseOptions, EffectKind, EffectParams, GapConfig, GapEvidence,
+};
+use allanscope::model::terms;
+use allanscope::sim::{SimModel, Simulator};
+use rand::{RngExt, SeedableRng};
+use rand_xoshiro::Xoshiro256PlusPlus;
+use std::path::Path;
+use std::time::Instant;
+
+#[derive(Debug, Clone, Copy)]
+struct Base {
+    n: f64,
+    b: f64,
+    k: f64,
+    lsb: f64,
+}
+
+impl Base {
+    fn adev(&self, tau: f64) -> f64 {
+        let q = terms::quantization_q(self.lsb);
+        terms::avar([q, self.n, self.b, self.k, 0.0], tau).sqrt()
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Draw {
+    base: Base,
+    effect: Option<EffectParams>,
+    /// Peak effect ADEV over base ADEV at that tau, as drawn.
+    rho: f64,
+}
+
+fn log_uniform(rng: &mut Xoshiro256PlusPlus, lo: f64, hi: f64) -> f64 {
+    (lo.ln() + rng.random::<f64>() * (hi.ln() - lo.ln())).exp()
+}
+
+fn draw(rng: &mut Xoshiro256PlusPlus, kind: Option<EffectKind>, t_run: f64, tau0: f64) -> Draw {
+    let base = Base {
+        n: 0.254 * log_uniform(rng, 0.5, 2.0),
+        b: 0.225 * log_uniform(rng, 0.5, 2.0),
+        k: 1.826e-2 * log_uniform(rng, 0.5, 2.0),
+        lsb: 0.004,
+    };
+    let rho = log_uniform(rng, 0.15, 3.0);
+    let effect = kind.map(|k| match k {
+        EffectKind::GaussMarkov => {
+            let tc = log_uniform(rng, 20.0 * tau0, t_run / 50.0);
+            // Peak ADEV 0.6174 sigma at tau = 1.893 tau_c (THEORY.md section 3).
+            let sigma = rho * base.adev(1.893 * tc) / 0.6174;
+            EffectParams::GaussMarkov { sigma, tau_c_s: tc }
+        }
+        EffectKind::Sinusoid => {
+            let f = log_uniform(rng, 30.0 / t_run, 0.1 / tau0);
+            // First maximum of sin^2(x)/x at x = pi 0.371: 0.725 A.
+            let a = rho * base.adev(0.371 / f) / 0.725;
+            EffectParams::Sinusoid {
+                amplitude: a,
+                frequency_hz: f,
+            }
+        }
+        EffectKind::OutputFilter => EffectParams::OutputFilter {
+            time_constant_s: log_uniform(rng, 1.0 * tau0, 10.0 * tau0),
+        },
+        EffectKind::Warmup => {
+            let tc = log_uniform(rng, 60.0, t_run / 5.0);
+            let n_inc = (t_run / tau0) as u64;
+            // Amplitude for the drawn peak ratio over the dense taus (warmup_avar is exact for
+            // the estimator on this record).
+            let ms = allanscope::gap::evidence::dense_ms(4, n_inc / 10);
+            let peak = ms
+                .iter()
+                .map(|&m| {
+                    let tau = m as f64 * tau0;
+                    terms::warmup_avar(1.0, tc, tau0, m, n_inc).sqrt() / base.adev(tau)
+                })
+                .fold(0.0, f64::max);
+            EffectParams::Warmup {
+                amplitude: rho / peak,
+                time_constant_s: tc,
+            }
+        }
+        EffectKind::BiasJumps => {
+            let count = rng.random_range(2..=8u64);
+            let mean_interval = t_run / count as f64;
+            let tau = t_run / 10.0;
+            let s = rho * base.adev(tau) / (tau / (3.0 * mean_interval)).sqrt();
+            EffectParams::BiasJumps { count, rms_size: s }
+        }
+    });
+    Draw { base, effect, rho }
+}
+
+fn model_toml(d: &Draw, tau0: f64) -> String {
+    let mut s = format!(
+        "tau0_s = {tau0}\n[[channel]]\nname = \"g\"\nunit = \"arcsec\"\nlsb = {}\nN = {}\nB = {}\nK = {}\nflicker_band_s = [{}, 1.0e5]\n",
+        d.base.lsb, d.base.n, d.base.b, d.base.k, tau0
+    );
+    match d.effect {
+        Some(EffectParams::GaussMarkov { sigma, tau_c_s }) => {
+            s += &format!("gauss_markov = {{ sigma = {sigma}, tau_c = {tau_c_s} }}\n")
+        }
+        Some(EffectParams::Sinusoid {
+            amplitude,
+            frequency_hz,
+        }) => {
+            s += &format!(
+            "sinusoid = {{ amplitude = {amplitude}, frequency = {frequency_hz}, phase = 0.3 }}\n"
+        )
+        }
+        Some(EffectParams::OutputFilter { time_constant_s }) => {
+            s += &format!("output_filter = {{ time_constant = {time_constant_s} }}\n")
+        }
+        Some(EffectParams::Warmup {
+            amplitude,
+            time_constant_s,
+        }) => {
+            s += &format!(
+                "warmup = {{ amplitude = {amplitude}, time_constant = {time_constant_s} }}\n"
+            )
+        }
+        Some(EffectParams::BiasJumps { count, rms_size }) => {
+            let t = 1.0; // placeholder replaced below
+            let _ = t;
+            s += &format!(
+                "bias_jumps = {{ mean_interval = MEANINT{count}, rms_size = {rms_size} }}\n"
+            )
+        }
+        None => {}
+    }
+    s
+}
+
+fn simulate(d: &Draw, tau0: f64, t_run: f64, seed: u64) -> Vec<f64> {
+    let mut toml = model_toml(d, tau0);
+    if let Some(EffectParams::BiasJumps { count, .. }) = d.effect {
+        toml = toml.replace(
+            &format!("MEANINT{count}"),
+            &format!("{}", t_run / count as f64),
+        );
+    }
+    let model = SimModel::from_toml_str(&toml, Path::new("<blind>")).expect("generated model");
+    let mut sim = Simulator::new(&model, seed);
+    let n = (t_run / tau0) as usize;
+    let mut out = vec![0.0; n];
+    sim.fill_channel(0, &mut out);
+    out
+}
+
+struct Outcome {
+    truth: Option<EffectKind>,
+    rho: f64,
+    named: Option<EffectKind>,
+    verdict: String,
+    gap_before: f64,
+    gap_after: f64,
+    shape_err: f64,
+    amp_err: f64,
+    truth_params: Option<EffectParams>,
+    found_params: Option<EffectParams>,
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b) / b
+}
+
+fn run_one(i: u64, seed: u64, tau0: f64, t_run: f64, kinds: &[Option<EffectKind>]) -> Outcome {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i));
+    let kind = kinds[(i as usize) % kinds.len()];
+    let d = draw(&mut rng, kind, t_run, tau0);
+    let inc = simulate(&d, tau0, t_run, seed.wrapping_add(7919 * i));
+    let ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
+    let mut ev = ev;
+    let snap = ev.snapshot();
+    let diag = diagnose(&snap, &DiagnoseOptions::default()).expect("diagnosis");
+    let first = diag.effects.first().map(|e| e.params);
+    let (mut shape_err, mut amp_err) = (f64::NAN, f64::NAN);
+    if let (Some(t), Some(f)) = (
+        d.effect,
+        diag.effects.iter().find(|e| Some(e.params.kind()) == kind),
+    ) {
+        let f = f.params;
+        match (t, f) {
+            (
+                EffectParams::BiasJumps { count, rms_size },
+                EffectParams::BiasJumps {
+                    count: c2,
+                    rms_size: r2,
+                },
+            ) => {
+                shape_err = rel(c2 as f64, count as f64);
+                amp_err = rel(r2, rms_size);
+            }
+            _ => {
+                shape_err = rel(f.shape(), t.shape());
+                amp_err = rel(f.amplitude(), t.amplitude());
+            }
+        }
+    }
+    Outcome {
+        truth: kind,
+        rho: d.rho,
+        named: first.map(|p| p.kind()),
+        verdict: format!("{:?}", diag.verdict).to_lowercase(),
+        gap_before: diag.gap_before,
+        gap_after: diag.gap_after,
+        shape_err,
+        amp_err,
+        truth_params: d.effect,
+        found_params: first,
+    }
+}
+
+fn name(k: Option<EffectKind>) -> &'static str {
+    k.map_or("none", |k| k.name())
+}
+
+fn calibrate(i: u64, seed: u64, tau0: f64, t_run: f64) -> (f64, f64, f64, Vec<f64>, f64, bool) {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i));
+    let d = draw(&mut rng, None, t_run, tau0);
+    let inc = simulate(&d, tau0, t_run, seed.wrapping_add(7919 * i));
+    let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
+    let snap = ev.snapshot();
+    let opts = DiagnoseOptions::default();
+    let prob = GapProblem::new(&snap, &opts).expect("problem");
+    let base = prob.gls(&ModelSpec::default()).expect("gls");
+    let g = base.gap();
+    let zmax = prob
+        .z(&base.model)
+        .iter()
+        .fold(0.0f64, |a, z| a.max(z.abs()));
+    let mut best = 0.0f64;
+    for k in [
+        EffectKind::GaussMarkov,
+        EffectKind::Sinusoid,
+        EffectKind::OutputFilter,
+    ] {
+        if let Some((_, f)) = prob.scan(&ModelSpec::default(), k) {
+            best = best.max((base.chi2 - f.chi2) / k.n_params() as f64);
+        }
+    }
+    let c5: [f64; 5] = std::array::from_fn(|i| base.coef[i]);
+    let w = fit_warmup(
+        &snap.block_means,
+        snap.block_len as f64 * tau0,
+        t_run,
+        &c5,
+        &[],
+    )
+    .map_or(0.0, |w| w.w_stat);
+    let flagged =
+        diagnose(&snap, &opts).expect("diag").verdict != allanscope::gap::Verdict::Consistent;
+    let jz: Vec<f64> = [4.5, 5.0, 5.5, 6.0]
+        .iter()
+        .map(|&z| {
+            detect_jumps(&snap.block_means, snap.block_len as f64 * tau0, z, 0.0)
+                .map_or(0.0, |f| f.sizes.len() as f64)
+        })
+        .collect();
+    (g, zmax, best, jz, w, flagged)
+}
+
+fn quantiles(mut v: Vec<f64>) -> String {
+    v.sort_by(|a, b| a.total_cmp(b));
+    let q = |p: f64| v[((v.len() as f64 - 1.0) * p).round() as usize];
+    format!(
+        "median {:.3} q90 {:.3} q95 {:.3} q99 {:.3} max {:.3}",
+        q(0.5),
+        q(0.9),
+        q(0.95),
+        q(0.99),
+        q(1.0)
+    )
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let get = |k: &str, d: &str| -> String {
+        args.iter()
+            .position(|a| a == k)
+            .and_then(|i| args.get(i + 1).cloned())
+            .unwrap_or_else(|| d.to_string())
+    };
+    let draws: u64 = get("--draws", "240").parse().expect("--draws");
+    let seed: u64 = get("--seed", "1").parse().expect("--seed");
+    let t_run: f64 = get("--duration", "3600").parse().expect("--duration");
+    let tau0: f64 = get("--tau0", "0.004").parse().expect("--tau0");
+    let threads: u64 = get("--threads", "2").parse().expect("--threads");
+    let mode = get("--mode", "bench");
+    let csv = get("--csv", "");
+
+    if mode == "speed" {
+        let tau0 = 0.004;
+        let n = (3.0 * 3600.0 / tau0) as usize;
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+        let d = draw(
+            &mut rng,
+            Some(EffectKind::GaussMarkov),
+            n as f64 * tau0,
+            tau0,
+        );
+        let inc = simulate(&d, tau0, n as f64 * tau0, seed);
+        let t = Instant::now();
+        let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
+        let snap = ev.snapshot();
+        let t1 = t.elapsed();
+        let diag = diagnose(&snap, &DiagnoseOptions::default()).expect("diagnosis");
+        let t2 = t.elapsed();
+        println!(
+            "{n} samples: evidence {:.2} s, diagnosis {:.2} s, total {:.2} s; verdict {:?}, effects {:?}",
+            t1.as_secs_f64(),
+            (t2 - t1).as_secs_f64(),
+            t2.as_secs_f64(),
+            diag.verdict,
+            diag.effects.iter().map(|e| e.params).collect::<Vec<_>>()
+        );
+        return;
+    }
+
+    if mode == "one" {
+        let i: u64 = get("--draw", "0").parse().expect("--draw");
+        let kinds: Vec<Option<EffectKind>> = vec![
+            None,
+            Some(EffectKind::GaussMarkov),
+            Some(EffectKind::Sinusoid),
+            Some(EffectKind::OutputFilter),
+            Some(EffectKind::Warmup),
+            Some(EffectKind::BiasJumps),
+        ];
+        let mut rng =
+            Xoshiro256PlusPlus::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i));
+        let d = draw(&mut rng, kinds[(i as usize) % kinds.len()], t_run, tau0);
+        println!("{d:?}");
+        let inc = simulate(&d, tau0, t_run, seed.wrapping_add(7919 * i));
+        let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
+        let snap = ev.snapshot();
+        let opts = DiagnoseOptions::default();
+        let prob = GapProblem::new(&snap, &opts).expect("problem");
+        let base = prob.gls(&ModelSpec::default()).expect("gls");
+        println!(
+            "base chi2 {:.2} exp {:.2} G {:.3} coef {:?}",
+            base.chi2,
+            base.expected,
+            base.gap(),
+            base.coef
+        );
+        for k in [
+            EffectKind::GaussMarkov,
+            EffectKind::Sinusoid,
+            EffectKind::OutputFilter,
+            EffectKind::Warmup,
+        ] {
+            if let Some((sh, f)) = prob.scan(&ModelSpec::default(), k) {
+                println!(
+                    "{:?}: shape {sh:.4} chi2 {:.2} exp {:.2} G {:.3} coef {:?}",
+                    k,
+                    f.chi2,
+                    f.expected,
+                    f.gap(),
+                    f.coef
+                );
+            }
+        }
+        let diag = diagnose(&snap, &opts).expect("diag");
+        println!("{diag:#?}");
+        println!(
+            "blocks: {:?}",
+            snap.block_means.iter().take(20).collect::<Vec<_>>()
+        );
+        return;
+    }
+
+    if mode == "calibrate" {
+        let res: Vec<(f64, f64, f64, Vec<f64>, f64, bool)> = std::thread::scope(|s| {
+            let hs: Vec<_> = (0..threads)
+                .map(|t| {
+                    s.spawn(move || {
+                        (0..draws)
+                            .filter(|i| i % threads == t)
+                            .map(|i| calibrate(i, seed, tau0, t_run))
+                            .collect::<Vec<_>>()
+                    })
+                })
+                .collect();
+            hs.into_iter()
+                .flat_map(|h| h.join().expect("thread"))
+                .collect()
+        });
+        println!("clean draws: {}", res.len());
+        println!("G0:       {}", quantiles(res.iter().map(|r| r.0).collect()));
+        println!("max|z|:   {}", quantiles(res.iter().map(|r| r.1).collect()));
+        println!(
+            "best dchi2/param: {}",
+            quantiles(res.iter().map(|r| r.2).collect())
+        );
+        println!(
+            "warm-up W: {}",
+            quantiles(res.iter().map(|r| r.4).collect())
+        );
+        println!(
+            "flagged (not consistent): {:.3}",
+            res.iter().filter(|r| r.5).count() as f64 / res.len() as f64
+        );
+        for (k, z) in [4.5, 5.0, 5.5, 6.0].iter().enumerate() {
+            let frac = res.iter().filter(|r| r.3[k] > 0.0).count() as f64 / res.len() as f64;
+            println!("jump false alarm at z {z}: {frac:.3}");
+        }
+        return;
+    }
+
+    let kinds: Vec<Option<EffectKind>> = vec![
+        None,
+        Some(EffectKind::GaussMarkov),
+        Some(EffectKind::Sinusoid),
+        Some(EffectKind::OutputFilter),
+        Some(EffectKind::Warmup),
+        Some(EffectKind::BiasJumps),
+    ];
+    let t0 = Instant::now();
+    let mut res: Vec<(u64, Outcome)> = std::thread::scope(|s| {
+        let kinds = &kinds;
+        let hs: Vec<_> = (0..threads)
+            .map(|t| {
+                s.spawn(move || {
+                    (0..draws)
+                        .filter(|i| i % threads == t)
+                        .map(|i| (i, run_one(i, seed, tau0, t_run, kinds)))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        hs.into_iter()
+            .flat_map(|h| h.join().expect("thread"))
+            .collect()
+    });
+    res.sort_by_key(|r| r.0);
+    let elapsed = t0.elapsed().as_secs_f64();
+    if !csv.is_empty() {
+        let mut text = String::from("draw,truth,rho,named,verdict,gap_before,gap_after,shape_err,amp_err,truth_params,found_params\n");
+        for (i, o) in &res {
+            text += &format!(
+                "{i},{},{:.3},{},{},{:.3},{:.3},{:.4},{:.4},\"{:?}\",\"{:?}\"\n",
+                name(o.truth),
+                o.rho,
+                name(o.named),
+                o.verdict,
+                o.gap_before,
+                o.gap_after,
+                o.shape_err,
+                o.amp_err,
+                o.truth_params,
+                o.found_params
+            );
+        }
+        std::fs::write(&csv, text).expect("csv");
+    }
+    println!(
+        "{} draws, duration {t_run} s, tau0 {tau0} s, {elapsed:.0} s wall",
+        res.len()
+    );
+    // Confusion matrix: truth rows, first named effect columns.
+    print!("| truth \\ named | n |");
+    for k in &kinds {
+        print!(" {} |", name(*k));
+    }
+    println!(" right (all) | right (rho >= 0.3) |");
+    print!("|---|---|");
+    for _ in &kinds {
+        print!("---|");
+    }
+    println!("---|---|");
+    for t in &kinds {
+        let rows: Vec<&Outcome> = res.iter().map(|r| &r.1).filter(|o| o.truth == *t).collect();
+        print!("| {} | {} |", name(*t), rows.len());
+        for k in &kinds {
+            print!(" {} |", rows.iter().filter(|o| o.named == *k).count());
+        }
+        let right = rows.iter().filter(|o| o.named == *t).count();
+        let big: Vec<_> = rows
+            .iter()
+            .filter(|o| o.rho >= 0.3 || t.is_none())
+            .collect();
+        let right_big = big.iter().filter(|o| o.named == *t).count();
+        println!(
+            " {right}/{} ({:.0}%) | {right_big}/{} ({:.0}%) |",
+            rows.len(),
+            100.0 * right as f64 / rows.len().max(1) as f64,
+            big.len(),
+            100.0 * right_big as f64 / big.len().max(1) as f64
+        );
+    }
+    println!();
+    println!("| effect | n named right | shape err median abs | shape err q90 abs | amp err median abs | amp err q90 abs |");
+    println!("|---|---|---|---|---|---|");
+    for t in kinds.iter().flatten() {
+        let mut se: Vec<f64> = res
+            .iter()
+            .map(|r| &r.1)
+            .filter(|o| o.truth == Some(*t) && o.shape_err.is_finite())
+            .map(|o| o.shape_err.abs())
+            .collect();
+        let mut ae: Vec<f64> = res
+            .iter()
+            .map(|r| &r.1)
+            .filter(|o| o.truth == Some(*t) && o.amp_err.is_finite())
+            .map(|o| o.amp_err.abs())
+            .collect();
+        se.sort_by(|a, b| a.total_cmp(b));
+        ae.sort_by(|a, b| a.total_cmp(b));
+        let q = |v: &Vec<f64>, p: f64| {
+            if v.is_empty() {
+                f64::NAN
+            } else {
+                v[((v.len() as f64 - 1.0) * p).round() as usize]
+            }
+        };
+        println!(
+            "| {} | {} | {:.3} | {:.3} | {:.3} | {:.3} |",
+            t.name(),
+            se.len(),
+            q(&se, 0.5),
+            q(&se, 0.9),
+            q(&ae, 0.5),
+            q(&ae, 0.9)
+        );
+    }
+}

@@ -1,0 +1,1150 @@
+//! The diagnosis proper (THEORY.md section 5): where the measured AVAR curve departs from the
+//! fitted five-term model (on the tau axis and in time), which effect of THEORY.md section 3
+//! closes the gap, and by how much. Works on an [`EvidenceSnapshot`]; pure and synchronous.
+//!
+//! # Method
+//!
+//! - Covariance. `S`, the covariance of the log estimates `ln AVAR_hat(tau_j)`, is the analytic
+//!   covariance of the five-term model fitted to the curve ([`AvarCovariance`], full-overlap
+//!   counts), divided by `AVAR_i AVAR_j`. It is computed once per curve and used for every
+//!   candidate model, so the gap statistics of different models are comparable. A ridge
+//!   `S + RIDGE diag(S)` keeps the inverse from amplifying the small mismatch between the
+//!   analytic covariance and the bounded-overlap estimator in its smallest eigen-directions;
+//!   [`Thresholds`] are calibrated by simulation with that ridge.
+//! - Fit of a model (five terms plus effect columns): generalised least squares with the
+//!   covariance `D S D`, `D = diag(model)`, solved as NNLS after whitening, reweighted from the
+//!   model a few times (weights from the data bias the fit low: THEORY.md section 2).
+//! - Gap statistic `G = r' S^-1 r / (J - p)`, `r = ln AVAR_hat - ln AVAR_model` (THEORY.md
+//!   section 5); near 1 when the model is right.
+//! - Effects: for each candidate, its shape parameter on a log grid (NNLS at each), the best one
+//!   polished by golden section; the candidate with the largest drop in `r' S^-1 r` is added if
+//!   the drop exceeds [`Thresholds::add_chi2`] per parameter, and effects are added while `G`
+//!   stays above [`Thresholds::gap_crit`].
+//! - Bias jumps have the second-order law of a rate random walk (K absorbs them on the curve),
+//!   so they are found in time: outliers of the first differences of the block-mean rate at
+//!   several block scales ([`detect_jumps`]).
+
+use super::effects::{effect_column, EffectKind, EffectParams, Grid};
+use super::evidence::EvidenceSnapshot;
+use crate::allan::CurvePoint;
+use crate::model::avar_cov::{AvarCovariance, CovPoint};
+use crate::model::fit::{fit, FitOptions};
+use crate::model::nnls::nnls;
+use crate::model::terms::basis;
+use nalgebra::{DMatrix, DVector};
+use statrs::distribution::{ChiSquared, ContinuousCDF};
+
+/// Ridge added to the log covariance, as a fraction of its diagonal (see the module doc).
+pub const RIDGE: f64 = 0.05;
+/// Reweighting passes of each GLS fit (the model-weighted fit settles in 3-5).
+const GLS_PASSES: usize = 4;
+
+/// Decision thresholds, calibrated by simulation of correct models (docs/gap.md, "Calibration").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Thresholds {
+    /// `G` above this flags the model (about the null 97% quantile, leaving room for the
+    /// time-domain tests within a 5% overall false-alarm rate).
+    pub gap_crit: f64,
+    /// Simultaneous band on `|z_j| = |r_j| / sqrt(S_jj)`: the whole correct curve stays inside
+    /// it in 95% of runs.
+    pub band_z: f64,
+    /// Drop in `r' S^-1 r` per added parameter needed to add an effect.
+    pub add_chi2: f64,
+    /// Robust z of a block-mean difference that counts as a bias jump.
+    pub jump_z: f64,
+    /// Drop of the block-mean residual sum of squares (in robust block variances) that a
+    /// warm-up must bring ([`fit_warmup`]).
+    pub warmup_w: f64,
+}
+
+impl Default for Thresholds {
+    fn default() -> Self {
+        Self {
+            gap_crit: 1.7,
+            band_z: 2.5,
+            add_chi2: 3.0,
+            jump_z: 5.5,
+            warmup_w: 16.0,
+        }
+    }
+}
+
+/// What to diagnose.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DiagnoseOptions {
+    /// Taus up to this fraction of the run are used (longer ones have too few degrees of
+    /// freedom for the Gaussian approximation of the log estimate).
+    pub tau_max_fraction: f64,
+    /// At most this many effects are added.
+    pub max_effects: usize,
+    pub candidates: Vec<EffectKind>,
+    pub thresholds: Thresholds,
+}
+
+impl Default for DiagnoseOptions {
+    fn default() -> Self {
+        Self {
+            tau_max_fraction: 0.1,
+            max_effects: 2,
+            candidates: EffectKind::ALL.to_vec(),
+
+            thresholds: Thresholds::default(),
+        }
+    }
+}
+
+/// Why no diagnosis could be made.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DiagnoseError {
+    #[error("diagnose: {0} usable curve points, need at least {1} (run too short?)")]
+    TooFewPoints(usize, usize),
+    #[error("diagnose: the five-term fit failed: {0}")]
+    Fit(String),
+    #[error("diagnose: the covariance of the curve is not positive definite")]
+    Covariance,
+}
+
+/// The verdict of CONTRACT.md's `diagnosis` record.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Verdict {
+    Consistent,
+    Explained,
+    Unexplained,
+}
+
+/// A run of taus where the model misses the curve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Region {
+    pub tau_lo_s: f64,
+    pub tau_hi_s: f64,
+    /// +1 where the data lie above the model.
+    pub sign: i32,
+    /// Measured ADEV over model ADEV at the worst tau of the run.
+    pub worst_ratio: f64,
+}
+
+/// An effect added to the model, with the gap once it is in.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AddedEffect {
+    pub params: EffectParams,
+    pub gap_after: f64,
+    /// Drop of `r' S^-1 r` it brought.
+    pub delta_chi2: f64,
+}
+
+/// Homogeneity of one tau across the segments (THEORY.md section 5, "Where in time").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SegmentTest {
+    pub tau_s: f64,
+    /// `sum_k (ln v_k - mean)^2 / Var(ln v_k)` over `K - 1`: about 1 when homogeneous.
+    pub stat: f64,
+    /// Probability of a larger statistic under homogeneity (chi-squared with K - 1 dof).
+    pub p_value: f64,
+    /// The segment that departs most, and its ADEV over the segments' geometric mean.
+    pub worst_segment: usize,
+    pub worst_ratio: f64,
+}
+
+/// Bias jumps found in the block means.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JumpFinding {
+    /// Times of the jumps (s from the start).
+    pub times_s: Vec<f64>,
+    /// Estimated sizes (u/s).
+    pub sizes: Vec<f64>,
+    /// Block length used (s).
+    pub block_s: f64,
+}
+
+/// The full diagnosis of one channel.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Diagnosis {
+    pub gap_before: f64,
+    pub gap_after: f64,
+    pub verdict: Verdict,
+    pub regions: Vec<Region>,
+    /// Regions still outside the band with the effects in.
+    pub regions_after: Vec<Region>,
+    pub effects: Vec<AddedEffect>,
+    /// The five-term fit alone, `(Q, N, B, K, R)`.
+    pub base_coef: [f64; 5],
+    /// The five terms with the effects in.
+    pub final_coef: [f64; 5],
+    /// Taus used and the number of them.
+    pub tau_span_s: (f64, f64),
+    pub n_taus: usize,
+    pub t_data_s: f64,
+    pub segment_tests: Vec<SegmentTest>,
+    pub jumps: Option<JumpFinding>,
+    /// A word on what is left when the verdict is `unexplained`.
+    pub residual_shape: Option<String>,
+}
+
+/// The curve with its log covariance, ready for GLS fits.
+#[derive(Debug, Clone)]
+pub struct GapProblem {
+    pub ms: Vec<u64>,
+    pub tau: Vec<f64>,
+    pub y: Vec<f64>,
+    ln_y: DVector<f64>,
+    /// Inverse Cholesky factor of the ridged log covariance.
+    linv: DMatrix<f64>,
+    /// Diagonal of the (unridged) log covariance.
+    pub s_diag: Vec<f64>,
+    /// The unridged covariance seen through the whitening, `Linv S Linv'` (for the expectation
+    /// of `r' S_ridge^-1 r`).
+    m_white: DMatrix<f64>,
+    pub tau0_s: f64,
+    pub n_inc: u64,
+    /// The plain five-term fit (the paper's model-weighted NNLS) that set the covariance.
+    pub c_init: [f64; 5],
+}
+
+/// One model to fit: the five terms (N column optionally filtered) plus free effect columns and
+/// a fixed offset.
+#[derive(Debug, Clone, Default)]
+pub struct ModelSpec {
+    pub filter_tc_s: Option<f64>,
+    pub extra: Vec<Vec<f64>>,
+    pub offset: Option<Vec<f64>>,
+}
+
+/// A GLS fit.
+#[derive(Debug, Clone)]
+pub struct GlsFit {
+    /// Five-term `c = (Q^2, N^2, B^2, K^2, R^2)` then the extra columns' amplitudes squared.
+    pub coef: Vec<f64>,
+    pub model: Vec<f64>,
+    /// `r' S^-1 r`.
+    pub chi2: f64,
+    /// Its expectation when the model is right: `tr((I - H) M)` with `H` the whitened hat
+    /// matrix of the active columns and `M` the whitened covariance (as fit.rs's gof), less one
+    /// per shape parameter (each extra column or filter of the spec).
+    pub expected: f64,
+}
+
+impl GlsFit {
+    /// The gap statistic `G = r' S^-1 r / E[r' S^-1 r]`, about 1 when the model is right.
+    pub fn gap(&self) -> f64 {
+        self.chi2 / self.expected.max(1.0)
+    }
+}
+
+impl GapProblem {
+    /// Builds the problem from the dense curve of `snap`.
+    pub fn new(snap: &EvidenceSnapshot, opts: &DiagnoseOptions) -> Result<Self, DiagnoseError> {
+        let n = snap.n_increments.max(1);
+        let m_max = ((n as f64) * opts.tau_max_fraction).floor() as u64;
+        let pts: Vec<_> = snap
+            .curve
+            .iter()
+            .filter(|p| p.m <= m_max && p.avar.is_finite() && p.avar > 0.0 && p.count > 0)
+            .collect();
+        let need = 8;
+        if pts.len() < need {
+            return Err(DiagnoseError::TooFewPoints(pts.len(), need));
+        }
+        let cps: Vec<CurvePoint> = pts
+            .iter()
+            .map(|p| CurvePoint {
+                m: p.m,
+                tau_s: p.tau_s,
+                var: p.avar,
+                count: p.count,
+                edf: f64::NAN,
+                alpha: 0,
+                sigma_lo: f64::NAN,
+                sigma_hi: f64::NAN,
+            })
+            .collect();
+        let base =
+            fit(&cps, &FitOptions::default()).map_err(|e| DiagnoseError::Fit(e.to_string()))?;
+        let c_init = base.c;
+        let tau0 = snap.tau0_s;
+        // Full-overlap counts: the bounded estimator's stride-s differences stand for the
+        // count * stride differences of the full overlap (THEORY.md section 1).
+        let cov_pts: Vec<CovPoint> = pts
+            .iter()
+            .map(|p| CovPoint {
+                m: p.m,
+                count: (p.count * p.stride).clamp(1, (n + 1).saturating_sub(2 * p.m).max(1)),
+            })
+            .collect();
+        let cov = AvarCovariance::new().matrix(tau0, &cov_pts, &c_init);
+        let a: Vec<f64> = pts
+            .iter()
+            .map(|p| base.model_avar(p.tau_s).max(1e-300))
+            .collect();
+        let j = pts.len();
+        let mut s = DMatrix::from_fn(j, j, |r, c| cov[(r, c)] / (a[r] * a[c]));
+        let s_diag: Vec<f64> = (0..j).map(|i| s[(i, i)]).collect();
+        if s_diag.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+            return Err(DiagnoseError::Covariance);
+        }
+        let s_plain = s.clone();
+        for i in 0..j {
+            s[(i, i)] *= 1.0 + RIDGE;
+        }
+        let chol = s.cholesky().ok_or(DiagnoseError::Covariance)?;
+        let l = chol.l();
+        let linv = l
+            .solve_lower_triangular(&DMatrix::identity(j, j))
+            .ok_or(DiagnoseError::Covariance)?;
+        let m_white = &linv * s_plain * linv.transpose();
+        Ok(Self {
+            ms: pts.iter().map(|p| p.m).collect(),
+            tau: pts.iter().map(|p| p.tau_s).collect(),
+            y: pts.iter().map(|p| p.avar).collect(),
+            ln_y: DVector::from_iterator(j, pts.iter().map(|p| p.avar.ln())),
+            linv,
+            s_diag,
+            m_white,
+            tau0_s: tau0,
+            n_inc: n,
+            c_init,
+        })
+    }
+
+    pub fn len(&self) -> usize {
+        self.tau.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.tau.is_empty()
+    }
+
+    /// The design columns of a spec.
+    fn columns(&self, spec: &ModelSpec) -> DMatrix<f64> {
+        let j = self.len();
+        let k = 5 + spec.extra.len();
+        let filt = spec.filter_tc_s.map(|t| {
+            effect_column(
+                EffectKind::OutputFilter,
+                t,
+                &self.ms,
+                self.tau0_s,
+                self.n_inc,
+            )
+        });
+        DMatrix::from_fn(j, k, |r, c| {
+            if c < 5 {
+                match (&filt, c) {
+                    (Some(f), 1) => f[r],
+                    _ => basis(self.tau[r])[c],
+                }
+            } else {
+                spec.extra[c - 5][r]
+            }
+        })
+    }
+
+    /// `r' S^-1 r` of a model curve.
+    pub fn chi2_of(&self, model: &[f64]) -> f64 {
+        let r = DVector::from_iterator(
+            self.len(),
+            model
+                .iter()
+                .zip(self.ln_y.iter())
+                .map(|(m, ly)| ly - m.max(1e-300).ln()),
+        );
+        (&self.linv * r).norm_squared()
+    }
+
+    /// Generalised least squares with model-based weights, coefficients `>= 0`.
+    pub fn gls(&self, spec: &ModelSpec) -> Option<GlsFit> {
+        let j = self.len();
+        let x = self.columns(spec);
+        let k = x.ncols();
+        let off = spec.offset.clone().unwrap_or_else(|| vec![0.0; j]);
+        let mut d: Vec<f64> = self.y.clone();
+        let mut coef = DVector::zeros(k);
+        let mut model = vec![0.0; j];
+        let mut a_last = DMatrix::zeros(j, k);
+        for _ in 0..GLS_PASSES {
+            let xd = DMatrix::from_fn(j, k, |r, c| x[(r, c)] / d[r]);
+            let yd = DVector::from_fn(j, |r, _| (self.y[r] - off[r]) / d[r]);
+            let mut a = &self.linv * xd;
+            let b = &self.linv * yd;
+            let mut norms = vec![1.0; k];
+            for (c, nrm) in norms.iter_mut().enumerate() {
+                let v = a.column(c).norm();
+                if v > 0.0 && v.is_finite() {
+                    *nrm = v;
+                    a.column_mut(c).scale_mut(1.0 / v);
+                }
+            }
+            let sol = nnls(&a, &b).ok()?;
+            a_last = a.clone();
+            coef = DVector::from_fn(k, |c, _| sol.x[c] / norms[c]);
+            let mv = &x * &coef;
+            for r in 0..j {
+                model[r] = mv[r] + off[r];
+            }
+            // Floor the weights' model at a tiny fraction of the data (a term-less stretch).
+            for r in 0..j {
+                d[r] = model[r].max(1e-6 * self.y[r]);
+            }
+        }
+        let chi2 = self.chi2_of(&model);
+        let active: Vec<usize> = (0..k).filter(|&c| coef[c] > 0.0).collect();
+        let tr_m = self.m_white.trace();
+        let mut expected = tr_m;
+        if !active.is_empty() {
+            let xa = a_last.select_columns(&active);
+            let xtx = xa.transpose() * &xa;
+            if let Some(inv) = xtx.try_inverse() {
+                expected -= (inv * xa.transpose() * &self.m_white * &xa).trace();
+            }
+        }
+        let n_shape = spec.extra.len() + usize::from(spec.filter_tc_s.is_some());
+        expected -= n_shape as f64 * tr_m / j as f64;
+        Some(GlsFit {
+            coef: coef.iter().copied().collect(),
+            model,
+            chi2,
+            expected,
+        })
+    }
+
+    /// Per-tau `z_j = r_j / sqrt(S_jj)` of a model.
+    pub fn z(&self, model: &[f64]) -> Vec<f64> {
+        (0..self.len())
+            .map(|i| (self.ln_y[i] - model[i].max(1e-300).ln()) / self.s_diag[i].sqrt())
+            .collect()
+    }
+
+    /// Runs of taus outside `|z| < band` with their sign and worst ADEV ratio.
+    pub fn regions(&self, model: &[f64], band: f64) -> Vec<Region> {
+        let z = self.z(model);
+        let mut out: Vec<Region> = Vec::new();
+        let mut open: Option<(usize, i32, usize)> = None; // start, sign, worst index
+        for i in 0..=z.len() {
+            let s = z.get(i).map(|&v| {
+                if v > band {
+                    1
+                } else if v < -band {
+                    -1
+                } else {
+                    0
+                }
+            });
+            match (open, s) {
+                (Some((st, sg, w)), Some(s)) if s == sg => {
+                    let w = if z[i].abs() > z[w].abs() { i } else { w };
+                    open = Some((st, sg, w));
+                }
+                (cur, s) => {
+                    if let Some((st, sg, w)) = cur {
+                        out.push(Region {
+                            tau_lo_s: self.tau[st],
+                            tau_hi_s: self.tau[i - 1],
+                            sign: sg,
+                            worst_ratio: (self.y[w] / model[w].max(1e-300)).sqrt(),
+                        });
+                    }
+                    open = match s {
+                        Some(s) if s != 0 => Some((i, s, i)),
+                        _ => None,
+                    };
+                }
+            }
+        }
+        out
+    }
+
+    /// The shape grid of a candidate over this curve.
+    pub fn grid(&self, kind: EffectKind) -> Grid {
+        let tmin = self.tau[0];
+        let tmax = self.tau[self.len() - 1];
+        let t_run = self.n_inc as f64 * self.tau0_s;
+        match kind {
+            EffectKind::GaussMarkov => Grid {
+                lo: tmin / 2.0,
+                hi: tmax,
+                per_decade: 12.0,
+            },
+            // First maximum of the sinusoid's AVAR at 0.371 / f0 (THEORY.md section 3).
+            EffectKind::Sinusoid => Grid {
+                lo: 0.371 / tmax,
+                hi: (0.5 / self.tau0_s).min(0.371 / tmin * 2.0),
+                per_decade: 60.0,
+            },
+            EffectKind::OutputFilter => Grid {
+                lo: 0.3 * self.tau0_s,
+                hi: 30.0 * self.tau0_s,
+                per_decade: 12.0,
+            },
+            EffectKind::Warmup => Grid {
+                lo: tmin.max(self.tau0_s * 4.0),
+                hi: t_run / 3.0,
+                per_decade: 12.0,
+            },
+            EffectKind::BiasJumps => Grid {
+                lo: 1.0,
+                hi: 1.0,
+                per_decade: 1.0,
+            },
+        }
+    }
+
+    fn spec_with(&self, base: &ModelSpec, kind: EffectKind, shape: f64) -> ModelSpec {
+        let mut s = base.clone();
+        if kind == EffectKind::OutputFilter {
+            s.filter_tc_s = Some(shape);
+        } else {
+            s.extra.push(effect_column(
+                kind,
+                shape,
+                &self.ms,
+                self.tau0_s,
+                self.n_inc,
+            ));
+        }
+        s
+    }
+
+    /// Best shape of one candidate on top of `base`: grid scan, then golden-section polish
+    /// in `ln shape`. Returns `(shape, fit)`.
+    pub fn scan(&self, base: &ModelSpec, kind: EffectKind) -> Option<(f64, GlsFit)> {
+        let pts = self.grid(kind).points();
+        if pts.len() < 2 {
+            return None;
+        }
+        let eval = |sh: f64| self.gls(&self.spec_with(base, kind, sh));
+        let mut best: Option<(usize, f64)> = None;
+        for (i, &sh) in pts.iter().enumerate() {
+            if let Some(f) = eval(sh) {
+                if best.is_none_or(|(_, c)| f.chi2 < c) {
+                    best = Some((i, f.chi2));
+                }
+            }
+        }
+        let (bi, _) = best?;
+        let mut lo = pts[bi.saturating_sub(1)].ln();
+        let mut hi = pts[(bi + 1).min(pts.len() - 1)].ln();
+        let g = 0.618_033_988_749_895;
+        let f = |x: f64| eval(x.exp()).map_or(f64::INFINITY, |f| f.chi2);
+        let mut x1 = hi - g * (hi - lo);
+        let mut x2 = lo + g * (hi - lo);
+        let (mut f1, mut f2) = (f(x1), f(x2));
+        for _ in 0..24 {
+            if f1 < f2 {
+                hi = x2;
+                x2 = x1;
+                f2 = f1;
+                x1 = hi - g * (hi - lo);
+                f1 = f(x1);
+            } else {
+                lo = x1;
+                x1 = x2;
+                f1 = f2;
+                x2 = lo + g * (hi - lo);
+                f2 = f(x2);
+            }
+        }
+        let cand = [pts[bi].ln(), 0.5 * (lo + hi)];
+        cand.iter()
+            .filter_map(|&x| eval(x.exp()).map(|fit| (x.exp(), fit)))
+            .min_by(|a, b| a.1.chi2.total_cmp(&b.1.chi2))
+    }
+}
+
+/// Five-term `(Q, N, B, K, R)` from `c`.
+fn coef5(c: &[f64]) -> [f64; 5] {
+    std::array::from_fn(|i| c.get(i).copied().unwrap_or(0.0).max(0.0).sqrt())
+}
+
+/// The effect parameters from a fit whose last free column (or filter) is the effect.
+fn params_of(kind: EffectKind, shape: f64, fit: &GlsFit) -> EffectParams {
+    let amp = fit.coef.last().copied().unwrap_or(0.0).max(0.0).sqrt();
+    match kind {
+        EffectKind::GaussMarkov => EffectParams::GaussMarkov {
+            sigma: amp,
+            tau_c_s: shape,
+        },
+        EffectKind::Sinusoid => EffectParams::Sinusoid {
+            amplitude: amp,
+            frequency_hz: shape,
+        },
+        EffectKind::OutputFilter => EffectParams::OutputFilter {
+            time_constant_s: shape,
+        },
+        EffectKind::Warmup => EffectParams::Warmup {
+            amplitude: amp,
+            time_constant_s: shape,
+        },
+        EffectKind::BiasJumps => EffectParams::BiasJumps {
+            count: 0,
+            rms_size: 0.0,
+        },
+    }
+}
+
+/// Diagnoses one channel's evidence.
+pub fn diagnose(
+    snap: &EvidenceSnapshot,
+    opts: &DiagnoseOptions,
+) -> Result<Diagnosis, DiagnoseError> {
+    let prob = GapProblem::new(snap, opts)?;
+    let th = opts.thresholds;
+    let j = prob.len();
+    let base = prob
+        .gls(&ModelSpec::default())
+        .ok_or(DiagnoseError::Fit("base GLS".into()))?;
+    let gap_before = base.gap();
+    let regions = prob.regions(&base.model, th.band_z);
+    let flagged = gap_before > th.gap_crit;
+
+    let mut effects: Vec<AddedEffect> = Vec::new();
+    let block_s = snap.block_len as f64 * snap.tau0_s;
+    let t_run = snap.n_increments as f64 * snap.tau0_s;
+    let stationary: Vec<EffectKind> = opts
+        .candidates
+        .iter()
+        .copied()
+        .filter(|k| !matches!(k, EffectKind::BiasJumps | EffectKind::Warmup))
+        .collect();
+
+    // 1. Stationary effects on the curve, while the gap stays significant.
+    let mut offset = vec![0.0; j];
+    let (mut spec, mut cur) = if flagged {
+        add_stationary(
+            &prob,
+            &stationary,
+            &offset,
+            &mut effects,
+            base.clone(),
+            opts,
+        )
+    } else {
+        (spec_from(&prob, &effects, &offset), base.clone())
+    };
+
+    // 2. A warm-up, in time: the block means against the model found so far.
+    let mut warm_curve: Option<Vec<f64>> = None;
+    let mut time_flag = false;
+    if opts.candidates.contains(&EffectKind::Warmup) {
+        let c5: [f64; 5] = std::array::from_fn(|i| cur.coef.get(i).copied().unwrap_or(0.0));
+        let stat_params: Vec<EffectParams> = effects.iter().map(|e| e.params).collect();
+        let warm = fit_warmup(&snap.block_means, block_s, t_run, &c5, &stat_params);
+        if let Some(w) = warm.filter(|w| w.w_stat > th.warmup_w) {
+            time_flag = true;
+            // Its AVAR, exact for the estimator on this record, enters as a fixed offset.
+            let col = effect_column(
+                EffectKind::Warmup,
+                w.time_constant_s,
+                &prob.ms,
+                prob.tau0_s,
+                prob.n_inc,
+            );
+            for (o, c) in offset.iter_mut().zip(&col) {
+                *o += w.amplitude * w.amplitude * c;
+            }
+            // Keep only the stationary effects still needed beside it, then look again.
+            let mut kept: Vec<AddedEffect> = Vec::new();
+            for e in &effects {
+                let others: Vec<AddedEffect> =
+                    effects.iter().filter(|o| *o != e).copied().collect();
+                let with = prob.gls(&spec_from(&prob, &effects, &offset));
+                let without = prob.gls(&spec_from(&prob, &others, &offset));
+                if let (Some(a), Some(b)) = (with, without) {
+                    if (b.chi2 - a.chi2) / e.params.kind().n_params() as f64 >= th.add_chi2 {
+                        kept.push(*e);
+                    }
+                }
+            }
+            let prev = cur.clone();
+            let f = prob
+                .gls(&spec_from(&prob, &kept, &offset))
+                .unwrap_or_else(|| prev.clone());
+            effects = vec![AddedEffect {
+                params: EffectParams::Warmup {
+                    amplitude: w.amplitude,
+                    time_constant_s: w.time_constant_s,
+                },
+                gap_after: f.gap(),
+                delta_chi2: base.chi2 - f.chi2,
+            }];
+            let mut rest = kept;
+            for e in rest.iter_mut() {
+                e.gap_after = f.gap();
+            }
+            effects.extend(rest);
+            cur = f;
+            if cur.gap() > th.gap_crit {
+                let (sp, c2) =
+                    add_stationary(&prob, &stationary, &offset, &mut effects, cur.clone(), opts);
+                spec = sp;
+                cur = c2;
+            } else {
+                spec = spec_from(&prob, &effects, &offset);
+            }
+            warm_curve = Some(w.block_curve(snap.block_means.len(), block_s));
+        }
+    }
+    let _ = &spec;
+
+    // 3. Bias jumps, in time (after the warm-up is taken out of the block means).
+    let jumps = if opts.candidates.contains(&EffectKind::BiasJumps) {
+        let resid: Vec<f64> = match &warm_curve {
+            Some(wc) => snap
+                .block_means
+                .iter()
+                .zip(wc)
+                .map(|(b, w)| b - w)
+                .collect(),
+            None => snap.block_means.clone(),
+        };
+        detect_jumps(&resid, block_s, th.jump_z, 0.0)
+    } else {
+        None
+    };
+    if let Some(f) = jumps.as_ref().filter(|f| !f.sizes.is_empty()) {
+        time_flag = true;
+        let rms = (f.sizes.iter().map(|s| s * s).sum::<f64>() / f.sizes.len() as f64).sqrt();
+        // On the curve the jumps are part of K (their law is a rate random walk's), so naming
+        // them leaves the gap statistic as it is.
+        effects.push(AddedEffect {
+            params: EffectParams::BiasJumps {
+                count: f.sizes.len() as u64,
+                rms_size: rms,
+            },
+            gap_after: cur.gap(),
+            delta_chi2: 0.0,
+        });
+    }
+    let flagged = flagged || time_flag;
+    let mut gap_after = cur.gap();
+    gap_after = if gap_after.is_finite() {
+        gap_after
+    } else {
+        gap_before
+    };
+    let verdict = if !flagged {
+        Verdict::Consistent
+    } else if gap_after <= th.gap_crit {
+        Verdict::Explained
+    } else {
+        Verdict::Unexplained
+    };
+    let regions_after = prob.regions(&cur.model, th.band_z);
+    let residual_shape = (verdict == Verdict::Unexplained).then(|| describe(&regions_after));
+    Ok(Diagnosis {
+        gap_before,
+        gap_after,
+        verdict,
+        regions,
+        regions_after,
+        effects,
+        base_coef: coef5(&base.coef),
+        final_coef: coef5(&cur.coef),
+        tau_span_s: (prob.tau[0], prob.tau[j - 1]),
+        n_taus: j,
+        t_data_s: snap.n_increments as f64 * snap.tau0_s,
+        segment_tests: segment_tests(snap, &prob.c_init),
+        jumps,
+        residual_shape,
+    })
+}
+
+/// The model spec of the stationary effects in `effects` (warm-ups and jumps are in `offset`
+/// or nowhere), their shapes fixed and amplitudes free.
+fn spec_from(prob: &GapProblem, effects: &[AddedEffect], offset: &[f64]) -> ModelSpec {
+    let mut spec = ModelSpec {
+        offset: Some(offset.to_vec()),
+        ..ModelSpec::default()
+    };
+    for e in effects {
+        let kind = e.params.kind();
+        if matches!(
+            kind,
+            EffectKind::GaussMarkov | EffectKind::Sinusoid | EffectKind::OutputFilter
+        ) {
+            spec = prob.spec_with(&spec, kind, e.params.shape());
+        }
+    }
+    spec
+}
+
+/// Adds stationary effects one at a time (the best drop of `r' S^-1 r` per parameter, if it
+/// exceeds the threshold) while the gap stays above its critical value.
+fn add_stationary(
+    prob: &GapProblem,
+    kinds: &[EffectKind],
+    offset: &[f64],
+    effects: &mut Vec<AddedEffect>,
+    start: GlsFit,
+    opts: &DiagnoseOptions,
+) -> (ModelSpec, GlsFit) {
+    let th = opts.thresholds;
+    let mut spec = spec_from(prob, effects, offset);
+    let mut cur = start;
+    let mut added = 0;
+    while added < opts.max_effects && cur.gap() > th.gap_crit {
+        let mut best: Option<(EffectKind, f64, GlsFit, f64)> = None;
+        for &kind in kinds {
+            if effects.iter().any(|e| e.params.kind() == kind) {
+                continue;
+            }
+            if let Some((sh, f)) = prob.scan(&spec, kind) {
+                let score = (cur.chi2 - f.chi2) / kind.n_params() as f64;
+                if best.as_ref().is_none_or(|b| score > b.3) {
+                    best = Some((kind, sh, f, score));
+                }
+            }
+        }
+        let Some((kind, sh, f, score)) = best else {
+            break;
+        };
+        if score < th.add_chi2 {
+            break;
+        }
+        effects.push(AddedEffect {
+            params: params_of(kind, sh, &f),
+            gap_after: f.gap(),
+            delta_chi2: cur.chi2 - f.chi2,
+        });
+        spec = prob.spec_with(&spec, kind, sh);
+        cur = f;
+        added += 1;
+    }
+    (spec, cur)
+}
+
+/// A few words on the shape of what the model leaves.
+fn describe(regions: &[Region]) -> String {
+    if regions.is_empty() {
+        return "diffuse: no tau run outside the band, misfit spread over the curve".into();
+    }
+    let signs: Vec<i32> = regions.iter().map(|r| r.sign).collect();
+    let alternations = signs.windows(2).filter(|w| w[0] != w[1]).count();
+    let parts: Vec<String> = regions
+        .iter()
+        .map(|r| {
+            format!(
+                "{} {:.3e}-{:.3e} s (x{:.2})",
+                if r.sign > 0 { "excess" } else { "deficit" },
+                r.tau_lo_s,
+                r.tau_hi_s,
+                r.worst_ratio
+            )
+        })
+        .collect();
+    let kind = if alternations >= 2 {
+        "oscillation"
+    } else if regions.len() == 1 && regions[0].sign > 0 {
+        "bump"
+    } else if regions.len() == 1 {
+        "dip"
+    } else {
+        "mixed"
+    };
+    format!("{kind}: {}", parts.join("; "))
+}
+
+/// Homogeneity across the segments of each octave tau with enough differences per segment:
+/// `ln v_k` against its weighted mean, scaled by the model's relative variance at the
+/// segment's count (THEORY.md section 5, "Where in time"). Segments shorter than half the
+/// longest are left out.
+pub fn segment_tests(snap: &EvidenceSnapshot, c: &[f64; 5]) -> Vec<SegmentTest> {
+    let longest = snap.segments.iter().map(|s| s.len).max().unwrap_or(0);
+    let segs: Vec<_> = snap
+        .segments
+        .iter()
+        .filter(|s| s.len * 2 >= longest)
+        .collect();
+    if segs.len() < 3 {
+        return Vec::new();
+    }
+    let shortest = segs.iter().map(|s| s.len).min().unwrap_or(0);
+    let tau0 = snap.tau0_s;
+    let mut cov = AvarCovariance::new();
+    let mut out = Vec::new();
+    let mut m = 1u64;
+    while m * 16 <= shortest {
+        let tau = m as f64 * tau0;
+        let a: f64 = basis(tau).iter().zip(c).map(|(b, c)| b * c).sum();
+        let vals: Vec<(f64, f64)> = segs
+            .iter()
+            .filter_map(|s| {
+                let (v, _) = s.avar(m)?;
+                let count = (s.len + 1).saturating_sub(2 * m).max(1);
+                let var = cov.matrix(tau0, &[CovPoint { m, count }], c)[(0, 0)] / (a * a);
+                (v > 0.0 && var > 0.0).then_some((v.ln(), var))
+            })
+            .collect();
+        if vals.len() >= 3 && a > 0.0 {
+            let wsum: f64 = vals.iter().map(|(_, w)| 1.0 / w).sum();
+            let mean = vals.iter().map(|(l, w)| l / w).sum::<f64>() / wsum;
+            let h: f64 = vals.iter().map(|(l, w)| (l - mean).powi(2) / w).sum();
+            let k1 = (vals.len() - 1) as f64;
+            let p = ChiSquared::new(k1).map_or(f64::NAN, |d| 1.0 - d.cdf(h));
+            let (wi, wl) = vals
+                .iter()
+                .enumerate()
+                .max_by(|x, y| (x.1 .0 - mean).abs().total_cmp(&(y.1 .0 - mean).abs()))
+                .map(|(i, v)| (i, v.0))
+                .unwrap_or((0, mean));
+            out.push(SegmentTest {
+                tau_s: tau,
+                stat: h / k1,
+                p_value: p,
+                worst_segment: wi,
+                worst_ratio: ((wl - mean) / 2.0).exp(),
+            });
+        }
+        m *= 2;
+    }
+    out
+}
+
+/// Bias jumps as outliers of the first differences of the block-mean rate, at block scales of
+/// 1, 2, 4 and 8 blocks: a difference whose distance from the median exceeds `z_crit` robust
+/// standard deviations (1.4826 times the median absolute deviation) marks a jump; neighbouring
+/// marks of one sign are one jump (a jump inside a block splits over two differences), and its
+/// size is the mean of up to four blocks after it minus four before. The scale with the most
+/// jumps wins (the finest among ties). Blocks before `skip_s` are left out (a warm-up).
+pub fn detect_jumps(
+    block_means: &[f64],
+    block_s: f64,
+    z_crit: f64,
+    skip_s: f64,
+) -> Option<JumpFinding> {
+    let skip = (skip_s / block_s).ceil() as usize;
+    let base: Vec<f64> = block_means.iter().skip(skip).copied().collect();
+    if base.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let mut best: Option<JumpFinding> = None;
+    for w in [1usize, 2, 4, 8] {
+        let b: Vec<f64> = base
+            .chunks_exact(w)
+            .map(|c| c.iter().sum::<f64>() / w as f64)
+            .collect();
+        if b.len() < 24 {
+            break;
+        }
+        let d: Vec<f64> = b.windows(2).map(|p| p[1] - p[0]).collect();
+        let med = median(&d);
+        let mad = median(&d.iter().map(|v| (v - med).abs()).collect::<Vec<_>>());
+        let sd = 1.4826 * mad;
+        if sd.is_nan() || sd <= 0.0 {
+            continue;
+        }
+        let mut times = Vec::new();
+        let mut sizes = Vec::new();
+        let mut i = 0;
+        while i < d.len() {
+            let z = (d[i] - med) / sd;
+            if z.abs() > z_crit {
+                let sign = z.signum();
+                let mut e = i;
+                while e + 1 < d.len() && ((d[e + 1] - med) / sd) * sign > 2.0 {
+                    e += 1;
+                }
+                // Jump between block i and block e + 1.
+                let before = &b[i.saturating_sub(3)..=i];
+                let after = &b[e + 1..(e + 5).min(b.len())];
+                let mean = |s: &[f64]| s.iter().sum::<f64>() / s.len() as f64;
+                sizes.push(mean(after) - mean(before));
+                times.push(skip as f64 * block_s + (i + 1) as f64 * w as f64 * block_s);
+                i = e + 1;
+            } else {
+                i += 1;
+            }
+        }
+        if best.as_ref().is_none_or(|f| sizes.len() > f.sizes.len()) {
+            best = Some(JumpFinding {
+                times_s: times,
+                sizes,
+                block_s: w as f64 * block_s,
+            });
+        }
+    }
+    best
+}
+
+/// A warm-up fitted to the block means.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WarmupFinding {
+    /// `A` of `A e^{-t/T}`, u/s.
+    pub amplitude: f64,
+    pub time_constant_s: f64,
+    /// Drop of the residual sum of squares against a line, in robust block variances.
+    pub w_stat: f64,
+}
+
+impl WarmupFinding {
+    /// The warm-up's mean over each block.
+    pub fn block_curve(&self, n_blocks: usize, block_s: f64) -> Vec<f64> {
+        (0..n_blocks)
+            .map(|i| self.amplitude * warmup_block_shape(i, block_s, self.time_constant_s))
+            .collect()
+    }
+}
+
+/// Mean of `e^{-t/T}` over block `i` of length `tb`: `(T/tb)(e^{-i tb/T} - e^{-(i+1) tb/T})`.
+fn warmup_block_shape(i: usize, tb: f64, t: f64) -> f64 {
+    let a = i as f64 * tb / t;
+    t / tb * (-a).exp() * -(-tb / t).exp_m1()
+}
+
+/// Generalised covariance `G(t)` of the phase (u^2) under the five-term model `c` plus
+/// stationary effects (avar_cov.rs's table; Gauss-Markov `-S(t)/2` with the structure
+/// function `S(t) = 2 s^2 T^2 (t/T - 1 + e^{-t/T})`; sinusoid `A^2 cos(w t) / (2 w^2)`). Valid
+/// under filters that annihilate polynomials of degree <= 1, such as a second difference.
+fn phase_gcov(c: &[f64; 5], effects: &[EffectParams], t: f64) -> f64 {
+    let at = t.abs();
+    let mut g = if at == 0.0 { c[0] } else { 0.0 };
+    g += -c[1] * at / 2.0;
+    if at > 0.0 {
+        g += c[2] / (2.0 * std::f64::consts::PI) * at * at * at.ln();
+    }
+    g += c[3] * at * at * at / 12.0;
+    for e in effects {
+        match *e {
+            EffectParams::GaussMarkov { sigma, tau_c_s } => {
+                let x = at / tau_c_s;
+                g -= sigma * sigma * tau_c_s * tau_c_s * (x - 1.0 + (-x).exp());
+            }
+            EffectParams::Sinusoid {
+                amplitude,
+                frequency_hz,
+            } => {
+                let w = 2.0 * std::f64::consts::PI * frequency_hz;
+                g += amplitude * amplitude * (w * at).cos() / (2.0 * w * w);
+            }
+            _ => {}
+        }
+    }
+    g
+}
+
+/// Covariance (u^2/s^2) of the first differences of block-mean rates `d_i = b_{i+1} - b_i`
+/// (second differences of phase at lag `tb`, divided by `tb`) at lags `0..n`.
+fn block_diff_acov(c: &[f64; 5], effects: &[EffectParams], tb: f64, n: usize) -> Vec<f64> {
+    const A: [f64; 3] = [1.0, -2.0, 1.0];
+    (0..n)
+        .map(|h| {
+            let mut v = 0.0;
+            for (i, ai) in A.iter().enumerate() {
+                for (j, aj) in A.iter().enumerate() {
+                    v += ai * aj * phase_gcov(c, effects, (h as f64 + j as f64 - i as f64) * tb);
+                }
+            }
+            v / (tb * tb)
+        })
+        .collect()
+}
+
+/// A warm-up in the block means: generalised least squares of the first differences of the
+/// block-mean rate on `r + A (e_{i+1} - e_i)`, `e_i` the block mean of `e^{-t/T}` (the warm-up
+/// of THEORY.md section 3 over a linear drift `r`), with the covariance of the differences from
+/// the fitted model (five terms `c` plus the stationary `effects`). `T` is scanned on a log grid
+/// from half a block to a quarter of the run. The statistic is the drop of the whitened
+/// residual sum of squares against the drift alone (about chi-squared with one degree of
+/// freedom, plus the scan's look-elsewhere, when there is no warm-up).
+pub fn fit_warmup(
+    block_means: &[f64],
+    block_s: f64,
+    t_run_s: f64,
+    c: &[f64; 5],
+    effects: &[EffectParams],
+) -> Option<WarmupFinding> {
+    if block_means.len() < 24 || block_means.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let d: Vec<f64> = block_means.windows(2).map(|p| p[1] - p[0]).collect();
+    let n = d.len();
+    let acov = block_diff_acov(c, effects, block_s, n);
+    let sigma = DMatrix::from_fn(n, n, |i, j| acov[i.abs_diff(j)]);
+    let chol = sigma.cholesky()?;
+    let white = |v: DVector<f64>| chol.l().solve_lower_triangular(&v);
+    let yw = white(DVector::from_column_slice(&d))?;
+    let ones = white(DVector::from_element(n, 1.0))?;
+    let r0 = {
+        let beta = ones.dot(&yw) / ones.norm_squared();
+        (&yw - &ones * beta).norm_squared()
+    };
+    let grid = Grid {
+        lo: block_s / 2.0,
+        hi: t_run_s / 4.0,
+        per_decade: 24.0,
+    };
+    let mut best: Option<(f64, f64, f64)> = None; // (T, A, rss)
+    for t in grid.points() {
+        let e: Vec<f64> = (0..=n).map(|i| warmup_block_shape(i, block_s, t)).collect();
+        let de = DVector::from_iterator(n, e.windows(2).map(|p| p[1] - p[0]));
+        let Some(ew) = white(de) else { continue };
+        let x = DMatrix::from_columns(&[ones.clone(), ew]);
+        let Some(beta) = (x.transpose() * &x)
+            .try_inverse()
+            .map(|inv| inv * x.transpose() * &yw)
+        else {
+            continue;
+        };
+        let rss = (&yw - &x * &beta).norm_squared();
+        if best.is_none_or(|b| rss < b.2) {
+            best = Some((t, beta[1], rss));
+        }
+    }
+    let (t, a, rss) = best?;
+    Some(WarmupFinding {
+        amplitude: a,
+        time_constant_s: t,
+        w_stat: r0 - rss,
+    })
+}
+
+fn median(v: &[f64]) -> f64 {
+    let mut s: Vec<f64> = v.to_vec();
+    s.sort_by(|a, b| a.total_cmp(b));
+    let n = s.len();
+    if n == 0 {
+        f64::NAN
+    } else if n % 2 == 1 {
+        s[n / 2]
+    } else {
+        0.5 * (s[n / 2 - 1] + s[n / 2])
+    }
+}
+
+/// The gap on a held-out run with the effects (kinds, shapes and amplitudes) fitted on another
+/// run held fixed; only the five-term amplitudes are refitted (they may differ run to run, as
+/// the seed paper's table 2 shows). Returns `(gap_before, gap_after)`.
+pub fn holdout_gap(
+    fitted: &Diagnosis,
+    snap: &EvidenceSnapshot,
+    opts: &DiagnoseOptions,
+) -> Result<(f64, f64), DiagnoseError> {
+    let prob = GapProblem::new(snap, opts)?;
+    let j = prob.len();
+    let base = prob
+        .gls(&ModelSpec::default())
+        .ok_or(DiagnoseError::Fit("base GLS".into()))?;
+    let mut spec = ModelSpec {
+        offset: Some(vec![0.0; j]),
+        ..ModelSpec::default()
+    };
+    for e in &fitted.effects {
+        let kind = e.params.kind();
+        match kind {
+            EffectKind::OutputFilter => spec.filter_tc_s = Some(e.params.shape()),
+            EffectKind::BiasJumps => {}
+            _ => {
+                let a = e.params.amplitude();
+                let col = effect_column(kind, e.params.shape(), &prob.ms, prob.tau0_s, prob.n_inc);
+                if let Some(off) = spec.offset.as_mut() {
+                    for (o, c) in off.iter_mut().zip(col) {
+                        *o += a * a * c;
+                    }
+                }
+            }
+        }
+    }
+    let after = prob
+        .gls(&spec)
+        .ok_or(DiagnoseError::Fit("holdout GLS".into()))?;
+    Ok((base.gap(), after.gap()))
+}

@@ -1,0 +1,182 @@
+//! Candidate effects of the diagnosis (THEORY.md section 3) and their AVAR columns: for a fixed
+//! shape parameter each effect's AVAR is linear in its amplitude squared (THEORY.md section 5),
+//! so a candidate is a column generator `shape -> column` plus the parameter names of
+//! CONTRACT.md's `diagnosis` record.
+
+use crate::model::terms;
+use serde::{Deserialize, Serialize};
+
+/// The kinds of effect CONTRACT.md names.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EffectKind {
+    GaussMarkov,
+    Sinusoid,
+    OutputFilter,
+    Warmup,
+    BiasJumps,
+}
+
+impl EffectKind {
+    pub const ALL: [EffectKind; 5] = [
+        EffectKind::GaussMarkov,
+        EffectKind::Sinusoid,
+        EffectKind::OutputFilter,
+        EffectKind::Warmup,
+        EffectKind::BiasJumps,
+    ];
+
+    /// The `kind` string of the record.
+    pub fn name(self) -> &'static str {
+        match self {
+            EffectKind::GaussMarkov => "gauss_markov",
+            EffectKind::Sinusoid => "sinusoid",
+            EffectKind::OutputFilter => "output_filter",
+            EffectKind::Warmup => "warmup",
+            EffectKind::BiasJumps => "bias_jumps",
+        }
+    }
+
+    /// Parameters the effect adds to the five-term model (amplitude and shape; the output
+    /// filter only its time constant, since it reshapes the N term).
+    pub fn n_params(self) -> usize {
+        match self {
+            EffectKind::OutputFilter => 1,
+            _ => 2,
+        }
+    }
+}
+
+/// A fitted effect with CONTRACT.md's parameters (rate units u/s, times s, frequencies Hz).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum EffectParams {
+    GaussMarkov {
+        sigma: f64,
+        tau_c_s: f64,
+    },
+    Sinusoid {
+        amplitude: f64,
+        frequency_hz: f64,
+    },
+    OutputFilter {
+        time_constant_s: f64,
+    },
+    Warmup {
+        amplitude: f64,
+        time_constant_s: f64,
+    },
+    BiasJumps {
+        count: u64,
+        rms_size: f64,
+    },
+}
+
+impl EffectParams {
+    pub fn kind(&self) -> EffectKind {
+        match self {
+            EffectParams::GaussMarkov { .. } => EffectKind::GaussMarkov,
+            EffectParams::Sinusoid { .. } => EffectKind::Sinusoid,
+            EffectParams::OutputFilter { .. } => EffectKind::OutputFilter,
+            EffectParams::Warmup { .. } => EffectKind::Warmup,
+            EffectParams::BiasJumps { .. } => EffectKind::BiasJumps,
+        }
+    }
+
+    /// The `params` object of the record, with CONTRACT.md's names.
+    pub fn to_json(&self) -> serde_json::Value {
+        use serde_json::json;
+        match *self {
+            EffectParams::GaussMarkov { sigma, tau_c_s } => {
+                json!({"sigma": sigma, "tau_c": tau_c_s})
+            }
+            EffectParams::Sinusoid {
+                amplitude,
+                frequency_hz,
+            } => json!({"amplitude": amplitude, "frequency": frequency_hz}),
+            EffectParams::OutputFilter { time_constant_s } => {
+                json!({"time_constant": time_constant_s})
+            }
+            EffectParams::Warmup {
+                amplitude,
+                time_constant_s,
+            } => json!({"amplitude": amplitude, "time_constant": time_constant_s}),
+            EffectParams::BiasJumps { count, rms_size } => {
+                json!({"count": count, "rms_size": rms_size})
+            }
+        }
+    }
+
+    /// The shape parameter (s for times, Hz for the sinusoid), NaN for jumps.
+    pub fn shape(&self) -> f64 {
+        match *self {
+            EffectParams::GaussMarkov { tau_c_s, .. } => tau_c_s,
+            EffectParams::Sinusoid { frequency_hz, .. } => frequency_hz,
+            EffectParams::OutputFilter { time_constant_s } => time_constant_s,
+            EffectParams::Warmup {
+                time_constant_s, ..
+            } => time_constant_s,
+            EffectParams::BiasJumps { .. } => f64::NAN,
+        }
+    }
+
+    /// Its amplitude (u/s; NaN for the filter, the rms size for jumps).
+    pub fn amplitude(&self) -> f64 {
+        match *self {
+            EffectParams::GaussMarkov { sigma, .. } => sigma,
+            EffectParams::Sinusoid { amplitude, .. } => amplitude,
+            EffectParams::OutputFilter { .. } => f64::NAN,
+            EffectParams::Warmup { amplitude, .. } => amplitude,
+            EffectParams::BiasJumps { rms_size, .. } => rms_size,
+        }
+    }
+}
+
+/// Where an effect's column sits in the design: AVAR of unit amplitude at one shape.
+#[derive(Debug, Clone, Copy)]
+pub struct Grid {
+    pub lo: f64,
+    pub hi: f64,
+    pub per_decade: f64,
+}
+
+impl Grid {
+    pub fn points(&self) -> Vec<f64> {
+        if !(self.lo > 0.0 && self.hi > self.lo) {
+            return Vec::new();
+        }
+        let n = ((self.hi / self.lo).log10() * self.per_decade)
+            .ceil()
+            .max(1.0) as usize;
+        (0..=n)
+            .map(|i| self.lo * (self.hi / self.lo).powf(i as f64 / n as f64))
+            .collect()
+    }
+}
+
+/// The column an effect of unit amplitude adds at each cluster size `ms` (AVAR, u^2/s^2 per
+/// (u/s)^2), THEORY.md section 3 via [`crate::model::terms`]. For the output filter it is the
+/// replacement of the N column: filtered white rate of unit N.
+pub fn effect_column(
+    kind: EffectKind,
+    shape: f64,
+    ms: &[u64],
+    tau0_s: f64,
+    n_inc: u64,
+) -> Vec<f64> {
+    ms.iter()
+        .map(|&m| {
+            let tau = m as f64 * tau0_s;
+            match kind {
+                EffectKind::GaussMarkov => terms::gauss_markov_avar(1.0, shape, tau),
+                EffectKind::Sinusoid => terms::sinusoid_avar(1.0, shape, tau),
+                EffectKind::OutputFilter => {
+                    terms::filtered_white_rate_avar(1.0, shape, tau0_s, m).max(0.0)
+                }
+                EffectKind::Warmup => terms::warmup_avar(1.0, shape, tau0_s, m, n_inc),
+                // Bias jumps have the second-order law of a rate random walk (terms.rs): the
+                // K column already holds them, so they add no column.
+                EffectKind::BiasJumps => 0.0,
+            }
+        })
+        .collect()
+}

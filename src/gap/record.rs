@@ -1,0 +1,135 @@
+//! CONTRACT.md's `diagnosis` record: `type`, `channel`, `gap_before`, `gap_after`, `verdict`,
+//! `regions`, `effects`, optional `holdout`, plus extra fields (`final`, `t_data`, `tau_span`,
+//! `base_coef`, `final_coef`, `segments`, `jumps`, `residual_shape`).
+
+use super::diagnose::{Diagnosis, Verdict};
+use serde::{Deserialize, Serialize};
+
+/// One region of the record.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RegionRecord {
+    pub tau_lo: f64,
+    pub tau_hi: f64,
+    pub sign: i32,
+    pub worst_ratio: f64,
+}
+
+/// One effect of the record (`params` with CONTRACT.md's names: u/s, s, Hz).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EffectRecord {
+    pub kind: String,
+    pub params: serde_json::Value,
+    pub gap_after: f64,
+}
+
+/// The gap on a held-out run.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct HoldoutRecord {
+    pub gap_before: f64,
+    pub gap_after: f64,
+}
+
+/// One segment homogeneity test (extra field `segments`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SegmentRecord {
+    pub tau: f64,
+    pub stat: f64,
+    pub p_value: f64,
+    pub worst_segment: usize,
+    pub worst_ratio: f64,
+}
+
+/// The `diagnosis` JSON line.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DiagnosisRecord {
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub channel: String,
+    pub gap_before: f64,
+    pub gap_after: f64,
+    pub verdict: Verdict,
+    pub regions: Vec<RegionRecord>,
+    pub effects: Vec<EffectRecord>,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub holdout: Option<HoldoutRecord>,
+    #[serde(rename = "final", default)]
+    pub is_final: bool,
+    /// Seconds of data diagnosed.
+    #[serde(default)]
+    pub t_data: f64,
+    /// Tau range of the curve used (s).
+    #[serde(default)]
+    pub tau_span: [f64; 2],
+    /// Five-term fit alone and with the effects, `[Q, N, B, K, R]` (THEORY.md section 2 units).
+    #[serde(default)]
+    pub base_coef: [f64; 5],
+    #[serde(default)]
+    pub final_coef: [f64; 5],
+    #[serde(default)]
+    pub segments: Vec<SegmentRecord>,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub residual_shape: Option<String>,
+}
+
+impl DiagnosisRecord {
+    /// The record of a diagnosis; `holdout` from [`super::diagnose::holdout_gap`].
+    pub fn new(channel: &str, d: &Diagnosis, holdout: Option<(f64, f64)>, is_final: bool) -> Self {
+        Self {
+            kind: "diagnosis".into(),
+            channel: channel.into(),
+            gap_before: d.gap_before,
+            gap_after: d.gap_after,
+            verdict: d.verdict,
+            regions: d
+                .regions
+                .iter()
+                .map(|r| RegionRecord {
+                    tau_lo: r.tau_lo_s,
+                    tau_hi: r.tau_hi_s,
+                    sign: r.sign,
+                    worst_ratio: r.worst_ratio,
+                })
+                .collect(),
+            effects: d
+                .effects
+                .iter()
+                .map(|e| EffectRecord {
+                    kind: e.params.kind().name().into(),
+                    params: e.params.to_json(),
+                    gap_after: e.gap_after,
+                })
+                .collect(),
+            holdout: holdout.map(|(b, a)| HoldoutRecord {
+                gap_before: b,
+                gap_after: a,
+            }),
+            is_final,
+            t_data: d.t_data_s,
+            tau_span: [d.tau_span_s.0, d.tau_span_s.1],
+            base_coef: d.base_coef,
+            final_coef: d.final_coef,
+            segments: d
+                .segment_tests
+                .iter()
+                .map(|s| SegmentRecord {
+                    tau: s.tau_s,
+                    stat: s.stat,
+                    p_value: s.p_value,
+                    worst_segment: s.worst_segment,
+                    worst_ratio: s.worst_ratio,
+                })
+                .collect(),
+            residual_shape: d.residual_shape.clone(),
+        }
+    }
+
+    /// The JSON line (no trailing newline).
+    pub fn to_json_line(&self) -> String {
+        serde_json::to_string(self).unwrap_or_else(|e| {
+            format!(
+                "{{\"type\":\"diagnosis\",\"channel\":\"{}\",\"error\":\"{e}\"}}",
+                self.channel
+            )
+        })
+    }
+}

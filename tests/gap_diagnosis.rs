@@ -1,0 +1,248 @@
+//! The diagnosis on simulated captures with a known hidden effect (ground truth from the
+//! simulator's model file): clean data is `consistent`, each effect is named with its parameters
+//! within tolerance, the held-out gap shrinks as on the fitting run, the record parses back
+//! field by field (CONTRACT.md), and live streaming gives the batch curve.
+//!
+//! Runs of one hour at tau0 = 4 ms (900 000 increments, the seed paper's step) of a VOG4-like
+//! base (config/models/vog4.toml's N, B, K, LSB). The blind benchmark (examples/blind_gap.rs,
+//! docs/gap.md) measures the rates; these cases are single draws well above the detection level.
+
+use allanscope::gap::{
+    diagnose, holdout_gap, DiagnoseOptions, Diagnosis, DiagnosisRecord, EffectKind, EffectParams,
+    GapConfig, GapEvidence, Verdict,
+};
+use allanscope::sim::{SimModel, Simulator};
+use std::path::Path;
+
+/// Relative tolerance on frequencies and correlation times (the brief's target).
+const TOL_SHAPE: f64 = 0.10;
+/// Relative tolerance on amplitudes and sigmas (the brief's target).
+const TOL_AMP: f64 = 0.25;
+/// Gauss-Markov correlation time and filter time constant: the blind benchmark's 90% quantile
+/// of the error is 10-45% (docs/gap.md), so the 10% target is not held here.
+const TOL_TIME_LOOSE: f64 = 0.25;
+/// Warm-up time constant against a free linear drift: 90% quantile of the error about 30-50%
+/// (docs/gap.md).
+const TOL_WARMUP_T: f64 = 0.5;
+
+const TAU0: f64 = 0.004;
+const DURATION_S: f64 = 3600.0;
+
+fn model(extra: &str) -> String {
+    format!(
+        "tau0_s = {TAU0}\n[[channel]]\nname = \"g4\"\nunit = \"arcsec\"\nlsb = 0.004\nN = 0.254\nB = 0.225\nK = 1.826e-2\nflicker_band_s = [0.004, 1.0e5]\n{extra}\n"
+    )
+}
+
+fn simulate(extra: &str, seed: u64) -> Vec<f64> {
+    let m = SimModel::from_toml_str(&model(extra), Path::new("<test>")).expect("model");
+    let mut sim = Simulator::new(&m, seed);
+    let mut out = vec![0.0; (DURATION_S / TAU0) as usize];
+    sim.fill_channel(0, &mut out);
+    out
+}
+
+fn run(extra: &str, seed: u64) -> Diagnosis {
+    let inc = simulate(extra, seed);
+    let mut ev = GapEvidence::from_increments(GapConfig::new(TAU0), &inc);
+    diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis")
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    ((a - b) / b).abs()
+}
+
+fn first_of(d: &Diagnosis, kind: EffectKind) -> EffectParams {
+    assert_eq!(
+        d.effects.first().map(|e| e.params.kind()),
+        Some(kind),
+        "first effect: {:?}",
+        d.effects
+    );
+    d.effects[0].params
+}
+
+#[test]
+fn clean_runs_are_consistent() {
+    // The five-term model is the truth: the gap statistic stays near 1 (null median 1.01,
+    // 97% quantile about 1.7 over 600 simulated runs, docs/gap.md).
+    for seed in [1, 2] {
+        let d = run("", seed);
+        assert_eq!(d.verdict, Verdict::Consistent, "seed {seed}: {d:?}");
+        assert!(d.effects.is_empty());
+        assert!(d.gap_before < 1.7, "gap {}", d.gap_before);
+        // N recovered within 5% (vog4.toml: 0.254 arcsec/sqrt(s)).
+        assert!(rel(d.base_coef[1], 0.254) < 0.05, "N {}", d.base_coef[1]);
+    }
+}
+
+#[test]
+fn gauss_markov_is_named_with_its_parameters() {
+    // vog4_effects.toml's Gauss-Markov term.
+    let d = run("gauss_markov = { sigma = 0.5, tau_c = 2.0 }", 3);
+    assert_eq!(d.verdict, Verdict::Explained, "{d:?}");
+    assert!(d
+        .regions
+        .iter()
+        .any(|r| r.sign > 0 && r.tau_lo_s < 4.0 && r.tau_hi_s > 2.0));
+    match first_of(&d, EffectKind::GaussMarkov) {
+        EffectParams::GaussMarkov { sigma, tau_c_s } => {
+            assert!(rel(tau_c_s, 2.0) < TOL_TIME_LOOSE, "tau_c {tau_c_s}");
+            assert!(rel(sigma, 0.5) < TOL_AMP, "sigma {sigma}");
+        }
+        p => panic!("{p:?}"),
+    }
+    assert!(d.gap_after < d.gap_before / 3.0);
+}
+
+#[test]
+fn sinusoid_is_named_with_its_parameters() {
+    let d = run(
+        "sinusoid = { amplitude = 0.3, frequency = 0.8, phase = 0.0 }",
+        4,
+    );
+    match first_of(&d, EffectKind::Sinusoid) {
+        EffectParams::Sinusoid {
+            amplitude,
+            frequency_hz,
+        } => {
+            assert!(rel(frequency_hz, 0.8) < TOL_SHAPE, "f {frequency_hz}");
+            assert!(rel(amplitude, 0.3) < TOL_AMP, "A {amplitude}");
+        }
+        p => panic!("{p:?}"),
+    }
+    assert_eq!(d.verdict, Verdict::Explained);
+}
+
+#[test]
+fn output_filter_is_named_with_its_time_constant() {
+    let d = run("output_filter = { time_constant = 0.02 }", 5);
+    match first_of(&d, EffectKind::OutputFilter) {
+        EffectParams::OutputFilter { time_constant_s } => {
+            assert!(
+                rel(time_constant_s, 0.02) < TOL_TIME_LOOSE,
+                "T {time_constant_s}"
+            );
+        }
+        p => panic!("{p:?}"),
+    }
+    // The data lie below the white-noise line at the shortest taus.
+    assert!(d
+        .regions
+        .first()
+        .is_some_and(|r| r.sign < 0 && r.tau_lo_s < 0.01));
+}
+
+#[test]
+fn warmup_is_named_with_its_parameters() {
+    // A = 5 u/s: with a free linear drift, the generalised least squares on the block means
+    // sees a 2 u/s warm-up of 300 s at only about 2.9 sigma against this base (a noise-free
+    // run through the same test gives W = 8.5), 5 u/s at about 7 sigma.
+    let d = run("warmup = { amplitude = 5.0, time_constant = 300.0 }", 6);
+    match first_of(&d, EffectKind::Warmup) {
+        EffectParams::Warmup {
+            amplitude,
+            time_constant_s,
+        } => {
+            assert!(
+                rel(time_constant_s, 300.0) < TOL_WARMUP_T,
+                "T {time_constant_s}"
+            );
+            assert!(rel(amplitude, 5.0) < TOL_AMP, "A {amplitude}");
+        }
+        p => panic!("{p:?}"),
+    }
+}
+
+#[test]
+fn bias_jumps_are_found_in_time() {
+    // Jumps of rms 6 arcsec/s, about 24 times the block-difference noise (0.25 arcsec/s at
+    // 14 s blocks).
+    let d = run("bias_jumps = { mean_interval = 900.0, rms_size = 6.0 }", 7);
+    let p = d
+        .effects
+        .iter()
+        .find(|e| e.params.kind() == EffectKind::BiasJumps)
+        .map(|e| e.params);
+    match p {
+        Some(EffectParams::BiasJumps { count, rms_size }) => {
+            let found = d.jumps.as_ref().map_or(0, |j| j.sizes.len());
+            assert_eq!(count as usize, found);
+            assert!((1..=12).contains(&count), "count {count}");
+            assert!(rms_size > 2.0 && rms_size < 18.0, "rms {rms_size}");
+        }
+        other => panic!("{other:?} in {:?}", d.effects),
+    }
+}
+
+#[test]
+fn held_out_gap_shrinks_as_on_the_fitting_run() {
+    let extra = "gauss_markov = { sigma = 0.5, tau_c = 2.0 }";
+    let d = run(extra, 8);
+    let inc2 = simulate(extra, 9);
+    let mut ev2 = GapEvidence::from_increments(GapConfig::new(TAU0), &inc2);
+    let (before, after) =
+        holdout_gap(&d, &ev2.snapshot(), &DiagnoseOptions::default()).expect("holdout");
+    assert!(before > 3.0, "held-out gap before {before}");
+    // As small as on the fitting run: below the critical gap (1.7, the null 97% quantile) and no more than 1.5
+    // times the fitting run's.
+    assert!(
+        after < 1.7 && after < 1.5 * d.gap_after.max(1.0),
+        "{after} vs {}",
+        d.gap_after
+    );
+    let rec = DiagnosisRecord::new("g4", &d, Some((before, after)), true);
+    let back: serde_json::Value = serde_json::from_str(&rec.to_json_line()).expect("json");
+    assert!(
+        rel(
+            back["holdout"]["gap_after"].as_f64().unwrap_or(f64::NAN),
+            after
+        ) < 1e-12
+    );
+}
+
+#[test]
+fn record_has_the_contract_fields() {
+    let d = run(
+        "sinusoid = { amplitude = 0.3, frequency = 0.8, phase = 0.0 }",
+        10,
+    );
+    let line = DiagnosisRecord::new("g4", &d, None, true).to_json_line();
+    let v: serde_json::Value = serde_json::from_str(&line).expect("json");
+    assert_eq!(v["type"], "diagnosis");
+    assert_eq!(v["channel"], "g4");
+    assert_eq!(v["verdict"], "explained");
+    // Parsed numbers agree to the last bits (serde_json's default float parser).
+    assert!(rel(v["gap_before"].as_f64().unwrap_or(f64::NAN), d.gap_before) < 1e-12);
+    assert!(rel(v["gap_after"].as_f64().unwrap_or(f64::NAN), d.gap_after) < 1e-12);
+    assert!(v.get("holdout").is_none());
+    let r0 = &v["regions"][0];
+    for k in ["tau_lo", "tau_hi", "sign", "worst_ratio"] {
+        assert!(r0.get(k).is_some(), "region field {k}");
+    }
+    let e0 = &v["effects"][0];
+    assert_eq!(e0["kind"], "sinusoid");
+    assert!(e0["params"]["amplitude"].is_f64() && e0["params"]["frequency"].is_f64());
+    assert!(e0["gap_after"].is_f64());
+    let back: DiagnosisRecord = serde_json::from_str(&line).expect("parse back");
+    assert_eq!(back.effects.len(), d.effects.len());
+}
+
+#[test]
+fn live_stream_gives_the_batch_curve() {
+    // The dense curve does not depend on the segmentation (known length vs doubling), and a
+    // gap splits the data without being counted as data.
+    let inc = simulate("", 12);
+    let n = 300_000;
+    let mut batch = GapEvidence::from_increments(GapConfig::new(TAU0), &inc[..n]);
+    let mut live = GapEvidence::new(GapConfig::new(TAU0));
+    for &d in &inc[..n] {
+        live.push_increment(d);
+    }
+    let (a, b) = (batch.snapshot(), live.snapshot());
+    assert_eq!(a.curve, b.curve);
+    assert_eq!(b.n_increments, n as u64);
+    live.push_gap(10);
+    assert_eq!(live.snapshot().n_received, n as u64);
+    assert_eq!(live.snapshot().n_increments, n as u64 + 10);
+}
