@@ -3,6 +3,7 @@
 //! configuration errors, 1 for anything else).
 
 mod analyze;
+mod diagnose;
 mod plot;
 mod report;
 mod simulate;
@@ -37,6 +38,8 @@ pub enum Command {
     Analyze(AnalyzeArgs),
     /// Write a capture (frames of a descriptor, or text columns) from a noise model.
     Simulate(SimulateArgs),
+    /// The sim-to-real gap of each channel: where, which effect, how much it shrinks.
+    Diagnose(DiagnoseArgs),
     /// Allan-deviation plot (SVG) from the JSON lines allanscope wrote.
     Plot(PlotArgs),
     /// One self-contained HTML page: plots, coefficient tables, diagnosis, pass/fail.
@@ -54,6 +57,20 @@ pub struct ReportArgs {
     /// Title of the page.
     #[arg(long, default_value = "allanscope test report")]
     pub title: String,
+}
+
+#[derive(Debug, Args)]
+pub struct DiagnoseArgs {
+    /// The run to diagnose (text columns or a capture; `-` for standard input).
+    pub input: String,
+    /// Only these channels (comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    pub channel: Option<Vec<String>>,
+    /// A second run of the same unit, on which the effects fitted on INPUT are judged.
+    #[arg(long)]
+    pub holdout: Option<String>,
+    #[command(flatten)]
+    pub data: DataArgs,
 }
 
 #[derive(Debug, Args)]
@@ -163,6 +180,7 @@ where
     match cli.command {
         Command::Analyze(a) => analyze::run(&a),
         Command::Simulate(s) => simulate::run(&s),
+        Command::Diagnose(d) => diagnose::run(&d),
         Command::Plot(p) => plot::run(&p),
         Command::Report(r) => report::run(&r),
     }
