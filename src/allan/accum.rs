@@ -1021,6 +1021,37 @@ fn update_level<R: Repr>(
     }
 }
 
+/// What a channel's accumulator needs of its engine, whatever the number representation.
+trait ChannelEngine {
+    fn gap(&mut self, missing: u64);
+    fn points(&self) -> u64;
+    fn seconds(&self) -> f64;
+    fn segment_count(&self) -> u64;
+    fn cfg(&self) -> &AccumConfig;
+    fn bytes(&self) -> usize;
+}
+
+impl<R: Repr> ChannelEngine for Engine<R> {
+    fn gap(&mut self, missing: u64) {
+        self.push_gap(missing)
+    }
+    fn points(&self) -> u64 {
+        self.phase_points()
+    }
+    fn seconds(&self) -> f64 {
+        self.t_data_s()
+    }
+    fn segment_count(&self) -> u64 {
+        self.segments()
+    }
+    fn cfg(&self) -> &AccumConfig {
+        self.config()
+    }
+    fn bytes(&self) -> usize {
+        self.stream_bytes()
+    }
+}
+
 /// A channel's accumulator for whichever kind of input it receives.
 #[derive(Debug, Clone)]
 pub enum ChannelAccumulator {
@@ -1042,46 +1073,43 @@ impl ChannelAccumulator {
         ChannelAccumulator::Real(Engine::new(cfg))
     }
 
-    pub fn push_gap(&mut self, missing: u64) {
+    /// The engine behind the channel, whichever its representation.
+    fn engine(&self) -> &dyn ChannelEngine {
         match self {
-            ChannelAccumulator::Counts { engine, .. } => engine.push_gap(missing),
-            ChannelAccumulator::Real(e) => e.push_gap(missing),
+            ChannelAccumulator::Counts { engine, .. } => engine,
+            ChannelAccumulator::Real(e) => e,
         }
+    }
+
+    fn engine_mut(&mut self) -> &mut dyn ChannelEngine {
+        match self {
+            ChannelAccumulator::Counts { engine, .. } => engine,
+            ChannelAccumulator::Real(e) => e,
+        }
+    }
+
+    pub fn push_gap(&mut self, missing: u64) {
+        self.engine_mut().gap(missing)
     }
 
     pub fn phase_points(&self) -> u64 {
-        match self {
-            ChannelAccumulator::Counts { engine, .. } => engine.phase_points(),
-            ChannelAccumulator::Real(e) => e.phase_points(),
-        }
+        self.engine().points()
     }
 
     pub fn t_data_s(&self) -> f64 {
-        match self {
-            ChannelAccumulator::Counts { engine, .. } => engine.t_data_s(),
-            ChannelAccumulator::Real(e) => e.t_data_s(),
-        }
+        self.engine().seconds()
     }
 
     pub fn segments(&self) -> u64 {
-        match self {
-            ChannelAccumulator::Counts { engine, .. } => engine.segments(),
-            ChannelAccumulator::Real(e) => e.segments(),
-        }
+        self.engine().segment_count()
     }
 
     pub fn config(&self) -> &AccumConfig {
-        match self {
-            ChannelAccumulator::Counts { engine, .. } => engine.config(),
-            ChannelAccumulator::Real(e) => e.config(),
-        }
+        self.engine().cfg()
     }
 
     pub fn stream_bytes(&self) -> usize {
-        match self {
-            ChannelAccumulator::Counts { engine, .. } => engine.stream_bytes(),
-            ChannelAccumulator::Real(e) => e.stream_bytes(),
-        }
+        self.engine().bytes()
     }
 
     /// Readings in u^2/s^2 (counts scaled).

@@ -6,7 +6,9 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
-use super::{analysis_options, open_input, output, select_channels, usage, AnalyzeArgs, DataArgs};
+use super::{
+    analysis_options, format_and_tau0, open_input, output, select_channels, AnalyzeArgs, DataArgs,
+};
 use crate::analysis::{AnalysisOptions, ChannelSetup, RunAnalysis};
 use crate::frame::{Decoder, FrameDescriptor};
 use crate::input::text::{TextReader, BATCH_ROWS};
@@ -26,16 +28,7 @@ const AUXILIARY_COLUMNS: [&str; 1] = ["temperature_c"];
 pub fn run(a: &AnalyzeArgs) -> Result<()> {
     let d = &a.data;
     let mut sink = output(d)?;
-    let descriptor = if d.format == "csv" {
-        None
-    } else {
-        Some(FrameDescriptor::load(&d.format).map_err(anyhow::Error::new)?)
-    };
-    let tau0 = match (&descriptor, d.tau0) {
-        (_, Some(t)) => t,
-        (Some(desc), None) => desc.tau0_s(),
-        (None, None) => return Err(usage("--tau0 is required for --format csv")),
-    };
+    let (descriptor, tau0) = format_and_tau0(d)?;
     let base = analysis_options(d, tau0)?;
     let several = a.inputs.len() > 1;
     let mut fits = Vec::new();

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 
-use super::{open_input, output, usage, DiagnoseArgs};
+use super::{format_and_tau0, open_input, output, usage, DiagnoseArgs};
 use crate::analysis::InputKind;
 use crate::frame::{Decoder, FrameDescriptor, FrameEvent};
 use crate::gap::{diagnose, holdout_gap, DiagnoseOptions, DiagnosisRecord, GapConfig, GapEvidence};
@@ -141,21 +141,7 @@ fn gather(
 pub fn run(a: &DiagnoseArgs) -> Result<()> {
     let d = &a.data;
     let mut sink = output(d)?;
-    let desc = if d.format == "csv" {
-        None
-    } else {
-        Some(FrameDescriptor::load(&d.format).map_err(anyhow::Error::new)?)
-    };
-    let tau0 = match (&desc, d.tau0) {
-        (_, Some(t)) if t.is_finite() && t > 0.0 => t,
-        (_, Some(t)) => {
-            return Err(usage(format!(
-                "--tau0 {t}: must be a positive number of seconds"
-            )))
-        }
-        (Some(desc), None) => desc.tau0_s(),
-        (None, None) => return Err(usage("--tau0 is required for --format csv")),
-    };
+    let (desc, tau0) = format_and_tau0(d)?;
     let opts = DiagnoseOptions::default();
     let mut main = gather(&a.input, a, desc.as_ref(), tau0)?;
     let mut held = match &a.holdout {

@@ -267,6 +267,29 @@ pub fn parse_duration_s(s: &str) -> Result<f64> {
     }
 }
 
+/// The frame descriptor (`None` for text columns) and the sampling step: `--tau0` when given,
+/// else the descriptor's; required for text columns.
+pub(crate) fn format_and_tau0(
+    d: &DataArgs,
+) -> Result<(Option<crate::frame::FrameDescriptor>, f64)> {
+    let desc = if d.format == "csv" {
+        None
+    } else {
+        Some(crate::frame::FrameDescriptor::load(&d.format).map_err(anyhow::Error::new)?)
+    };
+    let tau0 = match (&desc, d.tau0) {
+        (_, Some(t)) if t.is_finite() && t > 0.0 => t,
+        (_, Some(t)) => {
+            return Err(usage(format!(
+                "--tau0 {t}: must be a positive number of seconds"
+            )))
+        }
+        (Some(desc), None) => desc.tau0_s(),
+        (None, None) => return Err(usage("--tau0 is required for --format csv")),
+    };
+    Ok((desc, tau0))
+}
+
 /// The analysis options common to every run of a command.
 pub(crate) fn analysis_options(d: &DataArgs, tau0_s: f64) -> Result<AnalysisOptions> {
     if !(tau0_s.is_finite() && tau0_s > 0.0) {

@@ -103,25 +103,40 @@ pub fn render_svg(series: &[Series], title: &str) -> String {
     let (pw, ph) = (W - LEFT - RIGHT, H - TOP - BOTTOM);
     let px = |x: f64| LEFT + (x.log10() - x0 as f64) / (x1 - x0) as f64 * pw;
     let py = |y: f64| TOP + ph - (y.log10() - y0 as f64) / (y1 - y0) as f64 * ph;
-    // Grid: decades (solid) and 2..9 within each (faint).
-    for k in x0..=x1 {
-        for j in 1..10 {
-            let v = 10f64.powi(k) * j as f64;
-            if k == x1 && j > 1 {
-                break;
-            }
-            let (stroke, wd) = if j == 1 {
-                ("#bbbbbb", 1.0)
-            } else {
-                ("#eeeeee", 0.7)
-            };
-            let _ = writeln!(
-                svg,
-                r#"<line x1="{0:.1}" y1="{TOP}" x2="{0:.1}" y2="{1}" stroke="{stroke}" stroke-width="{wd}"/>"#,
-                px(v),
-                TOP + ph
-            );
+    // Grid: decades (solid) and 2..9 within each (faint), then the decade labels.
+    let grid = |lo: i32, hi: i32| -> Vec<(f64, bool)> {
+        (lo..=hi)
+            .flat_map(|k| (1..10).map(move |j| (k, j)))
+            .filter(|&(k, j)| k < hi || j == 1)
+            .map(|(k, j)| (10f64.powi(k) * j as f64, j == 1))
+            .collect()
+    };
+    let style = |major: bool| {
+        if major {
+            ("#bbbbbb", 1.0)
+        } else {
+            ("#eeeeee", 0.7)
         }
+    };
+    for (v, major) in grid(x0, x1) {
+        let (stroke, wd) = style(major);
+        let _ = writeln!(
+            svg,
+            r#"<line x1="{0:.1}" y1="{TOP}" x2="{0:.1}" y2="{1}" stroke="{stroke}" stroke-width="{wd}"/>"#,
+            px(v),
+            TOP + ph
+        );
+    }
+    for (v, major) in grid(y0, y1) {
+        let (stroke, wd) = style(major);
+        let _ = writeln!(
+            svg,
+            r#"<line x1="{LEFT}" y1="{0:.1}" x2="{1}" y2="{0:.1}" stroke="{stroke}" stroke-width="{wd}"/>"#,
+            py(v),
+            LEFT + pw
+        );
+    }
+    for k in x0..=x1 {
         let _ = writeln!(
             svg,
             r#"<text x="{:.1}" y="{}" text-anchor="middle">{}</text>"#,
@@ -131,23 +146,6 @@ pub fn render_svg(series: &[Series], title: &str) -> String {
         );
     }
     for k in y0..=y1 {
-        for j in 1..10 {
-            let v = 10f64.powi(k) * j as f64;
-            if k == y1 && j > 1 {
-                break;
-            }
-            let (stroke, wd) = if j == 1 {
-                ("#bbbbbb", 1.0)
-            } else {
-                ("#eeeeee", 0.7)
-            };
-            let _ = writeln!(
-                svg,
-                r#"<line x1="{LEFT}" y1="{0:.1}" x2="{1}" y2="{0:.1}" stroke="{stroke}" stroke-width="{wd}"/>"#,
-                py(v),
-                LEFT + pw
-            );
-        }
         let _ = writeln!(
             svg,
             r#"<text x="{}" y="{:.1}" text-anchor="end" dominant-baseline="middle">{}</text>"#,
