@@ -2,6 +2,7 @@
 //! [`main_with_args`] and maps errors to exit statuses (CONTRACT.md: 2 for usage and
 //! configuration errors, 1 for anything else).
 
+mod aggregate;
 mod analyze;
 mod simulate;
 
@@ -35,6 +36,19 @@ pub enum Command {
     Analyze(AnalyzeArgs),
     /// Write a capture (frames of a descriptor, or text columns) from a noise model.
     Simulate(SimulateArgs),
+    /// Run-to-run statistics (the seed paper's table 2) from the final `fit` records of several
+    /// runs, one JSON-lines file per run.
+    Aggregate(AggregateArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct AggregateArgs {
+    /// JSON-lines files written by `analyze`, one per run.
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// JSON lines to this file instead of standard output.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
 }
 
 /// Options shared by the commands that read data (CONTRACT.md).
@@ -122,6 +136,7 @@ where
     match cli.command {
         Command::Analyze(a) => analyze::run(&a),
         Command::Simulate(s) => simulate::run(&s),
+        Command::Aggregate(a) => aggregate::run(&a),
     }
 }
 
