@@ -65,11 +65,14 @@ pub fn record(a: &CoefAggregate) -> AggregateRecord {
     }
 }
 
+/// One run's channels as read so far: (is the record final, its coefficients).
+type RunSoFar = (Option<u64>, Vec<(bool, RunCoefs)>);
+
 /// The runs in one file: per run index (absent: one run), each channel's final fit.
 fn runs_of_file(path: &Path) -> Result<Vec<Vec<RunCoefs>>> {
     let records = read_json_lines(path)?;
     // (run index, channel) -> (is final, coefficients), the latest record winning among equals.
-    let mut runs: Vec<(Option<u64>, Vec<(bool, RunCoefs)>)> = Vec::new();
+    let mut runs: Vec<RunSoFar> = Vec::new();
     for rec in &records {
         let Some(coefs) = RunCoefs::from_fit_record(rec) else {
             continue;
