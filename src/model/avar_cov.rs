@@ -30,7 +30,7 @@
 //! stretches are summed exactly, long smooth stretches between breakpoints by Gauss-Legendre panels
 //! graded geometrically towards the kinks of `c12`, with the Euler-Maclaurin end corrections. The
 //! flicker cross-covariance decays as `c12(h) ~ -(m1 m2)^2 / (pi h^2)`; beyond
-//! `|h| = 16 max(m1, m2)` it is evaluated from its far-field series in `1/h` ([`flicker_series`],
+//! `|h| = 16 max(m1, m2)` it is evaluated from its far-field series in `1/h` (`flicker_series`,
 //! no logarithms, and free of the cancellation the direct nine-term sum suffers there). Against
 //! the exact lag-by-lag sum the quadrature agrees to better than 1e-6 relative
 //! (tests/fit_covariance.rs).
