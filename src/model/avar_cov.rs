@@ -561,36 +561,95 @@ pub struct CovPoint {
     pub count: u64,
 }
 
-/// The covariance points of an AVAR curve, in the order of `points`.
-///
-/// The covariance algebra is that of the full-overlap estimate (stride 1). A bounded-memory
-/// estimate (`--overlap L`) takes differences at a stride `s >= 2` for `m >= 2L`, and its
-/// `count` is the number of strided differences; its covariance is, to the few percent of edf
-/// the stride gives up (BENCHMARKS.md, "Choosing L": at most 3% at L = 16), that of the full
-/// estimate over the same span. So each point gets the full count `n - 2m + 1`, with `n` the
-/// number of increments read off the curve itself (`max(count + 2m - 1)`, exact at every
-/// stride-1 point of one contiguous segment), whenever its own count is at most half of that
-/// (strided: `floor((n - 2m)/s) + 1 <= (n - 2m + 2)/2`); otherwise its own count is used (full
-/// overlap, gaps included).
-pub fn cov_points(points: &[CurvePoint]) -> Vec<CovPoint> {
-    let n_est = points
+/// Increments `n` of the run an AVAR curve was read from: `max(count + 2m - 1)` over its points
+/// (exact at every stride-1 point of one contiguous segment).
+fn increments_of(points: &[CurvePoint]) -> u64 {
+    points
         .iter()
         .filter(|p| p.m >= 1 && p.count >= 1)
         .map(|p| p.count.saturating_add(2 * p.m - 1))
         .max()
-        .unwrap_or(0);
+        .unwrap_or(0)
+}
+
+/// Is a point strided: its count at most half the full count `n - 2m + 1` (a stride `s >= 2`
+/// gives `floor((n - 2m)/s) + 1 <= (n - 2m + 2)/2`)? Returns the full count.
+fn full_count(p: &CurvePoint, n: u64) -> (u64, bool) {
+    let full = (n + 1).saturating_sub(2 * p.m).max(1);
+    (
+        full,
+        p.count < full && p.count.saturating_mul(2) <= full + 1,
+    )
+}
+
+/// The covariance points of an AVAR curve, in the order of `points`, with their strides
+/// ([`strides`]).
+///
+/// The lag sums are those of the full-overlap estimate (stride 1). A bounded-memory estimate
+/// (`--overlap L`) takes differences at a stride `s >= 2` for `m >= 2L`, and its `count` is the
+/// number of strided differences; such a point gets the full count `n - 2m + 1` (the span it
+/// covers) and its stride, and [`AvarCovariance::matrix_strided`] corrects the sums for the
+/// stride. `n` is read off the curve itself; a point counts as strided when its own count is at
+/// most half the full one, otherwise its own count is used (full overlap, gaps included).
+pub fn cov_points(points: &[CurvePoint]) -> Vec<CovPoint> {
+    let n = increments_of(points);
     points
         .iter()
         .map(|p| {
-            let full = (n_est + 1).saturating_sub(2 * p.m).max(1);
-            let count = if p.count < full && p.count.saturating_mul(2) <= full + 1 {
-                full
-            } else {
-                p.count
-            };
-            CovPoint { m: p.m, count }
+            let (full, strided) = full_count(p, n);
+            CovPoint {
+                m: p.m,
+                count: if strided { full } else { p.count },
+            }
         })
         .collect()
+}
+
+/// The stride of each point of an AVAR curve: 1 at full overlap; for a strided point (see
+/// [`cov_points`]) the divisor of `m` nearest to `(full - 1) / (count - 1)`.
+pub fn strides(points: &[CurvePoint]) -> Vec<u64> {
+    let n = increments_of(points);
+    points
+        .iter()
+        .map(|p| {
+            let (full, strided) = full_count(p, n);
+            if !strided {
+                return 1;
+            }
+            let est = if p.count >= 2 {
+                (full - 1) as f64 / (p.count - 1) as f64
+            } else {
+                full as f64
+            };
+            nearest_divisor(p.m, est)
+        })
+        .collect()
+}
+
+/// The divisor of `m` nearest to `x` on a log scale.
+fn nearest_divisor(m: u64, x: f64) -> u64 {
+    let mut best = (f64::INFINITY, 1);
+    let mut d = 1u64;
+    while d.saturating_mul(d) <= m {
+        if m.is_multiple_of(d) {
+            for c in [d, m / d] {
+                let dist = ((c as f64) / x).ln().abs();
+                if dist < best.0 {
+                    best = (dist, c);
+                }
+            }
+        }
+        d += 1;
+    }
+    best.1
+}
+
+fn gcd(a: u64, b: u64) -> u64 {
+    if b == 0 {
+        a.max(1)
+    } else {
+        gcd(b, a % b)
+    }
 }
 
 /// Covariance matrices of AVAR estimates, with each pair's lag sums kept between calls.
@@ -662,8 +721,31 @@ impl AvarCovariance {
     }
 
     /// `Cov(AVAR_hat_i, AVAR_hat_j)` in (u/s)^4 for the five-term model with
-    /// `c = (Q^2, N^2, B^2, K^2, R^2)`, sampling step `tau0_s` (THEORY.md section 5).
+    /// `c = (Q^2, N^2, B^2, K^2, R^2)`, sampling step `tau0_s` (THEORY.md section 5), for
+    /// full-overlap estimates.
     pub fn matrix(&mut self, tau0_s: f64, points: &[CovPoint], c: &[f64; 5]) -> DMatrix<f64> {
+        self.matrix_strided(tau0_s, points, &[], c)
+    }
+
+    /// As [`matrix`](AvarCovariance::matrix), for estimates taken at strides `strides[i]`
+    /// (missing entries: 1), each point's `count` being the full count of the span it covers.
+    ///
+    /// Strided differences `D_1(k s1)`, `D_2(l s2)` meet at lags on the lattice `g Z`,
+    /// `g = gcd(s1, s2)`, with about `g / (s1 s2)` times as many pairs per lag as at full
+    /// overlap, and the counts are `M / s`. For the continuous terms (N, B, K), whose
+    /// cross-covariance varies on the scale of `m >> s`, the lattice sum is the full sum times
+    /// `g / (s1 s2)`, which the counts cancel: the covariance is that of the full overlap over
+    /// the same span. The white-phase cross-covariance is concentrated at lags `j m2 - i m1`,
+    /// which lie on the lattice, so its sums are `1 / (s1 s2)` of the full ones and its part of
+    /// the covariance is `g` times the full overlap's: striding does cost white phase noise its
+    /// degrees of freedom.
+    pub fn matrix_strided(
+        &mut self,
+        tau0_s: f64,
+        points: &[CovPoint],
+        strides: &[u64],
+        c: &[f64; 5],
+    ) -> DMatrix<f64> {
         let n = points.len();
         // Physical scale of each term's g per unit coefficient: tau0^(0, 1, 2, 3).
         let scale = [1.0, tau0_s, tau0_s * tau0_s, tau0_s.powi(3)];
@@ -673,7 +755,19 @@ impl AvarCovariance {
         for i in 0..n {
             for j in i..n {
                 let (a, b) = (points[i], points[j]);
-                let s = self.sums(a, b);
+                let mut s = self.sums(a, b);
+                let st = |k: usize| strides.get(k).copied().unwrap_or(1).max(1);
+                let g = gcd(st(i), st(j));
+                if g > 1 {
+                    let gf = g as f64;
+                    for t in 0..NRAND {
+                        s.quad[NQ][t] *= gf;
+                        if t != NQ {
+                            s.quad[t][NQ] *= gf;
+                        }
+                    }
+                    s.lin[NQ] *= gf;
+                }
                 let tau1 = a.m as f64 * tau0_s;
                 let tau2 = b.m as f64 * tau0_s;
                 let t12 = tau1 * tau1 * tau2 * tau2;

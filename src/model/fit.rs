@@ -23,7 +23,7 @@
 //! zero gets `[0, sqrt(1.96 sd)]` with `sd` from the Fisher information of the full model.
 
 use crate::allan::CurvePoint;
-use crate::model::avar_cov::{cov_points, AvarCovariance, CovPoint};
+use crate::model::avar_cov::{cov_points, strides, AvarCovariance, CovPoint};
 use crate::model::nnls::{nnls, NnlsError};
 use crate::model::terms::{basis, TERM_NAMES};
 use nalgebra::{DMatrix, DVector};
@@ -245,6 +245,8 @@ struct Problem {
     edf: Vec<f64>,
     x: DMatrix<f64>,
     cov_pts: Vec<CovPoint>,
+    /// Stride of each estimate (1: full overlap).
+    cov_strides: Vec<u64>,
     tau0_s: f64,
     allowed: [bool; 5],
 }
@@ -288,7 +290,9 @@ impl Fitter {
         let model = model_values(&prob.x, &c);
         // Covariance of the estimates at the fitted model; if the model is degenerate (all zero)
         // fall back to the per-point chi-squared variances of the data.
-        let mut s = self.cov.matrix(prob.tau0_s, &prob.cov_pts, &c);
+        let mut s = self
+            .cov
+            .matrix_strided(prob.tau0_s, &prob.cov_pts, &prob.cov_strides, &c);
         for i in 0..j {
             if !(s[(i, i)].is_finite() && s[(i, i)] > 0.0) {
                 s = DMatrix::from_diagonal(&DVector::from_fn(j, |k, _| {
@@ -424,20 +428,27 @@ fn select(points: &[CurvePoint], opts: &FitOptions) -> Result<Problem, FitError>
             }
         },
     );
-    // Covariance counts from the whole curve (a strided level's span, see `cov_points`).
+    // Covariance counts and strides from the whole curve (a strided level's span, see
+    // `cov_points`).
     let all_cov = cov_points(points);
+    let all_strides = strides(points);
+    let index: Vec<Option<usize>> = sel
+        .iter()
+        .map(|p| points.iter().position(|q| std::ptr::eq(q, *p)))
+        .collect();
     let cov_pts = sel
         .iter()
-        .map(|p| {
-            points
-                .iter()
-                .position(|q| std::ptr::eq(q, *p))
-                .map(|i| all_cov[i])
-                .unwrap_or(CovPoint {
-                    m: p.m,
-                    count: p.count,
-                })
+        .zip(&index)
+        .map(|(p, i)| {
+            i.map(|i| all_cov[i]).unwrap_or(CovPoint {
+                m: p.m,
+                count: p.count,
+            })
         })
+        .collect();
+    let cov_strides = index
+        .iter()
+        .map(|i| i.map_or(1, |i| all_strides[i]))
         .collect();
     Ok(Problem {
         tau,
@@ -445,6 +456,7 @@ fn select(points: &[CurvePoint], opts: &FitOptions) -> Result<Problem, FitError>
         edf,
         x,
         cov_pts,
+        cov_strides,
         tau0_s,
         allowed: opts.terms,
     })
