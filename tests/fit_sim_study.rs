@@ -226,9 +226,10 @@ fn print_table(st: &Study, tallies: &[Tally]) {
         st.name, st.truth, tallies[0].runs
     );
     println!(
-        "| method | coef | determined | bias (determined) | sd | rms error (all) | 95% coverage |"
+        "| method | coef | determined | bias (determined) | sd (determined) | bias of c (all) \
+         | rms error (all) | 95% coverage |"
     );
-    println!("|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|");
     for (k, t) in tallies.iter().enumerate() {
         for i in 0..5 {
             let f = |x: Option<f64>| x.map_or("-".to_string(), |v| format!("{:+.1}%", 100.0 * v));
