@@ -164,8 +164,8 @@ fn refit_time_per_channel() {
         fitter.fit(&pts, &opts).unwrap();
     }
     let warm = t.elapsed() / reps;
-    // Live: the run grows 0.5% between refits (counts change), lag sums reused within 2%.
-    let mut live = Fitter::with_count_tolerance(0.02);
+    // Live: the run grows 0.5% between refits (counts change); the lag sums are updated.
+    let mut live = Fitter::new();
     let mut n_live = n;
     live.fit(
         &fit_common::model_curve([2e-3, 3e-3, 1e-3, 2e-5, 1e-7], tau0, n_live, n_live / 2),
@@ -190,9 +190,9 @@ fn refit_time_per_channel() {
     );
     // Budget: a refit within 1 ms per channel.
     assert!(warm.as_secs_f64() < 1e-3, "refit took {warm:?}");
-    // Live refits amortise a full recomputation every ~4 refits here (counts move 2% in four
-    // steps); reported, bounded loosely.
-    assert!(grow.as_secs_f64() < 50e-3, "live refit took {grow:?}");
+    // Live refits update the covariance lag sums (0.6 ms in benches/fit.rs on the reference
+    // machine); bounded loosely here since test machines are shared.
+    assert!(grow.as_secs_f64() < 5e-3, "live refit took {grow:?}");
 }
 
 #[test]

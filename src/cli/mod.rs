@@ -2,6 +2,7 @@
 //! [`main_with_args`] and maps errors to exit statuses (CONTRACT.md: 2 for usage and
 //! configuration errors, 1 for anything else).
 
+mod aggregate;
 mod analyze;
 mod diagnose;
 mod plot;
@@ -44,6 +45,9 @@ pub enum Command {
     Plot(PlotArgs),
     /// One self-contained HTML page: plots, coefficient tables, diagnosis, pass/fail.
     Report(ReportArgs),
+    /// Run-to-run statistics (the seed paper's table 2) from the final `fit` records of several
+    /// runs, one JSON-lines file per run.
+    Aggregate(AggregateArgs),
 }
 
 #[derive(Debug, Args)]
@@ -93,6 +97,16 @@ pub struct PlotArgs {
     /// Leave out the fitted model lines.
     #[arg(long)]
     pub no_model: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct AggregateArgs {
+    /// JSON-lines files written by `analyze`, one per run.
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// JSON lines to this file instead of standard output.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
 }
 
 /// Options shared by the commands that read data (CONTRACT.md).
@@ -183,6 +197,7 @@ where
         Command::Diagnose(d) => diagnose::run(&d),
         Command::Plot(p) => plot::run(&p),
         Command::Report(r) => report::run(&r),
+        Command::Aggregate(a) => aggregate::run(&a),
     }
 }
 

@@ -69,3 +69,102 @@ pub fn aggregate(runs: &[[Option<f64>; 5]]) -> [Option<RunStats>; 5] {
 pub fn determined_values(fit: &crate::model::fit::FitResult) -> [Option<f64>; 5] {
     std::array::from_fn(|i| fit.coef[i].determined.then_some(fit.coef[i].value))
 }
+
+/// One run's determined coefficients of one channel (the `value`s of a `fit` record's `coef`;
+/// `None` where the paper prints "-").
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunCoefs {
+    pub channel: String,
+    pub unit: String,
+    /// Q, N, B, K, R.
+    pub values: [Option<f64>; 5],
+}
+
+impl RunCoefs {
+    /// From a fit (the channel's name and unit given by the caller).
+    pub fn from_fit(channel: &str, unit: &str, fit: &crate::model::fit::FitResult) -> RunCoefs {
+        RunCoefs {
+            channel: channel.into(),
+            unit: unit.into(),
+            values: determined_values(fit),
+        }
+    }
+
+    /// From a `fit` record as CONTRACT.md writes it (`channel`, `unit`, `coef.{Q..R}.value` and
+    /// `.determined`). `None` when the object is not a well-formed `fit` record.
+    pub fn from_fit_record(rec: &serde_json::Value) -> Option<RunCoefs> {
+        if rec.get("type")?.as_str()? != "fit" {
+            return None;
+        }
+        let channel = rec.get("channel")?.as_str()?.to_string();
+        let unit = rec
+            .get("unit")
+            .and_then(|u| u.as_str())
+            .unwrap_or("u")
+            .to_string();
+        let coef = rec.get("coef")?;
+        let mut values = [None; 5];
+        for (i, name) in crate::model::terms::TERM_NAMES.iter().enumerate() {
+            let c = coef.get(*name)?;
+            let determined = c
+                .get("determined")
+                .and_then(|d| d.as_bool())
+                .unwrap_or(true);
+            values[i] = c
+                .get("value")
+                .and_then(|v| v.as_f64())
+                .filter(|v| determined && v.is_finite());
+        }
+        Some(RunCoefs {
+            channel,
+            unit,
+            values,
+        })
+    }
+}
+
+/// Run-to-run statistics of one coefficient of one channel (CONTRACT.md's `aggregate` record).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CoefAggregate {
+    pub channel: String,
+    pub unit: String,
+    /// "Q" .. "R".
+    pub coef: &'static str,
+    /// `None` when no run determined it.
+    pub stats: Option<RunStats>,
+}
+
+/// The seed paper's table 2 for every channel and coefficient: `runs[r]` holds run r's channels.
+/// Channels are matched by name across runs and listed in the order they first appear; a run
+/// without a channel counts as "-" for it.
+pub fn aggregate_channels(runs: &[Vec<RunCoefs>]) -> Vec<CoefAggregate> {
+    let mut channels: Vec<(&str, &str)> = Vec::new();
+    for run in runs {
+        for c in run {
+            if !channels.iter().any(|(n, _)| *n == c.channel) {
+                channels.push((&c.channel, &c.unit));
+            }
+        }
+    }
+    let mut out = Vec::with_capacity(channels.len() * 5);
+    for (name, unit) in channels {
+        let per_run: Vec<[Option<f64>; 5]> = runs
+            .iter()
+            .map(|run| {
+                run.iter()
+                    .find(|c| c.channel == name)
+                    .map_or([None; 5], |c| c.values)
+            })
+            .collect();
+        let stats = aggregate(&per_run);
+        for (i, s) in stats.into_iter().enumerate() {
+            out.push(CoefAggregate {
+                channel: name.to_string(),
+                unit: unit.to_string(),
+                coef: crate::model::terms::TERM_NAMES[i],
+                stats: s,
+            });
+        }
+    }
+    out
+}

@@ -24,15 +24,24 @@
 //!
 //! where `n(h)` counts the pairs `(k, l)` at lag `h` (`M1`, `M2` differences averaged). All sums
 //! are kept per unit coefficient (lag unit `tau0 = 1`), so the matrix for any coefficients is a
-//! quadratic form in `c` and the expensive part is cached per `(m1, m2, M1, M2)`.
+//! quadratic form in `c` and the expensive part is cached per pair `(m1, m2)`.
 //!
 //! The lag sum runs over the whole overlap range `-(M2-1) ..= M1-1` with no truncation: short
 //! stretches are summed exactly, long smooth stretches between breakpoints by Gauss-Legendre panels
-//! graded geometrically towards the breakpoints, with the Euler-Maclaurin end corrections. The
-//! flicker cross-covariance decays as `c12(h) ~ -(m1 m2)^2 / (pi h^2)`, which the geometric panels
-//! follow out to the end of the range. Against the exact lag-by-lag sum the quadrature agrees to
-//! better than 1e-6 relative (tests/fit_covariance.rs).
+//! graded geometrically towards the kinks of `c12`, with the Euler-Maclaurin end corrections. The
+//! flicker cross-covariance decays as `c12(h) ~ -(m1 m2)^2 / (pi h^2)`; beyond
+//! `|h| = 16 max(m1, m2)` it is evaluated from its far-field series in `1/h` (`flicker_series`,
+//! no logarithms, and free of the cancellation the direct nine-term sum suffers there). Against
+//! the exact lag-by-lag sum the quadrature agrees to better than 1e-6 relative
+//! (tests/fit_covariance.rs).
+//!
+//! Live refits: as the run grows every count grows by the same `d`, `n(h)` grows by exactly `d` on
+//! the old range, and the range gains `d` lags at each end. The cache keeps, per pair, the sums
+//! weighted by `n(h)` and unweighted, and updates them with the new lags only
+//! ([`AvarCovariance`]): a refit of 21 octave taus costs about 0.6 ms instead of 14 ms
+//! (BENCHMARKS.md, "Noise-model fit").
 
+use crate::allan::CurvePoint;
 use nalgebra::DMatrix;
 use std::collections::HashMap;
 use std::f64::consts::PI;
@@ -115,28 +124,187 @@ fn pair_count(h: f64, big_m1: f64, big_m2: f64) -> f64 {
     ((big_m2).min(big_m1 - h) - (-h).max(0.0)).max(0.0)
 }
 
-/// The 7 accumulated quantities at one lag: `n g_t g_u` for `t <= u` over (N, B, K), then `n g_t`.
-type Vals = [f64; 9];
+/// Products accumulated at each lag: `g_t g_u` for `t <= u` over (N, B, K), then `g_t`.
+const NV: usize = 9;
+/// The products weighted by the pair count `n(h)` (entries `0..NV`), then unweighted
+/// (`NV..2 NV`): the unweighted sums are what a growing count adds to the old range.
+type Vals = [f64; 2 * NV];
 
-fn vals(h: f64, m1: f64, m2: f64, big_m1: f64, big_m2: f64) -> Vals {
-    let n = pair_count(h, big_m1, big_m2);
-    let g = g_cont(h, m1, m2);
+fn products(g: &[f64; 3]) -> [f64; NV] {
     [
-        n * g[0] * g[0],
-        n * g[0] * g[1],
-        n * g[0] * g[2],
-        n * g[1] * g[1],
-        n * g[1] * g[2],
-        n * g[2] * g[2],
-        n * g[0],
-        n * g[1],
-        n * g[2],
+        g[0] * g[0],
+        g[0] * g[1],
+        g[0] * g[2],
+        g[1] * g[1],
+        g[1] * g[2],
+        g[2] * g[2],
+        g[0],
+        g[1],
+        g[2],
     ]
 }
 
 fn add(acc: &mut Vals, v: &Vals, w: f64) {
     for (a, b) in acc.iter_mut().zip(v) {
         *a += w * b;
+    }
+}
+
+/// Terms of the far-field series of the flicker cross-covariance (orders `h^-2 .. h^-(NSER+1)`).
+const NSER: usize = 23;
+/// The series is used where `|h| >= FAR_FACTOR * max(m1, m2)`: there every lag `h + i m1 - j m2`
+/// is within a factor `1 +- 1/8` of `h`, the N and K cross-covariances are exactly 0, and the
+/// terms fall by 8 per order, so 23 orders reach 1e-19 of the leading one.
+const FAR_FACTOR: f64 = 16.0;
+
+/// One pair of cluster sizes at given counts: what the lag function needs.
+struct PairCtx {
+    m1: f64,
+    m2: f64,
+    big_m1: f64,
+    big_m2: f64,
+    /// `max(m1, m2)`.
+    scale: f64,
+    /// `|h|` from which the series is used (infinite: never).
+    far: f64,
+    /// `g_B(h) = scale^2 sum_k series[k] (scale / h)^(k + 2)`.
+    series: [f64; NSER],
+}
+
+/// Far-field expansion of `g_B(h) = sum_{i,j} a_i a_j G_B(h + i m1 - j m2)`.
+///
+/// Taylor expansion of `G_B(h + d)` about `h`: with `G_B^(n)(t) = (-1)^(n-3) (n-3)! / (pi t^(n-2))`
+/// for `n >= 3`, and `mu_n = sum_{i,j} a_i a_j (i m1 - j m2)^n` vanishing for `n < 4` (the second
+/// differences annihilate lines), `g_B(h) = sum_{n>=4} mu_n (-1)^(n-3) / (n (n-1) (n-2) pi h^(n-2))`,
+/// convergent for `|h| > 2 max(m1, m2)`. `mu_n` is summed binomially,
+/// `mu_n = sum_{p=2}^{n-2} C(n, p) (2^p - 2) (2^(n-p) - 2) m1^p (-m2)^(n-p)`, with `m` scaled by
+/// `max(m1, m2)` (no overflow, and no cancellation of large powers when `m1 << m2`). Leading term:
+/// `-(m1 m2)^2 / (pi h^2)`.
+fn flicker_series(m1: f64, m2: f64) -> [f64; NSER] {
+    let s = m1.max(m2);
+    let (x1, x2) = (m1 / s, -m2 / s);
+    // Powers 0 ..= NSER + 3 of 2, m1/s and -m2/s.
+    let mut pow2 = [1.0; NSER + 4];
+    let mut pow1 = [1.0; NSER + 4];
+    let mut pow2m = [1.0; NSER + 4];
+    for k in 1..NSER + 4 {
+        pow2[k] = 2.0 * pow2[k - 1];
+        pow1[k] = x1 * pow1[k - 1];
+        pow2m[k] = x2 * pow2m[k - 1];
+    }
+    let mut out = [0.0; NSER];
+    for (k, o) in out.iter_mut().enumerate() {
+        let n = k + 4;
+        let mut mu = 0.0;
+        let mut binom = 1.0; // C(n, p), built up from p = 0
+        for p in 0..=n {
+            if p >= 1 {
+                binom *= (n + 1 - p) as f64 / p as f64;
+            }
+            if p < 2 || p + 2 > n {
+                continue;
+            }
+            let q = n - p;
+            mu += binom * (pow2[p] - 2.0) * (pow2[q] - 2.0) * pow1[p] * pow2m[q];
+        }
+        let nf = n as f64;
+        let sign = if (n - 3) % 2 == 0 { 1.0 } else { -1.0 };
+        *o = sign * mu / (nf * (nf - 1.0) * (nf - 2.0) * PI);
+    }
+    out
+}
+
+impl PairCtx {
+    /// `series`: the pair's [`flicker_series`], or `None` to evaluate `g` directly everywhere.
+    fn new(m1: u64, m2: u64, big_m1: u64, big_m2: u64, series: Option<&[f64; NSER]>) -> PairCtx {
+        let (fm1, fm2) = (m1 as f64, m2 as f64);
+        let scale = fm1.max(fm2);
+        PairCtx {
+            m1: fm1,
+            m2: fm2,
+            big_m1: big_m1 as f64,
+            big_m2: big_m2 as f64,
+            scale,
+            far: if series.is_some() {
+                FAR_FACTOR * scale
+            } else {
+                f64::INFINITY
+            },
+            series: series.copied().unwrap_or([0.0; NSER]),
+        }
+    }
+
+    /// `(g_N, g_B, g_K)` at lag `h`: the series far out, the direct sums nearer.
+    #[inline]
+    fn g(&self, h: f64) -> [f64; 3] {
+        if h.abs() >= self.far {
+            let x = self.scale / h;
+            let mut acc = 0.0;
+            for c in self.series.iter().rev() {
+                acc = acc * x + c;
+            }
+            [0.0, self.scale * self.scale * acc * x * x, 0.0]
+        } else {
+            g_cont(h, self.m1, self.m2)
+        }
+    }
+
+    #[inline]
+    fn vals(&self, h: f64) -> Vals {
+        let n = pair_count(h, self.big_m1, self.big_m2);
+        let p = products(&self.g(h));
+        let mut v = [0.0; 2 * NV];
+        for k in 0..NV {
+            v[k] = n * p[k];
+            v[NV + k] = p[k];
+        }
+        v
+    }
+
+    /// Lags where `g` is not smooth: `j m2 - i m1` (a lag of `G` crosses 0), sorted.
+    fn kinks(&self) -> Vec<i64> {
+        let (m1, m2) = (self.m1 as i64, self.m2 as i64);
+        let mut k: Vec<i64> = (0..3i64)
+            .flat_map(|i| (0..3i64).map(move |j| j * m2 - i * m1))
+            .collect();
+        k.sort_unstable();
+        k.dedup();
+        k
+    }
+
+    /// Adds `sum_{h=lo}^{hi}` of the lag values to `acc`. The range is cut where the integrand
+    /// changes form (kinks of `g`, of `n(h)` at 0 and `M1 - M2`, and at `+- far` where the
+    /// series takes over); each piece is summed by [`sum_graded`] with its distances to the
+    /// nearest kinks of `g`, towards which the quadrature panels are graded.
+    fn sum_range(&self, lo: i64, hi: i64, acc: &mut Vals) {
+        if hi < lo {
+            return;
+        }
+        let kinks = self.kinks();
+        let mut bps: Vec<i64> = vec![lo, hi + 1, 0, self.big_m1 as i64 - self.big_m2 as i64];
+        bps.extend(&kinks);
+        if self.far.is_finite() {
+            let f = self.far.ceil() as i64;
+            bps.push(f);
+            bps.push(-f + 1);
+        }
+        bps.retain(|&b| b >= lo && b <= hi + 1);
+        bps.sort_unstable();
+        bps.dedup();
+        let f = |h: f64| self.vals(h);
+        for w in bps.windows(2) {
+            let (p, q) = (w[0], w[1] - 1);
+            let s_lo = kinks
+                .iter()
+                .rev()
+                .find(|&&k| k <= p)
+                .map_or(f64::INFINITY, |&k| (p - k) as f64);
+            let s_hi = kinks
+                .iter()
+                .find(|&&k| k > q)
+                .map_or(f64::INFINITY, |&k| (k - q) as f64);
+            sum_graded(p, q, s_lo, s_hi, &f, acc);
+        }
     }
 }
 
@@ -159,91 +327,199 @@ const END_EXACT: i64 = 8;
 /// Growth factor of the graded panels away from each breakpoint.
 const PANEL_GROWTH: f64 = 4.0;
 
-/// `sum_{h=p}^{q} F(h)` for `F` smooth on `[p, q]` (integers, `p <= q`).
-fn sum_stretch(p: i64, q: i64, f: &dyn Fn(f64) -> Vals, acc: &mut Vals) {
+fn gauss_panel(lo: f64, hi: f64, f: &dyn Fn(f64) -> Vals, acc: &mut Vals) {
+    if hi <= lo {
+        return;
+    }
+    let half = 0.5 * (hi - lo);
+    let c = 0.5 * (hi + lo);
+    for (x, wt) in GL_X.iter().zip(GL_W) {
+        add(acc, &f(c - half * x), wt * half);
+        add(acc, &f(c + half * x), wt * half);
+    }
+}
+
+/// Euler-Maclaurin ends: `(F(a) + F(b))/2 + (F'(b) - F'(a))/12`, derivatives by central
+/// differences.
+fn euler_maclaurin_ends(a: f64, b: f64, f: &dyn Fn(f64) -> Vals, acc: &mut Vals) {
+    let fa = f(a);
+    let fb = f(b);
+    let (fa_m, fa_p, fb_m, fb_p) = (f(a - 1.0), f(a + 1.0), f(b - 1.0), f(b + 1.0));
+    for k in 0..2 * NV {
+        let da = (fa_p[k] - fa_m[k]) / 2.0;
+        let db = (fb_p[k] - fb_m[k]) / 2.0;
+        acc[k] += (fa[k] + fb[k]) / 2.0 + (db - da) / 12.0;
+    }
+}
+
+/// `sum_{h=p}^{q} F(h)` for `F` smooth on `[p, q]` (integers, `p <= q`), whose nearest
+/// non-smooth points lie `s_lo` below `p` and `s_hi` above `q` (infinite: none).
+///
+/// Ends within `END_EXACT` of a kink are summed point by point; the rest by Euler-Maclaurin,
+/// `sum = integral + (F(a) + F(b))/2 + (F'(b) - F'(a))/12`, with the integral on 8-point
+/// Gauss-Legendre panels whose width is at most `PANEL_GROWTH - 1` times their distance to
+/// the nearest kink (graded towards kinks, one panel across a stretch far from any).
+fn sum_graded(p: i64, q: i64, s_lo: f64, s_hi: f64, f: &dyn Fn(f64) -> Vals, acc: &mut Vals) {
     if q - p < 4 * END_EXACT + 8 {
         for h in p..=q {
             add(acc, &f(h as f64), 1.0);
         }
         return;
     }
-    for h in (p..p + END_EXACT).chain(q - END_EXACT + 1..=q) {
+    let e_lo = if s_lo < END_EXACT as f64 {
+        END_EXACT
+    } else {
+        0
+    };
+    let e_hi = if s_hi <= END_EXACT as f64 {
+        END_EXACT
+    } else {
+        0
+    };
+    for h in (p..p + e_lo).chain(q - e_hi + 1..=q) {
         add(acc, &f(h as f64), 1.0);
     }
-    // Middle [a, b]: Euler-Maclaurin, sum = integral + (F(a) + F(b))/2 + (F'(b) - F'(a))/12.
-    let a = (p + END_EXACT) as f64;
-    let b = (q - END_EXACT) as f64;
-    let fa = f(a);
-    let fb = f(b);
-    let (fa_m, fa_p, fb_m, fb_p) = (f(a - 1.0), f(a + 1.0), f(b - 1.0), f(b + 1.0));
-    for k in 0..9 {
-        let da = (fa_p[k] - fa_m[k]) / 2.0;
-        let db = (fb_p[k] - fb_m[k]) / 2.0;
-        acc[k] += (fa[k] + fb[k]) / 2.0 + (db - da) / 12.0;
+    let a = (p + e_lo) as f64;
+    let b = (q - e_hi) as f64;
+    euler_maclaurin_ends(a, b, f, acc);
+    // Distance of a point x to the nearest kink on each side.
+    let d_lo = |x: f64| s_lo + (x - p as f64);
+    let d_hi = |x: f64| s_hi + (q as f64 - x);
+    let mid = if s_lo.is_infinite() && s_hi.is_infinite() {
+        0.5 * (a + b)
+    } else if s_lo.is_infinite() {
+        a
+    } else if s_hi.is_infinite() {
+        b
+    } else {
+        // Where the two distances are equal.
+        (0.5 * (a + b + s_hi - s_lo)).clamp(a, b)
+    };
+    let g = PANEL_GROWTH - 1.0;
+    let mut x = a;
+    while x < mid {
+        let next = (x + g * d_lo(x).max(1.0)).min(mid);
+        gauss_panel(x, next, f, acc);
+        x = next;
     }
-    // Integral over panels graded from both ends towards the middle.
-    let mid = 0.5 * (a + b);
-    let mut edges_lo = vec![a];
-    let mut w = END_EXACT as f64;
-    while edges_lo.last().copied().unwrap_or(a) + w < mid {
-        let e = edges_lo.last().copied().unwrap_or(a) + w;
-        edges_lo.push(e);
-        w *= PANEL_GROWTH;
+    let mut x = b;
+    while x > mid {
+        let next = (x - g * d_hi(x).max(1.0)).max(mid);
+        gauss_panel(next, x, f, acc);
+        x = next;
     }
-    let mut edges = edges_lo.clone();
-    edges.push(mid);
-    let mut hi: Vec<f64> = edges_lo.iter().map(|e| a + b - e).collect();
-    hi.reverse();
-    edges.extend(hi);
-    for win in edges.windows(2) {
-        let (lo, hi) = (win[0], win[1]);
-        if hi <= lo {
-            continue;
+}
+
+/// A pair's lag sums at its current counts, and what a larger count needs to update them.
+#[derive(Debug, Clone)]
+struct PairState {
+    m1: u64,
+    m2: u64,
+    counts: (u64, u64),
+    /// `sum_h n(h) p(h)` and `sum_h p(h)` over the overlap range, for the continuous terms.
+    acc: Vals,
+    /// White-phase point masses: lag `h`, `g_Q(h)`, and `(g_N, g_B, g_K)` at `h`.
+    masses: Vec<(i64, f64, [f64; 3])>,
+    /// The pair's far-field flicker series (count-independent).
+    series: [f64; NSER],
+}
+
+impl PairState {
+    /// Sums over the whole overlap range `-(M2-1) ..= M1-1` (see the module doc).
+    fn fresh(m1: u64, m2: u64, big_m1: u64, big_m2: u64) -> PairState {
+        let series = flicker_series(m1 as f64, m2 as f64);
+        let ctx = PairCtx::new(m1, m2, big_m1, big_m2, Some(&series));
+        let mut acc = [0.0; 2 * NV];
+        ctx.sum_range(-(big_m2 as i64 - 1), big_m1 as i64 - 1, &mut acc);
+        PairState {
+            m1,
+            m2,
+            counts: (big_m1, big_m2),
+            acc,
+            masses: masses(m1, m2),
+            series,
         }
-        let half = 0.5 * (hi - lo);
-        let c = 0.5 * (hi + lo);
-        for (x, wt) in GL_X.iter().zip(GL_W) {
-            add(acc, &f(c - half * x), wt * half);
-            add(acc, &f(c + half * x), wt * half);
+    }
+
+    /// Moves the sums to counts `(M1 + d, M2 + d)`, `d >= 0`. The pair count is
+    /// `n(h) = min(M2, M1 - h) - max(-h, 0)`, so on the old range every `n(h)` grows by exactly
+    /// `d` (adding `d` times the unweighted sums), and the range gains `d` lags at each end.
+    /// Returns `false` (nothing changed) when the counts do not move that way.
+    fn advance(&mut self, big_m1: u64, big_m2: u64) -> bool {
+        let (o1, o2) = self.counts;
+        if big_m1 < o1 || big_m2 < o2 || big_m1 - o1 != big_m2 - o2 {
+            return false;
         }
+        let d = (big_m1 - o1) as f64;
+        if d == 0.0 {
+            return true;
+        }
+        for k in 0..NV {
+            self.acc[k] += d * self.acc[NV + k];
+        }
+        let ctx = PairCtx::new(self.m1, self.m2, big_m1, big_m2, Some(&self.series));
+        ctx.sum_range(-(big_m2 as i64 - 1), -(o2 as i64), &mut self.acc);
+        ctx.sum_range(o1 as i64, big_m1 as i64 - 1, &mut self.acc);
+        self.counts = (big_m1, big_m2);
+        true
+    }
+
+    fn sums(&self) -> PairSums {
+        assemble(&self.acc, &self.masses, self.counts.0, self.counts.1)
     }
 }
 
 /// Lag sums by quadrature (see the module doc). `m1, m2 >= 1`, `M1, M2 >= 1`.
 pub fn pair_sums(m1: u64, m2: u64, big_m1: u64, big_m2: u64) -> PairSums {
-    let (fm1, fm2, fbm1, fbm2) = (m1 as f64, m2 as f64, big_m1 as f64, big_m2 as f64);
-    let lo = -(big_m2 as i64 - 1);
-    let hi = big_m1 as i64 - 1;
-    let mut bps: Vec<i64> = vec![lo, hi + 1, 0, big_m1 as i64 - big_m2 as i64];
-    for i in 0..3i64 {
-        for j in 0..3i64 {
-            bps.push(j * m2 as i64 - i * m1 as i64);
+    PairState::fresh(m1, m2, big_m1, big_m2).sums()
+}
+
+/// Lag sums at counts `(M1, M2)` reached from `(M1 - d, M2 - d)` by the incremental update the
+/// live cache uses (exposed for tests: it must agree with [`pair_sums`]).
+pub fn pair_sums_advanced(m1: u64, m2: u64, steps: &[(u64, u64)]) -> Option<PairSums> {
+    let (first, rest) = steps.split_first()?;
+    let mut st = PairState::fresh(m1, m2, first.0, first.1);
+    for &(c1, c2) in rest {
+        if !st.advance(c1, c2) {
+            return None;
         }
     }
-    bps.retain(|&b| b >= lo && b <= hi + 1);
-    bps.sort_unstable();
-    bps.dedup();
-    let f = |h: f64| vals(h, fm1, fm2, fbm1, fbm2);
-    let mut acc: Vals = [0.0; 9];
-    for w in bps.windows(2) {
-        sum_stretch(w[0], w[1] - 1, &f, &mut acc);
-    }
-    assemble(acc, m1, m2, big_m1, big_m2)
+    Some(st.sums())
 }
 
 /// Lag sums summed lag by lag over the whole range (the slow reference for [`pair_sums`]).
 pub fn pair_sums_exact(m1: u64, m2: u64, big_m1: u64, big_m2: u64) -> PairSums {
-    let (fm1, fm2, fbm1, fbm2) = (m1 as f64, m2 as f64, big_m1 as f64, big_m2 as f64);
-    let mut acc: Vals = [0.0; 9];
+    let ctx = PairCtx::new(m1, m2, big_m1, big_m2, None);
+    let mut acc = [0.0; 2 * NV];
     for h in -(big_m2 as i64 - 1)..=(big_m1 as i64 - 1) {
-        add(&mut acc, &vals(h as f64, fm1, fm2, fbm1, fbm2), 1.0);
+        add(&mut acc, &ctx.vals(h as f64), 1.0);
     }
-    assemble(acc, m1, m2, big_m1, big_m2)
+    assemble(&acc, &masses(m1, m2), big_m1, big_m2)
+}
+
+/// The white-phase point masses of a pair: `g_Q(h) = sum_{i,j: h = j m2 - i m1} a_i a_j`, with the
+/// continuous terms' values at those lags.
+fn masses(m1: u64, m2: u64) -> Vec<(i64, f64, [f64; 3])> {
+    let mut out: Vec<(i64, f64, [f64; 3])> = Vec::with_capacity(9);
+    for (i, ai) in A.iter().enumerate() {
+        for (j, aj) in A.iter().enumerate() {
+            let h = j as i64 * m2 as i64 - i as i64 * m1 as i64;
+            match out.iter_mut().find(|e| e.0 == h) {
+                Some(e) => e.1 += ai * aj,
+                None => out.push((h, ai * aj, [0.0; 3])),
+            }
+        }
+    }
+    out.retain(|e| e.1 != 0.0);
+    for e in &mut out {
+        e.2 = g_cont(e.0 as f64, m1 as f64, m2 as f64);
+    }
+    out
 }
 
 /// Unpack the continuous-term sums and add the white-phase point masses (nonzero only where a
 /// lag `h + i m1 - j m2` is exactly 0).
-fn assemble(acc: Vals, m1: u64, m2: u64, big_m1: u64, big_m2: u64) -> PairSums {
+fn assemble(acc: &Vals, masses: &[(i64, f64, [f64; 3])], big_m1: u64, big_m2: u64) -> PairSums {
     let mut s = PairSums::default();
     let idx = [
         (1, 1, 0),
@@ -260,24 +536,12 @@ fn assemble(acc: Vals, m1: u64, m2: u64, big_m1: u64, big_m2: u64) -> PairSums {
     s.lin[1] = acc[6];
     s.lin[2] = acc[7];
     s.lin[3] = acc[8];
-    // g_Q(h) = sum_{i,j: h = j m2 - i m1} a_i a_j.
-    let mut masses: Vec<(i64, f64)> = Vec::with_capacity(9);
-    for (i, ai) in A.iter().enumerate() {
-        for (j, aj) in A.iter().enumerate() {
-            let h = j as i64 * m2 as i64 - i as i64 * m1 as i64;
-            match masses.iter_mut().find(|(hh, _)| *hh == h) {
-                Some(e) => e.1 += ai * aj,
-                None => masses.push((h, ai * aj)),
-            }
-        }
-    }
-    let (fm1, fm2, fbm1, fbm2) = (m1 as f64, m2 as f64, big_m1 as f64, big_m2 as f64);
-    for (h, gq) in masses {
+    let (fbm1, fbm2) = (big_m1 as f64, big_m2 as f64);
+    for &(h, gq, g) in masses {
         let n = pair_count(h as f64, fbm1, fbm2);
-        if n <= 0.0 || gq == 0.0 {
+        if n <= 0.0 {
             continue;
         }
-        let g = g_cont(h as f64, fm1, fm2);
         s.quad[NQ][NQ] += n * gq * gq;
         for (t, gt) in g.iter().enumerate() {
             s.quad[NQ][t + 1] += n * gq * gt;
@@ -293,41 +557,129 @@ fn assemble(acc: Vals, m1: u64, m2: u64, big_m1: u64, big_m2: u64) -> PairSums {
 pub struct CovPoint {
     /// Cluster size.
     pub m: u64,
-    /// Number of second differences averaged (`M`).
+    /// Number of full-overlap (stride 1) second differences the estimate spans (`M`).
     pub count: u64,
 }
 
-/// Lag sums of one pair computed at counts `(M1, M2)`.
-type CountedSums = ((u64, u64), PairSums);
+/// Increments `n` of the run an AVAR curve was read from: `max(count + 2m - 1)` over its points
+/// (exact at every stride-1 point of one contiguous segment).
+fn increments_of(points: &[CurvePoint]) -> u64 {
+    points
+        .iter()
+        .filter(|p| p.m >= 1 && p.count >= 1)
+        .map(|p| p.count.saturating_add(2 * p.m - 1))
+        .max()
+        .unwrap_or(0)
+}
 
-/// Covariance matrices of AVAR estimates, with the per-pair lag sums cached (they depend only on
-/// `(m1, m2, M1, M2)`, not on the coefficients or `tau0`).
+/// Is a point strided: its count at most half the full count `n - 2m + 1` (a stride `s >= 2`
+/// gives `floor((n - 2m)/s) + 1 <= (n - 2m + 2)/2`)? Returns the full count.
+fn full_count(p: &CurvePoint, n: u64) -> (u64, bool) {
+    let full = (n + 1).saturating_sub(2 * p.m).max(1);
+    (
+        full,
+        p.count < full && p.count.saturating_mul(2) <= full + 1,
+    )
+}
+
+/// The covariance points of an AVAR curve, in the order of `points`, with their strides
+/// ([`strides`]).
 ///
-/// Live refits see the counts `M` grow between calls. With a count tolerance `eps > 0`
-/// ([`AvarCovariance::with_count_tolerance`]), sums computed at counts within a fraction `eps` of
-/// the requested ones are reused, scaled by `M2 / M2'`: the pair count is `n(h) = M2 + psi(h)`
-/// with `psi` fixed by the cluster sizes, so the scaled sums are off by at most about
-/// `eps * (2 m_max / M2)`, relative (the edge share of the overlap range times the count change).
+/// The lag sums are those of the full-overlap estimate (stride 1). A bounded-memory estimate
+/// (`--overlap L`) takes differences at a stride `s >= 2` for `m >= 2L`, and its `count` is the
+/// number of strided differences; such a point gets the full count `n - 2m + 1` (the span it
+/// covers) and its stride, and [`AvarCovariance::matrix_strided`] corrects the sums for the
+/// stride. `n` is read off the curve itself; a point counts as strided when its own count is at
+/// most half the full one, otherwise its own count is used (full overlap, gaps included).
+pub fn cov_points(points: &[CurvePoint]) -> Vec<CovPoint> {
+    let n = increments_of(points);
+    points
+        .iter()
+        .map(|p| {
+            let (full, strided) = full_count(p, n);
+            CovPoint {
+                m: p.m,
+                count: if strided { full } else { p.count },
+            }
+        })
+        .collect()
+}
+
+/// The stride of each point of an AVAR curve: 1 at full overlap; for a strided point (see
+/// [`cov_points`]) the divisor of `m` nearest to `(full - 1) / (count - 1)`.
+pub fn strides(points: &[CurvePoint]) -> Vec<u64> {
+    let n = increments_of(points);
+    points
+        .iter()
+        .map(|p| {
+            let (full, strided) = full_count(p, n);
+            if !strided {
+                return 1;
+            }
+            let est = if p.count >= 2 {
+                (full - 1) as f64 / (p.count - 1) as f64
+            } else {
+                full as f64
+            };
+            nearest_divisor(p.m, est)
+        })
+        .collect()
+}
+
+/// The divisor of `m` nearest to `x` on a log scale.
+fn nearest_divisor(m: u64, x: f64) -> u64 {
+    let mut best = (f64::INFINITY, 1);
+    let mut d = 1u64;
+    while d.saturating_mul(d) <= m {
+        if m.is_multiple_of(d) {
+            for c in [d, m / d] {
+                let dist = ((c as f64) / x).ln().abs();
+                if dist < best.0 {
+                    best = (dist, c);
+                }
+            }
+        }
+        d += 1;
+    }
+    best.1
+}
+
+fn gcd(a: u64, b: u64) -> u64 {
+    if b == 0 {
+        a.max(1)
+    } else {
+        gcd(b, a % b)
+    }
+}
+
+/// Covariance matrices of AVAR estimates, with each pair's lag sums kept between calls.
+///
+/// Live refits see every count grow by the same number of differences `d` between calls (one
+/// contiguous segment: `M = n - 2m + 1`). The sums are then updated exactly rather than
+/// recomputed: on the old lag range each pair count grows by `d` (so the sums gain `d` times the
+/// cached unweighted sums) and the range gains `d` lags at each end, summed by quadrature (the
+/// far-field series of the flicker term makes that cheap). Other changes (a gap, a shorter
+/// curve) recompute the pair.
 #[derive(Debug, Default, Clone)]
 pub struct AvarCovariance {
-    cache: HashMap<(u64, u64), Vec<CountedSums>>,
-    count_tolerance: f64,
+    cache: HashMap<(u64, u64), Vec<PairState>>,
 }
+
+/// Count versions kept per pair (a caller alternating between a few curves stays cached).
+const STATES_PER_PAIR: usize = 3;
 
 impl AvarCovariance {
     pub fn new() -> Self {
         Self::default()
     }
 
-    /// Reuse lag sums computed at counts within the fraction `eps` of the requested ones.
-    pub fn with_count_tolerance(eps: f64) -> Self {
-        Self {
-            cache: HashMap::new(),
-            count_tolerance: eps.max(0.0),
-        }
+    /// Kept for compatibility: counts that grow are now handled exactly (see the type doc), so
+    /// no tolerance is needed and `eps` is ignored.
+    pub fn with_count_tolerance(_eps: f64) -> Self {
+        Self::default()
     }
 
-    /// Number of cached pairs.
+    /// Number of cached pair states.
     pub fn cached_pairs(&self) -> usize {
         self.cache.values().map(Vec::len).sum()
     }
@@ -339,42 +691,61 @@ impl AvarCovariance {
         } else {
             (b.m, a.m, b.count, a.count)
         };
-        let eps = self.count_tolerance;
-        let entries = self.cache.entry((m1, m2)).or_default();
-        if let Some((_, s)) = entries.iter().find(|(k, _)| *k == (c1, c2)) {
-            return *s;
+        let states = self.cache.entry((m1, m2)).or_default();
+        if let Some(st) = states.iter().find(|s| s.counts == (c1, c2)) {
+            return st.sums();
         }
-        if eps > 0.0 {
-            let close = |x: u64, y: u64| (x as f64 - y as f64).abs() <= eps * y as f64;
-            if let Some(((_, k2), s)) = entries
-                .iter()
-                .find(|((k1, k2), _)| close(*k1, c1) && close(*k2, c2))
-            {
-                let f = c2 as f64 / *k2 as f64;
-                let mut out = *s;
-                for row in out.quad.iter_mut() {
-                    for v in row.iter_mut() {
-                        *v *= f;
-                    }
-                }
-                for v in out.lin.iter_mut() {
-                    *v *= f;
-                }
-                return out;
+        // Advance the furthest state that can reach these counts.
+        let best = states
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| {
+                let (o1, o2) = s.counts;
+                o1 <= c1 && o2 <= c2 && c1 - o1 == c2 - o2
+            })
+            .max_by_key(|(_, s)| s.counts.0)
+            .map(|(i, _)| i);
+        if let Some(i) = best {
+            let st = &mut states[i];
+            if st.advance(c1, c2) {
+                return st.sums();
             }
         }
-        let s = pair_sums(m1, m2, c1, c2);
-        // Keep a few count versions per pair (the live case moves forward; old ones go).
-        if entries.len() >= 4 {
-            entries.remove(0);
+        let st = PairState::fresh(m1, m2, c1, c2);
+        let s = st.sums();
+        if states.len() >= STATES_PER_PAIR {
+            states.remove(0);
         }
-        entries.push(((c1, c2), s));
+        states.push(st);
         s
     }
 
     /// `Cov(AVAR_hat_i, AVAR_hat_j)` in (u/s)^4 for the five-term model with
-    /// `c = (Q^2, N^2, B^2, K^2, R^2)`, sampling step `tau0_s` (THEORY.md section 5).
+    /// `c = (Q^2, N^2, B^2, K^2, R^2)`, sampling step `tau0_s` (THEORY.md section 5), for
+    /// full-overlap estimates.
     pub fn matrix(&mut self, tau0_s: f64, points: &[CovPoint], c: &[f64; 5]) -> DMatrix<f64> {
+        self.matrix_strided(tau0_s, points, &[], c)
+    }
+
+    /// As [`matrix`](AvarCovariance::matrix), for estimates taken at strides `strides[i]`
+    /// (missing entries: 1), each point's `count` being the full count of the span it covers.
+    ///
+    /// Strided differences `D_1(k s1)`, `D_2(l s2)` meet at lags on the lattice `g Z`,
+    /// `g = gcd(s1, s2)`, with about `g / (s1 s2)` times as many pairs per lag as at full
+    /// overlap, and the counts are `M / s`. For the continuous terms (N, B, K), whose
+    /// cross-covariance varies on the scale of `m >> s`, the lattice sum is the full sum times
+    /// `g / (s1 s2)`, which the counts cancel: the covariance is that of the full overlap over
+    /// the same span. The white-phase cross-covariance is concentrated at lags `j m2 - i m1`,
+    /// which lie on the lattice, so its sums are `1 / (s1 s2)` of the full ones and its part of
+    /// the covariance is `g` times the full overlap's: striding does cost white phase noise its
+    /// degrees of freedom.
+    pub fn matrix_strided(
+        &mut self,
+        tau0_s: f64,
+        points: &[CovPoint],
+        strides: &[u64],
+        c: &[f64; 5],
+    ) -> DMatrix<f64> {
         let n = points.len();
         // Physical scale of each term's g per unit coefficient: tau0^(0, 1, 2, 3).
         let scale = [1.0, tau0_s, tau0_s * tau0_s, tau0_s.powi(3)];
@@ -384,7 +755,19 @@ impl AvarCovariance {
         for i in 0..n {
             for j in i..n {
                 let (a, b) = (points[i], points[j]);
-                let s = self.sums(a, b);
+                let mut s = self.sums(a, b);
+                let st = |k: usize| strides.get(k).copied().unwrap_or(1).max(1);
+                let g = gcd(st(i), st(j));
+                if g > 1 {
+                    let gf = g as f64;
+                    for t in 0..NRAND {
+                        s.quad[NQ][t] *= gf;
+                        if t != NQ {
+                            s.quad[t][NQ] *= gf;
+                        }
+                    }
+                    s.lin[NQ] *= gf;
+                }
                 let tau1 = a.m as f64 * tau0_s;
                 let tau2 = b.m as f64 * tau0_s;
                 let t12 = tau1 * tau1 * tau2 * tau2;
@@ -419,4 +802,13 @@ pub fn second_difference_cov(h: i64, m1: u64, m2: u64) -> [f64; 4] {
         }
     }
     [gq, g[0], g[1], g[2]]
+}
+
+/// The far-field series of the flicker cross-covariance at lag `h` (for tests; valid for
+/// `|h| > 2 max(m1, m2)`), per unit coefficient with `tau0 = 1`.
+pub fn flicker_far_field(h: f64, m1: u64, m2: u64) -> f64 {
+    let series = flicker_series(m1 as f64, m2 as f64);
+    let mut ctx = PairCtx::new(m1, m2, 1, 1, Some(&series));
+    ctx.far = 0.0;
+    ctx.g(h)[1]
 }

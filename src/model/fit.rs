@@ -23,7 +23,7 @@
 //! zero gets `[0, sqrt(1.96 sd)]` with `sd` from the Fisher information of the full model.
 
 use crate::allan::CurvePoint;
-use crate::model::avar_cov::{AvarCovariance, CovPoint};
+use crate::model::avar_cov::{cov_points, strides, AvarCovariance, CovPoint};
 use crate::model::nnls::{nnls, NnlsError};
 use crate::model::terms::{basis, TERM_NAMES};
 use nalgebra::{DMatrix, DVector};
@@ -245,6 +245,8 @@ struct Problem {
     edf: Vec<f64>,
     x: DMatrix<f64>,
     cov_pts: Vec<CovPoint>,
+    /// Stride of each estimate (1: full overlap).
+    cov_strides: Vec<u64>,
     tau0_s: f64,
     allowed: [bool; 5],
 }
@@ -288,7 +290,9 @@ impl Fitter {
         let model = model_values(&prob.x, &c);
         // Covariance of the estimates at the fitted model; if the model is degenerate (all zero)
         // fall back to the per-point chi-squared variances of the data.
-        let mut s = self.cov.matrix(prob.tau0_s, &prob.cov_pts, &c);
+        let mut s = self
+            .cov
+            .matrix_strided(prob.tau0_s, &prob.cov_pts, &prob.cov_strides, &c);
         for i in 0..j {
             if !(s[(i, i)].is_finite() && s[(i, i)] > 0.0) {
                 s = DMatrix::from_diagonal(&DVector::from_fn(j, |k, _| {
@@ -304,7 +308,8 @@ impl Fitter {
                 cov_c[a][b] = cov_c_m[(a, b)];
             }
         }
-        let fisher_sd = fisher_sd(prob, &s);
+        let s_inv = spd_inverse(&s);
+        let fisher_sd = fisher_sd(prob, s_inv.as_ref());
         let mut coef = [CoefEstimate {
             value: 0.0,
             lo: 0.0,
@@ -344,7 +349,7 @@ impl Fitter {
                 sd_c: sd,
             };
         }
-        let gof = gof(prob, &est.g, &s, &model);
+        let gof = gof(prob, &est.g, &s, s_inv.as_ref(), &model);
         FitResult {
             method,
             c,
@@ -423,12 +428,27 @@ fn select(points: &[CurvePoint], opts: &FitOptions) -> Result<Problem, FitError>
             }
         },
     );
+    // Covariance counts and strides from the whole curve (a strided level's span, see
+    // `cov_points`).
+    let all_cov = cov_points(points);
+    let all_strides = strides(points);
+    let index: Vec<Option<usize>> = sel
+        .iter()
+        .map(|p| points.iter().position(|q| std::ptr::eq(q, *p)))
+        .collect();
     let cov_pts = sel
         .iter()
-        .map(|p| CovPoint {
-            m: p.m,
-            count: p.count,
+        .zip(&index)
+        .map(|(p, i)| {
+            i.map(|i| all_cov[i]).unwrap_or(CovPoint {
+                m: p.m,
+                count: p.count,
+            })
         })
+        .collect();
+    let cov_strides = index
+        .iter()
+        .map(|i| i.map_or(1, |i| all_strides[i]))
         .collect();
     Ok(Problem {
         tau,
@@ -436,6 +456,7 @@ fn select(points: &[CurvePoint], opts: &FitOptions) -> Result<Problem, FitError>
         edf,
         x,
         cov_pts,
+        cov_strides,
         tau0_s,
         allowed: opts.terms,
     })
@@ -630,8 +651,8 @@ fn chi2_interval(c: f64, var: f64) -> (f64, f64) {
     }
     match ChiSquared::new(nu) {
         Ok(d) => {
-            let lo = nu * c / d.inverse_cdf(0.975);
-            let hi = nu * c / d.inverse_cdf(0.025);
+            let lo = nu * c / chi2_quantile(&d, nu, 0.975, Z95);
+            let hi = nu * c / chi2_quantile(&d, nu, 0.025, -Z95);
             if lo.is_finite() && hi.is_finite() {
                 (lo, hi)
             } else {
@@ -642,12 +663,46 @@ fn chi2_interval(c: f64, var: f64) -> (f64, f64) {
     }
 }
 
+/// The `p` quantile of chi-squared with `nu` degrees of freedom (`z` the normal quantile of
+/// `p`): Wilson-Hilferty's cube-root normal approximation (or, where it fails in the lower tail
+/// of small `nu`, the small-x form `F(x) ~ (x/2)^(nu/2) / Gamma(nu/2 + 1)`), polished by Newton
+/// steps in `ln x` on the CDF: three to five CDF evaluations instead of the dozens of a bracketing
+/// search (the refit budget of BENCHMARKS.md depends on it). Falls back to statrs' own search if
+/// Newton does not settle.
+fn chi2_quantile(d: &ChiSquared, nu: f64, p: f64, z: f64) -> f64 {
+    use statrs::distribution::Continuous;
+    let k = 2.0 / (9.0 * nu);
+    let wh = 1.0 - k + z * k.sqrt();
+    let mut x = if wh > 0.1 {
+        nu * wh.powi(3)
+    } else {
+        let half = nu / 2.0;
+        2.0 * (p * statrs::function::gamma::gamma(half + 1.0)).powf(1.0 / half)
+    };
+    if !(x.is_finite() && x > 0.0) {
+        return d.inverse_cdf(p);
+    }
+    for _ in 0..12 {
+        let f = d.cdf(x) - p;
+        let slope = x * d.pdf(x); // dF / d ln x
+        if !(slope.is_finite() && slope > 0.0) {
+            break;
+        }
+        let step = (f / slope).clamp(-1.0, 1.0);
+        x *= (-step).exp();
+        if step.abs() <= 1e-12 {
+            return x;
+        }
+    }
+    d.inverse_cdf(p)
+}
+
 /// Standard deviation of each allowed `c_i` from the Fisher information `X' S^-1 X` of the full
 /// model (all allowed terms free): the scale of an upper bound for a term held at zero.
-fn fisher_sd(prob: &Problem, s: &DMatrix<f64>) -> [f64; 5] {
+fn fisher_sd(prob: &Problem, s_inv: Option<&DMatrix<f64>>) -> [f64; 5] {
     let cols: Vec<usize> = (0..5).filter(|&t| prob.allowed[t]).collect();
     let mut out = [0.0; 5];
-    let Some(s_inv) = spd_inverse(s) else {
+    let Some(s_inv) = s_inv else {
         return out;
     };
     let xp = prob.x.select_columns(&cols);
@@ -656,7 +711,7 @@ fn fisher_sd(prob: &Problem, s: &DMatrix<f64>) -> [f64; 5] {
         .map(|k| 1.0 / xp.column(k).norm().max(f64::MIN_POSITIVE))
         .collect();
     let xs = DMatrix::from_fn(xp.nrows(), xp.ncols(), |r, k| xp[(r, k)] * sc[k]);
-    let f = xs.transpose() * &s_inv * &xs;
+    let f = xs.transpose() * s_inv * &xs;
     if let Ok(inv) = f.pseudo_inverse(1e-12) {
         for (k, &t) in cols.iter().enumerate() {
             out[t] = inv[(k, k)].max(0.0).sqrt() * sc[k];
@@ -689,15 +744,21 @@ fn spd_inverse(s: &DMatrix<f64>) -> Option<DMatrix<f64>> {
 
 /// `e' S^-1 e / tr(S^-1 P S P')` with `e = y - X c` and `P = I - X G` (the expectation of the
 /// numerator when the model is right, to first order): about 1 for a correct model.
-fn gof(prob: &Problem, g: &DMatrix<f64>, s: &DMatrix<f64>, model: &DVector<f64>) -> f64 {
+fn gof(
+    prob: &Problem,
+    g: &DMatrix<f64>,
+    s: &DMatrix<f64>,
+    s_inv: Option<&DMatrix<f64>>,
+    model: &DVector<f64>,
+) -> f64 {
     let j = prob.y.len();
-    let Some(s_inv) = spd_inverse(s) else {
+    let Some(s_inv) = s_inv else {
         return f64::NAN;
     };
     let e = &prob.y - model;
-    let num = (e.transpose() * &s_inv * &e)[0];
+    let num = (e.transpose() * s_inv * &e)[0];
     let p = DMatrix::<f64>::identity(j, j) - &prob.x * g;
-    let den = (&s_inv * &p * s * p.transpose()).trace();
+    let den = (s_inv * &p * s * p.transpose()).trace();
     if den > 1e-9 {
         num / den
     } else {

@@ -1,9 +1,10 @@
-//! The noise model: the five-term Allan-variance model (THEORY.md section 2), its fit and
-//! run-to-run aggregation. Works on curves only; never sees samples.
+//! The noise model: the five-term Allan-variance model (THEORY.md section 2), its fit, run-to-run
+//! aggregation, datasheet units and limits. Works on curves only; never sees samples.
 
 pub mod aggregate;
 pub mod avar_cov;
 pub mod fit;
+pub mod limits;
 pub mod nnls;
 pub mod terms;
 pub mod units;

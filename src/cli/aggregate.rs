@@ -1,0 +1,118 @@
+//! `aggregate`: run-to-run statistics (the seed paper's table 2) from the JSON lines `analyze`
+//! wrote, one file per run. The statistics themselves are [`crate::model::aggregate`]'s.
+//!
+//! From each file the final `fit` record of each channel is taken (`"final": true`; a file cut
+//! short without one falls back to the channel's last `fit` record, with a warning). A file that
+//! holds several runs (`analyze A B C` writes a `run` index into each record) counts as those
+//! runs.
+
+use std::path::Path;
+
+use anyhow::Result;
+
+use super::{read_json_lines, usage, AggregateArgs};
+use crate::model::aggregate::{aggregate_channels, CoefAggregate, RunCoefs};
+use crate::sink::json::JsonLines;
+use crate::sink::records::AggregateRecord;
+
+pub fn run(a: &AggregateArgs) -> Result<()> {
+    let mut runs: Vec<Vec<RunCoefs>> = Vec::new();
+    for path in &a.inputs {
+        if !path.is_file() {
+            return Err(anyhow::Error::new(crate::error::UsageError::Input {
+                file: path.clone(),
+                line: 0,
+                problem: "cannot open: no such file".into(),
+            }));
+        }
+        let found = runs_of_file(path)?;
+        if found.is_empty() {
+            return Err(usage(format!(
+                "{}: no `fit` record (was it written by `allanscope analyze` with a fit?)",
+                path.display()
+            )));
+        }
+        runs.extend(found);
+    }
+    let mut sink = match &a.out {
+        Some(p) => {
+            let f = std::fs::File::create(p)
+                .map_err(|e| anyhow::anyhow!("cannot create output {}: {e}", p.display()))?;
+            JsonLines::new(Box::new(std::io::BufWriter::new(f)))
+        }
+        None => JsonLines::stdout(),
+    };
+    for agg in aggregate_channels(&runs) {
+        sink.write(&record(&agg))?;
+    }
+    sink.flush()?;
+    Ok(())
+}
+
+/// The `aggregate` record of one coefficient.
+pub fn record(a: &CoefAggregate) -> AggregateRecord {
+    let s = a.stats.as_ref();
+    AggregateRecord {
+        kind: "aggregate".into(),
+        channel: a.channel.clone(),
+        unit: a.unit.clone(),
+        coef: a.coef.into(),
+        n: s.map_or(0, |s| s.n),
+        mean: s.map(|s| s.mean),
+        sd: s.and_then(|s| s.sd),
+        ci_t: s.and_then(|s| s.ci_t),
+        ci_z: s.and_then(|s| s.ci_z),
+    }
+}
+
+/// One run's channels as read so far: (is the record final, its coefficients).
+type RunSoFar = (Option<u64>, Vec<(bool, RunCoefs)>);
+
+/// The runs in one file: per run index (absent: one run), each channel's final fit.
+fn runs_of_file(path: &Path) -> Result<Vec<Vec<RunCoefs>>> {
+    let records = read_json_lines(path)?;
+    // (run index, channel) -> (is final, coefficients), the latest record winning among equals.
+    let mut runs: Vec<RunSoFar> = Vec::new();
+    for rec in &records {
+        let Some(coefs) = RunCoefs::from_fit_record(rec) else {
+            continue;
+        };
+        let run = rec.get("run").and_then(|r| r.as_u64());
+        let is_final = rec.get("final").and_then(|f| f.as_bool()).unwrap_or(false);
+        let idx = match runs.iter().position(|(r, _)| *r == run) {
+            Some(i) => i,
+            None => {
+                runs.push((run, Vec::new()));
+                runs.len() - 1
+            }
+        };
+        let chans = &mut runs[idx].1;
+        match chans.iter_mut().find(|(_, c)| c.channel == coefs.channel) {
+            Some(slot) => {
+                if is_final || !slot.0 {
+                    *slot = (is_final, coefs);
+                }
+            }
+            None => chans.push((is_final, coefs)),
+        }
+    }
+    Ok(runs
+        .into_iter()
+        .map(|(run, chans)| {
+            chans
+                .into_iter()
+                .map(|(is_final, c)| {
+                    if !is_final {
+                        tracing::warn!(
+                            "{}{}: channel {}: no final fit record, using the last one",
+                            path.display(),
+                            run.map(|r| format!(" run {r}")).unwrap_or_default(),
+                            c.channel
+                        );
+                    }
+                    c
+                })
+                .collect()
+        })
+        .collect())
+}

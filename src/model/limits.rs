@@ -1,0 +1,510 @@
+//! Datasheet limits on the fitted coefficients, judged with their uncertainty.
+//!
+//! A stand config lists limits as an array of tables, each deserializing into a [`LimitSpec`]:
+//!
+//! ```toml
+//! [[limits]]
+//! channel = "g*"             # a channel name, or a pattern with `*` and `?`
+//! coef = "N"                 # Q, N, B, K or R
+//! max = 0.3                  # an upper bound (`min` for a lower one; both may be given)
+//! unit = "arcsec/sqrt(s)"    # the unit the bound is stated in; "native" (the default) is the
+//!                            # coefficient's own unit (THEORY.md section 2 table)
+//!
+//! [[limits]]
+//! channel = "g4"
+//! coef = "N"
+//! max = 0.005
+//! unit = "deg/sqrt(h)"       # the same kind of bound in datasheet units
+//!
+//! [[limits]]
+//! channel = "a4"
+//! coef = "B"
+//! over = "runs_sd"           # run-to-run: the sd of B over the runs (SEED.md: <= 5e-4 m/s^2)
+//! max = 5e-4
+//! unit = "m/s^2"
+//! ```
+//!
+//! `over` is `"run"` (default: each run's fitted coefficient), `"runs_sd"` (the sample standard
+//! deviation over runs) or `"runs_mean"` (the mean over runs). Units are products and quotients
+//! of `arcsec`, `deg`, `rad`, `mrad`, `urad`, `m`, `mm`, `s`, `min`, `h`, `g`, `mg`, `ug` (also
+//! written `micro-g`), with `^n` powers and `sqrt(...)`, e.g. `deg/h/sqrt(h)`, `m/s/sqrt(h)`,
+//! `micro-g`. A bound in a unit whose dimension is not the coefficient's (given the channel's
+//! unit) is reported `invalid`.
+//!
+//! # The rule
+//!
+//! Each value comes with its 95% interval `[lo, hi]` (the fit's interval for a run; for
+//! `runs_mean` the Student interval of the mean; for `runs_sd` the chi-squared interval of the
+//! sd with `n - 1` degrees of freedom). For a `max` limit: **pass** when `hi <= max`, **fail**
+//! when `lo > max`, **undecided** when the interval straddles the limit; mirrored for `min`. Each
+//! decision is one-sided at 97.5% confidence. A coefficient the fit did not determine still has
+//! an interval (from zero up to its upper bound), so a `max` limit can pass on it. Overall:
+//! `pass = false` if any limit fails, `true` if all pass, `null` (not decided) otherwise.
+
+use serde::{Deserialize, Serialize};
+use statrs::distribution::{ChiSquared, ContinuousCDF};
+
+use crate::model::aggregate::CoefAggregate;
+use crate::model::fit::FitResult;
+use crate::model::terms::TERM_NAMES;
+
+/// One coefficient of the five-term model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Coef {
+    Q,
+    N,
+    B,
+    K,
+    R,
+}
+
+impl Coef {
+    /// Index in Q, N, B, K, R order.
+    pub fn index(self) -> usize {
+        match self {
+            Coef::Q => 0,
+            Coef::N => 1,
+            Coef::B => 2,
+            Coef::K => 3,
+            Coef::R => 4,
+        }
+    }
+
+    /// Power of time the coefficient carries beyond the channel's unit: Q u, N u/sqrt(s),
+    /// B u/s, K u/s/sqrt(s), R u/s^2 (THEORY.md section 2).
+    fn time_exponent(self) -> f64 {
+        -0.5 * self.index() as f64
+    }
+}
+
+/// What a limit applies to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Scope {
+    /// Each run's fitted coefficient.
+    #[default]
+    Run,
+    /// The sample standard deviation of the coefficient over runs.
+    RunsSd,
+    /// The mean of the coefficient over runs.
+    RunsMean,
+}
+
+/// One `[[limits]]` table of a stand config (module doc).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LimitSpec {
+    /// Channel name or pattern (`*` any run of characters, `?` one character).
+    pub channel: String,
+    pub coef: Coef,
+    #[serde(default)]
+    pub max: Option<f64>,
+    #[serde(default)]
+    pub min: Option<f64>,
+    /// The unit of `max`/`min`; `None` or "native": the coefficient's native unit.
+    #[serde(default)]
+    pub unit: Option<String>,
+    #[serde(default)]
+    pub over: Scope,
+}
+
+/// The outcome of one bound.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Verdict {
+    Pass,
+    Fail,
+    Undecided,
+    /// The limit could not be judged (no such channel, no data, a unit of the wrong dimension).
+    Invalid,
+}
+
+/// One judged bound, as the `summary` record's `limits` field lists it. `limit`, `value`, `lo`
+/// and `hi` are in `unit`, the unit the bound was stated in.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LimitResult {
+    pub channel: String,
+    pub coef: Coef,
+    pub over: Scope,
+    /// "max" or "min".
+    pub bound: String,
+    pub limit: f64,
+    pub unit: String,
+    pub value: Option<f64>,
+    pub lo: Option<f64>,
+    pub hi: Option<f64>,
+    pub verdict: Verdict,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub note: Option<String>,
+}
+
+/// All judged bounds and the overall outcome.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Judgement {
+    pub results: Vec<LimitResult>,
+    /// `Some(false)` if any bound fails, `Some(true)` if all pass, `None` otherwise (and when
+    /// there is no bound).
+    pub pass: Option<bool>,
+}
+
+impl Judgement {
+    fn from_results(results: Vec<LimitResult>) -> Judgement {
+        let pass = if results.is_empty() {
+            None
+        } else if results.iter().any(|r| r.verdict == Verdict::Fail) {
+            Some(false)
+        } else if results.iter().all(|r| r.verdict == Verdict::Pass) {
+            Some(true)
+        } else {
+            None
+        };
+        Judgement { results, pass }
+    }
+
+    /// The `summary` record's `limits` field.
+    pub fn limits_json(&self) -> Vec<serde_json::Value> {
+        self.results
+            .iter()
+            .filter_map(|r| serde_json::to_value(r).ok())
+            .collect()
+    }
+
+    /// Both judgements together (e.g. per-run and run-to-run limits).
+    pub fn merge(self, other: Judgement) -> Judgement {
+        let mut r = self.results;
+        r.extend(other.results);
+        Judgement::from_results(r)
+    }
+}
+
+/// `name` matches `pattern` (`*` any run, `?` one character, otherwise literal).
+pub fn channel_matches(pattern: &str, name: &str) -> bool {
+    fn rec(p: &[char], n: &[char]) -> bool {
+        match p.split_first() {
+            None => n.is_empty(),
+            Some(('*', rest)) => (0..=n.len()).any(|k| rec(rest, &n[k..])),
+            Some(('?', rest)) => !n.is_empty() && rec(rest, &n[1..]),
+            Some((c, rest)) => n.first() == Some(c) && rec(rest, &n[1..]),
+        }
+    }
+    let p: Vec<char> = pattern.chars().collect();
+    let n: Vec<char> = name.chars().collect();
+    rec(&p, &n)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Units
+
+/// A unit as a factor to (arcsec, m, s) and the exponents of angle, length and time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Unit {
+    pub factor: f64,
+    pub angle: f64,
+    pub length: f64,
+    pub time: f64,
+}
+
+impl Unit {
+    const ONE: Unit = Unit {
+        factor: 1.0,
+        angle: 0.0,
+        length: 0.0,
+        time: 0.0,
+    };
+
+    fn pow(self, e: f64) -> Unit {
+        Unit {
+            factor: self.factor.powf(e),
+            angle: self.angle * e,
+            length: self.length * e,
+            time: self.time * e,
+        }
+    }
+
+    fn mul(self, o: Unit) -> Unit {
+        Unit {
+            factor: self.factor * o.factor,
+            angle: self.angle + o.angle,
+            length: self.length + o.length,
+            time: self.time + o.time,
+        }
+    }
+
+    fn same_dimension(&self, o: &Unit) -> bool {
+        let eq = |a: f64, b: f64| (a - b).abs() < 1e-9;
+        eq(self.angle, o.angle) && eq(self.length, o.length) && eq(self.time, o.time)
+    }
+}
+
+/// Arcseconds per radian.
+const ARCSEC_PER_RAD: f64 = 180.0 * 3600.0 / std::f64::consts::PI;
+/// Standard gravity, m/s^2.
+const G0: f64 = crate::model::units::G0_M_S2;
+
+fn atom(name: &str) -> Option<Unit> {
+    let u = |factor, angle, length, time| Unit {
+        factor,
+        angle,
+        length,
+        time,
+    };
+    Some(match name {
+        "1" => Unit::ONE,
+        "arcsec" => u(1.0, 1.0, 0.0, 0.0),
+        "deg" => u(3600.0, 1.0, 0.0, 0.0),
+        "rad" => u(ARCSEC_PER_RAD, 1.0, 0.0, 0.0),
+        "mrad" => u(ARCSEC_PER_RAD * 1e-3, 1.0, 0.0, 0.0),
+        "urad" => u(ARCSEC_PER_RAD * 1e-6, 1.0, 0.0, 0.0),
+        "m" => u(1.0, 0.0, 1.0, 0.0),
+        "mm" => u(1e-3, 0.0, 1.0, 0.0),
+        "s" => u(1.0, 0.0, 0.0, 1.0),
+        "min" => u(60.0, 0.0, 0.0, 1.0),
+        "h" | "hr" => u(3600.0, 0.0, 0.0, 1.0),
+        "g" => u(G0, 0.0, 1.0, -2.0),
+        "mg" => u(G0 * 1e-3, 0.0, 1.0, -2.0),
+        "ug" => u(G0 * 1e-6, 0.0, 1.0, -2.0),
+        _ => return None,
+    })
+}
+
+/// Parses a unit expression (module doc). `None` when it is not one.
+pub fn parse_unit(text: &str) -> Option<Unit> {
+    let t = text
+        .trim()
+        .to_lowercase()
+        .replace("micro-", "u")
+        .replace('µ', "u")
+        .replace(' ', "");
+    if t.is_empty() {
+        return None;
+    }
+    let mut out = Unit::ONE;
+    for (i, tok) in t.split('/').enumerate() {
+        let (inner, mut e) = match tok.strip_prefix("sqrt(").and_then(|r| r.strip_suffix(')')) {
+            Some(x) => (x, 0.5),
+            None => (tok, 1.0),
+        };
+        let (base, pow) = match inner.split_once('^') {
+            Some((b, p)) => (b, p.parse::<f64>().ok().filter(|p| p.is_finite())?),
+            None => (inner, 1.0),
+        };
+        e *= pow;
+        if i > 0 {
+            e = -e;
+        }
+        out = out.mul(atom(base)?.pow(e));
+    }
+    Some(out)
+}
+
+/// Factor `f` such that a coefficient in its native unit times `f` is in `limit_unit`, for a
+/// channel in `channel_unit`; `Err` says why not.
+pub fn conversion(channel_unit: &str, coef: Coef, limit_unit: Option<&str>) -> Result<f64, String> {
+    let lu = match limit_unit {
+        None => return Ok(1.0),
+        Some(u) if u.trim() == "native" => return Ok(1.0),
+        Some(u) => u,
+    };
+    let limit = parse_unit(lu).ok_or_else(|| format!("unknown unit `{lu}`"))?;
+    let chan = parse_unit(channel_unit).ok_or_else(|| {
+        format!("channel unit `{channel_unit}` is not a known unit: state the limit as native")
+    })?;
+    let native = chan.mul(atom("s").map_or(Unit::ONE, |s| s.pow(coef.time_exponent())));
+    if !native.same_dimension(&limit) {
+        return Err(format!(
+            "`{lu}` is not a unit of {:?} for a channel in {channel_unit}",
+            coef
+        ));
+    }
+    Ok(native.factor / limit.factor)
+}
+
+impl LimitSpec {
+    /// Problems a config loader should report (key and what is wrong), before any data.
+    pub fn problems(&self) -> Vec<(&'static str, String)> {
+        let mut p = Vec::new();
+        if self.max.is_none() && self.min.is_none() {
+            p.push(("max", "a limit needs `max` or `min`".to_string()));
+        }
+        for (key, v) in [("max", self.max), ("min", self.min)] {
+            if let Some(v) = v {
+                if !v.is_finite() {
+                    p.push((key, format!("{v} is not a finite number")));
+                }
+            }
+        }
+        if let Some(u) = &self.unit {
+            if u.trim() != "native" && parse_unit(u).is_none() {
+                p.push(("unit", format!("unknown unit `{u}`")));
+            }
+        }
+        if self.channel.is_empty() {
+            p.push(("channel", "empty channel name".to_string()));
+        }
+        p
+    }
+
+    fn unit_label(&self) -> String {
+        self.unit.clone().unwrap_or_else(|| "native".into())
+    }
+
+    fn bounds(&self) -> Vec<(&'static str, f64)> {
+        let mut b = Vec::new();
+        if let Some(v) = self.max {
+            b.push(("max", v));
+        }
+        if let Some(v) = self.min {
+            b.push(("min", v));
+        }
+        b
+    }
+
+    fn result(&self, channel: &str, bound: &str, limit: f64) -> LimitResult {
+        LimitResult {
+            channel: channel.into(),
+            coef: self.coef,
+            over: self.over,
+            bound: bound.into(),
+            limit,
+            unit: self.unit_label(),
+            value: None,
+            lo: None,
+            hi: None,
+            verdict: Verdict::Invalid,
+            note: None,
+        }
+    }
+}
+
+/// The rule of the module doc for one bound.
+pub fn decide(bound: &str, limit: f64, lo: f64, hi: f64) -> Verdict {
+    if !(lo.is_finite() && hi.is_finite()) {
+        return Verdict::Undecided;
+    }
+    match bound {
+        "max" if hi <= limit => Verdict::Pass,
+        "max" if lo > limit => Verdict::Fail,
+        "min" if lo >= limit => Verdict::Pass,
+        "min" if hi < limit => Verdict::Fail,
+        _ => Verdict::Undecided,
+    }
+}
+
+/// One channel's fit as the judge needs it.
+#[derive(Debug, Clone, Copy)]
+pub struct ChannelFit<'a> {
+    pub channel: &'a str,
+    pub unit: &'a str,
+    /// `None` when no fit could be made.
+    pub fit: Option<&'a FitResult>,
+}
+
+/// Judges the per-run limits (`over = "run"`) on one run's fits; the others are left to
+/// [`judge_runs`].
+pub fn judge(specs: &[LimitSpec], fits: &[ChannelFit]) -> Judgement {
+    let mut out = Vec::new();
+    for spec in specs.iter().filter(|s| s.over == Scope::Run) {
+        let matched: Vec<&ChannelFit> = fits
+            .iter()
+            .filter(|f| channel_matches(&spec.channel, f.channel))
+            .collect();
+        for (bound, limit) in spec.bounds() {
+            if matched.is_empty() {
+                let mut r = spec.result(&spec.channel, bound, limit);
+                r.note = Some("no channel matches".into());
+                out.push(r);
+            }
+            for f in &matched {
+                let mut r = spec.result(f.channel, bound, limit);
+                let factor = match conversion(f.unit, spec.coef, spec.unit.as_deref()) {
+                    Ok(x) => x,
+                    Err(e) => {
+                        r.note = Some(e);
+                        out.push(r);
+                        continue;
+                    }
+                };
+                let Some(fit) = f.fit else {
+                    r.note = Some("no fit".into());
+                    out.push(r);
+                    continue;
+                };
+                let e = &fit.coef[spec.coef.index()];
+                r.value = e.determined.then_some(e.value * factor);
+                r.lo = Some(e.lo * factor);
+                r.hi = Some(e.hi * factor);
+                r.verdict = decide(bound, limit, e.lo * factor, e.hi * factor);
+                if !e.determined {
+                    r.note = Some("coefficient not determined; judged on its interval".into());
+                }
+                out.push(r);
+            }
+        }
+    }
+    Judgement::from_results(out)
+}
+
+/// 95% interval of a standard deviation `sd` from `n` samples: `sd sqrt((n-1) / chi2_{q}(n-1))`
+/// at `q = 0.975, 0.025` (THEORY.md section 4's form).
+pub fn sd_interval(sd: f64, n: usize) -> Option<(f64, f64)> {
+    if n < 2 {
+        return None;
+    }
+    let k = (n - 1) as f64;
+    let d = ChiSquared::new(k).ok()?;
+    Some((
+        sd * (k / d.inverse_cdf(0.975)).sqrt(),
+        sd * (k / d.inverse_cdf(0.025)).sqrt(),
+    ))
+}
+
+/// Judges the run-to-run limits (`over = "runs_sd"` or `"runs_mean"`) on the aggregate of
+/// several runs.
+pub fn judge_runs(specs: &[LimitSpec], aggregates: &[CoefAggregate]) -> Judgement {
+    let mut out = Vec::new();
+    for spec in specs.iter().filter(|s| s.over != Scope::Run) {
+        let name = TERM_NAMES[spec.coef.index()];
+        let matched: Vec<&CoefAggregate> = aggregates
+            .iter()
+            .filter(|a| a.coef == name && channel_matches(&spec.channel, &a.channel))
+            .collect();
+        for (bound, limit) in spec.bounds() {
+            if matched.is_empty() {
+                let mut r = spec.result(&spec.channel, bound, limit);
+                r.note = Some("no channel matches".into());
+                out.push(r);
+            }
+            for a in &matched {
+                let mut r = spec.result(&a.channel, bound, limit);
+                let factor = match conversion(&a.unit, spec.coef, spec.unit.as_deref()) {
+                    Ok(x) => x,
+                    Err(e) => {
+                        r.note = Some(e);
+                        out.push(r);
+                        continue;
+                    }
+                };
+                let Some(s) = &a.stats else {
+                    r.note = Some("not determined in any run".into());
+                    out.push(r);
+                    continue;
+                };
+                let (value, interval) = match spec.over {
+                    Scope::RunsSd => (s.sd, s.sd.and_then(|sd| sd_interval(sd, s.n))),
+                    _ => (Some(s.mean), s.ci_t.map(|c| (c[0], c[1]))),
+                };
+                r.value = value.map(|v| v * factor);
+                match interval {
+                    Some((lo, hi)) => {
+                        r.lo = Some(lo * factor);
+                        r.hi = Some(hi * factor);
+                        r.verdict = decide(bound, limit, lo * factor, hi * factor);
+                    }
+                    None => r.note = Some(format!("{} run(s): no interval", s.n)),
+                }
+                out.push(r);
+            }
+        }
+    }
+    Judgement::from_results(out)
+}
