@@ -13,10 +13,9 @@ use crate::analysis::{AnalysisOptions, ChannelSetup, RunAnalysis};
 use crate::frame::{Decoder, FrameDescriptor};
 use crate::input::text::{TextReader, BATCH_ROWS};
 use crate::input::Chunk;
-use crate::model::aggregate::run_stats;
-use crate::model::terms::TERM_NAMES;
+use crate::model::aggregate::{aggregate_channels, RunCoefs};
 use crate::sink::json::JsonLines;
-use crate::sink::records::{AggregateRecord, HealthRecord, Record};
+use crate::sink::records::{HealthRecord, Record};
 
 /// Capacity of the channel between the reader thread and the analysis: a few chunks, so
 /// reading runs ahead of the analysis by at most that much memory.
@@ -213,35 +212,16 @@ fn finish_run(
 pub fn aggregate_records(
     runs: &[Vec<(String, String, Option<crate::model::fit::FitResult>)>],
 ) -> Vec<Record> {
-    let mut out = Vec::new();
-    let Some(first) = runs.first() else {
-        return out;
-    };
-    for (ci, (name, unit, _)) in first.iter().enumerate() {
-        for (ti, term) in TERM_NAMES.iter().enumerate() {
-            let values: Vec<Option<f64>> = runs
-                .iter()
-                .map(|r| {
-                    r.get(ci)
-                        .filter(|(n, _, _)| n == name)
-                        .and_then(|(_, _, f)| f.as_ref())
-                        .filter(|f| f.coef[ti].determined)
-                        .map(|f| f.coef[ti].value)
-                })
-                .collect();
-            let s = run_stats(&values);
-            out.push(Record::Aggregate(AggregateRecord {
-                kind: "aggregate".into(),
-                channel: name.clone(),
-                unit: unit.clone(),
-                coef: (*term).into(),
-                n: s.as_ref().map_or(0, |s| s.n),
-                mean: s.as_ref().map(|s| s.mean),
-                sd: s.as_ref().and_then(|s| s.sd),
-                ci_t: s.as_ref().and_then(|s| s.ci_t),
-                ci_z: s.as_ref().and_then(|s| s.ci_z),
-            }));
-        }
-    }
-    out
+    let coefs: Vec<Vec<RunCoefs>> = runs
+        .iter()
+        .map(|run| {
+            run.iter()
+                .filter_map(|(name, unit, fit)| Some(RunCoefs::from_fit(name, unit, fit.as_ref()?)))
+                .collect()
+        })
+        .collect();
+    aggregate_channels(&coefs)
+        .iter()
+        .map(|a| Record::Aggregate(super::aggregate::record(a)))
+        .collect()
 }
