@@ -279,6 +279,17 @@ impl StandConfig {
                     }
                 };
                 let kind = ck.string(s, "source", "kind");
+                let baud = match s.get("baud") {
+                    None => Some(DEFAULT_BAUD),
+                    Some(toml::Value::Integer(b)) if *b > 0 && *b <= 20_000_000 => Some(*b as u32),
+                    Some(v) => {
+                        ck.bad(
+                            "source.baud",
+                            format!("must be a positive integer baud rate, not {}", show(v)),
+                        );
+                        None
+                    }
+                };
                 let path = ck.string(s, "source", "path");
                 let needs = |ck: &mut Check, key: &str, what: &str| {
                     if !s.contains_key(key) {
@@ -295,22 +306,6 @@ impl StandConfig {
                         needs(&mut ck, "path", "the serial port, e.g. \"/dev/ttyUSB0\"");
                         only_for(&mut ck, "address", "\"udp\"");
                         only_for(&mut ck, "pace", "\"file\" or \"stdin\"");
-                        let baud = match s.get("baud") {
-                            None => Some(DEFAULT_BAUD),
-                            Some(toml::Value::Integer(b)) if *b > 0 && *b <= 20_000_000 => {
-                                Some(*b as u32)
-                            }
-                            Some(v) => {
-                                ck.bad(
-                                    "source.baud",
-                                    format!(
-                                        "must be a positive integer baud rate, not {}",
-                                        show(v)
-                                    ),
-                                );
-                                None
-                            }
-                        };
                         if let (Some(p), Some(baud)) = (path, baud) {
                             source = Some(SourceSpec::Serial {
                                 path: p.into(),
