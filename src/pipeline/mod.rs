@@ -41,7 +41,7 @@ use crate::input::Chunk;
 use crate::sink::records::{HealthRecord, Record};
 use crate::source::{Capture, Progress, SourceContext, SourceSpec};
 use decode::DecodeStage;
-pub use writer::{RecordQueue, RecordWriter, WriterStats};
+pub use writer::{RecordQueue, RecordWriter, WriterStats, RECORD_QUEUE};
 
 /// Capacity of the channel from the decode (or text reader) thread to the analysis, in
 /// chunks. A replayed chunk is one 64 KiB read (about 1560 siu8 frames, 300 KB decoded), so
