@@ -3,7 +3,9 @@
 //!
 //! The built binary listens on a loopback UDP port; the test sends the first 10 s of the siu8
 //! fixture (2,500 frames), waits until an interim record shows all of it consumed
-//! (`t_data` = 2,500 x 4 ms = 10 s), then sends SIGTERM with the `kill` command.
+//! (`t_data` = 2,500 x 4 ms = 10 s), then sends SIGTERM with the `kill` command. With
+//! `--capture FILE` the listener also writes every byte it received: FILE must be the bytes
+//! sent.
 
 mod pipeline_common;
 
@@ -23,6 +25,8 @@ const TIMEOUT: Duration = Duration::from_secs(30);
 #[test]
 fn sigterm_writes_final_records_and_exits_0() {
     let port = free_udp_port();
+    let capture =
+        std::env::temp_dir().join(format!("allanscope-signal-{}.siu8", std::process::id()));
     let mut child = Command::new(env!("CARGO_BIN_EXE_allanscope"))
         .args([
             "listen",
@@ -32,6 +36,8 @@ fn sigterm_writes_final_records_and_exits_0() {
             "siu8",
             "--every",
             "0.2",
+            "--capture",
+            capture.to_str().expect("utf-8 path"),
         ])
         .env("ALLANSCOPE_LOG", "info")
         .stdout(Stdio::piped())
@@ -105,6 +111,14 @@ fn sigterm_writes_final_records_and_exits_0() {
     assert_eq!(h["missing"], 0);
     let s = last_of(&recs, "summary");
     assert_eq!(s["t_data"], T_DATA_S);
+    // Every received byte is in the capture, in order.
+    let captured = std::fs::read(&capture).expect("capture file");
+    let _ = std::fs::remove_file(&capture);
+    assert_eq!(captured.len(), FRAMES * FRAME_LEN);
+    assert!(
+        captured == bytes[..FRAMES * FRAME_LEN],
+        "capture differs from the bytes sent"
+    );
     // The summary is the last line.
     assert_eq!(
         recs.last().map(|r| r["type"].clone()),
