@@ -106,7 +106,6 @@ pub fn run_frames(
     ctl: &RunControl,
 ) -> Result<RunOutcome> {
     let (src_tx, mut src_rx) = tokio::sync::mpsc::channel(spec.queue_capacity());
-    let (chunk_tx, chunk_rx) = crossbeam_channel::bounded::<Chunk>(CHUNK_QUEUE);
     // Chunks come back from the analysis to be cleared and reused here: the decoded frames are
     // freed by the thread that allocated them, and the chunk vectors are not reallocated
     // (profiled: fewer page faults and allocator calls than a fresh vector per chunk).
@@ -114,6 +113,14 @@ pub fn run_frames(
     let live = spec.is_live();
     let udp = matches!(spec, SourceSpec::Udp { .. });
     let mut stage = DecodeStage::new(desc.clone(), live);
+    let parts = if live { 1 } else { replay_threads() };
+    let (chunk_tx, workers) = spawn_analysis(
+        analysis,
+        parts,
+        Some(recycle_tx),
+        queue.clone(),
+        ctl.every_wall,
+    )?;
     let progress = ctl.progress.clone();
     let decode = std::thread::Builder::new()
         .name("allanscope-decode".into())
@@ -132,7 +139,7 @@ pub fn run_frames(
                 progress.frames.fetch_add(n, Ordering::Relaxed);
                 if !events.is_empty() && (events.len() >= MAX_CHUNK_EVENTS || src_rx.is_empty()) {
                     let chunk = Chunk::Frames(std::mem::replace(&mut events, fresh()));
-                    if chunk_tx.send(chunk).is_err() {
+                    if !chunk_tx.send(chunk) {
                         open = false;
                         break;
                     }
@@ -141,18 +148,11 @@ pub fn run_frames(
             let n = stage.finish(&mut events);
             progress.frames.fetch_add(n, Ordering::Relaxed);
             if open && !events.is_empty() {
-                let _ = chunk_tx.send(Chunk::Frames(events));
+                chunk_tx.send(Chunk::Frames(events));
             }
             stage
         })
         .context("cannot start the decode thread")?;
-    let worker = spawn_analysis(
-        analysis,
-        chunk_rx,
-        Some(recycle_tx),
-        queue.clone(),
-        ctl.every_wall,
-    )?;
     let source_result = drive(ctl, {
         let ctl = ctl.clone();
         async move {
@@ -172,9 +172,7 @@ pub fn run_frames(
     let stage = decode
         .join()
         .map_err(|_| anyhow::anyhow!("the decode thread panicked"))?;
-    let mut analysis = worker
-        .join()
-        .map_err(|_| anyhow::anyhow!("the analysis thread panicked"))?;
+    let mut analysis = join_analysis(workers)?;
     source_result?;
     let health = stage.health();
     let mut record = health_record(&health, analysis.summary().run);
@@ -213,8 +211,7 @@ pub fn run_text<R: BufRead + Send + 'static>(
     ctl: &RunControl,
 ) -> Result<RunOutcome> {
     let width = reader.names().len();
-    let (tx, rx) = crossbeam_channel::bounded::<Chunk>(CHUNK_QUEUE);
-    let worker = spawn_analysis(analysis, rx, None, queue.clone(), ctl.every_wall)?;
+    let (tx, workers) = spawn_analysis(analysis, 1, None, queue.clone(), ctl.every_wall)?;
     let shutdown = ctl.shutdown.clone();
     let read = move || -> Result<u64> {
         let mut reader = reader;
@@ -225,7 +222,7 @@ pub fn run_text<R: BufRead + Send + 'static>(
             let n = reader
                 .read_rows(&mut values, batch)
                 .with_context(|| format!("reading {}", path.display()))?;
-            if n == 0 || tx.send(Chunk::Rows { values, width }).is_err() {
+            if n == 0 || !tx.send(Chunk::Rows { values, width }) {
                 break;
             }
             if let Some(r) = rows_per_s {
@@ -240,9 +237,7 @@ pub fn run_text<R: BufRead + Send + 'static>(
             .await
             .map_err(|_| anyhow::anyhow!("the reader thread panicked"))?
     });
-    let mut analysis = worker
-        .join()
-        .map_err(|_| anyhow::anyhow!("the analysis thread panicked"))?;
+    let mut analysis = join_analysis(workers)?;
     analysis.add_bad_rows(result?);
     finish_records(&mut analysis, None, queue);
     Ok(RunOutcome {
@@ -251,40 +246,94 @@ pub fn run_text<R: BufRead + Send + 'static>(
     })
 }
 
-/// The analysis thread: chunks in, interim records out (on the data-second schedule of the
-/// options, or every `every_wall` of wall time). Consumed chunks go back on `recycle`.
+/// Analysis threads for a replay: the decode thread is the third busy thread on the
+/// project's 2-core machine, and the accumulators are the critical path (BENCHMARKS.md, "Live
+/// pipeline"): two analysis threads, each with half the channels, cut the replay's wall time.
+/// Live sources use one (their rate is low, and fewer threads wake per frame).
+pub const REPLAY_ANALYSIS_THREADS: usize = 2;
+
+/// [`REPLAY_ANALYSIS_THREADS`], at most the cores available; `ALLANSCOPE_ANALYSIS_THREADS`
+/// overrides it (for measurements).
+fn replay_threads() -> usize {
+    if let Some(n) = std::env::var("ALLANSCOPE_ANALYSIS_THREADS")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+    {
+        return n.max(1);
+    }
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    REPLAY_ANALYSIS_THREADS.min(cores)
+}
+
+/// Hands every chunk to each analysis thread (shared, not copied).
+#[derive(Clone)]
+struct ChunkSender(Vec<crossbeam_channel::Sender<Arc<Chunk>>>);
+
+impl ChunkSender {
+    /// False when the analysis has gone.
+    fn send(&self, c: Chunk) -> bool {
+        let c = Arc::new(c);
+        self.0.iter().all(|tx| tx.send(c.clone()).is_ok())
+    }
+}
+
+/// The analysis threads, `parts` of them, each with consecutive channels of `analysis`: chunks
+/// in, interim records out (on the data-second schedule of the options, or every `every_wall`
+/// of wall time). A consumed chunk goes back on `recycle` from the thread that drops it last.
 fn spawn_analysis(
-    mut analysis: RunAnalysis,
-    rx: crossbeam_channel::Receiver<Chunk>,
+    analysis: RunAnalysis,
+    parts: usize,
     recycle: Option<crossbeam_channel::Sender<Chunk>>,
     queue: RecordQueue,
     every_wall: Option<Duration>,
-) -> Result<std::thread::JoinHandle<RunAnalysis>> {
-    std::thread::Builder::new()
-        .name("allanscope-analysis".into())
-        .spawn(move || {
-            let mut out = Vec::new();
-            let tick = every_wall.map_or_else(crossbeam_channel::never, crossbeam_channel::tick);
-            loop {
-                crossbeam_channel::select! {
-                    recv(rx) -> chunk => match chunk {
-                        Ok(c) => {
-                            analysis.push_chunk(&c, &mut out);
-                            if let Some(r) = &recycle {
-                                let _ = r.try_send(c);
+) -> Result<(ChunkSender, Vec<std::thread::JoinHandle<RunAnalysis>>)> {
+    let mut txs = Vec::new();
+    let mut handles = Vec::new();
+    for mut part in analysis.split(parts) {
+        let (tx, rx) = crossbeam_channel::bounded::<Arc<Chunk>>(CHUNK_QUEUE);
+        txs.push(tx);
+        let (queue, recycle) = (queue.clone(), recycle.clone());
+        let h = std::thread::Builder::new()
+            .name("allanscope-analysis".into())
+            .spawn(move || {
+                let mut out = Vec::new();
+                let tick =
+                    every_wall.map_or_else(crossbeam_channel::never, crossbeam_channel::tick);
+                loop {
+                    crossbeam_channel::select! {
+                        recv(rx) -> chunk => match chunk {
+                            Ok(c) => {
+                                part.push_chunk(&c, &mut out);
+                                if let (Some(r), Ok(c)) = (&recycle, Arc::try_unwrap(c)) {
+                                    let _ = r.try_send(c);
+                                }
                             }
-                        }
-                        Err(_) => break,
-                    },
-                    recv(tick) -> _ => out.extend(analysis.records(false)),
+                            Err(_) => break,
+                        },
+                        recv(tick) -> _ => out.extend(part.records(false)),
+                    }
+                    for r in out.drain(..) {
+                        queue.push_interim(r);
+                    }
                 }
-                for r in out.drain(..) {
-                    queue.push_interim(r);
-                }
-            }
-            analysis
-        })
-        .context("cannot start the analysis thread")
+                part
+            })
+            .context("cannot start an analysis thread")?;
+        handles.push(h);
+    }
+    Ok((ChunkSender(txs), handles))
+}
+
+/// Waits for the analysis threads and puts their channels back together.
+fn join_analysis(handles: Vec<std::thread::JoinHandle<RunAnalysis>>) -> Result<RunAnalysis> {
+    let mut parts = Vec::new();
+    for h in handles {
+        parts.push(
+            h.join()
+                .map_err(|_| anyhow::anyhow!("an analysis thread panicked"))?,
+        );
+    }
+    RunAnalysis::join(parts).ok_or_else(|| anyhow::anyhow!("no analysis thread"))
 }
 
 /// Runs `fut` (the source) on a current-thread runtime here, with SIGINT/SIGTERM and
