@@ -1,5 +1,5 @@
-//! A serial port that disappears and comes back: the outage is recorded as a gap sized by the
-//! frame counter and the wall time together.
+//! A serial port that disappears and comes back (and a UDP stream that goes silent): the outage
+//! is recorded as a gap sized by the frame counter and the wall time together.
 //!
 //! The test plays a KVH 1750 (kvh1750 frames at 1000 Hz, counter modulo 128) in real time into
 //! a pseudo-terminal reached through a symlink, the way a stand reaches a USB adapter through a
@@ -131,4 +131,62 @@ fn outage_longer_than_the_counter_is_sized_by_time() {
     let want = (2 * PHASE_FRAMES as u64 + lost) as f64 / RATE_HZ;
     assert!((t - want).abs() < 1e-9, "t_data {t} != {want}");
     assert_eq!(s["segments"][0], 2);
+}
+
+/// The same rule for a UDP stream that goes silent (the unit's Ethernet link down for a
+/// while): kvh1750 frames at 1000 Hz, one per datagram; the sender stops for 400 ms while the
+/// unit keeps counting, then goes on with the frame due. The silence exceeds half the counter
+/// period (64 ms), so the listener sizes the gap by counter and time: the lost frames exactly.
+#[test]
+fn udp_silence_longer_than_the_counter_is_sized_by_time() {
+    let bytes =
+        std::fs::read(fixtures().join("captures/kvh1750_stand_1min_seed1.kvh1750")).expect("kvh");
+    let desc = FrameDescriptor::load("kvh1750").expect("kvh1750");
+    let port = free_udp_port();
+    let ctl = RunControl::default();
+    let (ctl2, desc2) = (ctl.clone(), desc.clone());
+    let listener = std::thread::spawn(move || {
+        let spec = SourceSpec::Udp {
+            bind: ([127, 0, 0, 1], port).into(),
+        };
+        run_to_records(spec, &desc2, &ctl2).0
+    });
+    std::thread::sleep(Duration::from_millis(200));
+    let sock = std::net::UdpSocket::bind("127.0.0.1:0").expect("bind");
+    let send = |t0: Instant, from: usize, to: usize| {
+        let mut next = from;
+        while next < to {
+            let due = ((t0.elapsed().as_secs_f64() * RATE_HZ) as usize).min(to);
+            while next < due {
+                sock.send_to(
+                    &bytes[next * FRAME_LEN..(next + 1) * FRAME_LEN],
+                    ("127.0.0.1", port),
+                )
+                .expect("send");
+                next += 1;
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    };
+    let t0 = Instant::now();
+    send(t0, 0, PHASE_FRAMES);
+    std::thread::sleep(Duration::from_millis(400));
+    let k1 = (t0.elapsed().as_secs_f64() * RATE_HZ) as usize;
+    send(t0, k1, k1 + PHASE_FRAMES);
+    wait_until("all frames", || {
+        ctl.progress.frames() == 2 * PHASE_FRAMES as u64
+    });
+    ctl.shutdown.cancel();
+    let recs = listener.join().expect("listener");
+    let lost = (k1 - PHASE_FRAMES) as u64;
+    eprintln!("lost {lost} frames in the silence");
+    assert!(
+        lost > 128,
+        "the silence should exceed the counter's modulus"
+    );
+    let h = last_of(&recs, "health");
+    assert_eq!(h["frames"], 2 * PHASE_FRAMES as u64);
+    assert_eq!(h["outages"], 1);
+    assert_eq!(h["missing"], lost);
+    assert_eq!(h["udp_late"], 0);
 }

@@ -118,12 +118,12 @@ impl DecodeStage {
     pub fn push(&mut self, ev: SourceEvent, out: &mut Vec<FrameEvent>) -> u64 {
         match ev {
             SourceEvent::Data { bytes, at } => {
-                self.check_silence(at, out);
+                let n = self.check_silence(at, out);
                 self.decoder.push(&bytes);
-                self.collect(at, out)
+                n + self.collect(at, out)
             }
             SourceEvent::Datagram { bytes, at } => {
-                self.check_silence(at, out);
+                let n = self.check_silence(at, out);
                 match &mut self.reorder {
                     Some(r) => {
                         r.push(&bytes, &mut self.pieces);
@@ -133,7 +133,7 @@ impl DecodeStage {
                     }
                     None => self.decoder.push(&bytes),
                 }
-                self.collect(at, out)
+                n + self.collect(at, out)
             }
             SourceEvent::Idle => {
                 if let Some(r) = &mut self.reorder {
@@ -163,20 +163,31 @@ impl DecodeStage {
     }
 
     /// A live stream silent for longer than half the counter period is an outage.
-    fn check_silence(&mut self, at: Instant, out: &mut Vec<FrameEvent>) {
-        if let Some((_, t)) = self.last_frame.filter(|_| self.live) {
-            if self.pending.is_none()
-                && at.saturating_duration_since(t).as_secs_f64() > self.silence_limit_s
+    /// Returns the good frames released by the restart, if there was one.
+    fn check_silence(&mut self, at: Instant, out: &mut Vec<FrameEvent>) -> u64 {
+        match self.last_frame.filter(|_| self.live) {
+            Some((_, t))
+                if self.pending.is_none()
+                    && at.saturating_duration_since(t).as_secs_f64() > self.silence_limit_s =>
             {
-                self.restart(out);
+                self.restart(out)
             }
+            _ => 0,
         }
     }
 
     /// Ends the current stretch of the stream; the next frame is placed by counter and time.
     fn restart(&mut self, out: &mut Vec<FrameEvent>) -> u64 {
+        if let Some(r) = &mut self.reorder {
+            r.reset(&mut self.pieces);
+            for p in self.pieces.drain(..) {
+                self.decoder.push(&p);
+            }
+        }
         self.decoder.finish();
-        let n = self.collect(Instant::now(), out);
+        // Frames released here arrived before the outage: they keep the time of the last one.
+        let at = self.last_frame.map_or_else(Instant::now, |(_, t)| t);
+        let n = self.collect(at, out);
         add_health(&mut self.retired, self.decoder.health());
         self.decoder = Decoder::new(self.desc.clone());
         if let Some((prev_counter, since)) = self.last_frame {

@@ -137,6 +137,14 @@ impl Reorder {
         }
     }
 
+    /// After an outage: releases everything held and forgets the counter (it may have wrapped
+    /// any number of times), so the next frame anchors the window afresh.
+    pub fn reset(&mut self, out: &mut Vec<Bytes>) {
+        self.flush(out);
+        self.next = None;
+        self.skipped.clear();
+    }
+
     fn frame(&mut self, c: u64, bytes: Bytes, out: &mut Vec<Bytes>) {
         let m = self.modulus;
         let Some(next) = self.next else {
