@@ -261,6 +261,39 @@ impl RunAnalysis {
         }
     }
 
+    /// Splits the run into `parts` runs of consecutive channels (same options and schedule), so
+    /// the pipeline can feed them on separate threads; [`RunAnalysis::join`] puts them back.
+    /// Channels are independent, so the split changes no number.
+    pub fn split(self, parts: usize) -> Vec<RunAnalysis> {
+        let parts = parts.clamp(1, self.channels.len().max(1));
+        let per = self.channels.len().div_ceil(parts).max(1);
+        let mut channels = self.channels.into_iter();
+        let mut out = Vec::with_capacity(parts);
+        for i in 0..parts {
+            out.push(RunAnalysis {
+                input: self.input.clone(),
+                opts: self.opts.clone(),
+                channels: channels.by_ref().take(per).collect(),
+                next_emit_s: self.next_emit_s,
+                bad_rows: if i == 0 { self.bad_rows } else { 0 },
+                started: self.started,
+            });
+        }
+        out
+    }
+
+    /// The inverse of [`RunAnalysis::split`]: the parts' channels in order.
+    pub fn join(parts: Vec<RunAnalysis>) -> Option<RunAnalysis> {
+        let mut it = parts.into_iter();
+        let mut first = it.next()?;
+        for p in it {
+            first.channels.extend(p.channels);
+            first.bad_rows += p.bad_rows;
+            first.next_emit_s = first.next_emit_s.max(p.next_emit_s);
+        }
+        Some(first)
+    }
+
     /// Current curves of one channel (for tests and the diagnosis).
     pub fn curves(&mut self, channel: usize) -> Vec<Curve> {
         let ch = &mut self.channels[channel];

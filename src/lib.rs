@@ -11,6 +11,9 @@
 //!   -> model (terms, fit, aggregate)                      Curve -> Fit
 //!   -> sink (JSON lines)                                  Curve/Fit -> record
 //! sim (noise, effects, writer)                            model file -> capture
+//! source (file, stdin, serial, udp) -> pipeline (decode, analysis and writer threads)
+//!                                                         bytes -> records, live or replayed
+//! stand (the stand config of `run`)                       TOML -> sources, options, limits
 //! ```
 //!
 //! Numerical stages (`allan`, `model`, `sim`) are plain synchronous code: they never know where
@@ -25,5 +28,8 @@ pub mod frame;
 pub mod gap;
 pub mod input;
 pub mod model;
+pub mod pipeline;
 pub mod sim;
 pub mod sink;
+pub mod source;
+pub mod stand;

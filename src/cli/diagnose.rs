@@ -7,7 +7,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 
-use super::{format_and_tau0, open_input, output, usage, DiagnoseArgs};
+use super::{format_and_tau0, open_input, usage, DiagnoseArgs};
 use crate::analysis::InputKind;
 use crate::frame::{Decoder, FrameDescriptor, FrameEvent};
 use crate::gap::{diagnose, holdout_gap, DiagnoseOptions, DiagnosisRecord, GapConfig, GapEvidence};
@@ -140,7 +140,7 @@ fn gather(
 
 pub fn run(a: &DiagnoseArgs) -> Result<()> {
     let d = &a.data;
-    let mut sink = output(d)?;
+    let mut sink = crate::sink::json::JsonLines::new(super::analyze::output_writer(d)?);
     let (desc, tau0) = format_and_tau0(d)?;
     let opts = DiagnoseOptions::default();
     let mut main = gather(&a.input, a, desc.as_ref(), tau0)?;

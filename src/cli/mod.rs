@@ -5,8 +5,10 @@
 mod aggregate;
 mod analyze;
 mod diagnose;
+mod listen;
 mod plot;
 mod report;
+mod run;
 mod simulate;
 
 use std::io::{BufRead, BufReader, Read};
@@ -19,7 +21,6 @@ use crate::allan::accum::{AccumConfig, Overlap, StatSet, TauSpec, DEFAULT_L};
 use crate::analysis::{AnalysisOptions, ChannelSetup, InputKind};
 use crate::error::UsageError;
 use crate::model::fit::{FitMethod, FitOptions};
-use crate::sink::json::JsonLines;
 
 #[derive(Debug, Parser)]
 #[command(
@@ -37,6 +38,11 @@ pub struct Cli {
 pub enum Command {
     /// Replay capture files or text columns through the analysis; each INPUT is one run.
     Analyze(AnalyzeArgs),
+    /// Live from a serial port, a UDP socket or standard input, until SIGINT/SIGTERM or
+    /// --duration; then the final records.
+    Listen(listen::ListenArgs),
+    /// The same, with sources, channels, statistics, outputs and limits from a stand config.
+    Run(run::RunArgs),
     /// Write a capture (frames of a descriptor, or text columns) from a noise model.
     Simulate(SimulateArgs),
     /// The sim-to-real gap of each channel: where, which effect, how much it shrinks.
@@ -139,7 +145,7 @@ pub struct DataArgs {
     /// Statistics to compute (comma-separated: avar, hvar, mvar).
     #[arg(long, value_delimiter = ',', default_value = "avar,hvar,mvar")]
     pub stats: Vec<String>,
-    /// Data-seconds between interim records (replay).
+    /// Seconds between interim records: data-seconds (analyze), wall-seconds (listen, run).
     #[arg(long)]
     pub every: Option<f64>,
     /// Fit method: model (default), paper, slopes, loglog, or none.
@@ -155,6 +161,9 @@ pub struct AnalyzeArgs {
     /// Input files (`-` for standard input); each is one run.
     #[arg(required = true)]
     pub inputs: Vec<String>,
+    /// Replay as fast as possible (`max`) or at the data's own rate (`realtime`).
+    #[arg(long, default_value = "max")]
+    pub pace: String,
     #[command(flatten)]
     pub data: DataArgs,
 }
@@ -193,6 +202,8 @@ where
     })?;
     match cli.command {
         Command::Analyze(a) => analyze::run(&a),
+        Command::Listen(l) => listen::run(&l),
+        Command::Run(r) => run::run(&r),
         Command::Simulate(s) => simulate::run(&s),
         Command::Diagnose(d) => diagnose::run(&d),
         Command::Plot(p) => plot::run(&p),
@@ -358,17 +369,6 @@ pub(crate) fn open_input(input: &str) -> Result<Box<dyn Read + Send>> {
         })?;
         Ok(Box::new(f))
     }
-}
-
-pub(crate) fn output(d: &DataArgs) -> Result<JsonLines> {
-    Ok(match &d.out {
-        Some(p) => {
-            let f = std::fs::File::create(p)
-                .with_context(|| format!("cannot create output {}", p.display()))?;
-            JsonLines::new(Box::new(std::io::BufWriter::new(f)))
-        }
-        None => JsonLines::stdout(),
-    })
 }
 
 pub(crate) fn select_channels(

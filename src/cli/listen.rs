@@ -1,0 +1,94 @@
+//! `listen`: live from a serial port, a UDP socket or standard input, through the pipeline,
+//! until SIGINT/SIGTERM or `--duration`; then the final records.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::Result;
+use clap::{ArgGroup, Args};
+
+use super::analyze::{frame_channels, output_writer};
+use super::{analysis_options, parse_duration_s, select_channels, usage, DataArgs};
+use crate::analysis::RunAnalysis;
+use crate::frame::FrameDescriptor;
+use crate::pipeline::{RecordWriter, RunControl};
+use crate::source::{Pace, SourceSpec};
+
+#[derive(Debug, Args)]
+#[command(group(ArgGroup::new("source").required(true).args(["serial", "udp", "input"])))]
+pub struct ListenArgs {
+    /// Serial port (e.g. /dev/ttyUSB0), 8N1; reopened with backoff when it disappears.
+    #[arg(long)]
+    pub serial: Option<PathBuf>,
+    /// Baud rate of the serial port.
+    #[arg(long, default_value_t = 230_400)]
+    pub baud: u32,
+    /// UDP socket to bind: ADDR:PORT, or PORT alone for 127.0.0.1:PORT.
+    #[arg(long)]
+    pub udp: Option<String>,
+    /// `-`: read frames from standard input.
+    #[arg(value_name = "-")]
+    pub input: Option<String>,
+    /// Stop after this long (seconds, or with s, min, h, d).
+    #[arg(long)]
+    pub duration: Option<String>,
+    /// Also write every received byte to this file, for replay later.
+    #[arg(long)]
+    pub capture: Option<PathBuf>,
+    #[command(flatten)]
+    pub data: DataArgs,
+}
+
+/// The source named by the options.
+fn source_spec(l: &ListenArgs) -> Result<SourceSpec> {
+    if let Some(p) = &l.serial {
+        return Ok(SourceSpec::Serial {
+            path: p.clone(),
+            baud: l.baud,
+        });
+    }
+    if let Some(u) = &l.udp {
+        let bind = crate::source::udp::parse_bind(u).map_err(|e| usage(format!("--udp {e}")))?;
+        return Ok(SourceSpec::Udp { bind });
+    }
+    match l.input.as_deref() {
+        Some("-") => Ok(SourceSpec::Stdin { pace: Pace::Max }),
+        Some(other) => Err(usage(format!(
+            "listen reads `-` (standard input), --serial or --udp, not `{other}` (use analyze \
+             for capture files)"
+        ))),
+        None => Err(usage("listen needs --serial PATH, --udp ADDR:PORT or -")),
+    }
+}
+
+pub fn run(l: &ListenArgs) -> Result<()> {
+    let d = &l.data;
+    if d.format == "csv" {
+        return Err(usage(
+            "listen reads frames: give --format NAME (siu8, kvh1750, hg4930 or a descriptor file)",
+        ));
+    }
+    let desc = FrameDescriptor::load(&d.format).map_err(anyhow::Error::new)?;
+    let spec = source_spec(l)?;
+    let mut opts = analysis_options(d, d.tau0.unwrap_or_else(|| desc.tau0_s()))?;
+    // Live: --every is wall-seconds, kept by the pipeline, not data-seconds.
+    opts.every_s = None;
+    let setups = select_channels(frame_channels(&desc), &d.channels, &spec.name())?;
+    let analysis = RunAnalysis::new(&spec.name(), setups, opts);
+    let ctl = RunControl {
+        duration: match &l.duration {
+            Some(s) => Some(Duration::from_secs_f64(parse_duration_s(s)?)),
+            None => None,
+        },
+        capture: l.capture.clone(),
+        handle_signals: true,
+        every_wall: d.every.map(Duration::from_secs_f64),
+        ..RunControl::default()
+    };
+    let writer = RecordWriter::spawn(output_writer(d)?);
+    let result = crate::pipeline::run_frames(spec, &desc, analysis, writer.queue(), &ctl);
+    let written = writer.finish();
+    result?;
+    written?;
+    Ok(())
+}

@@ -1,0 +1,429 @@
+//! The pipeline of one run: tasks, threads, channels and shutdown.
+//!
+//! ```text
+//!  source task (tokio)  --SourceEvent-->  decode thread  --Chunk-->  analysis thread  --Record-->  writer thread
+//!  file/stdin/serial/udp  mpsc, 4 | 1024   DecodeStage     crossbeam, 4   RunAnalysis     RecordQueue     JSON lines
+//! ```
+//!
+//! - I/O is async (a current-thread tokio runtime on the calling thread: the source task,
+//!   SIGINT/SIGTERM, `--duration`); decoding and statistics are plain sync code on threads of
+//!   their own; no stage awaits numerical work and no numerical stage awaits.
+//! - Every channel is bounded. The source waits when the decode stage is behind (for a file
+//!   that is back-pressure; for a socket the kernel buffer takes the slack), the decode thread
+//!   waits when the analysis is behind: **frames are never dropped**. The record writer is the
+//!   exception by design: its queue never blocks the analysis and coalesces interim records when
+//!   full ([`writer`]), so a stalled consumer of the JSON lines never stalls ingestion.
+//! - One shutdown token goes to the source. SIGINT, SIGTERM or the end of `--duration` fire it;
+//!   the source stops reading, and each stage after it finishes when its input channel closes:
+//!   the decoder is finished, the analysis writes its final curve, fit, health and summary
+//!   records, the writer drains its queue.
+//!
+//! Text columns (`--format csv`) enter the same analysis and writer stages from a reader
+//! thread instead of the source task and decode thread.
+
+pub mod decode;
+pub mod reorder;
+pub mod writer;
+
+use std::io::BufRead;
+use std::path::PathBuf;
+use std::sync::atomic::Ordering;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result};
+use tokio_util::sync::CancellationToken;
+
+use crate::analysis::RunAnalysis;
+use crate::frame::{FrameDescriptor, Health};
+use crate::input::text::{TextReader, BATCH_ROWS};
+use crate::input::Chunk;
+use crate::sink::records::{HealthRecord, Record};
+use crate::source::{Capture, Progress, SourceContext, SourceSpec};
+use decode::DecodeStage;
+pub use writer::{RecordQueue, RecordWriter, WriterStats, RECORD_QUEUE};
+
+/// Capacity of the channel from the decode (or text reader) thread to the analysis, in
+/// chunks. A replayed chunk is one 64 KiB read (about 1560 siu8 frames, 300 KB decoded), so
+/// reading runs ahead of the analysis by about a megabyte at most; live chunks are a few frames.
+pub const CHUNK_QUEUE: usize = 4;
+
+/// Largest number of events in one chunk: bounds a chunk's memory when many small reads are
+/// gathered while the analysis is busy.
+const MAX_CHUNK_EVENTS: usize = 4096;
+
+/// Events a new chunk has room for: a 64 KiB read of siu8 is 1560 frames; reserving room for
+/// them avoids regrowing the vector (profiled: 3% of the decode thread).
+const CHUNK_EVENTS_RESERVE: usize = 1600;
+
+/// How a run is driven and stopped.
+#[derive(Debug, Clone)]
+pub struct RunControl {
+    /// Fired by SIGINT/SIGTERM, `--duration`, or the caller: the source stops reading.
+    pub shutdown: CancellationToken,
+    /// Stop after this much wall time.
+    pub duration: Option<Duration>,
+    /// Also write every received byte to this file.
+    pub capture: Option<PathBuf>,
+    /// Counters the caller may watch.
+    pub progress: Arc<Progress>,
+    /// Stop on SIGINT and SIGTERM (the binary); off in tests that run several pipelines.
+    pub handle_signals: bool,
+    /// Show a progress bar (file replay, standard error a terminal).
+    pub show_progress: bool,
+    /// Wall-seconds between interim records (live sources); `None`: the analysis's own
+    /// data-second schedule (`AnalysisOptions::every_s`).
+    pub every_wall: Option<Duration>,
+}
+
+impl Default for RunControl {
+    fn default() -> Self {
+        RunControl {
+            shutdown: CancellationToken::new(),
+            duration: None,
+            capture: None,
+            progress: Arc::new(Progress::default()),
+            handle_signals: false,
+            show_progress: false,
+            every_wall: None,
+        }
+    }
+}
+
+/// What a run leaves behind: the analysis (for aggregate records) and the decoder's health.
+pub struct RunOutcome {
+    pub analysis: RunAnalysis,
+    pub health: Option<Health>,
+}
+
+/// Runs a source of frames through decoding and analysis until the input ends or shutdown;
+/// then queues the final curve and fit records, the health record and the summary.
+pub fn run_frames(
+    spec: SourceSpec,
+    desc: &FrameDescriptor,
+    analysis: RunAnalysis,
+    queue: &RecordQueue,
+    ctl: &RunControl,
+) -> Result<RunOutcome> {
+    let (src_tx, mut src_rx) = tokio::sync::mpsc::channel(spec.queue_capacity());
+    // Chunks come back from the analysis to be cleared and reused here: the decoded frames are
+    // freed by the thread that allocated them, and the chunk vectors are not reallocated
+    // (profiled: fewer page faults and allocator calls than a fresh vector per chunk).
+    let (recycle_tx, recycle_rx) = crossbeam_channel::bounded::<Chunk>(CHUNK_QUEUE + 2);
+    let live = spec.is_live();
+    let udp = matches!(spec, SourceSpec::Udp { .. });
+    let mut stage = DecodeStage::new(desc.clone(), live);
+    let parts = if live { 1 } else { replay_threads() };
+    let (chunk_tx, workers) = spawn_analysis(
+        analysis,
+        parts,
+        Some(recycle_tx),
+        queue.clone(),
+        ctl.every_wall,
+    )?;
+    let progress = ctl.progress.clone();
+    let decode = std::thread::Builder::new()
+        .name("allanscope-decode".into())
+        .spawn(move || {
+            let fresh = || match recycle_rx.try_recv() {
+                Ok(Chunk::Frames(mut v)) => {
+                    v.clear();
+                    v
+                }
+                _ => Vec::with_capacity(CHUNK_EVENTS_RESERVE),
+            };
+            let mut events = fresh();
+            let mut open = true;
+            while let Some(ev) = src_rx.blocking_recv() {
+                let n = stage.push(ev, &mut events);
+                progress.frames.fetch_add(n, Ordering::Relaxed);
+                if !events.is_empty() && (events.len() >= MAX_CHUNK_EVENTS || src_rx.is_empty()) {
+                    let chunk = Chunk::Frames(std::mem::replace(&mut events, fresh()));
+                    if !chunk_tx.send(chunk) {
+                        open = false;
+                        break;
+                    }
+                }
+            }
+            let n = stage.finish(&mut events);
+            progress.frames.fetch_add(n, Ordering::Relaxed);
+            if open && !events.is_empty() {
+                chunk_tx.send(Chunk::Frames(events));
+            }
+            stage
+        })
+        .context("cannot start the decode thread")?;
+    let source_result = drive(ctl, {
+        let ctl = ctl.clone();
+        async move {
+            let capture = match &ctl.capture {
+                Some(p) => Some(Capture::create(p.clone()).await?),
+                None => None,
+            };
+            let ctx = SourceContext {
+                tx: src_tx,
+                shutdown: ctl.shutdown.clone(),
+                capture,
+                progress: ctl.progress.clone(),
+            };
+            crate::source::run(spec, ctx, ctl.show_progress).await
+        }
+    });
+    let stage = decode
+        .join()
+        .map_err(|_| anyhow::anyhow!("the decode thread panicked"))?;
+    let mut analysis = join_analysis(workers)?;
+    source_result?;
+    let health = stage.health();
+    let mut record = health_record(&health, analysis.summary().run);
+    if let Some(r) = stage.reorder_stats().filter(|_| udp) {
+        record
+            .extra
+            .insert("udp_reordered".into(), r.reordered.into());
+        record
+            .extra
+            .insert("udp_duplicates".into(), r.duplicates.into());
+        record.extra.insert("udp_late".into(), r.late.into());
+    }
+    if live {
+        record
+            .extra
+            .insert("outages".into(), stage.outage.outages.into());
+        record
+            .extra
+            .insert("outage_missing".into(), stage.outage.missing.into());
+    }
+    finish_records(&mut analysis, Some(record), queue);
+    Ok(RunOutcome {
+        analysis,
+        health: Some(health),
+    })
+}
+
+/// Runs text columns (rows of `width` values) through the analysis; `rows_per_s` paces the
+/// reading at the data's own rate. Then queues the final records and the summary.
+pub fn run_text<R: BufRead + Send + 'static>(
+    reader: TextReader<R>,
+    path: PathBuf,
+    rows_per_s: Option<f64>,
+    analysis: RunAnalysis,
+    queue: &RecordQueue,
+    ctl: &RunControl,
+) -> Result<RunOutcome> {
+    let width = reader.names().len();
+    let (tx, workers) = spawn_analysis(analysis, 1, None, queue.clone(), ctl.every_wall)?;
+    let shutdown = ctl.shutdown.clone();
+    let read = move || -> Result<u64> {
+        let mut reader = reader;
+        let started = Instant::now();
+        let batch = rows_per_s.map_or(BATCH_ROWS, |r| ((r * 0.02) as usize).clamp(1, BATCH_ROWS));
+        while !shutdown.is_cancelled() {
+            let mut values = Vec::with_capacity(batch * width);
+            let n = reader
+                .read_rows(&mut values, batch)
+                .with_context(|| format!("reading {}", path.display()))?;
+            if n == 0 || !tx.send(Chunk::Rows { values, width }) {
+                break;
+            }
+            if let Some(r) = rows_per_s {
+                let due = started + Duration::from_secs_f64(reader.rows() as f64 / r);
+                std::thread::sleep(due.saturating_duration_since(Instant::now()));
+            }
+        }
+        Ok(reader.bad_rows())
+    };
+    let result = drive(ctl, async move {
+        tokio::task::spawn_blocking(read)
+            .await
+            .map_err(|_| anyhow::anyhow!("the reader thread panicked"))?
+    });
+    let mut analysis = join_analysis(workers)?;
+    analysis.add_bad_rows(result?);
+    finish_records(&mut analysis, None, queue);
+    Ok(RunOutcome {
+        analysis,
+        health: None,
+    })
+}
+
+/// Analysis threads for a replay: the decode thread is the third busy thread on the
+/// project's 2-core machine, and the accumulators are the critical path (BENCHMARKS.md, "Live
+/// pipeline"): two analysis threads, each with half the channels, cut the replay's wall time.
+/// Live sources use one (their rate is low, and fewer threads wake per frame).
+pub const REPLAY_ANALYSIS_THREADS: usize = 2;
+
+/// [`REPLAY_ANALYSIS_THREADS`], at most the cores available; `ALLANSCOPE_ANALYSIS_THREADS`
+/// overrides it (for measurements).
+fn replay_threads() -> usize {
+    if let Some(n) = std::env::var("ALLANSCOPE_ANALYSIS_THREADS")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+    {
+        return n.max(1);
+    }
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    REPLAY_ANALYSIS_THREADS.min(cores)
+}
+
+/// Hands every chunk to each analysis thread (shared, not copied).
+#[derive(Clone)]
+struct ChunkSender(Vec<crossbeam_channel::Sender<Arc<Chunk>>>);
+
+impl ChunkSender {
+    /// False when the analysis has gone.
+    fn send(&self, c: Chunk) -> bool {
+        let c = Arc::new(c);
+        self.0.iter().all(|tx| tx.send(c.clone()).is_ok())
+    }
+}
+
+/// The analysis threads, `parts` of them, each with consecutive channels of `analysis`: chunks
+/// in, interim records out (on the data-second schedule of the options, or every `every_wall`
+/// of wall time). A consumed chunk goes back on `recycle` from the thread that drops it last.
+fn spawn_analysis(
+    analysis: RunAnalysis,
+    parts: usize,
+    recycle: Option<crossbeam_channel::Sender<Chunk>>,
+    queue: RecordQueue,
+    every_wall: Option<Duration>,
+) -> Result<(ChunkSender, Vec<std::thread::JoinHandle<RunAnalysis>>)> {
+    let mut txs = Vec::new();
+    let mut handles = Vec::new();
+    for mut part in analysis.split(parts) {
+        let (tx, rx) = crossbeam_channel::bounded::<Arc<Chunk>>(CHUNK_QUEUE);
+        txs.push(tx);
+        let (queue, recycle) = (queue.clone(), recycle.clone());
+        let h = std::thread::Builder::new()
+            .name("allanscope-analysis".into())
+            .spawn(move || {
+                let mut out = Vec::new();
+                let tick =
+                    every_wall.map_or_else(crossbeam_channel::never, crossbeam_channel::tick);
+                loop {
+                    crossbeam_channel::select! {
+                        recv(rx) -> chunk => match chunk {
+                            Ok(c) => {
+                                part.push_chunk(&c, &mut out);
+                                if let (Some(r), Ok(c)) = (&recycle, Arc::try_unwrap(c)) {
+                                    let _ = r.try_send(c);
+                                }
+                            }
+                            Err(_) => break,
+                        },
+                        recv(tick) -> _ => out.extend(part.records(false)),
+                    }
+                    for r in out.drain(..) {
+                        queue.push_interim(r);
+                    }
+                }
+                part
+            })
+            .context("cannot start an analysis thread")?;
+        handles.push(h);
+    }
+    Ok((ChunkSender(txs), handles))
+}
+
+/// Waits for the analysis threads and puts their channels back together.
+fn join_analysis(handles: Vec<std::thread::JoinHandle<RunAnalysis>>) -> Result<RunAnalysis> {
+    let mut parts = Vec::new();
+    for h in handles {
+        parts.push(
+            h.join()
+                .map_err(|_| anyhow::anyhow!("an analysis thread panicked"))?,
+        );
+    }
+    RunAnalysis::join(parts).ok_or_else(|| anyhow::anyhow!("no analysis thread"))
+}
+
+/// Runs `fut` (the source) on a current-thread runtime here, with SIGINT/SIGTERM and
+/// `--duration` firing the shutdown token.
+fn drive<F, T>(ctl: &RunControl, fut: F) -> Result<T>
+where
+    F: std::future::Future<Output = Result<T>>,
+{
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .context("cannot start the I/O runtime")?;
+    rt.block_on(async {
+        let token = ctl.shutdown.clone();
+        let duration = ctl.duration;
+        let signals = ctl.handle_signals;
+        let watcher = tokio::spawn(async move {
+            let sleep = async {
+                match duration {
+                    Some(d) => tokio::time::sleep(d).await,
+                    None => std::future::pending().await,
+                }
+            };
+            tokio::select! {
+                _ = sleep => tracing::info!("--duration reached; finishing"),
+                s = wait_for_signal(signals) => tracing::info!("{s}; finishing"),
+                _ = token.cancelled() => {}
+            }
+            token.cancel();
+        });
+        let r = fut.await;
+        watcher.abort();
+        r
+    })
+}
+
+/// Waits for SIGINT or SIGTERM (forever when `enabled` is false or they cannot be watched).
+async fn wait_for_signal(enabled: bool) -> &'static str {
+    if !enabled {
+        return std::future::pending().await;
+    }
+    use tokio::signal::unix::{signal, SignalKind};
+    match (
+        signal(SignalKind::interrupt()),
+        signal(SignalKind::terminate()),
+    ) {
+        (Ok(mut int), Ok(mut term)) => tokio::select! {
+            _ = int.recv() => "SIGINT",
+            _ = term.recv() => "SIGTERM",
+        },
+        _ => {
+            tracing::warn!("cannot watch SIGINT/SIGTERM");
+            std::future::pending().await
+        }
+    }
+}
+
+/// The final curve and fit records, the health record and the summary, never coalesced.
+fn finish_records(analysis: &mut RunAnalysis, health: Option<HealthRecord>, queue: &RecordQueue) {
+    for r in analysis.records(true) {
+        queue.push_final(r);
+    }
+    if let Some(h) = health {
+        queue.push_final(Record::Health(h));
+    }
+    queue.push_final(Record::Summary(analysis.summary()));
+}
+
+/// The `health` record: the CONTRACT.md fields, then the decoder's extra detail.
+pub fn health_record(h: &Health, run: Option<usize>) -> HealthRecord {
+    let mut rec = HealthRecord {
+        kind: "health".into(),
+        frames: h.frames,
+        crc_errors: h.crc_errors,
+        resyncs: h.resyncs,
+        missing: h.missing,
+        duplicates: h.duplicates,
+        bytes_skipped: h.bytes_skipped,
+        extra: serde_json::Map::new(),
+        run,
+    };
+    if let Ok(serde_json::Value::Object(all)) = serde_json::to_value(h) {
+        for (k, v) in all {
+            if !matches!(
+                k.as_str(),
+                "frames" | "crc_errors" | "resyncs" | "missing" | "duplicates" | "bytes_skipped"
+            ) {
+                rec.extra.insert(k, v);
+            }
+        }
+    }
+    rec
+}

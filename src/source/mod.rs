@@ -1,0 +1,214 @@
+//! Sources: where the bytes come from. One async task per source (tokio), owning its file,
+//! port or socket; each hands what it reads to the decode stage as [`SourceEvent`]s over a
+//! bounded channel, and stops when its input ends or the shutdown token fires.
+//!
+//! - [`file`]: a capture file or standard input, as fast as possible or paced at the data's
+//!   own rate, with a progress bar when standard error is a terminal.
+//! - [`serial`]: a serial port, reopened with backoff when it disappears; each outage is
+//!   reported so the decode stage can record it as a gap.
+//! - [`udp`]: a UDP socket (bound to 127.0.0.1 unless told otherwise); each datagram holds
+//!   whole frames and is passed on whole, so the decode stage can put reordered frames back.
+//!
+//! Sources do no decoding and no numerical work. With `--capture FILE` every received byte is
+//! also written to FILE, in arrival order, for replay later.
+
+pub mod file;
+pub mod serial;
+pub mod udp;
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result};
+use bytes::Bytes;
+use tokio::io::AsyncWriteExt;
+use tokio::sync::mpsc;
+use tokio_util::sync::CancellationToken;
+
+/// How fast a file is replayed.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Pace {
+    /// As fast as the analysis takes it.
+    #[default]
+    Max,
+    /// At the data's own rate: `bytes_per_s` (frame length x frame rate).
+    Realtime { bytes_per_s: f64 },
+}
+
+/// Where the bytes come from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SourceSpec {
+    /// A capture file, read to its end.
+    File { path: PathBuf, pace: Pace },
+    /// Standard input, read to its end.
+    Stdin { pace: Pace },
+    /// A serial port at `baud`, 8N1.
+    Serial { path: PathBuf, baud: u32 },
+    /// A UDP socket bound to `bind`.
+    Udp { bind: SocketAddr },
+}
+
+impl SourceSpec {
+    /// True for sources that run until stopped (serial, UDP): their silences are measured in
+    /// wall time.
+    pub fn is_live(&self) -> bool {
+        matches!(self, SourceSpec::Serial { .. } | SourceSpec::Udp { .. })
+    }
+
+    /// Capacity of the channel from this source to the decode stage.
+    pub fn queue_capacity(&self) -> usize {
+        if self.is_live() {
+            SOURCE_QUEUE_LIVE
+        } else {
+            SOURCE_QUEUE_FILE
+        }
+    }
+
+    /// A name for the `summary` record's `input`.
+    pub fn name(&self) -> String {
+        match self {
+            SourceSpec::File { path, .. } => path.display().to_string(),
+            SourceSpec::Stdin { .. } => "-".into(),
+            SourceSpec::Serial { path, baud } => format!("serial:{}@{baud}", path.display()),
+            SourceSpec::Udp { bind } => format!("udp:{bind}"),
+        }
+    }
+}
+
+/// What a source hands to the decode stage.
+#[derive(Debug, Clone)]
+pub enum SourceEvent {
+    /// Bytes of a stream, as they arrived at `at`.
+    Data { bytes: Bytes, at: Instant },
+    /// One UDP datagram (whole frames), as it arrived at `at`.
+    Datagram { bytes: Bytes, at: Instant },
+    /// The source went quiet (no datagram for a while): frames held for reordering can go.
+    Idle,
+    /// The port came back after an outage: bytes before and after it are not contiguous.
+    Reconnected { outage_s: f64 },
+}
+
+/// Capacity of the channel from a live source task to the decode stage, in events. A datagram
+/// or a serial read is one or a few frames: 1024 datagrams are 50 ms of siu8 at 20,000
+/// frames/s, enough to ride out a scheduling hiccup of the decode thread without the kernel
+/// dropping any.
+pub const SOURCE_QUEUE_LIVE: usize = 1024;
+
+/// Capacity for file and standard-input sources, in 64 KiB blocks: the file waits (back-pressure),
+/// so a few blocks keep the decoder busy and memory at a quarter of a megabyte.
+pub const SOURCE_QUEUE_FILE: usize = 4;
+
+/// Counters a source and the stages after it share with whoever watches the run (tests, the
+/// progress bar).
+#[derive(Debug, Default)]
+pub struct Progress {
+    /// Bytes received by the source.
+    pub bytes: AtomicU64,
+    /// Good frames decoded so far.
+    pub frames: AtomicU64,
+    /// Serial: times the port was reopened.
+    pub reconnects: AtomicU64,
+}
+
+impl Progress {
+    pub fn frames(&self) -> u64 {
+        self.frames.load(Ordering::Relaxed)
+    }
+    pub fn bytes(&self) -> u64 {
+        self.bytes.load(Ordering::Relaxed)
+    }
+}
+
+/// Everything a source task needs besides its spec.
+pub struct SourceContext {
+    pub tx: mpsc::Sender<SourceEvent>,
+    pub shutdown: CancellationToken,
+    pub capture: Option<Capture>,
+    pub progress: Arc<Progress>,
+}
+
+impl SourceContext {
+    /// Records received bytes (progress, capture) and passes them on; false when the decode
+    /// stage has gone.
+    async fn deliver(&mut self, ev: SourceEvent) -> Result<bool> {
+        let bytes = match &ev {
+            SourceEvent::Data { bytes, .. } | SourceEvent::Datagram { bytes, .. } => Some(bytes),
+            _ => None,
+        };
+        if let Some(b) = bytes {
+            self.progress
+                .bytes
+                .fetch_add(b.len() as u64, Ordering::Relaxed);
+            if let Some(c) = &mut self.capture {
+                c.write(b).await?;
+            }
+        }
+        Ok(self.tx.send(ev).await.is_ok())
+    }
+}
+
+/// `--capture FILE`: every received byte, in arrival order.
+pub struct Capture {
+    path: PathBuf,
+    out: tokio::io::BufWriter<tokio::fs::File>,
+}
+
+impl Capture {
+    pub async fn create(path: PathBuf) -> Result<Capture> {
+        let f = tokio::fs::File::create(&path)
+            .await
+            .with_context(|| format!("cannot create capture file {}", path.display()))?;
+        Ok(Capture {
+            out: tokio::io::BufWriter::with_capacity(1 << 16, f),
+            path,
+        })
+    }
+
+    async fn write(&mut self, b: &[u8]) -> Result<()> {
+        self.out
+            .write_all(b)
+            .await
+            .with_context(|| format!("writing capture file {}", self.path.display()))
+    }
+
+    pub async fn finish(&mut self) -> Result<()> {
+        self.out
+            .flush()
+            .await
+            .with_context(|| format!("writing capture file {}", self.path.display()))
+    }
+}
+
+/// Runs a source until its input ends or `ctx.shutdown` fires.
+pub async fn run(spec: SourceSpec, mut ctx: SourceContext, show_progress: bool) -> Result<()> {
+    let res = match spec {
+        SourceSpec::File { path, pace } => {
+            let f = tokio::fs::File::open(&path).await.map_err(|e| {
+                anyhow::Error::new(crate::error::UsageError::Input {
+                    file: path.clone(),
+                    line: 0,
+                    problem: format!("cannot open: {e}"),
+                })
+            })?;
+            let len = f.metadata().await.ok().map(|m| m.len());
+            let bar = show_progress.then(|| file::progress_bar(len)).flatten();
+            file::read_stream(f, pace, &mut ctx, bar).await
+        }
+        SourceSpec::Stdin { pace } => {
+            file::read_stream(tokio::io::stdin(), pace, &mut ctx, None).await
+        }
+        SourceSpec::Serial { path, baud } => serial::run(&path, baud, &mut ctx).await,
+        SourceSpec::Udp { bind } => udp::run(bind, &mut ctx).await,
+    };
+    if let Some(c) = &mut ctx.capture {
+        c.finish().await?;
+    }
+    res
+}
+
+/// Backoff between attempts to reopen a serial port: doubling from the first to the last.
+pub const BACKOFF_FIRST: Duration = Duration::from_millis(50);
+pub const BACKOFF_MAX: Duration = Duration::from_secs(2);
