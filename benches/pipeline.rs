@@ -79,6 +79,7 @@ fn replay(c: &mut Criterion) {
                 every_s: None,
                 fit: Some(FitOptions::default()),
                 run: None,
+                limits: Vec::new(),
             };
             let analysis = RunAnalysis::new("bench", channels.clone(), opts);
             let writer = RecordWriter::spawn(Box::new(std::io::sink()));

@@ -48,6 +48,8 @@ pub struct AnalysisOptions {
     pub fit: Option<FitOptions>,
     /// Run index when several inputs are analyzed.
     pub run: Option<usize>,
+    /// Datasheet limits judged on each run's final fits (per-run scope), in `summary`.
+    pub limits: Vec<crate::model::limits::LimitSpec>,
 }
 
 struct ChannelState {
@@ -199,6 +201,12 @@ impl RunAnalysis {
         let run = self.opts.run;
         let mut out = Vec::new();
         for ch in &mut self.channels {
+            if final_ {
+                // The final fit starts from a fresh covariance cache, so it does not depend on
+                // how many interim refits came before (the cache's incremental updates agree
+                // with a fresh computation only to ~1e-11).
+                ch.fitter = Fitter::new();
+            }
             let (curves, fit) = analyze_channel(ch, &self.opts);
             for c in &curves {
                 out.push(Record::Curve(CurveRecord::new(
@@ -239,8 +247,19 @@ impl RunAnalysis {
             .collect()
     }
 
-    /// The `summary` record of the run.
+    /// The `summary` record of the run, with the per-run datasheet limits judged on the last
+    /// fits (call after the final [`records`](RunAnalysis::records)).
     pub fn summary(&self) -> SummaryRecord {
+        let fits: Vec<crate::model::limits::ChannelFit> = self
+            .channels
+            .iter()
+            .map(|c| crate::model::limits::ChannelFit {
+                channel: &c.setup.name,
+                unit: &c.setup.unit,
+                fit: c.last_fit.as_ref(),
+            })
+            .collect();
+        let judgement = crate::model::limits::judge(&self.opts.limits, &fits);
         SummaryRecord {
             kind: "summary".into(),
             input: self.input.clone(),
@@ -256,8 +275,8 @@ impl RunAnalysis {
                 Overlap::Bounded(l) => l.to_string(),
             },
             elapsed_s: self.started.elapsed().as_secs_f64(),
-            limits: Vec::new(),
-            pass: None,
+            limits: judgement.limits_json(),
+            pass: judgement.pass,
         }
     }
 

@@ -386,3 +386,53 @@ fn report_is_one_page_with_plots_tables_and_health() {
     assert!(text.contains("75000 frames, 0 checksum errors"));
     assert!(!text.contains("src=\"http"), "self-contained");
 }
+
+#[test]
+fn every_upper_bound_respects_what_the_curve_allows() {
+    // The 5-minute fixture leaves most terms undetermined. Each coefficient's upper bound must
+    // stay below the slope bound of the curve's own 97.5% limits (c_i basis_i(tau) <= hi(tau)^2
+    // at every tau), apart from rounding: no chi-squared interval with nu << 1 running off.
+    let capture = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/fixtures/captures/siu8_stand_5min_seed1.siu8"
+    );
+    let recs = records(
+        &exe()
+            .args(["analyze", capture, "--format", "siu8"])
+            .output()
+            .unwrap(),
+    );
+    let mut checked = 0;
+    for r in &recs {
+        let Record::Fit(f) = r else { continue };
+        let curve = recs
+            .iter()
+            .find_map(|c| match c {
+                Record::Curve(c) if c.channel == f.channel && c.stat.name() == "avar" => Some(c),
+                _ => None,
+            })
+            .unwrap();
+        for (i, name) in ["Q", "N", "B", "K", "R"].iter().enumerate() {
+            if f.coef[*name]["determined"] == true {
+                continue;
+            }
+            let hi = f.coef[*name]["hi"].as_f64().unwrap();
+            let bound = curve
+                .tau
+                .iter()
+                .zip(&curve.hi)
+                .filter_map(|(t, h)| {
+                    Some(h.as_ref()?.powi(2) / allanscope::model::terms::basis(*t)[i])
+                })
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                hi * hi <= bound * (1.0 + 1e-6),
+                "{} {name}: hi {hi:e}, bound {:e}",
+                f.channel,
+                bound.sqrt()
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked >= 16, "{checked}");
+}

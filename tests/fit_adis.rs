@@ -78,6 +78,7 @@ fn fit_axes(values: &[f64], fit: FitOptions) -> Vec<(String, FitResult)> {
         every_s: None,
         fit: Some(fit),
         run: None,
+        limits: Vec::new(),
     };
     let setups = ["gyro_x", "gyro_y", "gyro_z"]
         .iter()

@@ -75,6 +75,7 @@ fn frames_decode_to_the_simulated_counts_and_the_same_curves() {
         every_s: None,
         fit: None,
         run: None,
+        limits: Vec::new(),
     };
     let mut analysis = RunAnalysis::new("roundtrip", setups, opts);
     let mut out = Vec::new();

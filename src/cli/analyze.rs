@@ -90,8 +90,28 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue) -> Result<()> {
         fits.push(analysis.last_fits());
     }
     if several {
-        for r in aggregate_records(&fits) {
-            queue.push_final(r);
+        let aggregates = aggregate_channels(&run_coefs(&fits));
+        for a in &aggregates {
+            queue.push_final(Record::Aggregate(super::aggregate::record(a)));
+        }
+        // Run-to-run datasheet limits (e.g. the sd of B over runs) in a closing summary.
+        let j = crate::model::limits::judge_runs(&base.limits, &aggregates);
+        if !j.results.is_empty() {
+            queue.push_final(Record::Summary(crate::sink::records::SummaryRecord {
+                kind: "summary".into(),
+                input: a.inputs.join(" "),
+                run: None,
+                channels: Vec::new(),
+                tau0,
+                t_data: 0.0,
+                samples: Vec::new(),
+                segments: Vec::new(),
+                bad_rows: 0,
+                overlap: d.overlap.clone(),
+                elapsed_s: 0.0,
+                limits: j.limits_json(),
+                pass: j.pass,
+            }));
         }
     }
     Ok(())
@@ -158,20 +178,15 @@ fn analyze_frames(
     Ok(crate::pipeline::run_frames(spec, desc, analysis, queue, ctl)?.analysis)
 }
 
-/// `aggregate` records (the seed paper's table 2) from the final fits of several runs.
-pub fn aggregate_records(
+/// Each run's determined coefficients, for the run-to-run statistics.
+fn run_coefs(
     runs: &[Vec<(String, String, Option<crate::model::fit::FitResult>)>],
-) -> Vec<Record> {
-    let coefs: Vec<Vec<RunCoefs>> = runs
-        .iter()
+) -> Vec<Vec<RunCoefs>> {
+    runs.iter()
         .map(|run| {
             run.iter()
                 .filter_map(|(name, unit, fit)| Some(RunCoefs::from_fit(name, unit, fit.as_ref()?)))
                 .collect()
         })
-        .collect();
-    aggregate_channels(&coefs)
-        .iter()
-        .map(|a| Record::Aggregate(super::aggregate::record(a)))
         .collect()
 }

@@ -154,6 +154,10 @@ pub struct DataArgs {
     /// JSON lines to this file instead of standard output.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Datasheet limits (a TOML file with `[[limits]]` tables, as in a stand config), judged
+    /// with the fits' intervals; verdicts in `summary`.
+    #[arg(long)]
+    pub limits: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -353,6 +357,10 @@ pub(crate) fn analysis_options(d: &DataArgs, tau0_s: f64) -> Result<AnalysisOpti
         every_s: d.every,
         fit,
         run: None,
+        limits: match &d.limits {
+            Some(p) => crate::model::limits::load_file(p)?,
+            None => Vec::new(),
+        },
     })
 }
 

@@ -35,13 +35,14 @@ pub fn run(r: &RunArgs) -> Result<()> {
             problem: e.to_string(),
         })
     })?;
-    if !cfg.limits_raw.is_empty() {
-        tracing::info!(
-            "{}: {} [[limits]] read; judging them is left to the limit checker",
-            cfg.file.display(),
-            cfg.limits_raw.len()
-        );
-    }
+    let limits = crate::model::limits::from_tables(&cfg.limits_raw, &cfg.file).map_err(|errs| {
+        let all = errs
+            .iter()
+            .map(|e| e.to_string())
+            .collect::<Vec<_>>()
+            .join("\n");
+        anyhow::Error::new(UsageError::Option(all))
+    })?;
     let mut spec = cfg.source.clone();
     let live = spec.is_live();
     if let SourceSpec::File { pace, .. } | SourceSpec::Stdin { pace } = &mut spec {
@@ -63,6 +64,7 @@ pub fn run(r: &RunArgs) -> Result<()> {
             ..FitOptions::default()
         }),
         run: None,
+        limits,
     };
     let setups =
         select_channels(frame_channels(&desc), &cfg.channels, &spec.name()).map_err(|e| {

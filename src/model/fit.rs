@@ -319,6 +319,22 @@ impl Fitter {
             determined: false,
             sd_c: 0.0,
         }; 5];
+        // The slope bound of each term from the points' 97.5% upper limits (THEORY.md section
+        // 4): c_i basis_i(tau_k) <= AVAR(tau_k) <= edf_k AVAR_hat_k / chi2_{0.025}(edf_k).
+        let upper: Vec<f64> = (0..j)
+            .map(|k| match ChiSquared::new(prob.edf[k]) {
+                Ok(d) if prob.edf[k].is_finite() => {
+                    prob.edf[k] * prob.y[k] / chi2_quantile(&d, prob.edf[k], 0.025, -Z95)
+                }
+                _ => f64::INFINITY,
+            })
+            .collect();
+        let data_bound: [f64; 5] = std::array::from_fn(|i| {
+            (0..j)
+                .map(|k| upper[k] / prob.x[(k, i)])
+                .filter(|b| b.is_finite() && *b > 0.0)
+                .fold(f64::INFINITY, f64::min)
+        });
         for i in 0..5 {
             let var = cov_c[i][i].max(0.0);
             let sd = var.sqrt();
@@ -333,11 +349,24 @@ impl Fitter {
                 (0.0, 0.0)
             } else if ci > 0.0 && sd > 0.0 {
                 let (lo, hi) = chi2_interval(ci, var);
+                // For a term the data do not resolve (not significant, or Satterthwaite's
+                // nu = 2 c^2 / var below 1) the chi-squared upper bound can run off to absurd
+                // values (seen: 1e22 for a term 1e-5 of the curve); the curve itself bounds the
+                // term there, so cap it (never below the estimate). A resolved term keeps its
+                // chi-squared bound: a minimum over many points' bounds is no longer a 97.5%
+                // statement about it.
+                let nu = 2.0 * ci * ci / var;
+                let hi = if nu < 1.0 || !significant {
+                    hi.min(data_bound[i]).max(ci)
+                } else {
+                    hi
+                };
                 (if significant { lo } else { 0.0 }, hi)
             } else if ci > 0.0 {
                 (ci, ci)
             } else {
-                (0.0, Z95 * fisher_sd[i])
+                // Held at zero: the Fisher bound, capped by the curve as above.
+                (0.0, (Z95 * fisher_sd[i]).min(data_bound[i]))
             };
             coef[i] = CoefEstimate {
                 value: ci.sqrt(),

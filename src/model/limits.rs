@@ -508,3 +508,71 @@ pub fn judge_runs(specs: &[LimitSpec], aggregates: &[CoefAggregate]) -> Judgemen
     }
     Judgement::from_results(out)
 }
+
+/// Reads `[[limits]]` tables (a stand config's, or a limits file's) into specs, checking each:
+/// every problem is reported with the file and its key (`limits[i].key`), together.
+pub fn from_tables(
+    tables: &[toml::Value],
+    file: &std::path::Path,
+) -> Result<Vec<LimitSpec>, Vec<crate::error::UsageError>> {
+    let mut specs = Vec::new();
+    let mut errors = Vec::new();
+    for (i, t) in tables.iter().enumerate() {
+        match t.clone().try_into::<LimitSpec>() {
+            Ok(spec) => {
+                for (key, problem) in spec.problems() {
+                    errors.push(crate::error::UsageError::Config {
+                        file: file.into(),
+                        key: format!("limits[{i}].{key}"),
+                        problem,
+                    });
+                }
+                specs.push(spec);
+            }
+            Err(e) => errors.push(crate::error::UsageError::Config {
+                file: file.into(),
+                key: format!("limits[{i}]"),
+                problem: e.message().to_string(),
+            }),
+        }
+    }
+    if errors.is_empty() {
+        Ok(specs)
+    } else {
+        Err(errors)
+    }
+}
+
+/// Reads a limits file: TOML with a `[[limits]]` array (the stand config's form).
+pub fn load_file(path: &std::path::Path) -> anyhow::Result<Vec<LimitSpec>> {
+    use crate::error::UsageError;
+    let text = std::fs::read_to_string(path).map_err(|e| UsageError::Config {
+        file: path.into(),
+        key: "limits".into(),
+        problem: format!("cannot read: {e}"),
+    })?;
+    let root: toml::Table = text
+        .parse()
+        .map_err(|e: toml::de::Error| UsageError::Config {
+            file: path.into(),
+            key: "limits".into(),
+            problem: e.to_string(),
+        })?;
+    let tables = match root.get("limits") {
+        Some(toml::Value::Array(a)) => a.clone(),
+        _ => {
+            return Err(UsageError::Config {
+                file: path.into(),
+                key: "limits".into(),
+                problem: "expected an array of tables ([[limits]])".into(),
+            }
+            .into())
+        }
+    };
+    from_tables(&tables, path).map_err(|errs| {
+        let first = errs
+            .into_iter()
+            .reduce(|a, b| UsageError::Option(format!("{a}\n{b}")));
+        anyhow::Error::new(first.unwrap_or(UsageError::Option("limits".into())))
+    })
+}

@@ -48,6 +48,7 @@ pub fn options(desc: &FrameDescriptor, every_s: Option<f64>) -> AnalysisOptions 
         every_s,
         fit: Some(FitOptions::default()),
         run: None,
+        limits: Vec::new(),
     }
 }
 
