@@ -80,6 +80,7 @@ fn replay(c: &mut Criterion) {
                 fit: Some(FitOptions::default()),
                 run: None,
                 limits: Vec::new(),
+                diagnose: false,
             };
             let analysis = RunAnalysis::new("bench", channels.clone(), opts);
             let writer = RecordWriter::spawn(Box::new(std::io::sink()));

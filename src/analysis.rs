@@ -8,6 +8,7 @@ use crate::allan::accum::{AccumConfig, ChannelAccumulator, Overlap};
 use crate::allan::curve::{build_curves, AlphaSource};
 use crate::allan::{Curve, Stat};
 use crate::frame::{ChannelValue, FrameEvent};
+use crate::gap::{diagnose, DiagnoseOptions, DiagnosisRecord, GapConfig, GapEvidence};
 use crate::input::Chunk;
 use crate::model::fit::{FitOptions, FitResult, Fitter};
 use crate::model::units::{datasheet, quantization_ratio, SensorKind};
@@ -50,11 +51,17 @@ pub struct AnalysisOptions {
     pub run: Option<usize>,
     /// Datasheet limits judged on each run's final fits (per-run scope), in `summary`.
     pub limits: Vec<crate::model::limits::LimitSpec>,
+    /// Also gather the sim-to-real evidence and write `diagnosis` records with the fits.
+    pub diagnose: bool,
 }
 
 struct ChannelState {
     setup: ChannelSetup,
     acc: ChannelAccumulator,
+    /// The diagnosis' evidence (dense curve, segments, block means), when asked for.
+    gap: Option<GapEvidence>,
+    /// Last phase value (phase input), to feed the evidence increments.
+    last_phase: Option<f64>,
     fitter: Fitter,
     last_fit: Option<FitResult>,
 }
@@ -83,6 +90,10 @@ impl RunAnalysis {
                     Some(lsb) => ChannelAccumulator::counts(opts.accum.clone(), lsb),
                     None => ChannelAccumulator::real(opts.accum.clone()),
                 },
+                gap: opts
+                    .diagnose
+                    .then(|| GapEvidence::new(GapConfig::new(opts.accum.tau0_s))),
+                last_phase: None,
                 setup,
                 fitter: Fitter::new(),
                 last_fit: None,
@@ -130,7 +141,16 @@ impl RunAnalysis {
                     match ev {
                         FrameEvent::Frame(f) => {
                             for ch in &mut self.channels {
-                                match f.values.get(ch.setup.column).copied().flatten() {
+                                let value = f.values.get(ch.setup.column).copied().flatten();
+                                if let Some(g) = &mut ch.gap {
+                                    match value {
+                                        Some(v) => {
+                                            g.push_increment(v.physical(ch.setup.counts_lsb))
+                                        }
+                                        None => g.push_gap(1),
+                                    }
+                                }
+                                match value {
                                     Some(ChannelValue::Count(c)) => match &mut ch.acc {
                                         ChannelAccumulator::Counts { engine, .. } => {
                                             engine.push_increment(c)
@@ -154,6 +174,9 @@ impl RunAnalysis {
                         FrameEvent::Gap { missing } => {
                             for ch in &mut self.channels {
                                 ch.acc.push_gap(*missing);
+                                if let Some(g) = &mut ch.gap {
+                                    g.push_gap(*missing);
+                                }
                             }
                         }
                     }
@@ -168,6 +191,22 @@ impl RunAnalysis {
         let kind = self.opts.kind;
         for ch in &mut self.channels {
             let v = row[ch.setup.column];
+            if let Some(g) = &mut ch.gap {
+                let inc = match kind {
+                    InputKind::Phase => {
+                        let d = ch.last_phase.map(|p| v - p);
+                        ch.last_phase = v.is_finite().then_some(v);
+                        d
+                    }
+                    InputKind::Increments => Some(v),
+                    InputKind::Rate => Some(v * tau0),
+                };
+                match inc {
+                    Some(d) if d.is_finite() => g.push_increment(d),
+                    Some(_) => g.push_gap(1),
+                    None => {}
+                }
+            }
             match &mut ch.acc {
                 ChannelAccumulator::Real(e) => match kind {
                     InputKind::Phase => e.push_phase_f64(v),
@@ -226,6 +265,19 @@ impl RunAnalysis {
                     run,
                 )));
                 ch.last_fit = Some(f);
+            }
+            if let Some(g) = &mut ch.gap {
+                // The diagnosis refreshed with the fits (THEORY.md section 5); a run still too
+                // short for it gives no record yet.
+                match diagnose(&g.snapshot(), &DiagnoseOptions::default()) {
+                    Ok(d) => {
+                        let rec = DiagnosisRecord::new(&ch.setup.name, &d, None, final_);
+                        if let Ok(v) = serde_json::to_value(&rec) {
+                            out.push(Record::Other(v));
+                        }
+                    }
+                    Err(e) => tracing::debug!("{}: {e}", ch.setup.name),
+                }
             }
         }
         out

@@ -116,3 +116,42 @@ fn a_clean_run_is_consistent() {
     assert_eq!(d["effects"].as_array().unwrap().len(), 0);
     assert!(d["gap_before"].as_f64().unwrap() < 1.7);
 }
+
+#[test]
+fn the_stream_carries_diagnosis_records_refreshed_with_the_fits() {
+    let run = simulate(&model(true), 8, "gm8-stream.csv");
+    let out = exe()
+        .args([
+            "analyze",
+            run.to_str().unwrap(),
+            "--tau0",
+            "0.004",
+            "--diagnose",
+            "--every",
+            "600",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let recs: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .filter(|v: &serde_json::Value| v["type"] == "diagnosis")
+        .collect();
+    // 30 minutes, every 600 s: interim at 600, 1200 and 1800 s, then the final one.
+    assert_eq!(recs.len(), 4);
+    assert_eq!(recs.iter().filter(|r| r["final"] == true).count(), 1);
+    let last = recs.last().unwrap();
+    let batch = diagnosis(&[run.to_str().unwrap()]);
+    assert_eq!(last["verdict"], batch["verdict"]);
+    assert_eq!(last["effects"][0]["kind"], batch["effects"][0]["kind"]);
+    let (a, b) = (
+        last["gap_before"].as_f64().unwrap(),
+        batch["gap_before"].as_f64().unwrap(),
+    );
+    assert!((a - b).abs() <= 1e-9 * b, "stream {a} vs diagnose {b}");
+}

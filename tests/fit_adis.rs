@@ -79,6 +79,7 @@ fn fit_axes(values: &[f64], fit: FitOptions) -> Vec<(String, FitResult)> {
         fit: Some(fit),
         run: None,
         limits: Vec::new(),
+        diagnose: false,
     };
     let setups = ["gyro_x", "gyro_y", "gyro_z"]
         .iter()

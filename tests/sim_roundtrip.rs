@@ -76,6 +76,7 @@ fn frames_decode_to_the_simulated_counts_and_the_same_curves() {
         fit: None,
         run: None,
         limits: Vec::new(),
+        diagnose: false,
     };
     let mut analysis = RunAnalysis::new("roundtrip", setups, opts);
     let mut out = Vec::new();

@@ -158,6 +158,9 @@ pub struct DataArgs {
     /// with the fits' intervals; verdicts in `summary`.
     #[arg(long)]
     pub limits: Option<PathBuf>,
+    /// Also write `diagnosis` records (the sim-to-real gap) with the fits, interim and final.
+    #[arg(long)]
+    pub diagnose: bool,
 }
 
 #[derive(Debug, Args)]
@@ -361,6 +364,7 @@ pub(crate) fn analysis_options(d: &DataArgs, tau0_s: f64) -> Result<AnalysisOpti
             Some(p) => crate::model::limits::load_file(p)?,
             None => Vec::new(),
         },
+        diagnose: d.diagnose,
     })
 }
 

@@ -49,6 +49,7 @@ pub fn options(desc: &FrameDescriptor, every_s: Option<f64>) -> AnalysisOptions 
         fit: Some(FitOptions::default()),
         run: None,
         limits: Vec::new(),
+        diagnose: false,
     }
 }
 
