@@ -114,3 +114,45 @@ fn a_bad_limits_file_names_the_key_and_exits_2() {
         "{err}"
     );
 }
+
+#[test]
+fn a_stand_config_judges_its_limits_in_the_summary() {
+    // The 5-minute siu8 fixture: g4 carries the seed paper's VOG4 N = 0.254 arcsec/sqrt(s).
+    let capture = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/fixtures/captures/siu8_stand_5min_seed1.siu8"
+    );
+    let out_path = tmp("stand-out.jsonl");
+    let cfg = tmp("stand.toml");
+    std::fs::write(
+        &cfg,
+        format!(
+            "[source]\nkind = \"file\"\npath = {capture:?}\nformat = \"siu8\"\n\n[channels]\ninclude = [\"g4\"]\n\n\
+             [output]\npath = {:?}\n\n[[limits]]\nchannel = \"g4\"\ncoef = \"N\"\nmax = 0.30\n\n\
+             [[limits]]\nchannel = \"g4\"\ncoef = \"N\"\nmax = 0.0035\nunit = \"deg/sqrt(h)\"\n",
+            out_path.to_str().unwrap()
+        ),
+    )
+    .unwrap();
+    let run = exe()
+        .args(["run", "--config", cfg.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let text = std::fs::read_to_string(&out_path).unwrap();
+    let summary: serde_json::Value = text
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .rfind(|v| v["type"] == "summary")
+        .unwrap();
+    let l = summary["limits"].as_array().unwrap();
+    assert_eq!(l.len(), 2);
+    // 0.30 arcsec/sqrt(s) passes; 0.0035 deg/sqrt(h) = 0.21 arcsec/sqrt(s) fails.
+    assert_eq!(l[0]["verdict"], "pass");
+    assert_eq!(l[1]["verdict"], "fail");
+    assert_eq!(summary["pass"], false);
+}

@@ -32,9 +32,12 @@ fn shipped_example_parses() {
     // 3 h and 60 s as written in the example.
     assert_eq!(cfg.duration_s, Some(10_800.0));
     assert_eq!(cfg.every_s, Some(60.0));
-    // The three [[limits]] tables, kept raw for the limit checker.
-    assert_eq!(cfg.limits_raw.len(), 3);
+    // The four [[limits]] tables, and each is a valid limit spec.
+    assert_eq!(cfg.limits_raw.len(), 4);
     assert_eq!(cfg.limits_raw[0]["channel"].as_str(), Some("g4"));
+    let specs =
+        allanscope::model::limits::from_tables(&cfg.limits_raw, &cfg.file).expect("valid limits");
+    assert_eq!(specs.len(), 4);
 }
 
 #[test]
