@@ -431,6 +431,15 @@ struct SqSum {
     next: u64,
 }
 
+impl SqSum {
+    /// Adds the sum of `n` squared differences just taken.
+    fn add(&mut self, n: usize, sum_sq: f64) {
+        self.sum.add(sum_sq);
+        self.count += n as u64;
+        self.next += n as u64;
+    }
+}
+
 /// Moments for the lag-1 autocorrelation of one differenced series (noise identification).
 #[derive(Debug, Clone, Copy, Default)]
 struct LagMoments {
@@ -866,6 +875,20 @@ fn decimate<T: Copy>(parent: &Buf<T>, child: &mut Buf<T>, factor: u64) {
     }
 }
 
+/// The differences of span `(K - 1) mp` not yet taken from `buf`, starting at stream index
+/// `next`: `K` equal-length slices of the buffer at offsets `0, mp, 2 mp, ...`.
+#[inline(always)]
+fn lagged<T: Copy, const K: usize>(buf: &Buf<T>, next: u64, mp: u64) -> Option<[&[T]; K]> {
+    let span = (K as u64 - 1) * mp;
+    if buf.end() <= next + span {
+        return None;
+    }
+    let n = (buf.end() - span - next) as usize;
+    let o = (next - buf.base) as usize;
+    let m = mp as usize;
+    Some(std::array::from_fn(|j| &buf.data[o + j * m..o + j * m + n]))
+}
+
 /// Sum of `f(a_i, b_i, c_i)^2` over equal-length slices, in four partial sums over
 /// `chunks_exact(4)` so the loop has no bounds checks and runs on vector lanes.
 #[inline(always)]
@@ -941,64 +964,43 @@ fn update_level<R: Repr>(
     let x = &st.x;
     // AVAR: x_{k+2m} - 2 x_{k+m} + x_k (THEORY.md section 1).
     if stats.avar {
-        let q = &mut lv.avar;
-        if x.end() > q.next + 2 * mp {
-            let n = (x.end() - 2 * mp - q.next) as usize;
-            let o = (q.next - x.base) as usize;
-            let m = mp as usize;
-            let a = &x.data[o..o + n];
-            let b = &x.data[o + m..o + m + n];
-            let c = &x.data[o + 2 * m..o + 2 * m + n];
-            q.sum.add(if narrow.d2 {
-                sum_sq3(a, b, c, |a, b, c| R::d2_narrow(c, b, a))
-            } else {
-                sum_sq3(a, b, c, |a, b, c| R::d2(c, b, a))
-            });
-            q.count += n as u64;
-            q.next += n as u64;
+        if let Some([a, b, c]) = lagged(x, lv.avar.next, mp) {
+            lv.avar.add(
+                a.len(),
+                if narrow.d2 {
+                    sum_sq3(a, b, c, |a, b, c| R::d2_narrow(c, b, a))
+                } else {
+                    sum_sq3(a, b, c, |a, b, c| R::d2(c, b, a))
+                },
+            );
         }
     }
     // HVAR: x_{k+3m} - 3 x_{k+2m} + 3 x_{k+m} - x_k (THEORY.md section 1).
     if stats.hvar {
-        let q = &mut lv.hvar;
-        if x.end() > q.next + 3 * mp {
-            let n = (x.end() - 3 * mp - q.next) as usize;
-            let o = (q.next - x.base) as usize;
-            let m = mp as usize;
-            let a = &x.data[o..o + n];
-            let b = &x.data[o + m..o + m + n];
-            let c = &x.data[o + 2 * m..o + 2 * m + n];
-            let d = &x.data[o + 3 * m..o + 3 * m + n];
-            q.sum.add(if narrow.d3 {
-                sum_sq4(a, b, c, d, |a, b, c, d| R::d3_narrow(d, c, b, a))
-            } else {
-                sum_sq4(a, b, c, d, |a, b, c, d| R::d3(d, c, b, a))
-            });
-            q.count += n as u64;
-            q.next += n as u64;
+        if let Some([a, b, c, d]) = lagged(x, lv.hvar.next, mp) {
+            lv.hvar.add(
+                a.len(),
+                if narrow.d3 {
+                    sum_sq4(a, b, c, d, |a, b, c, d| R::d3_narrow(d, c, b, a))
+                } else {
+                    sum_sq4(a, b, c, d, |a, b, c, d| R::d3(d, c, b, a))
+                },
+            );
         }
     }
     // MVAR: the inner sum of m second differences is C_{j+3m} - 3C_{j+2m} + 3C_{j+m} - C_j
     // (THEORY.md section 1 with C the running sum of phase); with stride s the stream holds
     // C at every s-th index, and mp = m/s.
     if stats.mvar {
-        let q = &mut lv.mvar;
-        let c = &st.c;
-        if c.end() > q.next + 3 * mp {
-            let n = (c.end() - 3 * mp - q.next) as usize;
-            let o = (q.next - c.base) as usize;
-            let m = mp as usize;
-            let a = &c.data[o..o + n];
-            let b = &c.data[o + m..o + m + n];
-            let cc = &c.data[o + 2 * m..o + 2 * m + n];
-            let d = &c.data[o + 3 * m..o + 3 * m + n];
-            q.sum.add(if narrow.c3 {
-                sum_sq4(a, b, cc, d, |a, b, c, d| R::c3_narrow(d, c, b, a))
-            } else {
-                sum_sq4(a, b, cc, d, |a, b, c, d| R::c3(d, c, b, a))
-            });
-            q.count += n as u64;
-            q.next += n as u64;
+        if let Some([a, b, c, d]) = lagged(&st.c, lv.mvar.next, mp) {
+            lv.mvar.add(
+                a.len(),
+                if narrow.c3 {
+                    sum_sq4(a, b, c, d, |a, b, c, d| R::c3_narrow(d, c, b, a))
+                } else {
+                    sum_sq4(a, b, c, d, |a, b, c, d| R::c3(d, c, b, a))
+                },
+            );
         }
     }
     // Noise identification (Riley and Greenhall 2004): lag-1 products of the non-overlapping
