@@ -214,6 +214,16 @@ fn run_one(i: u64, seed: u64, tau0: f64, t_run: f64, kinds: &[Option<EffectKind>
     let kind = kinds[(i as usize) % kinds.len()];
     let mut d = draw(&mut rng, kind, t_run, tau0);
     let (inc, truth) = simulate(&d, tau0, t_run, seed.wrapping_add(7919 * i));
+    // Jumps: the size is that of the realised jumps (their rms over the nominal one).
+    if let (
+        Some(EffectParams::BiasJumps {
+            rms_size: nominal, ..
+        }),
+        Some(EffectParams::BiasJumps { rms_size: real, .. }),
+    ) = (d.effect, truth)
+    {
+        d.rho *= real / nominal;
+    }
     d.effect = truth;
     let ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
     let mut ev = ev;
