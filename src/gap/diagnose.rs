@@ -658,7 +658,14 @@ pub fn diagnose(
                 let with = prob.gls(&spec_from(&prob, &effects, &offset));
                 let without = prob.gls(&spec_from(&prob, &others, &offset));
                 if let (Some(a), Some(b)) = (with, without) {
-                    if (b.chi2 - a.chi2) / e.params.kind().n_params() as f64 >= th.add_chi2 {
+                    // The rules of the forward search: `add_chi2` while the model without it
+                    // is flagged by `G`, the likelihood-ratio threshold otherwise.
+                    let crit = if b.gap() > th.gap_crit {
+                        th.add_chi2
+                    } else {
+                        th.lr_crit
+                    };
+                    if (b.chi2 - a.chi2) / e.params.kind().n_params() as f64 >= crit {
                         kept.push(*e);
                     }
                 }
