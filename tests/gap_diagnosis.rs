@@ -176,6 +176,49 @@ fn bias_jumps_are_found_in_time() {
 }
 
 #[test]
+fn injected_steps_are_located_and_sized() {
+    // Three steps added to a clean run (the truth is exact): sizes 3, -2.5 and 2 arcsec/s,
+    // 8-12 times the block-difference noise (about 0.25 arcsec/s at 14 s blocks).
+    let truth = [(1000.3, 3.0), (2000.0, -2.5), (2900.7, 2.0)];
+    let mut inc = simulate("", 12);
+    let mut level = 0.0;
+    let mut next = 0;
+    for (k, d) in inc.iter_mut().enumerate() {
+        let (t0, t1) = (k as f64 * TAU0, (k + 1) as f64 * TAU0);
+        let mut add = level * TAU0;
+        while next < truth.len() && truth[next].0 < t1 {
+            add += truth[next].1 * (t1 - truth[next].0.max(t0));
+            level += truth[next].1;
+            next += 1;
+        }
+        *d += add;
+    }
+    let mut ev = GapEvidence::from_increments(GapConfig::new(TAU0), &inc);
+    let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
+    let j = d.jumps.as_ref().expect("jump search ran");
+    assert_eq!(j.sizes.len(), truth.len(), "{j:?}");
+    for ((t, s), (tt, ts)) in j.times_s.iter().zip(&j.sizes).zip(truth) {
+        assert!((t - tt).abs() <= j.block_s, "time {t} vs {tt}");
+        assert!(rel(*s, ts) < TOL_AMP, "size {s} vs {ts}");
+    }
+    match d
+        .effects
+        .iter()
+        .find(|e| e.params.kind() == EffectKind::BiasJumps)
+    {
+        Some(e) => match e.params {
+            EffectParams::BiasJumps { count, rms_size } => {
+                assert_eq!(count, 3);
+                // rms of the true sizes: sqrt((9 + 6.25 + 4) / 3) = 2.533.
+                assert!(rel(rms_size, 2.533) < TOL_AMP, "rms {rms_size}");
+            }
+            p => panic!("{p:?}"),
+        },
+        None => panic!("no bias_jumps in {:?}", d.effects),
+    }
+}
+
+#[test]
 fn held_out_gap_shrinks_as_on_the_fitting_run() {
     let extra = "gauss_markov = { sigma = 0.5, tau_c = 2.0 }";
     let d = run(extra, 8);

@@ -52,11 +52,16 @@ fn adis16405_gyro_x_diagnosis() {
     assert!(((n - N_PROVENANCE) / N_PROVENANCE).abs() < TOL_N, "N {n}");
     // This crate's result (docs/gap.md): the five terms alone miss by far (G in the hundreds:
     // at 100 Hz the short taus have thousands of degrees of freedom), and the first effect
-    // named is an output filter of a few ms, as the ADIS16405's decimating average from its
-    // 819.2 Hz internal rate would give. A residual of about 1% at short tau stays significant.
+    // stationary effect named is an output filter of a few ms, as the ADIS16405's decimating
+    // average from its 819.2 Hz internal rate would give (a start transient may be named before
+    // it: the effects in time are listed first). A residual of about 1% at short tau stays
+    // significant.
     assert!(d.gap_before > 100.0, "gap before {}", d.gap_before);
     assert_eq!(
-        d.effects.first().map(|e| e.params.kind()),
+        d.effects
+            .iter()
+            .map(|e| e.params.kind())
+            .find(|k| !matches!(k, EffectKind::Warmup | EffectKind::BiasJumps)),
         Some(EffectKind::OutputFilter)
     );
     assert!(d.gap_after < d.gap_before / 10.0);

@@ -19,10 +19,12 @@
 //! - Effects: for each candidate, its shape parameter on a log grid (NNLS at each), the best one
 //!   polished by golden section; the candidate with the largest drop in `r' S^-1 r` is added if
 //!   the drop exceeds [`Thresholds::add_chi2`] per parameter, and effects are added while `G`
-//!   stays above [`Thresholds::gap_crit`].
+//!   stays above [`Thresholds::gap_crit`]. The best candidate also flags the model on its own
+//!   when its drop per parameter exceeds [`Thresholds::lr_crit`] (a likelihood-ratio test
+//!   against the named alternatives, which catches bumps that the omnibus `G` misses).
 //! - Bias jumps have the second-order law of a rate random walk (K absorbs them on the curve),
-//!   so they are found in time: outliers of the first differences of the block-mean rate at
-//!   several block scales ([`detect_jumps`]).
+//!   so they are found in time: steps in the block-mean rate by generalised least squares with
+//!   the fitted model's noise covariance, forward selection ([`detect_steps`]).
 
 use super::effects::{effect_column, EffectKind, EffectParams, Grid};
 use super::evidence::EvidenceSnapshot;
@@ -48,9 +50,16 @@ pub struct Thresholds {
     /// Simultaneous band on `|z_j| = |r_j| / sqrt(S_jj)`: the whole correct curve stays inside
     /// it in 95% of runs.
     pub band_z: f64,
-    /// Drop in `r' S^-1 r` per added parameter needed to add an effect.
+    /// Drop in `r' S^-1 r` per added parameter needed to add an effect once the model is
+    /// flagged.
     pub add_chi2: f64,
-    /// Robust z of a block-mean difference that counts as a bias jump.
+    /// Drop in `r' S^-1 r` per added parameter by the best stationary candidate that flags the
+    /// model on its own, even when `G <= gap_crit` (a likelihood-ratio test against the named
+    /// alternatives, more sensitive to them than the omnibus `G`; about the null 99.5%
+    /// quantile of the best drop over all candidates and shapes).
+    pub lr_crit: f64,
+    /// z score (square root of the drop of the whitened residual sum of squares) a step in
+    /// the block means needs to count as a bias jump ([`detect_steps`]).
     pub jump_z: f64,
     /// Drop of the block-mean residual sum of squares (in robust block variances) that a
     /// warm-up must bring ([`fit_warmup`]).
@@ -60,11 +69,12 @@ pub struct Thresholds {
 impl Default for Thresholds {
     fn default() -> Self {
         Self {
-            gap_crit: 1.7,
+            gap_crit: 1.9,
             band_z: 2.5,
             add_chi2: 3.0,
-            jump_z: 5.5,
-            warmup_w: 16.0,
+            lr_crit: 6.7,
+            jump_z: 4.5,
+            warmup_w: 11.5,
         }
     }
 }
@@ -608,18 +618,17 @@ pub fn diagnose(
 
     // 1. Stationary effects on the curve, while the gap stays significant.
     let mut offset = vec![0.0; j];
-    let (mut spec, mut cur) = if flagged {
-        add_stationary(
-            &prob,
-            &stationary,
-            &offset,
-            &mut effects,
-            base.clone(),
-            opts,
-        )
-    } else {
-        (spec_from(&prob, &effects, &offset), base.clone())
-    };
+    // Flagged by `G`, or by the best candidate's likelihood ratio (add_stationary).
+    let (mut spec, mut cur) = add_stationary(
+        &prob,
+        &stationary,
+        &offset,
+        &mut effects,
+        base.clone(),
+        opts,
+        true,
+    );
+    let flagged = flagged || !effects.is_empty();
 
     // 2. A warm-up, in time: the block means against the model found so far.
     let mut warm_curve: Option<Vec<f64>> = None;
@@ -649,7 +658,14 @@ pub fn diagnose(
                 let with = prob.gls(&spec_from(&prob, &effects, &offset));
                 let without = prob.gls(&spec_from(&prob, &others, &offset));
                 if let (Some(a), Some(b)) = (with, without) {
-                    if (b.chi2 - a.chi2) / e.params.kind().n_params() as f64 >= th.add_chi2 {
+                    // The rules of the forward search: `add_chi2` while the model without it
+                    // is flagged by `G`, the likelihood-ratio threshold otherwise.
+                    let crit = if b.gap() > th.gap_crit {
+                        th.add_chi2
+                    } else {
+                        th.lr_crit
+                    };
+                    if (b.chi2 - a.chi2) / e.params.kind().n_params() as f64 >= crit {
                         kept.push(*e);
                     }
                 }
@@ -658,23 +674,31 @@ pub fn diagnose(
             let f = prob
                 .gls(&spec_from(&prob, &kept, &offset))
                 .unwrap_or_else(|| prev.clone());
-            effects = vec![AddedEffect {
+            // In the order they were added (CONTRACT.md): the stationary effects kept, then
+            // the warm-up.
+            effects = kept;
+            for e in effects.iter_mut() {
+                e.gap_after = f.gap();
+            }
+            effects.push(AddedEffect {
                 params: EffectParams::Warmup {
                     amplitude: w.amplitude,
                     time_constant_s: w.time_constant_s,
                 },
                 gap_after: f.gap(),
                 delta_chi2: base.chi2 - f.chi2,
-            }];
-            let mut rest = kept;
-            for e in rest.iter_mut() {
-                e.gap_after = f.gap();
-            }
-            effects.extend(rest);
+            });
             cur = f;
             if cur.gap() > th.gap_crit {
-                let (sp, c2) =
-                    add_stationary(&prob, &stationary, &offset, &mut effects, cur.clone(), opts);
+                let (sp, c2) = add_stationary(
+                    &prob,
+                    &stationary,
+                    &offset,
+                    &mut effects,
+                    cur.clone(),
+                    opts,
+                    false,
+                );
                 spec = sp;
                 cur = c2;
             } else {
@@ -696,7 +720,13 @@ pub fn diagnose(
                 .collect(),
             None => snap.block_means.clone(),
         };
-        detect_jumps(&resid, block_s, th.jump_z, 0.0)
+        let c5: [f64; 5] = std::array::from_fn(|i| cur.coef.get(i).copied().unwrap_or(0.0));
+        let stat_params: Vec<EffectParams> = effects
+            .iter()
+            .map(|e| e.params)
+            .filter(|p| matches!(p.kind(), EffectKind::GaussMarkov | EffectKind::Sinusoid))
+            .collect();
+        detect_steps(&resid, block_s, &c5, &stat_params, th.jump_z)
     } else {
         None
     };
@@ -776,12 +806,19 @@ fn add_stationary(
     effects: &mut Vec<AddedEffect>,
     start: GlsFit,
     opts: &DiagnoseOptions,
+    lr_first: bool,
 ) -> (ModelSpec, GlsFit) {
     let th = opts.thresholds;
     let mut spec = spec_from(prob, effects, offset);
     let mut cur = start;
     let mut added = 0;
-    while added < opts.max_effects && cur.gap() > th.gap_crit {
+    while added < opts.max_effects && (cur.gap() > th.gap_crit || (lr_first && added == 0)) {
+        // Below gap_crit only the likelihood-ratio threshold can add (the first) effect.
+        let crit = if cur.gap() > th.gap_crit {
+            th.add_chi2
+        } else {
+            th.lr_crit
+        };
         let mut best: Option<(EffectKind, f64, GlsFit, f64)> = None;
         for &kind in kinds {
             if effects.iter().any(|e| e.params.kind() == kind) {
@@ -797,7 +834,7 @@ fn add_stationary(
         let Some((kind, sh, f, score)) = best else {
             break;
         };
-        if score < th.add_chi2 {
+        if score < crit {
             break;
         }
         effects.push(AddedEffect {
@@ -897,72 +934,6 @@ pub fn segment_tests(snap: &EvidenceSnapshot, c: &[f64; 5]) -> Vec<SegmentTest> 
         m *= 2;
     }
     out
-}
-
-/// Bias jumps as outliers of the first differences of the block-mean rate, at block scales of
-/// 1, 2, 4 and 8 blocks: a difference whose distance from the median exceeds `z_crit` robust
-/// standard deviations (1.4826 times the median absolute deviation) marks a jump; neighbouring
-/// marks of one sign are one jump (a jump inside a block splits over two differences), and its
-/// size is the mean of up to four blocks after it minus four before. The scale with the most
-/// jumps wins (the finest among ties). Blocks before `skip_s` are left out (a warm-up).
-pub fn detect_jumps(
-    block_means: &[f64],
-    block_s: f64,
-    z_crit: f64,
-    skip_s: f64,
-) -> Option<JumpFinding> {
-    let skip = (skip_s / block_s).ceil() as usize;
-    let base: Vec<f64> = block_means.iter().skip(skip).copied().collect();
-    if base.iter().any(|v| !v.is_finite()) {
-        return None;
-    }
-    let mut best: Option<JumpFinding> = None;
-    for w in [1usize, 2, 4, 8] {
-        let b: Vec<f64> = base
-            .chunks_exact(w)
-            .map(|c| c.iter().sum::<f64>() / w as f64)
-            .collect();
-        if b.len() < 24 {
-            break;
-        }
-        let d: Vec<f64> = b.windows(2).map(|p| p[1] - p[0]).collect();
-        let med = median(&d);
-        let mad = median(&d.iter().map(|v| (v - med).abs()).collect::<Vec<_>>());
-        let sd = 1.4826 * mad;
-        if sd.is_nan() || sd <= 0.0 {
-            continue;
-        }
-        let mut times = Vec::new();
-        let mut sizes = Vec::new();
-        let mut i = 0;
-        while i < d.len() {
-            let z = (d[i] - med) / sd;
-            if z.abs() > z_crit {
-                let sign = z.signum();
-                let mut e = i;
-                while e + 1 < d.len() && ((d[e + 1] - med) / sd) * sign > 2.0 {
-                    e += 1;
-                }
-                // Jump between block i and block e + 1.
-                let before = &b[i.saturating_sub(3)..=i];
-                let after = &b[e + 1..(e + 5).min(b.len())];
-                let mean = |s: &[f64]| s.iter().sum::<f64>() / s.len() as f64;
-                sizes.push(mean(after) - mean(before));
-                times.push(skip as f64 * block_s + (i + 1) as f64 * w as f64 * block_s);
-                i = e + 1;
-            } else {
-                i += 1;
-            }
-        }
-        if best.as_ref().is_none_or(|f| sizes.len() > f.sizes.len()) {
-            best = Some(JumpFinding {
-                times_s: times,
-                sizes,
-                block_s: w as f64 * block_s,
-            });
-        }
-    }
-    best
 }
 
 /// A warm-up fitted to the block means.
@@ -1097,19 +1068,6 @@ pub fn fit_warmup(
     })
 }
 
-fn median(v: &[f64]) -> f64 {
-    let mut s: Vec<f64> = v.to_vec();
-    s.sort_by(|a, b| a.total_cmp(b));
-    let n = s.len();
-    if n == 0 {
-        f64::NAN
-    } else if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        0.5 * (s[n / 2 - 1] + s[n / 2])
-    }
-}
-
 /// The gap on a held-out run with the effects (kinds, shapes and amplitudes) fitted on another
 /// run held fixed; only the five-term amplitudes are refitted (they may differ run to run, as
 /// the seed paper's table 2 shows). Returns `(gap_before, gap_after)`.
@@ -1147,4 +1105,130 @@ pub fn holdout_gap(
         .gls(&spec)
         .ok_or(DiagnoseError::Fit("holdout GLS".into()))?;
     Ok((base.gap(), after.gap()))
+}
+
+/// Bias jumps by generalised least squares on the first differences of the block-mean rate
+/// (THEORY.md sections 3 and 5): `d = r 1 + sum_j s_j p_j + noise`, the noise covariance from
+/// the fitted model (five terms `c`, flicker and random walk included, plus the stationary
+/// `effects`: [`block_diff_acov`]). A jump at a block boundary is a spike `p = e_k` in `d`; one
+/// inside block `k` splits over `d_{k-1}` and `d_k` (`p = (e_{k-1} + e_k) / 2`). Forward
+/// selection: the candidate whose column brings the largest drop of the whitened residual sum of
+/// squares is added while the drop's square root (a z score) exceeds `z_crit`, with all the
+/// sizes refitted jointly each time. As jumps are found, their share of the random walk
+/// (`sum s^2 / T_run`, which the curve's `K` has absorbed) is taken out of `K` and the search
+/// is run again (twice at most). Returns `None` when the series is too short.
+pub fn detect_steps(
+    block_means: &[f64],
+    block_s: f64,
+    c: &[f64; 5],
+    effects: &[EffectParams],
+    z_crit: f64,
+) -> Option<JumpFinding> {
+    if block_means.len() < 24 || block_means.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let t_run = block_means.len() as f64 * block_s;
+    let mut c = *c;
+    let k2_total = c[3];
+    let mut found = step_search(block_means, block_s, &c, effects, z_crit)?;
+    for _ in 0..2 {
+        let kj2: f64 = found.sizes.iter().map(|s| s * s).sum::<f64>() / t_run;
+        let k2 = (k2_total - kj2).max(0.25 * k2_total);
+        if (k2 - c[3]).abs() <= 0.02 * k2_total {
+            break;
+        }
+        c[3] = k2;
+        found = step_search(block_means, block_s, &c, effects, z_crit)?;
+    }
+    Some(found)
+}
+
+fn step_search(
+    block_means: &[f64],
+    block_s: f64,
+    c: &[f64; 5],
+    effects: &[EffectParams],
+    z_crit: f64,
+) -> Option<JumpFinding> {
+    let d: Vec<f64> = block_means.windows(2).map(|p| p[1] - p[0]).collect();
+    let n = d.len();
+    let acov = block_diff_acov(c, effects, block_s, n);
+    let sigma = DMatrix::from_fn(n, n, |i, j| acov[i.abs_diff(j)]);
+    let chol = sigma.cholesky()?;
+    let l = chol.l();
+    let linv = l.solve_lower_triangular(&DMatrix::identity(n, n))?;
+    let yw = &linv * DVector::from_column_slice(&d);
+    // Candidate columns, whitened: spikes (jump at the boundary after block k) and halves
+    // (jump inside block k); `pos[i]` is the candidate's jump time in blocks.
+    let mut cols: Vec<DVector<f64>> = Vec::with_capacity(2 * n);
+    let mut pos: Vec<f64> = Vec::with_capacity(2 * n);
+    for k in 0..n {
+        cols.push(linv.column(k).into_owned());
+        pos.push(k as f64 + 1.0);
+        if k > 0 {
+            cols.push((linv.column(k - 1) + linv.column(k)) * 0.5);
+            pos.push(k as f64 + 0.5);
+        }
+    }
+    let ones = &linv * DVector::from_element(n, 1.0);
+    let mut chosen: Vec<usize> = Vec::new();
+    let max_jumps = (n / 8).max(1);
+    let fit = |chosen: &[usize]| -> Option<(DVector<f64>, DVector<f64>)> {
+        let mut xs = vec![ones.clone()];
+        xs.extend(chosen.iter().map(|&i| cols[i].clone()));
+        let x = DMatrix::from_columns(&xs);
+        let beta = (x.transpose() * &x).try_inverse()? * x.transpose() * &yw;
+        let r = &yw - &x * &beta;
+        Some((beta, r))
+    };
+    let (_, mut resid) = fit(&chosen)?;
+    let mut q = vec![ones.clone() / ones.norm()];
+    while chosen.len() < max_jumps {
+        // Drop of the RSS for each candidate: (u' r)^2 / |u|^2, u the column projected off
+        // the current design (orthonormal basis q).
+        let mut best: Option<(usize, f64)> = None;
+        for (i, col) in cols.iter().enumerate() {
+            if chosen.contains(&i) {
+                continue;
+            }
+            let mut u = col.clone();
+            for qv in &q {
+                let a = qv.dot(&u);
+                u -= qv * a;
+            }
+            let nu = u.norm_squared();
+            if nu <= 1e-12 * col.norm_squared() {
+                continue;
+            }
+            let drop = u.dot(&resid).powi(2) / nu;
+            if best.is_none_or(|b| drop > b.1) {
+                best = Some((i, drop));
+            }
+        }
+        let Some((i, drop)) = best else { break };
+        if drop.sqrt() < z_crit {
+            break;
+        }
+        let mut u = cols[i].clone();
+        for qv in &q {
+            let a = qv.dot(&u);
+            u -= qv * a;
+        }
+        let nu = u.norm();
+        q.push(u / nu);
+        chosen.push(i);
+        resid = fit(&chosen)?.1;
+    }
+    let (beta, _) = fit(&chosen)?;
+    let mut jumps: Vec<(f64, f64)> = chosen
+        .iter()
+        .enumerate()
+        .map(|(j, &i)| (pos[i] * block_s, beta[j + 1]))
+        .collect();
+    jumps.sort_by(|a, b| a.0.total_cmp(&b.0));
+    Some(JumpFinding {
+        times_s: jumps.iter().map(|j| j.0).collect(),
+        sizes: jumps.iter().map(|j| j.1).collect(),
+        block_s,
+    })
 }
