@@ -6,18 +6,22 @@
 //! each boundary:
 //!
 //! ```text
-//! input (text columns) / frame (descriptor, decoder)      bytes -> Sample
-//!   -> allan (accumulators, batch reference, edf)         Sample -> Curve
-//!   -> model (terms, fit, aggregate)                      Curve -> Fit
-//!   -> sink (JSON lines)                                  Curve/Fit -> record
-//! sim (noise, effects, writer)                            model file -> capture
-//! source (file, stdin, serial, udp) -> pipeline (decode, analysis and writer threads)
-//!                                                         bytes -> records, live or replayed
+//! source (file, stdin, serial, udp)                       bytes            (tokio tasks)
+//!   -> frame (descriptor, decoder) | input (text columns)  bytes -> Chunk  (decode thread)
+//!   -> analysis: one run, per channel                      Chunk -> records (worker threads)
+//!        allan (accumulators, batch reference, edf, noise id)   samples -> Curve
+//!        model (terms, covariance, fit, aggregate, limits)      Curve -> FitResult
+//!        gap (evidence, effects, diagnosis)                     increments -> Diagnosis
+//!   -> sink (JSON-lines records, SVG plot, HTML report)    records -> bytes (writer thread)
+//! pipeline: the threads and bounded channels between those stages, shutdown, back-pressure
+//! sim (model files, generators, capture writer)           model file -> capture
 //! stand (the stand config of `run`)                       TOML -> sources, options, limits
+//! cli: one file per subcommand over the above; main.rs maps errors to exit statuses
 //! ```
 //!
-//! Numerical stages (`allan`, `model`, `sim`) are plain synchronous code: they never know where
-//! samples came from and never await. I/O lives at the edges (`input`, `frame`, `sink`, `cli`).
+//! Numerical stages (`allan`, `model`, `gap`, `sim`) are plain synchronous code: they never know
+//! where samples came from and never await. I/O lives at the edges (`source`, `input`, `sink`,
+//! `cli`); `pipeline` connects them with bounded crossbeam channels.
 #![forbid(unsafe_code)]
 
 pub mod allan;
