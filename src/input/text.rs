@@ -25,7 +25,7 @@ pub struct TextReader<R> {
     names: Vec<String>,
     /// The first data row, read while looking for a header.
     pending: Option<Vec<f64>>,
-    line: String,
+    line: Vec<u8>,
     bad_rows: u64,
     rows: u64,
 }
@@ -83,7 +83,7 @@ impl<R: BufRead> TextReader<R> {
                 line_no,
                 names,
                 pending,
-                line,
+                line: line.into_bytes(),
                 bad_rows: 0,
                 rows: 0,
             });
@@ -115,11 +115,19 @@ impl<R: BufRead> TextReader<R> {
         }
         while n < max_rows {
             self.line.clear();
-            if self.src.read_line(&mut self.line)? == 0 {
+            if self.src.read_until(b'\n', &mut self.line)? == 0 {
                 break;
             }
             self.line_no += 1;
-            let t = self.line.trim();
+            // A line that is not UTF-8 (a damaged stretch of the file) is a bad row, not the
+            // end of the run.
+            let Ok(text) = std::str::from_utf8(&self.line) else {
+                let row = Err("not UTF-8 text".to_string());
+                self.push_row(out, row);
+                n += 1;
+                continue;
+            };
+            let t = text.trim();
             if t.starts_with('#') {
                 continue;
             }
@@ -185,6 +193,20 @@ mod tests {
             assert!(a == &b || (a.is_nan() && b.is_nan()), "{v:?}");
         }
         assert_eq!(bad, 1);
+    }
+
+    #[test]
+    fn a_line_that_is_not_utf8_is_a_bad_row_not_the_end() {
+        let mut bytes = b"c\n1\n".to_vec();
+        bytes.extend_from_slice(&[0xff, 0xfe, b'\n']);
+        bytes.extend_from_slice(b"3\n");
+        let mut r = TextReader::new(bytes.as_slice(), Path::new("u.csv")).unwrap();
+        let mut out = Vec::new();
+        while r.read_rows(&mut out, 8).unwrap() > 0 {}
+        assert_eq!(out.len(), 3);
+        assert_eq!((out[0], out[2]), (1.0, 3.0));
+        assert!(out[1].is_nan());
+        assert_eq!(r.bad_rows(), 1);
     }
 
     #[test]
