@@ -19,6 +19,7 @@
 //! duration = "3h"             # optional: stop after (s, min, h, d)
 //! every_s = 60.0              # optional: interim records (wall-seconds live, data-seconds file)
 //! capture = "stand.siu8"      # optional: every received byte (live sources)
+//! diagnose = true              # optional: `diagnosis` records with the fits (default false)
 //!
 //! [statistics]
 //! stats = ["avar", "hvar", "mvar"]
@@ -59,6 +60,8 @@ pub struct StandConfig {
     pub duration_s: Option<f64>,
     /// Seconds between interim records (`run.every_s`).
     pub every_s: Option<f64>,
+    /// Write `diagnosis` records (the sim-to-real gap) with the fits (`run.diagnose`).
+    pub diagnose: bool,
     /// `run.capture`.
     pub capture: Option<PathBuf>,
     pub stats: StatSet,
@@ -360,8 +363,17 @@ impl StandConfig {
 
         // [run]
         let (mut duration_s, mut every_s, mut capture) = (None, None, None);
+        let mut diagnose = false;
         if let Some(r) = ck.table(&root, "run") {
-            ck.known_keys("run", r, &["duration", "every_s", "capture"]);
+            ck.known_keys("run", r, &["duration", "every_s", "capture", "diagnose"]);
+            match r.get("diagnose") {
+                None => {}
+                Some(toml::Value::Boolean(b)) => diagnose = *b,
+                Some(v) => ck.bad(
+                    "run.diagnose",
+                    format!("expected true or false, not {}", show(v)),
+                ),
+            }
             match r.get("duration") {
                 None => {}
                 Some(toml::Value::String(d)) => match crate::cli::parse_duration_s(d) {
@@ -527,6 +539,7 @@ impl StandConfig {
                 duration_s,
                 every_s,
                 capture,
+                diagnose,
                 stats,
                 taus,
                 overlap,

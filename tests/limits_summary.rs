@@ -127,7 +127,8 @@ fn a_stand_config_judges_its_limits_in_the_summary() {
     std::fs::write(
         &cfg,
         format!(
-            "[source]\nkind = \"file\"\npath = {capture:?}\nformat = \"siu8\"\n\n[channels]\ninclude = [\"g4\"]\n\n\
+            "[source]\nkind = \"file\"\npath = {capture:?}\nformat = \"siu8\"\n\n[run]\ndiagnose = true\n\n\
+             [channels]\ninclude = [\"g4\"]\n\n\
              [output]\npath = {:?}\n\n[[limits]]\nchannel = \"g4\"\ncoef = \"N\"\nmax = 0.30\n\n\
              [[limits]]\nchannel = \"g4\"\ncoef = \"N\"\nmax = 0.0035\nunit = \"deg/sqrt(h)\"\n",
             out_path.to_str().unwrap()
@@ -155,4 +156,12 @@ fn a_stand_config_judges_its_limits_in_the_summary() {
     assert_eq!(l[0]["verdict"], "pass");
     assert_eq!(l[1]["verdict"], "fail");
     assert_eq!(summary["pass"], false);
+    // `[run] diagnose = true`: the final diagnosis of g4 is in the stream.
+    let diag: Vec<serde_json::Value> = text
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .filter(|v| v["type"] == "diagnosis" && v["final"] == true)
+        .collect();
+    assert_eq!(diag.len(), 1);
+    assert_eq!(diag[0]["channel"], "g4");
 }

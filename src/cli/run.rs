@@ -65,7 +65,7 @@ pub fn run(r: &RunArgs) -> Result<()> {
         }),
         run: None,
         limits,
-        diagnose: false,
+        diagnose: cfg.diagnose,
     };
     let setups =
         select_channels(frame_channels(&desc), &cfg.channels, &spec.name()).map_err(|e| {
