@@ -55,17 +55,7 @@ fn decode_stage(c: &mut Criterion) {
 
 fn replay(c: &mut Criterion) {
     let desc = FrameDescriptor::load("siu8").expect("siu8");
-    let channels: Vec<ChannelSetup> = desc
-        .channels()
-        .into_iter()
-        .enumerate()
-        .map(|(i, ch)| ChannelSetup {
-            name: ch.name,
-            unit: ch.unit,
-            column: i,
-            counts_lsb: ch.scale,
-        })
-        .collect();
+    let channels: Vec<ChannelSetup> = ChannelSetup::for_frames(&desc);
     let mut g = c.benchmark_group("replay");
     g.sample_size(10);
     g.throughput(Throughput::Bytes(

@@ -38,6 +38,23 @@ pub struct ChannelSetup {
     pub counts_lsb: Option<f64>,
 }
 
+impl ChannelSetup {
+    /// The channels of a frame format, in the order its frames carry them; integer increment
+    /// fields are counts of their LSB.
+    pub fn for_frames(desc: &crate::frame::FrameDescriptor) -> Vec<ChannelSetup> {
+        desc.channels()
+            .into_iter()
+            .enumerate()
+            .map(|(i, c)| ChannelSetup {
+                name: c.name,
+                unit: c.unit,
+                column: i,
+                counts_lsb: c.scale,
+            })
+            .collect()
+    }
+}
+
 /// Settings of one run's analysis.
 #[derive(Debug, Clone)]
 pub struct AnalysisOptions {

@@ -59,16 +59,7 @@ fn frames_decode_to_the_simulated_counts_and_the_same_curves() {
 
     // Through the frames: decode at odd chunk sizes, feed the analysis.
     let mut decoder = Decoder::new(desc.clone());
-    let setups = chans
-        .iter()
-        .enumerate()
-        .map(|(i, c)| ChannelSetup {
-            name: c.name.clone(),
-            unit: c.unit.clone(),
-            column: i,
-            counts_lsb: c.scale,
-        })
-        .collect();
+    let setups = ChannelSetup::for_frames(&desc);
     let opts = AnalysisOptions {
         accum: cfg.clone(),
         kind: InputKind::Increments,

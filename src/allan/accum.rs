@@ -263,10 +263,7 @@ impl Repr for IntRepr {
     }
     #[inline(always)]
     fn d3(a: i64, b: i64, c: i64, d: i64) -> f64 {
-        let ab = a.wrapping_sub(b);
-        let bc = b.wrapping_sub(c);
-        let cd = c.wrapping_sub(d);
-        ab.wrapping_sub(bc).wrapping_sub(bc.wrapping_sub(cd)) as f64
+        third_difference(a, b, c, d) as f64
     }
     #[inline(always)]
     fn c3(a: i128, b: i128, c: i128, d: i128) -> f64 {
@@ -287,11 +284,7 @@ impl Repr for IntRepr {
     /// caller proves `|result| < 2^51`).
     #[inline(always)]
     fn c3_narrow(a: i128, b: i128, c: i128, d: i128) -> f64 {
-        let (a, b, c, d) = (a as i64, b as i64, c as i64, d as i64);
-        let ab = a.wrapping_sub(b);
-        let bc = b.wrapping_sub(c);
-        let cd = c.wrapping_sub(d);
-        small_i64_to_f64(ab.wrapping_sub(bc).wrapping_sub(bc.wrapping_sub(cd)))
+        small_i64_to_f64(third_difference(a as i64, b as i64, c as i64, d as i64))
     }
     fn deviation(d: i64, reference: i64) -> u64 {
         d.abs_diff(reference)
@@ -302,11 +295,18 @@ impl Repr for IntRepr {
     }
     #[inline(always)]
     fn d3_narrow(a: i64, b: i64, c: i64, d: i64) -> f64 {
-        let ab = a.wrapping_sub(b);
-        let bc = b.wrapping_sub(c);
-        let cd = c.wrapping_sub(d);
-        small_i64_to_f64(ab.wrapping_sub(bc).wrapping_sub(bc.wrapping_sub(cd)))
+        small_i64_to_f64(third_difference(a, b, c, d))
     }
+}
+
+/// `a - 3b + 3c - d` as nested first differences in wrapping i64 arithmetic: exact modulo
+/// 2^64, so exact whenever the true value fits in i64.
+#[inline(always)]
+fn third_difference(a: i64, b: i64, c: i64, d: i64) -> i64 {
+    let ab = a.wrapping_sub(b);
+    let bc = b.wrapping_sub(c);
+    let cd = c.wrapping_sub(d);
+    ab.wrapping_sub(bc).wrapping_sub(bc.wrapping_sub(cd))
 }
 
 /// `v as f64` for `|v| < 2^51`, exactly, by the 1.5 * 2^52 bias trick: an integer add and a

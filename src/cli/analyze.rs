@@ -51,20 +51,6 @@ pub(crate) fn parse_pace(s: &str) -> Result<bool> {
     }
 }
 
-/// The channels of a frame format, as the analysis sets them up.
-pub(crate) fn frame_channels(desc: &FrameDescriptor) -> Vec<ChannelSetup> {
-    desc.channels()
-        .into_iter()
-        .enumerate()
-        .map(|(i, c)| ChannelSetup {
-            name: c.name,
-            unit: c.unit,
-            column: i,
-            counts_lsb: c.scale,
-        })
-        .collect()
-}
-
 fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue) -> Result<()> {
     let d = &a.data;
     let realtime = parse_pace(&a.pace)?;
@@ -158,7 +144,7 @@ fn analyze_frames(
     queue: &RecordQueue,
     ctl: &RunControl,
 ) -> Result<RunAnalysis> {
-    let setups = select_channels(frame_channels(desc), &d.channels, input)?;
+    let setups = select_channels(ChannelSetup::for_frames(desc), &d.channels, input)?;
     let analysis = RunAnalysis::new(input, setups, opts);
     let pace = if realtime {
         Pace::Realtime {

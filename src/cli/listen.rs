@@ -7,7 +7,7 @@ use std::time::Duration;
 use anyhow::Result;
 use clap::{ArgGroup, Args};
 
-use super::analyze::{frame_channels, output_writer};
+use super::analyze::output_writer;
 use super::{analysis_options, parse_duration_s, select_channels, usage, DataArgs};
 use crate::analysis::RunAnalysis;
 use crate::frame::FrameDescriptor;
@@ -73,7 +73,11 @@ pub fn run(l: &ListenArgs) -> Result<()> {
     let mut opts = analysis_options(d, d.tau0.unwrap_or_else(|| desc.tau0_s()))?;
     // Live: --every is wall-seconds, kept by the pipeline, not data-seconds.
     opts.every_s = None;
-    let setups = select_channels(frame_channels(&desc), &d.channels, &spec.name())?;
+    let setups = select_channels(
+        crate::analysis::ChannelSetup::for_frames(&desc),
+        &d.channels,
+        &spec.name(),
+    )?;
     let analysis = RunAnalysis::new(&spec.name(), setups, opts);
     let ctl = RunControl {
         duration: match &l.duration {

@@ -8,7 +8,6 @@ use std::time::Duration;
 use anyhow::{Context, Result};
 use clap::Args;
 
-use super::analyze::frame_channels;
 use super::select_channels;
 use crate::allan::accum::AccumConfig;
 use crate::analysis::{AnalysisOptions, InputKind, RunAnalysis};
@@ -67,14 +66,18 @@ pub fn run(r: &RunArgs) -> Result<()> {
         limits,
         diagnose: cfg.diagnose,
     };
-    let setups =
-        select_channels(frame_channels(&desc), &cfg.channels, &spec.name()).map_err(|e| {
-            anyhow::Error::new(UsageError::Config {
-                file: cfg.file.clone(),
-                key: "channels.include".into(),
-                problem: e.to_string(),
-            })
-        })?;
+    let setups = select_channels(
+        crate::analysis::ChannelSetup::for_frames(&desc),
+        &cfg.channels,
+        &spec.name(),
+    )
+    .map_err(|e| {
+        anyhow::Error::new(UsageError::Config {
+            file: cfg.file.clone(),
+            key: "channels.include".into(),
+            problem: e.to_string(),
+        })
+    })?;
     let analysis = RunAnalysis::new(&spec.name(), setups, opts);
     let out: Box<dyn Write + Send> = match &cfg.output {
         Some(p) => Box::new(std::io::BufWriter::new(

@@ -28,16 +28,7 @@ pub fn siu8() -> FrameDescriptor {
 }
 
 pub fn channels(desc: &FrameDescriptor) -> Vec<ChannelSetup> {
-    desc.channels()
-        .into_iter()
-        .enumerate()
-        .map(|(i, c)| ChannelSetup {
-            name: c.name,
-            unit: c.unit,
-            column: i,
-            counts_lsb: c.scale,
-        })
-        .collect()
+    ChannelSetup::for_frames(desc)
 }
 
 /// The default options of `analyze` (all three statistics, octave taus, L = 16, model fit).
