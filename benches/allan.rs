@@ -66,12 +66,23 @@ fn stand_run(c: &mut Criterion) {
     let mut g = c.benchmark_group("8 channels x 2.7e6 samples, all three, L=16");
     g.throughput(Throughput::Elements(8 * n as u64));
     g.sample_size(10);
-    g.bench_function("counts + noise id", |b| {
+    g.bench_function("counts + noise id, one sample at a time", |b| {
         b.iter(|| {
             data.iter()
                 .map(|d| {
                     let mut e: Engine<IntRepr> = Engine::new(cfg(StatSet::ALL, true));
                     d.iter().for_each(|&v| e.push_increment(v));
+                    e.read().len()
+                })
+                .sum::<usize>()
+        })
+    });
+    g.bench_function("counts + noise id, arrays (push_increments)", |b| {
+        b.iter(|| {
+            data.iter()
+                .map(|d| {
+                    let mut e: Engine<IntRepr> = Engine::new(cfg(StatSet::ALL, true));
+                    e.push_increments(d);
                     e.read().len()
                 })
                 .sum::<usize>()

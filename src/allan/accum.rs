@@ -235,6 +235,12 @@ pub trait Repr: 'static {
     fn deviation(_d: Self::Inc, _reference: Self::Inc) -> u64 {
         0
     }
+    /// The phase points as wrapping 64-bit integers, for the fused integer kernels
+    /// ([`sum_sq_d2_d3`], the moving-sum MVAR); `None` for representations without them.
+    #[inline(always)]
+    fn as_i64(_x: &[Self::X]) -> Option<&[i64]> {
+        None
+    }
 }
 
 /// Integer counts, summed exactly.
@@ -296,6 +302,10 @@ impl Repr for IntRepr {
     #[inline(always)]
     fn d3_narrow(a: i64, b: i64, c: i64, d: i64) -> f64 {
         small_i64_to_f64(third_difference(a, b, c, d))
+    }
+    #[inline(always)]
+    fn as_i64(x: &[i64]) -> Option<&[i64]> {
+        Some(x)
     }
 }
 
@@ -548,6 +558,8 @@ pub struct Engine<R: Repr> {
     /// when its third difference of the running sum fits in 64 bits.
     first_inc: Option<R::Inc>,
     spread: u64,
+    /// Scratch for the moving sums of phase at m = 2, 4, 8, ... (integer input).
+    pyramid: Vec<Vec<i64>>,
 }
 
 impl<R: Repr> Engine<R> {
@@ -621,6 +633,7 @@ impl<R: Repr> Engine<R> {
             segments: 0,
             first_inc: None,
             spread: 0,
+            pyramid: Vec::new(),
         }
     }
 
@@ -656,6 +669,48 @@ impl<R: Repr> Engine<R> {
         let x = R::step(self.x_cur, d);
         self.append_point(x);
         self.n_steps += 1;
+    }
+
+    /// Feeds a run of increments, as [`Engine::push_increment`] on each in turn (the same
+    /// result), with the per-sample bookkeeping done a block at a time.
+    pub fn push_increments(&mut self, ds: &[R::Inc]) {
+        let mut rest = ds;
+        while let Some((&d0, tail)) = rest.split_first() {
+            if !self.open || self.first_inc.is_none() {
+                self.push_increment(d0);
+                rest = tail;
+                continue;
+            }
+            let s0 = &mut self.streams[0];
+            let room = BLOCK.saturating_sub(s0.x.data.len() - s0.x.new_from).max(1);
+            let (chunk, tail) = rest.split_at(room.min(rest.len()));
+            if let Some(r) = self.first_inc {
+                for &d in chunk {
+                    self.spread = self.spread.max(R::deviation(d, r));
+                }
+            }
+            let from = s0.x.data.len();
+            let mut x = self.x_cur;
+            s0.x.data.extend(chunk.iter().map(|&d| {
+                x = R::step(x, d);
+                x
+            }));
+            self.x_cur = x;
+            if s0.needs_c {
+                let mut c = self.c_cur;
+                s0.c.data.extend(s0.x.data[from..].iter().map(|&x| {
+                    c = R::accumulate(c, x);
+                    c
+                }));
+                self.c_cur = c;
+            }
+            self.n_points += chunk.len() as u64;
+            self.n_steps += chunk.len() as u64;
+            if s0.x.data.len() - s0.x.new_from >= BLOCK {
+                self.process();
+            }
+            rest = tail;
+        }
     }
 
     /// Feeds `missing` lost increments: the segment ends here.
@@ -746,19 +801,72 @@ impl<R: Repr> Engine<R> {
         let stats = self.cfg.stats;
         let nid = self.cfg.noise_id;
         let spread = self.spread;
-        for lv in &mut self.levels {
-            let st = &self.streams[lv.stream];
-            // Bounds from the spread (see `spread`): |second difference| <= 2 m spread,
-            // |third difference| <= 4 m spread, |MVAR inner sum| <= 2 m^2 spread.
-            let m = lv.m as u128;
-            let s = spread as u128 + 1;
-            let bounds = Narrow {
-                d2: (2 * m).saturating_mul(s) < (1 << 51),
-                d3: (4 * m).saturating_mul(s) < (1 << 51),
-                c3: m.saturating_mul(m).saturating_mul(2 * s) < (1 << 51),
-            };
-            update_level::<R>(lv, st, stats, nid, bounds);
+        // Bounds from the spread (see `spread`): |second difference| <= 2 m spread,
+        // |third difference| <= 4 m spread, |MVAR inner sum| <= 2 m^2 spread.
+        let bounds: Vec<Narrow> = self
+            .levels
+            .iter()
+            .map(|lv| {
+                let m = lv.m as u128;
+                let s = spread as u128 + 1;
+                Narrow {
+                    d2: (2 * m).saturating_mul(s) < (1 << 51),
+                    d3: (4 * m).saturating_mul(s) < (1 << 51),
+                    c3: m.saturating_mul(m).saturating_mul(2 * s) < (1 << 51),
+                }
+            })
+            .collect();
+        // MVAR of stream 0's levels at m = 2^k (integer phase, narrow bound) from the moving
+        // sums of phase, built by doubling: A_2m(j) = A_m(j) + A_m(j + m), A_1 = x.
+        let uses_sums =
+            |lv: &Level, b: &Narrow| stats.mvar && lv.stream == 0 && lv.m.is_power_of_two() && b.c3;
+        let mut pyramid = std::mem::take(&mut self.pyramid);
+        let s0 = &self.streams[0].x;
+        let mut lo = s0.end();
+        let mut top = 0;
+        if let Some(xi) = R::as_i64(&s0.data) {
+            for (lv, b) in self.levels.iter().zip(&bounds) {
+                if uses_sums(lv, b) {
+                    lo = lo.min(lv.mvar.next);
+                    top = top.max(lv.m.trailing_zeros() as usize);
+                }
+            }
+            pyramid.resize_with(top, Vec::new);
+            for k in 0..top {
+                let (done, rest) = pyramid.split_at_mut(k);
+                let prev: &[i64] = if k == 0 {
+                    &xi[(lo - s0.base) as usize..]
+                } else {
+                    &done[k - 1]
+                };
+                let half = 1usize << k;
+                let next = &mut rest[0];
+                next.clear();
+                if prev.len() > half {
+                    let len = prev.len() - half;
+                    next.extend(
+                        prev[..len]
+                            .iter()
+                            .zip(&prev[half..])
+                            .map(|(a, b)| a.wrapping_add(*b)),
+                    );
+                }
+            }
         }
+        for (lv, b) in self.levels.iter_mut().zip(&bounds) {
+            let st = &self.streams[lv.stream];
+            let sums = if uses_sums(lv, b) {
+                match (lv.m.trailing_zeros() as usize, R::as_i64(&st.x.data)) {
+                    (0, Some(xi)) => Some((xi, st.x.base)),
+                    (k, Some(_)) => Some((&pyramid[k - 1][..], lo)),
+                    _ => None,
+                }
+            } else {
+                None
+            };
+            update_level::<R>(lv, st, stats, nid, *b, sums);
+        }
+        self.pyramid = pyramid;
         // Trim: each stream keeps what its levels still need.
         let mut keep: Vec<u64> = self.streams.iter().map(|s| s.x.end()).collect();
         let mut keep_c: Vec<u64> = self.streams.iter().map(|s| s.c.end()).collect();
@@ -775,6 +883,10 @@ impl<R: Repr> Engine<R> {
             }
             if stats.mvar {
                 keep_c[lv.stream] = keep_c[lv.stream].min(lv.mvar.next);
+                if lv.stream == 0 {
+                    // The moving sums read phase from MVAR's next term on.
+                    *k = (*k).min(lv.mvar.next);
+                }
             }
         }
         for (i, s) in self.streams.iter_mut().enumerate() {
@@ -866,12 +978,12 @@ fn largest_divisor_at_most(m: u64, cap: u64) -> u64 {
 /// divisible by `factor`).
 fn decimate<T: Copy>(parent: &Buf<T>, child: &mut Buf<T>, factor: u64) {
     let first_new = parent.base + parent.new_from as u64;
-    let end = parent.end();
     // First index >= first_new that is a multiple of factor.
-    let mut k = first_new.div_ceil(factor) * factor;
-    while k < end {
-        child.data.push(parent.data[(k - parent.base) as usize]);
-        k += factor;
+    let k = first_new.div_ceil(factor) * factor;
+    if let Some(from) = parent.data.get((k - parent.base) as usize..) {
+        child
+            .data
+            .extend(from.iter().step_by(factor as usize).copied());
     }
 }
 
@@ -944,6 +1056,59 @@ fn sum_sq4<T: Copy>(a: &[T], b: &[T], c: &[T], d: &[T], f: impl Fn(T, T, T, T) -
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + rest
 }
 
+/// `K` slices of `data` (whose first element is stream index `base`), `n` long each, starting
+/// at stream indices `from, from + mp, from + 2 mp, ...`.
+#[inline(always)]
+fn lagged_at<T, const K: usize>(data: &[T], base: u64, from: u64, mp: u64, n: usize) -> [&[T]; K] {
+    let o = (from - base) as usize;
+    let m = mp as usize;
+    std::array::from_fn(|j| &data[o + j * m..o + j * m + n])
+}
+
+/// AVAR and HVAR sums of squares of integer phase in one pass (THEORY.md section 1). With
+/// `x0..x3` the phase at `k, k + m, k + 2m, k + 3m`: `v = x3 - 2 x2 + x1` is AVAR's second
+/// difference at `k + m` and `v - u`, `u = x2 - 2 x1 + x0`, HVAR's third difference at `k`.
+/// Wrapping arithmetic is exact modulo 2^64; the caller proves both below 2^51 in magnitude.
+#[inline(always)]
+fn sum_sq_d2_d3(x0: &[i64], x1: &[i64], x2: &[i64], x3: &[i64]) -> (f64, f64) {
+    #[inline(always)]
+    fn one(a: i64, b: i64, c: i64, d: i64) -> (f64, f64) {
+        let (p, q, r) = (b.wrapping_sub(a), c.wrapping_sub(b), d.wrapping_sub(c));
+        let (u, v) = (q.wrapping_sub(p), r.wrapping_sub(q));
+        let (fv, fw) = (small_i64_to_f64(v), small_i64_to_f64(v.wrapping_sub(u)));
+        (fv * fv, fw * fw)
+    }
+    const LANES: usize = 2;
+    let mut s2 = [0.0f64; LANES];
+    let mut s3 = [0.0f64; LANES];
+    let (c0, c1, c2, c3) = (
+        x0.chunks_exact(LANES),
+        x1.chunks_exact(LANES),
+        x2.chunks_exact(LANES),
+        x3.chunks_exact(LANES),
+    );
+    let (mut r2, mut r3) = (0.0, 0.0);
+    let rem = c0
+        .remainder()
+        .iter()
+        .zip(c1.remainder())
+        .zip(c2.remainder())
+        .zip(c3.remainder());
+    for (((a, b), c), d) in rem {
+        let (v2, v3) = one(*a, *b, *c, *d);
+        r2 += v2;
+        r3 += v3;
+    }
+    for (((a, b), c), d) in c0.zip(c1).zip(c2).zip(c3) {
+        for l in 0..LANES {
+            let (v2, v3) = one(a[l], b[l], c[l], d[l]);
+            s2[l] += v2;
+            s3[l] += v3;
+        }
+    }
+    (s2.iter().sum::<f64>() + r2, s3.iter().sum::<f64>() + r3)
+}
+
 /// Which differences of a level are proved below 2^51 in magnitude (integer input), so they
 /// can take the narrow, vectorizable conversions.
 #[derive(Debug, Clone, Copy)]
@@ -959,11 +1124,36 @@ fn update_level<R: Repr>(
     stats: StatSet,
     nid: bool,
     narrow: Narrow,
+    moving_sums: Option<(&[i64], u64)>,
 ) {
     let mp = lv.mp;
     let x = &st.x;
+    // Integer phase with both bounds proved: AVAR and HVAR in one pass. AVAR first catches up
+    // to HVAR's next + mp (the start of a segment), so that AVAR's difference at k + mp and
+    // HVAR's at k come from the same four phase points.
+    let mut fused = false;
+    if let (true, true, true, Some(xi)) = (stats.avar, stats.hvar, narrow.d3, R::as_i64(&x.data)) {
+        let target = lv.hvar.next + mp;
+        if lv.avar.next <= target {
+            fused = true;
+            let upto = target.min(x.end().saturating_sub(2 * mp));
+            if upto > lv.avar.next {
+                let n = (upto - lv.avar.next) as usize;
+                let [a, b, c] = lagged_at(xi, x.base, lv.avar.next, mp, n);
+                lv.avar
+                    .add(n, sum_sq3(a, b, c, |a, b, c| IntRepr::d2_narrow(c, b, a)));
+            }
+            if lv.avar.next == target && x.end() > lv.hvar.next + 3 * mp {
+                let n = (x.end() - 3 * mp - lv.hvar.next) as usize;
+                let [a, b, c, d] = lagged_at(xi, x.base, lv.hvar.next, mp, n);
+                let (s2, s3) = sum_sq_d2_d3(a, b, c, d);
+                lv.avar.add(n, s2);
+                lv.hvar.add(n, s3);
+            }
+        }
+    }
     // AVAR: x_{k+2m} - 2 x_{k+m} + x_k (THEORY.md section 1).
-    if stats.avar {
+    if stats.avar && !fused {
         if let Some([a, b, c]) = lagged(x, lv.avar.next, mp) {
             lv.avar.add(
                 a.len(),
@@ -976,7 +1166,7 @@ fn update_level<R: Repr>(
         }
     }
     // HVAR: x_{k+3m} - 3 x_{k+2m} + 3 x_{k+m} - x_k (THEORY.md section 1).
-    if stats.hvar {
+    if stats.hvar && !fused {
         if let Some([a, b, c, d]) = lagged(x, lv.hvar.next, mp) {
             lv.hvar.add(
                 a.len(),
@@ -991,7 +1181,18 @@ fn update_level<R: Repr>(
     // MVAR: the inner sum of m second differences is C_{j+3m} - 3C_{j+2m} + 3C_{j+m} - C_j
     // (THEORY.md section 1 with C the running sum of phase); with stride s the stream holds
     // C at every s-th index, and mp = m/s.
-    if stats.mvar {
+    if let (true, Some((sums, base))) = (stats.mvar, moving_sums) {
+        // The same inner sum as the second difference at lag m of the moving sums
+        // A_m(j) = C_{j+m} - C_j of phase, which the caller holds from `base` up to P - m + 1
+        // (P phase points), in wrapping i64, with |result| < 2^51 proved.
+        let end = base + sums.len() as u64;
+        if end > lv.mvar.next + 2 * mp {
+            let n = (end - 2 * mp - lv.mvar.next) as usize;
+            let [a, b, c] = lagged_at(sums, base, lv.mvar.next, mp, n);
+            lv.mvar
+                .add(n, sum_sq3(a, b, c, |a, b, c| IntRepr::d2_narrow(c, b, a)));
+        }
+    } else if stats.mvar {
         if let Some([a, b, c, d]) = lagged(&st.c, lv.mvar.next, mp) {
             lv.mvar.add(
                 a.len(),
