@@ -90,6 +90,50 @@ fn simulate_curve(st: &Study, seed: u64, duration_s: f64) -> Vec<CurvePoint> {
         .points
 }
 
+/// The curve of one seed; with `SIM_STUDY_CACHE=DIR` set, curves are read from (or written to)
+/// `DIR/NAME-SEED.txt`, so that changes to the fit can be studied without re-simulating.
+fn cached_curve(st: &Study, seed: u64) -> Vec<CurvePoint> {
+    let Some(dir) = std::env::var_os("SIM_STUDY_CACHE") else {
+        return simulate_curve(st, seed, DURATION_S);
+    };
+    let path = Path::new(&dir).join(format!("{}-{seed}.txt", st.name));
+    if let Ok(text) = std::fs::read_to_string(&path) {
+        let pts: Option<Vec<CurvePoint>> = text
+            .lines()
+            .map(|l| {
+                let f: Vec<&str> = l.split_whitespace().collect();
+                (f.len() == 8).then_some(())?;
+                Some(CurvePoint {
+                    m: f[0].parse().ok()?,
+                    tau_s: f[1].parse().ok()?,
+                    var: f[2].parse().ok()?,
+                    count: f[3].parse().ok()?,
+                    edf: f[4].parse().ok()?,
+                    alpha: f[5].parse().ok()?,
+                    sigma_lo: f[6].parse().ok()?,
+                    sigma_hi: f[7].parse().ok()?,
+                })
+            })
+            .collect();
+        if let Some(pts) = pts.filter(|p| !p.is_empty()) {
+            return pts;
+        }
+    }
+    let pts = simulate_curve(st, seed, DURATION_S);
+    let text: String = pts
+        .iter()
+        .map(|p| {
+            format!(
+                "{} {} {} {} {} {} {} {}\n",
+                p.m, p.tau_s, p.var, p.count, p.edf, p.alpha, p.sigma_lo, p.sigma_hi
+            )
+        })
+        .collect();
+    std::fs::create_dir_all(&dir).expect("cache dir");
+    std::fs::write(&path, text).expect("cache write");
+    pts
+}
+
 #[derive(Default, Clone)]
 struct Tally {
     runs: usize,
@@ -182,7 +226,7 @@ fn run_study(st: &Study, seeds: std::ops::Range<u64>, threads: usize) -> Vec<Tal
                     let mut tallies = vec![Tally::default(); METHODS.len()];
                     let mut fitter = Fitter::new();
                     for &seed in chunk {
-                        let pts = simulate_curve(st, seed, DURATION_S);
+                        let pts = cached_curve(st, seed);
                         for (k, m) in METHODS.iter().enumerate() {
                             let opts = FitOptions {
                                 method: *m,
