@@ -16,7 +16,7 @@ use std::path::Path;
 use allanscope::allan::accum::{AccumConfig, ChannelAccumulator, StatSet};
 use allanscope::allan::curve::{build_curves, AlphaSource};
 use allanscope::allan::{CurvePoint, Stat};
-use allanscope::model::fit::{FitMethod, FitOptions, FitResult, Fitter};
+use allanscope::model::fit::{CoefEstimate, FitMethod, FitOptions, FitResult, Fitter};
 use allanscope::model::terms::{basis, TERM_NAMES};
 use allanscope::sim::{SimModel, Simulator};
 
@@ -146,6 +146,12 @@ struct Tally {
     sq_all: [f64; 5],
     c_all: [f64; 5],
     covered: [usize; 5],
+    /// Per rule of `determined` (see [`RULES`]): runs determined, and sums of value / truth and
+    /// its square over them, and how often their interval covers the truth.
+    rule_det: [[usize; 5]; RULES.len()],
+    rule_sum: [[f64; 5]; RULES.len()],
+    rule_sum2: [[f64; 5]; RULES.len()],
+    rule_cov: [[usize; 5]; RULES.len()],
     gof: Vec<f64>,
     dof: Vec<f64>,
 }
@@ -163,8 +169,17 @@ impl Tally {
             }
             self.sq_all[i] += (r - 1.0) * (r - 1.0);
             self.c_all[i] += r * r;
-            if e.lo <= truth[i] && truth[i] <= e.hi {
+            let covers = e.lo <= truth[i] && truth[i] <= e.hi;
+            if covers {
                 self.covered[i] += 1;
+            }
+            for (k, rule) in RULES.iter().enumerate() {
+                if (rule.1)(e) {
+                    self.rule_det[k][i] += 1;
+                    self.rule_sum[k][i] += r;
+                    self.rule_sum2[k][i] += r * r;
+                    self.rule_cov[k][i] += usize::from(covers);
+                }
             }
         }
         if f.gof.is_finite() {
@@ -204,6 +219,24 @@ impl Tally {
         self.gof.iter().sum::<f64>() / self.gof.len().max(1) as f64
     }
 }
+
+type Rule = (&'static str, fn(&CoefEstimate) -> bool);
+
+/// Readings of THEORY.md section 2's `determined` compared in docs/fit.md ("Which terms are
+/// determined"); the first is the fit's own.
+const RULES: [Rule; 5] = [
+    ("dominant, lower end >= value / 3 (the fit's rule)", |e| e.determined),
+    ("dominant, interval excludes 0", |e| e.dominant && e.lo > 0.0),
+    ("dominant, estimate > 1.96 sd at the fit (Wald; before)", |e| {
+        e.dominant && e.value * e.value > 1.959964 * e.sd_c
+    }),
+    ("dominant at its lower end, interval excludes 0", |e| {
+        e.dominant_at_lo && e.lo > 0.0
+    }),
+    ("dominant, lower end >= value / 2", |e| {
+        e.dominant && e.lo > 0.0 && e.lo >= 0.5 * e.value
+    }),
+];
 
 const METHODS: [FitMethod; 4] = [
     FitMethod::Model,
@@ -256,6 +289,12 @@ fn run_study(st: &Study, seeds: std::ops::Range<u64>, threads: usize) -> Vec<Tal
                 o.sq_all[i] += p.sq_all[i];
                 o.c_all[i] += p.c_all[i];
                 o.covered[i] += p.covered[i];
+                for k in 0..RULES.len() {
+                    o.rule_det[k][i] += p.rule_det[k][i];
+                    o.rule_sum[k][i] += p.rule_sum[k][i];
+                    o.rule_sum2[k][i] += p.rule_sum2[k][i];
+                    o.rule_cov[k][i] += p.rule_cov[k][i];
+                }
             }
             o.gof.extend(p.gof);
             o.dof.extend(p.dof);
@@ -320,6 +359,39 @@ fn print_table(st: &Study, tallies: &[Tally]) {
         q95,
         100.0 * above
     );
+}
+
+/// The rules of `determined` side by side (model method).
+fn print_rules(t: &Tally) {
+    println!("| rule | coef | determined | bias (det.) | sd (det.) | coverage (det.) |");
+    println!("|---|---|---|---|---|---|");
+    for (k, rule) in RULES.iter().enumerate() {
+        for i in 0..5 {
+            let n = t.rule_det[k][i];
+            if n == 0 {
+                println!("| {} | {} | 0/{} | - | - | - |", rule.0, TERM_NAMES[i], t.runs);
+                continue;
+            }
+            let m = t.rule_sum[k][i] / n as f64;
+            let sd = if n > 1 {
+                ((t.rule_sum2[k][i] - n as f64 * m * m) / (n as f64 - 1.0))
+                    .max(0.0)
+                    .sqrt()
+            } else {
+                f64::NAN
+            };
+            println!(
+                "| {} | {} | {}/{} | {:+.1}% | {:.1}% | {:.1}% |",
+                rule.0,
+                TERM_NAMES[i],
+                n,
+                t.runs,
+                100.0 * (m - 1.0),
+                100.0 * sd,
+                100.0 * t.rule_cov[k][i] as f64 / n as f64
+            );
+        }
+    }
 }
 
 fn assert_model_method(st: &Study, t: &Tally) {
@@ -388,5 +460,6 @@ fn sim_study_full() {
             t0.elapsed().as_secs_f64()
         );
         print_table(&st, &t);
+        print_rules(&t[0]);
     }
 }
