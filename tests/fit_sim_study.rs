@@ -26,10 +26,16 @@ const DURATION_S: f64 = 3.0 * 3600.0;
 /// 85% is three sds below; the bias allowance is 5% plus three standard errors of the mean
 /// (sample sd / sqrt(runs determined)).
 const CI_SEEDS: u64 = 40;
+/// Every term, determined or not: the test-inverted intervals cover 91.5-98% over 200 seeds
+/// (docs/fit.md).
 const CI_COVERAGE_MIN: f64 = 0.85;
-/// Terms determined in fewer than half the seeds: 200-seed coverage 83% at worst (MA4's R), less
-/// three binomial sds of 40 seeds (6%), rounded down.
-const CI_WEAK_COVERAGE_MIN: f64 = 0.75;
+/// ... and at most this often (a 95% interval that always covers is too wide to be honest): 40
+/// of 40 is allowed, but an interval the width of the curve's own bound would show as 100% for
+/// every term.
+const CI_COVERAGE_ALL_MAX_TERMS: usize = 3;
+/// Terms determined in fewer than half the seeds (MA4's K and R, VOG4's R, 0-14% of 200 seeds
+/// with the quantitation condition): at most this fraction of the seeds.
+const CI_WEAK_DETERMINED_MAX: f64 = 0.25;
 const BIAS_TOL: f64 = 0.05;
 /// gof's mean over 40 seeds: its sd per run is about sqrt(2 / (J - p)) ~ 0.35 (J ~ 20 taus), so
 /// the mean is within 0.2 of 1 at more than three standard errors.
@@ -225,11 +231,16 @@ type Rule = (&'static str, fn(&CoefEstimate) -> bool);
 /// Readings of THEORY.md section 2's `determined` compared in docs/fit.md ("Which terms are
 /// determined"); the first is the fit's own.
 const RULES: [Rule; 5] = [
-    ("dominant, lower end >= value / 3 (the fit's rule)", |e| e.determined),
-    ("dominant, interval excludes 0", |e| e.dominant && e.lo > 0.0),
-    ("dominant, estimate > 1.96 sd at the fit (Wald; before)", |e| {
-        e.dominant && e.value * e.value > 1.959964 * e.sd_c
+    ("dominant, lower end >= value / 3 (the fit's rule)", |e| {
+        e.determined
     }),
+    ("dominant, interval excludes 0", |e| {
+        e.dominant && e.lo > 0.0
+    }),
+    (
+        "dominant, estimate > 1.96 sd at the fit (Wald; before)",
+        |e| e.dominant && e.value * e.value > 1.959964 * e.sd_c,
+    ),
     ("dominant at its lower end, interval excludes 0", |e| {
         e.dominant_at_lo && e.lo > 0.0
     }),
@@ -369,7 +380,10 @@ fn print_rules(t: &Tally) {
         for i in 0..5 {
             let n = t.rule_det[k][i];
             if n == 0 {
-                println!("| {} | {} | 0/{} | - | - | - |", rule.0, TERM_NAMES[i], t.runs);
+                println!(
+                    "| {} | {} | 0/{} | - | - | - |",
+                    rule.0, TERM_NAMES[i], t.runs
+                );
                 continue;
             }
             let m = t.rule_sum[k][i] / n as f64;
@@ -395,18 +409,27 @@ fn print_rules(t: &Tally) {
 }
 
 fn assert_model_method(st: &Study, t: &Tally) {
+    let mut full = 0;
     for i in 0..5 {
+        assert!(
+            t.coverage(i) >= CI_COVERAGE_MIN,
+            "{} {}: coverage {}",
+            st.name,
+            TERM_NAMES[i],
+            t.coverage(i)
+        );
+        full += usize::from(t.covered[i] == t.runs);
         if t.det[i] < t.runs / 2 {
-            // Rarely determined (MA4's K and R, VOG4's Q and R): the bias among the few runs that
-            // determine it is selection, not the estimator (the squared coefficient is unbiased
-            // over all runs, docs/fit.md), and the intervals of MA4's K and R cover 83-88% over
-            // 200 seeds: a known shortfall, bounded here with the binomial allowance.
+            // Rarely determined: the runs that determine it are the high draws (selection, not
+            // the estimator: docs/fit.md), so no bias is asserted; the quantitation condition
+            // must keep them rare.
             assert!(
-                t.coverage(i) >= CI_WEAK_COVERAGE_MIN,
-                "{} {}: coverage {}",
+                t.det[i] as f64 <= CI_WEAK_DETERMINED_MAX * t.runs as f64,
+                "{} {}: determined in {} of {}",
                 st.name,
                 TERM_NAMES[i],
-                t.coverage(i)
+                t.det[i],
+                t.runs
             );
             continue;
         }
@@ -418,14 +441,12 @@ fn assert_model_method(st: &Study, t: &Tally) {
             st.name,
             TERM_NAMES[i]
         );
-        assert!(
-            t.coverage(i) >= CI_COVERAGE_MIN,
-            "{} {}: coverage {}",
-            st.name,
-            TERM_NAMES[i],
-            t.coverage(i)
-        );
     }
+    assert!(
+        full <= CI_COVERAGE_ALL_MAX_TERMS,
+        "{}: {full} terms covered in every run",
+        st.name
+    );
     assert!(
         (t.gof_mean() - 1.0).abs() <= CI_GOF_MEAN_TOL,
         "{}: gof mean {}",

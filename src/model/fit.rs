@@ -301,9 +301,20 @@ impl Fitter {
         let model = model_values(&prob.x, &c);
         // Covariance of the estimates at the fitted model; if the model is degenerate (all zero)
         // fall back to the per-point chi-squared variances of the data.
-        let mut s = self
+        // The covariance as quadratic forms in c (one read of the lag sums), evaluated at the fit.
+        let tensors = self
             .cov
-            .matrix_strided(prob.tau0_s, &prob.cov_pts, &prob.cov_strides, &c);
+            .tensors_strided(prob.tau0_s, &prob.cov_pts, &prob.cov_strides);
+        let mut s = DMatrix::zeros(j, j);
+        let mut idx = 0;
+        for a in 0..j {
+            for b in a..j {
+                let v = quad_form(&tensors[idx], &c);
+                idx += 1;
+                s[(a, b)] = v;
+                s[(b, a)] = v;
+            }
+        }
         let mut model_cov = true;
         for i in 0..j {
             if !(s[(i, i)].is_finite() && s[(i, i)] > 0.0) {
@@ -335,24 +346,28 @@ impl Fitter {
         }; 5];
         // The slope bound of each term from the points' 97.5% upper limits (THEORY.md section
         // 4): c_i basis_i(tau_k) <= AVAR(tau_k) <= edf_k AVAR_hat_k / chi2_{0.025}(edf_k).
-        let upper: Vec<f64> = (0..j)
-            .map(|k| match ChiSquared::new(prob.edf[k]) {
-                Ok(d) if prob.edf[k].is_finite() => {
-                    prob.edf[k] * prob.y[k] / chi2_quantile(&d, prob.edf[k], 0.025, -Z95)
-                }
-                _ => f64::INFINITY,
-            })
-            .collect();
-        let data_bound: [f64; 5] = std::array::from_fn(|i| {
-            (0..j)
-                .map(|k| upper[k] / prob.x[(k, i)])
-                .filter(|b| b.is_finite() && *b > 0.0)
-                .fold(f64::INFINITY, f64::min)
-        });
+        // Computed only when a term is left undetermined (the quantiles are half of a refit).
+        let bounds = std::cell::OnceCell::new();
+        let data_bound = |i: usize| -> f64 {
+            bounds.get_or_init(|| {
+                let upper: Vec<f64> = (0..j)
+                    .map(|k| match ChiSquared::new(prob.edf[k]) {
+                        Ok(d) if prob.edf[k].is_finite() => {
+                            prob.edf[k] * prob.y[k] / chi2_quantile(&d, prob.edf[k], 0.025, -Z95)
+                        }
+                        _ => f64::INFINITY,
+                    })
+                    .collect();
+                let b: [f64; 5] = std::array::from_fn(|t| {
+                    (0..j)
+                        .map(|k| upper[k] / prob.x[(k, t)])
+                        .filter(|b| b.is_finite() && *b > 0.0)
+                        .fold(f64::INFINITY, f64::min)
+                });
+                b
+            })[i]
+        };
         let inverted = if model_cov {
-            let tensors = self
-                .cov
-                .tensors_strided(prob.tau0_s, &prob.cov_pts, &prob.cov_strides);
             inverted_intervals(
                 prob,
                 &est.g,
@@ -373,9 +388,24 @@ impl Fitter {
             let (lo_c, hi_c, dominant_at_lo) = if !prob.allowed[i] {
                 (0.0, 0.0, false)
             } else if let Some(inv) = inverted[i] {
-                // No finite upper end: the curve itself bounds the term (as below).
-                let hi = inv.hi.unwrap_or(data_bound[i]).max(ci);
-                (inv.lo, hi, inv.lo > 0.0 && dominates(&prob.x, i, inv.lo, &inv.c_at_lo))
+                // A term not determined (not dominant, or its interval reaches below a third
+                // of its value, or has no finite upper end): the curve itself bounds it, as
+                // below.
+                let measured = dominant
+                    && inv.lo > 0.0
+                    && inv.lo.sqrt() >= QUANTITATION_FRACTION * ci.sqrt()
+                    && inv.hi.is_some();
+                let hi = inv.hi.unwrap_or(f64::INFINITY);
+                let hi = if measured {
+                    hi
+                } else {
+                    hi.min(data_bound(i)).max(ci)
+                };
+                (
+                    inv.lo,
+                    hi,
+                    inv.lo > 0.0 && dominates(&prob.x, i, inv.lo, &inv.c_at_lo),
+                )
             } else if ci > 0.0 && sd > 0.0 {
                 let significant = ci > Z95 * sd;
                 let (lo, hi) = chi2_interval(ci, var);
@@ -387,7 +417,7 @@ impl Fitter {
                 // statement about it.
                 let nu = 2.0 * ci * ci / var;
                 let hi = if nu < 1.0 || !significant {
-                    hi.min(data_bound[i]).max(ci)
+                    hi.min(data_bound(i)).max(ci)
                 } else {
                     hi
                 };
@@ -396,7 +426,7 @@ impl Fitter {
                 (ci, ci, dominant)
             } else {
                 // Held at zero: the Fisher bound, capped by the curve as above.
-                (0.0, (Z95 * fisher_sd[i]).min(data_bound[i]), false)
+                (0.0, (Z95 * fisher_sd[i]).min(data_bound(i)), false)
             };
             let significant = lo_c > 0.0;
             let (value, lo) = (ci.sqrt(), lo_c.max(0.0).sqrt());
@@ -424,6 +454,17 @@ impl Fitter {
             iterations: est.iterations,
         }
     }
+}
+
+/// `c' t c`.
+fn quad_form(t: &[[f64; 5]; 5], c: &[f64; 5]) -> f64 {
+    let mut q = 0.0;
+    for a in 0..5 {
+        for b in 0..5 {
+            q += c[a] * t[a][b] * c[b];
+        }
+    }
+    q
 }
 
 /// Term `i`, at `ci`, is the largest of the five at one fitted tau or more, the others at `c`.
@@ -497,7 +538,13 @@ fn inverted_intervals(
             }
             (
                 gf.row(i).iter().copied().collect(),
-                std::array::from_fn(|t| if prob.allowed[t] { cov[(t, i)] / cii } else { 0.0 }),
+                std::array::from_fn(|t| {
+                    if prob.allowed[t] {
+                        cov[(t, i)] / cii
+                    } else {
+                        0.0
+                    }
+                }),
             )
         } else {
             let cii = cov_c[i][i];
@@ -537,15 +584,7 @@ fn inverted_intervals(
                 }
             })
         };
-        let var_at = |m: &[f64; 5]| -> f64 {
-            let mut q = 0.0;
-            for a in 0..5 {
-                for b in 0..5 {
-                    q += m[a] * v[a][b] * m[b];
-                }
-            }
-            q.max(0.0)
-        };
+        let var_at = |m: &[f64; 5]| -> f64 { quad_form(&v, m).max(0.0) };
         // Accepted where f <= 0.
         let f = |t: f64| (ci - t) * (ci - t) - Z95 * Z95 * var_at(&profile(t));
         let var_hat = var_at(&profile(ci));
@@ -554,14 +593,15 @@ fn inverted_intervals(
         }
         let bisect = |mut a: f64, mut b: f64| -> f64 {
             // f(a) <= 0 < f(b); returns the accepted end.
-            for _ in 0..100 {
+            // To 1e-7 of the end: far below the interval's own uncertainty.
+            for _ in 0..60 {
                 let m = 0.5 * (a + b);
                 if f(m) <= 0.0 {
                     a = m;
                 } else {
                     b = m;
                 }
-                if (b - a).abs() <= 1e-10 * b.abs().max(a.abs()) {
+                if (b - a).abs() <= 1e-7 * b.abs().max(a.abs()) {
                     break;
                 }
             }
@@ -612,10 +652,10 @@ fn free_map(prob: &Problem, c: &[f64; 5]) -> Option<DMatrix<f64>> {
         .collect();
     let mut a = DMatrix::from_fn(j, cols.len(), |r, k| prob.x[(r, cols[k])] * sw[r]);
     let mut scale = vec![0.0; cols.len()];
-    for k in 0..cols.len() {
+    for (k, sc) in scale.iter_mut().enumerate() {
         let n = a.column(k).norm();
-        scale[k] = if n > 0.0 { 1.0 / n } else { 0.0 };
-        a.column_mut(k).scale_mut(scale[k]);
+        *sc = if n > 0.0 { 1.0 / n } else { 0.0 };
+        a.column_mut(k).scale_mut(*sc);
     }
     let ata = a.transpose() * &a;
     let inv = ata
