@@ -15,12 +15,15 @@
 //!   "fit a curve on the log-log plot"; a comparison baseline.
 //!
 //! Uncertainty, whatever the method: each estimator is linearised as `c = G y` around the fitted
-//! values (`y` the AVAR estimates), the covariance `S` of `y` is the analytic one of the fitted
-//! model ([`crate::model::avar_cov`], strong correlation between neighbouring taus included), and
-//! `Var c = G S G'`. The 95% interval of each `c_i` is the chi-squared one with Satterthwaite's
-//! degrees of freedom `nu = 2 c_i^2 / Var c_i` (the form of THEORY.md section 4, which keeps it
-//! positive and skewed like the estimates); the reported interval is its square root. A term held at
-//! zero gets `[0, sqrt(1.96 sd)]` with `sd` from the Fisher information of the full model.
+//! values (`y` the AVAR estimates), the covariance `S` of `y` is the analytic one
+//! ([`crate::model::avar_cov`], strong correlation between neighbouring taus included), a
+//! quadratic form in the model `c`, and `Var c = G S G'` at the fit. The 95% interval of each `c_i`
+//! comes from inverting a test whose variance is taken under the trial value, the other terms at
+//! their profile values ([`inverted_intervals`]: honest where a term is near zero, where the
+//! fitted model's variance is too small); the reported interval is its square root. An
+//! undetermined term's upper end is capped by the curve's own 97.5% limits. `determined`: the
+//! term dominates at one fitted tau or more, its interval excludes zero, and its lower end is at
+//! least [`QUANTITATION_FRACTION`] of the value (docs/fit.md, "Which terms are determined").
 
 use crate::allan::CurvePoint;
 use crate::model::avar_cov::{cov_points, strides, AvarCovariance, CovPoint};
