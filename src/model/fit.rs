@@ -19,7 +19,7 @@
 //! ([`crate::model::avar_cov`], strong correlation between neighbouring taus included), a
 //! quadratic form in the model `c`, and `Var c = G S G'` at the fit. The 95% interval of each `c_i`
 //! comes from inverting a test whose variance is taken under the trial value, the other terms at
-//! their profile values ([`inverted_intervals`]: honest where a term is near zero, where the
+//! their profile values (`inverted_intervals`: honest where a term is near zero, where the
 //! fitted model's variance is too small); the reported interval is its square root. An
 //! undetermined term's upper end is capped by the curve's own 97.5% limits. `determined`: the
 //! term dominates at one fitted tau or more, its interval excludes zero, and its lower end is at
