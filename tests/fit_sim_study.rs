@@ -16,7 +16,7 @@ use std::path::Path;
 use allanscope::allan::accum::{AccumConfig, ChannelAccumulator, StatSet};
 use allanscope::allan::curve::{build_curves, AlphaSource};
 use allanscope::allan::{CurvePoint, Stat};
-use allanscope::model::fit::{FitMethod, FitOptions, FitResult, Fitter};
+use allanscope::model::fit::{CoefEstimate, FitMethod, FitOptions, FitResult, Fitter};
 use allanscope::model::terms::{basis, TERM_NAMES};
 use allanscope::sim::{SimModel, Simulator};
 
@@ -26,10 +26,16 @@ const DURATION_S: f64 = 3.0 * 3600.0;
 /// 85% is three sds below; the bias allowance is 5% plus three standard errors of the mean
 /// (sample sd / sqrt(runs determined)).
 const CI_SEEDS: u64 = 40;
+/// Every term, determined or not: the test-inverted intervals cover 91.5-98% over 200 seeds
+/// (docs/fit.md).
 const CI_COVERAGE_MIN: f64 = 0.85;
-/// Terms determined in fewer than half the seeds: 200-seed coverage 83% at worst (MA4's R), less
-/// three binomial sds of 40 seeds (6%), rounded down.
-const CI_WEAK_COVERAGE_MIN: f64 = 0.75;
+/// ... and at most this often (a 95% interval that always covers is too wide to be honest): 40
+/// of 40 is allowed, but an interval the width of the curve's own bound would show as 100% for
+/// every term.
+const CI_COVERAGE_ALL_MAX_TERMS: usize = 3;
+/// Terms determined in fewer than half the seeds (MA4's K and R, VOG4's R, 0-14% of 200 seeds
+/// with the quantitation condition): at most this fraction of the seeds.
+const CI_WEAK_DETERMINED_MAX: f64 = 0.25;
 const BIAS_TOL: f64 = 0.05;
 /// gof's mean over 40 seeds: its sd per run is about sqrt(2 / (J - p)) ~ 0.35 (J ~ 20 taus), so
 /// the mean is within 0.2 of 1 at more than three standard errors.
@@ -90,6 +96,50 @@ fn simulate_curve(st: &Study, seed: u64, duration_s: f64) -> Vec<CurvePoint> {
         .points
 }
 
+/// The curve of one seed; with `SIM_STUDY_CACHE=DIR` set, curves are read from (or written to)
+/// `DIR/NAME-SEED.txt`, so that changes to the fit can be studied without re-simulating.
+fn cached_curve(st: &Study, seed: u64) -> Vec<CurvePoint> {
+    let Some(dir) = std::env::var_os("SIM_STUDY_CACHE") else {
+        return simulate_curve(st, seed, DURATION_S);
+    };
+    let path = Path::new(&dir).join(format!("{}-{seed}.txt", st.name));
+    if let Ok(text) = std::fs::read_to_string(&path) {
+        let pts: Option<Vec<CurvePoint>> = text
+            .lines()
+            .map(|l| {
+                let f: Vec<&str> = l.split_whitespace().collect();
+                (f.len() == 8).then_some(())?;
+                Some(CurvePoint {
+                    m: f[0].parse().ok()?,
+                    tau_s: f[1].parse().ok()?,
+                    var: f[2].parse().ok()?,
+                    count: f[3].parse().ok()?,
+                    edf: f[4].parse().ok()?,
+                    alpha: f[5].parse().ok()?,
+                    sigma_lo: f[6].parse().ok()?,
+                    sigma_hi: f[7].parse().ok()?,
+                })
+            })
+            .collect();
+        if let Some(pts) = pts.filter(|p| !p.is_empty()) {
+            return pts;
+        }
+    }
+    let pts = simulate_curve(st, seed, DURATION_S);
+    let text: String = pts
+        .iter()
+        .map(|p| {
+            format!(
+                "{} {} {} {} {} {} {} {}\n",
+                p.m, p.tau_s, p.var, p.count, p.edf, p.alpha, p.sigma_lo, p.sigma_hi
+            )
+        })
+        .collect();
+    std::fs::create_dir_all(&dir).expect("cache dir");
+    std::fs::write(&path, text).expect("cache write");
+    pts
+}
+
 #[derive(Default, Clone)]
 struct Tally {
     runs: usize,
@@ -102,6 +152,12 @@ struct Tally {
     sq_all: [f64; 5],
     c_all: [f64; 5],
     covered: [usize; 5],
+    /// Per rule of `determined` (see [`RULES`]): runs determined, and sums of value / truth and
+    /// its square over them, and how often their interval covers the truth.
+    rule_det: [[usize; 5]; RULES.len()],
+    rule_sum: [[f64; 5]; RULES.len()],
+    rule_sum2: [[f64; 5]; RULES.len()],
+    rule_cov: [[usize; 5]; RULES.len()],
     gof: Vec<f64>,
     dof: Vec<f64>,
 }
@@ -119,8 +175,17 @@ impl Tally {
             }
             self.sq_all[i] += (r - 1.0) * (r - 1.0);
             self.c_all[i] += r * r;
-            if e.lo <= truth[i] && truth[i] <= e.hi {
+            let covers = e.lo <= truth[i] && truth[i] <= e.hi;
+            if covers {
                 self.covered[i] += 1;
+            }
+            for (k, rule) in RULES.iter().enumerate() {
+                if (rule.1)(e) {
+                    self.rule_det[k][i] += 1;
+                    self.rule_sum[k][i] += r;
+                    self.rule_sum2[k][i] += r * r;
+                    self.rule_cov[k][i] += usize::from(covers);
+                }
             }
         }
         if f.gof.is_finite() {
@@ -161,6 +226,29 @@ impl Tally {
     }
 }
 
+type Rule = (&'static str, fn(&CoefEstimate) -> bool);
+
+/// Readings of THEORY.md section 2's `determined` compared in docs/fit.md ("Which terms are
+/// determined"); the first is the fit's own.
+const RULES: [Rule; 5] = [
+    ("dominant, lower end >= value / 3 (the fit's rule)", |e| {
+        e.determined
+    }),
+    ("dominant, interval excludes 0", |e| {
+        e.dominant && e.lo > 0.0
+    }),
+    (
+        "dominant, estimate > 1.96 sd at the fit (Wald; before)",
+        |e| e.dominant && e.value * e.value > 1.959964 * e.sd_c,
+    ),
+    ("dominant at its lower end, interval excludes 0", |e| {
+        e.dominant_at_lo && e.lo > 0.0
+    }),
+    ("dominant, lower end >= value / 2", |e| {
+        e.dominant && e.lo > 0.0 && e.lo >= 0.5 * e.value
+    }),
+];
+
 const METHODS: [FitMethod; 4] = [
     FitMethod::Model,
     FitMethod::Paper,
@@ -182,7 +270,7 @@ fn run_study(st: &Study, seeds: std::ops::Range<u64>, threads: usize) -> Vec<Tal
                     let mut tallies = vec![Tally::default(); METHODS.len()];
                     let mut fitter = Fitter::new();
                     for &seed in chunk {
-                        let pts = simulate_curve(st, seed, DURATION_S);
+                        let pts = cached_curve(st, seed);
                         for (k, m) in METHODS.iter().enumerate() {
                             let opts = FitOptions {
                                 method: *m,
@@ -212,6 +300,12 @@ fn run_study(st: &Study, seeds: std::ops::Range<u64>, threads: usize) -> Vec<Tal
                 o.sq_all[i] += p.sq_all[i];
                 o.c_all[i] += p.c_all[i];
                 o.covered[i] += p.covered[i];
+                for k in 0..RULES.len() {
+                    o.rule_det[k][i] += p.rule_det[k][i];
+                    o.rule_sum[k][i] += p.rule_sum[k][i];
+                    o.rule_sum2[k][i] += p.rule_sum2[k][i];
+                    o.rule_cov[k][i] += p.rule_cov[k][i];
+                }
             }
             o.gof.extend(p.gof);
             o.dof.extend(p.dof);
@@ -278,19 +372,64 @@ fn print_table(st: &Study, tallies: &[Tally]) {
     );
 }
 
+/// The rules of `determined` side by side (model method).
+fn print_rules(t: &Tally) {
+    println!("| rule | coef | determined | bias (det.) | sd (det.) | coverage (det.) |");
+    println!("|---|---|---|---|---|---|");
+    for (k, rule) in RULES.iter().enumerate() {
+        for i in 0..5 {
+            let n = t.rule_det[k][i];
+            if n == 0 {
+                println!(
+                    "| {} | {} | 0/{} | - | - | - |",
+                    rule.0, TERM_NAMES[i], t.runs
+                );
+                continue;
+            }
+            let m = t.rule_sum[k][i] / n as f64;
+            let sd = if n > 1 {
+                ((t.rule_sum2[k][i] - n as f64 * m * m) / (n as f64 - 1.0))
+                    .max(0.0)
+                    .sqrt()
+            } else {
+                f64::NAN
+            };
+            println!(
+                "| {} | {} | {}/{} | {:+.1}% | {:.1}% | {:.1}% |",
+                rule.0,
+                TERM_NAMES[i],
+                n,
+                t.runs,
+                100.0 * (m - 1.0),
+                100.0 * sd,
+                100.0 * t.rule_cov[k][i] as f64 / n as f64
+            );
+        }
+    }
+}
+
 fn assert_model_method(st: &Study, t: &Tally) {
+    let mut full = 0;
     for i in 0..5 {
+        assert!(
+            t.coverage(i) >= CI_COVERAGE_MIN,
+            "{} {}: coverage {}",
+            st.name,
+            TERM_NAMES[i],
+            t.coverage(i)
+        );
+        full += usize::from(t.covered[i] == t.runs);
         if t.det[i] < t.runs / 2 {
-            // Rarely determined (MA4's K and R, VOG4's Q and R): the bias among the few runs that
-            // determine it is selection, not the estimator (the squared coefficient is unbiased
-            // over all runs, docs/fit.md), and the intervals of MA4's K and R cover 83-88% over
-            // 200 seeds: a known shortfall, bounded here with the binomial allowance.
+            // Rarely determined: the runs that determine it are the high draws (selection, not
+            // the estimator: docs/fit.md), so no bias is asserted; the quantitation condition
+            // must keep them rare.
             assert!(
-                t.coverage(i) >= CI_WEAK_COVERAGE_MIN,
-                "{} {}: coverage {}",
+                t.det[i] as f64 <= CI_WEAK_DETERMINED_MAX * t.runs as f64,
+                "{} {}: determined in {} of {}",
                 st.name,
                 TERM_NAMES[i],
-                t.coverage(i)
+                t.det[i],
+                t.runs
             );
             continue;
         }
@@ -302,14 +441,12 @@ fn assert_model_method(st: &Study, t: &Tally) {
             st.name,
             TERM_NAMES[i]
         );
-        assert!(
-            t.coverage(i) >= CI_COVERAGE_MIN,
-            "{} {}: coverage {}",
-            st.name,
-            TERM_NAMES[i],
-            t.coverage(i)
-        );
     }
+    assert!(
+        full <= CI_COVERAGE_ALL_MAX_TERMS,
+        "{}: {full} terms covered in every run",
+        st.name
+    );
     assert!(
         (t.gof_mean() - 1.0).abs() <= CI_GOF_MEAN_TOL,
         "{}: gof mean {}",
@@ -344,5 +481,6 @@ fn sim_study_full() {
             t0.elapsed().as_secs_f64()
         );
         print_table(&st, &t);
+        print_rules(&t[0]);
     }
 }

@@ -787,6 +787,56 @@ impl AvarCovariance {
         }
         out
     }
+
+    /// The same covariance as a quadratic form in `c`: for each pair `i <= j` (row-major over
+    /// the upper triangle), the symmetric 5 x 5 matrix `T` with
+    /// `Cov(AVAR_hat_i, AVAR_hat_j) = c' T c` (the entries of [`Self::matrix_strided`] are these
+    /// forms at one `c`). The fit uses them to evaluate the variance of its estimates under any
+    /// trial model without re-reading the lag sums.
+    pub fn tensors_strided(
+        &mut self,
+        tau0_s: f64,
+        points: &[CovPoint],
+        strides: &[u64],
+    ) -> Vec<[[f64; 5]; 5]> {
+        let n = points.len();
+        let scale = [1.0, tau0_s, tau0_s * tau0_s, tau0_s.powi(3)];
+        let mut out = Vec::with_capacity(n * (n + 1) / 2);
+        for i in 0..n {
+            for j in i..n {
+                let (a, b) = (points[i], points[j]);
+                let mut s = self.sums(a, b);
+                let st = |k: usize| strides.get(k).copied().unwrap_or(1).max(1);
+                let g = gcd(st(i), st(j));
+                if g > 1 {
+                    let gf = g as f64;
+                    for t in 0..NRAND {
+                        s.quad[NQ][t] *= gf;
+                        if t != NQ {
+                            s.quad[t][NQ] *= gf;
+                        }
+                    }
+                    s.lin[NQ] *= gf;
+                }
+                let tau1 = a.m as f64 * tau0_s;
+                let tau2 = b.m as f64 * tau0_s;
+                let t12 = tau1 * tau1 * tau2 * tau2;
+                let den = 4.0 * t12 * a.count as f64 * b.count as f64;
+                let mut t = [[0.0; 5]; 5];
+                for u in 0..NRAND {
+                    for v in 0..NRAND {
+                        t[u][v] = 2.0 * scale[u] * scale[v] * s.quad[u][v] / den;
+                    }
+                    // The mean term 4 c_R t12 sum c_u lin_u, split over both triangles.
+                    let m = 2.0 * t12 * scale[u] * s.lin[u] / den;
+                    t[u][4] = m;
+                    t[4][u] = m;
+                }
+                out.push(t);
+            }
+        }
+        out
+    }
 }
 
 /// `Cov(D_{m1}(l + h), D_{m2}(l))` per unit coefficient with `tau0 = 1`, for (Q, N, B, K) (the

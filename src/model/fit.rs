@@ -15,12 +15,15 @@
 //!   "fit a curve on the log-log plot"; a comparison baseline.
 //!
 //! Uncertainty, whatever the method: each estimator is linearised as `c = G y` around the fitted
-//! values (`y` the AVAR estimates), the covariance `S` of `y` is the analytic one of the fitted
-//! model ([`crate::model::avar_cov`], strong correlation between neighbouring taus included), and
-//! `Var c = G S G'`. The 95% interval of each `c_i` is the chi-squared one with Satterthwaite's
-//! degrees of freedom `nu = 2 c_i^2 / Var c_i` (the form of THEORY.md section 4, which keeps it
-//! positive and skewed like the estimates); the reported interval is its square root. A term held at
-//! zero gets `[0, sqrt(1.96 sd)]` with `sd` from the Fisher information of the full model.
+//! values (`y` the AVAR estimates), the covariance `S` of `y` is the analytic one
+//! ([`crate::model::avar_cov`], strong correlation between neighbouring taus included), a
+//! quadratic form in the model `c`, and `Var c = G S G'` at the fit. The 95% interval of each `c_i`
+//! comes from inverting a test whose variance is taken under the trial value, the other terms at
+//! their profile values (`inverted_intervals`: honest where a term is near zero, where the
+//! fitted model's variance is too small); the reported interval is its square root. An
+//! undetermined term's upper end is capped by the curve's own 97.5% limits. `determined`: the
+//! term dominates at one fitted tau or more, its interval excludes zero, and its lower end is at
+//! least [`QUANTITATION_FRACTION`] of the value (docs/fit.md, "Which terms are determined").
 
 use crate::allan::CurvePoint;
 use crate::model::avar_cov::{cov_points, strides, AvarCovariance, CovPoint};
@@ -32,6 +35,12 @@ use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 /// Two-sided 95% normal quantile.
 const Z95: f64 = 1.959_963_984_540_054;
+
+/// A determined coefficient's 95% interval must reach no lower than this fraction of its value
+/// (a limit of quantitation beside the limit of detection `lo > 0`): below it the value is
+/// detected but not measured, and the runs that pass a detection test alone are the ones whose
+/// estimate came out high (docs/fit.md, "Which terms are determined").
+pub const QUANTITATION_FRACTION: f64 = 1.0 / 3.0;
 
 /// How the coefficients are estimated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
@@ -127,10 +136,15 @@ pub struct CoefEstimate {
     pub hi: f64,
     /// The term is the largest of the five at one or more of the fitted taus.
     pub dominant: bool,
-    /// The estimate is more than 1.96 standard deviations above zero.
+    /// The 95% interval excludes zero (`lo > 0`).
     pub significant: bool,
-    /// `dominant && significant` (THEORY.md section 2).
+    /// `dominant && significant && lo >= value * QUANTITATION_FRACTION` (THEORY.md section 2,
+    /// with the quantitation condition of [`QUANTITATION_FRACTION`]).
     pub determined: bool,
+    /// The term is still the largest at one or more fitted taus when it sits at the lower end of
+    /// its interval and the other terms at their profile values there (a stricter reading of
+    /// "dominates", compared in docs/fit.md).
+    pub dominant_at_lo: bool,
     /// Standard deviation of the squared coefficient `c_i`.
     pub sd_c: f64,
 }
@@ -290,11 +304,24 @@ impl Fitter {
         let model = model_values(&prob.x, &c);
         // Covariance of the estimates at the fitted model; if the model is degenerate (all zero)
         // fall back to the per-point chi-squared variances of the data.
-        let mut s = self
+        // The covariance as quadratic forms in c (one read of the lag sums), evaluated at the fit.
+        let tensors = self
             .cov
-            .matrix_strided(prob.tau0_s, &prob.cov_pts, &prob.cov_strides, &c);
+            .tensors_strided(prob.tau0_s, &prob.cov_pts, &prob.cov_strides);
+        let mut s = DMatrix::zeros(j, j);
+        let mut idx = 0;
+        for a in 0..j {
+            for b in a..j {
+                let v = quad_form(&tensors[idx], &c);
+                idx += 1;
+                s[(a, b)] = v;
+                s[(b, a)] = v;
+            }
+        }
+        let mut model_cov = true;
         for i in 0..j {
             if !(s[(i, i)].is_finite() && s[(i, i)] > 0.0) {
+                model_cov = false;
                 s = DMatrix::from_diagonal(&DVector::from_fn(j, |k, _| {
                     2.0 * prob.y[k] * prob.y[k] / prob.edf[k]
                 }));
@@ -317,37 +344,73 @@ impl Fitter {
             dominant: false,
             significant: false,
             determined: false,
+            dominant_at_lo: false,
             sd_c: 0.0,
         }; 5];
         // The slope bound of each term from the points' 97.5% upper limits (THEORY.md section
         // 4): c_i basis_i(tau_k) <= AVAR(tau_k) <= edf_k AVAR_hat_k / chi2_{0.025}(edf_k).
-        let upper: Vec<f64> = (0..j)
-            .map(|k| match ChiSquared::new(prob.edf[k]) {
-                Ok(d) if prob.edf[k].is_finite() => {
-                    prob.edf[k] * prob.y[k] / chi2_quantile(&d, prob.edf[k], 0.025, -Z95)
-                }
-                _ => f64::INFINITY,
-            })
-            .collect();
-        let data_bound: [f64; 5] = std::array::from_fn(|i| {
-            (0..j)
-                .map(|k| upper[k] / prob.x[(k, i)])
-                .filter(|b| b.is_finite() && *b > 0.0)
-                .fold(f64::INFINITY, f64::min)
-        });
+        // Computed only when a term is left undetermined (the quantiles are half of a refit).
+        let bounds = std::cell::OnceCell::new();
+        let data_bound = |i: usize| -> f64 {
+            bounds.get_or_init(|| {
+                let upper: Vec<f64> = (0..j)
+                    .map(|k| match ChiSquared::new(prob.edf[k]) {
+                        Ok(d) if prob.edf[k].is_finite() => {
+                            prob.edf[k] * prob.y[k] / chi2_quantile(&d, prob.edf[k], 0.025, -Z95)
+                        }
+                        _ => f64::INFINITY,
+                    })
+                    .collect();
+                let b: [f64; 5] = std::array::from_fn(|t| {
+                    (0..j)
+                        .map(|k| upper[k] / prob.x[(k, t)])
+                        .filter(|b| b.is_finite() && *b > 0.0)
+                        .fold(f64::INFINITY, f64::min)
+                });
+                b
+            })[i]
+        };
+        let inverted = if model_cov {
+            inverted_intervals(
+                prob,
+                &est.g,
+                &s,
+                &c,
+                &cov_c,
+                &tensors,
+                method == FitMethod::Model,
+            )
+        } else {
+            [None; 5]
+        };
         for i in 0..5 {
             let var = cov_c[i][i].max(0.0);
             let sd = var.sqrt();
             let ci = c[i];
-            let dominant = ci > 0.0
-                && (0..j).any(|k| {
-                    let own = prob.x[(k, i)] * ci;
-                    (0..5).all(|t| prob.x[(k, t)] * c[t] <= own)
-                });
-            let significant = ci > 0.0 && ci > Z95 * sd;
-            let (lo_c, hi_c) = if !prob.allowed[i] {
-                (0.0, 0.0)
+            let dominant = ci > 0.0 && dominates(&prob.x, i, ci, &c);
+            let (lo_c, hi_c, dominant_at_lo) = if !prob.allowed[i] {
+                (0.0, 0.0, false)
+            } else if let Some(inv) = inverted[i] {
+                // A term not determined (not dominant, or its interval reaches below a third
+                // of its value, or has no finite upper end): the curve itself bounds it, as
+                // below.
+                let measured = dominant
+                    && inv.lo > 0.0
+                    && inv.lo.sqrt() >= QUANTITATION_FRACTION * ci.sqrt()
+                    && inv.hi.is_some();
+                let hi = inv.hi.unwrap_or(f64::INFINITY);
+                let hi = if measured {
+                    hi
+                } else {
+                    hi.min(data_bound(i)).max(ci)
+                };
+                (
+                    inv.lo,
+                    hi,
+                    inv.lo > 0.0 && dominates(&prob.x, i, inv.lo, &inv.c_at_lo),
+                )
             } else if ci > 0.0 && sd > 0.0 {
+                let significant = ci > Z95 * sd;
                 let (lo, hi) = chi2_interval(ci, var);
                 // For a term the data do not resolve (not significant, or Satterthwaite's
                 // nu = 2 c^2 / var below 1) the chi-squared upper bound can run off to absurd
@@ -357,24 +420,27 @@ impl Fitter {
                 // statement about it.
                 let nu = 2.0 * ci * ci / var;
                 let hi = if nu < 1.0 || !significant {
-                    hi.min(data_bound[i]).max(ci)
+                    hi.min(data_bound(i)).max(ci)
                 } else {
                     hi
                 };
-                (if significant { lo } else { 0.0 }, hi)
+                (if significant { lo } else { 0.0 }, hi, false)
             } else if ci > 0.0 {
-                (ci, ci)
+                (ci, ci, dominant)
             } else {
                 // Held at zero: the Fisher bound, capped by the curve as above.
-                (0.0, (Z95 * fisher_sd[i]).min(data_bound[i]))
+                (0.0, (Z95 * fisher_sd[i]).min(data_bound(i)), false)
             };
+            let significant = lo_c > 0.0;
+            let (value, lo) = (ci.sqrt(), lo_c.max(0.0).sqrt());
             coef[i] = CoefEstimate {
-                value: ci.sqrt(),
-                lo: lo_c.max(0.0).sqrt(),
+                value,
+                lo,
                 hi: hi_c.max(0.0).sqrt(),
                 dominant,
                 significant,
-                determined: dominant && significant,
+                determined: dominant && significant && lo >= QUANTITATION_FRACTION * value,
+                dominant_at_lo,
                 sd_c: sd,
             };
         }
@@ -391,6 +457,223 @@ impl Fitter {
             iterations: est.iterations,
         }
     }
+}
+
+/// `c' t c`.
+fn quad_form(t: &[[f64; 5]; 5], c: &[f64; 5]) -> f64 {
+    let mut q = 0.0;
+    for a in 0..5 {
+        for b in 0..5 {
+            q += c[a] * t[a][b] * c[b];
+        }
+    }
+    q
+}
+
+/// Term `i`, at `ci`, is the largest of the five at one fitted tau or more, the others at `c`.
+fn dominates(x: &DMatrix<f64>, i: usize, ci: f64, c: &[f64; 5]) -> bool {
+    ci > 0.0
+        && (0..x.nrows()).any(|k| {
+            let own = x[(k, i)] * ci;
+            (0..5).all(|t| t == i || x[(k, t)] * c[t] <= own)
+        })
+}
+
+/// One coefficient's interval from [`inverted_intervals`], in `c_i` (squared units).
+#[derive(Debug, Clone, Copy)]
+struct Inverted {
+    lo: f64,
+    /// `None`: no finite upper end (the term's own noise at any trial value is as large as it).
+    hi: Option<f64>,
+    /// The profile model at `c_i = lo`.
+    c_at_lo: [f64; 5],
+}
+
+/// 95% intervals by test inversion, with the variance under the null (THEORY.md section 4: the
+/// variance of the estimates follows from the model; here from the trial model, not the fitted
+/// one, as in Wilson's score interval for a proportion). For each term `i` and trial value `t`:
+/// the other terms take their profile values `c_-i(t) = c_hat_-i + Cov(c_-i, c_i) / Var(c_i)
+/// (t - c_hat_i)` (the maximum of the estimator's Gaussian approximation given `c_i = t`),
+/// clipped at zero; the estimate's variance there is `r' S(c(t)) r` (`r` the row of the linear
+/// map `c = G y`, `S` the analytic covariance of the AVAR estimates, exactly quadratic in `c`);
+/// `t` is accepted when `(c_hat_i - t)^2 <= 1.96^2 r' S(c(t)) r`. Near zero the fitted model's
+/// variance understates the variance at the truth when the estimate came out low; this does
+/// not. A term held at zero by the NNLS uses the row of the unconstrained weighted fit (weights
+/// `edf / (2 AVAR_model^2)`, all allowed terms free) and its estimate counts as 0.
+fn inverted_intervals(
+    prob: &Problem,
+    g: &DMatrix<f64>,
+    s: &DMatrix<f64>,
+    c: &[f64; 5],
+    cov_c: &[[f64; 5]; 5],
+    tensors: &[[[f64; 5]; 5]],
+    free_rows: bool,
+) -> [Option<Inverted>; 5] {
+    let j = prob.tau.len();
+    let mut out = [None; 5];
+    if tensors.len() != j * (j + 1) / 2 {
+        return out;
+    }
+    // The unconstrained weighted fit's map, for terms the NNLS holds at zero.
+    let held: Vec<usize> = (0..5)
+        .filter(|&i| prob.allowed[i] && !(c[i] > 0.0 && g.row(i).iter().any(|v| *v != 0.0)))
+        .collect();
+    let free = if !free_rows && held.is_empty() {
+        None
+    } else {
+        free_map(prob, c).map(|gf| {
+            let cov = &gf * s * gf.transpose();
+            (gf, cov)
+        })
+    };
+    for i in 0..5 {
+        if !prob.allowed[i] {
+            continue;
+        }
+        let is_held = held.contains(&i);
+        let (row, dir): (Vec<f64>, [f64; 5]) = if free_rows || is_held {
+            let Some((gf, cov)) = free.as_ref() else {
+                continue;
+            };
+            let cii = cov[(i, i)];
+            if !(cii.is_finite() && cii > 0.0) {
+                continue;
+            }
+            (
+                gf.row(i).iter().copied().collect(),
+                std::array::from_fn(|t| {
+                    if prob.allowed[t] {
+                        cov[(t, i)] / cii
+                    } else {
+                        0.0
+                    }
+                }),
+            )
+        } else {
+            let cii = cov_c[i][i];
+            if !(cii.is_finite() && cii > 0.0) {
+                continue;
+            }
+            (
+                g.row(i).iter().copied().collect(),
+                std::array::from_fn(|t| cov_c[t][i] / cii),
+            )
+        };
+        // v = sum_kl r_k r_l T_kl: the estimate's variance is c' v c for any model c.
+        let mut v = [[0.0; 5]; 5];
+        let mut idx = 0;
+        for k in 0..j {
+            for l in k..j {
+                let w = if k == l { 1.0 } else { 2.0 } * row[k] * row[l];
+                let t = &tensors[idx];
+                idx += 1;
+                if w == 0.0 {
+                    continue;
+                }
+                for a in 0..5 {
+                    for b in 0..5 {
+                        v[a][b] += w * t[a][b];
+                    }
+                }
+            }
+        }
+        let ci = if is_held { 0.0 } else { c[i] };
+        let profile = |t: f64| -> [f64; 5] {
+            std::array::from_fn(|a| {
+                if a == i {
+                    t
+                } else {
+                    (c[a] + dir[a] * (t - ci)).max(0.0)
+                }
+            })
+        };
+        let var_at = |m: &[f64; 5]| -> f64 { quad_form(&v, m).max(0.0) };
+        // Accepted where f <= 0.
+        let f = |t: f64| (ci - t) * (ci - t) - Z95 * Z95 * var_at(&profile(t));
+        let var_hat = var_at(&profile(ci));
+        if !(var_hat.is_finite() && var_hat > 0.0) {
+            continue;
+        }
+        let bisect = |mut a: f64, mut b: f64| -> f64 {
+            // f(a) <= 0 < f(b); returns the accepted end.
+            // To 1e-7 of the end: far below the interval's own uncertainty.
+            for _ in 0..60 {
+                let m = 0.5 * (a + b);
+                if f(m) <= 0.0 {
+                    a = m;
+                } else {
+                    b = m;
+                }
+                if (b - a).abs() <= 1e-7 * b.abs().max(a.abs()) {
+                    break;
+                }
+            }
+            a
+        };
+        let lo = if ci > 0.0 && f(0.0) > 0.0 {
+            bisect(ci, 0.0)
+        } else {
+            0.0
+        };
+        // The first rejected value above the estimate, in doubling steps, then bisection.
+        let mut step = Z95 * var_hat.sqrt();
+        let mut accepted = ci;
+        let mut hi = None;
+        for _ in 0..200 {
+            let t = ci + step;
+            if !t.is_finite() {
+                break;
+            }
+            if f(t) > 0.0 {
+                hi = Some(bisect(accepted, t));
+                break;
+            }
+            accepted = t;
+            step *= 2.0;
+        }
+        out[i] = Some(Inverted {
+            lo,
+            hi,
+            c_at_lo: profile(lo),
+        });
+    }
+    out
+}
+
+/// The linear map of the unconstrained weighted least-squares fit with every allowed term free
+/// (weights `edf / (2 AVAR_model^2)` at the model `c`), 5 x J (zero rows for disallowed terms).
+fn free_map(prob: &Problem, c: &[f64; 5]) -> Option<DMatrix<f64>> {
+    let j = prob.tau.len();
+    let cols: Vec<usize> = (0..5).filter(|&t| prob.allowed[t]).collect();
+    if cols.len() > j {
+        return None;
+    }
+    let mut model = model_values(&prob.x, c);
+    floor_model(&mut model, &prob.y);
+    let sw: Vec<f64> = (0..j)
+        .map(|r| (prob.edf[r] / (2.0 * model[r] * model[r])).sqrt())
+        .collect();
+    let mut a = DMatrix::from_fn(j, cols.len(), |r, k| prob.x[(r, cols[k])] * sw[r]);
+    let mut scale = vec![0.0; cols.len()];
+    for (k, sc) in scale.iter_mut().enumerate() {
+        let n = a.column(k).norm();
+        *sc = if n > 0.0 { 1.0 / n } else { 0.0 };
+        a.column_mut(k).scale_mut(*sc);
+    }
+    let ata = a.transpose() * &a;
+    let inv = ata
+        .clone()
+        .cholesky()
+        .map(|ch| ch.inverse())
+        .or_else(|| ata.pseudo_inverse(1e-13).ok())?;
+    let gp = inv * a.transpose();
+    let mut g = DMatrix::zeros(5, j);
+    for (k, &t) in cols.iter().enumerate() {
+        for r in 0..j {
+            g[(t, r)] = gp[(k, r)] * sw[r] * scale[k];
+        }
+    }
+    Some(g)
 }
 
 fn model_values(x: &DMatrix<f64>, c: &[f64; 5]) -> DVector<f64> {
