@@ -560,6 +560,8 @@ pub struct Engine<R: Repr> {
     spread: u64,
     /// Scratch for the moving sums of phase at m = 2, 4, 8, ... (integer input).
     pyramid: Vec<Vec<i64>>,
+    /// Scratch for one level's second differences (integer input).
+    scratch: Vec<f64>,
 }
 
 impl<R: Repr> Engine<R> {
@@ -634,6 +636,7 @@ impl<R: Repr> Engine<R> {
             first_inc: None,
             spread: 0,
             pyramid: Vec::new(),
+            scratch: Vec::new(),
         }
     }
 
@@ -864,7 +867,7 @@ impl<R: Repr> Engine<R> {
             } else {
                 None
             };
-            update_level::<R>(lv, st, stats, nid, *b, sums);
+            update_level::<R>(lv, st, stats, nid, *b, sums, &mut self.scratch);
         }
         self.pyramid = pyramid;
         // Trim: each stream keeps what its levels still need.
@@ -1065,48 +1068,53 @@ fn lagged_at<T, const K: usize>(data: &[T], base: u64, from: u64, mp: u64, n: us
     std::array::from_fn(|j| &data[o + j * m..o + j * m + n])
 }
 
-/// AVAR and HVAR sums of squares of integer phase in one pass (THEORY.md section 1). With
-/// `x0..x3` the phase at `k, k + m, k + 2m, k + 3m`: `v = x3 - 2 x2 + x1` is AVAR's second
-/// difference at `k + m` and `v - u`, `u = x2 - 2 x1 + x0`, HVAR's third difference at `k`.
-/// Wrapping arithmetic is exact modulo 2^64; the caller proves both below 2^51 in magnitude.
-#[inline(always)]
-fn sum_sq_d2_d3(x0: &[i64], x1: &[i64], x2: &[i64], x3: &[i64]) -> (f64, f64) {
-    #[inline(always)]
-    fn one(a: i64, b: i64, c: i64, d: i64) -> (f64, f64) {
-        let (p, q, r) = (b.wrapping_sub(a), c.wrapping_sub(b), d.wrapping_sub(c));
-        let (u, v) = (q.wrapping_sub(p), r.wrapping_sub(q));
-        let (fv, fw) = (small_i64_to_f64(v), small_i64_to_f64(v.wrapping_sub(u)));
-        (fv * fv, fw * fw)
-    }
-    const LANES: usize = 2;
-    let mut s2 = [0.0f64; LANES];
-    let mut s3 = [0.0f64; LANES];
-    let (c0, c1, c2, c3) = (
-        x0.chunks_exact(LANES),
-        x1.chunks_exact(LANES),
-        x2.chunks_exact(LANES),
-        x3.chunks_exact(LANES),
+/// Second differences `x2 - 2 x1 + x0` of integer phase as exact doubles (THEORY.md section 1),
+/// into `out`; the caller proves `|result| < 2^51`, so their differences are exact too.
+#[inline(never)]
+fn second_differences(x0: &[i64], x1: &[i64], x2: &[i64], out: &mut Vec<f64>) {
+    out.clear();
+    out.extend(
+        x0.iter()
+            .zip(x1)
+            .zip(x2)
+            .map(|((&a, &b), &c)| IntRepr::d2_narrow(c, b, a)),
     );
-    let (mut r2, mut r3) = (0.0, 0.0);
-    let rem = c0
-        .remainder()
-        .iter()
-        .zip(c1.remainder())
-        .zip(c2.remainder())
-        .zip(c3.remainder());
-    for (((a, b), c), d) in rem {
-        let (v2, v3) = one(*a, *b, *c, *d);
-        r2 += v2;
-        r3 += v3;
-    }
-    for (((a, b), c), d) in c0.zip(c1).zip(c2).zip(c3) {
-        for l in 0..LANES {
-            let (v2, v3) = one(a[l], b[l], c[l], d[l]);
-            s2[l] += v2;
-            s3[l] += v3;
+}
+
+/// Sum of squares, in four partial sums.
+#[inline(never)]
+fn sum_sq(v: &[f64]) -> f64 {
+    let mut acc = [0.0f64; 4];
+    let c = v.chunks_exact(4);
+    let rest: f64 = c.remainder().iter().map(|x| x * x).sum();
+    for x in c {
+        for l in 0..4 {
+            acc[l] += x[l] * x[l];
         }
     }
-    (s2.iter().sum::<f64>() + r2, s3.iter().sum::<f64>() + r3)
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + rest
+}
+
+/// Sum of `(b_i - a_i)^2`, in four partial sums.
+#[inline(never)]
+fn sum_sq_diff(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut acc = [0.0f64; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let rest: f64 = ca
+        .remainder()
+        .iter()
+        .zip(cb.remainder())
+        .map(|(x, y)| (y - x) * (y - x))
+        .sum();
+    for (x, y) in ca.zip(cb) {
+        for l in 0..4 {
+            let d = y[l] - x[l];
+            acc[l] += d * d;
+        }
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + rest
 }
 
 /// Which differences of a level are proved below 2^51 in magnitude (integer input), so they
@@ -1125,6 +1133,7 @@ fn update_level<R: Repr>(
     nid: bool,
     narrow: Narrow,
     moving_sums: Option<(&[i64], u64)>,
+    scratch: &mut Vec<f64>,
 ) {
     let mp = lv.mp;
     let x = &st.x;
@@ -1144,11 +1153,14 @@ fn update_level<R: Repr>(
                     .add(n, sum_sq3(a, b, c, |a, b, c| IntRepr::d2_narrow(c, b, a)));
             }
             if lv.avar.next == target && x.end() > lv.hvar.next + 3 * mp {
+                // Second differences at k in [hvar.next, end - 2 mp): AVAR takes them from
+                // k = hvar.next + mp on, HVAR their differences at lag mp (THEORY.md section 1).
                 let n = (x.end() - 3 * mp - lv.hvar.next) as usize;
-                let [a, b, c, d] = lagged_at(xi, x.base, lv.hvar.next, mp, n);
-                let (s2, s3) = sum_sq_d2_d3(a, b, c, d);
-                lv.avar.add(n, s2);
-                lv.hvar.add(n, s3);
+                let m = mp as usize;
+                let [a, b, c] = lagged_at(xi, x.base, lv.hvar.next, mp, n + m);
+                second_differences(a, b, c, scratch);
+                lv.avar.add(n, sum_sq(&scratch[m..]));
+                lv.hvar.add(n, sum_sq_diff(&scratch[..n], &scratch[m..]));
             }
         }
     }
@@ -1189,8 +1201,8 @@ fn update_level<R: Repr>(
         if end > lv.mvar.next + 2 * mp {
             let n = (end - 2 * mp - lv.mvar.next) as usize;
             let [a, b, c] = lagged_at(sums, base, lv.mvar.next, mp, n);
-            lv.mvar
-                .add(n, sum_sq3(a, b, c, |a, b, c| IntRepr::d2_narrow(c, b, a)));
+            second_differences(a, b, c, scratch);
+            lv.mvar.add(n, sum_sq(scratch));
         }
     } else if stats.mvar {
         if let Some([a, b, c, d]) = lagged(&st.c, lv.mvar.next, mp) {
