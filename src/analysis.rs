@@ -230,6 +230,11 @@ impl RunAnalysis {
         }
     }
 
+    /// Sampling step in seconds.
+    pub fn tau0_s(&self) -> f64 {
+        self.opts.accum.tau0_s
+    }
+
     pub fn channel_names(&self) -> Vec<String> {
         self.channels.iter().map(|c| c.setup.name.clone()).collect()
     }

@@ -126,11 +126,7 @@ impl<R: BufRead> TextReader<R> {
     /// [`TextReader::read_rows`].
     pub fn position(&self) -> TextPosition {
         TextPosition {
-            offset: self.offset
-                - self
-                    .pending
-                    .as_ref()
-                    .map_or(0, |_| self.line.len() as u64),
+            offset: self.offset - self.pending.as_ref().map_or(0, |_| self.line.len() as u64),
             line_no: self.line_no - u64::from(self.pending.is_some()),
             rows: self.rows,
             bad_rows: self.bad_rows,
