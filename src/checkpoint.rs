@@ -149,7 +149,7 @@ pub enum Position {
     /// Frames: `offset` bytes of the input had reached the decoder, whose state is `stage`.
     Frames {
         offset: u64,
-        stage: DecodeStageState,
+        stage: Box<DecodeStageState>,
     },
     /// Text columns.
     Text(TextPosition),
@@ -382,7 +382,7 @@ pub struct CheckpointPlan {
 pub enum Piece {
     Position {
         seq: u64,
-        position: Position,
+        position: Box<Position>,
     },
     Part {
         seq: u64,
@@ -431,7 +431,7 @@ impl Collector {
                             position: p,
                         } => {
                             seq = s;
-                            position = Some(p);
+                            position = Some(*p);
                             states.iter_mut().for_each(|x| *x = None);
                         }
                         Piece::Part {

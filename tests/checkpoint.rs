@@ -173,7 +173,10 @@ fn a_bounded_state_stays_bounded_and_a_full_one_grows() {
         size_after(Overlap::Full, 400_000),
     );
     // Bounded: a few new levels' worth of points (each ~4L per stream) for 4x the data.
-    assert!(b4 < b1 * 3 / 2, "bounded state grew from {b1} to {b4} bytes");
+    assert!(
+        b4 < b1 * 3 / 2,
+        "bounded state grew from {b1} to {b4} bytes"
+    );
     // Full overlap keeps stream 1 whole: 4x the data is about 4x the state.
     assert!(f4 > f1 * 3, "full state {f1} -> {f4} bytes");
     assert!(b4 < f4 / 10, "bounded {b4} vs full {f4} bytes");
@@ -254,7 +257,9 @@ fn assert_same_finals(reference: &Path, resumed: &Path) {
 
 fn analyze(input: &str, out: &Path, extra: &[&str]) -> Output {
     exe()
-        .args(["analyze", input, "--format", "siu8", "--every", "60", "--out"])
+        .args([
+            "analyze", input, "--format", "siu8", "--every", "60", "--out",
+        ])
         .arg(out)
         .args(extra)
         .output()
@@ -327,7 +332,10 @@ fn a_realtime_replay_killed_with_sigkill_and_resumed_gives_the_uninterrupted_rec
     let finished_first = child.try_wait().unwrap().is_some();
     child.kill().unwrap(); // SIGKILL
     let _ = child.wait();
-    assert!(!finished_first, "the 8 s realtime replay ended before it was killed");
+    assert!(
+        !finished_first,
+        "the 8 s realtime replay ended before it was killed"
+    );
     assert!(!Checkpoint::load(&ck).unwrap().complete);
 
     let o = analyze(cut_s, &out, &["--resume"]);
@@ -362,6 +370,36 @@ fn text_columns_resume_from_the_saved_byte_offset() {
     for ((k, x), (_, y)) in a.iter().zip(&b) {
         same(x, y, &format!("{k:?}"));
     }
+}
+
+#[test]
+fn a_stand_config_checkpoints_and_resumes() {
+    let out = tmp("stand_run.jsonl");
+    let reference = tmp("stand_ref.jsonl");
+    assert!(analyze(SIU8, &reference, &[]).status.success());
+    let cfg = tmp("stand_ckpt.toml");
+    std::fs::write(
+        &cfg,
+        format!(
+            "[source]\nkind = \"file\"\npath = \"{SIU8}\"\nformat = \"siu8\"\n\
+             [run]\nevery_s = 60.0\ncheckpoint_every = 20\n[output]\npath = \"{}\"\n",
+            out.display()
+        ),
+    )
+    .unwrap();
+    let run = |extra: &[&str]| {
+        exe()
+            .args(["run", "--config"])
+            .arg(&cfg)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    assert!(!run(&["--abort-after-frames", "50000"]).status.success());
+    assert!(!Checkpoint::load(&path_for(&out)).unwrap().complete);
+    let o = run(&["--resume"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_same_finals(&reference, &out);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -401,7 +439,11 @@ fn a_live_stream_resumed_has_the_outage_as_a_segment_break() {
             .unwrap()
     };
     let health = get("health", "");
-    assert_eq!(health["frames"], (n1 + n2) as u64, "frames counted across the stop");
+    assert_eq!(
+        health["frames"],
+        (n1 + n2) as u64,
+        "frames counted across the stop"
+    );
     let summary = get("summary", "");
     assert_eq!(summary["segments"][0], 2, "the outage breaks the segment");
     assert_eq!(summary["samples"][0], (n1 + 1 + n2 + 1) as u64);
@@ -428,10 +470,17 @@ fn mismatched_options_and_damaged_checkpoints_are_usage_errors_naming_the_file()
     let ck_name = ck.display().to_string();
 
     // Other options: refused, every difference named.
-    let o = analyze(SIU8, &out, &["--resume", "--overlap", "8", "--channels", "g1"]);
+    let o = analyze(
+        SIU8,
+        &out,
+        &["--resume", "--overlap", "8", "--channels", "g1"],
+    );
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     let e = stderr(&o);
-    assert!(e.contains(&ck_name) && e.contains("--overlap") && e.contains("--channels"), "{e}");
+    assert!(
+        e.contains(&ck_name) && e.contains("--overlap") && e.contains("--channels"),
+        "{e}"
+    );
     let o = analyze(SIU8, &out, &["--resume", "--tau0", "0.002"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("--tau0"), "{}", stderr(&o));
@@ -461,9 +510,35 @@ fn mismatched_options_and_damaged_checkpoints_are_usage_errors_naming_the_file()
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("not found"), "{}", stderr(&o));
     let o = exe()
-        .args(["analyze", SIU8, "--format", "siu8", "--checkpoint-every", "10"])
+        .args([
+            "analyze",
+            SIU8,
+            "--format",
+            "siu8",
+            "--checkpoint-every",
+            "10",
+        ])
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("--out"), "{}", stderr(&o));
+}
+
+#[test]
+fn running_sums_beyond_64_bits_survive_the_round_trip() {
+    // Increments of 3e10 counts: the running sum of phase C passes 2^64 within the run, so the
+    // saved i128 values need CBOR's big integers; MVAR at every m reads C differences across
+    // the restore point.
+    let n = 400_000usize;
+    let data: Vec<Option<i64>> = (0..n)
+        .map(|k| Some(30_000_000_000 + (k as i64 * 7919) % 1000))
+        .collect();
+    let mut a = make(true, Overlap::Bounded(16));
+    feed(&mut a, &data[..200_001]);
+    let mut b = load(&save(&a));
+    feed(&mut a, &data[200_001..]);
+    feed(&mut b, &data[200_001..]);
+    let (ra, rb) = (a.read(), b.read());
+    assert!(ra.iter().filter(|r| r.mvar.is_some()).count() >= 15);
+    assert_eq!(ra, rb);
 }

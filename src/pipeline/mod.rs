@@ -192,10 +192,13 @@ pub fn run_frames(
                     // Every step before this point has been sent: the mark follows them.
                     match stage.state() {
                         Some(st) => {
-                            let position = Position::Frames { offset, stage: st };
+                            let position = Position::Frames {
+                                offset,
+                                stage: Box::new(st),
+                            };
                             let _ = tx.send(Piece::Position {
                                 seq: s.seq,
-                                position,
+                                position: Box::new(position),
                             });
                             if !chunk_tx.send(Chunk::Checkpoint(s.seq)) {
                                 open = false;
@@ -244,7 +247,10 @@ pub fn run_frames(
     source_result?;
     if let (Some(plan), Some(written), Some(st)) = (&plan, written, stage.state()) {
         let complete = !(replay && ctl.shutdown.is_cancelled());
-        let position = Position::Frames { offset, stage: st };
+        let position = Position::Frames {
+            offset,
+            stage: Box::new(st),
+        };
         final_checkpoint(plan, written, complete, position, &analysis);
     }
     let health = stage.health();
@@ -318,7 +324,7 @@ pub fn run_text<R: BufRead + Send + 'static>(
                     let position = Position::Text(reader.position());
                     let _ = ptx.send(Piece::Position {
                         seq: s.seq,
-                        position,
+                        position: Box::new(position),
                     });
                     if !tx.send(Chunk::Checkpoint(s.seq)) {
                         break;
