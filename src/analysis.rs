@@ -27,7 +27,7 @@ pub enum InputKind {
 }
 
 /// One channel as the input describes it.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ChannelSetup {
     pub name: String,
     pub unit: String,
@@ -83,6 +83,29 @@ struct ChannelState {
     last_fit: Option<FitResult>,
 }
 
+/// One channel's saved state (a checkpoint): its setup, accumulator and evidence as they were.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct ChannelSnapshot {
+    pub setup: ChannelSetup,
+    pub acc: ChannelAccumulator,
+    pub gap: Option<GapEvidence>,
+    pub last_phase: Option<f64>,
+}
+
+/// A run's saved state (a checkpoint, `crate::checkpoint`): everything the final records
+/// depend on. The fits are not saved: the final fit starts from a fresh covariance cache
+/// anyway (see [`RunAnalysis::records`]), and interim fits are recomputed from the curves.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct AnalysisState {
+    pub input: String,
+    pub channels: Vec<ChannelSnapshot>,
+    /// Data-second of the next interim record (infinite: none).
+    pub next_emit_s: f64,
+    pub bad_rows: u64,
+    /// Wall-seconds the run had taken when saved.
+    pub elapsed_s: f64,
+}
+
 /// A run in progress.
 pub struct RunAnalysis {
     input: String,
@@ -124,6 +147,92 @@ impl RunAnalysis {
             bad_rows: 0,
             started: Instant::now(),
         }
+    }
+
+    /// The run's state as of now (pending points are not processed, so continuing from the
+    /// saved state gives the same numbers as not stopping).
+    pub fn snapshot(&self) -> AnalysisState {
+        AnalysisState {
+            input: self.input.clone(),
+            channels: self
+                .channels
+                .iter()
+                .map(|c| ChannelSnapshot {
+                    setup: c.setup.clone(),
+                    acc: c.acc.clone(),
+                    gap: c.gap.clone(),
+                    last_phase: c.last_phase,
+                })
+                .collect(),
+            next_emit_s: self.next_emit_s,
+            bad_rows: self.bad_rows,
+            elapsed_s: self.started.elapsed().as_secs_f64(),
+        }
+    }
+
+    /// Continues a run from its saved state with `opts`, which must accumulate the same way
+    /// (same tau0, cluster sizes, overlap and statistics; the diagnosis on or off as before).
+    pub fn restore(state: AnalysisState, opts: AnalysisOptions) -> Result<RunAnalysis, String> {
+        for c in &state.channels {
+            if c.acc.config() != &opts.accum {
+                return Err(format!(
+                    "channel {} was accumulated with other settings ({:?}) than asked now ({:?})",
+                    c.setup.name,
+                    c.acc.config(),
+                    opts.accum
+                ));
+            }
+            if c.gap.is_some() != opts.diagnose {
+                return Err(format!(
+                    "the saved run was made {} the diagnosis; give --diagnose {}",
+                    if opts.diagnose { "without" } else { "with" },
+                    if opts.diagnose {
+                        "only if it was given"
+                    } else {
+                        "again"
+                    }
+                ));
+            }
+        }
+        let started = Instant::now()
+            .checked_sub(std::time::Duration::from_secs_f64(
+                state.elapsed_s.clamp(0.0, 1.0e9),
+            ))
+            .unwrap_or_else(Instant::now);
+        Ok(RunAnalysis {
+            input: state.input,
+            opts,
+            channels: state
+                .channels
+                .into_iter()
+                .map(|c| ChannelState {
+                    setup: c.setup,
+                    acc: c.acc,
+                    gap: c.gap,
+                    last_phase: c.last_phase,
+                    fitter: Fitter::new(),
+                    last_fit: None,
+                })
+                .collect(),
+            next_emit_s: state.next_emit_s,
+            bad_rows: state.bad_rows,
+            started,
+        })
+    }
+
+    /// Ends every channel's phase segment without accounting for time: what follows is not
+    /// contiguous with what came before (a live run resumed after a stop), so no difference
+    /// spans the break.
+    pub fn break_segments(&mut self) {
+        for ch in &mut self.channels {
+            ch.acc.break_segment();
+            ch.last_phase = None;
+        }
+    }
+
+    /// Sampling step in seconds.
+    pub fn tau0_s(&self) -> f64 {
+        self.opts.accum.tau0_s
     }
 
     pub fn channel_names(&self) -> Vec<String> {
@@ -200,6 +309,8 @@ impl RunAnalysis {
                     self.emit_if_due(out);
                 }
             }
+            // The pipeline saves the state at this mark; nothing to accumulate.
+            Chunk::Checkpoint(_) => {}
         }
     }
 

@@ -21,6 +21,9 @@ pub enum UsageError {
         key: String,
         problem: String,
     },
+    /// A checkpoint that cannot be used: missing, damaged, or saved with other options.
+    #[error("checkpoint {file}: {problem}")]
+    Checkpoint { file: PathBuf, problem: String },
 }
 
 /// The exit status for an error chain: 2 when a [`UsageError`] is anywhere in it, else 1.

@@ -26,6 +26,7 @@
 
 pub mod allan;
 pub mod analysis;
+pub mod checkpoint;
 pub mod cli;
 pub mod error;
 pub mod frame;

@@ -20,6 +20,7 @@
 //! every_s = 60.0              # optional: interim records (wall-seconds live, data-seconds file)
 //! capture = "stand.siu8"      # optional: every received byte (live sources)
 //! diagnose = true              # optional: `diagnosis` records with the fits (default false)
+//! checkpoint_every = 300.0    # optional: save the state beside output.path (run --resume)
 //!
 //! [statistics]
 //! stats = ["avar", "hvar", "mvar"]
@@ -58,6 +59,9 @@ pub struct StandConfig {
     pub format: String,
     /// Stop after this many seconds (`run.duration`).
     pub duration_s: Option<f64>,
+    /// Seconds between checkpoints beside the output (`run.checkpoint_every`): wall-seconds
+    /// live, data-seconds for a file.
+    pub checkpoint_every_s: Option<f64>,
     /// Seconds between interim records (`run.every_s`).
     pub every_s: Option<f64>,
     /// Write `diagnosis` records (the sim-to-real gap) with the fits (`run.diagnose`).
@@ -363,9 +367,21 @@ impl StandConfig {
 
         // [run]
         let (mut duration_s, mut every_s, mut capture) = (None, None, None);
+        let mut checkpoint_every_s = None;
         let mut diagnose = false;
         if let Some(r) = ck.table(&root, "run") {
-            ck.known_keys("run", r, &["duration", "every_s", "capture", "diagnose"]);
+            ck.known_keys(
+                "run",
+                r,
+                &[
+                    "duration",
+                    "every_s",
+                    "capture",
+                    "diagnose",
+                    "checkpoint_every",
+                ],
+            );
+            checkpoint_every_s = ck.positive(r, "run", "checkpoint_every");
             match r.get("diagnose") {
                 None => {}
                 Some(toml::Value::Boolean(b)) => diagnose = *b,
@@ -537,6 +553,7 @@ impl StandConfig {
                 source,
                 format,
                 duration_s,
+                checkpoint_every_s,
                 every_s,
                 capture,
                 diagnose,

@@ -32,6 +32,7 @@ fn shipped_example_parses() {
     // 3 h and 60 s as written in the example.
     assert_eq!(cfg.duration_s, Some(10_800.0));
     assert_eq!(cfg.every_s, Some(60.0));
+    assert_eq!(cfg.checkpoint_every_s, Some(300.0));
     // The four [[limits]] tables, and each is a valid limit spec.
     assert_eq!(cfg.limits_raw.len(), 4);
     assert_eq!(cfg.limits_raw[0]["channel"].as_str(), Some("g4"));

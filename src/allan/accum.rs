@@ -37,7 +37,7 @@ use super::batch::CompensatedSum;
 use super::Stat;
 
 /// Which statistics to accumulate.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct StatSet {
     pub avar: bool,
     pub hvar: bool,
@@ -69,7 +69,7 @@ impl StatSet {
 }
 
 /// Overlap of the estimates.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Overlap {
     /// The exact overlapping estimate: every difference, memory grows with the run.
     Full,
@@ -91,7 +91,7 @@ pub enum Overlap {
 pub const DEFAULT_L: u64 = 16;
 
 /// Which cluster sizes `m` to compute.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum TauSpec {
     /// `m = 1, 2, 4, 8, ...`
     Octave,
@@ -129,7 +129,7 @@ impl TauSpec {
 }
 
 /// Settings of one channel's accumulator.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct AccumConfig {
     /// Sampling step in seconds.
     pub tau0_s: f64,
@@ -156,7 +156,7 @@ impl AccumConfig {
 // Number representations
 
 /// A double-double number `hi + lo`, `|lo| <= ulp(hi)/2`.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Dd {
     pub hi: f64,
     pub lo: f64,
@@ -197,11 +197,11 @@ impl Dd {
 /// How phase and its running sum are represented for one kind of input.
 pub trait Repr: 'static {
     /// One increment as it arrives.
-    type Inc: Copy;
+    type Inc: Copy + std::fmt::Debug + serde::Serialize + serde::de::DeserializeOwned;
     /// A phase point.
-    type X: Copy + Default + std::fmt::Debug;
+    type X: Copy + Default + std::fmt::Debug + serde::Serialize + serde::de::DeserializeOwned;
     /// A point of the running sum of phase.
-    type C: Copy + Default + std::fmt::Debug;
+    type C: Copy + Default + std::fmt::Debug + serde::Serialize + serde::de::DeserializeOwned;
     fn zero_x() -> Self::X {
         Self::X::default()
     }
@@ -383,7 +383,7 @@ impl Repr for FloatRepr {
 // Streams and levels
 
 /// Points of one stream since the start of the segment, of which the first `base` were dropped.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 struct Buf<T> {
     data: Vec<T>,
     /// Segment-relative stream index of `data[0]`.
@@ -419,7 +419,8 @@ impl<T: Copy> Buf<T> {
     }
 }
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(bound = "")]
 struct Stream<R: Repr> {
     stride: u64,
     /// Index of the stream this one decimates (itself for stride 1).
@@ -433,7 +434,7 @@ struct Stream<R: Repr> {
 }
 
 /// Sum of squared differences of one statistic at one level.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, serde::Serialize, serde::Deserialize)]
 struct SqSum {
     sum: CompensatedSum,
     count: u64,
@@ -451,7 +452,7 @@ impl SqSum {
 }
 
 /// Moments for the lag-1 autocorrelation of one differenced series (noise identification).
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, serde::Serialize, serde::Deserialize)]
 struct LagMoments {
     /// The first value seen, subtracted from every value so the moments do not cancel.
     shift: Option<f64>,
@@ -485,7 +486,7 @@ impl LagMoments {
     }
 }
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 struct Level {
     m: u64,
     stream: usize,
@@ -537,7 +538,8 @@ const NID_MIN_STEP: u64 = 16;
 const BLOCK: usize = 2048;
 
 /// The streaming accumulator of one channel, generic over the number representation.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(bound = "")]
 pub struct Engine<R: Repr> {
     cfg: AccumConfig,
     streams: Vec<Stream<R>>,
@@ -558,7 +560,9 @@ pub struct Engine<R: Repr> {
     /// when its third difference of the running sum fits in 64 bits.
     first_inc: Option<R::Inc>,
     spread: u64,
-    /// Scratch for the moving sums of phase at m = 2, 4, 8, ... (integer input).
+    /// Scratch for the moving sums of phase at m = 2, 4, 8, ... (integer input); rebuilt at
+    /// every block, so a saved state leaves it out.
+    #[serde(skip)]
     pyramid: Vec<Vec<i64>>,
     /// Scratch for one level's second differences (integer input).
     scratch: Vec<f64>,
@@ -1268,7 +1272,7 @@ impl<R: Repr> ChannelEngine for Engine<R> {
 }
 
 /// A channel's accumulator for whichever kind of input it receives.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub enum ChannelAccumulator {
     /// Integer counts (frame fields); the reading is scaled by `scale` (u per count).
     Counts { engine: Engine<IntRepr>, scale: f64 },
@@ -1305,6 +1309,15 @@ impl ChannelAccumulator {
 
     pub fn push_gap(&mut self, missing: u64) {
         self.engine_mut().gap(missing)
+    }
+
+    /// Ends the current phase segment without accounting for time: the data after it are not
+    /// contiguous with the data before (a resumed live run), so no difference spans the break.
+    pub fn break_segment(&mut self) {
+        match self {
+            ChannelAccumulator::Counts { engine, .. } => engine.break_segment(),
+            ChannelAccumulator::Real(e) => e.break_segment(),
+        }
     }
 
     pub fn phase_points(&self) -> u64 {

@@ -5,7 +5,7 @@
 //! a difference never spans two segments (THEORY.md section 1, "Gaps").
 
 /// A neumaier-compensated running sum, so reference sums of many squares stay exact to ~1 ulp.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, serde::Serialize, serde::Deserialize)]
 pub struct CompensatedSum {
     sum: f64,
     comp: f64,

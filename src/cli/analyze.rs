@@ -7,10 +7,15 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
+use std::io::Seek;
+use std::sync::Arc;
+
 use super::{
-    analysis_options, format_and_tau0, open_input, select_channels, usage, AnalyzeArgs, DataArgs,
+    analysis_options, checkpoint_header, checkpoint_setup, format_and_tau0, open_input,
+    select_channels, start_analysis, usage, AnalyzeArgs, DataArgs,
 };
 use crate::analysis::{AnalysisOptions, ChannelSetup, RunAnalysis};
+use crate::checkpoint::Position;
 use crate::frame::FrameDescriptor;
 use crate::input::text::TextReader;
 use crate::model::aggregate::{aggregate_channels, RunCoefs};
@@ -32,10 +37,26 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
 
 /// Where the JSON lines go: `--out FILE` or standard output.
 pub(crate) fn output_writer(d: &DataArgs) -> Result<Box<dyn Write + Send>> {
-    Ok(match &d.out {
+    // A resumed run adds to the records already written.
+    output_file(d.out.as_deref(), d.resume)
+}
+
+/// JSON lines to `out` (created, or appended to when `append`), or to standard output.
+pub(crate) fn output_file(
+    out: Option<&std::path::Path>,
+    append: bool,
+) -> Result<Box<dyn Write + Send>> {
+    Ok(match out {
         Some(p) => {
-            let f = std::fs::File::create(p)
-                .with_context(|| format!("cannot create output {}", p.display()))?;
+            let f = if append {
+                std::fs::OpenOptions::new()
+                    .append(true)
+                    .create(true)
+                    .open(p)
+            } else {
+                std::fs::File::create(p)
+            }
+            .with_context(|| format!("cannot create output {}", p.display()))?;
             Box::new(std::io::BufWriter::new(f))
         }
         None => Box::new(std::io::BufWriter::new(std::io::stdout())),
@@ -57,6 +78,11 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue) -> Result<()> {
     let (descriptor, tau0) = format_and_tau0(d)?;
     let base = analysis_options(d, tau0)?;
     let several = a.inputs.len() > 1;
+    if several && (d.checkpoint_every.is_some() || d.resume) {
+        return Err(usage(
+            "--checkpoint-every and --resume take one input (one run per output file)",
+        ));
+    }
     let ctl = RunControl {
         handle_signals: true,
         show_progress: std::io::stderr().is_terminal(),
@@ -129,9 +155,50 @@ fn analyze_text(
         })
         .collect();
     let setups = select_channels(setups, &d.channels, input)?;
-    let analysis = RunAnalysis::new(input, setups, opts);
+    let header = checkpoint_header(input, "csv", &opts, &setups);
+    let replay = input != "-";
+    let ckpt = checkpoint_setup(
+        d.checkpoint_every,
+        d.resume,
+        d.abort_after_frames,
+        d.out.as_deref(),
+        header,
+        true,
+        replay,
+    )?;
+    let saved = ckpt.as_ref().and_then(|c| c.1.as_ref());
+    let ck_path = ckpt.as_ref().map(|c| c.0.path.clone());
+    let mut analysis = start_analysis(input, setups, opts, saved, ck_path.as_deref())?;
+    let reader = match saved.map(|c| &c.position) {
+        Some(Position::Text(pos)) if replay => {
+            // Continue the file where the saved run stood.
+            let names = reader.names().to_vec();
+            drop(reader);
+            let mut f =
+                std::fs::File::open(input).with_context(|| format!("cannot open {input}"))?;
+            f.seek(std::io::SeekFrom::Start(pos.offset))
+                .with_context(|| format!("cannot seek in {input}"))?;
+            let f: Box<dyn std::io::Read + Send> = Box::new(f);
+            TextReader::resume(BufReader::with_capacity(1 << 16, f), &path, names, pos)
+        }
+        Some(Position::Text(pos)) => {
+            // Standard input cannot be rewound: what follows is a new stretch.
+            analysis.break_segments();
+            analysis.add_bad_rows(pos.bad_rows);
+            reader
+        }
+        Some(Position::Frames { .. }) => {
+            return Err(usage(format!(
+                "{}: the checkpoint is of frames, not text columns",
+                ck_path.unwrap_or_default().display()
+            )))
+        }
+        None => reader,
+    };
+    let mut ctl = ctl.clone();
+    ctl.checkpoint = ckpt.map(|c| Arc::new(c.0));
     let rows_per_s = realtime.then_some(1.0 / tau0);
-    Ok(crate::pipeline::run_text(reader, path, rows_per_s, analysis, queue, ctl)?.analysis)
+    Ok(crate::pipeline::run_text(reader, path, rows_per_s, analysis, queue, &ctl)?.analysis)
 }
 
 /// A capture of frames (a file, or `-`): the file source, the decode stage, the analysis.
@@ -145,7 +212,22 @@ fn analyze_frames(
     ctl: &RunControl,
 ) -> Result<RunAnalysis> {
     let setups = select_channels(ChannelSetup::for_frames(desc), &d.channels, input)?;
-    let analysis = RunAnalysis::new(input, setups, opts);
+    let header = checkpoint_header(input, &d.format, &opts, &setups);
+    let ckpt = checkpoint_setup(
+        d.checkpoint_every,
+        d.resume,
+        d.abort_after_frames,
+        d.out.as_deref(),
+        header,
+        true,
+        input != "-",
+    )?;
+    let saved = ckpt.as_ref().and_then(|c| c.1.as_ref());
+    let ck_path = ckpt.as_ref().map(|c| c.0.path.clone());
+    let analysis = start_analysis(input, setups, opts, saved, ck_path.as_deref())?;
+    let mut ctl = ctl.clone();
+    ctl.checkpoint = ckpt.map(|c| Arc::new(c.0));
+    let ctl = &ctl;
     let pace = if realtime {
         Pace::Realtime {
             bytes_per_s: desc.frame_len() as f64 * desc.rate_hz,

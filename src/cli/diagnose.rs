@@ -140,6 +140,12 @@ fn gather(
 
 pub fn run(a: &DiagnoseArgs) -> Result<()> {
     let d = &a.data;
+    if d.checkpoint_every.is_some() || d.resume {
+        return Err(usage(
+            "diagnose reads its input in one pass and keeps no checkpoints: --checkpoint-every \
+             and --resume are for analyze, listen and run",
+        ));
+    }
     let mut sink = crate::sink::json::JsonLines::new(super::analyze::output_writer(d)?);
     let (desc, tau0) = format_and_tau0(d)?;
     let opts = DiagnoseOptions::default();

@@ -9,7 +9,6 @@ use clap::{ArgGroup, Args};
 
 use super::analyze::output_writer;
 use super::{analysis_options, parse_duration_s, select_channels, usage, DataArgs};
-use crate::analysis::RunAnalysis;
 use crate::frame::FrameDescriptor;
 use crate::pipeline::{RecordWriter, RunControl};
 use crate::source::{Pace, SourceSpec};
@@ -78,8 +77,21 @@ pub fn run(l: &ListenArgs) -> Result<()> {
         &d.channels,
         &spec.name(),
     )?;
-    let analysis = RunAnalysis::new(&spec.name(), setups, opts);
+    let header = super::checkpoint_header(&spec.name(), &d.format, &opts, &setups);
+    let ckpt = super::checkpoint_setup(
+        d.checkpoint_every,
+        d.resume,
+        d.abort_after_frames,
+        d.out.as_deref(),
+        header,
+        false,
+        false,
+    )?;
+    let saved = ckpt.as_ref().and_then(|c| c.1.as_ref());
+    let ck_path = ckpt.as_ref().map(|c| c.0.path.clone());
+    let analysis = super::start_analysis(&spec.name(), setups, opts, saved, ck_path.as_deref())?;
     let ctl = RunControl {
+        checkpoint: ckpt.map(|c| std::sync::Arc::new(c.0)),
         duration: match &l.duration {
             Some(s) => Some(Duration::from_secs_f64(parse_duration_s(s)?)),
             None => None,

@@ -161,6 +161,20 @@ pub struct DataArgs {
     /// Also write `diagnosis` records (the sim-to-real gap) with the fits, interim and final.
     #[arg(long)]
     pub diagnose: bool,
+    /// Save the analysis state every S seconds beside the output (`--out FILE` -> FILE.ckpt),
+    /// and at the end: data-seconds when replaying a file, wall-seconds live. Written to a
+    /// temporary file and renamed, so a crash never leaves a partial checkpoint.
+    #[arg(long, value_name = "S")]
+    pub checkpoint_every: Option<f64>,
+    /// Continue the run saved in FILE.ckpt (after a crash): a replayed file from the saved byte
+    /// offset, giving the final records of an uninterrupted run; a live source from now on, the
+    /// outage a gap. Records are appended to --out. Refused (exit 2) if the options differ.
+    #[arg(long)]
+    pub resume: bool,
+    /// Test hook: abort (as a crash would) once this many frames are decoded (rows read, for
+    /// text columns) and a checkpoint is on disk.
+    #[arg(long, hide = true, value_name = "N")]
+    pub abort_after_frames: Option<u64>,
 }
 
 #[derive(Debug, Args)]
@@ -366,6 +380,134 @@ pub(crate) fn analysis_options(d: &DataArgs, tau0_s: f64) -> Result<AnalysisOpti
         },
         diagnose: d.diagnose,
     })
+}
+
+/// The checkpoint header of a run: the options its accumulated state depends on.
+pub(crate) fn checkpoint_header(
+    input: &str,
+    format: &str,
+    opts: &AnalysisOptions,
+    channels: &[ChannelSetup],
+) -> crate::checkpoint::Header {
+    use crate::allan::accum::Overlap;
+    let s = opts.accum.stats;
+    let stats = [("avar", s.avar), ("hvar", s.hvar), ("mvar", s.mvar)]
+        .iter()
+        .filter(|x| x.1)
+        .map(|x| x.0.to_string())
+        .collect();
+    let file = Path::new(input);
+    crate::checkpoint::Header {
+        input: input.into(),
+        input_fingerprint: (input != "-" && file.is_file())
+            .then(|| crate::checkpoint::fingerprint(file))
+            .flatten(),
+        format: format.into(),
+        kind: match opts.kind {
+            InputKind::Increments => "increments",
+            InputKind::Rate => "rate",
+            InputKind::Phase => "phase",
+        }
+        .into(),
+        tau0_s: opts.accum.tau0_s,
+        taus: opts.accum.taus.cluster_sizes(),
+        overlap: match opts.accum.overlap {
+            Overlap::Full => "full".into(),
+            Overlap::Bounded(l) => l.to_string(),
+        },
+        stats,
+        channels: channels.iter().map(|c| c.name.clone()).collect(),
+        diagnose: opts.diagnose,
+    }
+}
+
+/// A run's checkpointing, from `--checkpoint-every`, `--resume` and the output path: the plan
+/// for the pipeline and, when resuming, the saved checkpoint (checked against `header`).
+pub(crate) fn checkpoint_setup(
+    every: Option<f64>,
+    resume: bool,
+    abort_after_frames: Option<u64>,
+    out: Option<&Path>,
+    header: crate::checkpoint::Header,
+    data_seconds: bool,
+    replay: bool,
+) -> Result<
+    Option<(
+        crate::checkpoint::CheckpointPlan,
+        Option<crate::checkpoint::Checkpoint>,
+    )>,
+> {
+    use crate::checkpoint::{
+        check_fresh_start, check_resume, path_for, Checkpoint, CheckpointPlan,
+    };
+    if every.is_none() && !resume {
+        if abort_after_frames.is_some() {
+            return Err(usage("--abort-after-frames needs --checkpoint-every"));
+        }
+        return Ok(None);
+    }
+    let Some(out) = out else {
+        return Err(usage(
+            "--checkpoint-every and --resume need an output file (--out FILE, or [output] path              in a stand config): the checkpoint is kept beside it, as FILE.ckpt",
+        ));
+    };
+    if let Some(e) = every {
+        if !(e.is_finite() && e > 0.0) {
+            return Err(usage(format!(
+                "--checkpoint-every {e}: must be a positive number of seconds"
+            )));
+        }
+    }
+    let path = path_for(out);
+    let mut plan = CheckpointPlan {
+        path: path.clone(),
+        every_s: every.unwrap_or(0.0),
+        data_seconds,
+        header,
+        resume: None,
+        abort_after_frames,
+    };
+    if !resume {
+        check_fresh_start(&path)?;
+        return Ok(Some((plan, None)));
+    }
+    let ck = Checkpoint::load(&path)?;
+    check_resume(&path, &ck, &plan.header, replay)?;
+    if every.is_none() {
+        plan.every_s = ck.every_s;
+    }
+    plan.resume = Some((ck.position.clone(), ck.sequence));
+    tracing::info!(
+        "resuming from {} (checkpoint {}, {:.1} s of data, {} bytes of input)",
+        path.display(),
+        ck.sequence,
+        ck.analysis
+            .channels
+            .iter()
+            .map(|c| c.acc.t_data_s())
+            .fold(0.0, f64::max),
+        ck.position.offset()
+    );
+    Ok(Some((plan, Some(ck))))
+}
+
+/// The analysis of a run: fresh, or continued from a checkpoint's state.
+pub(crate) fn start_analysis(
+    input: &str,
+    setups: Vec<ChannelSetup>,
+    opts: AnalysisOptions,
+    resume: Option<&crate::checkpoint::Checkpoint>,
+    path: Option<&Path>,
+) -> Result<crate::analysis::RunAnalysis> {
+    match resume {
+        None => Ok(crate::analysis::RunAnalysis::new(input, setups, opts)),
+        Some(ck) => crate::analysis::RunAnalysis::restore(ck.analysis.clone(), opts).map_err(|p| {
+            anyhow::Error::new(UsageError::Checkpoint {
+                file: path.map(Path::to_path_buf).unwrap_or_default(),
+                problem: p,
+            })
+        }),
+    }
 }
 
 pub(crate) fn open_input(input: &str) -> Result<Box<dyn Read + Send>> {

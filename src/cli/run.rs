@@ -5,12 +5,12 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::Duration;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 
 use super::select_channels;
 use crate::allan::accum::AccumConfig;
-use crate::analysis::{AnalysisOptions, InputKind, RunAnalysis};
+use crate::analysis::{AnalysisOptions, InputKind};
 use crate::error::UsageError;
 use crate::frame::FrameDescriptor;
 use crate::model::fit::FitOptions;
@@ -23,6 +23,14 @@ pub struct RunArgs {
     /// The stand config (TOML; see config/stand.toml).
     #[arg(long)]
     pub config: PathBuf,
+    /// Continue the run saved in the checkpoint beside the config's output (`[run]
+    /// checkpoint_every`): a replayed file from where it stood, a live source from now on with
+    /// the outage as a gap; records are appended to the output.
+    #[arg(long)]
+    pub resume: bool,
+    /// Test hook: abort once this many frames are decoded and a checkpoint is on disk.
+    #[arg(long, hide = true, value_name = "N")]
+    pub abort_after_frames: Option<u64>,
 }
 
 pub fn run(r: &RunArgs) -> Result<()> {
@@ -78,15 +86,24 @@ pub fn run(r: &RunArgs) -> Result<()> {
             problem: e.to_string(),
         })
     })?;
-    let analysis = RunAnalysis::new(&spec.name(), setups, opts);
-    let out: Box<dyn Write + Send> = match &cfg.output {
-        Some(p) => Box::new(std::io::BufWriter::new(
-            std::fs::File::create(p)
-                .with_context(|| format!("cannot create output {}", p.display()))?,
-        )),
-        None => Box::new(std::io::BufWriter::new(std::io::stdout())),
-    };
+    let header = super::checkpoint_header(&spec.name(), &cfg.format, &opts, &setups);
+    let replay = matches!(spec, SourceSpec::File { .. });
+    let ckpt = super::checkpoint_setup(
+        cfg.checkpoint_every_s,
+        r.resume,
+        r.abort_after_frames,
+        cfg.output.as_deref(),
+        header,
+        !live,
+        replay,
+    )
+    .map_err(|e| e.context(format!("stand config {}", cfg.file.display())))?;
+    let saved = ckpt.as_ref().and_then(|c| c.1.as_ref());
+    let ck_path = ckpt.as_ref().map(|c| c.0.path.clone());
+    let analysis = super::start_analysis(&spec.name(), setups, opts, saved, ck_path.as_deref())?;
+    let out: Box<dyn Write + Send> = super::analyze::output_file(cfg.output.as_deref(), r.resume)?;
     let ctl = RunControl {
+        checkpoint: ckpt.map(|c| std::sync::Arc::new(c.0)),
         duration: cfg.duration_s.map(Duration::from_secs_f64),
         capture: cfg.capture.clone(),
         handle_signals: true,

@@ -29,14 +29,14 @@
 
 use std::collections::VecDeque;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::descriptor::{BitMeaning, FrameDescriptor, MessageSpec};
 use super::field::{read, read_bits, RawValue};
 use super::{ChannelValue, DecodedFrame, FrameEvent};
 
 /// Decoder health: the CONTRACT.md `health` fields first, then extra detail.
-#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Health {
     /// Good frames delivered (duplicates not included).
     pub frames: u64,
@@ -148,6 +148,21 @@ impl SeqTracker {
     }
 }
 
+/// What a [`Decoder`] holds between two pushes, for a checkpoint (`crate::checkpoint`): the
+/// bytes of a message not yet complete, the counters, and where the frame counter stands.
+/// Taken when every decoded event has been collected.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct DecoderState {
+    /// Unconsumed bytes (at most about one message).
+    pub pending: Vec<u8>,
+    pub health: Health,
+    pub skipping: bool,
+    /// The counter tracker's last message: (slot, counter, is_frame).
+    pub last: Option<(u64, u64, bool)>,
+    pub last_seq: Option<u64>,
+    pub next_index: u64,
+}
+
 /// Streaming decoder for one descriptor. Feed it with [`Decoder::push`], take events with
 /// [`Decoder::next_event`] (or [`Decoder::drain`]), call [`Decoder::finish`] at end of input.
 pub struct Decoder {
@@ -192,6 +207,31 @@ impl Decoder {
 
     pub fn descriptor(&self) -> &FrameDescriptor {
         &self.desc
+    }
+
+    /// The decoder's state, or `None` while decoded events are still waiting to be taken.
+    pub fn state(&self) -> Option<DecoderState> {
+        self.events.is_empty().then(|| DecoderState {
+            pending: self.buf[self.pos..].to_vec(),
+            health: self.health.clone(),
+            skipping: self.skipping,
+            last: self.tracker.last,
+            last_seq: self.tracker.last_seq,
+            next_index: self.next_index,
+        })
+    }
+
+    /// A decoder for `desc` in the state `st` ([`Decoder::state`]): fed the bytes that followed,
+    /// it gives the events and counters the original decoder would have given.
+    pub fn restore(desc: FrameDescriptor, st: &DecoderState) -> Self {
+        let mut d = Decoder::new(desc);
+        d.buf = st.pending.clone();
+        d.health = st.health.clone();
+        d.skipping = st.skipping;
+        d.tracker.last = st.last;
+        d.tracker.last_seq = st.last_seq;
+        d.next_index = st.next_index;
+        d
     }
 
     pub fn health(&self) -> &Health {

@@ -16,7 +16,7 @@ pub mod descriptor;
 pub mod encoder;
 pub mod field;
 
-pub use decoder::{Decoder, Health};
+pub use decoder::{Decoder, DecoderState, Health};
 pub use descriptor::{DescriptorErrors, FrameDescriptor};
 pub use encoder::{encode, encode_frame, EncodeError, FrameInput};
 

@@ -27,7 +27,7 @@ pub const BLOCKS_PER_SEGMENT: u64 = 32;
 pub const OVERLAP_L: u64 = crate::allan::accum::DEFAULT_L;
 
 /// How to gather the evidence.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct GapConfig {
     /// Sampling step, s.
     pub tau0_s: f64,
@@ -83,7 +83,7 @@ pub fn dense_ms(per_octave: u32, max_m: u64) -> Vec<u64> {
 
 /// One segment's accumulated second-difference sums: per cluster size, `(m, sum of D^2 / (2
 /// tau^2), count)` so that merging is adding.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SegmentCurve {
     /// Index of the segment's first increment.
     pub start: u64,
@@ -150,7 +150,7 @@ pub struct EvidenceSnapshot {
 }
 
 /// The streaming evidence of one channel.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct GapEvidence {
     cfg: GapConfig,
     main: Engine<FloatRepr>,

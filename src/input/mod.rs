@@ -13,4 +13,7 @@ pub enum Chunk {
     Rows { values: Vec<f64>, width: usize },
     /// Decoded frames and the gaps between them.
     Frames(Vec<FrameEvent>),
+    /// A checkpoint mark (its sequence number): every step before it has been sent, none after
+    /// it; the analysis saves its state here (`crate::checkpoint`).
+    Checkpoint(u64),
 }

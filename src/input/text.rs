@@ -28,6 +28,19 @@ pub struct TextReader<R> {
     line: Vec<u8>,
     bad_rows: u64,
     rows: u64,
+    /// Bytes of the input consumed so far (header and comment lines included).
+    offset: u64,
+}
+
+/// Where a [`TextReader`] stands, for a checkpoint: continuing from `offset` with these counts
+/// reads the rest of the input as the reader would have.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct TextPosition {
+    /// Bytes consumed (the next row starts here).
+    pub offset: u64,
+    pub line_no: u64,
+    pub rows: u64,
+    pub bad_rows: u64,
 }
 
 fn parse_field(t: &str) -> Result<f64, ()> {
@@ -52,6 +65,7 @@ impl<R: BufRead> TextReader<R> {
     pub fn new(mut src: R, path: &Path) -> Result<Self, UsageError> {
         let mut line = String::new();
         let mut line_no = 0u64;
+        let mut offset = 0u64;
         loop {
             line.clear();
             let n = src.read_line(&mut line).map_err(|e| UsageError::Input {
@@ -67,6 +81,7 @@ impl<R: BufRead> TextReader<R> {
                 });
             }
             line_no += 1;
+            offset += n as u64;
             let t = line.trim();
             if t.is_empty() || t.starts_with('#') {
                 continue;
@@ -86,7 +101,35 @@ impl<R: BufRead> TextReader<R> {
                 line: line.into_bytes(),
                 bad_rows: 0,
                 rows: 0,
+                offset,
             });
+        }
+    }
+
+    /// Continues reading `src`, positioned at `pos.offset` of the input whose channels are
+    /// `names`, as a reader that had stopped at `pos` (no header is looked for).
+    pub fn resume(src: R, path: &Path, names: Vec<String>, pos: &TextPosition) -> Self {
+        TextReader {
+            src,
+            path: path.into(),
+            line_no: pos.line_no,
+            names,
+            pending: None,
+            line: Vec::new(),
+            bad_rows: pos.bad_rows,
+            rows: pos.rows,
+            offset: pos.offset,
+        }
+    }
+
+    /// Where the reader stands: every row before it has been handed out by
+    /// [`TextReader::read_rows`].
+    pub fn position(&self) -> TextPosition {
+        TextPosition {
+            offset: self.offset - self.pending.as_ref().map_or(0, |_| self.line.len() as u64),
+            line_no: self.line_no - u64::from(self.pending.is_some()),
+            rows: self.rows,
+            bad_rows: self.bad_rows,
         }
     }
 
@@ -115,9 +158,11 @@ impl<R: BufRead> TextReader<R> {
         }
         while n < max_rows {
             self.line.clear();
-            if self.src.read_until(b'\n', &mut self.line)? == 0 {
+            let got = self.src.read_until(b'\n', &mut self.line)?;
+            if got == 0 {
                 break;
             }
+            self.offset += got as u64;
             self.line_no += 1;
             // A line that is not UTF-8 (a damaged stretch of the file) is a bad row, not the
             // end of the run.

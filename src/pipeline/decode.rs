@@ -18,12 +18,12 @@
 //!   kvh1750. Formats without a counter (or whose counter is shared with other messages, as
 //!   hg4930's) use the time alone.
 
-use std::time::Instant;
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use bytes::Bytes;
 
 use super::reorder::{Reorder, ReorderStats};
-use crate::frame::{Decoder, FrameDescriptor, FrameEvent, Health};
+use crate::frame::{Decoder, DecoderState, FrameDescriptor, FrameEvent, Health};
 use crate::source::SourceEvent;
 
 /// Frames lost in an outage: the advance of the frame counter from the last frame before the
@@ -50,7 +50,7 @@ pub fn outage_advance(
 }
 
 /// Outage counters (added to the `health` record).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct OutageStats {
     /// Outages: reconnections of the port, or silences longer than half the counter period.
     pub outages: u64,
@@ -58,6 +58,30 @@ pub struct OutageStats {
     pub missing: u64,
     /// First frames after an outage that repeated the last one (included in `duplicates`).
     pub duplicates: u64,
+}
+
+/// What a [`DecodeStage`] holds, for a checkpoint (`crate::checkpoint`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct DecodeStageState {
+    pub decoder: DecoderState,
+    /// Health of decoders replaced after outages.
+    pub retired: Health,
+    pub outage: OutageStats,
+    /// UDP reorder window's counters.
+    pub reorder: Option<ReorderStats>,
+    /// Counter of the last frame (`Some(None)`: a frame without a usable counter), and when it
+    /// arrived, in seconds since the Unix epoch (live sources place the first frame after a
+    /// resume by both).
+    pub last_counter: Option<Option<u64>>,
+    pub last_frame_unix_s: Option<f64>,
+}
+
+/// Seconds since the Unix epoch of an `Instant` in the past.
+fn unix_s(at: Instant) -> f64 {
+    let now = SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64());
+    now - at.elapsed().as_secs_f64()
 }
 
 struct Pending {
@@ -243,6 +267,56 @@ impl DecodeStage {
             h.duplicates += r.stats.duplicates;
         }
         h
+    }
+
+    /// The stage's state between two source events, or `None` while decoded events wait.
+    pub fn state(&self) -> Option<DecodeStageState> {
+        Some(DecodeStageState {
+            decoder: self.decoder.state()?,
+            retired: self.retired.clone(),
+            outage: self.outage,
+            reorder: self.reorder_stats(),
+            last_counter: self.last_frame.map(|(c, _)| c),
+            last_frame_unix_s: self.last_frame.map(|(_, t)| unix_s(t)),
+        })
+    }
+
+    /// A stage continuing a replay from `st`: the decoder exactly as it was, so the bytes that
+    /// followed give the same events and counters.
+    pub fn restore_replay(desc: FrameDescriptor, st: &DecodeStageState) -> DecodeStage {
+        let mut stage = DecodeStage::new(desc.clone(), false);
+        stage.decoder = Decoder::restore(desc, &st.decoder);
+        stage.retired = st.retired.clone();
+        stage.outage = st.outage;
+        stage
+    }
+
+    /// A stage continuing a live stream from `st` after the program stopped: the counters go
+    /// on, and the stream restarts as after an outage, the first frame placed by its counter and
+    /// the wall time since the last frame saved (so the lost frames are a gap).
+    pub fn restore_live(desc: FrameDescriptor, live: bool, st: &DecodeStageState) -> DecodeStage {
+        let mut stage = DecodeStage::new(desc, live);
+        stage.retired = st.retired.clone();
+        add_health(&mut stage.retired, &st.decoder.health);
+        stage.outage = st.outage;
+        if let (Some(r), Some(saved)) = (&mut stage.reorder, st.reorder) {
+            r.stats = saved;
+        }
+        if let Some(prev_counter) = st.last_counter {
+            let now = SystemTime::now()
+                .duration_since(UNIX_EPOCH)
+                .map_or(0.0, |d| d.as_secs_f64());
+            let ago = (now - st.last_frame_unix_s.unwrap_or(now)).max(0.0);
+            let since = Instant::now()
+                .checked_sub(Duration::from_secs_f64(ago))
+                .unwrap_or_else(Instant::now);
+            stage.outage.outages += 1;
+            stage.pending = Some(Pending {
+                prev_counter,
+                since,
+            });
+        }
+        stage
     }
 
     pub fn reorder_stats(&self) -> Option<ReorderStats> {

@@ -35,11 +35,12 @@ use anyhow::{Context, Result};
 use tokio_util::sync::CancellationToken;
 
 use crate::analysis::RunAnalysis;
+use crate::checkpoint::{Checkpoint, CheckpointPlan, Collector, Piece, Position, Schedule};
 use crate::frame::{FrameDescriptor, Health};
 use crate::input::text::{TextReader, BATCH_ROWS};
 use crate::input::Chunk;
 use crate::sink::records::{HealthRecord, Record};
-use crate::source::{Capture, Progress, SourceContext, SourceSpec};
+use crate::source::{Capture, Progress, SourceContext, SourceEvent, SourceSpec};
 use decode::DecodeStage;
 pub use writer::{RecordQueue, RecordWriter, WriterStats, RECORD_QUEUE};
 
@@ -74,6 +75,9 @@ pub struct RunControl {
     /// Wall-seconds between interim records (live sources); `None`: the analysis's own
     /// data-second schedule (`AnalysisOptions::every_s`).
     pub every_wall: Option<Duration>,
+    /// Checkpoints (`--checkpoint-every`, `--resume`): where, how often, and the position to
+    /// continue from.
+    pub checkpoint: Option<Arc<CheckpointPlan>>,
 }
 
 impl Default for RunControl {
@@ -86,6 +90,7 @@ impl Default for RunControl {
             handle_signals: false,
             show_progress: false,
             every_wall: None,
+            checkpoint: None,
         }
     }
 }
@@ -112,19 +117,45 @@ pub fn run_frames(
     let (recycle_tx, recycle_rx) = crossbeam_channel::bounded::<Chunk>(CHUNK_QUEUE + 2);
     let live = spec.is_live();
     let udp = matches!(spec, SourceSpec::Udp { .. });
-    let mut stage = DecodeStage::new(desc.clone(), live);
+    let replay = matches!(spec, SourceSpec::File { .. });
+    let plan = ctl.checkpoint.clone();
+    let mut analysis = analysis;
+    let mut start_offset = 0;
+    let mut stage = match plan.as_ref().and_then(|p| p.resume.as_ref()) {
+        None => DecodeStage::new(desc.clone(), live),
+        Some((Position::Frames { offset, stage }, _)) if replay => {
+            start_offset = *offset;
+            DecodeStage::restore_replay(desc.clone(), stage)
+        }
+        Some((Position::Frames { stage, .. }, _)) => {
+            // A stream that cannot be rewound: what was lost while the program was down is a
+            // gap (the first frame is placed by counter and time), and no difference spans it.
+            analysis.break_segments();
+            DecodeStage::restore_live(desc.clone(), live, stage)
+        }
+        Some((Position::Text(_), _)) => {
+            anyhow::bail!("the checkpoint is of text columns, this run reads frames")
+        }
+    };
     let parts = if live { 1 } else { replay_threads() };
-    let (chunk_tx, workers) = spawn_analysis(
+    let (chunk_tx, workers, collector) = spawn_analysis(
         analysis,
         parts,
         Some(recycle_tx),
         queue.clone(),
         ctl.every_wall,
+        plan.as_deref(),
     )?;
     let progress = ctl.progress.clone();
+    let mut schedule = plan.as_deref().map(|p| Schedule::new(p, desc.tau0_s()));
+    let ck = collector
+        .as_ref()
+        .map(|c| (c.sender(), c.in_flight.clone(), c.written.clone()));
+    let abort_after = plan.as_ref().and_then(|p| p.abort_after_frames);
     let decode = std::thread::Builder::new()
         .name("allanscope-decode".into())
         .spawn(move || {
+            let mut offset = start_offset;
             let fresh = || match recycle_rx.try_recv() {
                 Ok(Chunk::Frames(mut v)) => {
                     v.clear();
@@ -135,13 +166,51 @@ pub fn run_frames(
             let mut events = fresh();
             let mut open = true;
             while let Some(ev) = src_rx.blocking_recv() {
+                if let SourceEvent::Data { bytes, .. } | SourceEvent::Datagram { bytes, .. } = &ev {
+                    offset += bytes.len() as u64;
+                }
+                let before = events.len();
                 let n = stage.push(ev, &mut events);
                 progress.frames.fetch_add(n, Ordering::Relaxed);
-                if !events.is_empty() && (events.len() >= MAX_CHUNK_EVENTS || src_rx.is_empty()) {
+                let due = match (&mut schedule, &ck) {
+                    (Some(s), Some((_, in_flight, _))) => {
+                        s.add_steps(events[before..].iter().map(steps_of).sum());
+                        s.due(in_flight)
+                    }
+                    _ => false,
+                };
+                if !events.is_empty()
+                    && (due || events.len() >= MAX_CHUNK_EVENTS || src_rx.is_empty())
+                {
                     let chunk = Chunk::Frames(std::mem::replace(&mut events, fresh()));
                     if !chunk_tx.send(chunk) {
                         open = false;
                         break;
+                    }
+                }
+                if let (true, Some(s), Some((tx, in_flight, _))) = (due, &schedule, &ck) {
+                    // Every step before this point has been sent: the mark follows them.
+                    match stage.state() {
+                        Some(st) => {
+                            let position = Position::Frames {
+                                offset,
+                                stage: Box::new(st),
+                            };
+                            let _ = tx.send(Piece::Position {
+                                seq: s.seq,
+                                position: Box::new(position),
+                            });
+                            if !chunk_tx.send(Chunk::Checkpoint(s.seq)) {
+                                open = false;
+                                break;
+                            }
+                        }
+                        None => in_flight.store(false, Ordering::SeqCst),
+                    }
+                }
+                if let (Some(limit), Some((_, _, written))) = (abort_after, &ck) {
+                    if progress.frames() >= limit {
+                        abort_for_test(written);
                     }
                 }
             }
@@ -150,7 +219,7 @@ pub fn run_frames(
             if open && !events.is_empty() {
                 chunk_tx.send(Chunk::Frames(events));
             }
-            stage
+            (stage, offset)
         })
         .context("cannot start the decode thread")?;
     let source_result = drive(ctl, {
@@ -161,6 +230,7 @@ pub fn run_frames(
                 None => None,
             };
             let ctx = SourceContext {
+                start_offset,
                 tx: src_tx,
                 shutdown: ctl.shutdown.clone(),
                 capture,
@@ -169,11 +239,20 @@ pub fn run_frames(
             crate::source::run(spec, ctx, ctl.show_progress).await
         }
     });
-    let stage = decode
+    let (stage, offset) = decode
         .join()
         .map_err(|_| anyhow::anyhow!("the decode thread panicked"))?;
     let mut analysis = join_analysis(workers)?;
+    let written = collector.map(Collector::finish);
     source_result?;
+    if let (Some(plan), Some(written), Some(st)) = (&plan, written, stage.state()) {
+        let complete = !(replay && ctl.shutdown.is_cancelled());
+        let position = Position::Frames {
+            offset,
+            stage: Box::new(st),
+        };
+        final_checkpoint(plan, written, complete, position, &analysis);
+    }
     let health = stage.health();
     let mut record = health_record(&health, analysis.summary().run);
     if let Some(r) = stage.reorder_stats().filter(|_| udp) {
@@ -211,9 +290,23 @@ pub fn run_text<R: BufRead + Send + 'static>(
     ctl: &RunControl,
 ) -> Result<RunOutcome> {
     let width = reader.names().len();
-    let (tx, workers) = spawn_analysis(analysis, 1, None, queue.clone(), ctl.every_wall)?;
+    let plan = ctl.checkpoint.clone();
+    let tau0 = analysis.tau0_s();
+    let (tx, workers, collector) = spawn_analysis(
+        analysis,
+        1,
+        None,
+        queue.clone(),
+        ctl.every_wall,
+        plan.as_deref(),
+    )?;
+    let mut schedule = plan.as_deref().map(|p| Schedule::new(p, tau0));
+    let ck = collector
+        .as_ref()
+        .map(|c| (c.sender(), c.in_flight.clone(), c.written.clone()));
+    let abort_after = plan.as_ref().and_then(|p| p.abort_after_frames);
     let shutdown = ctl.shutdown.clone();
-    let read = move || -> Result<u64> {
+    let read = move || -> Result<crate::input::text::TextPosition> {
         let mut reader = reader;
         let started = Instant::now();
         let batch = rows_per_s.map_or(BATCH_ROWS, |r| ((r * 0.02) as usize).clamp(1, BATCH_ROWS));
@@ -225,12 +318,30 @@ pub fn run_text<R: BufRead + Send + 'static>(
             if n == 0 || !tx.send(Chunk::Rows { values, width }) {
                 break;
             }
+            if let (Some(s), Some((ptx, in_flight, _))) = (&mut schedule, &ck) {
+                s.add_steps(n as u64);
+                if s.due(in_flight) {
+                    let position = Position::Text(reader.position());
+                    let _ = ptx.send(Piece::Position {
+                        seq: s.seq,
+                        position: Box::new(position),
+                    });
+                    if !tx.send(Chunk::Checkpoint(s.seq)) {
+                        break;
+                    }
+                }
+            }
+            if let (Some(limit), Some((_, _, written))) = (abort_after, &ck) {
+                if reader.rows() >= limit {
+                    abort_for_test(written);
+                }
+            }
             if let Some(r) = rows_per_s {
                 let due = started + Duration::from_secs_f64(reader.rows() as f64 / r);
                 std::thread::sleep(due.saturating_duration_since(Instant::now()));
             }
         }
-        Ok(reader.bad_rows())
+        Ok(reader.position())
     };
     let result = drive(ctl, async move {
         tokio::task::spawn_blocking(read)
@@ -238,7 +349,17 @@ pub fn run_text<R: BufRead + Send + 'static>(
             .map_err(|_| anyhow::anyhow!("the reader thread panicked"))?
     });
     let mut analysis = join_analysis(workers)?;
-    analysis.add_bad_rows(result?);
+    let written = collector.map(Collector::finish);
+    let position = result?;
+    if let (Some(plan), Some(written)) = (&plan, written) {
+        // The analysis state leaves the reader's bad rows out (the position holds them).
+        let complete = !(plan.data_seconds && ctl.shutdown.is_cancelled());
+        let bad_rows = position.bad_rows;
+        final_checkpoint(plan, written, complete, Position::Text(position), &analysis);
+        analysis.add_bad_rows(bad_rows);
+    } else {
+        analysis.add_bad_rows(position.bad_rows);
+    }
     finish_records(&mut analysis, None, queue);
     Ok(RunOutcome {
         analysis,
@@ -280,19 +401,31 @@ impl ChunkSender {
 /// The analysis threads, `parts` of them, each with consecutive channels of `analysis`: chunks
 /// in, interim records out (on the data-second schedule of the options, or every `every_wall`
 /// of wall time). A consumed chunk goes back on `recycle` from the thread that drops it last.
+#[allow(clippy::type_complexity)]
 fn spawn_analysis(
     analysis: RunAnalysis,
     parts: usize,
     recycle: Option<crossbeam_channel::Sender<Chunk>>,
     queue: RecordQueue,
     every_wall: Option<Duration>,
-) -> Result<(ChunkSender, Vec<std::thread::JoinHandle<RunAnalysis>>)> {
+    plan: Option<&CheckpointPlan>,
+) -> Result<(
+    ChunkSender,
+    Vec<std::thread::JoinHandle<RunAnalysis>>,
+    Option<Collector>,
+)> {
     let mut txs = Vec::new();
     let mut handles = Vec::new();
-    for mut part in analysis.split(parts) {
+    let split = analysis.split(parts);
+    let collector = match plan {
+        Some(p) => Some(Collector::spawn(p, split.len())?),
+        None => None,
+    };
+    for (index, mut part) in split.into_iter().enumerate() {
         let (tx, rx) = crossbeam_channel::bounded::<Arc<Chunk>>(CHUNK_QUEUE);
         txs.push(tx);
         let (queue, recycle) = (queue.clone(), recycle.clone());
+        let pieces = collector.as_ref().map(Collector::sender);
         let h = std::thread::Builder::new()
             .name("allanscope-analysis".into())
             .spawn(move || {
@@ -303,6 +436,13 @@ fn spawn_analysis(
                     crossbeam_channel::select! {
                         recv(rx) -> chunk => match chunk {
                             Ok(c) => {
+                                if let (Chunk::Checkpoint(seq), Some(p)) = (&*c, &pieces) {
+                                    let _ = p.send(Piece::Part {
+                                        seq: *seq,
+                                        index,
+                                        state: part.snapshot(),
+                                    });
+                                }
                                 part.push_chunk(&c, &mut out);
                                 if let (Some(r), Ok(c)) = (&recycle, Arc::try_unwrap(c)) {
                                     let _ = r.try_send(c);
@@ -321,7 +461,61 @@ fn spawn_analysis(
             .context("cannot start an analysis thread")?;
         handles.push(h);
     }
-    Ok((ChunkSender(txs), handles))
+    Ok((ChunkSender(txs), handles, collector))
+}
+
+/// Steps of the data an event stands for (a frame, or the frames lost in a gap).
+fn steps_of(ev: &crate::frame::FrameEvent) -> u64 {
+    match ev {
+        crate::frame::FrameEvent::Frame(_) => 1,
+        crate::frame::FrameEvent::Gap { missing } => *missing,
+    }
+}
+
+/// The test hook behind `--abort-after-frames`: once a checkpoint is on disk (waiting up to a
+/// minute for one), the process aborts as a crash would: no final records, no flush.
+fn abort_for_test(written: &std::sync::atomic::AtomicU64) -> ! {
+    let until = Instant::now() + Duration::from_secs(60);
+    while written.load(Ordering::SeqCst) == 0 && Instant::now() < until {
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    eprintln!("allanscope: --abort-after-frames reached: aborting (test hook)");
+    std::process::abort();
+}
+
+/// The checkpoint at the end of a run (after the collector has stopped, so no older one can
+/// overwrite it).
+fn final_checkpoint(
+    plan: &CheckpointPlan,
+    written: u64,
+    complete: bool,
+    position: Position,
+    analysis: &RunAnalysis,
+) {
+    let ck = Checkpoint {
+        header: plan.header.clone(),
+        every_s: plan.every_s,
+        sequence: plan.resume.as_ref().map_or(0, |r| r.1).max(written) + 1,
+        complete,
+        saved_unix_s: crate::checkpoint::unix_now_s(),
+        position,
+        analysis: analysis.snapshot(),
+    };
+    let t = Instant::now();
+    match ck.write_atomic(&plan.path) {
+        Ok(n) => tracing::info!(
+            "checkpoint {} written ({} bytes, {:.1} ms){}",
+            plan.path.display(),
+            n,
+            t.elapsed().as_secs_f64() * 1e3,
+            if complete {
+                ""
+            } else {
+                "; the run can be resumed with --resume"
+            }
+        ),
+        Err(e) => tracing::warn!("final checkpoint not written: {e:#}"),
+    }
 }
 
 /// Waits for the analysis threads and puts their channels back together.

@@ -28,7 +28,7 @@ pub const REORDER_DATAGRAMS: u64 = 8;
 const REMEMBER_FRAMES: u64 = 4096;
 
 /// Counters of the reorder stage (added to the `health` record).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct ReorderStats {
     /// Frames that waited in the window for an earlier one (arrived out of order, or after a
     /// loss), then released in order.

@@ -54,7 +54,7 @@ pub async fn read_stream<R: AsyncRead + Unpin>(
         }
         total += n as u64;
         if let Some(b) = &bar {
-            b.set_position(total);
+            b.set_position(ctx.start_offset + total);
         }
         let ev = SourceEvent::Data {
             bytes: buf.freeze(),

@@ -124,6 +124,8 @@ impl Progress {
 
 /// Everything a source task needs besides its spec.
 pub struct SourceContext {
+    /// Byte offset to start a file at (a resumed replay); 0 otherwise.
+    pub start_offset: u64,
     pub tx: mpsc::Sender<SourceEvent>,
     pub shutdown: CancellationToken,
     pub capture: Option<Capture>,
@@ -193,8 +195,29 @@ pub async fn run(spec: SourceSpec, mut ctx: SourceContext, show_progress: bool) 
                     problem: format!("cannot open: {e}"),
                 })
             })?;
+            let mut f = f;
             let len = f.metadata().await.ok().map(|m| m.len());
+            if ctx.start_offset > 0 {
+                use tokio::io::AsyncSeekExt;
+                if len.is_some_and(|l| l < ctx.start_offset) {
+                    return Err(anyhow::Error::new(crate::error::UsageError::Input {
+                        file: path.clone(),
+                        line: 0,
+                        problem: format!(
+                            "shorter ({} bytes) than the checkpoint's position ({} bytes)",
+                            len.unwrap_or(0),
+                            ctx.start_offset
+                        ),
+                    }));
+                }
+                f.seek(std::io::SeekFrom::Start(ctx.start_offset))
+                    .await
+                    .with_context(|| format!("cannot seek in {}", path.display()))?;
+            }
             let bar = show_progress.then(|| file::progress_bar(len)).flatten();
+            if let Some(b) = &bar {
+                b.set_position(ctx.start_offset);
+            }
             file::read_stream(f, pace, &mut ctx, bar).await
         }
         SourceSpec::Stdin { pace } => {
