@@ -565,6 +565,7 @@ pub struct Engine<R: Repr> {
     #[serde(skip)]
     pyramid: Vec<Vec<i64>>,
     /// Scratch for one level's second differences (integer input).
+    #[serde(skip)]
     scratch: Vec<f64>,
 }
 
