@@ -6,13 +6,15 @@
 //!
 //! ```text
 //! cargo run --release --example blind_gap -- [--draws 240] [--seed 1] [--duration 3600]
-//!     [--tau0 0.004] [--threads 2] [--mode bench|calibrate|speed] [--csv FILE]
+//!     [--tau0 0.004] [--threads 2] [--mode bench|calibrate|speed] [--csv FILE] [--scores]
 //! ```
 //!
 //! `--mode calibrate` draws clean runs only and prints the null quantiles of the statistics the
-//! thresholds are set from; `--mode speed` times one 3-hour 250 Hz channel.
+//! thresholds are set from (and with `--csv`, each run's statistics); `--mode speed` times one
+//! 3-hour 250 Hz channel. `--scores` adds the base model's per-candidate statistics to the
+//! benchmark's CSV.
 
-use allanscope::gap::diagnose::{detect_steps, fit_warmup, GapProblem, ModelSpec};
+use allanscope::gap::diagnose::{fit_warmup, forward_steps, GapProblem, ModelSpec};
 use allanscope::gap::{
     diagnose, DiagnoseOptions, EffectKind, EffectParams, GapConfig, GapEvidence,
 };
@@ -203,13 +205,23 @@ struct Outcome {
     amp_err: f64,
     truth_params: Option<EffectParams>,
     found_params: Option<EffectParams>,
+    /// With `--scores`: the base model's best drop of chi2 per parameter for each stationary
+    /// candidate, the warm-up statistic and the three largest step z scores (NaN otherwise).
+    scores: [f64; 7],
 }
 
 fn rel(a: f64, b: f64) -> f64 {
     (a - b) / b
 }
 
-fn run_one(i: u64, seed: u64, tau0: f64, t_run: f64, kinds: &[Option<EffectKind>]) -> Outcome {
+fn run_one(
+    i: u64,
+    seed: u64,
+    tau0: f64,
+    t_run: f64,
+    kinds: &[Option<EffectKind>],
+    with_scores: bool,
+) -> Outcome {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i));
     let kind = kinds[(i as usize) % kinds.len()];
     let mut d = draw(&mut rng, kind, t_run, tau0);
@@ -229,6 +241,42 @@ fn run_one(i: u64, seed: u64, tau0: f64, t_run: f64, kinds: &[Option<EffectKind>
     let mut ev = ev;
     let snap = ev.snapshot();
     let diag = diagnose(&snap, &DiagnoseOptions::default()).expect("diagnosis");
+    let mut scores = [f64::NAN; 7];
+    if with_scores {
+        let opts = DiagnoseOptions::default();
+        let prob = GapProblem::new(&snap, &opts).expect("problem");
+        let base = prob.gls(&ModelSpec::default()).expect("gls");
+        for (s, k) in scores.iter_mut().zip([
+            EffectKind::GaussMarkov,
+            EffectKind::Sinusoid,
+            EffectKind::OutputFilter,
+        ]) {
+            *s = prob
+                .scan(&ModelSpec::default(), k)
+                .map_or(0.0, |(_, f)| (base.chi2 - f.chi2) / k.n_params() as f64);
+        }
+        let c5: [f64; 5] = std::array::from_fn(|i| base.coef[i]);
+        scores[3] = fit_warmup(
+            &snap.block_means,
+            snap.block_len as f64 * tau0,
+            t_run,
+            &c5,
+            &[],
+        )
+        .map_or(0.0, |w| w.w_stat);
+        let mut jz: Vec<f64> = forward_steps(
+            &snap.block_means,
+            snap.block_len as f64 * tau0,
+            &c5,
+            &[],
+            JUMP_ZS[0],
+        )
+        .map_or(Vec::new(), |f| f.z_scores);
+        jz.sort_by(|a, b| b.total_cmp(a));
+        for k in 0..3 {
+            scores[4 + k] = jz.get(k).copied().unwrap_or(0.0);
+        }
+    }
     let first = diag.effects.first().map(|e| e.params);
     let (mut shape_err, mut amp_err) = (f64::NAN, f64::NAN);
     if let (Some(t), Some(f)) = (
@@ -265,6 +313,7 @@ fn run_one(i: u64, seed: u64, tau0: f64, t_run: f64, kinds: &[Option<EffectKind>
         amp_err,
         truth_params: d.effect,
         found_params: first,
+        scores,
     }
 }
 
@@ -272,7 +321,22 @@ fn name(k: Option<EffectKind>) -> &'static str {
     k.map_or("none", |k| k.name())
 }
 
-fn calibrate(i: u64, seed: u64, tau0: f64, t_run: f64) -> (f64, f64, f64, Vec<f64>, f64, bool) {
+/// One clean run's null statistics.
+struct Null {
+    g: f64,
+    zmax: f64,
+    /// Best drop of chi2 per parameter over all candidates, then per candidate
+    /// (Gauss-Markov, sinusoid, output filter).
+    best: f64,
+    per_kind: Vec<f64>,
+    /// z scores of the steps forward selection finds down to `JUMP_ZS[0]`, largest first.
+    jumps: Vec<f64>,
+    w: f64,
+    flagged: bool,
+    verdict_effects: String,
+}
+
+fn calibrate(i: u64, seed: u64, tau0: f64, t_run: f64) -> Null {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i));
     let d = draw(&mut rng, None, t_run, tau0);
     let (inc, _) = simulate(&d, tau0, t_run, seed.wrapping_add(7919 * i));
@@ -286,16 +350,19 @@ fn calibrate(i: u64, seed: u64, tau0: f64, t_run: f64) -> (f64, f64, f64, Vec<f6
         .z(&base.model)
         .iter()
         .fold(0.0f64, |a, z| a.max(z.abs()));
-    let mut best = 0.0f64;
-    for k in [
+    let kinds = [
         EffectKind::GaussMarkov,
         EffectKind::Sinusoid,
         EffectKind::OutputFilter,
-    ] {
-        if let Some((_, f)) = prob.scan(&ModelSpec::default(), k) {
-            best = best.max((base.chi2 - f.chi2) / k.n_params() as f64);
-        }
-    }
+    ];
+    let per_kind: Vec<f64> = kinds
+        .iter()
+        .map(|&k| {
+            prob.scan(&ModelSpec::default(), k)
+                .map_or(0.0, |(_, f)| (base.chi2 - f.chi2) / k.n_params() as f64)
+        })
+        .collect();
+    let best = per_kind.iter().fold(0.0f64, |a, &b| a.max(b));
     let c5: [f64; 5] = std::array::from_fn(|i| base.coef[i]);
     let w = fit_warmup(
         &snap.block_means,
@@ -305,20 +372,39 @@ fn calibrate(i: u64, seed: u64, tau0: f64, t_run: f64) -> (f64, f64, f64, Vec<f6
         &[],
     )
     .map_or(0.0, |w| w.w_stat);
-    let flagged =
-        diagnose(&snap, &opts).expect("diag").verdict != allanscope::gap::Verdict::Consistent;
-    let jz: Vec<f64> = JUMP_ZS
+    let diag = diagnose(&snap, &opts).expect("diag");
+    let flagged = diag.verdict != allanscope::gap::Verdict::Consistent;
+    let verdict_effects = diag
+        .effects
         .iter()
-        .map(|&z| {
-            detect_steps(&snap.block_means, snap.block_len as f64 * tau0, &c5, &[], z)
-                .map_or(0.0, |f| f.sizes.len() as f64)
-        })
-        .collect();
-    (g, zmax, best, jz, w, flagged)
+        .map(|e| e.params.kind().name())
+        .collect::<Vec<_>>()
+        .join("+");
+    // The forward-selected steps down to the lowest z of the table, largest z first.
+    let mut jz: Vec<f64> = forward_steps(
+        &snap.block_means,
+        snap.block_len as f64 * tau0,
+        &c5,
+        &[],
+        JUMP_ZS[0],
+    )
+    .map_or(Vec::new(), |f| f.z_scores);
+    jz.sort_by(|a, b| b.total_cmp(a));
+    Null {
+        g,
+        zmax,
+        best,
+        per_kind,
+        jumps: jz,
+        w,
+        flagged,
+        verdict_effects,
+    }
 }
 
-/// Step-detector thresholds whose null rates `--mode calibrate` prints.
-const JUMP_ZS: [f64; 5] = [3.5, 3.75, 4.0, 4.25, 4.5];
+/// Step-detector thresholds whose null rates `--mode calibrate` prints (the first is also the
+/// lowest z the selection goes down to).
+const JUMP_ZS: [f64; 6] = [3.25, 3.5, 3.75, 4.0, 4.25, 4.5];
 
 fn quantiles(mut v: Vec<f64>) -> String {
     v.sort_by(|a, b| a.total_cmp(b));
@@ -348,6 +434,7 @@ fn main() {
     let threads: u64 = get("--threads", "2").parse().expect("--threads");
     let mode = get("--mode", "bench");
     let csv = get("--csv", "");
+    let with_scores = args.iter().any(|a| a == "--scores");
 
     if mode == "speed" {
         let tau0 = 0.004;
@@ -421,6 +508,40 @@ fn main() {
                 );
             }
         }
+        let c5: [f64; 5] = std::array::from_fn(|i| base.coef[i]);
+        let block_s = snap.block_len as f64 * tau0;
+        println!(
+            "warm-up: {:?}",
+            fit_warmup(&snap.block_means, block_s, t_run, &c5, &[])
+        );
+        if let Some(se) = allanscope::gap::diagnose::step_standard_errors(
+            snap.block_means.len(),
+            block_s,
+            &c5,
+            &[],
+        ) {
+            let tb = 10.0 * t_run / 10.0;
+            let true_se = allanscope::gap::diagnose::step_standard_errors(
+                snap.block_means.len(),
+                block_s,
+                &[
+                    terms::quantization_q(d.base.lsb).powi(2),
+                    d.base.n * d.base.n,
+                    d.base.b * d.base.b,
+                    d.base.k * d.base.k,
+                    0.0,
+                ],
+                &[],
+            )
+            .unwrap_or_default();
+            println!(
+                "step s.e. (u/s) with the fitted terms: first {:.4} middle {:.4}; true base: middle {:.4}; base ADEV(T_run/10) {:.4} (T_run {tb} s)",
+                se[0],
+                se[se.len() / 2],
+                true_se.get(true_se.len() / 2).copied().unwrap_or(f64::NAN),
+                d.base.adev(t_run / 10.0)
+            );
+        }
         let diag = diagnose(&snap, &opts).expect("diag");
         println!("{diag:#?}");
         println!(
@@ -431,7 +552,7 @@ fn main() {
     }
 
     if mode == "calibrate" {
-        let res: Vec<(f64, f64, f64, Vec<f64>, f64, bool)> = std::thread::scope(|s| {
+        let res: Vec<Null> = std::thread::scope(|s| {
             let hs: Vec<_> = (0..threads)
                 .map(|t| {
                     s.spawn(move || {
@@ -446,24 +567,70 @@ fn main() {
                 .flat_map(|h| h.join().expect("thread"))
                 .collect()
         });
+        if !csv.is_empty() {
+            let mut text = String::from(
+                "g,zmax,best,gm,sin,filter,w,flagged,effects,jump_z1,jump_z2,jump_z3\n",
+            );
+            for r in &res {
+                text += &format!(
+                    "{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{}",
+                    r.g,
+                    r.zmax,
+                    r.best,
+                    r.per_kind[0],
+                    r.per_kind[1],
+                    r.per_kind[2],
+                    r.w,
+                    u8::from(r.flagged),
+                    r.verdict_effects
+                );
+                for k in 0..3 {
+                    text += &format!(",{:.4}", r.jumps.get(k).copied().unwrap_or(0.0));
+                }
+                text += "\n";
+            }
+            std::fs::write(&csv, text).expect("csv");
+        }
         println!("clean draws: {}", res.len());
-        println!("G0:       {}", quantiles(res.iter().map(|r| r.0).collect()));
-        println!("max|z|:   {}", quantiles(res.iter().map(|r| r.1).collect()));
+        println!("G0:       {}", quantiles(res.iter().map(|r| r.g).collect()));
         println!(
-            "best dchi2/param: {}",
-            quantiles(res.iter().map(|r| r.2).collect())
+            "max|z|:   {}",
+            quantiles(res.iter().map(|r| r.zmax).collect())
         );
         println!(
+            "best dchi2/param: {}",
+            quantiles(res.iter().map(|r| r.best).collect())
+        );
+        for (k, nm) in ["gauss_markov", "sinusoid", "output_filter"]
+            .iter()
+            .enumerate()
+        {
+            println!(
+                "  {nm} dchi2/param: {}",
+                quantiles(res.iter().map(|r| r.per_kind[k]).collect())
+            );
+        }
+        println!(
             "warm-up W: {}",
-            quantiles(res.iter().map(|r| r.4).collect())
+            quantiles(res.iter().map(|r| r.w).collect())
         );
         println!(
             "flagged (not consistent): {:.3}",
-            res.iter().filter(|r| r.5).count() as f64 / res.len() as f64
+            res.iter().filter(|r| r.flagged).count() as f64 / res.len() as f64
         );
-        for (k, z) in JUMP_ZS.iter().enumerate() {
-            let frac = res.iter().filter(|r| r.3[k] > 0.0).count() as f64 / res.len() as f64;
-            println!("jump false alarm at z {z}: {frac:.3}");
+        for z in JUMP_ZS {
+            let frac = |k: usize| {
+                res.iter()
+                    .filter(|r| r.jumps.get(k).is_some_and(|&v| v >= z))
+                    .count() as f64
+                    / res.len() as f64
+            };
+            println!(
+                "steps at z >= {z}: at least one {:.3}, two {:.3}, three {:.3}",
+                frac(0),
+                frac(1),
+                frac(2)
+            );
         }
         return;
     }
@@ -484,7 +651,7 @@ fn main() {
                 s.spawn(move || {
                     (0..draws)
                         .filter(|i| i % threads == t)
-                        .map(|i| (i, run_one(i, seed, tau0, t_run, kinds)))
+                        .map(|i| (i, run_one(i, seed, tau0, t_run, kinds, with_scores)))
                         .collect::<Vec<_>>()
                 })
             })
@@ -496,10 +663,10 @@ fn main() {
     res.sort_by_key(|r| r.0);
     let elapsed = t0.elapsed().as_secs_f64();
     if !csv.is_empty() {
-        let mut text = String::from("draw,truth,rho,named,verdict,gap_before,gap_after,shape_err,amp_err,truth_params,found_params\n");
+        let mut text = String::from("draw,truth,rho,named,verdict,gap_before,gap_after,shape_err,amp_err,gm,sin,filter,w,jump_z1,jump_z2,jump_z3,all_named,truth_params,found_params\n");
         for (i, o) in &res {
             text += &format!(
-                "{i},{},{:.3},{},{},{:.3},{:.3},{:.4},{:.4},\"{:?}\",\"{:?}\"\n",
+                "{i},{},{:.3},{},{},{:.3},{:.3},{:.4},{:.4},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{},\"{:?}\",\"{:?}\"\n",
                 name(o.truth),
                 o.rho,
                 name(o.named),
@@ -508,6 +675,18 @@ fn main() {
                 o.gap_after,
                 o.shape_err,
                 o.amp_err,
+                o.scores[0],
+                o.scores[1],
+                o.scores[2],
+                o.scores[3],
+                o.scores[4],
+                o.scores[5],
+                o.scores[6],
+                o.all_named
+                    .iter()
+                    .map(|k| k.name())
+                    .collect::<Vec<_>>()
+                    .join("+"),
                 o.truth_params,
                 o.found_params
             );

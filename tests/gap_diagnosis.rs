@@ -289,3 +289,25 @@ fn live_stream_gives_the_batch_curve() {
     assert_eq!(live.snapshot().n_received, n as u64);
     assert_eq!(live.snapshot().n_increments, n as u64 + 10);
 }
+
+#[test]
+fn jumps_are_kept_by_the_one_strong_or_several_moderate_rule() {
+    use allanscope::gap::diagnose::JumpFinding;
+    let f = |z: &[f64]| JumpFinding {
+        times_s: (0..z.len()).map(|i| 100.0 * (i + 1) as f64).collect(),
+        sizes: vec![1.0; z.len()],
+        z_scores: z.to_vec(),
+        block_s: 10.0,
+    };
+    let rule = [4.5, 4.0, 3.6];
+    // One strong step: kept alone, the weaker one is not.
+    assert_eq!(f(&[3.0, 4.6]).accepted(&rule).times_s, vec![200.0]);
+    // Two moderate steps, neither strong: both kept.
+    assert_eq!(f(&[4.1, 4.2]).accepted(&rule).z_scores, vec![4.1, 4.2]);
+    // Three at the lowest level: all three kept, a fourth below it is not.
+    assert_eq!(f(&[3.7, 3.3, 3.8, 3.65]).accepted(&rule).sizes.len(), 3);
+    // Two at the lowest level only: none.
+    assert!(f(&[3.7, 3.8]).accepted(&rule).sizes.is_empty());
+    // A single threshold is the plain rule.
+    assert_eq!(f(&[4.4, 4.6, 4.7]).accepted(&[4.5]).sizes.len(), 2);
+}
