@@ -460,13 +460,15 @@ impl Fitter {
     }
 }
 
-/// `c' t c`.
+/// `c' t c` for a symmetric `t` (its upper triangle is read).
 fn quad_form(t: &[[f64; 5]; 5], c: &[f64; 5]) -> f64 {
     let mut q = 0.0;
     for a in 0..5 {
-        for b in 0..5 {
-            q += c[a] * t[a][b] * c[b];
+        let mut row = 0.0;
+        for b in a + 1..5 {
+            row += t[a][b] * c[b];
         }
+        q += c[a] * (t[a][a] * c[a] + 2.0 * row);
     }
     q
 }
@@ -571,11 +573,18 @@ fn inverted_intervals(
                 if w == 0.0 {
                     continue;
                 }
-                for a in 0..5 {
-                    for b in 0..5 {
+                // The upper triangle (T is symmetric, and T[4][4] = 0: the ramp enters only
+                // through the means).
+                for a in 0..4 {
+                    for b in a..5 {
                         v[a][b] += w * t[a][b];
                     }
                 }
+            }
+        }
+        for a in 0..5 {
+            for b in 0..a {
+                v[a][b] = v[b][a];
             }
         }
         let ci = if is_held { 0.0 } else { c[i] };
@@ -784,6 +793,27 @@ fn weighted_nnls(
     w: &[f64],
     allowed: &[bool; 5],
 ) -> Result<([f64; 5], DMatrix<f64>), FitError> {
+    let sol = weighted_nnls_solve(x, z, w, allowed)?;
+    Ok((sol.c, sol.map()))
+}
+
+/// A solved [`weighted_nnls`] whose map `G` is formed only when asked for (an iterated fit
+/// needs the map of its last pass alone).
+struct WeightedSolution {
+    c: [f64; 5],
+    /// The weighted, column-scaled design.
+    a: DMatrix<f64>,
+    sw: Vec<f64>,
+    scale: [f64; 5],
+    passive: [bool; 5],
+}
+
+fn weighted_nnls_solve(
+    x: &DMatrix<f64>,
+    z: &DVector<f64>,
+    w: &[f64],
+    allowed: &[bool; 5],
+) -> Result<WeightedSolution, FitError> {
     let j = x.nrows();
     let sw: Vec<f64> = w.iter().map(|v| v.max(0.0).sqrt()).collect();
     let mut a = DMatrix::from_fn(j, 5, |r, t| x[(r, t)] * sw[r]);
@@ -799,27 +829,41 @@ fn weighted_nnls(
     for t in 0..5 {
         c[t] = sol.x[t] * scale[t];
     }
-    // G on the passive set: (A_P' A_P)^-1 A_P' diag(sw), then undo the column scaling.
-    let cols: Vec<usize> = (0..5).filter(|&t| sol.passive[t] && c[t] > 0.0).collect();
-    let mut g = DMatrix::zeros(5, j);
-    if !cols.is_empty() {
-        let ap = a.select_columns(&cols);
-        let ata = ap.transpose() * &ap;
-        let inv = ata
-            .clone()
-            .cholesky()
-            .map(|ch| ch.inverse())
-            .or_else(|| ata.pseudo_inverse(1e-13).ok());
-        if let Some(inv) = inv {
-            let gp = inv * ap.transpose();
-            for (k, &t) in cols.iter().enumerate() {
-                for r in 0..j {
-                    g[(t, r)] = gp[(k, r)] * sw[r] * scale[t];
+    Ok(WeightedSolution {
+        c,
+        a,
+        sw,
+        scale,
+        passive: std::array::from_fn(|t| sol.passive[t]),
+    })
+}
+
+impl WeightedSolution {
+    /// `G` on the passive set: `(A_P' A_P)^-1 A_P' diag(sw)`, then the column scaling undone.
+    fn map(&self) -> DMatrix<f64> {
+        let (a, sw, scale, c) = (&self.a, &self.sw, &self.scale, &self.c);
+        let j = a.nrows();
+        let cols: Vec<usize> = (0..5).filter(|&t| self.passive[t] && c[t] > 0.0).collect();
+        let mut g = DMatrix::zeros(5, j);
+        if !cols.is_empty() {
+            let ap = a.select_columns(&cols);
+            let ata = ap.transpose() * &ap;
+            let inv = ata
+                .clone()
+                .cholesky()
+                .map(|ch| ch.inverse())
+                .or_else(|| ata.pseudo_inverse(1e-13).ok());
+            if let Some(inv) = inv {
+                let gp = inv * ap.transpose();
+                for (k, &t) in cols.iter().enumerate() {
+                    for r in 0..j {
+                        g[(t, r)] = gp[(k, r)] * sw[r] * scale[t];
+                    }
                 }
             }
         }
+        g
     }
-    Ok((c, g))
 }
 
 fn converged(old: &[f64; 5], new: &[f64; 5], x: &DMatrix<f64>, tol: f64) -> bool {
@@ -843,7 +887,8 @@ fn est_model(prob: &Problem, opts: &FitOptions) -> Result<Estimate, FitError> {
     let w0: Vec<f64> = (0..prob.y.len())
         .map(|r| prob.edf[r] / (2.0 * prob.y[r] * prob.y[r]))
         .collect();
-    let (mut c, mut g) = weighted_nnls(&prob.x, &prob.y, &w0, &prob.allowed)?;
+    let mut sol = weighted_nnls_solve(&prob.x, &prob.y, &w0, &prob.allowed)?;
+    let mut c = sol.c;
     let mut iterations = 0;
     for _ in 0..opts.max_iter {
         iterations += 1;
@@ -852,14 +897,15 @@ fn est_model(prob: &Problem, opts: &FitOptions) -> Result<Estimate, FitError> {
         let w: Vec<f64> = (0..prob.y.len())
             .map(|r| prob.edf[r] / (2.0 * model[r] * model[r]))
             .collect();
-        let (c_new, g_new) = weighted_nnls(&prob.x, &prob.y, &w, &prob.allowed)?;
-        let done = converged(&c, &c_new, &prob.x, opts.rel_tol);
-        c = c_new;
-        g = g_new;
+        sol = weighted_nnls_solve(&prob.x, &prob.y, &w, &prob.allowed)?;
+        let done = converged(&c, &sol.c, &prob.x, opts.rel_tol);
+        c = sol.c;
         if done {
             break;
         }
     }
+    // The map of the last pass (the one that produced c).
+    let g = sol.map();
     Ok(Estimate { c, g, iterations })
 }
 
