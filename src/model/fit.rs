@@ -582,9 +582,10 @@ fn inverted_intervals(
                 }
             }
         }
-        for a in 0..5 {
-            for b in 0..a {
-                v[a][b] = v[b][a];
+        let upper = v;
+        for (a, row) in v.iter_mut().enumerate() {
+            for (b, x) in row.iter_mut().enumerate().take(a) {
+                *x = upper[b][a];
             }
         }
         let ci = if is_held { 0.0 } else { c[i] };
