@@ -38,8 +38,9 @@
 //! Live refits: as the run grows every count grows by the same `d`, `n(h)` grows by exactly `d` on
 //! the old range, and the range gains `d` lags at each end. The cache keeps, per pair, the sums
 //! weighted by `n(h)` and unweighted, and updates them with the new lags only
-//! ([`AvarCovariance`]): a refit of 21 octave taus costs about 0.6 ms instead of 14 ms
-//! (BENCHMARKS.md, "Noise-model fit").
+//! ([`AvarCovariance`]); each window of far lags evaluates only the series terms its nearest lag
+//! needs (2^-64 of the leading term). The two fits of a live tick take about 0.35 ms for 21
+//! octave taus, a cold fit about 7 ms (BENCHMARKS.md, "Noise-model fit").
 
 use crate::allan::CurvePoint;
 use nalgebra::DMatrix;
@@ -169,7 +170,14 @@ struct PairCtx {
     far: f64,
     /// `g_B(h) = scale^2 sum_k series[k] (scale / h)^(k + 2)`.
     series: [f64; NSER],
+    /// `tail[k] = sum_{j >= k} |series[j]| (1/16)^(j - k)`: with `|x| = scale/|h| <= 1/16`, the
+    /// terms from order `k` on add at most `|x|^k tail[k]` ([`PairCtx::terms_for`]).
+    tail: [f64; NSER],
 }
+
+/// Relative size, against the leading term, of the far-field terms a window may leave out:
+/// 2^-64, far below rounding.
+const SERIES_TOL: f64 = 5.421_010_862_427_522e-20;
 
 /// Far-field expansion of `g_B(h) = sum_{i,j} a_i a_j G_B(h + i m1 - j m2)`.
 ///
@@ -231,16 +239,40 @@ impl PairCtx {
                 f64::INFINITY
             },
             series: series.copied().unwrap_or([0.0; NSER]),
+            tail: series.map_or([0.0; NSER], |c| {
+                let mut t = [0.0; NSER];
+                let mut acc = 0.0;
+                for k in (0..NSER).rev() {
+                    acc = c[k].abs() + acc / FAR_FACTOR;
+                    t[k] = acc;
+                }
+                t
+            }),
         }
     }
 
-    /// `(g_N, g_B, g_K)` at lag `h`: the series far out, the direct sums nearer.
+    /// Number of far-field terms that represent `g_B` to [`SERIES_TOL`] of the leading one
+    /// wherever `|scale / h| <= x_max` (`x_max <= 1/16`).
+    fn terms_for(&self, x_max: f64) -> usize {
+        let tol = SERIES_TOL * self.series[0].abs();
+        let mut pw = x_max;
+        for k in 1..NSER {
+            if pw * self.tail[k] <= tol {
+                return k;
+            }
+            pw *= x_max;
+        }
+        NSER
+    }
+
+    /// `(g_N, g_B, g_K)` at lag `h`: the series (its first `terms` terms) far out, the direct
+    /// sums nearer.
     #[inline]
-    fn g(&self, h: f64) -> [f64; 3] {
+    fn g(&self, h: f64, terms: usize) -> [f64; 3] {
         if h.abs() >= self.far {
             let x = self.scale / h;
             let mut acc = 0.0;
-            for c in self.series.iter().rev() {
+            for c in self.series[..terms.min(NSER)].iter().rev() {
                 acc = acc * x + c;
             }
             [0.0, self.scale * self.scale * acc * x * x, 0.0]
@@ -250,9 +282,9 @@ impl PairCtx {
     }
 
     #[inline]
-    fn vals(&self, h: f64) -> Vals {
+    fn vals(&self, h: f64, terms: usize) -> Vals {
         let n = pair_count(h, self.big_m1, self.big_m2);
-        let p = products(&self.g(h));
+        let p = products(&self.g(h, terms));
         let mut v = [0.0; 2 * NV];
         for k in 0..NV {
             v[k] = n * p[k];
@@ -261,15 +293,19 @@ impl PairCtx {
         v
     }
 
-    /// Lags where `g` is not smooth: `j m2 - i m1` (a lag of `G` crosses 0), sorted.
-    fn kinks(&self) -> Vec<i64> {
+    /// Lags where `g` is not smooth: `j m2 - i m1` (a lag of `G` crosses 0), sorted, and how many
+    /// are distinct (no allocation: the live refit calls this for every pair).
+    fn kinks(&self) -> ([i64; 9], usize) {
         let (m1, m2) = (self.m1 as i64, self.m2 as i64);
-        let mut k: Vec<i64> = (0..3i64)
-            .flat_map(|i| (0..3i64).map(move |j| j * m2 - i * m1))
-            .collect();
+        let mut k = [0i64; 9];
+        for i in 0..3i64 {
+            for j in 0..3i64 {
+                k[(3 * i + j) as usize] = j * m2 - i * m1;
+            }
+        }
         k.sort_unstable();
-        k.dedup();
-        k
+        let n = dedup_sorted(&mut k);
+        (k, n)
     }
 
     /// Adds `sum_{h=lo}^{hi}` of the lag values to `acc`. The range is cut where the integrand
@@ -280,20 +316,43 @@ impl PairCtx {
         if hi < lo {
             return;
         }
-        let kinks = self.kinks();
-        let mut bps: Vec<i64> = vec![lo, hi + 1, 0, self.big_m1 as i64 - self.big_m2 as i64];
-        bps.extend(&kinks);
+        let (kink_buf, nk) = self.kinks();
+        let kinks = &kink_buf[..nk];
+        let mut buf = [0i64; 15];
+        let mut nb = 0;
+        let mut push = |b: i64| {
+            if b >= lo && b <= hi + 1 {
+                buf[nb] = b;
+                nb += 1;
+            }
+        };
+        push(lo);
+        push(hi + 1);
+        push(0);
+        push(self.big_m1 as i64 - self.big_m2 as i64);
+        for &k in kinks {
+            push(k);
+        }
         if self.far.is_finite() {
             let f = self.far.ceil() as i64;
-            bps.push(f);
-            bps.push(-f + 1);
+            push(f);
+            push(-f + 1);
         }
-        bps.retain(|&b| b >= lo && b <= hi + 1);
+        let bps = &mut buf[..nb];
         bps.sort_unstable();
-        bps.dedup();
-        let f = |h: f64| self.vals(h);
+        let nb = dedup_sorted(bps);
+        let bps = &buf[..nb];
         for w in bps.windows(2) {
             let (p, q) = (w[0], w[1] - 1);
+            // A window of the far field (one sign; the quadrature reads it at most one lag
+            // beyond its ends) needs only the series terms its nearest lag does.
+            let near = (p.abs().min(q.abs()) - 1) as f64;
+            let terms = if self.far.is_finite() && p.signum() == q.signum() && near >= self.far {
+                self.terms_for(self.scale / near)
+            } else {
+                NSER
+            };
+            let f = |h: f64| self.vals(h, terms);
             let s_lo = kinks
                 .iter()
                 .rev()
@@ -492,7 +551,7 @@ pub fn pair_sums_exact(m1: u64, m2: u64, big_m1: u64, big_m2: u64) -> PairSums {
     let ctx = PairCtx::new(m1, m2, big_m1, big_m2, None);
     let mut acc = [0.0; 2 * NV];
     for h in -(big_m2 as i64 - 1)..=(big_m1 as i64 - 1) {
-        add(&mut acc, &ctx.vals(h as f64), 1.0);
+        add(&mut acc, &ctx.vals(h as f64, NSER), 1.0);
     }
     assemble(&acc, &masses(m1, m2), big_m1, big_m2)
 }
@@ -642,6 +701,19 @@ fn nearest_divisor(m: u64, x: f64) -> u64 {
         d += 1;
     }
     best.1
+}
+
+/// Removes repeats from a sorted slice in place; returns the number of distinct values (now at
+/// its front).
+fn dedup_sorted(v: &mut [i64]) -> usize {
+    let mut n = 0;
+    for i in 0..v.len() {
+        if n == 0 || v[i] != v[n - 1] {
+            v[n] = v[i];
+            n += 1;
+        }
+    }
+    n
 }
 
 fn gcd(a: u64, b: u64) -> u64 {
@@ -860,5 +932,5 @@ pub fn flicker_far_field(h: f64, m1: u64, m2: u64) -> f64 {
     let series = flicker_series(m1 as f64, m2 as f64);
     let mut ctx = PairCtx::new(m1, m2, 1, 1, Some(&series));
     ctx.far = 0.0;
-    ctx.g(h)[1]
+    ctx.g(h, NSER)[1]
 }
