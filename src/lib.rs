@@ -16,6 +16,7 @@
 //! pipeline: the threads and bounded channels between those stages, shutdown, back-pressure
 //! sim (model files, generators, capture writer)           model file -> capture
 //! stand (the stand config of `run`)                       TOML -> sources, options, limits
+//! stats: the chi-squared quantile behind every interval
 //! cli: one file per subcommand over the above; main.rs maps errors to exit statuses
 //! ```
 //!
@@ -38,3 +39,4 @@ pub mod sim;
 pub mod sink;
 pub mod source;
 pub mod stand;
+pub mod stats;

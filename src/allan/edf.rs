@@ -16,7 +16,7 @@
 //!   `S = 1`: non-overlapped),
 //! - `N`: number of phase points.
 
-use statrs::distribution::{ChiSquared, ContinuousCDF};
+use crate::stats::chi2_quantile;
 
 use super::Stat;
 
@@ -291,10 +291,9 @@ pub fn chi2_interval(var: f64, edf: f64, confidence: f64) -> Option<(f64, f64)> 
     if !(var_ok && conf_ok && edf.is_finite() && edf > 0.0) {
         return None;
     }
-    let chi2 = ChiSquared::new(edf).ok()?;
     let tail = (1.0 - confidence) / 2.0;
-    let q_hi = chi2.inverse_cdf(1.0 - tail);
-    let q_lo = chi2.inverse_cdf(tail);
+    let q_hi = chi2_quantile(edf, 1.0 - tail);
+    let q_lo = chi2_quantile(edf, tail);
     if !(q_hi.is_finite() && q_lo > 0.0) {
         return None;
     }
