@@ -756,6 +756,33 @@ impl AvarCovariance {
         self.cache.values().map(Vec::len).sum()
     }
 
+    /// The pair's sums for strided estimates (points `i` and `j` of `strides`): white phase's
+    /// cross-covariance sits on the stride lattice, so its terms are `gcd(s_i, s_j)` times the
+    /// full overlap's (see [`Self::matrix_strided`]); the other noises' are unchanged.
+    fn sums_strided(
+        &mut self,
+        a: CovPoint,
+        b: CovPoint,
+        i: usize,
+        j: usize,
+        strides: &[u64],
+    ) -> PairSums {
+        let mut s = self.sums(a, b);
+        let st = |k: usize| strides.get(k).copied().unwrap_or(1).max(1);
+        let g = gcd(st(i), st(j));
+        if g > 1 {
+            let gf = g as f64;
+            for t in 0..NRAND {
+                s.quad[NQ][t] *= gf;
+                if t != NQ {
+                    s.quad[t][NQ] *= gf;
+                }
+            }
+            s.lin[NQ] *= gf;
+        }
+        s
+    }
+
     fn sums(&mut self, a: CovPoint, b: CovPoint) -> PairSums {
         // The sums are symmetric under swapping the two estimates (h -> -h).
         let (m1, m2, c1, c2) = if (a.m, a.count) <= (b.m, b.count) {
@@ -827,19 +854,7 @@ impl AvarCovariance {
         for i in 0..n {
             for j in i..n {
                 let (a, b) = (points[i], points[j]);
-                let mut s = self.sums(a, b);
-                let st = |k: usize| strides.get(k).copied().unwrap_or(1).max(1);
-                let g = gcd(st(i), st(j));
-                if g > 1 {
-                    let gf = g as f64;
-                    for t in 0..NRAND {
-                        s.quad[NQ][t] *= gf;
-                        if t != NQ {
-                            s.quad[t][NQ] *= gf;
-                        }
-                    }
-                    s.lin[NQ] *= gf;
-                }
+                let s = self.sums_strided(a, b, i, j, strides);
                 let tau1 = a.m as f64 * tau0_s;
                 let tau2 = b.m as f64 * tau0_s;
                 let t12 = tau1 * tau1 * tau2 * tau2;
@@ -877,19 +892,7 @@ impl AvarCovariance {
         for i in 0..n {
             for j in i..n {
                 let (a, b) = (points[i], points[j]);
-                let mut s = self.sums(a, b);
-                let st = |k: usize| strides.get(k).copied().unwrap_or(1).max(1);
-                let g = gcd(st(i), st(j));
-                if g > 1 {
-                    let gf = g as f64;
-                    for t in 0..NRAND {
-                        s.quad[NQ][t] *= gf;
-                        if t != NQ {
-                            s.quad[t][NQ] *= gf;
-                        }
-                    }
-                    s.lin[NQ] *= gf;
-                }
+                let s = self.sums_strided(a, b, i, j, strides);
                 let tau1 = a.m as f64 * tau0_s;
                 let tau2 = b.m as f64 * tau0_s;
                 let t12 = tau1 * tau1 * tau2 * tau2;
