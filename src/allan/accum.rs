@@ -530,8 +530,10 @@ impl LevelReading {
 }
 
 /// Smallest step between the starts of noise-identification block pairs: at m = 1 a 3-hour
-/// 250 Hz run still gives 170 000 pairs, far more than the lag-1 estimate needs.
-const NID_MIN_STEP: u64 = 16;
+/// 250 Hz run still gives 42 000 pairs (standard error of the lag-1 autocorrelation about 0.005,
+/// against decision steps of 0.25 in Riley and Greenhall's delta), and a 5-minute run 1 200.
+/// 64 rather than 16 took 11% off the stand benchmark (BENCHMARKS.md, "Allan engine").
+const NID_MIN_STEP: u64 = 64;
 
 /// Points of stream 1 gathered before the levels are updated: large enough that the inner loops
 /// run over long slices, small enough to stay in L1 cache with its history.
