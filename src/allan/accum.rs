@@ -235,8 +235,8 @@ pub trait Repr: 'static {
     fn deviation(_d: Self::Inc, _reference: Self::Inc) -> u64 {
         0
     }
-    /// The phase points as wrapping 64-bit integers, for the fused integer kernels
-    /// ([`sum_sq_d2_d3`], the moving-sum MVAR); `None` for representations without them.
+    /// The phase points as wrapping 64-bit integers, for the integer kernels
+    /// ([`second_differences`], the moving-sum MVAR); `None` for representations without them.
     #[inline(always)]
     fn as_i64(_x: &[Self::X]) -> Option<&[i64]> {
         None
@@ -1001,14 +1001,15 @@ fn decimate<T: Copy>(parent: &Buf<T>, child: &mut Buf<T>, factor: u64) {
 /// `next`: `K` equal-length slices of the buffer at offsets `0, mp, 2 mp, ...`.
 #[inline(always)]
 fn lagged<T: Copy, const K: usize>(buf: &Buf<T>, next: u64, mp: u64) -> Option<[&[T]; K]> {
+    lagged_in(&buf.data, buf.base, next, mp)
+}
+
+/// [`lagged`] on a slice whose first element is stream index `base`.
+#[inline(always)]
+fn lagged_in<T, const K: usize>(data: &[T], base: u64, next: u64, mp: u64) -> Option<[&[T]; K]> {
     let span = (K as u64 - 1) * mp;
-    if buf.end() <= next + span {
-        return None;
-    }
-    let n = (buf.end() - span - next) as usize;
-    let o = (next - buf.base) as usize;
-    let m = mp as usize;
-    Some(std::array::from_fn(|j| &buf.data[o + j * m..o + j * m + n]))
+    let end = base + data.len() as u64;
+    (end > next + span).then(|| lagged_at(data, base, next, mp, (end - span - next) as usize))
 }
 
 /// Sum of `f(a_i, b_i, c_i)^2` over equal-length slices, in four partial sums over
@@ -1144,9 +1145,9 @@ fn update_level<R: Repr>(
 ) {
     let mp = lv.mp;
     let x = &st.x;
-    // Integer phase with both bounds proved: AVAR and HVAR in one pass. AVAR first catches up
-    // to HVAR's next + mp (the start of a segment), so that AVAR's difference at k + mp and
-    // HVAR's at k come from the same four phase points.
+    // Integer phase with both bounds proved: AVAR and HVAR from one set of second differences.
+    // AVAR first catches up to HVAR's next + mp (the start of a segment), so that AVAR's
+    // difference at k + mp is the one HVAR subtracts its difference at k from.
     let mut fused = false;
     if let (true, true, true, Some(xi)) = (stats.avar, stats.hvar, narrow.d3, R::as_i64(&x.data)) {
         let target = lv.hvar.next + mp;
@@ -1204,12 +1205,9 @@ fn update_level<R: Repr>(
         // The same inner sum as the second difference at lag m of the moving sums
         // A_m(j) = C_{j+m} - C_j of phase, which the caller holds from `base` up to P - m + 1
         // (P phase points), in wrapping i64, with |result| < 2^51 proved.
-        let end = base + sums.len() as u64;
-        if end > lv.mvar.next + 2 * mp {
-            let n = (end - 2 * mp - lv.mvar.next) as usize;
-            let [a, b, c] = lagged_at(sums, base, lv.mvar.next, mp, n);
+        if let Some([a, b, c]) = lagged_in(sums, base, lv.mvar.next, mp) {
             second_differences(a, b, c, scratch);
-            lv.mvar.add(n, sum_sq(scratch));
+            lv.mvar.add(a.len(), sum_sq(scratch));
         }
     } else if stats.mvar {
         if let Some([a, b, c, d]) = lagged(&st.c, lv.mvar.next, mp) {
@@ -1246,6 +1244,7 @@ fn update_level<R: Repr>(
 /// What a channel's accumulator needs of its engine, whatever the number representation.
 trait ChannelEngine {
     fn gap(&mut self, missing: u64);
+    fn break_seg(&mut self);
     fn points(&self) -> u64;
     fn seconds(&self) -> f64;
     fn segment_count(&self) -> u64;
@@ -1256,6 +1255,9 @@ trait ChannelEngine {
 impl<R: Repr> ChannelEngine for Engine<R> {
     fn gap(&mut self, missing: u64) {
         self.push_gap(missing)
+    }
+    fn break_seg(&mut self) {
+        self.break_segment()
     }
     fn points(&self) -> u64 {
         self.phase_points()
@@ -1317,10 +1319,7 @@ impl ChannelAccumulator {
     /// Ends the current phase segment without accounting for time: the data after it are not
     /// contiguous with the data before (a resumed live run), so no difference spans the break.
     pub fn break_segment(&mut self) {
-        match self {
-            ChannelAccumulator::Counts { engine, .. } => engine.break_segment(),
-            ChannelAccumulator::Real(e) => e.break_segment(),
-        }
+        self.engine_mut().break_seg()
     }
 
     pub fn phase_points(&self) -> u64 {
