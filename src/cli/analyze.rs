@@ -11,8 +11,8 @@ use std::io::Seek;
 use std::sync::Arc;
 
 use super::{
-    analysis_options, checkpoint_header, checkpoint_setup, format_and_tau0, open_input,
-    select_channels, start_analysis, usage, AnalyzeArgs, DataArgs,
+    analysis_options, checkpoint_header, format_and_tau0, open_input, select_channels,
+    start_analysis, usage, AnalyzeArgs, DataArgs,
 };
 use crate::analysis::{AnalysisOptions, ChannelSetup, RunAnalysis};
 use crate::checkpoint::Position;
@@ -157,15 +157,7 @@ fn analyze_text(
     let setups = select_channels(setups, &d.channels, input)?;
     let header = checkpoint_header(input, "csv", &opts, &setups);
     let replay = input != "-";
-    let ckpt = checkpoint_setup(
-        d.checkpoint_every,
-        d.resume,
-        d.abort_after_frames,
-        d.out.as_deref(),
-        header,
-        true,
-        replay,
-    )?;
+    let ckpt = d.checkpoint_setup(header, true, replay)?;
     let saved = ckpt.as_ref().and_then(|c| c.1.as_ref());
     let ck_path = ckpt.as_ref().map(|c| c.0.path.clone());
     let mut analysis = start_analysis(input, setups, opts, saved, ck_path.as_deref())?;
@@ -213,15 +205,7 @@ fn analyze_frames(
 ) -> Result<RunAnalysis> {
     let setups = select_channels(ChannelSetup::for_frames(desc), &d.channels, input)?;
     let header = checkpoint_header(input, &d.format, &opts, &setups);
-    let ckpt = checkpoint_setup(
-        d.checkpoint_every,
-        d.resume,
-        d.abort_after_frames,
-        d.out.as_deref(),
-        header,
-        true,
-        input != "-",
-    )?;
+    let ckpt = d.checkpoint_setup(header, true, input != "-")?;
     let saved = ckpt.as_ref().and_then(|c| c.1.as_ref());
     let ck_path = ckpt.as_ref().map(|c| c.0.path.clone());
     let analysis = start_analysis(input, setups, opts, saved, ck_path.as_deref())?;

@@ -78,15 +78,7 @@ pub fn run(l: &ListenArgs) -> Result<()> {
         &spec.name(),
     )?;
     let header = super::checkpoint_header(&spec.name(), &d.format, &opts, &setups);
-    let ckpt = super::checkpoint_setup(
-        d.checkpoint_every,
-        d.resume,
-        d.abort_after_frames,
-        d.out.as_deref(),
-        header,
-        false,
-        false,
-    )?;
+    let ckpt = d.checkpoint_setup(header, false, false)?;
     let saved = ckpt.as_ref().and_then(|c| c.1.as_ref());
     let ck_path = ckpt.as_ref().map(|c| c.0.path.clone());
     let analysis = super::start_analysis(&spec.name(), setups, opts, saved, ck_path.as_deref())?;

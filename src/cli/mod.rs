@@ -421,6 +421,32 @@ pub(crate) fn checkpoint_header(
     }
 }
 
+impl DataArgs {
+    /// [`checkpoint_setup`] with this command's `--checkpoint-every`, `--resume`,
+    /// `--abort-after-frames` and `--out`.
+    pub(crate) fn checkpoint_setup(
+        &self,
+        header: crate::checkpoint::Header,
+        data_seconds: bool,
+        replay: bool,
+    ) -> Result<
+        Option<(
+            crate::checkpoint::CheckpointPlan,
+            Option<crate::checkpoint::Checkpoint>,
+        )>,
+    > {
+        checkpoint_setup(
+            self.checkpoint_every,
+            self.resume,
+            self.abort_after_frames,
+            self.out.as_deref(),
+            header,
+            data_seconds,
+            replay,
+        )
+    }
+}
+
 /// A run's checkpointing, from `--checkpoint-every`, `--resume` and the output path: the plan
 /// for the pipeline and, when resuming, the saved checkpoint (checked against `header`).
 pub(crate) fn checkpoint_setup(
@@ -447,9 +473,10 @@ pub(crate) fn checkpoint_setup(
         return Ok(None);
     }
     let Some(out) = out else {
-        return Err(usage(
-            "--checkpoint-every and --resume need an output file (--out FILE, or [output] path              in a stand config): the checkpoint is kept beside it, as FILE.ckpt",
-        ));
+        return Err(usage(concat!(
+            "--checkpoint-every and --resume need an output file (--out FILE, or [output] path ",
+            "in a stand config): the checkpoint is kept beside it, as FILE.ckpt"
+        )));
     };
     if let Some(e) = every {
         if !(e.is_finite() && e > 0.0) {
