@@ -389,7 +389,7 @@ impl Fitter {
             let var = cov_c[i][i].max(0.0);
             let sd = var.sqrt();
             let ci = c[i];
-            let dominant = ci > 0.0 && dominates(&prob.x, i, ci, &c);
+            let dominant = dominates(&prob.x, i, ci, &c);
             let (lo_c, hi_c, dominant_at_lo) = if !prob.allowed[i] {
                 (0.0, 0.0, false)
             } else if let Some(inv) = inverted[i] {
