@@ -9,9 +9,12 @@
 //! decoded and a checkpoint is on disk); a second test kills a realtime-paced replay with
 //! SIGKILL wherever it happens to be after its first checkpoint.
 
+mod common;
+
+use common::exe;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Output, Stdio};
 use std::time::{Duration, Instant};
 
 use allanscope::allan::accum::{AccumConfig, ChannelAccumulator, LevelReading, Overlap};
@@ -20,14 +23,8 @@ use allanscope::checkpoint::{path_for, Checkpoint};
 const SIU8: &str = "fixtures/captures/siu8_stand_5min_seed1.siu8";
 const SIU8_FRAME: usize = 42;
 
-fn exe() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_allanscope"))
-}
-
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("allanscope-ckpt-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    let p = d.join(name);
+    let p = common::tmp_in("ckpt", name);
     let _ = std::fs::remove_file(&p);
     let _ = std::fs::remove_file(path_for(&p));
     p

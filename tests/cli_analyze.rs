@@ -2,20 +2,17 @@
 //! field against CONTRACT.md, interim records with `--every`, several runs with `aggregate`
 //! records, and exit statuses for bad input.
 
+mod common;
+
+use common::exe;
 use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::process::Output;
 
 use allanscope::allan::batch::{oavar, phase_from_increments};
 use allanscope::sink::records::Record;
 
-fn exe() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_allanscope"))
-}
-
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("allanscope-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
+    common::tmp_in("cli", name)
 }
 
 fn records(out: &Output) -> Vec<Record> {

@@ -1,16 +1,12 @@
 //! `diagnose` through the binary: a simulated gyro with a hidden Gauss-Markov term, judged on
 //! its own run and on a held-out run of the same model; a clean run is consistent.
 
-use std::process::Command;
+mod common;
 
-fn exe() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_allanscope"))
-}
+use common::exe;
 
 fn tmp(name: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("allanscope-diag-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
+    common::tmp_in("diag", name)
 }
 
 /// The seed paper's VOG4 terms (table 2 means) with or without a Gauss-Markov term.

@@ -2,16 +2,12 @@
 //! run's `summary`, run-to-run ones (sd of a coefficient over runs) in a closing summary, and a
 //! bad limits file named with its key (exit 2).
 
-use std::process::Command;
+mod common;
 
-fn exe() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_allanscope"))
-}
+use common::exe;
 
 fn tmp(name: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("allanscope-limits-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
+    common::tmp_in("limits", name)
 }
 
 /// White rate noise N = 0.25 arcsec/sqrt(s) (the seed paper's VOG4 level) at 4 ms, as CSV.

@@ -8,6 +8,18 @@ use std::path::{Path, PathBuf};
 /// Relative agreement of the streaming estimate with the batch formulas (issue: 1e-12).
 pub const STREAM_VS_BATCH_REL: f64 = 1e-12;
 
+/// The `allanscope` binary built for these tests.
+pub fn exe() -> std::process::Command {
+    std::process::Command::new(env!("CARGO_BIN_EXE_allanscope"))
+}
+
+/// `name` in a scratch folder of this test process, `tag` telling the test files apart.
+pub fn tmp_in(tag: &str, name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("allanscope-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d.join(name)
+}
+
 /// The crate's own fixtures folder.
 pub fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures")
