@@ -16,7 +16,7 @@
 
 use allanscope::gap::diagnose::{fit_warmup, forward_steps, GapProblem, ModelSpec};
 use allanscope::gap::{
-    diagnose, DiagnoseOptions, EffectKind, EffectParams, GapConfig, GapEvidence,
+    diagnose, DiagnoseOptions, EffectKind, EffectParams, EvidenceSnapshot, GapConfig, GapEvidence,
 };
 use allanscope::model::terms;
 use allanscope::sim::{SimModel, Simulator};
@@ -243,38 +243,11 @@ fn run_one(
     let diag = diagnose(&snap, &DiagnoseOptions::default()).expect("diagnosis");
     let mut scores = [f64::NAN; 7];
     if with_scores {
-        let opts = DiagnoseOptions::default();
-        let prob = GapProblem::new(&snap, &opts).expect("problem");
-        let base = prob.gls(&ModelSpec::default()).expect("gls");
-        for (s, k) in scores.iter_mut().zip([
-            EffectKind::GaussMarkov,
-            EffectKind::Sinusoid,
-            EffectKind::OutputFilter,
-        ]) {
-            *s = prob
-                .scan(&ModelSpec::default(), k)
-                .map_or(0.0, |(_, f)| (base.chi2 - f.chi2) / k.n_params() as f64);
-        }
-        let c5: [f64; 5] = std::array::from_fn(|i| base.coef[i]);
-        scores[3] = fit_warmup(
-            &snap.block_means,
-            snap.block_len as f64 * tau0,
-            t_run,
-            &c5,
-            &[],
-        )
-        .map_or(0.0, |w| w.w_stat);
-        let mut jz: Vec<f64> = forward_steps(
-            &snap.block_means,
-            snap.block_len as f64 * tau0,
-            &c5,
-            &[],
-            JUMP_ZS[0],
-        )
-        .map_or(Vec::new(), |f| f.z_scores);
-        jz.sort_by(|a, b| b.total_cmp(a));
+        let b = base_scores(&snap, tau0, t_run);
+        scores[..3].copy_from_slice(&b.per_kind);
+        scores[3] = b.w;
         for k in 0..3 {
-            scores[4 + k] = jz.get(k).copied().unwrap_or(0.0);
+            scores[4 + k] = b.jumps.get(k).copied().unwrap_or(0.0);
         }
     }
     let first = diag.effects.first().map(|e| e.params);
@@ -336,6 +309,49 @@ struct Null {
     verdict_effects: String,
 }
 
+/// Statistics of the base five-term model that the thresholds are set on: `G`, the largest
+/// `|z|` over taus, each stationary candidate's drop of chi2 per parameter, the warm-up `W`, and
+/// the z scores of the steps forward selection finds down to `JUMP_ZS[0]`, largest first.
+struct BaseScores {
+    g: f64,
+    zmax: f64,
+    per_kind: [f64; 3],
+    w: f64,
+    jumps: Vec<f64>,
+}
+
+fn base_scores(snap: &EvidenceSnapshot, tau0: f64, t_run: f64) -> BaseScores {
+    let opts = DiagnoseOptions::default();
+    let prob = GapProblem::new(snap, &opts).expect("problem");
+    let base = prob.gls(&ModelSpec::default()).expect("gls");
+    let zmax = prob
+        .z(&base.model)
+        .iter()
+        .fold(0.0f64, |a, z| a.max(z.abs()));
+    let per_kind = [
+        EffectKind::GaussMarkov,
+        EffectKind::Sinusoid,
+        EffectKind::OutputFilter,
+    ]
+    .map(|k| {
+        prob.scan(&ModelSpec::default(), k)
+            .map_or(0.0, |(_, f)| (base.chi2 - f.chi2) / k.n_params() as f64)
+    });
+    let c5: [f64; 5] = std::array::from_fn(|i| base.coef[i]);
+    let block_s = snap.block_len as f64 * tau0;
+    let w = fit_warmup(&snap.block_means, block_s, t_run, &c5, &[]).map_or(0.0, |w| w.w_stat);
+    let mut jumps = forward_steps(&snap.block_means, block_s, &c5, &[], JUMP_ZS[0])
+        .map_or(Vec::new(), |f| f.z_scores);
+    jumps.sort_by(|a, b| b.total_cmp(a));
+    BaseScores {
+        g: base.gap(),
+        zmax,
+        per_kind,
+        w,
+        jumps,
+    }
+}
+
 fn calibrate(i: u64, seed: u64, tau0: f64, t_run: f64) -> Null {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i));
     let d = draw(&mut rng, None, t_run, tau0);
@@ -343,35 +359,14 @@ fn calibrate(i: u64, seed: u64, tau0: f64, t_run: f64) -> Null {
     let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
     let snap = ev.snapshot();
     let opts = DiagnoseOptions::default();
-    let prob = GapProblem::new(&snap, &opts).expect("problem");
-    let base = prob.gls(&ModelSpec::default()).expect("gls");
-    let g = base.gap();
-    let zmax = prob
-        .z(&base.model)
-        .iter()
-        .fold(0.0f64, |a, z| a.max(z.abs()));
-    let kinds = [
-        EffectKind::GaussMarkov,
-        EffectKind::Sinusoid,
-        EffectKind::OutputFilter,
-    ];
-    let per_kind: Vec<f64> = kinds
-        .iter()
-        .map(|&k| {
-            prob.scan(&ModelSpec::default(), k)
-                .map_or(0.0, |(_, f)| (base.chi2 - f.chi2) / k.n_params() as f64)
-        })
-        .collect();
+    let BaseScores {
+        g,
+        zmax,
+        per_kind,
+        w,
+        jumps,
+    } = base_scores(&snap, tau0, t_run);
     let best = per_kind.iter().fold(0.0f64, |a, &b| a.max(b));
-    let c5: [f64; 5] = std::array::from_fn(|i| base.coef[i]);
-    let w = fit_warmup(
-        &snap.block_means,
-        snap.block_len as f64 * tau0,
-        t_run,
-        &c5,
-        &[],
-    )
-    .map_or(0.0, |w| w.w_stat);
     let diag = diagnose(&snap, &opts).expect("diag");
     let flagged = diag.verdict != allanscope::gap::Verdict::Consistent;
     let verdict_effects = diag
@@ -380,22 +375,12 @@ fn calibrate(i: u64, seed: u64, tau0: f64, t_run: f64) -> Null {
         .map(|e| e.params.kind().name())
         .collect::<Vec<_>>()
         .join("+");
-    // The forward-selected steps down to the lowest z of the table, largest z first.
-    let mut jz: Vec<f64> = forward_steps(
-        &snap.block_means,
-        snap.block_len as f64 * tau0,
-        &c5,
-        &[],
-        JUMP_ZS[0],
-    )
-    .map_or(Vec::new(), |f| f.z_scores);
-    jz.sort_by(|a, b| b.total_cmp(a));
     Null {
         g,
         zmax,
         best,
-        per_kind,
-        jumps: jz,
+        per_kind: per_kind.to_vec(),
+        jumps,
         w,
         flagged,
         verdict_effects,
