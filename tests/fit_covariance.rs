@@ -208,28 +208,30 @@ fn white_fm_edf_matches_known_large_sample_form() {
     assert!(rel(edf, expect) < 2e-3, "edf {edf} vs {expect}");
 }
 
+/// Full-overlap octave points m = 1 .. 2^18 of an `n`-increment run.
+fn octave_grid(n: u64) -> Vec<CovPoint> {
+    (0..19)
+        .map(|k| {
+            let m = 1u64 << k;
+            CovPoint {
+                m,
+                count: n - 2 * m + 1,
+            }
+        })
+        .collect()
+}
+
 #[test]
 fn count_tolerance_reuse_is_accurate() {
     // Octave grid of a 2^20-increment run, then the same grid 2% further into the run: sums reused
     // and scaled must match a fresh computation to 1e-3 relative (module doc of avar_cov).
-    let grid = |n: u64| -> Vec<CovPoint> {
-        (0..19)
-            .map(|k| {
-                let m = 1u64 << k;
-                CovPoint {
-                    m,
-                    count: n - 2 * m + 1,
-                }
-            })
-            .collect()
-    };
     let c = [1e-2, 1.0, 0.5, 1e-3, 1e-6];
     let mut live = AvarCovariance::with_count_tolerance(0.02);
     let n0 = 1u64 << 20;
-    live.matrix(0.01, &grid(n0), &c);
+    live.matrix(0.01, &octave_grid(n0), &c);
     let n1 = n0 + n0 / 50;
-    let reused = live.matrix(0.01, &grid(n1), &c);
-    let fresh = AvarCovariance::new().matrix(0.01, &grid(n1), &c);
+    let reused = live.matrix(0.01, &octave_grid(n1), &c);
+    let fresh = AvarCovariance::new().matrix(0.01, &octave_grid(n1), &c);
     for i in 0..19 {
         for j in 0..19 {
             let scale = (fresh[(i, i)] * fresh[(j, j)]).sqrt();
@@ -339,26 +341,15 @@ fn incremental_sums_match_exact_lag_sum() {
 fn live_matrix_equals_fresh_matrix() {
     // A cache advanced over 40 refits (+250 increments each) gives the matrix a fresh cache gives
     // at the final counts, to the quadrature's tolerance.
-    let grid = |n: u64| -> Vec<CovPoint> {
-        (0..19)
-            .map(|k| {
-                let m = 1u64 << k;
-                CovPoint {
-                    m,
-                    count: n - 2 * m + 1,
-                }
-            })
-            .collect()
-    };
     let c = [1e-2, 1.0, 0.5, 1e-3, 1e-6];
     let mut live = AvarCovariance::new();
     let mut n = 1u64 << 20;
     for _ in 0..40 {
-        live.matrix(0.01, &grid(n), &c);
+        live.matrix(0.01, &octave_grid(n), &c);
         n += 250;
     }
-    let got = live.matrix(0.01, &grid(n), &c);
-    let fresh = AvarCovariance::new().matrix(0.01, &grid(n), &c);
+    let got = live.matrix(0.01, &octave_grid(n), &c);
+    let fresh = AvarCovariance::new().matrix(0.01, &octave_grid(n), &c);
     for i in 0..19 {
         for j in 0..19 {
             let scale = (fresh[(i, i)] * fresh[(j, j)]).sqrt();
