@@ -231,7 +231,9 @@ pub trait Repr: 'static {
     fn d3_narrow(a: Self::X, b: Self::X, c: Self::X, d: Self::X) -> f64 {
         Self::d3(a, b, c, d)
     }
-    /// `|d - reference|` as a whole number of counts, saturating; 0 where not needed (floats).
+    /// A whole number of counts `v` with `v + 1 >= |d - reference|`, whose bitwise OR over many
+    /// increments is again such a bound for each (so it is kept with `|=`, which vectorizes);
+    /// 0 where not needed (floats).
     fn deviation(_d: Self::Inc, _reference: Self::Inc) -> u64 {
         0
     }
@@ -292,8 +294,13 @@ impl Repr for IntRepr {
     fn c3_narrow(a: i128, b: i128, c: i128, d: i128) -> f64 {
         small_i64_to_f64(third_difference(a as i64, b as i64, c as i64, d as i64))
     }
+    #[inline(always)]
     fn deviation(d: i64, reference: i64) -> u64 {
-        d.abs_diff(reference)
+        // One's-complement magnitude of d - reference (|t| - 1 for negative t), or all ones when
+        // the wrapping difference overflowed (operands of opposite signs, result sign flipped).
+        let t = d.wrapping_sub(reference);
+        let overflow = ((d ^ reference) & (d ^ t)) >> 63;
+        ((t ^ (t >> 63)) | overflow) as u64
     }
     #[inline(always)]
     fn d2_narrow(a: i64, b: i64, c: i64) -> f64 {
@@ -556,8 +563,9 @@ pub struct Engine<R: Repr> {
     n_steps: u64,
     /// Number of segments started.
     segments: u64,
-    /// The first increment, and the largest `|d - first|` seen since: MVAR's inner sum at
-    /// cluster m is at most `2 m^2 spread` in magnitude (each of its m second differences is a
+    /// The first increment, and the OR of [`Repr::deviation`] over the increments since, so that
+    /// `spread + 1 >= |d - first|` for each of them: MVAR's inner sum at
+    /// cluster m is at most `2 m^2 (spread + 1)` in magnitude (each of its m second differences is a
     /// difference of two sums of m increments, and a constant offset cancels), which decides
     /// when its third difference of the running sum fits in 64 bits.
     first_inc: Option<R::Inc>,
@@ -673,7 +681,7 @@ impl<R: Repr> Engine<R> {
             self.start_segment(R::zero_x());
         }
         match self.first_inc {
-            Some(r) => self.spread = self.spread.max(R::deviation(d, r)),
+            Some(r) => self.spread |= R::deviation(d, r),
             None => self.first_inc = Some(d),
         }
         let x = R::step(self.x_cur, d);
@@ -695,9 +703,7 @@ impl<R: Repr> Engine<R> {
             let room = BLOCK.saturating_sub(s0.x.data.len() - s0.x.new_from).max(1);
             let (chunk, tail) = rest.split_at(room.min(rest.len()));
             if let Some(r) = self.first_inc {
-                for &d in chunk {
-                    self.spread = self.spread.max(R::deviation(d, r));
-                }
+                self.spread |= chunk.iter().fold(0, |acc, &d| acc | R::deviation(d, r));
             }
             let from = s0.x.data.len();
             let mut x = self.x_cur;
@@ -811,8 +817,8 @@ impl<R: Repr> Engine<R> {
         let stats = self.cfg.stats;
         let nid = self.cfg.noise_id;
         let spread = self.spread;
-        // Bounds from the spread (see `spread`): |second difference| <= 2 m spread,
-        // |third difference| <= 4 m spread, |MVAR inner sum| <= 2 m^2 spread.
+        // Bounds from the spread (see `spread`), with s = spread + 1: |second difference| <= 2 m s,
+        // |third difference| <= 4 m s, |MVAR inner sum| <= 2 m^2 s.
         let bounds: Vec<Narrow> = self
             .levels
             .iter()
@@ -991,9 +997,17 @@ fn decimate<T: Copy>(parent: &Buf<T>, child: &mut Buf<T>, factor: u64) {
     // First index >= first_new that is a multiple of factor.
     let k = first_new.div_ceil(factor) * factor;
     if let Some(from) = parent.data.get((k - parent.base) as usize..) {
-        child
-            .data
-            .extend(from.iter().step_by(factor as usize).copied());
+        if factor == 2 {
+            // The usual case (octave strides); pairs vectorize where `step_by` does not.
+            let pairs = from.chunks_exact(2);
+            let last = pairs.remainder().first().copied();
+            child.data.extend(pairs.map(|p| p[0]));
+            child.data.extend(last);
+        } else {
+            child
+                .data
+                .extend(from.iter().step_by(factor as usize).copied());
+        }
     }
 }
 
@@ -1012,12 +1026,16 @@ fn lagged_in<T, const K: usize>(data: &[T], base: u64, next: u64, mp: u64) -> Op
     (end > next + span).then(|| lagged_at(data, base, next, mp, (end - span - next) as usize))
 }
 
-/// Sum of `f(a_i, b_i, c_i)^2` over equal-length slices, in four partial sums over
-/// `chunks_exact(4)` so the loop has no bounds checks and runs on vector lanes.
+/// Sum of `f(a_i, b_i, c_i)^2` over equal-length slices, in [`LANES`] partial sums over
+/// `chunks_exact` so the loop has no bounds checks and runs on vector lanes.
 #[inline(always)]
 fn sum_sq3<T: Copy>(a: &[T], b: &[T], c: &[T], f: impl Fn(T, T, T) -> f64) -> f64 {
-    let mut acc = [0.0f64; 4];
-    let (ca, cb, cc) = (a.chunks_exact(4), b.chunks_exact(4), c.chunks_exact(4));
+    let mut acc = [0.0f64; LANES];
+    let (ca, cb, cc) = (
+        a.chunks_exact(LANES),
+        b.chunks_exact(LANES),
+        c.chunks_exact(LANES),
+    );
     let mut rest = 0.0;
     for ((x, y), z) in ca
         .remainder()
@@ -1029,23 +1047,23 @@ fn sum_sq3<T: Copy>(a: &[T], b: &[T], c: &[T], f: impl Fn(T, T, T) -> f64) -> f6
         rest += v * v;
     }
     for ((x, y), z) in ca.zip(cb).zip(cc) {
-        for l in 0..4 {
+        for l in 0..LANES {
             let v = f(x[l], y[l], z[l]);
             acc[l] += v * v;
         }
     }
-    (acc[0] + acc[1]) + (acc[2] + acc[3]) + rest
+    fold_lanes(acc) + rest
 }
 
 /// The same with four slices.
 #[inline(always)]
 fn sum_sq4<T: Copy>(a: &[T], b: &[T], c: &[T], d: &[T], f: impl Fn(T, T, T, T) -> f64) -> f64 {
-    let mut acc = [0.0f64; 4];
+    let mut acc = [0.0f64; LANES];
     let (ca, cb, cc, cd) = (
-        a.chunks_exact(4),
-        b.chunks_exact(4),
-        c.chunks_exact(4),
-        d.chunks_exact(4),
+        a.chunks_exact(LANES),
+        b.chunks_exact(LANES),
+        c.chunks_exact(LANES),
+        d.chunks_exact(LANES),
     );
     let mut rest = 0.0;
     let rem = ca
@@ -1059,12 +1077,12 @@ fn sum_sq4<T: Copy>(a: &[T], b: &[T], c: &[T], d: &[T], f: impl Fn(T, T, T, T) -
         rest += v * v;
     }
     for (((w, x), y), z) in ca.zip(cb).zip(cc).zip(cd) {
-        for l in 0..4 {
+        for l in 0..LANES {
             let v = f(w[l], x[l], y[l], z[l]);
             acc[l] += v * v;
         }
     }
-    (acc[0] + acc[1]) + (acc[2] + acc[3]) + rest
+    fold_lanes(acc) + rest
 }
 
 /// `K` slices of `data` (whose first element is stream index `base`), `n` long each, starting
@@ -1078,6 +1096,8 @@ fn lagged_at<T, const K: usize>(data: &[T], base: u64, from: u64, mp: u64, n: us
 
 /// Second differences `x2 - 2 x1 + x0` of integer phase as exact doubles (THEORY.md section 1),
 /// into `out`; the caller proves `|result| < 2^51`, so their differences are exact too.
+/// (Summing their squares in the same loop was measured slower: the stores and the add chains
+/// together defeat the vectorizer.)
 #[inline(never)]
 fn second_differences(x0: &[i64], x1: &[i64], x2: &[i64], out: &mut Vec<f64>) {
     out.clear();
@@ -1089,27 +1109,28 @@ fn second_differences(x0: &[i64], x1: &[i64], x2: &[i64], out: &mut Vec<f64>) {
     );
 }
 
-/// Sum of squares, in four partial sums.
+/// Sum of squares, in [`LANES`] partial sums (independent add chains, so the loop is bound by
+/// throughput rather than by the latency of one chain).
 #[inline(never)]
 fn sum_sq(v: &[f64]) -> f64 {
-    let mut acc = [0.0f64; 4];
-    let c = v.chunks_exact(4);
+    let mut acc = [0.0f64; LANES];
+    let c = v.chunks_exact(LANES);
     let rest: f64 = c.remainder().iter().map(|x| x * x).sum();
     for x in c {
-        for l in 0..4 {
+        for l in 0..LANES {
             acc[l] += x[l] * x[l];
         }
     }
-    (acc[0] + acc[1]) + (acc[2] + acc[3]) + rest
+    fold_lanes(acc) + rest
 }
 
-/// Sum of `(b_i - a_i)^2`, in four partial sums.
+/// Sum of `(b_i - a_i)^2`, in [`LANES`] partial sums.
 #[inline(never)]
 fn sum_sq_diff(a: &[f64], b: &[f64]) -> f64 {
     let n = a.len().min(b.len());
     let (a, b) = (&a[..n], &b[..n]);
-    let mut acc = [0.0f64; 4];
-    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let mut acc = [0.0f64; LANES];
+    let (ca, cb) = (a.chunks_exact(LANES), b.chunks_exact(LANES));
     let rest: f64 = ca
         .remainder()
         .iter()
@@ -1117,12 +1138,29 @@ fn sum_sq_diff(a: &[f64], b: &[f64]) -> f64 {
         .map(|(x, y)| (y - x) * (y - x))
         .sum();
     for (x, y) in ca.zip(cb) {
-        for l in 0..4 {
+        for l in 0..LANES {
             let d = y[l] - x[l];
             acc[l] += d * d;
         }
     }
-    (acc[0] + acc[1]) + (acc[2] + acc[3]) + rest
+    fold_lanes(acc) + rest
+}
+
+/// Partial sums per kernel: 16 doubles are 8 independent two-lane (or 4 four-lane) add chains,
+/// enough to cover the add latency on the vector units this builds for.
+const LANES: usize = 8;
+
+/// The partial sums added pairwise.
+#[inline(always)]
+fn fold_lanes(mut acc: [f64; LANES]) -> f64 {
+    let mut w = LANES;
+    while w > 1 {
+        w /= 2;
+        for l in 0..w {
+            acc[l] += acc[l + w];
+        }
+    }
+    acc[0]
 }
 
 /// Which differences of a level are proved below 2^51 in magnitude (integer input), so they
@@ -1366,7 +1404,49 @@ impl ChannelAccumulator {
 
 #[cfg(test)]
 mod tests {
-    use super::largest_divisor_at_most;
+    use super::{largest_divisor_at_most, IntRepr, Repr};
+
+    #[test]
+    fn deviation_bounds_the_distance_and_is_tight_within_two() {
+        // `deviation + 1 >= |d - r|` for every pair, and no more than twice it while the
+        // difference fits in i64 (all ones when it cannot), checked in 128-bit arithmetic.
+        let edge = [
+            i64::MIN,
+            i64::MIN + 1,
+            -(1 << 40),
+            -7,
+            -1,
+            0,
+            1,
+            6,
+            1 << 40,
+            i64::MAX,
+        ];
+        let mut s: u64 = 0x2545F4914F6CDD1D;
+        let mut vals: Vec<i64> = edge.to_vec();
+        for _ in 0..200 {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            vals.push((s as i64) >> (s % 64));
+        }
+        for &d in &vals {
+            for &r in &vals {
+                let dist = (d as i128 - r as i128).unsigned_abs();
+                let v = IntRepr::deviation(d, r);
+                assert!(v as u128 + 1 >= dist, "d={d} r={r} v={v}");
+                if dist < 1 << 63 {
+                    assert!(v as u128 <= 2 * dist, "d={d} r={r} v={v}");
+                } else if dist > 1 << 63 {
+                    // Out of i64 range: the wrapping difference overflowed.
+                    assert_eq!(v, u64::MAX, "d={d} r={r}");
+                }
+                // The OR of two deviations bounds both.
+                let w = v | IntRepr::deviation(r, d);
+                assert!(w as u128 + 1 >= dist);
+            }
+        }
+    }
 
     #[test]
     fn strides_are_the_largest_divisors_under_the_cap() {
