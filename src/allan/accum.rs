@@ -1187,6 +1187,8 @@ fn update_level<R: Repr>(
     // AVAR first catches up to HVAR's next + mp (the start of a segment), so that AVAR's
     // difference at k + mp is the one HVAR subtracts its difference at k from.
     let mut fused = false;
+    // The AVAR terms this update took in one piece: (first index, count, sum of squares).
+    let mut avar_piece: Option<(u64, usize, f64)> = None;
     if let (true, true, true, Some(xi)) = (stats.avar, stats.hvar, narrow.d3, R::as_i64(&x.data)) {
         let target = lv.hvar.next + mp;
         if lv.avar.next <= target {
@@ -1205,7 +1207,9 @@ fn update_level<R: Repr>(
                 let m = mp as usize;
                 let [a, b, c] = lagged_at(xi, x.base, lv.hvar.next, mp, n + m);
                 second_differences(a, b, c, scratch);
-                lv.avar.add(n, sum_sq(&scratch[m..]));
+                let sq = sum_sq(&scratch[m..]);
+                avar_piece = Some((target, n, sq));
+                lv.avar.add(n, sq);
                 lv.hvar.add(n, sum_sq_diff(&scratch[..n], &scratch[m..]));
             }
         }
@@ -1244,8 +1248,17 @@ fn update_level<R: Repr>(
         // A_m(j) = C_{j+m} - C_j of phase, which the caller holds from `base` up to P - m + 1
         // (P phase points), in wrapping i64, with |result| < 2^51 proved.
         if let Some([a, b, c]) = lagged_in(sums, base, lv.mvar.next, mp) {
-            second_differences(a, b, c, scratch);
-            lv.mvar.add(a.len(), sum_sq(scratch));
+            match avar_piece {
+                // At m = 1 MVAR's inner sum is AVAR's second difference: the same terms in the
+                // same order give the same sum, so it is not taken twice.
+                Some((from, n, sq)) if lv.m == 1 && from == lv.mvar.next && n == a.len() => {
+                    lv.mvar.add(n, sq)
+                }
+                _ => {
+                    second_differences(a, b, c, scratch);
+                    lv.mvar.add(a.len(), sum_sq(scratch));
+                }
+            }
         }
     } else if stats.mvar {
         if let Some([a, b, c, d]) = lagged(&st.c, lv.mvar.next, mp) {
