@@ -6,15 +6,20 @@
 //!
 //! ```text
 //! cargo run --release --example blind_gap -- [--draws 240] [--seed 1] [--duration 3600]
-//!     [--tau0 0.004] [--threads 2] [--mode bench|calibrate|speed] [--csv FILE] [--scores]
+//!     [--tau0 0.004] [--threads 2] [--mode bench|calibrate|speed|one|oracle] [--csv FILE]
+//!     [--scores] [--null-draws 400] [--null-seed 2]
 //! ```
 //!
 //! `--mode calibrate` draws clean runs only and prints the null quantiles of the statistics the
 //! thresholds are set from (and with `--csv`, each run's statistics); `--mode speed` times one
 //! 3-hour 250 Hz channel. `--scores` adds the base model's per-candidate statistics to the
-//! benchmark's CSV.
+//! benchmark's CSV. `--mode oracle` runs the benchmark's Gauss-Markov, warm-up and jump draws
+//! (the same draws as `bench`) and `--null-draws` clean runs of `--mode calibrate` with seed
+//! `--null-seed`, and prints the oracle bounds of docs/gap.md ("Oracle bounds"): the power of
+//! tests told the true effect, and Cramér-Rao bounds on its parameters (`allanscope::gap::oracle`).
 
 use allanscope::gap::diagnose::{fit_warmup, forward_steps, GapProblem, ModelSpec};
+use allanscope::gap::oracle::{self, BlockGls};
 use allanscope::gap::{
     diagnose, DiagnoseOptions, EffectKind, EffectParams, EvidenceSnapshot, GapConfig, GapEvidence,
 };
@@ -59,6 +64,17 @@ fn draw(rng: &mut Xoshiro256PlusPlus, kind: Option<EffectKind>, t_run: f64, tau0
         k: 1.826e-2 * log_uniform(rng, 0.5, 2.0),
         lsb: 0.004,
     };
+    draw_effect(rng, base, kind, t_run, tau0)
+}
+
+/// The effect part of [`draw`] on a given base: `rho`, then the effect's parameters.
+fn draw_effect(
+    rng: &mut Xoshiro256PlusPlus,
+    base: Base,
+    kind: Option<EffectKind>,
+    t_run: f64,
+    tau0: f64,
+) -> Draw {
     let rho = log_uniform(rng, 0.15, 3.0);
     let effect = kind.map(|k| match k {
         EffectKind::GaussMarkov => {
@@ -145,8 +161,13 @@ fn model_toml(d: &Draw, tau0: f64) -> String {
 /// Simulates a draw. Bias jumps are added here rather than by the simulator, so that the
 /// truth is the realised jumps: `count` jumps at uniform times (a Poisson process given its
 /// count), Gaussian sizes of rms `rms_size`; the realised draw (count, rms of the sizes) is
-/// returned in place of the nominal one.
-fn simulate(d: &Draw, tau0: f64, t_run: f64, seed: u64) -> (Vec<f64>, Option<EffectParams>) {
+/// returned in place of the nominal one, with the realised jumps `(time s, size u/s)`.
+fn simulate(
+    d: &Draw,
+    tau0: f64,
+    t_run: f64,
+    seed: u64,
+) -> (Vec<f64>, Option<EffectParams>, Vec<(f64, f64)>) {
     let mut clean = *d;
     if let Some(EffectParams::BiasJumps { .. }) = d.effect {
         clean.effect = None;
@@ -158,18 +179,9 @@ fn simulate(d: &Draw, tau0: f64, t_run: f64, seed: u64) -> (Vec<f64>, Option<Eff
     let mut out = vec![0.0; n];
     sim.fill_channel(0, &mut out);
     let mut truth = d.effect;
+    let mut jumps = Vec::new();
     if let Some(EffectParams::BiasJumps { count, rms_size }) = d.effect {
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x0005_eed1_u64);
-        let mut jumps: Vec<(f64, f64)> = (0..count)
-            .map(|_| {
-                let t = rng.random::<f64>() * t_run;
-                // Box-Muller normal.
-                let (u1, u2) = (rng.random::<f64>().max(1e-300), rng.random::<f64>());
-                let z = (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
-                (t, rms_size * z)
-            })
-            .collect();
-        jumps.sort_by(|a, b| a.0.total_cmp(&b.0));
+        jumps = draw_jumps(count, rms_size, t_run, seed ^ 0x0005_eed1_u64);
         let mut level = 0.0;
         let mut next = 0;
         for (k, o) in out.iter_mut().enumerate() {
@@ -189,7 +201,24 @@ fn simulate(d: &Draw, tau0: f64, t_run: f64, seed: u64) -> (Vec<f64>, Option<Eff
             rms_size: rms,
         });
     }
-    (out, truth)
+    (out, truth, jumps)
+}
+
+/// `count` jumps `(time s, size u/s)` at uniform times in `[0, t_run)`, Gaussian sizes of rms
+/// `rms_size`, sorted by time.
+fn draw_jumps(count: u64, rms_size: f64, t_run: f64, seed: u64) -> Vec<(f64, f64)> {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+    let mut jumps: Vec<(f64, f64)> = (0..count)
+        .map(|_| {
+            let t = rng.random::<f64>() * t_run;
+            // Box-Muller normal.
+            let (u1, u2) = (rng.random::<f64>().max(1e-300), rng.random::<f64>());
+            let z = (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
+            (t, rms_size * z)
+        })
+        .collect();
+    jumps.sort_by(|a, b| a.0.total_cmp(&b.0));
+    jumps
 }
 
 struct Outcome {
@@ -214,18 +243,21 @@ fn rel(a: f64, b: f64) -> f64 {
     (a - b) / b
 }
 
-fn run_one(
-    i: u64,
-    seed: u64,
-    tau0: f64,
-    t_run: f64,
-    kinds: &[Option<EffectKind>],
-    with_scores: bool,
-) -> Outcome {
+/// One benchmark draw, simulated: its effect kind, the draw (its effect the realised one), the
+/// increments and the realised jumps.
+struct Prepared {
+    kind: Option<EffectKind>,
+    d: Draw,
+    inc: Vec<f64>,
+    /// The realised jumps `(time s, size u/s)` of a jump draw.
+    jumps: Vec<(f64, f64)>,
+}
+
+fn prepare(i: u64, seed: u64, tau0: f64, t_run: f64, kinds: &[Option<EffectKind>]) -> Prepared {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i));
     let kind = kinds[(i as usize) % kinds.len()];
     let mut d = draw(&mut rng, kind, t_run, tau0);
-    let (inc, truth) = simulate(&d, tau0, t_run, seed.wrapping_add(7919 * i));
+    let (inc, truth, jumps) = simulate(&d, tau0, t_run, seed.wrapping_add(7919 * i));
     // Jumps: the size is that of the realised jumps (their rms over the nominal one).
     if let (
         Some(EffectParams::BiasJumps {
@@ -237,13 +269,41 @@ fn run_one(
         d.rho *= real / nominal;
     }
     d.effect = truth;
-    let ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
-    let mut ev = ev;
+    Prepared {
+        kind,
+        d,
+        inc,
+        jumps,
+    }
+}
+
+fn run_one(
+    i: u64,
+    seed: u64,
+    tau0: f64,
+    t_run: f64,
+    kinds: &[Option<EffectKind>],
+    with_scores: bool,
+) -> Outcome {
+    let p = prepare(i, seed, tau0, t_run, kinds);
+    let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &p.inc);
     let snap = ev.snapshot();
-    let diag = diagnose(&snap, &DiagnoseOptions::default()).expect("diagnosis");
+    outcome(p.kind, &p.d, &snap, tau0, t_run, with_scores)
+}
+
+/// The diagnosis of one draw's evidence against its truth.
+fn outcome(
+    kind: Option<EffectKind>,
+    d: &Draw,
+    snap: &EvidenceSnapshot,
+    tau0: f64,
+    t_run: f64,
+    with_scores: bool,
+) -> Outcome {
+    let diag = diagnose(snap, &DiagnoseOptions::default()).expect("diagnosis");
     let mut scores = [f64::NAN; 7];
     if with_scores {
-        let b = base_scores(&snap, tau0, t_run);
+        let b = base_scores(snap, tau0, t_run);
         scores[..3].copy_from_slice(&b.per_kind);
         scores[3] = b.w;
         for k in 0..3 {
@@ -355,7 +415,7 @@ fn base_scores(snap: &EvidenceSnapshot, tau0: f64, t_run: f64) -> BaseScores {
 fn calibrate(i: u64, seed: u64, tau0: f64, t_run: f64) -> Null {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i));
     let d = draw(&mut rng, None, t_run, tau0);
-    let (inc, _) = simulate(&d, tau0, t_run, seed.wrapping_add(7919 * i));
+    let (inc, _, _) = simulate(&d, tau0, t_run, seed.wrapping_add(7919 * i));
     let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
     let snap = ev.snapshot();
     let opts = DiagnoseOptions::default();
@@ -404,6 +464,537 @@ fn quantiles(mut v: Vec<f64>) -> String {
     )
 }
 
+/// Oracle statistics of one run for one effect, told the effect's true parameters (docs/gap.md,
+/// "Oracle bounds"; `allanscope::gap::oracle`).
+#[derive(Debug, Clone, Copy)]
+struct OracleStat {
+    /// Shape known, amplitude(s) fitted: the Gauss-Markov drop of chi2 at the true `tau_c`, the
+    /// warm-up `W` at the true `T`, the jumps' chi2 with steps at the true times.
+    fitted: f64,
+    /// Its nominal degrees of freedom (1, 1, the jump count).
+    dof: f64,
+    /// Everything known: `z` and its noncentrality `delta` (model covariance, as the diagnosis).
+    z: f64,
+    delta: f64,
+    /// Gauss-Markov: the drop with the amplitude fixed at the truth. Block effects: `fitted`
+    /// with the covariance of the true five terms.
+    alt: f64,
+    /// Block effects: `z`, `delta` with the true five terms' covariance (NaN for Gauss-Markov).
+    z_true: f64,
+    delta_true: f64,
+    /// Cramér-Rao sd of the log shape (`ln tau_c`, `ln T`; NaN for jumps) and log amplitude
+    /// (`ln sigma`, `ln A`): Gauss-Markov with R known (0), warm-up with the true covariance.
+    crb_shape: f64,
+    crb_amp: f64,
+    /// The same shape bound in the other setting: Gauss-Markov with R free, warm-up with the
+    /// fitted covariance.
+    crb_shape_alt: f64,
+}
+
+impl OracleStat {
+    fn nan() -> Self {
+        Self {
+            fitted: f64::NAN,
+            dof: f64::NAN,
+            z: f64::NAN,
+            delta: f64::NAN,
+            alt: f64::NAN,
+            z_true: f64::NAN,
+            delta_true: f64::NAN,
+            crb_shape: f64::NAN,
+            crb_amp: f64::NAN,
+            crb_shape_alt: f64::NAN,
+        }
+    }
+
+    /// Upper-tail probability of `fitted` under its nominal chi-squared law (a monotone map
+    /// per dof, so that runs with different jump counts share one threshold).
+    fn p_fitted(&self) -> f64 {
+        use statrs::distribution::{ChiSquared, ContinuousCDF};
+        if self.dof.is_nan() || self.dof <= 0.0 || !self.fitted.is_finite() {
+            return f64::NAN;
+        }
+        ChiSquared::new(self.dof).map_or(f64::NAN, |c| 1.0 - c.cdf(self.fitted.max(0.0)))
+    }
+}
+
+/// The oracle statistics of `snap` for the effect `truth` (with the realised `jumps`), on a run
+/// whose true base is `base`.
+fn oracle_stats(
+    truth: EffectParams,
+    jumps: &[(f64, f64)],
+    base: &Base,
+    snap: &EvidenceSnapshot,
+    tau0: f64,
+) -> OracleStat {
+    let mut o = OracleStat::nan();
+    let opts = DiagnoseOptions::default();
+    let Ok(prob) = GapProblem::new(snap, &opts) else {
+        return o;
+    };
+    let Some(base_fit) = prob.gls(&ModelSpec::default()) else {
+        return o;
+    };
+    let c_fit: [f64; 5] = std::array::from_fn(|i| base_fit.coef[i]);
+    let q = terms::quantization_q(base.lsb);
+    let c_true = [
+        q * q,
+        base.n * base.n,
+        base.b * base.b,
+        base.k * base.k,
+        0.0,
+    ];
+    let block_s = snap.block_len as f64 * tau0;
+    let gls_fit = BlockGls::new(&snap.block_means, block_s, &c_fit);
+    let gls_true = BlockGls::new(&snap.block_means, block_s, &c_true);
+    match truth {
+        EffectParams::GaussMarkov { sigma, tau_c_s } => {
+            if let Some(g) = oracle::gm_oracle(&prob, sigma, tau_c_s) {
+                o.fitted = g.drop_fitted;
+                o.dof = 1.0;
+                o.z = g.z_known;
+                o.delta = g.delta;
+                o.alt = g.drop_fixed;
+            }
+            let r_known = [true, true, true, true, false];
+            if let Some(c) = oracle::gm_curve_crb(&prob, &c_true, sigma, tau_c_s, r_known) {
+                o.crb_shape = c.sd_ln_tau_c;
+                o.crb_amp = c.sd_ln_sigma;
+            }
+            if let Some(c) = oracle::gm_curve_crb(&prob, &c_true, sigma, tau_c_s, [true; 5]) {
+                o.crb_shape_alt = c.sd_ln_tau_c;
+            }
+        }
+        EffectParams::Warmup {
+            amplitude,
+            time_constant_s,
+        } => {
+            if let Some(g) = &gls_fit {
+                let (w, z, delta) = oracle::warmup_oracle(g, amplitude, time_constant_s);
+                (o.fitted, o.dof, o.z, o.delta) = (w, 1.0, z, delta);
+                if let Some(c) = oracle::warmup_crb(g, amplitude, time_constant_s) {
+                    o.crb_shape_alt = c.sd_ln_t;
+                }
+            }
+            if let Some(g) = &gls_true {
+                let (w, z, delta) = oracle::warmup_oracle(g, amplitude, time_constant_s);
+                (o.alt, o.z_true, o.delta_true) = (w, z, delta);
+                if let Some(c) = oracle::warmup_crb(g, amplitude, time_constant_s) {
+                    o.crb_shape = c.sd_ln_t;
+                    o.crb_amp = c.sd_ln_a;
+                }
+            }
+        }
+        EffectParams::BiasJumps { .. } => {
+            if let Some(g) = &gls_fit {
+                let (chi2, z, delta) = oracle::jumps_oracle(g, jumps);
+                (o.fitted, o.dof, o.z, o.delta) = (chi2, jumps.len() as f64, z, delta);
+            }
+            if let Some(g) = &gls_true {
+                let (chi2, z, delta) = oracle::jumps_oracle(g, jumps);
+                (o.alt, o.z_true, o.delta_true) = (chi2, z, delta);
+            }
+        }
+        _ => {}
+    }
+    o
+}
+
+/// One effect draw of the benchmark (the same generator and seeds as `--mode bench`): the
+/// diagnosis's outcome and the oracle statistics at the truth.
+fn oracle_effect(
+    i: u64,
+    seed: u64,
+    tau0: f64,
+    t_run: f64,
+    kinds: &[Option<EffectKind>],
+) -> (Outcome, OracleStat) {
+    let p = prepare(i, seed, tau0, t_run, kinds);
+    let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &p.inc);
+    let snap = ev.snapshot();
+    let out = outcome(p.kind, &p.d, &snap, tau0, t_run, true);
+    let o = match p.d.effect {
+        Some(t) => oracle_stats(t, &p.jumps, &p.d.base, &snap, tau0),
+        None => OracleStat::nan(),
+    };
+    (out, o)
+}
+
+/// One clean run of `--mode calibrate` (same base and simulation seed) with the oracle
+/// statistics of a Gauss-Markov term, a warm-up and jumps whose parameters are drawn from the
+/// benchmark's priors on that base (the jumps' times and sizes from their own stream): the null
+/// distributions of the oracle statistics, and the diagnosis's own base statistics (Gauss-Markov
+/// drop per parameter, scanned `W`, largest step z: [`base_scores`]).
+fn oracle_null(i: u64, seed: u64, tau0: f64, t_run: f64) -> ([OracleStat; 3], [f64; 3]) {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i));
+    let d_gm = draw(&mut rng, Some(EffectKind::GaussMarkov), t_run, tau0);
+    let d_w = draw_effect(&mut rng, d_gm.base, Some(EffectKind::Warmup), t_run, tau0);
+    let d_j = draw_effect(
+        &mut rng,
+        d_gm.base,
+        Some(EffectKind::BiasJumps),
+        t_run,
+        tau0,
+    );
+    let clean = Draw {
+        base: d_gm.base,
+        effect: None,
+        rho: 0.0,
+    };
+    let sim_seed = seed.wrapping_add(7919 * i);
+    let (inc, _, _) = simulate(&clean, tau0, t_run, sim_seed);
+    let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
+    let snap = ev.snapshot();
+    let jumps = match d_j.effect {
+        Some(EffectParams::BiasJumps { count, rms_size }) => {
+            draw_jumps(count, rms_size, t_run, sim_seed ^ 0x00ac_1e5e_u64)
+        }
+        _ => Vec::new(),
+    };
+    let b = base_scores(&snap, tau0, t_run);
+    let own = [b.per_kind[0], b.w, b.jumps.first().copied().unwrap_or(0.0)];
+    let stats = [d_gm, d_w, d_j].map(|d| match d.effect {
+        Some(t) => oracle_stats(t, &jumps, &clean.base, &snap, tau0),
+        None => OracleStat::nan(),
+    });
+    (stats, own)
+}
+
+/// `f(i)` for each `i` in `items` on `threads` threads, in the order of `items`.
+fn par_map<T: Send>(items: &[u64], threads: u64, f: impl Fn(u64) -> T + Sync) -> Vec<T> {
+    let threads = threads.max(1) as usize;
+    let f = &f;
+    let mut out: Vec<(usize, T)> = std::thread::scope(|s| {
+        let hs: Vec<_> = (0..threads)
+            .map(|t| {
+                s.spawn(move || {
+                    items
+                        .iter()
+                        .enumerate()
+                        .filter(|(k, _)| k % threads == t)
+                        .map(|(k, &i)| (k, f(i)))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        hs.into_iter()
+            .flat_map(|h| h.join().expect("thread"))
+            .collect()
+    });
+    out.sort_by_key(|r| r.0);
+    out.into_iter().map(|r| r.1).collect()
+}
+
+/// Empirical quantile `p` (nearest rank) of the finite values.
+fn quantile(v: &[f64], p: f64) -> f64 {
+    let mut v: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[((v.len() as f64 - 1.0) * p).round() as usize]
+}
+
+fn std_normal_cdf(x: f64) -> f64 {
+    use statrs::distribution::{ContinuousCDF, Normal};
+    Normal::new(0.0, 1.0).map_or(f64::NAN, |n| n.cdf(x))
+}
+
+/// `--mode oracle`: oracle power and Cramér-Rao bounds (docs/gap.md, "Oracle bounds").
+/// What `--mode oracle` runs: the benchmark's draws (`draws`, `seed`) and the clean runs
+/// (`null_draws`, `null_seed`).
+struct OracleArgs<'a> {
+    draws: u64,
+    seed: u64,
+    null_draws: u64,
+    null_seed: u64,
+    tau0: f64,
+    t_run: f64,
+    threads: u64,
+    csv: &'a str,
+}
+
+fn oracle_mode(a: &OracleArgs) {
+    let OracleArgs {
+        draws,
+        seed,
+        null_draws,
+        null_seed,
+        tau0,
+        t_run,
+        threads,
+        csv,
+    } = *a;
+    let kinds: Vec<Option<EffectKind>> = vec![
+        None,
+        Some(EffectKind::GaussMarkov),
+        Some(EffectKind::Sinusoid),
+        Some(EffectKind::OutputFilter),
+        Some(EffectKind::Warmup),
+        Some(EffectKind::BiasJumps),
+    ];
+    let targets = [
+        EffectKind::GaussMarkov,
+        EffectKind::Warmup,
+        EffectKind::BiasJumps,
+    ];
+    let t0 = Instant::now();
+    let null_idx: Vec<u64> = (0..null_draws).collect();
+    let nulls = par_map(&null_idx, threads, |i| {
+        oracle_null(i, null_seed, tau0, t_run)
+    });
+    let eff_idx: Vec<u64> = (0..draws)
+        .filter(|&i| kinds[(i as usize) % kinds.len()].is_some_and(|k| targets.contains(&k)))
+        .collect();
+    let effs = par_map(&eff_idx, threads, |i| {
+        oracle_effect(i, seed, tau0, t_run, &kinds)
+    });
+    println!(
+        "oracle: {} effect draws (seed {seed}), {} clean runs (seed {null_seed}), duration {t_run} s, {:.0} s wall",
+        effs.len(),
+        nulls.len(),
+        t0.elapsed().as_secs_f64()
+    );
+    if !csv.is_empty() {
+        let head =
+            "fitted,dof,p_fitted,z,delta,alt,z_true,delta_true,crb_shape,crb_amp,crb_shape_alt";
+        let row = |o: &OracleStat| {
+            format!(
+                "{:.4},{},{:.3e},{:.4},{:.4},{:.4},{:.4},{:.4},{:.5},{:.5},{:.5}",
+                o.fitted,
+                o.dof,
+                o.p_fitted(),
+                o.z,
+                o.delta,
+                o.alt,
+                o.z_true,
+                o.delta_true,
+                o.crb_shape,
+                o.crb_amp,
+                o.crb_shape_alt
+            )
+        };
+        let mut text = format!("draw,truth,rho,named,all_named,shape_err,amp_err,gm,w,jump_z1,jump_z2,jump_z3,{head}\n");
+        for (i, (out, o)) in eff_idx.iter().zip(&effs) {
+            text += &format!(
+                "{i},{},{:.3},{},{},{:.4},{:.4},{:.3},{:.3},{:.3},{:.3},{:.3},{}\n",
+                name(out.truth),
+                out.rho,
+                name(out.named),
+                out.all_named
+                    .iter()
+                    .map(|k| k.name())
+                    .collect::<Vec<_>>()
+                    .join("+"),
+                out.shape_err,
+                out.amp_err,
+                out.scores[0],
+                out.scores[3],
+                out.scores[4],
+                out.scores[5],
+                out.scores[6],
+                row(o)
+            );
+        }
+        std::fs::write(csv, text).expect("csv");
+        let mut text = format!("run,pseudo_effect,{head},own\n");
+        for (i, (r, own)) in nulls.iter().enumerate() {
+            for ((k, o), v) in targets.iter().zip(r).zip(own) {
+                text += &format!("{i},{},{},{v:.4}\n", k.name(), row(o));
+            }
+        }
+        let null_csv = format!("{}.null.csv", csv.trim_end_matches(".csv"));
+        std::fs::write(&null_csv, text).expect("null csv");
+    }
+
+    println!();
+    println!(
+        "Null (clean runs, pseudo-effects from the priors): quantiles of the oracle statistics"
+    );
+    println!("| effect | p-value of `fitted` q05 / q01 (nominal 0.05 / 0.01) | `z` q95 / q99 (nominal 1.645 / 2.326) | `z` true cov. q95 | own statistic q95 |");
+    println!("|---|---|---|---|---|");
+    let mut thr = Vec::new();
+    for (k, kind) in targets.iter().enumerate() {
+        let pf: Vec<f64> = nulls.iter().map(|r| r.0[k].p_fitted()).collect();
+        let z: Vec<f64> = nulls.iter().map(|r| r.0[k].z).collect();
+        let zt: Vec<f64> = nulls.iter().map(|r| r.0[k].z_true).collect();
+        let own: Vec<f64> = nulls.iter().map(|r| r.1[k]).collect();
+        let t = (
+            quantile(&pf, 0.05),
+            quantile(&pf, 0.01),
+            quantile(&z, 0.95),
+            quantile(&z, 0.99),
+            quantile(&zt, 0.95),
+            quantile(&own, 0.95),
+        );
+        println!(
+            "| {} | {:.4} / {:.4} | {:.3} / {:.3} | {:.3} | {:.3} |",
+            kind.name(),
+            t.0,
+            t.1,
+            t.2,
+            t.3,
+            t.4,
+            t.5
+        );
+        thr.push(t);
+    }
+
+    for (big, label) in [(0.3, "rho >= 0.3"), (0.0, "all draws")] {
+        println!();
+        println!("Detection, {label}: the diagnosis (right effect named first) against the oracles at the clean runs' 5% (1%) quantiles");
+        println!("| effect | n | diagnosis | own statistic alone at its 5% | shape known, amplitude fitted: 5% (1%) | all known `z`: 5% (1%) | all known, expected `Phi(delta - z95)` | all known, true cov.: expected |");
+        println!("|---|---|---|---|---|---|---|---|");
+        for (k, kind) in targets.iter().enumerate() {
+            let rows: Vec<&(Outcome, OracleStat)> = effs
+                .iter()
+                .filter(|(o, _)| o.truth == Some(*kind) && o.rho >= big)
+                .collect();
+            let n = rows.len().max(1) as f64;
+            let t = thr[k];
+            let ours = rows.iter().filter(|(o, _)| o.named == Some(*kind)).count();
+            let own_col = match kind {
+                EffectKind::GaussMarkov => 0,
+                EffectKind::Warmup => 3,
+                _ => 4,
+            };
+            let own5 = rows.iter().filter(|(o, _)| o.scores[own_col] > t.5).count();
+            let f5 = rows.iter().filter(|(_, s)| s.p_fitted() <= t.0).count();
+            let f1 = rows.iter().filter(|(_, s)| s.p_fitted() <= t.1).count();
+            let z5 = rows.iter().filter(|(_, s)| s.z >= t.2).count();
+            let z1 = rows.iter().filter(|(_, s)| s.z >= t.3).count();
+            let ez: f64 = rows
+                .iter()
+                .map(|(_, s)| std_normal_cdf(s.delta - t.2))
+                .sum::<f64>()
+                / n;
+            let ezt: f64 = rows
+                .iter()
+                .map(|(_, s)| std_normal_cdf(s.delta_true - 1.645))
+                .sum::<f64>()
+                / n;
+            let pc = |c: usize| 100.0 * c as f64 / n;
+            println!(
+                "| {} | {} | {ours} ({:.0}%) | {own5} ({:.0}%) | {f5} ({:.0}%) ({f1}, {:.0}%) | {z5} ({:.0}%) ({z1}, {:.0}%) | {:.0}% | {} |",
+                kind.name(),
+                rows.len(),
+                pc(ours),
+                pc(own5),
+                pc(f5),
+                pc(f1),
+                pc(z5),
+                pc(z1),
+                100.0 * ez,
+                if kind == &EffectKind::GaussMarkov {
+                    "-".to_string()
+                } else {
+                    format!("{:.0}%", 100.0 * ezt)
+                }
+            );
+        }
+    }
+
+    println!();
+    println!("Draws at rho >= 0.3 the diagnosis misses (oracle p-value of `fitted`, `z`, `delta`; the diagnosis's own base statistic: GM drop per parameter, W, largest step z)");
+    println!("| draw | effect | rho | named | p(fitted) | fitted | z | delta | own statistic |");
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for (i, (out, o)) in eff_idx.iter().zip(&effs) {
+        let Some(kind) = out.truth else { continue };
+        if out.rho < 0.3 || out.named == Some(kind) {
+            continue;
+        }
+        let own = match kind {
+            EffectKind::GaussMarkov => out.scores[0],
+            EffectKind::Warmup => out.scores[3],
+            _ => out.scores[4],
+        };
+        println!(
+            "| {i} | {} | {:.2} | {} | {:.2e} | {:.2} | {:.2} | {:.2} | {:.2} |",
+            kind.name(),
+            out.rho,
+            name(out.named),
+            o.p_fitted(),
+            o.fitted,
+            o.z,
+            o.delta,
+            own
+        );
+    }
+
+    println!();
+    println!("Cramér-Rao bounds (sd of the log parameter for any unbiased estimator) and the measured errors");
+    println!("| effect, parameter | draw set | n | CRB sd median | CRB sd q90 | share with CRB sd > 10%/1.645 (25%/1.645 for amplitudes) | CRB-implied q90 of abs rel. error | measured q90 | measured median | share with abs ln error > 1.645 CRB sd |");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    for kind in [EffectKind::GaussMarkov, EffectKind::Warmup] {
+        for (param, is_shape) in [("shape", true), ("amplitude", false)] {
+            for (set, named_only, big) in [
+                ("named", true, 0.0),
+                ("named, rho >= 0.3", true, 0.3),
+                ("all, rho >= 0.3", false, 0.3),
+            ] {
+                let rows: Vec<&(Outcome, OracleStat)> = effs
+                    .iter()
+                    .filter(|(o, _)| {
+                        o.truth == Some(kind)
+                            && o.rho >= big
+                            && (!named_only || o.shape_err.is_finite())
+                    })
+                    .collect();
+                let sd: Vec<f64> = rows
+                    .iter()
+                    .map(|(_, s)| if is_shape { s.crb_shape } else { s.crb_amp })
+                    .collect();
+                let err: Vec<f64> = rows
+                    .iter()
+                    .map(|(o, _)| if is_shape { o.shape_err } else { o.amp_err })
+                    .collect();
+                let lim = if is_shape { 0.10 } else { 0.25 } / 1.645;
+                let over = sd.iter().filter(|&&v| v > lim).count();
+                let abs_err: Vec<f64> = err.iter().map(|e| e.abs()).collect();
+                let eff_out = rows
+                    .iter()
+                    .zip(&sd)
+                    .filter(|((o, _), &s)| {
+                        let e = if is_shape { o.shape_err } else { o.amp_err };
+                        e.is_finite() && (1.0 + e).ln().abs() > 1.645 * s
+                    })
+                    .count();
+                let n_err = abs_err.iter().filter(|v| v.is_finite()).count();
+                println!(
+                    "| {} {param} | {set} | {} | {:.3} | {:.3} | {over}/{} | {:.3} | {} | {} | {} |",
+                    kind.name(),
+                    rows.len(),
+                    quantile(&sd, 0.5),
+                    quantile(&sd, 0.9),
+                    rows.len(),
+                    oracle::mixture_rel_error_quantile(&sd, 0.9),
+                    if n_err > 0 { format!("{:.3}", quantile(&abs_err, 0.9)) } else { "-".into() },
+                    if n_err > 0 { format!("{:.3}", quantile(&abs_err, 0.5)) } else { "-".into() },
+                    if n_err > 0 { format!("{eff_out}/{n_err}") } else { "-".into() },
+                );
+            }
+        }
+    }
+    // The other setting of the shape bound.
+    for kind in [EffectKind::GaussMarkov, EffectKind::Warmup] {
+        let sd: Vec<f64> = effs
+            .iter()
+            .filter(|(o, _)| o.truth == Some(kind) && o.shape_err.is_finite())
+            .map(|(_, s)| s.crb_shape_alt)
+            .collect();
+        println!(
+            "{} shape CRB, other setting ({}), named draws: median {:.3}, q90 {:.3}, implied q90 rel. error {:.3}, share > 10%/1.645: {}/{}",
+            kind.name(),
+            if kind == EffectKind::GaussMarkov { "R free" } else { "fitted covariance" },
+            quantile(&sd, 0.5),
+            quantile(&sd, 0.9),
+            oracle::mixture_rel_error_quantile(&sd, 0.9),
+            sd.iter().filter(|&&v| v > 0.1 / 1.645).count(),
+            sd.len()
+        );
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let get = |k: &str, d: &str| -> String {
@@ -431,7 +1022,7 @@ fn main() {
             n as f64 * tau0,
             tau0,
         );
-        let (inc, _) = simulate(&d, tau0, n as f64 * tau0, seed);
+        let (inc, _, _) = simulate(&d, tau0, n as f64 * tau0, seed);
         let t = Instant::now();
         let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
         let snap = ev.snapshot();
@@ -463,7 +1054,7 @@ fn main() {
             Xoshiro256PlusPlus::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i));
         let d = draw(&mut rng, kinds[(i as usize) % kinds.len()], t_run, tau0);
         println!("{d:?}");
-        let (inc, _) = simulate(&d, tau0, t_run, seed.wrapping_add(7919 * i));
+        let (inc, _, _) = simulate(&d, tau0, t_run, seed.wrapping_add(7919 * i));
         let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
         let snap = ev.snapshot();
         let opts = DiagnoseOptions::default();
@@ -533,6 +1124,22 @@ fn main() {
             "blocks: {:?}",
             snap.block_means.iter().take(20).collect::<Vec<_>>()
         );
+        return;
+    }
+
+    if mode == "oracle" {
+        let null_draws: u64 = get("--null-draws", "400").parse().expect("--null-draws");
+        let null_seed: u64 = get("--null-seed", "2").parse().expect("--null-seed");
+        oracle_mode(&OracleArgs {
+            draws,
+            seed,
+            null_draws,
+            null_seed,
+            tau0,
+            t_run,
+            threads,
+            csv: &csv,
+        });
         return;
     }
 

@@ -243,6 +243,8 @@ pub struct GapProblem {
     linv: DMatrix<f64>,
     /// Diagonal of the (unridged) log covariance.
     pub s_diag: Vec<f64>,
+    /// The unridged log covariance `S` itself (for the oracle bounds of [`super::oracle`]).
+    s_plain: DMatrix<f64>,
     /// The unridged covariance seen through the whitening, `Linv S Linv'` (for the expectation
     /// of `r' S_ridge^-1 r`).
     m_white: DMatrix<f64>,
@@ -342,7 +344,7 @@ impl GapProblem {
         let linv = l
             .solve_lower_triangular(&DMatrix::identity(j, j))
             .ok_or(DiagnoseError::Covariance)?;
-        let m_white = &linv * s_plain * linv.transpose();
+        let m_white = &linv * &s_plain * linv.transpose();
         Ok(Self {
             ms: pts.iter().map(|p| p.m).collect(),
             tau: pts.iter().map(|p| p.tau_s).collect(),
@@ -350,6 +352,7 @@ impl GapProblem {
             ln_y: DVector::from_iterator(j, pts.iter().map(|p| p.avar.ln())),
             linv,
             s_diag,
+            s_plain,
             m_white,
             tau0_s: tau0,
             n_inc: n,
@@ -359,6 +362,23 @@ impl GapProblem {
 
     pub fn len(&self) -> usize {
         self.tau.len()
+    }
+
+    /// The unridged covariance `S` of `ln AVAR_hat` at the curve's taus (the analytic
+    /// covariance of the five-term fit `c_init`, THEORY.md section 5).
+    pub fn log_covariance(&self) -> &DMatrix<f64> {
+        &self.s_plain
+    }
+
+    /// `ln AVAR_hat` at the curve's taus.
+    pub fn ln_avar(&self) -> &DVector<f64> {
+        &self.ln_y
+    }
+
+    /// `L^-1 v`, with `L L'` the ridged covariance the GLS fits whiten with, so that
+    /// `|L^-1 r|^2` is the `r' S^-1 r` of [`GapProblem::chi2_of`].
+    pub fn whiten(&self, v: &DVector<f64>) -> DVector<f64> {
+        &self.linv * v
     }
 
     pub fn is_empty(&self) -> bool {
@@ -996,7 +1016,7 @@ impl WarmupFinding {
 }
 
 /// Mean of `e^{-t/T}` over block `i` of length `tb`: `(T/tb)(e^{-i tb/T} - e^{-(i+1) tb/T})`.
-fn warmup_block_shape(i: usize, tb: f64, t: f64) -> f64 {
+pub fn warmup_block_shape(i: usize, tb: f64, t: f64) -> f64 {
     let a = i as f64 * tb / t;
     t / tb * (-a).exp() * -(-tb / t).exp_m1()
 }
@@ -1047,6 +1067,23 @@ fn block_diff_acov(c: &[f64; 5], effects: &[EffectParams], tb: f64, n: usize) ->
             v / (tb * tb)
         })
         .collect()
+}
+
+/// Covariance matrix (u^2/s^2) of the `n_blocks - 1` first differences of the block-mean rate
+/// under the model `c` plus stationary `effects` ([`block_diff_acov`], a Toeplitz matrix): the
+/// noise model of [`fit_warmup`] and [`detect_steps`]. `None` below 3 blocks.
+pub fn block_diff_covariance(
+    n_blocks: usize,
+    block_s: f64,
+    c: &[f64; 5],
+    effects: &[EffectParams],
+) -> Option<DMatrix<f64>> {
+    if n_blocks < 3 {
+        return None;
+    }
+    let n = n_blocks - 1;
+    let acov = block_diff_acov(c, effects, block_s, n);
+    Some(DMatrix::from_fn(n, n, |i, j| acov[i.abs_diff(j)]))
 }
 
 /// A warm-up in the block means: generalised least squares of the first differences of the

@@ -15,6 +15,7 @@
 pub mod diagnose;
 pub mod effects;
 pub mod evidence;
+pub mod oracle;
 pub mod record;
 
 pub use diagnose::{diagnose, holdout_gap, DiagnoseOptions, Diagnosis, Thresholds, Verdict};

@@ -1,0 +1,412 @@
+//! Oracle bounds for the diagnosis (docs/gap.md, "Oracle bounds"): statistics that are told the
+//! true effect's parameters, and Cramér-Rao bounds on its shape and amplitude, on the same
+//! evidence the diagnosis uses. They measure how much a detector could at best gain, not how to
+//! detect: none of this runs on the diagnosis's path.
+//!
+//! Evidence models (the ones the diagnosis fits with):
+//! - the curve: `ln AVAR_hat ~ N(ln AVAR(theta), S)` with `S` the analytic log covariance of
+//!   [`GapProblem`] (THEORY.md section 5), the five-term amplitudes as nuisance;
+//! - the block means: their first differences `d ~ N(r 1 + signal, Sigma)` with `Sigma` from
+//!   the five-term model ([`block_diff_covariance`]), the drift `r` as nuisance (the level drops
+//!   out of the differences).
+//!
+//! For a fully known alternative (all effect parameters given) in a Gaussian model whose
+//! nuisance enters linearly, the most powerful test invariant to the nuisance rejects for large
+//! `z = u'y / |u|`, `u` the whitened signal projected off the whitened nuisance columns, and its
+//! power at level `alpha` is `Phi(|u| - z_alpha)` (Neyman-Pearson on the maximal invariant; e.g.
+//! Lehmann and Romano, Testing Statistical Hypotheses, ch. 6). On the curve the model is linear in
+//! the five amplitudes only after linearising `ln AVAR` at the truth, so there `z` is the score
+//! statistic of that linearisation.
+
+use super::diagnose::{block_diff_covariance, warmup_block_shape, GapProblem, ModelSpec};
+use super::effects::{effect_column, EffectKind};
+use crate::model::terms::basis;
+use nalgebra::{DMatrix, DVector};
+
+/// Relative step of the numerical derivatives in `ln` of a shape parameter.
+const LN_STEP: f64 = 1e-4;
+
+/// Orthonormal basis (columns) of the span of `cols` (modified Gram-Schmidt; columns that add
+/// less than `1e-10` of their norm are dropped).
+fn orthonormal(cols: &[DVector<f64>]) -> Vec<DVector<f64>> {
+    let mut q: Vec<DVector<f64>> = Vec::new();
+    for c in cols {
+        let mut u = c.clone();
+        for v in &q {
+            let a = v.dot(&u);
+            u -= v * a;
+        }
+        let n = u.norm();
+        if n > 1e-10 * c.norm() && n > 0.0 {
+            q.push(u / n);
+        }
+    }
+    q
+}
+
+/// `v` projected off the span of the orthonormal `q`.
+fn project_off(v: &DVector<f64>, q: &[DVector<f64>]) -> DVector<f64> {
+    let mut u = v.clone();
+    for w in q {
+        let a = w.dot(&u);
+        u -= w * a;
+    }
+    u
+}
+
+/// The Gauss-Markov oracle on the curve at the true `(sigma, tau_c)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GmOracle {
+    /// Drop of `r' S^-1 r` (ridged `S`, as the diagnosis) from the base five-term GLS fit to the
+    /// fit with a Gauss-Markov column at the true `tau_c`, amplitude fitted (`>= 0`).
+    pub drop_fitted: f64,
+    /// The same with the amplitude fixed at the true `sigma` (may be negative).
+    pub drop_fixed: f64,
+    /// Score statistic of the fully known alternative: `u' r_w / |u|`, `r_w` the whitened
+    /// residual of the base fit, `u` the whitened Gauss-Markov signature `sigma^2 g / AVAR`
+    /// projected off the base fit's active five-term columns (`b_i / AVAR`). About `N(0, 1)` on
+    /// clean runs.
+    pub z_known: f64,
+    /// `|u|`: the mean of `z_known` under the alternative, to first order (its noncentrality).
+    pub delta: f64,
+}
+
+/// The Gauss-Markov oracle statistics of `prob` at the true `sigma` (u/s) and `tau_c_s`.
+pub fn gm_oracle(prob: &GapProblem, sigma: f64, tau_c_s: f64) -> Option<GmOracle> {
+    let base = prob.gls(&ModelSpec::default())?;
+    let col = effect_column(
+        EffectKind::GaussMarkov,
+        tau_c_s,
+        &prob.ms,
+        prob.tau0_s,
+        prob.n_inc,
+    );
+    let fitted = prob.gls(&ModelSpec {
+        extra: vec![col.clone()],
+        ..ModelSpec::default()
+    })?;
+    let s2 = sigma * sigma;
+    let fixed = prob.gls(&ModelSpec {
+        offset: Some(col.iter().map(|g| s2 * g).collect()),
+        ..ModelSpec::default()
+    })?;
+    let j = prob.len();
+    let a = &base.model;
+    let r = DVector::from_fn(j, |i, _| prob.ln_avar()[i] - a[i].max(1e-300).ln());
+    let rw = prob.whiten(&r);
+    let nuis: Vec<DVector<f64>> = (0..5)
+        .filter(|&c| base.coef[c] > 0.0)
+        .map(|c| prob.whiten(&DVector::from_fn(j, |i, _| basis(prob.tau[i])[c] / a[i])))
+        .collect();
+    let q = orthonormal(&nuis);
+    let sig = prob.whiten(&DVector::from_fn(j, |i, _| s2 * col[i] / a[i]));
+    let u = project_off(&sig, &q);
+    let delta = u.norm();
+    Some(GmOracle {
+        drop_fitted: base.chi2 - fitted.chi2,
+        drop_fixed: base.chi2 - fixed.chi2,
+        z_known: if delta > 0.0 { u.dot(&rw) / delta } else { 0.0 },
+        delta,
+    })
+}
+
+/// Cramér-Rao bound of the Gauss-Markov parameters on the curve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GmCrb {
+    /// Standard deviation of any unbiased estimate of `ln tau_c` (relative sd of `tau_c`).
+    pub sd_ln_tau_c: f64,
+    /// The same for `ln sigma`.
+    pub sd_ln_sigma: f64,
+    /// Noncentrality `sigma^4 (J_s' W J_s)_perp` of the amplitude-fitted drop of
+    /// [`GmOracle::drop_fitted`] at known `tau_c` (linearised, weights `W` = the ridged `S^-1`
+    /// of the diagnosis, nuisance columns the free five terms), so that its mean is about
+    /// `noncentrality + noise`.
+    pub noncentrality: f64,
+    /// The drop's mean on clean data under the same linearisation: `u' M u / |u|^2`, `M` the
+    /// whitened true covariance (below 1 because of the ridge).
+    pub noise: f64,
+}
+
+/// Cramér-Rao bound of `(ln sigma, ln tau_c)` from the curve's Fisher information
+/// `F = J' S^-1 J` (Gaussian `ln AVAR_hat` with the fixed covariance `S` of `prob`, unridged;
+/// the information in the covariance's own dependence on the parameters is left out), `J` the
+/// Jacobian of `ln AVAR(tau_j)` at the truth: five-term coefficients `c` (`Q^2 .. R^2`, those
+/// with `free[i]`; the others known) and the Gauss-Markov `sigma`, `tau_c`.
+pub fn gm_curve_crb(
+    prob: &GapProblem,
+    c: &[f64; 5],
+    sigma: f64,
+    tau_c_s: f64,
+    free: [bool; 5],
+) -> Option<GmCrb> {
+    let j = prob.len();
+    let s2 = sigma * sigma;
+    let g = |t: f64| {
+        effect_column(
+            EffectKind::GaussMarkov,
+            t,
+            &prob.ms,
+            prob.tau0_s,
+            prob.n_inc,
+        )
+    };
+    let g0 = g(tau_c_s);
+    let gp = g(tau_c_s * LN_STEP.exp());
+    let gm = g(tau_c_s * (-LN_STEP).exp());
+    let a: Vec<f64> = (0..j)
+        .map(|i| {
+            let b = basis(prob.tau[i]);
+            (0..5).map(|k| c[k] * b[k]).sum::<f64>() + s2 * g0[i]
+        })
+        .collect();
+    let mut cols: Vec<DVector<f64>> = (0..5)
+        .filter(|&k| free[k])
+        .map(|k| DVector::from_fn(j, |i, _| basis(prob.tau[i])[k] / a[i]))
+        .collect();
+    let nb = cols.len();
+    // d ln AVAR / d ln sigma and d ln AVAR / d ln tau_c.
+    cols.push(DVector::from_fn(j, |i, _| 2.0 * s2 * g0[i] / a[i]));
+    cols.push(DVector::from_fn(j, |i, _| {
+        s2 * (gp[i] - gm[i]) / (2.0 * LN_STEP) / a[i]
+    }));
+    let x = DMatrix::from_columns(&cols);
+    let s = prob.log_covariance();
+    let chol = s.clone().cholesky()?;
+    let fisher = x.transpose() * chol.solve(&x);
+    let inv = fisher.try_inverse()?;
+    let sd_ln_sigma = inv[(nb, nb)].max(0.0).sqrt();
+    let sd_ln_tau_c = inv[(nb + 1, nb + 1)].max(0.0).sqrt();
+    // Noncentrality of the amplitude-fitted drop, in the diagnosis's (ridged) metric.
+    let whiten = |v: &DVector<f64>| prob.whiten(v);
+    let q = orthonormal(&cols[..nb].iter().map(whiten).collect::<Vec<_>>());
+    let sig = whiten(&DVector::from_fn(j, |i, _| s2 * g0[i] / a[i]));
+    let u = project_off(&sig, &q);
+    // M = L^-1 S L^-T (whitened true covariance): u' M u = |L_s' L^-T u|^2.
+    let lt_inv_u = whiten_transpose(prob, &u)?;
+    let noise = (chol.l().transpose() * lt_inv_u).norm_squared() / u.norm_squared();
+    Some(GmCrb {
+        sd_ln_tau_c,
+        sd_ln_sigma,
+        noncentrality: u.norm_squared(),
+        noise,
+    })
+}
+
+/// `L^-T u` for the whitening `L^-1` of `prob` (from `L^-1` applied to the unit vectors).
+fn whiten_transpose(prob: &GapProblem, u: &DVector<f64>) -> Option<DVector<f64>> {
+    let j = prob.len();
+    let linv = DMatrix::from_columns(
+        &(0..j)
+            .map(|k| {
+                let mut e = DVector::zeros(j);
+                e[k] = 1.0;
+                prob.whiten(&e)
+            })
+            .collect::<Vec<_>>(),
+    );
+    Some(linv.transpose() * u)
+}
+
+/// Generalised least squares on the first differences of the block-mean rate with the model
+/// covariance (the evidence of the warm-up and jump tests), drift as the nuisance.
+#[derive(Debug, Clone)]
+pub struct BlockGls {
+    n_blocks: usize,
+    block_s: f64,
+    linv: DMatrix<f64>,
+    /// Whitened differences.
+    yw: DVector<f64>,
+    /// Orthonormal whitened drift column.
+    q_drift: DVector<f64>,
+}
+
+impl BlockGls {
+    /// From block means (u/s, blocks of `block_s` s) and the five-term model `c` (`Q^2 .. R^2`)
+    /// that sets the covariance. `None` with fewer than 24 blocks, a missing block or a
+    /// covariance that is not positive definite.
+    pub fn new(block_means: &[f64], block_s: f64, c: &[f64; 5]) -> Option<Self> {
+        if block_means.len() < 24 || block_means.iter().any(|v| !v.is_finite()) {
+            return None;
+        }
+        let sigma = block_diff_covariance(block_means.len(), block_s, c, &[])?;
+        let n = sigma.nrows();
+        let chol = sigma.cholesky()?;
+        let linv = chol.l().solve_lower_triangular(&DMatrix::identity(n, n))?;
+        let d = DVector::from_iterator(n, block_means.windows(2).map(|p| p[1] - p[0]));
+        let yw = &linv * d;
+        let ones = &linv * DVector::from_element(n, 1.0);
+        let q_drift = &ones / ones.norm();
+        Some(Self {
+            n_blocks: block_means.len(),
+            block_s,
+            linv,
+            yw,
+            q_drift,
+        })
+    }
+
+    /// Number of differences.
+    pub fn len(&self) -> usize {
+        self.yw.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.yw.is_empty()
+    }
+
+    /// First differences of a block-mean profile (one value per block).
+    pub fn diff(profile: &[f64]) -> DVector<f64> {
+        DVector::from_iterator(
+            profile.len().saturating_sub(1),
+            profile.windows(2).map(|p| p[1] - p[0]),
+        )
+    }
+
+    /// Block-mean profile of a unit step at `t_s` (s from the start): the fraction of each block
+    /// after the step.
+    pub fn step_profile(&self, t_s: f64) -> Vec<f64> {
+        (0..self.n_blocks)
+            .map(|i| {
+                let end = (i + 1) as f64 * self.block_s;
+                ((end - t_s) / self.block_s).clamp(0.0, 1.0)
+            })
+            .collect()
+    }
+
+    /// Block-mean profile of a unit warm-up `e^{-t/T}` ([`warmup_block_shape`]).
+    pub fn warmup_profile(&self, t_s: f64) -> Vec<f64> {
+        (0..self.n_blocks)
+            .map(|i| warmup_block_shape(i, self.block_s, t_s))
+            .collect()
+    }
+
+    fn whitened_perp(&self, signal: &DVector<f64>) -> DVector<f64> {
+        let u = &self.linv * signal;
+        project_off(&u, std::slice::from_ref(&self.q_drift))
+    }
+
+    /// Drop of the whitened residual sum of squares when the difference-space `columns` are
+    /// added to the drift, their sizes fitted (chi-squared with `columns.len()` degrees of
+    /// freedom on clean data when the covariance is right).
+    pub fn drop(&self, columns: &[DVector<f64>]) -> f64 {
+        let us: Vec<DVector<f64>> = columns.iter().map(|c| self.whitened_perp(c)).collect();
+        orthonormal(&us)
+            .iter()
+            .map(|q| q.dot(&self.yw).powi(2))
+            .sum()
+    }
+
+    /// `(z, delta)` of a fully known difference-space signal: `z = u' y_w / |u|` (`N(0, 1)` on
+    /// clean data, mean `delta = |u|` under the alternative), `u` the whitened signal off the
+    /// drift.
+    pub fn z_known(&self, signal: &DVector<f64>) -> (f64, f64) {
+        let u = self.whitened_perp(signal);
+        let delta = u.norm();
+        if delta > 0.0 {
+            (u.dot(&self.yw) / delta, delta)
+        } else {
+            (0.0, 0.0)
+        }
+    }
+
+    /// Inverse Fisher information of the parameters whose difference-space derivatives are
+    /// `columns`, the drift (first parameter) included: `(X' Sigma^-1 X)^-1`, `X = [1, columns]`.
+    pub fn inverse_fisher(&self, columns: &[DVector<f64>]) -> Option<DMatrix<f64>> {
+        let n = self.len();
+        let mut xs = vec![&self.linv * DVector::from_element(n, 1.0)];
+        xs.extend(columns.iter().map(|c| &self.linv * c));
+        let x = DMatrix::from_columns(&xs);
+        (x.transpose() * x).try_inverse()
+    }
+}
+
+/// Cramér-Rao bound of a warm-up `A e^{-t/T}` in the block means.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WarmupCrb {
+    pub sd_ln_t: f64,
+    pub sd_ln_a: f64,
+}
+
+/// The warm-up's Cramér-Rao bound: parameters drift `r`, `A`, `ln T` in
+/// `d = r 1 + A diff(e(T)) + noise`, `e` the block means of `e^{-t/T}`, covariance of `gls`.
+pub fn warmup_crb(gls: &BlockGls, amplitude: f64, time_constant_s: f64) -> Option<WarmupCrb> {
+    let e0 = BlockGls::diff(&gls.warmup_profile(time_constant_s));
+    let ep = BlockGls::diff(&gls.warmup_profile(time_constant_s * LN_STEP.exp()));
+    let em = BlockGls::diff(&gls.warmup_profile(time_constant_s * (-LN_STEP).exp()));
+    let dt = (ep - em) * (amplitude / (2.0 * LN_STEP));
+    let inv = gls.inverse_fisher(&[e0, dt])?;
+    Some(WarmupCrb {
+        sd_ln_t: inv[(2, 2)].max(0.0).sqrt(),
+        sd_ln_a: inv[(1, 1)].max(0.0).sqrt() / amplitude.abs(),
+    })
+}
+
+/// The warm-up oracle: `W` at the true `T` (amplitude fitted; the diagnosis's `W` without the
+/// scan over `T`) and the known-signal `(z, delta)` at the true `A` and `T`.
+pub fn warmup_oracle(gls: &BlockGls, amplitude: f64, time_constant_s: f64) -> (f64, f64, f64) {
+    let e = BlockGls::diff(&gls.warmup_profile(time_constant_s));
+    let w = gls.drop(std::slice::from_ref(&e));
+    let (z, delta) = gls.z_known(&(e * amplitude));
+    (w, z, delta)
+}
+
+/// The jump oracle at the true jumps `(time s, size u/s)`: the drop of the whitened residual sum
+/// of squares with steps at the true times, sizes fitted (chi-squared with as many degrees of
+/// freedom as jumps on clean data), and the known-signal `(z, delta)` with the true sizes.
+pub fn jumps_oracle(gls: &BlockGls, jumps: &[(f64, f64)]) -> (f64, f64, f64) {
+    let cols: Vec<DVector<f64>> = jumps
+        .iter()
+        .map(|&(t, _)| BlockGls::diff(&gls.step_profile(t)))
+        .collect();
+    let chi2 = gls.drop(&cols);
+    let mut signal = DVector::zeros(gls.len());
+    for (c, &(_, s)) in cols.iter().zip(jumps) {
+        signal += c * s;
+    }
+    let (z, delta) = gls.z_known(&signal);
+    (chi2, z, delta)
+}
+
+/// Quantile `p` of `|e^x - 1|` over the mixture of `x ~ N(0, sd_i^2)` with equal weights: the
+/// `p` quantile of the relative error of an estimate whose log error has the given standard
+/// deviations (bisection on the mixture's tail probability).
+pub fn mixture_rel_error_quantile(sds: &[f64], p: f64) -> f64 {
+    use statrs::distribution::{ContinuousCDF, Normal};
+    let sds: Vec<f64> = sds
+        .iter()
+        .copied()
+        .filter(|s| s.is_finite() && *s > 0.0)
+        .collect();
+    if sds.is_empty() {
+        return f64::NAN;
+    }
+    let nrm = Normal::new(0.0, 1.0).expect("unit normal");
+    // P(|e^x - 1| > q) = P(x > ln(1 + q)) + P(x < ln(1 - q)) (the second is 0 for q >= 1).
+    let tail = |q: f64| -> f64 {
+        sds.iter()
+            .map(|&s| {
+                let hi = 1.0 - nrm.cdf((1.0 + q).ln() / s);
+                let lo = if q < 1.0 {
+                    nrm.cdf((1.0 - q).ln() / s)
+                } else {
+                    0.0
+                };
+                hi + lo
+            })
+            .sum::<f64>()
+            / sds.len() as f64
+    };
+    let (mut lo, mut hi) = (0.0, 1.0);
+    while tail(hi) > 1.0 - p && hi < 1e6 {
+        hi *= 2.0;
+    }
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if tail(mid) > 1.0 - p {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
