@@ -1146,8 +1146,8 @@ fn sum_sq_diff(a: &[f64], b: &[f64]) -> f64 {
     fold_lanes(acc) + rest
 }
 
-/// Partial sums per kernel: 16 doubles are 8 independent two-lane (or 4 four-lane) add chains,
-/// enough to cover the add latency on the vector units this builds for.
+/// Partial sums per kernel: 8 doubles are 4 independent two-lane SSE2 add chains, enough to
+/// cover the add latency (4 and 16 were measured slower on kernel_probe, BENCHMARKS.md).
 const LANES: usize = 8;
 
 /// The partial sums added pairwise.
