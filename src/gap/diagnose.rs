@@ -32,7 +32,7 @@ use crate::allan::CurvePoint;
 use crate::model::avar_cov::{AvarCovariance, CovPoint};
 use crate::model::fit::{fit, FitOptions};
 use crate::model::nnls::nnls;
-use crate::model::terms::basis;
+use crate::model::terms::{self, basis};
 use nalgebra::{DMatrix, DVector};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
@@ -712,25 +712,7 @@ pub fn diagnose(
                 *o += w.amplitude * w.amplitude * c;
             }
             // Keep only the stationary effects still needed beside it, then look again.
-            let mut kept: Vec<AddedEffect> = Vec::new();
-            for e in &effects {
-                let others: Vec<AddedEffect> =
-                    effects.iter().filter(|o| *o != e).copied().collect();
-                let with = prob.gls(&spec_from(&prob, &effects, &offset));
-                let without = prob.gls(&spec_from(&prob, &others, &offset));
-                if let (Some(a), Some(b)) = (with, without) {
-                    // The rules of the forward search: `add_chi2` while the model without it
-                    // is flagged by `G`, the likelihood-ratio threshold otherwise.
-                    let crit = if b.gap() > th.gap_crit {
-                        th.add_chi2
-                    } else {
-                        th.lr_crit_of(e.params.kind())
-                    };
-                    if (b.chi2 - a.chi2) / e.params.kind().n_params() as f64 >= crit {
-                        kept.push(*e);
-                    }
-                }
-            }
+            let kept = still_needed(&prob, &effects, &offset, opts);
             let prev = cur.clone();
             let f = prob
                 .gls(&spec_from(&prob, &kept, &offset))
@@ -794,15 +776,57 @@ pub fn diagnose(
     if let Some(f) = jumps.as_ref().filter(|f| !f.sizes.is_empty()) {
         time_flag = true;
         let rms = (f.sizes.iter().map(|s| s * s).sum::<f64>() / f.sizes.len() as f64).sqrt();
-        // On the curve the jumps are part of K (their law is a rate random walk's), so naming
-        // them leaves the gap statistic as it is.
+        // In law the jumps are part of K (a rate random walk's), but a few large ones leave
+        // their own shape on this record's curve, which a stationary candidate may have taken
+        // (a slow sinusoid, typically). Their exact AVAR on the record enters as a fixed offset,
+        // as a warm-up's does; the stationary effects must then pass the forward rules again.
+        // Steps less than 1.5 blocks apart are one jump inside a block that the search split
+        // over two differences: merged (sizes summed, at their |size|-weighted time).
+        let mut order: Vec<usize> = (0..f.sizes.len()).collect();
+        order.sort_by(|&a, &b| f.times_s[a].total_cmp(&f.times_s[b]));
+        let mut merged: Vec<(f64, f64, f64)> = Vec::new(); // (weighted time sum, weight, size)
+        let mut last_t = f64::NEG_INFINITY;
+        for i in order {
+            let (t, sz) = (f.times_s[i], f.sizes[i]);
+            match merged.last_mut() {
+                Some(g) if t - last_t < 1.5 * f.block_s => {
+                    g.0 += t * sz.abs();
+                    g.1 += sz.abs();
+                    g.2 += sz;
+                }
+                _ => merged.push((t * sz.abs(), sz.abs(), sz)),
+            }
+            last_t = t;
+        }
+        let positions: Vec<u64> = merged
+            .iter()
+            .map(|g| {
+                (g.0 / g.1.max(f64::MIN_POSITIVE) / prob.tau0_s)
+                    .round()
+                    .max(0.0) as u64
+            })
+            .collect();
+        let sizes: Vec<f64> = merged.iter().map(|g| g.2).collect();
+        let mut offset_j = offset.clone();
+        for (o, &m) in offset_j.iter_mut().zip(&prob.ms) {
+            *o += terms::steps_avar(&positions, &sizes, m, prob.n_inc);
+        }
+        let kept = still_needed(&prob, &effects, &offset_j, opts);
+        let before = cur.chi2;
+        if let Some(fit) = prob.gls(&spec_from(&prob, &kept, &offset_j)) {
+            effects = kept;
+            for e in effects.iter_mut() {
+                e.gap_after = fit.gap();
+            }
+            cur = fit;
+        }
         effects.push(AddedEffect {
             params: EffectParams::BiasJumps {
                 count: f.sizes.len() as u64,
                 rms_size: rms,
             },
             gap_after: cur.gap(),
-            delta_chi2: 0.0,
+            delta_chi2: before - cur.chi2,
         });
     }
     let flagged = flagged || time_flag;
@@ -839,6 +863,40 @@ pub fn diagnose(
     })
 }
 
+/// The stationary effects of `effects` still needed once `offset` (a warm-up's or jumps' exact
+/// AVAR) is in the model, by the rules of the forward search: each must lower `r' S^-1 r` per
+/// parameter by `add_chi2` while the model without it is flagged by `G`, by its own
+/// likelihood-ratio threshold otherwise. Other entries (warm-ups) are kept as they are.
+fn still_needed(
+    prob: &GapProblem,
+    effects: &[AddedEffect],
+    offset: &[f64],
+    opts: &DiagnoseOptions,
+) -> Vec<AddedEffect> {
+    let th = opts.thresholds;
+    let with = prob.gls(&spec_from(prob, effects, offset));
+    let mut kept: Vec<AddedEffect> = Vec::new();
+    for e in effects {
+        if !e.params.kind().is_stationary() {
+            kept.push(*e);
+            continue;
+        }
+        let others: Vec<AddedEffect> = effects.iter().filter(|o| *o != e).copied().collect();
+        let without = prob.gls(&spec_from(prob, &others, offset));
+        if let (Some(a), Some(b)) = (with.as_ref(), without) {
+            let crit = if b.gap() > th.gap_crit {
+                th.add_chi2
+            } else {
+                th.lr_crit_of(e.params.kind())
+            };
+            if (b.chi2 - a.chi2) / e.params.kind().n_params() as f64 >= crit {
+                kept.push(*e);
+            }
+        }
+    }
+    kept
+}
+
 /// The model spec of the stationary effects in `effects` (warm-ups and jumps are in `offset`
 /// or nowhere), their shapes fixed and amplitudes free.
 fn spec_from(prob: &GapProblem, effects: &[AddedEffect], offset: &[f64]) -> ModelSpec {
@@ -848,10 +906,7 @@ fn spec_from(prob: &GapProblem, effects: &[AddedEffect], offset: &[f64]) -> Mode
     };
     for e in effects {
         let kind = e.params.kind();
-        if matches!(
-            kind,
-            EffectKind::GaussMarkov | EffectKind::Sinusoid | EffectKind::OutputFilter
-        ) {
+        if kind.is_stationary() {
             spec = prob.spec_with(&spec, kind, e.params.shape());
         }
     }

@@ -26,6 +26,15 @@ impl EffectKind {
         EffectKind::BiasJumps,
     ];
 
+    /// Stationary effects are fitted on the curve as columns; warm-ups and jumps are found in
+    /// time and enter the curve as fixed offsets.
+    pub fn is_stationary(self) -> bool {
+        matches!(
+            self,
+            EffectKind::GaussMarkov | EffectKind::Sinusoid | EffectKind::OutputFilter
+        )
+    }
+
     /// The `kind` string of the record.
     pub fn name(self) -> &'static str {
         match self {
