@@ -18,7 +18,11 @@
 //! `--null-seed`, and prints the oracle bounds of docs/gap.md ("Oracle bounds"): the power of
 //! tests told the true effect, and Cramér-Rao bounds on its parameters (`allanscope::gap::oracle`).
 
-use allanscope::gap::diagnose::{fit_warmup, forward_steps, GapProblem, ModelSpec};
+use allanscope::gap::diagnose::{
+    fit_warmup, forward_steps, jump_forward_mixture_log_bf, jump_forward_mixture_stat,
+    jump_mixture_log_bf, jump_mixture_stat, step_scan, GapProblem, ModelSpec, StepScan,
+    JUMP_FWD_Z_MIN,
+};
 use allanscope::gap::oracle::{self, BlockGls};
 use allanscope::gap::{
     diagnose, DiagnoseOptions, EffectKind, EffectParams, EvidenceSnapshot, GapConfig, GapEvidence,
@@ -235,8 +239,10 @@ struct Outcome {
     truth_params: Option<EffectParams>,
     found_params: Option<EffectParams>,
     /// With `--scores`: the base model's best drop of chi2 per parameter for each stationary
-    /// candidate, the warm-up statistic and the three largest step z scores (NaN otherwise).
-    scores: [f64; 7],
+    /// candidate, the warm-up statistic and the three largest step z scores, then the mixture
+    /// statistics (`MixScores`: warm-up `B`, jump mixture integrated / max / boundaries only,
+    /// and the jump ceiling at the true count and rms) (NaN otherwise).
+    scores: [f64; 15],
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -301,7 +307,7 @@ fn outcome(
     with_scores: bool,
 ) -> Outcome {
     let diag = diagnose(snap, &DiagnoseOptions::default()).expect("diagnosis");
-    let mut scores = [f64::NAN; 7];
+    let mut scores = [f64::NAN; 15];
     if with_scores {
         let b = base_scores(snap, tau0, t_run);
         scores[..3].copy_from_slice(&b.per_kind);
@@ -309,6 +315,11 @@ fn outcome(
         for k in 0..3 {
             scores[4 + k] = b.jumps.get(k).copied().unwrap_or(0.0);
         }
+        let truth = match d.effect {
+            Some(EffectParams::BiasJumps { count, rms_size }) => Some((count as f64, rms_size)),
+            _ => None,
+        };
+        scores[7..].copy_from_slice(&b.mix.row(truth));
     }
     let first = diag.effects.first().map(|e| e.params);
     let (mut shape_err, mut amp_err) = (f64::NAN, f64::NAN);
@@ -367,6 +378,8 @@ struct Null {
     w: f64,
     flagged: bool,
     verdict_effects: String,
+    /// [`MixScores::row`], the ceiling at a prior draw of the jumps.
+    mix: [f64; 8],
 }
 
 /// Statistics of the base five-term model that the thresholds are set on: `G`, the largest
@@ -378,6 +391,57 @@ struct BaseScores {
     per_kind: [f64; 3],
     w: f64,
     jumps: Vec<f64>,
+    mix: MixScores,
+}
+
+/// The mixture statistics of the base model (docs/gap.md, "Mixture statistics").
+struct MixScores {
+    /// Warm-up: `ln mean_T exp(W(T) / 2)` over the scan.
+    w_bf: f64,
+    /// The first pass's single-step scan, for the jump mixtures.
+    scan: Option<StepScan>,
+    /// z scores of the forward search down to `JUMP_FWD_Z_MIN`.
+    fwd: Vec<f64>,
+    /// The block GLS of the base model, for the marginal-likelihood jump ceiling.
+    gls: Option<BlockGls>,
+}
+
+/// Importance samples of the marginal-likelihood jump ceiling (`oracle::jumps_marginal_oracle`).
+const JUMP_CEIL_SAMPLES: usize = 4000;
+
+impl MixScores {
+    /// `[w_bf, jump mixture (integrated), jump mixture (max over the grid), jump mixture
+    /// (boundaries only, integrated), jump ceiling]`; the ceiling is the mixture at the given
+    /// `(count, rms)` (NaN without one).
+    fn row(&self, truth: Option<(f64, f64)>) -> [f64; 8] {
+        let Some(scan) = &self.scan else {
+            let mut out = [f64::NAN; 8];
+            out[0] = self.w_bf;
+            return out;
+        };
+        let mut se = scan.se.clone();
+        se.sort_by(|a, b| a.total_cmp(b));
+        let med = se[se.len() / 2];
+        let npos = scan.z.len();
+        [
+            self.w_bf,
+            jump_mixture_stat(scan, false, false),
+            jump_mixture_stat(scan, false, true),
+            jump_mixture_stat(scan, true, false),
+            truth.map_or(f64::NAN, |(c, s)| jump_mixture_log_bf(scan, s, c, false)),
+            jump_forward_mixture_stat(&self.fwd, npos),
+            truth.map_or(f64::NAN, |(c, s)| {
+                jump_forward_mixture_log_bf(&self.fwd, npos, s / med, c)
+            }),
+            match (truth, &self.gls) {
+                (Some((c, s)), Some(g)) => {
+                    oracle::jumps_marginal_oracle(g, c as usize, s, JUMP_CEIL_SAMPLES, 17)
+                        .unwrap_or(f64::NAN)
+                }
+                _ => f64::NAN,
+            },
+        ]
+    }
 }
 
 fn base_scores(snap: &EvidenceSnapshot, tau0: f64, t_run: f64) -> BaseScores {
@@ -399,7 +463,15 @@ fn base_scores(snap: &EvidenceSnapshot, tau0: f64, t_run: f64) -> BaseScores {
     });
     let c5: [f64; 5] = std::array::from_fn(|i| base.coef[i]);
     let block_s = snap.block_len as f64 * tau0;
-    let w = fit_warmup(&snap.block_means, block_s, t_run, &c5, &[]).map_or(0.0, |w| w.w_stat);
+    let wf = fit_warmup(&snap.block_means, block_s, t_run, &c5, &[]);
+    let w = wf.map_or(0.0, |w| w.w_stat);
+    let mix = MixScores {
+        w_bf: wf.map_or(0.0, |w| w.log_bf),
+        scan: step_scan(&snap.block_means, block_s, &c5, &[]),
+        fwd: forward_steps(&snap.block_means, block_s, &c5, &[], JUMP_FWD_Z_MIN)
+            .map_or(Vec::new(), |f| f.z_scores),
+        gls: BlockGls::new(&snap.block_means, block_s, &c5),
+    };
     let mut jumps = forward_steps(&snap.block_means, block_s, &c5, &[], JUMP_ZS[0])
         .map_or(Vec::new(), |f| f.z_scores);
     jumps.sort_by(|a, b| b.total_cmp(a));
@@ -409,6 +481,7 @@ fn base_scores(snap: &EvidenceSnapshot, tau0: f64, t_run: f64) -> BaseScores {
         per_kind,
         w,
         jumps,
+        mix,
     }
 }
 
@@ -425,7 +498,27 @@ fn calibrate(i: u64, seed: u64, tau0: f64, t_run: f64) -> Null {
         per_kind,
         w,
         jumps,
+        mix,
     } = base_scores(&snap, tau0, t_run);
+    // The jump ceiling's null: a count and realised rms drawn from the benchmark's prior on
+    // this base, from a stream of their own (the clean run is unchanged).
+    let mut jrng =
+        Xoshiro256PlusPlus::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i) ^ 0x6a_c1e5);
+    let dj = draw_effect(&mut jrng, d.base, Some(EffectKind::BiasJumps), t_run, tau0);
+    let truth = match dj.effect {
+        Some(EffectParams::BiasJumps { count, rms_size }) => {
+            let js = draw_jumps(
+                count,
+                rms_size,
+                t_run,
+                seed.wrapping_add(7919 * i) ^ 0x6a_c1e5,
+            );
+            let rms = (js.iter().map(|j| j.1 * j.1).sum::<f64>() / count as f64).sqrt();
+            Some((count as f64, rms))
+        }
+        _ => None,
+    };
+    let mix = mix.row(truth);
     let best = per_kind.iter().fold(0.0f64, |a, &b| a.max(b));
     let diag = diagnose(&snap, &opts).expect("diag");
     let flagged = diag.verdict != allanscope::gap::Verdict::Consistent;
@@ -444,6 +537,7 @@ fn calibrate(i: u64, seed: u64, tau0: f64, t_run: f64) -> Null {
         w,
         flagged,
         verdict_effects,
+        mix,
     }
 }
 
@@ -1052,7 +1146,13 @@ fn main() {
         ];
         let mut rng =
             Xoshiro256PlusPlus::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i));
-        let d = draw(&mut rng, kinds[(i as usize) % kinds.len()], t_run, tau0);
+        // `--clean`: the clean run of `--mode calibrate` with this seed and index.
+        let kind = if args.iter().any(|a| a == "--clean") {
+            None
+        } else {
+            kinds[(i as usize) % kinds.len()]
+        };
+        let d = draw(&mut rng, kind, t_run, tau0);
         println!("{d:?}");
         let (inc, _, _) = simulate(&d, tau0, t_run, seed.wrapping_add(7919 * i));
         let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
@@ -1118,6 +1218,26 @@ fn main() {
                 d.base.adev(t_run / 10.0)
             );
         }
+        if let Some(scan) = step_scan(&snap.block_means, block_s, &c5, &[]) {
+            let mut idx: Vec<usize> = (0..scan.z.len()).collect();
+            idx.sort_by(|&a, &b| scan.z[b].abs().total_cmp(&scan.z[a].abs()));
+            let mut se = scan.se.clone();
+            se.sort_by(|a, b| a.total_cmp(b));
+            let med = se[se.len() / 2];
+            println!(
+                "step scan: {} candidates, median s.e. {med:.4}; mixture {:.3} (max {:.3}, boundaries {:.3})",
+                scan.z.len(),
+                jump_mixture_stat(&scan, false, false),
+                jump_mixture_stat(&scan, false, true),
+                jump_mixture_stat(&scan, true, false)
+            );
+            for &j in idx.iter().take(10) {
+                println!(
+                    "  candidate {j}: z {:.3} s.e. {:.4} boundary {}",
+                    scan.z[j], scan.se[j], scan.boundary[j]
+                );
+            }
+        }
         let diag = diagnose(&snap, &opts).expect("diag");
         println!("{diag:#?}");
         println!(
@@ -1161,7 +1281,7 @@ fn main() {
         });
         if !csv.is_empty() {
             let mut text = String::from(
-                "g,zmax,best,gm,sin,filter,w,flagged,effects,jump_z1,jump_z2,jump_z3\n",
+                "g,zmax,best,gm,sin,filter,w,flagged,effects,jump_z1,jump_z2,jump_z3,w_bf,jmix,jmix_max,jmix_b,jceil,jfwd,jfwd_ceil,jmarg\n",
             );
             for r in &res {
                 text += &format!(
@@ -1178,6 +1298,9 @@ fn main() {
                 );
                 for k in 0..3 {
                     text += &format!(",{:.4}", r.jumps.get(k).copied().unwrap_or(0.0));
+                }
+                for v in r.mix {
+                    text += &format!(",{v:.4}");
                 }
                 text += "\n";
             }
@@ -1255,10 +1378,10 @@ fn main() {
     res.sort_by_key(|r| r.0);
     let elapsed = t0.elapsed().as_secs_f64();
     if !csv.is_empty() {
-        let mut text = String::from("draw,truth,rho,named,verdict,gap_before,gap_after,shape_err,amp_err,gm,sin,filter,w,jump_z1,jump_z2,jump_z3,all_named,truth_params,found_params\n");
+        let mut text = String::from("draw,truth,rho,named,verdict,gap_before,gap_after,shape_err,amp_err,gm,sin,filter,w,jump_z1,jump_z2,jump_z3,w_bf,jmix,jmix_max,jmix_b,jceil,jfwd,jfwd_ceil,jmarg,all_named,truth_params,found_params\n");
         for (i, o) in &res {
             text += &format!(
-                "{i},{},{:.3},{},{},{:.3},{:.3},{:.4},{:.4},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{},\"{:?}\",\"{:?}\"\n",
+                "{i},{},{:.3},{},{},{:.3},{:.3},{:.4},{:.4},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},\"{:?}\",\"{:?}\"\n",
                 name(o.truth),
                 o.rho,
                 name(o.named),
@@ -1274,6 +1397,14 @@ fn main() {
                 o.scores[4],
                 o.scores[5],
                 o.scores[6],
+                o.scores[7],
+                o.scores[8],
+                o.scores[9],
+                o.scores[10],
+                o.scores[11],
+                o.scores[12],
+                o.scores[13],
+                o.scores[14],
                 o.all_named
                     .iter()
                     .map(|k| k.name())

@@ -410,3 +410,87 @@ pub fn mixture_rel_error_quantile(sds: &[f64], p: f64) -> f64 {
     }
     0.5 * (lo + hi)
 }
+
+/// Candidate jump times per block of [`jumps_marginal_oracle`] (at the centres of equal
+/// sub-blocks), standing in for the benchmark's uniform times.
+pub const JUMP_SUBBLOCKS: usize = 4;
+
+/// The jump ceiling with the count and rms size known and the times unknown: the log marginal
+/// likelihood ratio `ln E_S[LR(S)]` of `count` steps at independent uniform times (on a grid of
+/// [`JUMP_SUBBLOCKS`] per block) with sizes `N(0, rms_size^2)` against none, in the block-mean
+/// differences with the drift as nuisance. For steps at given times `S`, with `U_S` their
+/// whitened columns off the drift and `y` the whitened differences off the drift (Woodbury):
+/// `LR(S) = |I + s^2 U_S' U_S|^(-1/2) exp(c' (U_S' U_S + I / s^2)^(-1) c / 2)`, `c = U_S' y`.
+/// By Neyman-Pearson this ratio is the most powerful test against that prior (Lehmann and
+/// Romano, ch. 3), in the Gaussian model of the evidence with the model covariance. The mean
+/// over `S` is estimated by importance sampling with `samples` draws: each time from a defensive
+/// mixture, half uniform and half in proportion to the single-step Bayes factor at that time.
+/// Returns `None` when the block GLS cannot be set up.
+pub fn jumps_marginal_oracle(
+    gls: &BlockGls,
+    count: usize,
+    rms_size: f64,
+    samples: usize,
+    seed: u64,
+) -> Option<f64> {
+    use rand::{RngExt, SeedableRng};
+    if count == 0 || rms_size.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) || samples == 0
+    {
+        return None;
+    }
+    let y = project_off(&gls.yw, std::slice::from_ref(&gls.q_drift));
+    let t_run = gls.n_blocks as f64 * gls.block_s;
+    let n_cand = gls.n_blocks * JUMP_SUBBLOCKS;
+    let cols: Vec<DVector<f64>> = (0..n_cand)
+        .map(|i| {
+            let t = (i as f64 + 0.5) / n_cand as f64 * t_run;
+            gls.whitened_perp(&BlockGls::diff(&gls.step_profile(t)))
+        })
+        .collect();
+    let s2 = rms_size * rms_size;
+    // Single-step log Bayes factors, for the proposal.
+    let lb: Vec<f64> = cols
+        .iter()
+        .map(|u| {
+            let g = u.norm_squared();
+            let c = u.dot(&y);
+            -0.5 * (1.0 + s2 * g).ln() + 0.5 * c * c / (g + 1.0 / s2)
+        })
+        .collect();
+    let m = lb.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let wsum: f64 = lb.iter().map(|v| (v - m).exp()).sum();
+    let q: Vec<f64> = lb
+        .iter()
+        .map(|v| 0.5 * (v - m).exp() / wsum + 0.5 / n_cand as f64)
+        .collect();
+    let mut cdf = Vec::with_capacity(n_cand);
+    let mut acc = 0.0;
+    for v in &q {
+        acc += v;
+        cdf.push(acc);
+    }
+    let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
+    let mut logw: Vec<f64> = Vec::with_capacity(samples);
+    for _ in 0..samples {
+        let idx: Vec<usize> = (0..count)
+            .map(|_| {
+                let u = rng.random::<f64>() * acc;
+                cdf.partition_point(|&c| c < u).min(n_cand - 1)
+            })
+            .collect();
+        let g = DMatrix::from_fn(count, count, |a, b| cols[idx[a]].dot(&cols[idx[b]]));
+        let c = DVector::from_iterator(count, idx.iter().map(|&i| cols[i].dot(&y)));
+        let a = &g * s2 + DMatrix::identity(count, count);
+        let Some(ch_a) = a.cholesky() else { continue };
+        let logdet: f64 = ch_a.l().diagonal().iter().map(|v| 2.0 * v.ln()).sum();
+        let b = &g + DMatrix::identity(count, count) / s2;
+        let Some(ch_b) = b.cholesky() else { continue };
+        let quad = c.dot(&ch_b.solve(&c));
+        let prop: f64 = idx.iter().map(|&i| (q[i] * n_cand as f64).ln()).sum();
+        logw.push(-0.5 * logdet + 0.5 * quad - prop);
+    }
+    if logw.is_empty() {
+        return None;
+    }
+    Some(super::diagnose::log_mean_exp(&logw))
+}
