@@ -53,6 +53,7 @@ pub(crate) fn output_file(
                     .append(true)
                     .create(true)
                     .open(p)
+                    .and_then(|f| drop_torn_last_line(p).map(|_| f))
             } else {
                 std::fs::File::create(p)
             }
@@ -61,6 +62,43 @@ pub(crate) fn output_file(
         }
         None => Box::new(std::io::BufWriter::new(std::io::stdout())),
     })
+}
+
+/// A run that crashed may have left its last JSON line half written (the writer's buffer is
+/// flushed in blocks, not lines). Before a resumed run appends, the file is cut back to its last
+/// complete line, so every line stays a whole record; returns the bytes dropped.
+fn drop_torn_last_line(path: &std::path::Path) -> std::io::Result<u64> {
+    use std::io::{Read, SeekFrom};
+    let mut f = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(path)?;
+    let len = f.metadata()?.len();
+    // Look back in blocks for the last newline.
+    let mut end = len;
+    let mut buf = vec![0u8; 64 * 1024];
+    let keep = loop {
+        if end == 0 {
+            break 0;
+        }
+        let start = end.saturating_sub(buf.len() as u64);
+        let chunk = &mut buf[..(end - start) as usize];
+        f.seek(SeekFrom::Start(start))?;
+        f.read_exact(chunk)?;
+        if let Some(i) = chunk.iter().rposition(|&b| b == b'\n') {
+            break start + i as u64 + 1;
+        }
+        end = start;
+    };
+    if keep < len {
+        f.set_len(keep)?;
+        tracing::warn!(
+            "{}: dropped a torn last line of {} bytes before resuming",
+            path.display(),
+            len - keep
+        );
+    }
+    Ok(len - keep)
 }
 
 /// Parses `--pace`.
@@ -241,4 +279,29 @@ fn run_coefs(
                 .collect()
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::drop_torn_last_line;
+
+    #[test]
+    fn a_torn_last_line_is_dropped_and_whole_lines_are_kept() {
+        let dir = std::env::temp_dir().join(format!("allanscope-torn-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("out.jsonl");
+        let whole = "{\"type\":\"curve\",\"n\":1}\n{\"type\":\"curve\",\"n\":2}\n";
+        std::fs::write(&p, format!("{whole}{{\"type\":\"cur")).unwrap();
+        assert_eq!(drop_torn_last_line(&p).unwrap(), 12);
+        assert_eq!(std::fs::read_to_string(&p).unwrap(), whole);
+        // Nothing to drop when the file ends with a newline, or is empty.
+        assert_eq!(drop_torn_last_line(&p).unwrap(), 0);
+        std::fs::write(&p, "").unwrap();
+        assert_eq!(drop_torn_last_line(&p).unwrap(), 0);
+        // A single torn line, no newline at all: the file is emptied.
+        std::fs::write(&p, "{\"type\"").unwrap();
+        assert_eq!(drop_torn_last_line(&p).unwrap(), 7);
+        assert_eq!(std::fs::metadata(&p).unwrap().len(), 0);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }
