@@ -1138,6 +1138,11 @@ fn block_diff_acov(c: &[f64; 5], effects: &[EffectParams], tb: f64, n: usize) ->
         .collect()
 }
 
+/// Whether block means can carry the time-domain tests: at least 24 blocks, none missing.
+pub fn usable_block_means(block_means: &[f64]) -> bool {
+    block_means.len() >= 24 && block_means.iter().all(|v| v.is_finite())
+}
+
 /// Covariance matrix (u^2/s^2) of the `n_blocks - 1` first differences of the block-mean rate
 /// under the model `c` plus stationary `effects` ([`block_diff_acov`], a Toeplitz matrix): the
 /// noise model of [`fit_warmup`] and [`detect_steps`]. `None` below 3 blocks.
@@ -1227,14 +1232,12 @@ impl WarmupFitter {
         c: &[f64; 5],
         effects: &[EffectParams],
     ) -> Option<Self> {
-        if block_means.len() < 24 || block_means.iter().any(|v| !v.is_finite()) {
+        if !usable_block_means(block_means) {
             return None;
         }
         let d: Vec<f64> = block_means.windows(2).map(|p| p[1] - p[0]).collect();
         let n = d.len();
-        let acov = block_diff_acov(c, effects, block_s, n);
-        let sigma = DMatrix::from_fn(n, n, |i, j| acov[i.abs_diff(j)]);
-        let chol = sigma.cholesky()?;
+        let chol = block_diff_covariance(block_means.len(), block_s, c, effects)?.cholesky()?;
         let yw = chol
             .l()
             .solve_lower_triangular(&DVector::from_column_slice(&d))?;
@@ -1328,7 +1331,7 @@ pub fn detect_steps(
     effects: &[EffectParams],
     z_crit: &[f64],
 ) -> Option<JumpFinding> {
-    if block_means.len() < 24 || block_means.iter().any(|v| !v.is_finite()) {
+    if !usable_block_means(block_means) {
         return None;
     }
     let z_min = *z_crit.last()?;
@@ -1359,12 +1362,8 @@ pub fn step_standard_errors(
     c: &[f64; 5],
     effects: &[EffectParams],
 ) -> Option<Vec<f64>> {
-    if n_blocks < 3 {
-        return None;
-    }
-    let n = n_blocks - 1;
-    let acov = block_diff_acov(c, effects, block_s, n);
-    let sigma = DMatrix::from_fn(n, n, |i, j| acov[i.abs_diff(j)]);
+    let sigma = block_diff_covariance(n_blocks, block_s, c, effects)?;
+    let n = sigma.nrows();
     let chol = sigma.cholesky()?;
     let linv = chol.l().solve_lower_triangular(&DMatrix::identity(n, n))?;
     let ones = &linv * DVector::from_element(n, 1.0);
@@ -1391,7 +1390,7 @@ pub fn forward_steps(
     effects: &[EffectParams],
     z_min: f64,
 ) -> Option<JumpFinding> {
-    if block_means.len() < 24 || block_means.iter().any(|v| !v.is_finite()) {
+    if !usable_block_means(block_means) {
         return None;
     }
     step_search(block_means, block_s, c, effects, z_min)
@@ -1406,9 +1405,7 @@ fn step_search(
 ) -> Option<JumpFinding> {
     let d: Vec<f64> = block_means.windows(2).map(|p| p[1] - p[0]).collect();
     let n = d.len();
-    let acov = block_diff_acov(c, effects, block_s, n);
-    let sigma = DMatrix::from_fn(n, n, |i, j| acov[i.abs_diff(j)]);
-    let chol = sigma.cholesky()?;
+    let chol = block_diff_covariance(block_means.len(), block_s, c, effects)?.cholesky()?;
     let l = chol.l();
     let linv = l.solve_lower_triangular(&DMatrix::identity(n, n))?;
     let yw = &linv * DVector::from_column_slice(&d);
@@ -1512,14 +1509,12 @@ pub fn step_scan(
     c: &[f64; 5],
     effects: &[EffectParams],
 ) -> Option<StepScan> {
-    if block_means.len() < 24 || block_means.iter().any(|v| !v.is_finite()) {
+    if !usable_block_means(block_means) {
         return None;
     }
     let d: Vec<f64> = block_means.windows(2).map(|p| p[1] - p[0]).collect();
     let n = d.len();
-    let acov = block_diff_acov(c, effects, block_s, n);
-    let sigma = DMatrix::from_fn(n, n, |i, j| acov[i.abs_diff(j)]);
-    let chol = sigma.cholesky()?;
+    let chol = block_diff_covariance(block_means.len(), block_s, c, effects)?.cholesky()?;
     let linv = chol.l().solve_lower_triangular(&DMatrix::identity(n, n))?;
     let yw = &linv * DVector::from_column_slice(&d);
     let ones = &linv * DVector::from_element(n, 1.0);

@@ -18,7 +18,9 @@
 //! the five amplitudes only after linearising `ln AVAR` at the truth, so there `z` is the score
 //! statistic of that linearisation.
 
-use super::diagnose::{block_diff_covariance, warmup_block_shape, GapProblem, ModelSpec};
+use super::diagnose::{
+    block_diff_covariance, usable_block_means, warmup_block_shape, GapProblem, ModelSpec,
+};
 use super::effects::{effect_column, EffectKind};
 use crate::model::terms::basis;
 use nalgebra::{DMatrix, DVector};
@@ -225,7 +227,7 @@ impl BlockGls {
     /// that sets the covariance. `None` with fewer than 24 blocks, a missing block or a
     /// covariance that is not positive definite.
     pub fn new(block_means: &[f64], block_s: f64, c: &[f64; 5]) -> Option<Self> {
-        if block_means.len() < 24 || block_means.iter().any(|v| !v.is_finite()) {
+        if !usable_block_means(block_means) {
             return None;
         }
         let sigma = block_diff_covariance(block_means.len(), block_s, c, &[])?;
