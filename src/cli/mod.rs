@@ -421,6 +421,12 @@ pub(crate) fn checkpoint_header(
     }
 }
 
+/// A run's checkpoint plan for the pipeline and, when resuming, the saved checkpoint.
+pub(crate) type CheckpointSetup = (
+    crate::checkpoint::CheckpointPlan,
+    Option<crate::checkpoint::Checkpoint>,
+);
+
 impl DataArgs {
     /// [`checkpoint_setup`] with this command's `--checkpoint-every`, `--resume`,
     /// `--abort-after-frames` and `--out`.
@@ -429,12 +435,7 @@ impl DataArgs {
         header: crate::checkpoint::Header,
         data_seconds: bool,
         replay: bool,
-    ) -> Result<
-        Option<(
-            crate::checkpoint::CheckpointPlan,
-            Option<crate::checkpoint::Checkpoint>,
-        )>,
-    > {
+    ) -> Result<Option<CheckpointSetup>> {
         checkpoint_setup(
             self.checkpoint_every,
             self.resume,
@@ -457,12 +458,7 @@ pub(crate) fn checkpoint_setup(
     header: crate::checkpoint::Header,
     data_seconds: bool,
     replay: bool,
-) -> Result<
-    Option<(
-        crate::checkpoint::CheckpointPlan,
-        Option<crate::checkpoint::Checkpoint>,
-    )>,
-> {
+) -> Result<Option<CheckpointSetup>> {
     use crate::checkpoint::{
         check_fresh_start, check_resume, path_for, Checkpoint, CheckpointPlan,
     };
