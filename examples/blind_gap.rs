@@ -1264,21 +1264,8 @@ fn main() {
     }
 
     if mode == "calibrate" {
-        let res: Vec<Null> = std::thread::scope(|s| {
-            let hs: Vec<_> = (0..threads)
-                .map(|t| {
-                    s.spawn(move || {
-                        (0..draws)
-                            .filter(|i| i % threads == t)
-                            .map(|i| calibrate(i, seed, tau0, t_run))
-                            .collect::<Vec<_>>()
-                    })
-                })
-                .collect();
-            hs.into_iter()
-                .flat_map(|h| h.join().expect("thread"))
-                .collect()
-        });
+        let idx: Vec<u64> = (0..draws).collect();
+        let res: Vec<Null> = par_map(&idx, threads, |i| calibrate(i, seed, tau0, t_run));
         if !csv.is_empty() {
             let mut text = String::from(
                 "g,zmax,best,gm,sin,filter,w,flagged,effects,jump_z1,jump_z2,jump_z3,w_bf,jmix,jmix_max,jmix_b,jceil,jfwd,jfwd_ceil,jmarg\n",
@@ -1359,23 +1346,10 @@ fn main() {
         Some(EffectKind::BiasJumps),
     ];
     let t0 = Instant::now();
-    let mut res: Vec<(u64, Outcome)> = std::thread::scope(|s| {
-        let kinds = &kinds;
-        let hs: Vec<_> = (0..threads)
-            .map(|t| {
-                s.spawn(move || {
-                    (0..draws)
-                        .filter(|i| i % threads == t)
-                        .map(|i| (i, run_one(i, seed, tau0, t_run, kinds, with_scores)))
-                        .collect::<Vec<_>>()
-                })
-            })
-            .collect();
-        hs.into_iter()
-            .flat_map(|h| h.join().expect("thread"))
-            .collect()
+    let idx: Vec<u64> = (0..draws).collect();
+    let res: Vec<(u64, Outcome)> = par_map(&idx, threads, |i| {
+        (i, run_one(i, seed, tau0, t_run, &kinds, with_scores))
     });
-    res.sort_by_key(|r| r.0);
     let elapsed = t0.elapsed().as_secs_f64();
     if !csv.is_empty() {
         let mut text = String::from("draw,truth,rho,named,verdict,gap_before,gap_after,shape_err,amp_err,gm,sin,filter,w,jump_z1,jump_z2,jump_z3,w_bf,jmix,jmix_max,jmix_b,jceil,jfwd,jfwd_ceil,jmarg,all_named,truth_params,found_params\n");
