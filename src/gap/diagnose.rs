@@ -195,6 +195,34 @@ pub struct JumpFinding {
 }
 
 impl JumpFinding {
+    /// The steps as sample indices (at `tau0_s`) and sizes (u/s), with steps less than 1.5
+    /// blocks apart merged into one: a jump inside a block is split by the search over two
+    /// differences. A merged step has the summed size, at its members' |size|-weighted time.
+    pub fn merged_steps(&self, tau0_s: f64) -> (Vec<u64>, Vec<f64>) {
+        let mut order: Vec<usize> = (0..self.sizes.len()).collect();
+        order.sort_by(|&a, &b| self.times_s[a].total_cmp(&self.times_s[b]));
+        // (|size|-weighted time sum, weight, size) per merged step.
+        let mut merged: Vec<(f64, f64, f64)> = Vec::new();
+        let mut last_t = f64::NEG_INFINITY;
+        for i in order {
+            let (t, sz) = (self.times_s[i], self.sizes[i]);
+            match merged.last_mut() {
+                Some(g) if t - last_t < 1.5 * self.block_s => {
+                    g.0 += t * sz.abs();
+                    g.1 += sz.abs();
+                    g.2 += sz;
+                }
+                _ => merged.push((t * sz.abs(), sz.abs(), sz)),
+            }
+            last_t = t;
+        }
+        let positions = merged
+            .iter()
+            .map(|g| (g.0 / g.1.max(f64::MIN_POSITIVE) / tau0_s).round().max(0.0) as u64)
+            .collect();
+        (positions, merged.iter().map(|g| g.2).collect())
+    }
+
     /// The jumps that pass the rule "at least `k` jumps with `z >= z_crit[k - 1]`" for the
     /// largest `k` it holds for (`z_crit` non-increasing): those with `z >= z_crit[k - 1]`.
     /// None pass when the rule holds for no `k`.
@@ -789,33 +817,7 @@ pub fn diagnose(
         // their own shape on this record's curve, which a stationary candidate may have taken
         // (a slow sinusoid, typically). Their exact AVAR on the record enters as a fixed offset,
         // as a warm-up's does; the stationary effects must then pass the forward rules again.
-        // Steps less than 1.5 blocks apart are one jump inside a block that the search split
-        // over two differences: merged (sizes summed, at their |size|-weighted time).
-        let mut order: Vec<usize> = (0..f.sizes.len()).collect();
-        order.sort_by(|&a, &b| f.times_s[a].total_cmp(&f.times_s[b]));
-        let mut merged: Vec<(f64, f64, f64)> = Vec::new(); // (weighted time sum, weight, size)
-        let mut last_t = f64::NEG_INFINITY;
-        for i in order {
-            let (t, sz) = (f.times_s[i], f.sizes[i]);
-            match merged.last_mut() {
-                Some(g) if t - last_t < 1.5 * f.block_s => {
-                    g.0 += t * sz.abs();
-                    g.1 += sz.abs();
-                    g.2 += sz;
-                }
-                _ => merged.push((t * sz.abs(), sz.abs(), sz)),
-            }
-            last_t = t;
-        }
-        let positions: Vec<u64> = merged
-            .iter()
-            .map(|g| {
-                (g.0 / g.1.max(f64::MIN_POSITIVE) / prob.tau0_s)
-                    .round()
-                    .max(0.0) as u64
-            })
-            .collect();
-        let sizes: Vec<f64> = merged.iter().map(|g| g.2).collect();
+        let (positions, sizes) = f.merged_steps(prob.tau0_s);
         let mut offset_j = offset.clone();
         for (o, &m) in offset_j.iter_mut().zip(&prob.ms) {
             *o += terms::steps_avar(&positions, &sizes, m, prob.n_inc);
