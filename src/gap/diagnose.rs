@@ -1405,25 +1405,10 @@ fn step_search(
     effects: &[EffectParams],
     z_crit: f64,
 ) -> Option<JumpFinding> {
-    let d: Vec<f64> = block_means.windows(2).map(|p| p[1] - p[0]).collect();
-    let n = d.len();
-    let chol = block_diff_covariance(block_means.len(), block_s, c, effects)?.cholesky()?;
-    let l = chol.l();
-    let linv = l.solve_lower_triangular(&DMatrix::identity(n, n))?;
-    let yw = &linv * DVector::from_column_slice(&d);
-    // Candidate columns, whitened: spikes (jump at the boundary after block k) and halves
-    // (jump inside block k); `pos[i]` is the candidate's jump time in blocks.
-    let mut cols: Vec<DVector<f64>> = Vec::with_capacity(2 * n);
-    let mut pos: Vec<f64> = Vec::with_capacity(2 * n);
-    for k in 0..n {
-        cols.push(linv.column(k).into_owned());
-        pos.push(k as f64 + 1.0);
-        if k > 0 {
-            cols.push((linv.column(k - 1) + linv.column(k)) * 0.5);
-            pos.push(k as f64 + 0.5);
-        }
-    }
-    let ones = &linv * DVector::from_element(n, 1.0);
+    let (linv, yw, ones) = whitened_block_diffs(block_means, block_s, c, effects)?;
+    let n = yw.len();
+    // `pos[i]` is candidate i's jump time in blocks.
+    let (cols, pos): (Vec<DVector<f64>>, Vec<f64>) = step_candidates(&linv).unzip();
     let mut chosen: Vec<usize> = Vec::new();
     let max_jumps = (n / 8).max(1);
     let fit = |chosen: &[usize]| -> Option<(DVector<f64>, DVector<f64>)> {
@@ -1514,34 +1499,55 @@ pub fn step_scan(
     if !usable_block_means(block_means) {
         return None;
     }
-    let d: Vec<f64> = block_means.windows(2).map(|p| p[1] - p[0]).collect();
-    let n = d.len();
-    let chol = block_diff_covariance(block_means.len(), block_s, c, effects)?.cholesky()?;
-    let linv = chol.l().solve_lower_triangular(&DMatrix::identity(n, n))?;
-    let yw = &linv * DVector::from_column_slice(&d);
-    let ones = &linv * DVector::from_element(n, 1.0);
+    let (linv, yw, ones) = whitened_block_diffs(block_means, block_s, c, effects)?;
+    let n = yw.len();
     let q = &ones / ones.norm();
     let mut out = StepScan {
         z: Vec::with_capacity(2 * n),
         se: Vec::with_capacity(2 * n),
         boundary: Vec::with_capacity(2 * n),
     };
-    let mut push = |col: DVector<f64>, boundary: bool| {
+    for (col, pos) in step_candidates(&linv) {
         let u = &col - &q * q.dot(&col);
         let nu = u.norm();
         if nu > 1e-12 * col.norm() {
             out.z.push(u.dot(&yw) / nu);
             out.se.push(1.0 / nu);
-            out.boundary.push(boundary);
-        }
-    };
-    for k in 0..n {
-        push(linv.column(k).into_owned(), true);
-        if k > 0 {
-            push((linv.column(k - 1) + linv.column(k)) * 0.5, false);
+            out.boundary.push(pos.fract() == 0.0);
         }
     }
     Some(out)
+}
+
+/// The block-mean differences whitened by the model covariance ([`block_diff_covariance`]):
+/// `(L^-1, L^-1 d, L^-1 1)`, with `L L'` the covariance and `1` the drift column.
+fn whitened_block_diffs(
+    block_means: &[f64],
+    block_s: f64,
+    c: &[f64; 5],
+    effects: &[EffectParams],
+) -> Option<(DMatrix<f64>, DVector<f64>, DVector<f64>)> {
+    let sigma = block_diff_covariance(block_means.len(), block_s, c, effects)?;
+    let n = sigma.nrows();
+    let linv = sigma
+        .cholesky()?
+        .l()
+        .solve_lower_triangular(&DMatrix::identity(n, n))?;
+    let d = DVector::from_iterator(n, block_means.windows(2).map(|p| p[1] - p[0]));
+    let yw = &linv * d;
+    let ones = &linv * DVector::from_element(n, 1.0);
+    Some((linv, yw, ones))
+}
+
+/// The step candidates' whitened columns with their jump times in blocks: a spike (a jump at
+/// the boundary after block k, time k + 1) and, from the second block on, a half over two
+/// differences (a jump inside block k, time k + 0.5).
+fn step_candidates(linv: &DMatrix<f64>) -> impl Iterator<Item = (DVector<f64>, f64)> + '_ {
+    (0..linv.ncols()).flat_map(move |k| {
+        let spike = (linv.column(k).into_owned(), k as f64 + 1.0);
+        let half = (k > 0).then(|| ((linv.column(k - 1) + linv.column(k)) * 0.5, k as f64 + 0.5));
+        std::iter::once(spike).chain(half)
+    })
 }
 
 /// Spike-and-slab mixture statistic of the jumps over the candidate positions:
