@@ -389,7 +389,7 @@ impl RunAnalysis {
                 let readouts = curves
                     .iter()
                     .find(|c| c.stat == Stat::Avar)
-                    .map(|c| readouts(&c.points).record(&ch.setup.unit));
+                    .map(|c| Box::new(readouts(&c.points).record(&ch.setup.unit)));
                 let mut rec = fit_record(&ch.setup, &f, final_, ch.acc.t_data_s(), run);
                 rec.readouts = readouts;
                 out.push(Record::Fit(rec));

@@ -32,7 +32,7 @@ fn every_angle_unit_against_hand_computation() {
                 3_437.746_770_784_939,
                 206_264.806_247_096_36,
                 12_375_888.374_825_78,
-                742_553_302.489_546_9,
+                742_553_302.489_547,
             ],
         ),
         (
@@ -42,7 +42,7 @@ fn every_angle_unit_against_hand_computation() {
                 3.437_746_770_784_939,
                 206.264_806_247_096_36,
                 12_375.888_374_825_78,
-                742_553.302_489_546_9,
+                742_553.302_489_547,
             ],
         ),
         ("arcsec", [1.0, 1.0 / 60.0, 1.0, 60.0, 3600.0]),
@@ -55,13 +55,8 @@ fn every_angle_unit_against_hand_computation() {
             d.units,
             ["arcsec", "deg/sqrt(h)", "deg/h", "deg/h/sqrt(h)", "deg/h^2"]
         );
-        for i in 0..5 {
-            assert!(
-                close(d.values[i], want[i]),
-                "{unit} {i}: {} vs {}",
-                d.values[i],
-                want[i]
-            );
+        for (i, (got, want)) in d.values.iter().zip(want).enumerate() {
+            assert!(close(*got, want), "{unit} {i}: {got} vs {want}");
         }
     }
 }
@@ -91,13 +86,8 @@ fn every_velocity_unit_against_hand_computation() {
         assert_eq!(u.kind, SensorKind::Accel, "{unit}");
         let d = datasheet([1.0; 5], &u);
         assert_eq!(d.units, datasheet_units(SensorKind::Accel));
-        for i in 0..5 {
-            assert!(
-                close(d.values[i], want[i]),
-                "{unit} {i}: {} vs {}",
-                d.values[i],
-                want[i]
-            );
+        for (i, (got, want)) in d.values.iter().zip(want).enumerate() {
+            assert!(close(*got, want), "{unit} {i}: {got} vs {want}");
         }
     }
     assert_eq!(IncrementUnit::parse("g*s"), IncrementUnit::parse("g"));

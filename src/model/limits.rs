@@ -210,7 +210,7 @@ pub fn conversion(channel_unit: &str, coef: Coef, limit_unit: Option<&str>) -> R
     let chan = parse_channel_unit(channel_unit).ok_or_else(|| {
         format!("channel unit `{channel_unit}` is not a known unit: state the limit as native")
     })?;
-    let native = chan.mul(atom("s").map_or(Unit::ONE, |s| s.pow(coef.time_exponent())));
+    let native = chan.times(atom("s").map_or(Unit::ONE, |s| s.pow(coef.time_exponent())));
     if !native.same_dimension(&limit) {
         return Err(format!(
             "`{lu}` is not a unit of {:?} for a channel in {channel_unit}",

@@ -265,7 +265,7 @@ impl Unit {
         }
     }
 
-    pub fn mul(self, o: Unit) -> Unit {
+    pub fn times(self, o: Unit) -> Unit {
         Unit {
             factor: self.factor * o.factor,
             angle: self.angle + o.angle,
@@ -335,7 +335,7 @@ pub fn parse_unit(text: &str) -> Option<Unit> {
         if i > 0 {
             e = -e;
         }
-        out = out.mul(atom(base)?.pow(e));
+        out = out.times(atom(base)?.pow(e));
     }
     Some(out)
 }
