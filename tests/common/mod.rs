@@ -2,6 +2,9 @@
 //! Stable32 result tables, and the named tolerances.
 #![allow(dead_code)]
 
+pub mod fit;
+pub mod pipeline;
+
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 

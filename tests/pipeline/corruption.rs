@@ -12,14 +12,12 @@
 //!   damaged bytes with a whole frame's length of stream after them (where the decoder must try
 //!   a checksum; a chance pass, 2^-16 per try, would break this count and the curve equality).
 
-mod pipeline_common;
-
 use std::process::Command;
 
+use crate::common::pipeline::*;
 use allanscope::frame::{Decoder, FrameEvent};
 use allanscope::input::Chunk;
 use allanscope::sink::records::Record;
-use pipeline_common::*;
 use rand::{RngExt, SeedableRng};
 
 const FRAME_LEN: usize = 42;

@@ -8,7 +8,7 @@
 //! - `sim_study_ci`: 40 seeds of 3-hour runs per model, asserting the bias of each determined
 //!   coefficient, its 95% coverage and the gof mean, with tolerances set by the seed count.
 //! - `sim_study_full` (ignored): 200 seeds per model, the four methods side by side; prints the
-//!   tables of docs/fit.md. `cargo test --release --test fit_sim_study -- --ignored --nocapture`.
+//!   tables of docs/fit.md. `cargo test --release --test model -- sim_study:: --ignored --nocapture`.
 #![allow(clippy::needless_range_loop)]
 
 use std::path::Path;

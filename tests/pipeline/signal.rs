@@ -7,14 +7,12 @@
 //! `--capture FILE` the listener also writes every byte it received: FILE must be the bytes
 //! sent.
 
-mod pipeline_common;
-
 use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-use pipeline_common::*;
+use crate::common::pipeline::*;
 
 const FRAMES: usize = 2_500;
 const FRAME_LEN: usize = 42;

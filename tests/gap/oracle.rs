@@ -4,7 +4,7 @@
 //! scanned `tau_c` over seeds, and the warm-up's known-signal `z` has mean `delta` and unit
 //! spread with the Cramér-Rao bound of `ln T` matching the spread of the maximum-likelihood `T`.
 //!
-//! Runs of one hour at tau0 = 4 ms of the VOG4-like base of tests/gap_diagnosis.rs, ten seeds
+//! Runs of one hour at tau0 = 4 ms of the VOG4-like base of tests/gap/diagnosis.rs, ten seeds
 //! each. Tolerances come from the sampling error of ten draws (stated at each assert).
 
 use allanscope::gap::diagnose::{GapProblem, ModelSpec};

@@ -2,10 +2,8 @@
 //! coefficients back; the `coef` JSON has CONTRACT.md's shape.
 #![allow(clippy::needless_range_loop)]
 
-mod fit_common;
-
+use crate::common::fit::model_curve;
 use allanscope::model::fit::{fit, FitMethod, FitOptions, Fitter};
-use fit_common::model_curve;
 
 /// Exact data, exact model: only rounding separates the fit from the truth (THEORY.md section 2).
 const EXACT_REL_TOL: f64 = 1e-9;

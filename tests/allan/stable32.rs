@@ -8,11 +8,9 @@
 //! [`STABLE32_ARITH_REL`] for a value that sits on a rounding boundary, where Stable32's own
 //! arithmetic decides the last digit.
 
-mod common;
-
+use crate::common::*;
 use allanscope::allan::accum::{AccumConfig, Engine, FloatRepr, Overlap, StatSet, TauSpec};
 use allanscope::allan::Stat;
-use common::*;
 use std::path::Path;
 
 /// Slack for Stable32's own arithmetic at a rounding boundary (OCXO MDEV at AF 1994 is

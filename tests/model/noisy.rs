@@ -1,13 +1,11 @@
-//! The fit on simulated noisy curves with known coefficients (tests/fit_common): bias, 95%
+//! The fit on simulated noisy curves with known coefficients (tests/common/fit.rs): bias, 95%
 //! interval coverage and gof calibration of the default method over many seeds, and the refit
-//! time. `cargo test --release --test fit_noisy -- --ignored --nocapture` prints the comparison
+//! time. `cargo test --release --test model -- noisy:: --ignored --nocapture` prints the comparison
 //! with the paper's method, the slope read-out and the unweighted log-log fit.
 #![allow(clippy::needless_range_loop)]
 
-mod fit_common;
-
+use crate::common::fit::{bank_times, gm_avar, octave_curve, simulate_phase, Truth};
 use allanscope::model::fit::{FitMethod, FitOptions, Fitter};
-use fit_common::{bank_times, gm_avar, octave_curve, simulate_phase, Truth};
 use std::f64::consts::{LN_2, PI};
 use std::time::Instant;
 
@@ -98,7 +96,7 @@ fn report(name: &str, st: &Stats) {
 fn flicker_bank_is_flat() {
     // The bank's AVAR against (2 ln2/pi) B^2 over the taus where B dominates the model (1..32 s):
     // within 1% (closed form of THEORY.md section 3).
-    let s2 = fit_common::bank_variance(TRUTH.b);
+    let s2 = crate::common::fit::bank_variance(TRUTH.b);
     let target = 2.0 * LN_2 / PI * TRUTH.b * TRUTH.b;
     for k in 0..6 {
         let tau = 2f64.powi(k);
@@ -151,7 +149,7 @@ fn refit_time_per_channel() {
     // ~20 octave taus: 2^21 increments at 4 ms (2.3 h), m = 1 .. 2^20.
     let tau0 = 0.004;
     let n = 1usize << 21;
-    let pts = fit_common::model_curve([2e-3, 3e-3, 1e-3, 2e-5, 1e-7], tau0, n, n / 2);
+    let pts = crate::common::fit::model_curve([2e-3, 3e-3, 1e-3, 2e-5, 1e-7], tau0, n, n / 2);
     assert!(pts.len() >= 20);
     let mut fitter = Fitter::new();
     let opts = FitOptions::default();
@@ -168,14 +166,14 @@ fn refit_time_per_channel() {
     let mut live = Fitter::new();
     let mut n_live = n;
     live.fit(
-        &fit_common::model_curve([2e-3, 3e-3, 1e-3, 2e-5, 1e-7], tau0, n_live, n_live / 2),
+        &crate::common::fit::model_curve([2e-3, 3e-3, 1e-3, 2e-5, 1e-7], tau0, n_live, n_live / 2),
         &opts,
     )
     .unwrap();
     let curves: Vec<_> = (0..reps)
         .map(|_| {
             n_live += n_live / 200;
-            fit_common::model_curve([2e-3, 3e-3, 1e-3, 2e-5, 1e-7], tau0, n_live, n / 2)
+            crate::common::fit::model_curve([2e-3, 3e-3, 1e-3, 2e-5, 1e-7], tau0, n_live, n / 2)
         })
         .collect();
     let t = Instant::now();

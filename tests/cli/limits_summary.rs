@@ -2,12 +2,10 @@
 //! run's `summary`, run-to-run ones (sd of a coefficient over runs) in a closing summary, and a
 //! bad limits file named with its key (exit 2).
 
-mod common;
-
-use common::exe;
+use crate::common::exe;
 
 fn tmp(name: &str) -> std::path::PathBuf {
-    common::tmp_in("limits", name)
+    crate::common::tmp_in("limits", name)
 }
 
 /// White rate noise N = 0.25 arcsec/sqrt(s) (the seed paper's VOG4 level) at 4 ms, as CSV.

@@ -8,15 +8,13 @@
 //! equal but for `elapsed_s` and `input`, and the health counters equal the truth: 7,500
 //! frames, nothing missing, and for UDP exactly the duplicated frames sent.
 
-mod pipeline_common;
-
 use std::io::Write;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
+use crate::common::pipeline::*;
 use allanscope::pipeline::RunControl;
 use allanscope::source::{Pace, SourceSpec};
-use pipeline_common::*;
 use rand::{RngExt, SeedableRng};
 
 /// 30 s of data at 250 Hz.

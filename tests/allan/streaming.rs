@@ -1,14 +1,12 @@
 //! Streaming accumulators against the batch formulas (THEORY.md section 1) on seeded random
 //! data: random lengths, values and gap patterns; integer and floating paths; bounded mode.
 
-mod common;
-
+use crate::common::STREAM_VS_BATCH_REL;
 use allanscope::allan::accum::{
     AccumConfig, Engine, FloatRepr, IntRepr, LevelReading, Overlap, TauSpec,
 };
 use allanscope::allan::batch::{mvar, oavar, ohvar, phase_from_increments, BatchPoint};
 use allanscope::allan::Stat;
-use common::STREAM_VS_BATCH_REL;
 use proptest::prelude::*;
 
 fn cfg(tau0: f64, overlap: Overlap) -> AccumConfig {
@@ -89,7 +87,7 @@ fn incs_strategy() -> impl Strategy<Value = Vec<Option<f64>>> {
     // Values around a large mean (a 1 g accelerometer's increments), 2% of rows missing. They
     // are multiples of 2^-30, so the batch reference's phase is exact in f64 and the reference
     // itself is good to a few ulps (with arbitrary values its rounded phase, not the stream, would
-    // be the less accurate side at 1e-12); arbitrary values are covered by tests/precision.rs.
+    // be the less accurate side at 1e-12); arbitrary values are covered by tests/allan/precision.rs.
     prop::collection::vec(
         (0u32..100, -1.0f64..1.0).prop_map(|(g, v)| {
             let exact = ((0.0392 + 1e-3 * v) * 1073741824.0).round() / 1073741824.0;

@@ -1,12 +1,10 @@
 //! `diagnose` through the binary: a simulated gyro with a hidden Gauss-Markov term, judged on
 //! its own run and on a held-out run of the same model; a clean run is consistent.
 
-mod common;
-
-use common::exe;
+use crate::common::exe;
 
 fn tmp(name: &str) -> std::path::PathBuf {
-    common::tmp_in("diag", name)
+    crate::common::tmp_in("diag", name)
 }
 
 /// The seed paper's VOG4 terms (table 2 means) with or without a Gauss-Markov term.

@@ -10,16 +10,14 @@
 //!   millisecond, for the same time; the health record must show every frame received and none
 //!   missing. Target: zero lost.
 //!
-//! `cargo test --release --test pipeline_live_bench -- --ignored --nocapture --test-threads 1`
-
-mod pipeline_common;
+//! `cargo test --release --test pipeline -- live_bench:: --ignored --nocapture --test-threads 1`
 
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+use crate::common::pipeline::*;
 use allanscope::frame::{encode, ChannelValue};
-use pipeline_common::*;
 
 fn bench_seconds() -> f64 {
     std::env::var("ALLANSCOPE_BENCH_S")

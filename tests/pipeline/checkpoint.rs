@@ -9,9 +9,7 @@
 //! decoded and a checkpoint is on disk); a second test kills a realtime-paced replay with
 //! SIGKILL wherever it happens to be after its first checkpoint.
 
-mod common;
-
-use common::exe;
+use crate::common::exe;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Output, Stdio};
@@ -24,7 +22,7 @@ const SIU8: &str = "fixtures/captures/siu8_stand_5min_seed1.siu8";
 const SIU8_FRAME: usize = 42;
 
 fn tmp(name: &str) -> PathBuf {
-    let p = common::tmp_in("ckpt", name);
+    let p = crate::common::tmp_in("ckpt", name);
     let _ = std::fs::remove_file(&p);
     let _ = std::fs::remove_file(path_for(&p));
     p

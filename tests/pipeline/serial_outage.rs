@@ -9,15 +9,13 @@
 //! frames, more than the counter's modulus, so the counter alone cannot size it: the health
 //! record must show exactly the frames the unit produced while the port was gone.
 
-mod pipeline_common;
-
 use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
+use crate::common::pipeline::*;
 use allanscope::frame::FrameDescriptor;
 use allanscope::pipeline::RunControl;
 use allanscope::source::SourceSpec;
-use pipeline_common::*;
 use tokio::io::AsyncWriteExt;
 use tokio_serial::SerialPort;
 

@@ -7,15 +7,13 @@
 //! (the newest per channel and statistic kept); once released, the writer delivers every final
 //! record, equal to those of a run with a free-flowing writer.
 
-mod pipeline_common;
-
 use std::io::Write;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
+use crate::common::pipeline::*;
 use allanscope::pipeline::{run_frames, RecordWriter, RunControl, RECORD_QUEUE};
 use allanscope::source::{Pace, SourceSpec};
-use pipeline_common::*;
 
 /// Frames in the fixture (5 min at 250 Hz).
 const FRAMES: u64 = 75_000;

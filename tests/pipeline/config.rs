@@ -2,14 +2,12 @@
 //! key and its problem (all of them at once); a config replaying a capture gives the records
 //! `analyze` gives.
 
-mod pipeline_common;
-
 use std::path::Path;
 use std::process::Command;
 
+use crate::common::pipeline::*;
 use allanscope::source::SourceSpec;
 use allanscope::stand::StandConfig;
-use pipeline_common::*;
 
 fn tmp(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("allanscope-config-{}", std::process::id()));

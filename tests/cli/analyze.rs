@@ -2,9 +2,7 @@
 //! field against CONTRACT.md, interim records with `--every`, several runs with `aggregate`
 //! records, and exit statuses for bad input.
 
-mod common;
-
-use common::exe;
+use crate::common::exe;
 use std::path::PathBuf;
 use std::process::Output;
 
@@ -12,7 +10,7 @@ use allanscope::allan::batch::{oavar, phase_from_increments};
 use allanscope::sink::records::Record;
 
 fn tmp(name: &str) -> PathBuf {
-    common::tmp_in("cli", name)
+    crate::common::tmp_in("cli", name)
 }
 
 fn records(out: &Output) -> Vec<Record> {

@@ -2,8 +2,6 @@
 //! section 2, and verdicts with the fit's intervals on the seed paper's VOG4 and MA4 figures.
 #![allow(clippy::needless_range_loop)]
 
-mod fit_common;
-
 use allanscope::model::aggregate::{aggregate_channels, RunCoefs};
 use allanscope::model::fit::{fit, FitOptions};
 use allanscope::model::limits::{
@@ -122,7 +120,7 @@ fn vog4_arw_against_its_datasheet() {
     let truth = [0.004 / 12f64.sqrt(), 0.254, 0.225, 1.826e-2, 0.891e-4];
     let tau0 = 0.004;
     let n = (3.0 * 3600.0 / tau0) as usize;
-    let pts = fit_common::model_curve(truth, tau0, n, n / 4);
+    let pts = crate::common::fit::model_curve(truth, tau0, n, n / 4);
     let f = fit(&pts, &FitOptions::default()).unwrap();
     let e = f.coef[1];
     assert!(

@@ -7,7 +7,7 @@ use std::process::Command;
 use allanscope::sink::records::AggregateRecord;
 use serde_json::json;
 
-/// The table prints 3 decimals and so do its per-run values (see tests/aggregate_table2.rs):
+/// The table prints 3 decimals and so do its per-run values (see tests/model/aggregate_table2.rs):
 /// a figure recomputed from the printed runs matches within the two roundings.
 const PRINTED: f64 = 0.001 + 1e-9;
 /// Student's t quantile t_{0.975, 2} = 4.302653 (any t table), for n = 3 runs.
