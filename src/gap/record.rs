@@ -82,7 +82,7 @@ pub struct DiagnosisRecord {
 }
 
 impl DiagnosisRecord {
-    /// The record of a diagnosis; `holdout` from [`super::diagnose::holdout_gap`].
+    /// The record of a diagnosis; `holdout` from [`super::holdout::holdout_gap`].
     pub fn new(channel: &str, d: &Diagnosis, holdout: Option<(f64, f64)>, is_final: bool) -> Self {
         Self {
             kind: "diagnosis".into(),

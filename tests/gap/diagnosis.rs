@@ -292,7 +292,7 @@ fn live_stream_gives_the_batch_curve() {
 
 #[test]
 fn jumps_are_kept_by_the_one_strong_or_several_moderate_rule() {
-    use allanscope::gap::diagnose::JumpFinding;
+    use allanscope::gap::steps::JumpFinding;
     let f = |z: &[f64]| JumpFinding {
         times_s: (0..z.len()).map(|i| 100.0 * (i + 1) as f64).collect(),
         sizes: vec![1.0; z.len()],
