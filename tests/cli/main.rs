@@ -8,4 +8,5 @@ mod common;
 mod aggregate;
 mod analyze;
 mod diagnose;
+mod export;
 mod limits_summary;
