@@ -15,8 +15,10 @@
 pub mod diagnose;
 pub mod effects;
 pub mod evidence;
+pub mod lsb;
 pub mod oracle;
 pub mod record;
+pub mod unit_model;
 
 pub use diagnose::{diagnose, holdout_gap, DiagnoseOptions, Diagnosis, Thresholds, Verdict};
 pub use effects::{EffectKind, EffectParams};
