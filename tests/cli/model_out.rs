@@ -2,9 +2,7 @@
 //! round trip diagnose -> model file -> simulate -> diagnose giving back the effects and
 //! parameters (issue 13, "Close the loop").
 
-mod common;
-
-use common::exe;
+use crate::common::{self, exe};
 use std::path::{Path, PathBuf};
 
 fn tmp(name: &str) -> PathBuf {
