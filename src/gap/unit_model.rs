@@ -8,10 +8,11 @@
 //! record's rms size, the flicker band is the simulator's default (six decades from `tau0`).
 
 use crate::model::terms;
+use crate::model::units::IncrementUnit;
 use crate::sim::effects::TemperatureProfile;
 use crate::sim::model_file::{
-    sensor_kind, BiasJumps, ChannelModel, GaussMarkov, OutputFilterSpec, SimModel, Sinusoid,
-    Warmup, FLICKER_BAND_DECADES_DEFAULT,
+    BiasJumps, ChannelModel, GaussMarkov, OutputFilterSpec, SimModel, Sinusoid, Warmup,
+    FLICKER_BAND_DECADES_DEFAULT,
 };
 use crate::sim::noise::FlickerBank;
 
@@ -54,7 +55,7 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
         flicker_band_s: band,
         flicker: (b > 0.0).then(|| FlickerBank::design(b, band.0, band.1)),
         axis_enu: None,
-        kind: sensor_kind(&facts.unit),
+        kind: IncrementUnit::parse(&facts.unit),
         temperature_coefficient: facts.temperature_coefficient,
         gauss_markov: Vec::new(),
         sinusoids: Vec::new(),
