@@ -5,10 +5,9 @@
 //! log of the grid's size (a mean of `exp(W(T) / 2)` is below its largest term and above
 //! its largest term over the count).
 
-use allanscope::gap::diagnose::{
-    fit_warmup, jump_forward_mixture_log_bf, jump_mixture_log_bf, log_mean_exp, warmup_block_shape,
-    StepScan,
-};
+use allanscope::gap::jump_mixture::{jump_forward_mixture_log_bf, jump_mixture_log_bf};
+use allanscope::gap::steps::StepScan;
+use allanscope::gap::warmup::{fit_warmup, log_mean_exp, warmup_block_shape};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -120,7 +119,7 @@ fn warmup_integrated_statistic_is_bounded_by_the_maximum() {
 /// `I + s^2 U U'` (not the `2 x 2` Woodbury form the oracle uses).
 #[test]
 fn jump_ceiling_matches_exact_enumeration() {
-    use allanscope::gap::diagnose::block_diff_covariance;
+    use allanscope::gap::block_cov::block_diff_covariance;
     use allanscope::gap::oracle::{jumps_marginal_oracle, BlockGls, JUMP_SUBBLOCKS};
     use nalgebra::{DMatrix, DVector};
     let (n_blocks, block_s) = (40usize, 10.0);

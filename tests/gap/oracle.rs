@@ -7,8 +7,8 @@
 //! Runs of one hour at tau0 = 4 ms of the VOG4-like base of tests/gap/diagnosis.rs, ten seeds
 //! each. Tolerances come from the sampling error of ten draws (stated at each assert).
 
-use allanscope::gap::diagnose::{GapProblem, ModelSpec};
 use allanscope::gap::oracle::{gm_curve_crb, gm_oracle, warmup_crb, warmup_oracle, BlockGls};
+use allanscope::gap::problem::{GapProblem, ModelSpec};
 use allanscope::gap::{DiagnoseOptions, EffectKind, EvidenceSnapshot, GapConfig, GapEvidence};
 use allanscope::model::terms;
 use allanscope::sim::{SimModel, Simulator};
