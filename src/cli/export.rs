@@ -8,9 +8,9 @@ use anyhow::{Context, Result};
 use clap::Args;
 
 use super::{read_json_lines, usage};
-use crate::model::units::{IncrementUnit, SensorKind};
-use crate::sink::export::{self, ExportFormat, ImuNoise};
-use crate::sink::records::{CurveRecord, FitRecord};
+use allanscope::model::units::{IncrementUnit, SensorKind};
+use allanscope::sink::export::{self, ExportFormat, ImuNoise};
+use allanscope::sink::records::{CurveRecord, FitRecord};
 
 #[derive(Debug, Args)]
 pub struct ExportArgs {
