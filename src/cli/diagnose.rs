@@ -170,7 +170,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
                 .map_err(|e| tracing::warn!("{}: holdout channel {name}: {e}", a.input))
                 .ok()
         });
-        let rec = DiagnosisRecord::new(name, &diag, holdout, true);
+        let rec = DiagnosisRecord::new(name, &diag, holdout.as_ref(), true);
         sink.write(&rec)?;
     }
     sink.flush()?;
