@@ -137,6 +137,12 @@ pub struct Diagnosis {
     pub jumps: Option<JumpFinding>,
     /// A word on what is left when the verdict is `unexplained`.
     pub residual_shape: Option<String>,
+    /// The taus of the curve diagnosed (s) and, at each, the AVAR (u^2/s^2) of the five-term
+    /// model alone and of the model with the effects in (warm-up and jumps as their exact AVAR
+    /// on this record), for plots.
+    pub model_tau_s: Vec<f64>,
+    pub model_base_avar: Vec<f64>,
+    pub model_final_avar: Vec<f64>,
 }
 
 /// Five-term `(Q, N, B, K, R)` from `c`.
@@ -373,6 +379,9 @@ pub fn diagnose(
         segment_tests: segment_tests(snap, &prob.c_init),
         jumps,
         residual_shape,
+        model_tau_s: prob.tau[..j].to_vec(),
+        model_base_avar: base.model.clone(),
+        model_final_avar: cur.model.clone(),
     })
 }
 

@@ -396,3 +396,67 @@ fn a_large_step_is_named_as_a_jump_not_as_a_slow_oscillation() {
         d.gap_after
     );
 }
+
+#[test]
+fn record_carries_the_base_model_and_the_model_with_effects() {
+    // A sinusoid at 0.8 Hz lifts the curve near tau = 1/(2 f) over the five-term model; the
+    // record's two model lines (for plots) must be the GLS fits the regions were judged on.
+    let inc = simulate(
+        "sinusoid = { amplitude = 0.3, frequency = 0.8, phase = 0.0 }",
+        10,
+    );
+    let mut ev = GapEvidence::from_increments(GapConfig::new(TAU0), &inc);
+    let snap = ev.snapshot();
+    let d = diagnose(&snap, &DiagnoseOptions::default()).expect("diagnosis");
+    let rec = DiagnosisRecord::new("g4", &d, None, true);
+    let n = rec.model_tau.len();
+    assert!(n >= 10, "{n} taus");
+    assert_eq!(rec.model_base.len(), n);
+    assert_eq!(rec.model_effects.len(), n);
+    assert_eq!(rec.model_tau[0], d.tau_span_s.0);
+    assert_eq!(rec.model_tau[n - 1], d.tau_span_s.1);
+    // The measured deviation at each of the record's taus, from the same snapshot.
+    let data: Vec<f64> = rec
+        .model_tau
+        .iter()
+        .map(|t| {
+            let p = snap
+                .curve
+                .iter()
+                .find(|p| p.tau_s == *t)
+                .expect("tau of the curve");
+            p.avar.sqrt()
+        })
+        .collect();
+    // Each region's worst ratio (at its largest |z|) is data / base model at one of its taus.
+    for r in &rec.regions {
+        let hit = (0..n)
+            .filter(|&i| rec.model_tau[i] >= r.tau_lo && rec.model_tau[i] <= r.tau_hi)
+            .any(|i| rel(data[i] / rec.model_base[i], r.worst_ratio) < 1e-9);
+        assert!(hit, "no tau of {r:?} gives its worst ratio");
+    }
+    // With the sinusoid in, the model follows the data in the regions much more closely.
+    let taus = &rec.model_tau;
+    let in_region: Vec<usize> = (0..n)
+        .filter(|&i| {
+            rec.regions
+                .iter()
+                .any(|r| taus[i] >= r.tau_lo && taus[i] <= r.tau_hi)
+        })
+        .collect();
+    let miss = |m: &[f64]| -> f64 {
+        in_region
+            .iter()
+            .map(|&i| (data[i] / m[i]).ln().abs())
+            .fold(0.0, f64::max)
+    };
+    assert!(!rec.regions.is_empty());
+    assert!(
+        miss(&rec.model_effects) < 0.5 * miss(&rec.model_base),
+        "{} vs {}",
+        miss(&rec.model_effects),
+        miss(&rec.model_base)
+    );
+    let back: DiagnosisRecord = serde_json::from_str(&rec.to_json_line()).expect("parse back");
+    assert_eq!(back.model_effects.len(), n);
+}
