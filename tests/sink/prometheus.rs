@@ -11,14 +11,12 @@
 //! Without a `prometheus` binary the test is skipped, except under CI (`CI=true`), where it
 //! fails.
 
-mod pipeline_common;
-
 use std::io::{Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use pipeline_common::*;
+use crate::common::pipeline::*;
 
 const FRAMES: usize = 15_000;
 const FRAME_LEN: usize = 42;

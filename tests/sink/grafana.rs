@@ -7,16 +7,15 @@
 //! every label its selectors match on must be a label of that metric, and every `{{label}}` of a
 //! legend a label of the expression's metrics (or Prometheus's own `job`, `instance`).
 
-mod pipeline_common;
-
 use std::collections::{BTreeMap, BTreeSet};
 use std::sync::Arc;
 
+use crate::common::fixtures;
+use crate::common::pipeline::*;
 use allanscope::model::limits::{Coef, LimitSpec, Scope};
 use allanscope::pipeline::RunControl;
 use allanscope::sink::metrics::Metrics;
 use allanscope::source::{Pace, SourceSpec};
-use pipeline_common::*;
 
 /// Metric name -> label names, from an exposition.
 fn emitted(text: &str) -> BTreeMap<String, BTreeSet<String>> {
