@@ -15,6 +15,7 @@
 //! | `allanscope_coef_lo`, `allanscope_coef_hi` | gauge | unit, channel, coef | ends of its 95% interval |
 //! | `allanscope_coef_determined` | gauge | unit, channel, coef | 1 determined, 0 not |
 //! | `allanscope_coef_datasheet` | gauge | unit, channel, coef, datasheet_unit | the value in datasheet units (absent while not determined) |
+//! | `allanscope_coef_datasheet_lo`, `_hi` | gauge | unit, channel, coef, datasheet_unit | its 95% interval ends in datasheet units |
 //! | `allanscope_fit_gof` | gauge | unit, channel | goodness of fit |
 //! | `allanscope_fit_t_data_seconds` | gauge | unit, channel | data-seconds behind the fit |
 //! | `allanscope_fit_timestamp_seconds` | gauge | unit, channel | Unix time the fit was made |
@@ -56,6 +57,8 @@ pub struct Metrics {
     coef_hi: GaugeFamily,
     coef_determined: GaugeFamily,
     coef_datasheet: GaugeFamily,
+    coef_datasheet_lo: GaugeFamily,
+    coef_datasheet_hi: GaugeFamily,
     gof: GaugeFamily,
     t_data: GaugeFamily,
     fit_time: GaugeFamily,
@@ -154,6 +157,14 @@ impl Metrics {
             "coef_datasheet",
             "Latest fitted coefficient in datasheet units (label datasheet_unit); absent while not determined",
         );
+        let coef_datasheet_lo = gauge(
+            "coef_datasheet_lo",
+            "Lower end of the 95% interval in datasheet units",
+        );
+        let coef_datasheet_hi = gauge(
+            "coef_datasheet_hi",
+            "Upper end of the 95% interval in datasheet units",
+        );
         let gof = gauge(
             "fit_gof",
             "Goodness of the latest fit (near 1 when the model explains the curve)",
@@ -194,6 +205,8 @@ impl Metrics {
             coef_hi,
             coef_determined,
             coef_datasheet,
+            coef_datasheet_lo,
+            coef_datasheet_hi,
             gof,
             t_data,
             fit_time,
@@ -270,6 +283,12 @@ impl Metrics {
                     ("coef", name),
                     ("datasheet_unit", du),
                 ]);
+                if let Some(v) = d.get("lo").and_then(serde_json::Value::as_f64) {
+                    self.coef_datasheet_lo.get_or_create(&dl).set(v);
+                }
+                if let Some(v) = d.get("hi").and_then(serde_json::Value::as_f64) {
+                    self.coef_datasheet_hi.get_or_create(&dl).set(v);
+                }
                 match d.get("value").and_then(serde_json::Value::as_f64) {
                     Some(v) => {
                         self.coef_datasheet.get_or_create(&dl).set(v);
@@ -380,8 +399,8 @@ mod tests {
         });
         let datasheet = serde_json::json!({
             "Q": {"value": null, "unit": "arcsec"},
-            "N": {"value": 0.25 / 60.0, "unit": "deg/sqrt(h)"},
-            "B": {"value": 0.125 * 3600.0 / 3600.0, "unit": "deg/h"},
+            "N": {"value": 0.25 / 60.0, "lo": 0.2 / 60.0, "hi": 0.3125 / 60.0, "unit": "deg/sqrt(h)"},
+            "B": {"value": 0.125, "lo": 0.0625, "hi": 0.5, "unit": "deg/h"},
             "K": {"value": null, "unit": "deg/h/sqrt(h)"},
             "R": {"value": null, "unit": "deg/h^2"},
         });
@@ -396,6 +415,7 @@ mod tests {
             method: "model".into(),
             model_c: vec![],
             datasheet: Some(datasheet),
+            readouts: None,
             q_over_lsb: None,
             run: None,
         }
@@ -448,6 +468,9 @@ mod tests {
         l(r#"allanscope_coef_determined{unit="dut1",channel="g4",coef="N"} 1.0"#);
         l(
             r#"allanscope_coef_datasheet{unit="dut1",channel="g4",coef="B",datasheet_unit="deg/h"} 0.125"#,
+        );
+        l(
+            r#"allanscope_coef_datasheet_hi{unit="dut1",channel="g4",coef="B",datasheet_unit="deg/h"} 0.5"#,
         );
         l(r#"allanscope_fit_gof{unit="dut1",channel="g4"} 1.5"#);
         l(r#"allanscope_fit_t_data_seconds{unit="dut1",channel="g4"} 300.0"#);
