@@ -9,8 +9,8 @@ use std::thread::JoinHandle;
 use anyhow::Result;
 
 use super::usage;
-use crate::model::limits::LimitSpec;
-use crate::sink::metrics::{Metrics, MetricsTap, CONTENT_TYPE};
+use allanscope::model::limits::LimitSpec;
+use allanscope::sink::metrics::{Metrics, MetricsTap, CONTENT_TYPE};
 
 /// A running metrics endpoint; stops when dropped.
 pub struct MetricsServer {
@@ -22,7 +22,7 @@ pub struct MetricsServer {
 /// Parses `--metrics` (or the stand config's `run.metrics`): `ADDR:PORT`, or `PORT` for
 /// 127.0.0.1.
 pub fn parse_addr(s: &str) -> Result<SocketAddr, String> {
-    crate::source::udp::parse_bind(s)
+    allanscope::source::udp::parse_bind(s)
 }
 
 /// The server `--metrics` asks for, if any (a bad address is a usage error naming the option).
