@@ -5,6 +5,7 @@
 
 pub mod export;
 pub mod json;
+pub mod metrics;
 pub mod plot;
 pub mod records;
 pub mod report;
