@@ -180,8 +180,12 @@ fn analyze_text(
 ) -> Result<RunAnalysis> {
     let path = PathBuf::from(input);
     let tau0 = opts.accum.tau0_s;
-    let reader = TextReader::new(BufReader::with_capacity(1 << 16, open_input(input)?), &path)
-        .map_err(anyhow::Error::new)?;
+    let reader = TextReader::with_options(
+        BufReader::with_capacity(1 << 16, open_input(input)?),
+        &path,
+        &d.text_options(),
+    )
+    .map_err(anyhow::Error::new)?;
     let setups: Vec<ChannelSetup> = reader
         .names()
         .iter()
@@ -204,14 +208,12 @@ fn analyze_text(
     let reader = match saved.map(|c| &c.position) {
         Some(Position::Text(pos)) if replay => {
             // Continue the file where the saved run stood.
-            let names = reader.names().to_vec();
-            drop(reader);
             let mut f =
                 std::fs::File::open(input).with_context(|| format!("cannot open {input}"))?;
             f.seek(std::io::SeekFrom::Start(pos.offset))
                 .with_context(|| format!("cannot seek in {input}"))?;
             let f: Box<dyn std::io::Read + Send> = Box::new(f);
-            TextReader::resume(BufReader::with_capacity(1 << 16, f), &path, names, pos)
+            reader.resume(BufReader::with_capacity(1 << 16, f), pos)
         }
         Some(Position::Text(pos)) => {
             // Standard input cannot be rewound: what follows is a new stretch.

@@ -79,9 +79,12 @@ fn gather(
                 InputKind::Increments
             };
             let path = Path::new(input);
-            let mut reader =
-                TextReader::new(BufReader::with_capacity(1 << 16, open_input(input)?), path)
-                    .map_err(anyhow::Error::new)?;
+            let mut reader = TextReader::with_options(
+                BufReader::with_capacity(1 << 16, open_input(input)?),
+                path,
+                &a.data.text_options(),
+            )
+            .map_err(anyhow::Error::new)?;
             for (i, n) in reader.names().iter().enumerate() {
                 if n != "temperature_c" && wanted(n) {
                     g.add_channel(n, &a.data.unit, &cfg);
@@ -118,6 +121,13 @@ fn gather(
                         }
                     }
                 }
+            }
+            if reader.samples() == 0 {
+                return Err(anyhow::Error::new(allanscope::error::UsageError::Input {
+                    file: path.into(),
+                    line: reader.position().line_no,
+                    problem: "no samples: every value is empty, nan or not a number".into(),
+                }));
             }
         }
         Some(desc) => {

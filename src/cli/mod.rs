@@ -23,6 +23,7 @@ use clap::{Args, Parser, Subcommand};
 use allanscope::allan::accum::{AccumConfig, Overlap, StatSet, TauSpec, DEFAULT_L};
 use allanscope::analysis::{AnalysisOptions, ChannelSetup, InputKind};
 use allanscope::error::UsageError;
+use allanscope::input::text::{ColumnPick, TextOptions};
 use allanscope::model::fit::{FitMethod, FitOptions};
 
 #[derive(Debug, Parser)]
@@ -150,6 +151,14 @@ pub struct DataArgs {
     /// Only these channels (comma-separated names).
     #[arg(long, value_delimiter = ',')]
     pub channels: Option<Vec<String>>,
+    /// Text columns: the header name of the time column, skipped (by default a column named
+    /// time, t, timestamp or time_s, in any case).
+    #[arg(long, value_name = "NAME")]
+    pub time_column: Option<String>,
+    /// Text columns: only these, in this order, renamed with `=`: `gx=g1,gy` reads column
+    /// `gx` as channel `g1` and `gy` as `gy`.
+    #[arg(long, value_delimiter = ',', value_name = "NAME[=NEW],...")]
+    pub columns: Option<Vec<ColumnPick>>,
     /// `full` (exact, memory grows with the run) or L (bounded memory, stride max(1, m/L)).
     #[arg(long, default_value_t = DEFAULT_L.to_string())]
     pub overlap: String,
@@ -220,6 +229,16 @@ pub struct SimulateArgs {
     /// Output file.
     #[arg(short = 'o', long = "out")]
     pub out: PathBuf,
+}
+
+impl DataArgs {
+    /// How text columns become channels (`--time-column`, `--columns`).
+    pub fn text_options(&self) -> TextOptions {
+        TextOptions {
+            time_column: self.time_column.clone(),
+            columns: self.columns.clone(),
+        }
+    }
 }
 
 /// Parses `args` and runs the command.

@@ -1,5 +1,9 @@
-//! Text columns: one row per sample, columns separated by commas, tabs or spaces, an optional
-//! first row of channel names (otherwise `c1`, `c2`, ...), `#` lines skipped (CONTRACT.md).
+//! Text columns: one row per sample, columns separated by commas, semicolons, tabs or spaces,
+//! an optional first row of channel names (otherwise `c1`, `c2`, ...; a UTF-8 byte-order mark
+//! before it is dropped, duplicate names are refused), `#` lines skipped (CONTRACT.md). A column
+//! named `time`, `t`, `timestamp` or `time_s` (or the one [`TextOptions::time_column`] names) is
+//! a time stamp, not a channel, and is skipped; [`TextOptions::columns`] picks and renames
+//! channels.
 //!
 //! Streams: rows are read line by line and handed on in batches; the file is never held in
 //! memory. An empty row, or a row whose every field is empty or `nan`, is a gap for every
@@ -9,6 +13,7 @@
 
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
+use std::str::FromStr;
 
 use crate::error::UsageError;
 
@@ -18,16 +23,176 @@ pub const BATCH_ROWS: usize = 8192;
 /// How many bad rows are logged one by one before the rest are only counted.
 const BAD_ROWS_LOGGED: u64 = 10;
 
+/// Header names taken as a time column when no `--time-column` is given (case-insensitive).
+pub const TIME_COLUMN_NAMES: [&str; 4] = ["time", "t", "timestamp", "time_s"];
+
+/// One `--columns` item: the input column `source`, called `name` in the analysis
+/// (`gx=g1`, or `gy` to keep the name).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ColumnPick {
+    pub source: String,
+    pub name: String,
+}
+
+impl FromStr for ColumnPick {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (source, name) = s.split_once('=').unwrap_or((s, s));
+        let (source, name) = (source.trim(), name.trim());
+        if source.is_empty() || name.is_empty() {
+            return Err(format!("`{s}`: expected NAME or NAME=NEW_NAME"));
+        }
+        Ok(ColumnPick {
+            source: source.into(),
+            name: name.into(),
+        })
+    }
+}
+
+/// How the columns of a text input become channels.
+#[derive(Debug, Clone, Default)]
+pub struct TextOptions {
+    /// The header name of the time column (skipped); `None` looks for [`TIME_COLUMN_NAMES`].
+    pub time_column: Option<String>,
+    /// Only these columns, in this order, renamed; `None` keeps every column but the time one.
+    pub columns: Option<Vec<ColumnPick>>,
+}
+
+/// Which input columns are read, and under which names.
+#[derive(Debug, Clone)]
+struct Layout {
+    /// Fields per input row.
+    width_in: usize,
+    /// Input column (0-based) of each channel.
+    keep: Vec<usize>,
+    /// Input column names (header or `c1..cn`).
+    source_names: Vec<String>,
+    /// Channel names.
+    names: Vec<String>,
+}
+
+fn input_error(path: &Path, line: u64, problem: String) -> UsageError {
+    UsageError::Input {
+        file: path.into(),
+        line,
+        problem,
+    }
+}
+
+impl Layout {
+    fn new(
+        source_names: Vec<String>,
+        header: bool,
+        opts: &TextOptions,
+        path: &Path,
+        line: u64,
+    ) -> Result<Layout, UsageError> {
+        let err = |p: String| input_error(path, line, p);
+        for (j, n) in source_names.iter().enumerate() {
+            if let Some(i) = source_names[..j].iter().position(|m| m == n) {
+                return Err(err(format!(
+                    "duplicate column name `{n}`: columns {} and {}",
+                    i + 1,
+                    j + 1
+                )));
+            }
+        }
+        let find = |n: &str| source_names.iter().position(|m| m == n);
+        let time = match &opts.time_column {
+            Some(t) if !header => {
+                return Err(err(format!(
+                    "--time-column `{t}`: the input has no header row"
+                )))
+            }
+            Some(t) => Some(find(t).ok_or_else(|| {
+                err(format!(
+                    "--time-column `{t}`: no such column (the header has {})",
+                    source_names.join(", ")
+                ))
+            })?),
+            None if header => source_names
+                .iter()
+                .position(|n| TIME_COLUMN_NAMES.iter().any(|t| n.eq_ignore_ascii_case(t))),
+            None => None,
+        };
+        let (keep, names) = match &opts.columns {
+            Some(picks) => {
+                let mut keep = Vec::new();
+                let mut names: Vec<String> = Vec::new();
+                for p in picks {
+                    let i = find(&p.source).ok_or_else(|| {
+                        err(format!(
+                            "--columns: no column named `{}` (the input has {})",
+                            p.source,
+                            source_names.join(", ")
+                        ))
+                    })?;
+                    if names.contains(&p.name) {
+                        return Err(err(format!(
+                            "--columns: the name `{}` is given twice",
+                            p.name
+                        )));
+                    }
+                    keep.push(i);
+                    names.push(p.name.clone());
+                }
+                (keep, names)
+            }
+            None => (0..source_names.len())
+                .filter(|&i| Some(i) != time)
+                .map(|i| (i, source_names[i].clone()))
+                .unzip(),
+        };
+        if keep.is_empty() {
+            return Err(err("no data column (only a time column)".into()));
+        }
+        Ok(Layout {
+            width_in: source_names.len(),
+            keep,
+            source_names,
+            names,
+        })
+    }
+
+    /// The channel values of a row, or what is wrong with it.
+    fn parse(&self, t: &str) -> Result<Vec<f64>, String> {
+        let fields = split(t);
+        if fields.len() != self.width_in {
+            return Err(format!(
+                "{} fields, expected {}",
+                fields.len(),
+                self.width_in
+            ));
+        }
+        self.keep
+            .iter()
+            .map(|&i| {
+                parse_field(fields[i]).map_err(|()| {
+                    format!(
+                        "column {} `{}`: `{}` is not a number",
+                        i + 1,
+                        self.source_names[i],
+                        fields[i].trim()
+                    )
+                })
+            })
+            .collect()
+    }
+}
+
 pub struct TextReader<R> {
     src: R,
     path: PathBuf,
     line_no: u64,
+    layout: Layout,
     names: Vec<String>,
     /// The first data row, read while looking for a header.
     pending: Option<Vec<f64>>,
     line: Vec<u8>,
     bad_rows: u64,
     rows: u64,
+    /// Values that are numbers (not gaps) read so far.
+    samples: u64,
     /// Bytes of the input consumed so far (header and comment lines included).
     offset: u64,
 }
@@ -41,6 +206,9 @@ pub struct TextPosition {
     pub line_no: u64,
     pub rows: u64,
     pub bad_rows: u64,
+    /// Values that were numbers (not gaps) so far.
+    #[serde(default)]
+    pub samples: u64,
 }
 
 fn parse_field(t: &str) -> Result<f64, ()> {
@@ -54,70 +222,107 @@ fn parse_field(t: &str) -> Result<f64, ()> {
 fn split(line: &str) -> Vec<&str> {
     if line.contains(',') {
         line.split(',').collect()
+    } else if line.contains(';') {
+        line.split(';').collect()
     } else {
         line.split_whitespace().collect()
     }
 }
 
 impl<R: BufRead> TextReader<R> {
+    /// Opens the stream with every column but a time column as a channel
+    /// ([`TextReader::with_options`] with the defaults).
+    pub fn new(src: R, path: &Path) -> Result<Self, UsageError> {
+        Self::with_options(src, path, &TextOptions::default())
+    }
+
     /// Opens the stream and reads up to the first data row (taking a header row if present).
-    /// Fails with a usage error (exit status 2) when there is no data row at all.
-    pub fn new(mut src: R, path: &Path) -> Result<Self, UsageError> {
+    /// Fails with a usage error (exit status 2) when there is no data row at all, when the
+    /// header names a column twice, when `opts` names a column the input does not have, or when
+    /// a channel of the first data row is not a number (a text column, or a separator the
+    /// header does not share).
+    pub fn with_options(mut src: R, path: &Path, opts: &TextOptions) -> Result<Self, UsageError> {
         let mut line = String::new();
         let mut line_no = 0u64;
         let mut offset = 0u64;
+        let mut layout: Option<Layout> = None;
         loop {
             line.clear();
-            let n = src.read_line(&mut line).map_err(|e| UsageError::Input {
-                file: path.into(),
-                line: line_no + 1,
-                problem: e.to_string(),
-            })?;
+            let n = src
+                .read_line(&mut line)
+                .map_err(|e| input_error(path, line_no + 1, e.to_string()))?;
             if n == 0 {
-                return Err(UsageError::Input {
-                    file: path.into(),
-                    line: line_no,
-                    problem: "no data rows".into(),
-                });
+                return Err(input_error(path, line_no, "no data rows".into()));
             }
             line_no += 1;
             offset += n as u64;
-            let t = line.trim();
+            // A byte-order mark (spreadsheets write one) is not part of the first name.
+            let t = if line_no == 1 {
+                line.trim_start_matches('\u{feff}').trim()
+            } else {
+                line.trim()
+            };
             if t.is_empty() || t.starts_with('#') {
                 continue;
             }
-            let fields = split(t);
-            let parsed: Result<Vec<f64>, ()> = fields.iter().map(|f| parse_field(f)).collect();
-            let (names, pending) = match parsed {
-                Ok(v) => ((1..=v.len()).map(|i| format!("c{i}")).collect(), Some(v)),
-                Err(()) => (fields.iter().map(|f| f.trim().to_string()).collect(), None),
+            let (values, layout) = match layout.take() {
+                Some(l) => match l.parse(t) {
+                    Ok(v) => (v, l),
+                    Err(problem) => {
+                        return Err(input_error(
+                            path,
+                            line_no,
+                            format!("the first data row: {problem}"),
+                        ))
+                    }
+                },
+                None => {
+                    let fields = split(t);
+                    if fields.iter().all(|f| parse_field(f).is_ok()) {
+                        let names = (1..=fields.len()).map(|i| format!("c{i}")).collect();
+                        let l = Layout::new(names, false, opts, path, line_no)?;
+                        let v = l.parse(t).map_err(|p| input_error(path, line_no, p))?;
+                        (v, l)
+                    } else {
+                        let names = fields
+                            .iter()
+                            .map(|f| f.trim().trim_matches('"').trim().to_string())
+                            .collect();
+                        layout = Some(Layout::new(names, true, opts, path, line_no)?);
+                        continue;
+                    }
+                }
             };
             return Ok(TextReader {
                 src,
                 path: path.into(),
                 line_no,
-                names,
-                pending,
+                names: layout.names.clone(),
+                layout,
+                pending: Some(values),
                 line: line.into_bytes(),
                 bad_rows: 0,
                 rows: 0,
+                samples: 0,
                 offset,
             });
         }
     }
 
-    /// Continues reading `src`, positioned at `pos.offset` of the input whose channels are
-    /// `names`, as a reader that had stopped at `pos` (no header is looked for).
-    pub fn resume(src: R, path: &Path, names: Vec<String>, pos: &TextPosition) -> Self {
+    /// Continues reading `src`, positioned at `pos.offset` of the same input, with this
+    /// reader's columns, as a reader that had stopped at `pos` (no header is looked for).
+    pub fn resume<S: BufRead>(self, src: S, pos: &TextPosition) -> TextReader<S> {
         TextReader {
             src,
-            path: path.into(),
+            path: self.path,
             line_no: pos.line_no,
-            names,
+            names: self.names,
+            layout: self.layout,
             pending: None,
             line: Vec::new(),
             bad_rows: pos.bad_rows,
             rows: pos.rows,
+            samples: pos.samples,
             offset: pos.offset,
         }
     }
@@ -130,7 +335,13 @@ impl<R: BufRead> TextReader<R> {
             line_no: self.line_no - u64::from(self.pending.is_some()),
             rows: self.rows,
             bad_rows: self.bad_rows,
+            samples: self.samples,
         }
+    }
+
+    /// Values read so far that were numbers (gaps and bad rows left out).
+    pub fn samples(&self) -> u64 {
+        self.samples
     }
 
     /// Channel names, from the header row or `c1..cn`.
@@ -179,16 +390,7 @@ impl<R: BufRead> TextReader<R> {
             let row = if t.is_empty() {
                 Ok(vec![f64::NAN; width])
             } else {
-                let fields = split(t);
-                if fields.len() != width {
-                    Err(format!("{} fields, expected {width}", fields.len()))
-                } else {
-                    fields
-                        .iter()
-                        .map(|f| parse_field(f))
-                        .collect::<Result<Vec<f64>, ()>>()
-                        .map_err(|()| "a field is not a number".to_string())
-                }
+                self.layout.parse(t)
             };
             self.push_row(out, row);
             n += 1;
@@ -199,7 +401,10 @@ impl<R: BufRead> TextReader<R> {
     fn push_row(&mut self, out: &mut Vec<f64>, row: Result<Vec<f64>, String>) {
         self.rows += 1;
         match row {
-            Ok(v) => out.extend_from_slice(&v),
+            Ok(v) => {
+                self.samples += v.iter().filter(|x| x.is_finite()).count() as u64;
+                out.extend_from_slice(&v);
+            }
             Err(problem) => {
                 self.bad_rows += 1;
                 if self.bad_rows <= BAD_ROWS_LOGGED {

@@ -36,6 +36,7 @@ use tokio_util::sync::CancellationToken;
 
 use crate::analysis::RunAnalysis;
 use crate::checkpoint::{Checkpoint, CheckpointPlan, Collector, Piece, Position, Schedule};
+use crate::error::UsageError;
 use crate::frame::{FrameDescriptor, Health};
 use crate::input::text::{TextReader, BATCH_ROWS};
 use crate::input::Chunk;
@@ -320,6 +321,7 @@ pub fn run_text<R: BufRead + Send + 'static>(
         .map(|c| (c.sender(), c.in_flight.clone(), c.written.clone()));
     let abort_after = plan.as_ref().and_then(|p| p.abort_after_frames);
     let shutdown = ctl.shutdown.clone();
+    let path_shown = path.clone();
     let read = move || -> Result<crate::input::text::TextPosition> {
         let mut reader = reader;
         let started = Instant::now();
@@ -365,6 +367,14 @@ pub fn run_text<R: BufRead + Send + 'static>(
     let mut analysis = join_analysis(workers)?;
     let written = collector.map(Collector::finish);
     let position = result?;
+    if position.samples == 0 && !ctl.shutdown.is_cancelled() {
+        return Err(UsageError::Input {
+            file: path_shown,
+            line: position.line_no,
+            problem: "no samples: every value is empty, nan or not a number".into(),
+        }
+        .into());
+    }
     if let (Some(plan), Some(written)) = (&plan, written) {
         // The analysis state leaves the reader's bad rows out (the position holds them).
         let complete = !(plan.data_seconds && ctl.shutdown.is_cancelled());

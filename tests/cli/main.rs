@@ -11,3 +11,4 @@ mod diagnose;
 mod export;
 mod limits_summary;
 mod model_out;
+mod text_input;
