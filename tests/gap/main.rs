@@ -1,8 +1,9 @@
 //! The sim-to-real gap diagnosis (src/gap/): simulated hidden effects, mixture statistics,
-//! oracle bounds and a real recording.
+//! oracle bounds, a real recording, and the temperature effect.
 //! One test binary per stage; each topic is a module of it.
 
 mod diagnosis;
 mod mixture;
 mod oracle;
 mod reference;
+mod temperature;
