@@ -8,5 +8,6 @@ mod common;
 mod aggregate;
 mod analyze;
 mod diagnose;
+mod export;
 mod limits_summary;
 mod model_out;
