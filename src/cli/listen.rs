@@ -7,10 +7,13 @@ use std::time::Duration;
 use anyhow::Result;
 use clap::{ArgGroup, Args};
 
-use super::analyze::output_writer;
-use super::{analysis_options, parse_duration_s, select_channels, usage, DataArgs};
+use super::{
+    analysis_options, capture_output, finish_records, parse_duration_s, records_output,
+    select_channels, usage, DataArgs,
+};
 use crate::frame::FrameDescriptor;
-use crate::pipeline::{RecordWriter, RunControl};
+use crate::pipeline::{RecordWriter, RunControl, SignalWatch};
+use crate::sink::output::OutputMode;
 use crate::source::{Pace, SourceSpec};
 
 #[derive(Debug, Args)]
@@ -31,7 +34,9 @@ pub struct ListenArgs {
     /// Stop after this long (seconds, or with s, min, h, d).
     #[arg(long)]
     pub duration: Option<String>,
-    /// Also write every received byte to this file, for replay later.
+    /// Also write every received byte to this file, for replay later. An existing non-empty
+    /// file is refused unless --force (or --resume, which appends). A write error stops the
+    /// capture, not the run (reported in `health` and `summary`).
     #[arg(long)]
     pub capture: Option<PathBuf>,
     #[command(flatten)]
@@ -82,21 +87,31 @@ pub fn run(l: &ListenArgs) -> Result<()> {
     let saved = ckpt.as_ref().and_then(|c| c.1.as_ref());
     let ck_path = ckpt.as_ref().map(|c| c.0.path.clone());
     let analysis = super::start_analysis(&spec.name(), setups, opts, saved, ck_path.as_deref())?;
+    let mode = OutputMode::new(d.force, d.resume);
+    // Outputs last: every option has been accepted; they are only emptied once the source
+    // is open and delivers (crate::sink::output).
+    let capture = capture_output(l.capture.as_deref(), mode, "--capture")?;
+    let (out, dest) = records_output(d.out.as_deref(), mode, "--out")?;
     let ctl = RunControl {
         checkpoint: ckpt.map(|c| std::sync::Arc::new(c.0)),
         duration: match &l.duration {
             Some(s) => Some(Duration::from_secs_f64(parse_duration_s(s)?)),
             None => None,
         },
-        capture: l.capture.clone(),
-        handle_signals: true,
+        capture,
         every_wall: d.every.map(Duration::from_secs_f64),
         ..RunControl::default()
     };
-    let writer = RecordWriter::spawn(output_writer(d)?);
+    // Live: a consumer that falls behind gets the newest interim records (coalesced), and
+    // ingestion never waits for it.
+    let writer = RecordWriter::spawn_coalescing(out);
+    let signals = SignalWatch::start(
+        ctl.shutdown.clone(),
+        writer.queue().clone(),
+        ctl.progress.clone(),
+    );
     let result = crate::pipeline::run_frames(spec, &desc, analysis, writer.queue(), &ctl);
-    let written = writer.finish();
+    let written = finish_records(writer, &dest, &signals);
     result?;
-    written?;
-    Ok(())
+    written
 }
