@@ -108,7 +108,15 @@ fn a_failed_start_leaves_earlier_results_untouched() {
             s(&cap),
             "--force",
         ],
-        vec!["analyze", "missing.csv", "--tau0", "1", "--out", s(&out), "--force"],
+        vec![
+            "analyze",
+            "missing.csv",
+            "--tau0",
+            "1",
+            "--out",
+            s(&out),
+            "--force",
+        ],
         vec!["analyze", s(&csv), "--out", s(&out), "--force"],
     ];
     for args in &tries {
@@ -116,8 +124,16 @@ fn a_failed_start_leaves_earlier_results_untouched() {
         std::fs::write(&cap, earlier(2)).unwrap();
         let o = run(args, None);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
-        assert_eq!(std::fs::read(&out).unwrap(), earlier(1), "{args:?} changed --out");
-        assert_eq!(std::fs::read(&cap).unwrap(), earlier(2), "{args:?} changed --capture");
+        assert_eq!(
+            std::fs::read(&out).unwrap(),
+            earlier(1),
+            "{args:?} changed --out"
+        );
+        assert_eq!(
+            std::fs::read(&cap).unwrap(),
+            earlier(2),
+            "{args:?} changed --capture"
+        );
     }
     // Where there was no file, a failed start leaves none (not an empty one).
     let o = run(
@@ -168,7 +184,10 @@ fn a_rerun_over_the_last_capture_is_refused_unless_forced() {
     ];
     let o = run(&args, Some(first));
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    assert!(std::fs::read(&cap).unwrap() == first, "the capture holds the bytes received");
+    assert!(
+        std::fs::read(&cap).unwrap() == first,
+        "the capture holds the bytes received"
+    );
     let out_first = std::fs::read(&out).unwrap();
     assert_eq!(last_of(&records(&out), "health")["frames"], 1000);
 
@@ -227,7 +246,10 @@ fn a_full_capture_disk_stops_the_capture_not_the_run() {
     );
     let e = stderr(&o);
     assert_eq!(o.status.code(), Some(0), "{e}");
-    assert!(e.contains("capture file /dev/full") && e.contains("No space left"), "{e}");
+    assert!(
+        e.contains("capture file /dev/full") && e.contains("No space left"),
+        "{e}"
+    );
     let recs = records(&out);
     let h = last_of(&recs, "health");
     assert_eq!(h["frames"], 5000);
@@ -236,7 +258,10 @@ fn a_full_capture_disk_stops_the_capture_not_the_run() {
     assert!(written < 5000 * FRAME_LEN as u64, "{written}");
     assert!(h["capture_error"].as_str().unwrap().contains("/dev/full"));
     let sm = last_of(&recs, "summary");
-    assert!(sm["capture_error"].as_str().unwrap().contains("No space left"));
+    assert!(sm["capture_error"]
+        .as_str()
+        .unwrap()
+        .contains("No space left"));
     assert_eq!(sm["t_data"], 5000.0 * TAU0_S);
     assert_eq!(sm["read_to_end"], true);
     // The final records are all there: 8 channels x 3 statistics + 8 fits.
@@ -270,6 +295,9 @@ fn json_lines_to_a_full_standard_output_say_so() {
         .unwrap();
     let e = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{e}");
-    assert!(e.contains("writing the JSON lines to standard output"), "{e}");
+    assert!(
+        e.contains("writing the JSON lines to standard output"),
+        "{e}"
+    );
     assert!(e.contains("No space left on device"), "{e}");
 }

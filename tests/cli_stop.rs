@@ -104,7 +104,10 @@ fn replay_interims(pause: Duration) -> (Vec<f64>, usize) {
     let t = recs
         .iter()
         .filter(|r| {
-            r["type"] == "curve" && r["channel"] == "g1" && r["stat"] == "avar" && r["final"] == false
+            r["type"] == "curve"
+                && r["channel"] == "g1"
+                && r["stat"] == "avar"
+                && r["final"] == false
         })
         .map(|r| r["t_data"].as_f64().expect("t_data"))
         .collect();
@@ -154,7 +157,8 @@ fn a_replay_stopped_by_sigint_says_so_and_exits_1() {
     assert!(took < Duration::from_secs(3), "{took:?}");
     let err: Vec<String> = rx.try_iter().collect();
     assert!(
-        err.iter().any(|l| l.contains("stopped by SIGINT before the end")),
+        err.iter()
+            .any(|l| l.contains("stopped by SIGINT before the end")),
         "{err:?}"
     );
     let recs: Vec<serde_json::Value> = std::fs::read_to_string(&out)

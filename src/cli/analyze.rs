@@ -33,7 +33,11 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
     parse_pace(&a.pace)?;
     let (_, tau0) = format_and_tau0(d)?;
     analysis_options(d, tau0)?;
-    let (out, dest) = records_output(d.out.as_deref(), OutputMode::new(d.force, d.resume), "--out")?;
+    let (out, dest) = records_output(
+        d.out.as_deref(),
+        OutputMode::new(d.force, d.resume),
+        "--out",
+    )?;
     // A replay has no deadline: back-pressure, never coalesced interim records.
     let writer = RecordWriter::spawn(out);
     let ctl = RunControl {
@@ -58,7 +62,12 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
 /// Where the JSON lines of a one-pass command go (`diagnose`): `--out FILE` (see
 /// [`records_output`]) or standard output.
 pub(crate) fn output_writer(d: &DataArgs) -> Result<Box<dyn Write + Send>> {
-    Ok(records_output(d.out.as_deref(), OutputMode::new(d.force, d.resume), "--out")?.0)
+    Ok(records_output(
+        d.out.as_deref(),
+        OutputMode::new(d.force, d.resume),
+        "--out",
+    )?
+    .0)
 }
 
 /// A run that crashed may have left its last JSON line half written (the writer's buffer is

@@ -275,8 +275,7 @@ pub(crate) fn capture_output(
     what: &str,
 ) -> Result<Option<crate::source::CaptureSlot>> {
     let Some(p) = path else { return Ok(None) };
-    let f = crate::sink::output::OutputFile::open(p, mode, what)
-        .map_err(anyhow::Error::new)?;
+    let f = crate::sink::output::OutputFile::open(p, mode, what).map_err(anyhow::Error::new)?;
     Ok(Some(crate::source::CaptureSlot::new(f)))
 }
 

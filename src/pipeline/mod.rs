@@ -282,7 +282,9 @@ pub fn run_frames(
     }
     if ctl.capture.is_some() {
         let c = &ctl.progress.capture;
-        record.extra.insert("capture_bytes".into(), c.bytes().into());
+        record
+            .extra
+            .insert("capture_bytes".into(), c.bytes().into());
         if let Some(e) = c.error() {
             record.extra.insert("capture_error".into(), e.into());
         }

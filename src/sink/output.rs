@@ -151,7 +151,8 @@ mod tests {
     use super::*;
 
     fn dir(tag: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("allanscope-output-{tag}-{}", std::process::id()));
+        let d =
+            std::env::temp_dir().join(format!("allanscope-output-{tag}-{}", std::process::id()));
         std::fs::create_dir_all(&d).unwrap();
         d
     }
@@ -191,10 +192,12 @@ mod tests {
         f.write_all(b"x").unwrap();
         drop(f);
         assert_eq!(std::fs::read(&p).unwrap(), b"x");
-        assert!(OutputFile::open(&d, OutputMode::Fresh { force: true }, "--out")
-            .unwrap_err()
-            .to_string()
-            .contains("is a directory"));
+        assert!(
+            OutputFile::open(&d, OutputMode::Fresh { force: true }, "--out")
+                .unwrap_err()
+                .to_string()
+                .contains("is a directory")
+        );
         let _ = std::fs::remove_dir_all(&d);
     }
 }

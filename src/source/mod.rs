@@ -264,7 +264,9 @@ impl Capture {
         match out.write_all(b).await {
             // Counted when handed to the buffer; a later flush error is reported all the same.
             Ok(()) => {
-                self.status.bytes.fetch_add(b.len() as u64, Ordering::Relaxed);
+                self.status
+                    .bytes
+                    .fetch_add(b.len() as u64, Ordering::Relaxed);
             }
             Err(e) => self.fail(&e),
         }
