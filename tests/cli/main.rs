@@ -1,0 +1,11 @@
+//! The command-line binary end to end (`analyze`, `diagnose`, `aggregate`, `limits`), run as a
+//! child process and its JSON lines parsed back.
+//! One test binary per stage; each topic is a module of it.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod aggregate;
+mod analyze;
+mod diagnose;
+mod limits_summary;
