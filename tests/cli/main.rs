@@ -9,3 +9,5 @@ mod aggregate;
 mod analyze;
 mod diagnose;
 mod limits_summary;
+mod outputs;
+mod stop;

@@ -11,13 +11,11 @@
 //!   frame analysed, the failure in `health`, `summary` and the log.
 //! - JSON lines to a full standard output: the error says it is standard output.
 
-mod common;
-
 use std::io::Write;
 use std::path::Path;
 use std::process::{Output, Stdio};
 
-use common::{exe, fixtures, tmp_in};
+use crate::common::{exe, fixtures, tmp_in};
 
 /// siu8 frames are 42 bytes at 250 Hz (4 ms).
 const FRAME_LEN: usize = 42;

@@ -9,14 +9,12 @@
 //!   (the writer's grace, 3 s), at once after a second SIGINT, with an error naming standard
 //!   output; with `--out FILE` the final records are in the file.
 
-mod common;
-
 use std::io::{BufRead, BufReader, Read};
 use std::process::{Child, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-use common::{exe, fixtures, tmp_in};
+use crate::common::{exe, fixtures, tmp_in};
 
 const FRAME_LEN: usize = 42;
 const TAU0_S: f64 = 0.004;
