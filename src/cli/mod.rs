@@ -130,7 +130,8 @@ pub struct DataArgs {
     /// Text columns hold phase (the running sum of increments, u).
     #[arg(long)]
     pub phase: bool,
-    /// Unit label of text columns.
+    /// Unit of the increment of text columns, also with --rate or --phase (with --rate, `deg/s`
+    /// means `deg`): deg, rad, mrad, arcsec, m/s, ft/s, g (g*s), mg give datasheet units.
     #[arg(long, default_value = "u")]
     pub unit: String,
     /// Cluster sizes: `octave` (powers of two), `decade` (1, 2, 4 per decade) or a list of m.
