@@ -79,6 +79,10 @@ pub struct DiagnoseArgs {
     /// A second run of the same unit, on which the effects fitted on INPUT are judged.
     #[arg(long)]
     pub holdout: Option<String>,
+    /// Write the fitted unit (five terms, LSB, tau0, accepted effects) as a model file that
+    /// `simulate --model` reads. An existing file is never overwritten.
+    #[arg(long, value_name = "FILE")]
+    pub model_out: Option<PathBuf>,
     #[command(flatten)]
     pub data: DataArgs,
 }

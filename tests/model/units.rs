@@ -2,8 +2,6 @@
 //! IEEE 952 read-outs (model::readout) of simulated runs against the closed forms of THEORY.md
 //! section 2, through the `fit` record `analyze` writes.
 
-mod common;
-
 use allanscope::model::units::{
     datasheet, datasheet_units, increment_unit_label, IncrementUnit, SensorKind,
 };
@@ -95,11 +93,11 @@ fn every_velocity_unit_against_hand_computation() {
 }
 
 fn run_analyze(tag: &str, model: &str, duration: &str, extra: &[&str]) -> Vec<Value> {
-    let m = common::tmp_in(tag, "model.toml");
+    let m = crate::common::tmp_in(tag, "model.toml");
     std::fs::write(&m, model).unwrap();
-    let csv = common::tmp_in(tag, "sim.csv");
+    let csv = crate::common::tmp_in(tag, "sim.csv");
     let _ = std::fs::remove_file(&csv);
-    let st = common::exe()
+    let st = crate::common::exe()
         .args([
             "simulate",
             "--model",
@@ -118,7 +116,7 @@ fn run_analyze(tag: &str, model: &str, duration: &str, extra: &[&str]) -> Vec<Va
         .status()
         .unwrap();
     assert!(st.success());
-    let out = common::exe()
+    let out = crate::common::exe()
         .args(["analyze", csv.to_str().unwrap(), "--tau0", "0.01"])
         .args(extra)
         .output()
@@ -222,14 +220,14 @@ fn bias_instability_readout_of_a_simulated_accelerometer() {
 #[test]
 fn rate_unit_names_the_increment() {
     assert_eq!(increment_unit_label("deg/s", true), "deg");
-    let csv = common::tmp_in("rate-unit", "rate.csv");
+    let csv = crate::common::tmp_in("rate-unit", "rate.csv");
     let mut text = String::from("gz\n");
     for i in 0..4000u32 {
         // A deterministic zigzag of rates (deg/s): enough for a fit record.
         text.push_str(&format!("{}\n", ((i * 7919) % 101) as f64 / 100.0 - 0.5));
     }
     std::fs::write(&csv, text).unwrap();
-    let out = common::exe()
+    let out = crate::common::exe()
         .args(["analyze", csv.to_str().unwrap(), "--tau0", "0.01", "--rate"])
         .args(["--unit", "deg/s"])
         .output()
