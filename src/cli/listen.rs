@@ -11,10 +11,10 @@ use super::{
     analysis_options, capture_output, finish_records, parse_duration_s, records_output,
     select_channels, usage, DataArgs,
 };
-use crate::frame::FrameDescriptor;
-use crate::pipeline::{RecordWriter, RunControl, SignalWatch};
-use crate::sink::output::OutputMode;
-use crate::source::{Pace, SourceSpec};
+use allanscope::frame::FrameDescriptor;
+use allanscope::pipeline::{RecordWriter, RunControl, SignalWatch};
+use allanscope::sink::output::OutputMode;
+use allanscope::source::{Pace, SourceSpec};
 
 #[derive(Debug, Args)]
 #[command(group(ArgGroup::new("source").required(true).args(["serial", "udp", "input"])))]
@@ -52,7 +52,8 @@ fn source_spec(l: &ListenArgs) -> Result<SourceSpec> {
         });
     }
     if let Some(u) = &l.udp {
-        let bind = crate::source::udp::parse_bind(u).map_err(|e| usage(format!("--udp {e}")))?;
+        let bind =
+            allanscope::source::udp::parse_bind(u).map_err(|e| usage(format!("--udp {e}")))?;
         return Ok(SourceSpec::Udp { bind });
     }
     match l.input.as_deref() {
@@ -78,7 +79,7 @@ pub fn run(l: &ListenArgs) -> Result<()> {
     // Live: --every is wall-seconds, kept by the pipeline, not data-seconds.
     opts.every_s = None;
     let setups = select_channels(
-        crate::analysis::ChannelSetup::for_frames(&desc),
+        allanscope::analysis::ChannelSetup::for_frames(&desc),
         &d.channels,
         &spec.name(),
     )?;
@@ -89,7 +90,7 @@ pub fn run(l: &ListenArgs) -> Result<()> {
     let analysis = super::start_analysis(&spec.name(), setups, opts, saved, ck_path.as_deref())?;
     let mode = OutputMode::new(d.force, d.resume);
     // Outputs last: every option has been accepted; they are only emptied once the source
-    // is open and delivers (crate::sink::output).
+    // is open and delivers (allanscope::sink::output).
     let capture = capture_output(l.capture.as_deref(), mode, "--capture")?;
     let (out, dest) = records_output(d.out.as_deref(), mode, "--out")?;
     let ctl = RunControl {
@@ -110,7 +111,7 @@ pub fn run(l: &ListenArgs) -> Result<()> {
         writer.queue().clone(),
         ctl.progress.clone(),
     );
-    let result = crate::pipeline::run_frames(spec, &desc, analysis, writer.queue(), &ctl);
+    let result = allanscope::pipeline::run_frames(spec, &desc, analysis, writer.queue(), &ctl);
     let written = finish_records(writer, &dest, &signals);
     result?;
     written

@@ -1,4 +1,5 @@
-//! The command line: argument parsing here, one file per subcommand beside it. `main.rs` only calls
+//! The command line (a module of the binary, not of the library): argument parsing here, one file
+//! per subcommand beside it, each over `allanscope::...`. `main.rs` only calls
 //! [`main_with_args`] and maps errors to exit statuses (CONTRACT.md: 2 for usage and
 //! configuration errors, 1 for anything else).
 
@@ -17,10 +18,10 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 
-use crate::allan::accum::{AccumConfig, Overlap, StatSet, TauSpec, DEFAULT_L};
-use crate::analysis::{AnalysisOptions, ChannelSetup, InputKind};
-use crate::error::UsageError;
-use crate::model::fit::{FitMethod, FitOptions};
+use allanscope::allan::accum::{AccumConfig, Overlap, StatSet, TauSpec, DEFAULT_L};
+use allanscope::analysis::{AnalysisOptions, ChannelSetup, InputKind};
+use allanscope::error::UsageError;
+use allanscope::model::fit::{FitMethod, FitOptions};
 
 #[derive(Debug, Parser)]
 #[command(
@@ -249,10 +250,10 @@ where
 /// output; and the destination's name for messages.
 pub(crate) fn records_output(
     out: Option<&Path>,
-    mode: crate::sink::output::OutputMode,
+    mode: allanscope::sink::output::OutputMode,
     what: &str,
 ) -> Result<(Box<dyn std::io::Write + Send>, String)> {
-    use crate::sink::output::{OutputFile, OutputMode};
+    use allanscope::sink::output::{OutputFile, OutputMode};
     Ok(match out {
         Some(p) => {
             if mode == OutputMode::Append && p.is_file() {
@@ -273,23 +274,24 @@ pub(crate) fn records_output(
     })
 }
 
-/// The `--capture` file of a live run, opened as [`crate::sink::output::OutputFile`] explains.
+/// The `--capture` file of a live run, opened as [`allanscope::sink::output::OutputFile`] explains.
 pub(crate) fn capture_output(
     path: Option<&Path>,
-    mode: crate::sink::output::OutputMode,
+    mode: allanscope::sink::output::OutputMode,
     what: &str,
-) -> Result<Option<crate::source::CaptureSlot>> {
+) -> Result<Option<allanscope::source::CaptureSlot>> {
     let Some(p) = path else { return Ok(None) };
-    let f = crate::sink::output::OutputFile::open(p, mode, what).map_err(anyhow::Error::new)?;
-    Ok(Some(crate::source::CaptureSlot::new(f)))
+    let f =
+        allanscope::sink::output::OutputFile::open(p, mode, what).map_err(anyhow::Error::new)?;
+    Ok(Some(allanscope::source::CaptureSlot::new(f)))
 }
 
 /// Ends a command's record writer: every record written (within the grace the signals allow)
 /// or an error naming the destination.
 pub(crate) fn finish_records(
-    writer: crate::pipeline::RecordWriter,
+    writer: allanscope::pipeline::RecordWriter,
     dest: &str,
-    signals: &crate::pipeline::SignalWatch,
+    signals: &allanscope::pipeline::SignalWatch,
 ) -> Result<()> {
     writer
         .finish_within(|| signals.grace())
@@ -299,7 +301,7 @@ pub(crate) fn finish_records(
 
 /// The error of a replay that was stopped before its input ended (exit status 1; CONTRACT.md:
 /// 0 only when the input was read to its end). The final records were written all the same.
-pub(crate) fn interrupted(input: &str, progress: &crate::source::Progress) -> anyhow::Error {
+pub(crate) fn interrupted(input: &str, progress: &allanscope::source::Progress) -> anyhow::Error {
     anyhow::anyhow!(
         "{input}: stopped by {} before the end of the input; the final records cover the data \
          read (the summary says `read_to_end: false`)",
@@ -311,92 +313,36 @@ pub(crate) fn usage(msg: impl Into<String>) -> anyhow::Error {
     anyhow::Error::new(UsageError::Option(msg.into()))
 }
 
-/// Parses `--taus`.
+/// Parses `--taus` ([`TauSpec`]'s `FromStr`, shared with the stand config).
 pub fn parse_taus(s: &str) -> Result<TauSpec> {
-    match s {
-        "octave" => Ok(TauSpec::Octave),
-        "decade" => Ok(TauSpec::Decade),
-        list => {
-            let ms: Result<Vec<u64>, _> =
-                list.split(',').map(|t| t.trim().parse::<u64>()).collect();
-            match ms {
-                Ok(v) if !v.is_empty() && v.iter().all(|&m| m >= 1) => Ok(TauSpec::List(v)),
-                _ => Err(usage(format!(
-                    "--taus `{list}`: expected octave, decade or a comma list of cluster sizes m >= 1"
-                ))),
-            }
-        }
-    }
+    s.parse::<TauSpec>()
+        .map_err(|e| usage(format!("--taus `{s}`: {e}")))
 }
 
 /// Parses `--overlap`.
 pub fn parse_overlap(s: &str) -> Result<Overlap> {
-    match s {
-        "full" => Ok(Overlap::Full),
-        l => match l.parse::<u64>() {
-            Ok(l) if l >= 1 => Ok(Overlap::Bounded(l)),
-            _ => Err(usage(format!(
-                "--overlap `{l}`: expected `full` or an integer L >= 1"
-            ))),
-        },
-    }
+    s.parse::<Overlap>()
+        .map_err(|e| usage(format!("--overlap `{s}`: {e}")))
 }
 
 fn parse_stats(list: &[String]) -> Result<StatSet> {
-    let mut set = StatSet {
-        avar: false,
-        hvar: false,
-        mvar: false,
-    };
-    for s in list {
-        match s.trim() {
-            "avar" => set.avar = true,
-            "hvar" => set.hvar = true,
-            "mvar" => set.mvar = true,
-            other => {
-                return Err(usage(format!(
-                    "--stats: unknown statistic `{other}` (allowed: avar, hvar, mvar)"
-                )))
-            }
-        }
-    }
-    if !(set.avar || set.hvar || set.mvar) {
-        return Err(usage("--stats: at least one statistic"));
-    }
-    Ok(set)
+    StatSet::from_names(list.iter().map(String::as_str)).map_err(|e| usage(format!("--stats: {e}")))
 }
 
 /// Parses a duration: seconds, or a number with `s`, `min`, `h` or `d`.
 pub fn parse_duration_s(s: &str) -> Result<f64> {
-    let t = s.trim();
-    let (num, mult) = if let Some(v) = t.strip_suffix("min") {
-        (v, 60.0)
-    } else if let Some(v) = t.strip_suffix('h') {
-        (v, 3600.0)
-    } else if let Some(v) = t.strip_suffix('d') {
-        (v, 86400.0)
-    } else if let Some(v) = t.strip_suffix('s') {
-        (v, 1.0)
-    } else {
-        (t, 1.0)
-    };
-    match num.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v * mult),
-        _ => Err(usage(format!(
-            "duration `{s}`: expected a positive number of seconds, or with s, min, h or d"
-        ))),
-    }
+    allanscope::plan::options::parse_duration_s(s).map_err(usage)
 }
 
 /// The frame descriptor (`None` for text columns) and the sampling step: `--tau0` when given,
 /// else the descriptor's; required for text columns.
 pub(crate) fn format_and_tau0(
     d: &DataArgs,
-) -> Result<(Option<crate::frame::FrameDescriptor>, f64)> {
+) -> Result<(Option<allanscope::frame::FrameDescriptor>, f64)> {
     let desc = if d.format == "csv" {
         None
     } else {
-        Some(crate::frame::FrameDescriptor::load(&d.format).map_err(anyhow::Error::new)?)
+        Some(allanscope::frame::FrameDescriptor::load(&d.format).map_err(anyhow::Error::new)?)
     };
     let tau0 = match (&desc, d.tau0) {
         (_, Some(t)) if t.is_finite() && t > 0.0 => t,
@@ -449,7 +395,7 @@ pub(crate) fn analysis_options(d: &DataArgs, tau0_s: f64) -> Result<AnalysisOpti
         fit,
         run: None,
         limits: match &d.limits {
-            Some(p) => crate::model::limits::load_file(p)?,
+            Some(p) => allanscope::model::limits::load_file(p)?,
             None => Vec::new(),
         },
         diagnose: d.diagnose,
@@ -462,8 +408,8 @@ pub(crate) fn checkpoint_header(
     format: &str,
     opts: &AnalysisOptions,
     channels: &[ChannelSetup],
-) -> crate::checkpoint::Header {
-    use crate::allan::accum::Overlap;
+) -> allanscope::checkpoint::Header {
+    use allanscope::allan::accum::Overlap;
     let s = opts.accum.stats;
     let stats = [("avar", s.avar), ("hvar", s.hvar), ("mvar", s.mvar)]
         .iter()
@@ -471,10 +417,10 @@ pub(crate) fn checkpoint_header(
         .map(|x| x.0.to_string())
         .collect();
     let file = Path::new(input);
-    crate::checkpoint::Header {
+    allanscope::checkpoint::Header {
         input: input.into(),
         input_fingerprint: (input != "-" && file.is_file())
-            .then(|| crate::checkpoint::fingerprint(file))
+            .then(|| allanscope::checkpoint::fingerprint(file))
             .flatten(),
         format: format.into(),
         kind: match opts.kind {
@@ -497,8 +443,8 @@ pub(crate) fn checkpoint_header(
 
 /// A run's checkpoint plan for the pipeline and, when resuming, the saved checkpoint.
 pub(crate) type CheckpointSetup = (
-    crate::checkpoint::CheckpointPlan,
-    Option<crate::checkpoint::Checkpoint>,
+    allanscope::checkpoint::CheckpointPlan,
+    Option<allanscope::checkpoint::Checkpoint>,
 );
 
 impl DataArgs {
@@ -506,7 +452,7 @@ impl DataArgs {
     /// `--abort-after-frames` and `--out`.
     pub(crate) fn checkpoint_setup(
         &self,
-        header: crate::checkpoint::Header,
+        header: allanscope::checkpoint::Header,
         data_seconds: bool,
         replay: bool,
     ) -> Result<Option<CheckpointSetup>> {
@@ -529,11 +475,11 @@ pub(crate) fn checkpoint_setup(
     resume: bool,
     abort_after_frames: Option<u64>,
     out: Option<&Path>,
-    header: crate::checkpoint::Header,
+    header: allanscope::checkpoint::Header,
     data_seconds: bool,
     replay: bool,
 ) -> Result<Option<CheckpointSetup>> {
-    use crate::checkpoint::{
+    use allanscope::checkpoint::{
         check_fresh_start, check_resume, path_for, Checkpoint, CheckpointPlan,
     };
     if every.is_none() && !resume {
@@ -593,17 +539,19 @@ pub(crate) fn start_analysis(
     input: &str,
     setups: Vec<ChannelSetup>,
     opts: AnalysisOptions,
-    resume: Option<&crate::checkpoint::Checkpoint>,
+    resume: Option<&allanscope::checkpoint::Checkpoint>,
     path: Option<&Path>,
-) -> Result<crate::analysis::RunAnalysis> {
+) -> Result<allanscope::analysis::RunAnalysis> {
     match resume {
-        None => Ok(crate::analysis::RunAnalysis::new(input, setups, opts)),
-        Some(ck) => crate::analysis::RunAnalysis::restore(ck.analysis.clone(), opts).map_err(|p| {
-            anyhow::Error::new(UsageError::Checkpoint {
-                file: path.map(Path::to_path_buf).unwrap_or_default(),
-                problem: p,
+        None => Ok(allanscope::analysis::RunAnalysis::new(input, setups, opts)),
+        Some(ck) => {
+            allanscope::analysis::RunAnalysis::restore(ck.analysis.clone(), opts).map_err(|p| {
+                anyhow::Error::new(UsageError::Checkpoint {
+                    file: path.map(Path::to_path_buf).unwrap_or_default(),
+                    problem: p,
+                })
             })
-        }),
+        }
     }
 }
 

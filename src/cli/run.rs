@@ -1,5 +1,5 @@
 //! `run --config FILE`: the pipeline with source, channels, statistics, outputs and limits from
-//! a stand config (`crate::stand`; `config/stand.toml` is the example).
+//! a stand config (`allanscope::stand`; `config/stand.toml` is the example).
 
 use std::path::PathBuf;
 use std::time::Duration;
@@ -8,15 +8,15 @@ use anyhow::Result;
 use clap::Args;
 
 use super::select_channels;
-use crate::allan::accum::AccumConfig;
-use crate::analysis::{AnalysisOptions, InputKind};
-use crate::error::UsageError;
-use crate::frame::FrameDescriptor;
-use crate::model::fit::FitOptions;
-use crate::pipeline::{RecordWriter, RunControl, SignalWatch};
-use crate::sink::output::OutputMode;
-use crate::source::{Pace, SourceSpec};
-use crate::stand::StandConfig;
+use allanscope::allan::accum::AccumConfig;
+use allanscope::analysis::{AnalysisOptions, InputKind};
+use allanscope::error::UsageError;
+use allanscope::frame::FrameDescriptor;
+use allanscope::model::fit::FitOptions;
+use allanscope::pipeline::{RecordWriter, RunControl, SignalWatch};
+use allanscope::sink::output::OutputMode;
+use allanscope::source::{Pace, SourceSpec};
+use allanscope::stand::StandConfig;
 
 #[derive(Debug, Args)]
 pub struct RunArgs {
@@ -46,14 +46,15 @@ pub fn run(r: &RunArgs) -> Result<()> {
             problem: e.to_string(),
         })
     })?;
-    let limits = crate::model::limits::from_tables(&cfg.limits_raw, &cfg.file).map_err(|errs| {
-        let all = errs
-            .iter()
-            .map(|e| e.to_string())
-            .collect::<Vec<_>>()
-            .join("\n");
-        anyhow::Error::new(UsageError::Option(all))
-    })?;
+    let limits =
+        allanscope::model::limits::from_tables(&cfg.limits_raw, &cfg.file).map_err(|errs| {
+            let all = errs
+                .iter()
+                .map(|e| e.to_string())
+                .collect::<Vec<_>>()
+                .join("\n");
+            anyhow::Error::new(UsageError::Option(all))
+        })?;
     let mut spec = cfg.source.clone();
     let live = spec.is_live();
     if let SourceSpec::File { pace, .. } | SourceSpec::Stdin { pace } = &mut spec {
@@ -79,7 +80,7 @@ pub fn run(r: &RunArgs) -> Result<()> {
         diagnose: cfg.diagnose,
     };
     let setups = select_channels(
-        crate::analysis::ChannelSetup::for_frames(&desc),
+        allanscope::analysis::ChannelSetup::for_frames(&desc),
         &cfg.channels,
         &spec.name(),
     )
@@ -106,7 +107,7 @@ pub fn run(r: &RunArgs) -> Result<()> {
     let ck_path = ckpt.as_ref().map(|c| c.0.path.clone());
     let analysis = super::start_analysis(&spec.name(), setups, opts, saved, ck_path.as_deref())?;
     // Outputs last: every option has been accepted; they are only emptied once the source
-    // is open and delivers (crate::sink::output).
+    // is open and delivers (allanscope::sink::output).
     let mode = OutputMode::new(r.force, r.resume);
     let capture = super::capture_output(cfg.capture.as_deref(), mode, "[run] capture")
         .map_err(|e| e.context(format!("stand config {}", cfg.file.display())))?;
@@ -136,7 +137,7 @@ pub fn run(r: &RunArgs) -> Result<()> {
         ctl.progress.clone(),
     );
     let name = spec.name();
-    let result = crate::pipeline::run_frames(spec, &desc, analysis, writer.queue(), &ctl);
+    let result = allanscope::pipeline::run_frames(spec, &desc, analysis, writer.queue(), &ctl);
     let written = super::finish_records(writer, &dest, &signals);
     let outcome = result?;
     written?;
