@@ -128,6 +128,8 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue, ctl: &RunControl) -> Result
             "--checkpoint-every and --resume take one input (one run per output file)",
         ));
     }
+    let server = super::metrics::start_option(d.metrics.as_deref())?;
+    let mut ctl = ctl.clone();
     let mut fits = Vec::new();
     let mut unfinished = None;
     for (run, input) in a.inputs.iter().enumerate() {
@@ -137,9 +139,10 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue, ctl: &RunControl) -> Result
         }
         let mut opts = base.clone();
         opts.run = several.then_some(run);
+        ctl.metrics = server.as_ref().map(|s| s.tap(input, &opts.limits));
         let outcome = match &descriptor {
-            None => analyze_text(input, d, opts, realtime, queue, ctl)?,
-            Some(desc) => analyze_frames(input, desc, d, opts, realtime, queue, ctl)?,
+            None => analyze_text(input, d, opts, realtime, queue, &ctl)?,
+            Some(desc) => analyze_frames(input, desc, d, opts, realtime, queue, &ctl)?,
         };
         if !outcome.read_to_end {
             unfinished.get_or_insert_with(|| input.clone());

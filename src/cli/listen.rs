@@ -87,6 +87,8 @@ pub fn run(l: &ListenArgs) -> Result<()> {
     let ckpt = d.checkpoint_setup(header, false, false)?;
     let saved = ckpt.as_ref().and_then(|c| c.1.as_ref());
     let ck_path = ckpt.as_ref().map(|c| c.0.path.clone());
+    let server = super::metrics::start_option(d.metrics.as_deref())?;
+    let metrics = server.as_ref().map(|s| s.tap(&spec.name(), &opts.limits));
     let analysis = super::start_analysis(&spec.name(), setups, opts, saved, ck_path.as_deref())?;
     let mode = OutputMode::new(d.force, d.resume);
     // Outputs last: every option has been accepted; they are only emptied once the source
@@ -94,6 +96,7 @@ pub fn run(l: &ListenArgs) -> Result<()> {
     let capture = capture_output(l.capture.as_deref(), mode, "--capture")?;
     let (out, dest) = records_output(d.out.as_deref(), mode, "--out")?;
     let ctl = RunControl {
+        metrics,
         checkpoint: ckpt.map(|c| std::sync::Arc::new(c.0)),
         duration: match &l.duration {
             Some(s) => Some(Duration::from_secs_f64(parse_duration_s(s)?)),

@@ -40,6 +40,7 @@ use crate::checkpoint::{Checkpoint, CheckpointPlan, Collector, Piece, Position, 
 use crate::frame::{FrameDescriptor, Health};
 use crate::input::text::{TextReader, BATCH_ROWS};
 use crate::input::Chunk;
+use crate::sink::metrics::MetricsTap;
 use crate::sink::records::{HealthRecord, Record};
 use crate::source::{Capture, CaptureSlot, Progress, SourceContext, SourceEvent, SourceSpec};
 use decode::DecodeStage;
@@ -81,6 +82,9 @@ pub struct RunControl {
     /// Checkpoints (`--checkpoint-every`, `--resume`): where, how often, and the position to
     /// continue from.
     pub checkpoint: Option<Arc<CheckpointPlan>>,
+    /// Metrics for monitoring (`--metrics`): every fit record and the decoder's health, as the
+    /// run goes.
+    pub metrics: Option<MetricsTap>,
 }
 
 impl Default for RunControl {
@@ -94,6 +98,7 @@ impl Default for RunControl {
             show_progress: false,
             every_wall: None,
             checkpoint: None,
+            metrics: None,
         }
     }
 }
@@ -152,6 +157,7 @@ pub fn run_frames(
         queue.clone(),
         ctl.every_wall,
         plan.as_deref(),
+        ctl.metrics.clone(),
     )?;
     let progress = ctl.progress.clone();
     let mut schedule = plan.as_deref().map(|p| Schedule::new(p, desc.tau0_s()));
@@ -159,6 +165,7 @@ pub fn run_frames(
         .as_ref()
         .map(|c| (c.sender(), c.in_flight.clone(), c.written.clone()));
     let abort_after = plan.as_ref().and_then(|p| p.abort_after_frames);
+    let metrics = ctl.metrics.clone();
     let decode = std::thread::Builder::new()
         .name("allanscope-decode".into())
         .spawn(move || {
@@ -179,6 +186,9 @@ pub fn run_frames(
                 let before = events.len();
                 let n = stage.push(ev, &mut events);
                 progress.frames.fetch_add(n, Ordering::Relaxed);
+                if let Some(m) = &metrics {
+                    m.health(&stage.health());
+                }
                 let due = match (&mut schedule, &ck) {
                     (Some(s), Some((_, in_flight, _))) => {
                         s.add_steps(events[before..].iter().map(steps_of).sum());
@@ -289,6 +299,9 @@ pub fn run_frames(
             record.extra.insert("capture_error".into(), e.into());
         }
     }
+    if let Some(m) = &ctl.metrics {
+        m.health(&health);
+    }
     let read_to_end = ctl.progress.input_ended();
     finish_records(&mut analysis, Some(record), queue, ctl);
     Ok(RunOutcome {
@@ -318,6 +331,7 @@ pub fn run_text<R: BufRead + Send + 'static>(
         queue.clone(),
         ctl.every_wall,
         plan.as_deref(),
+        ctl.metrics.clone(),
     )?;
     let mut schedule = plan.as_deref().map(|p| Schedule::new(p, tau0));
     let ck = collector
@@ -436,6 +450,7 @@ fn spawn_analysis(
     queue: RecordQueue,
     every_wall: Option<Duration>,
     plan: Option<&CheckpointPlan>,
+    metrics: Option<MetricsTap>,
 ) -> Result<(
     ChunkSender,
     Vec<std::thread::JoinHandle<RunAnalysis>>,
@@ -453,6 +468,7 @@ fn spawn_analysis(
         txs.push(tx);
         let (queue, recycle) = (queue.clone(), recycle.clone());
         let pieces = collector.as_ref().map(Collector::sender);
+        let metrics = metrics.clone();
         let h = std::thread::Builder::new()
             .name("allanscope-analysis".into())
             .spawn(move || {
@@ -480,6 +496,9 @@ fn spawn_analysis(
                         recv(tick) -> _ => out.extend(part.records(false)),
                     }
                     for r in out.drain(..) {
+                        if let Some(m) = &metrics {
+                            m.observe(&r);
+                        }
                         queue.push_interim(r);
                     }
                 }
@@ -628,7 +647,11 @@ fn finish_records(
     queue: &RecordQueue,
     ctl: &RunControl,
 ) {
+    let metrics = ctl.metrics.as_ref();
     for r in analysis.records(true) {
+        if let Some(m) = metrics {
+            m.observe(&r);
+        }
         queue.push_final(r);
     }
     if let Some(h) = health {
