@@ -6,6 +6,7 @@
 mod aggregate;
 mod analyze;
 mod diagnose;
+mod export;
 mod listen;
 mod metrics;
 mod plot;
@@ -56,6 +57,9 @@ pub enum Command {
     /// Run-to-run statistics (the seed paper's table 2) from the final `fit` records of several
     /// runs, one JSON-lines file per run.
     Aggregate(AggregateArgs),
+    /// The fitted noise model in another tool's format (Kalibr, OpenVINS, VINS, KF-GINS), or
+    /// the curves as CSV or a Stable32-style table.
+    Export(export::ExportArgs),
 }
 
 #[derive(Debug, Args)]
@@ -247,6 +251,7 @@ where
         Command::Plot(p) => plot::run(&p),
         Command::Report(r) => report::run(&r),
         Command::Aggregate(a) => aggregate::run(&a),
+        Command::Export(e) => export::run(&e),
     }
 }
 

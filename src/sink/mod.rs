@@ -3,6 +3,7 @@
 //! [`records`] defines the records as typed structs (the contract's field names, units in
 //! their doc comments); [`json`] writes them one per line.
 
+pub mod export;
 pub mod json;
 pub mod metrics;
 pub mod output;

@@ -8,6 +8,7 @@ mod common;
 mod aggregate;
 mod analyze;
 mod diagnose;
+mod export;
 mod limits_summary;
 mod model_out;
 mod outputs;
