@@ -6,6 +6,7 @@
 pub mod export;
 pub mod json;
 pub mod metrics;
+pub mod output;
 pub mod plot;
 pub mod records;
 pub mod report;

@@ -11,3 +11,5 @@ mod diagnose;
 mod export;
 mod limits_summary;
 mod model_out;
+mod outputs;
+mod stop;
