@@ -8,5 +8,8 @@ mod common;
 mod aggregate;
 mod analyze;
 mod diagnose;
+mod export;
 mod limits_summary;
 mod model_out;
+mod outputs;
+mod stop;
