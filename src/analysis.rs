@@ -18,7 +18,7 @@ use crate::sink::records::{CurveRecord, FitRecord, Record, SummaryRecord};
 /// What the values of a text column are.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum InputKind {
-    /// Increments over each step, in u (the default; THEORY.md section 1).
+    /// Increments over each step, in u (the default; docs/theory.md section 1).
     #[default]
     Increments,
     /// Rate samples in u/s: the increment is `y * tau0`.
@@ -402,7 +402,7 @@ impl RunAnalysis {
                 ch.last_fit = Some(f);
             }
             if let Some(g) = &mut ch.gap {
-                // The diagnosis refreshed with the fits (THEORY.md section 5); a run still too
+                // The diagnosis refreshed with the fits (docs/theory.md section 5); a run still too
                 // short for it gives no record yet.
                 match diagnose(&g.snapshot(), &DiagnoseOptions::default()) {
                     Ok(d) => {

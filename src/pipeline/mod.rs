@@ -670,7 +670,7 @@ fn finish_records(
     queue.push_final(Record::Summary(summary));
 }
 
-/// The `health` record: the CONTRACT.md fields, then the decoder's extra detail.
+/// The `health` record: the docs/records.md fields, then the decoder's extra detail.
 pub fn health_record(h: &Health, run: Option<usize>) -> HealthRecord {
     let mut rec = HealthRecord {
         kind: "health".into(),

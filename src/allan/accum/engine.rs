@@ -289,7 +289,7 @@ impl<R: Repr> Engine<R> {
         self.segments
     }
 
-    /// Feeds one increment `d_k` (THEORY.md section 1).
+    /// Feeds one increment `d_k` (docs/theory.md section 1).
     #[inline]
     pub fn push_increment(&mut self, d: R::Inc) {
         if !self.open {
@@ -547,7 +547,7 @@ impl<R: Repr> Engine<R> {
                     m: lv.m,
                     stride,
                     tau_s: tau,
-                    // THEORY.md section 1: AVAR divides by 2 tau^2, HVAR by 6 tau^2, MVAR by 2 m^2 tau^2.
+                    // docs/theory.md section 1: AVAR divides by 2 tau^2, HVAR by 6 tau^2, MVAR by 2 m^2 tau^2.
                     avar: fin(&lv.avar, stats.avar, 2.0 * tau * tau),
                     hvar: fin(&lv.hvar, stats.hvar, 6.0 * tau * tau),
                     mvar: fin(&lv.mvar, stats.mvar, 2.0 * mf * mf * tau * tau),
@@ -665,7 +665,7 @@ pub(super) fn update_level<R: Repr>(
             }
             if lv.avar.next == target && x.end() > lv.hvar.next + 3 * mp {
                 // Second differences at k in [hvar.next, end - 2 mp): AVAR takes them from
-                // k = hvar.next + mp on, HVAR their differences at lag mp (THEORY.md section 1).
+                // k = hvar.next + mp on, HVAR their differences at lag mp (docs/theory.md section 1).
                 let n = (x.end() - 3 * mp - lv.hvar.next) as usize;
                 let m = mp as usize;
                 let [a, b, c] = lagged_at(xi, x.base, lv.hvar.next, mp, n + m);
@@ -677,7 +677,7 @@ pub(super) fn update_level<R: Repr>(
             }
         }
     }
-    // AVAR: x_{k+2m} - 2 x_{k+m} + x_k (THEORY.md section 1).
+    // AVAR: x_{k+2m} - 2 x_{k+m} + x_k (docs/theory.md section 1).
     if stats.avar && !fused {
         if let Some([a, b, c]) = lagged(x, lv.avar.next, mp) {
             lv.avar.add(
@@ -690,7 +690,7 @@ pub(super) fn update_level<R: Repr>(
             );
         }
     }
-    // HVAR: x_{k+3m} - 3 x_{k+2m} + 3 x_{k+m} - x_k (THEORY.md section 1).
+    // HVAR: x_{k+3m} - 3 x_{k+2m} + 3 x_{k+m} - x_k (docs/theory.md section 1).
     if stats.hvar && !fused {
         if let Some([a, b, c, d]) = lagged(x, lv.hvar.next, mp) {
             lv.hvar.add(
@@ -704,7 +704,7 @@ pub(super) fn update_level<R: Repr>(
         }
     }
     // MVAR: the inner sum of m second differences is C_{j+3m} - 3C_{j+2m} + 3C_{j+m} - C_j
-    // (THEORY.md section 1 with C the running sum of phase); with stride s the stream holds
+    // (docs/theory.md section 1 with C the running sum of phase); with stride s the stream holds
     // C at every s-th index, and mp = m/s.
     if let (true, Some((sums, base))) = (stats.mvar, moving_sums) {
         // The same inner sum as the second difference at lag m of the moving sums

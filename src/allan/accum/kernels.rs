@@ -108,7 +108,7 @@ pub(super) fn lagged_at<T, const K: usize>(
     std::array::from_fn(|j| &data[o + j * m..o + j * m + n])
 }
 
-/// Second differences `x2 - 2 x1 + x0` of integer phase as exact doubles (THEORY.md section 1),
+/// Second differences `x2 - 2 x1 + x0` of integer phase as exact doubles (docs/theory.md section 1),
 /// into `out`; the caller proves `|result| < 2^51`, so their differences are exact too.
 /// (Summing their squares in the same loop was measured slower: the stores and the add chains
 /// together defeat the vectorizer.)

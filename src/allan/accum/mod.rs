@@ -1,5 +1,5 @@
 //! Streaming accumulators for the overlapping Allan, overlapping Hadamard and modified Allan
-//! variances (THEORY.md section 1), updated sample by sample and readable at any moment.
+//! variances (docs/theory.md section 1), updated sample by sample and readable at any moment.
 //!
 //! # How it works
 //!
@@ -8,7 +8,7 @@
 //! third difference of `C`) enter a *stream* at stride 1. Every cluster size `m` (a *level*)
 //! reads a stream of stride `s`: `s = 1` in exact mode, and in bounded mode the largest divisor
 //! of `m` not above `max(1, m/L)`, so each level sees at least `L` stream points per cluster
-//! (THEORY.md section 1, "Streaming with bounded memory"). Streams of larger strides are
+//! (docs/theory.md section 1, "Bounded memory"). Streams of larger strides are
 //! decimations of smaller ones. Each stream keeps only the points its levels still need (about
 //! `4L` of them in bounded mode), so memory does not grow with the run; in exact mode stream 1
 //! keeps everything and every level uses every difference.
@@ -30,7 +30,7 @@
 //! # Gaps
 //!
 //! A gap (lost frames, an empty or NaN row) ends the phase segment: the phase after it is known
-//! only up to a constant, so no difference spans it (THEORY.md section 1, "Gaps"). Sums and counts
+//! only up to a constant, so no difference spans it (docs/theory.md section 1, "Gaps"). Sums and counts
 //! carry on; the streams restart.
 //!
 //! # Files

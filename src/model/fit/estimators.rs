@@ -199,7 +199,7 @@ pub(super) fn floor_model(model: &mut DVector<f64>, y: &DVector<f64>) {
     }
 }
 
-/// THEORY.md section 2: weights `edf_j / (2 AVAR_model(tau_j)^2)` at the current model, iterated.
+/// docs/theory.md section 2: weights `edf_j / (2 AVAR_model(tau_j)^2)` at the current model, iterated.
 pub(super) fn est_model(prob: &Problem, opts: &FitOptions) -> Result<Estimate, FitError> {
     // Start from the data's own weights, then move the weights to the model.
     let w0: Vec<f64> = (0..prob.y.len())
@@ -227,7 +227,7 @@ pub(super) fn est_model(prob: &Problem, opts: &FitOptions) -> Result<Estimate, F
     Ok(Estimate { c, g, iterations })
 }
 
-/// The seed paper's formulas (6)-(7) (SEED.md).
+/// The seed paper's formulas (6)-(7) (the seed paper, docs/theory.md section 6).
 pub(super) fn est_paper(prob: &Problem) -> Result<Estimate, FitError> {
     let j = prob.y.len();
     let w1: Vec<f64> = (0..j).map(|r| 1.0 / prob.y[r]).collect();

@@ -37,7 +37,7 @@ pub(super) struct Inverted {
     pub(super) c_at_lo: [f64; 5],
 }
 
-/// 95% intervals by test inversion, with the variance under the null (THEORY.md section 4: the
+/// 95% intervals by test inversion, with the variance under the null (docs/theory.md section 4: the
 /// variance of the estimates follows from the model; here from the trial model, not the fitted
 /// one, as in Wilson's score interval for a proportion). For each term `i` and trial value `t`:
 /// the other terms take their profile values `c_-i(t) = c_hat_-i + Cov(c_-i, c_i) / Var(c_i)

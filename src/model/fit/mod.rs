@@ -1,13 +1,13 @@
-//! Fit of the five-term model (THEORY.md section 2) to an AVAR curve, with honest 95% intervals
-//! and a calibrated goodness of fit (THEORY.md sections 4 and 5). Works on curve points only.
+//! Fit of the five-term model (docs/theory.md section 2) to an AVAR curve, with honest 95% intervals
+//! and a calibrated goodness of fit (docs/theory.md sections 4 and 5). Works on curve points only.
 //!
 //! Methods ([`FitMethod`]):
 //! - `Model` (default): weighted NNLS in `c = (Q^2, N^2, B^2, K^2, R^2) >= 0` with weights
 //!   `1 / Var(AVAR_hat(tau_j))`, `Var = 2 AVAR_model(tau_j)^2 / edf_j`, the model being the current
 //!   fit, iterated to a fixed point. Weights from the noisy estimate itself bias the fit low
-//!   (THEORY.md section 2); weights from the model do not.
+//!   (docs/theory.md section 2); weights from the model do not.
 //! - `Paper`: the seed paper's formulas (6)-(7): weights `1/AVAR_hat`, then one fit per term with
-//!   weights `term_i / (AVAR_hat * p^2)`, keeping that term's coefficient (SEED.md).
+//!   weights `term_i / (AVAR_hat * p^2)`, keeping that term's coefficient (the seed paper, docs/theory.md section 6).
 //! - `Slopes`: the IEEE Std 952 read-out: the line of each term's slope that touches the curve from
 //!   below (N at tau = 1 s on the -1/2 line, K at 3 s on +1/2, Q at sqrt(3) s on -1, R at sqrt(2) s
 //!   on +1, B = min ADEV / 0.664).
@@ -134,7 +134,7 @@ pub enum FitError {
     Nnls(#[from] NnlsError),
 }
 
-/// One coefficient of the fit, in its native unit (THEORY.md section 2 table).
+/// One coefficient of the fit, in its native unit (docs/theory.md section 2 table).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct CoefEstimate {
     /// The estimate (kept even when not determined; the JSON record prints null then).
@@ -146,7 +146,7 @@ pub struct CoefEstimate {
     pub dominant: bool,
     /// The 95% interval excludes zero (`lo > 0`).
     pub significant: bool,
-    /// `dominant && significant && lo >= value * QUANTITATION_FRACTION` (THEORY.md section 2,
+    /// `dominant && significant && lo >= value * QUANTITATION_FRACTION` (docs/theory.md section 2,
     /// with the quantitation condition of [`QUANTITATION_FRACTION`]).
     pub determined: bool,
     /// The term is still the largest at one or more fitted taus when it sits at the lower end of
@@ -239,7 +239,7 @@ impl Fitter {
         }
     }
 
-    /// Fit the AVAR curve `points` (THEORY.md section 2).
+    /// Fit the AVAR curve `points` (docs/theory.md section 2).
     pub fn fit(&mut self, points: &[CurvePoint], opts: &FitOptions) -> Result<FitResult, FitError> {
         let prob = select(points, opts)?;
         let est = match opts.method {
@@ -300,7 +300,7 @@ impl Fitter {
             dominant_at_lo: false,
             sd_c: 0.0,
         }; 5];
-        // The slope bound of each term from the points' 97.5% upper limits (THEORY.md section
+        // The slope bound of each term from the points' 97.5% upper limits (docs/theory.md section
         // 4): c_i basis_i(tau_k) <= AVAR(tau_k) <= edf_k AVAR_hat_k / chi2_{0.025}(edf_k).
         // Computed only when a term is left undetermined (the quantiles are half of a refit).
         let bounds = std::cell::OnceCell::new();

@@ -4,7 +4,7 @@
 #[allow(unused_imports)]
 use super::*;
 
-/// One coefficient as CONTRACT.md's `fit` record prints it.
+/// One coefficient as docs/records.md's `fit` record prints it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct CoefValue {
     pub value: Option<f64>,
@@ -13,7 +13,7 @@ pub struct CoefValue {
     pub determined: bool,
 }
 
-/// The `coef` object of CONTRACT.md's `fit` record: keys Q, N, B, K, R.
+/// The `coef` object of docs/records.md's `fit` record: keys Q, N, B, K, R.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[allow(non_snake_case)]
 pub struct CoefRecord {
@@ -25,7 +25,7 @@ pub struct CoefRecord {
 }
 
 impl FitResult {
-    /// The `coef` object of CONTRACT.md's `fit` record.
+    /// The `coef` object of docs/records.md's `fit` record.
     pub fn coef_record(&self) -> CoefRecord {
         let v = |i: usize| {
             let e = &self.coef[i];
