@@ -1,6 +1,6 @@
 //! Text columns: one row per sample, columns separated by commas, semicolons, tabs or spaces,
 //! an optional first row of channel names (otherwise `c1`, `c2`, ...; a UTF-8 byte-order mark
-//! before it is dropped, duplicate names are refused), `#` lines skipped (CONTRACT.md). A column
+//! before it is dropped, duplicate names are refused), `#` lines skipped (docs/records.md). A column
 //! named `time`, `t`, `timestamp` or `time_s` (or the one [`TextOptions::time_column`] names) is
 //! a time stamp, not a channel, and is skipped; [`TextOptions::columns`] picks and renames
 //! channels.

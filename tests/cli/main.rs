@@ -11,4 +11,6 @@ mod diagnose;
 mod export;
 mod limits_summary;
 mod model_out;
+mod outputs;
+mod stop;
 mod text_input;
