@@ -37,12 +37,8 @@ use anyhow::{Context, Result};
 use tokio_util::sync::CancellationToken;
 
 use crate::analysis::RunAnalysis;
-<<<<<<< HEAD
-use crate::checkpoint::{Checkpoint, CheckpointPlan, Collector, Piece, Position, Schedule};
-use crate::error::UsageError;
-=======
 use crate::checkpoint::{Checkpoint, CheckpointPlan, Position};
->>>>>>> main
+use crate::error::UsageError;
 use crate::frame::{FrameDescriptor, Health};
 use crate::input::text::{TextReader, BATCH_ROWS};
 use crate::input::Chunk;
@@ -346,12 +342,9 @@ pub fn run_text<R: BufRead + Send + 'static>(
         .map(|c| (c.sender(), c.in_flight.clone(), c.written.clone()));
     let abort_after = plan.as_ref().and_then(|p| p.abort_after_frames);
     let shutdown = ctl.shutdown.clone();
-<<<<<<< HEAD
     let path_shown = path.clone();
-=======
     let progress = ctl.progress.clone();
     progress.input_ended.store(false, Ordering::SeqCst);
->>>>>>> main
     let read = move || -> Result<crate::input::text::TextPosition> {
         let mut reader = reader;
         let started = Instant::now();
