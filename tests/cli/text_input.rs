@@ -4,7 +4,7 @@
 //! the binary; the curves are compared with those of the same numbers written plainly.
 
 use crate::common::exe;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Output;
 
 use allanscope::sink::records::{CurveRecord, Record, SummaryRecord};
@@ -43,7 +43,7 @@ fn rows(sep: &str, with_time: bool) -> String {
     s
 }
 
-fn analyze(path: &PathBuf, extra: &[&str]) -> Output {
+fn analyze(path: &Path, extra: &[&str]) -> Output {
     exe()
         .args([
             "analyze",
