@@ -106,6 +106,37 @@ pub struct AnalysisState {
     pub elapsed_s: f64,
 }
 
+/// The first of `next, next + every, next + 2 every, ...` (summed one by one, as the records'
+/// data-seconds always were) that lies after `t`. The sum is taken at most a few thousand times;
+/// past that (a long gap, a tiny interval against a huge time, a restored `next` far behind),
+/// the multiple of `every` after `t` is computed directly, so the time this takes is bounded
+/// whatever the numbers; an `every` too small to move `next` at all gives infinity (no more
+/// interim records) rather than a loop that never ends.
+fn next_after(mut next: f64, every: f64, t: f64) -> f64 {
+    const SUMMED: u32 = 4096;
+    for _ in 0..SUMMED {
+        if next > t {
+            return next;
+        }
+        let moved = next + every;
+        if moved <= next || moved.is_nan() {
+            return f64::INFINITY;
+        }
+        next = moved;
+    }
+    if next > t {
+        return next;
+    }
+    let mut after = next + ((t - next) / every).floor() * every;
+    for _ in 0..4 {
+        if after > t && after.is_finite() {
+            return after;
+        }
+        after += every;
+    }
+    f64::INFINITY
+}
+
 /// A run in progress.
 pub struct RunAnalysis {
     input: String,
@@ -172,14 +203,42 @@ impl RunAnalysis {
 
     /// Continues a run from its saved state with `opts`, which must accumulate the same way
     /// (same tau0, cluster sizes, overlap and statistics; the diagnosis on or off as before).
-    pub fn restore(state: AnalysisState, opts: AnalysisOptions) -> Result<RunAnalysis, String> {
+    /// `setups` are the channels the input has now: the saved ones must be the same.
+    pub fn restore(
+        state: AnalysisState,
+        setups: &[ChannelSetup],
+        opts: AnalysisOptions,
+    ) -> Result<RunAnalysis, String> {
+        let saved: Vec<&ChannelSetup> = state.channels.iter().map(|c| &c.setup).collect();
+        if saved.len() != setups.len() || saved.iter().zip(setups).any(|(a, b)| *a != b) {
+            return Err(format!(
+                "saved for the channels [{}], the input now has [{}]",
+                saved
+                    .iter()
+                    .map(|c| c.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                setups
+                    .iter()
+                    .map(|c| c.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+        // The next interim record is due at a data-second ahead of zero, or never.
+        if !(state.next_emit_s >= 0.0) {
+            return Err(format!(
+                "the next interim record is due at {} data-seconds",
+                state.next_emit_s
+            ));
+        }
         for c in &state.channels {
             if c.acc.config() != &opts.accum {
                 return Err(format!(
-                    "channel {} was accumulated with other settings ({:?}) than asked now ({:?})",
+                    "channel {} was accumulated with other settings than asked now (saved vs \
+                     now: {}); resume with the options of the saved run",
                     c.setup.name,
-                    c.acc.config(),
-                    opts.accum
+                    c.acc.config().differences(&opts.accum).join("; ")
                 ));
             }
             if c.gap.is_some() != opts.diagnose {
@@ -194,9 +253,25 @@ impl RunAnalysis {
                 ));
             }
         }
+        for c in &state.channels {
+            c.acc
+                .check_restored()
+                .map_err(|e| format!("channel {}: {e}", c.setup.name))?;
+            if let Some(g) = &c.gap {
+                g.check_restored(opts.accum.tau0_s)
+                    .map_err(|e| format!("channel {}: {e}", c.setup.name))?;
+            }
+            if c.last_phase.is_some_and(|x| !x.is_finite()) {
+                return Err(format!("channel {}: last phase not finite", c.setup.name));
+            }
+        }
         let started = Instant::now()
             .checked_sub(std::time::Duration::from_secs_f64(
-                state.elapsed_s.clamp(0.0, 1.0e9),
+                if state.elapsed_s.is_finite() {
+                    state.elapsed_s.clamp(0.0, 1.0e9)
+                } else {
+                    0.0
+                },
             ))
             .unwrap_or_else(Instant::now);
         Ok(RunAnalysis {
@@ -357,9 +432,7 @@ impl RunAnalysis {
         if self.t_data_s() >= self.next_emit_s {
             out.extend(self.records(false));
             let every = self.opts.every_s.unwrap_or(f64::INFINITY);
-            while self.next_emit_s <= self.t_data_s() {
-                self.next_emit_s += every;
-            }
+            self.next_emit_s = next_after(self.next_emit_s, every, self.t_data_s());
         }
     }
 

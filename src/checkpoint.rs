@@ -254,7 +254,21 @@ impl Checkpoint {
         if CRC32.checksum(body) != crc {
             return Err("damaged: the CRC-32 of its contents does not match".into());
         }
-        ciborium::from_reader(body).map_err(|e| format!("cannot decode its contents: {e}"))
+        let ck: Checkpoint =
+            ciborium::from_reader(body).map_err(|e| format!("cannot decode its contents: {e}"))?;
+        // The numbers a resume drives timers and loops with (the accumulators are checked when
+        // restored, against the options of the resuming run).
+        if ck.every_s != 0.0 {
+            crate::ranges::check_interval(ck.every_s)
+                .map_err(|e| format!("damaged: saved checkpoint interval {e}"))?;
+        }
+        if !(ck.analysis.next_emit_s >= 0.0) {
+            return Err(format!(
+                "damaged: the next interim record is due at {} data-seconds",
+                crate::ranges::show(ck.analysis.next_emit_s)
+            ));
+        }
+        Ok(ck)
     }
 
     /// Writes the checkpoint atomically: `FILE.tmp`, flushed to disk, renamed over `FILE`.
@@ -519,19 +533,28 @@ pub struct Schedule {
     steps: u64,
     next_steps: u64,
     next_wall: Instant,
+    /// `every_s` as a wall-clock interval (at least `crate::ranges::MIN_INTERVAL_S`).
+    wall: std::time::Duration,
     pub seq: u64,
 }
 
 impl Schedule {
     pub fn new(plan: &CheckpointPlan, tau0_s: f64) -> Schedule {
         let every_steps = ((plan.every_s / tau0_s).round() as u64).max(1);
+        // `every_s` is checked against `crate::ranges` where it is parsed; a timer is clamped
+        // here too, so that no value can overflow the clock.
+        let wall = std::time::Duration::from_secs_f64(
+            plan.every_s
+                .clamp(crate::ranges::MIN_INTERVAL_S, crate::ranges::MAX_SECONDS),
+        );
         Schedule {
             every_s: plan.every_s,
             data_seconds: plan.data_seconds,
             tau0_s,
             steps: 0,
             next_steps: every_steps,
-            next_wall: Instant::now() + std::time::Duration::from_secs_f64(plan.every_s),
+            next_wall: Instant::now() + wall,
+            wall,
             seq: plan.resume.as_ref().map_or(0, |r| r.1),
         }
     }
@@ -554,11 +577,17 @@ impl Schedule {
             return false;
         }
         let every_steps = ((self.every_s / self.tau0_s).round() as u64).max(1);
-        while self.next_steps <= self.steps {
-            self.next_steps += every_steps;
+        if self.next_steps <= self.steps {
+            // The first multiple of the interval after the steps read (not a loop: a long gap
+            // of lost frames can jump the count by far more than one interval).
+            let behind = (self.steps - self.next_steps) / every_steps + 1;
+            self.next_steps = self
+                .next_steps
+                .saturating_add(behind.saturating_mul(every_steps));
         }
-        while self.next_wall <= now {
-            self.next_wall += std::time::Duration::from_secs_f64(self.every_s);
+        if self.next_wall <= now {
+            let behind = now.duration_since(self.next_wall).as_secs_f64() / self.wall.as_secs_f64();
+            self.next_wall += self.wall.mul_f64(behind.floor() + 1.0);
         }
         self.seq += 1;
         true

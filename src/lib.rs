@@ -17,6 +17,8 @@
 //! sim (model files, generators, capture writer)           model file -> capture
 //! stand (the stand config of `run`)                       TOML -> sources, options, limits
 //! stats: the chi-squared quantile behind every interval
+//! toml_check: the one error collector of every TOML file read (file, line, key, problem)
+//! ranges: the bounds every user-given number is checked against where it is parsed
 //! cli: one file per subcommand over the above; main.rs maps errors to exit statuses
 //! ```
 //!
@@ -35,8 +37,10 @@ pub mod gap;
 pub mod input;
 pub mod model;
 pub mod pipeline;
+pub mod ranges;
 pub mod sim;
 pub mod sink;
 pub mod source;
 pub mod stand;
 pub mod stats;
+pub mod toml_check;

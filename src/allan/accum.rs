@@ -141,6 +141,60 @@ pub struct AccumConfig {
 }
 
 impl AccumConfig {
+    /// Each setting that differs from `other`'s, as `name: this vs other` (empty when equal),
+    /// in the words of the command line.
+    pub fn differences(&self, other: &AccumConfig) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.tau0_s.to_bits() != other.tau0_s.to_bits() {
+            out.push(format!("tau0: {:?} s vs {:?} s", self.tau0_s, other.tau0_s));
+        }
+        if self.stats != other.stats {
+            let names = |s: StatSet| {
+                [("avar", s.avar), ("hvar", s.hvar), ("mvar", s.mvar)]
+                    .iter()
+                    .filter(|x| x.1)
+                    .map(|x| x.0)
+                    .collect::<Vec<_>>()
+                    .join(",")
+            };
+            out.push(format!(
+                "--stats: {} vs {}",
+                names(self.stats),
+                names(other.stats)
+            ));
+        }
+        if self.overlap != other.overlap {
+            let show = |o: Overlap| match o {
+                Overlap::Full => "full".to_string(),
+                Overlap::Bounded(l) => l.to_string(),
+            };
+            out.push(format!(
+                "--overlap: {} vs {}",
+                show(self.overlap),
+                show(other.overlap)
+            ));
+        }
+        if self.taus != other.taus {
+            let show = |t: &TauSpec| match t {
+                TauSpec::Octave => "octave".to_string(),
+                TauSpec::Decade => "decade".to_string(),
+                TauSpec::List(v) => v.iter().map(u64::to_string).collect::<Vec<_>>().join(","),
+            };
+            out.push(format!(
+                "--taus: {} vs {}",
+                show(&self.taus),
+                show(&other.taus)
+            ));
+        }
+        if self.noise_id != other.noise_id {
+            out.push(format!(
+                "noise identification: {} vs {}",
+                self.noise_id, other.noise_id
+            ));
+        }
+        out
+    }
+
     pub fn new(tau0_s: f64) -> AccumConfig {
         AccumConfig {
             tau0_s,
@@ -943,6 +997,75 @@ impl<R: Repr> Engine<R> {
             .collect()
     }
 
+    /// Checks a state read back from a checkpoint: the streams and levels must be the ones its
+    /// configuration builds, and every index must point into what the streams hold, so that a
+    /// damaged or forged state is refused rather than read out of bounds. The numbers in the
+    /// sums are not checked (any value is a possible sum).
+    pub fn check_restored(&self) -> Result<(), String> {
+        let fresh = Engine::<R>::new(self.cfg.clone());
+        if self.streams.len() != fresh.streams.len() || self.levels.len() != fresh.levels.len() {
+            return Err(format!(
+                "{} streams and {} levels, where its settings give {} and {}",
+                self.streams.len(),
+                self.levels.len(),
+                fresh.streams.len(),
+                fresh.levels.len()
+            ));
+        }
+        // Indices stay far below u64::MAX, so the sums of index and span cannot overflow.
+        const MAX_INDEX: u64 = 1 << 62;
+        for (i, (s, f)) in self.streams.iter().zip(&fresh.streams).enumerate() {
+            if (s.stride, s.parent, s.factor, s.needs_c)
+                != (f.stride, f.parent, f.factor, f.needs_c)
+            {
+                return Err(format!("stream {i} is not the one its settings build"));
+            }
+            for (name, base, len, new_from) in [
+                ("x", s.x.base, s.x.data.len(), s.x.new_from),
+                ("c", s.c.base, s.c.data.len(), s.c.new_from),
+            ] {
+                if new_from > len || base > MAX_INDEX || len as u64 > MAX_INDEX {
+                    return Err(format!(
+                        "stream {i} ({name}): new points from {new_from} of {len} held, base {base}"
+                    ));
+                }
+            }
+            if !s.needs_c && !s.c.data.is_empty() {
+                return Err(format!("stream {i} holds running sums it does not use"));
+            }
+        }
+        for (lv, f) in self.levels.iter().zip(&fresh.levels) {
+            if (lv.m, lv.stream, lv.mp) != (f.m, f.stream, f.mp) {
+                return Err(format!(
+                    "the level of m = {} is not the one its settings build",
+                    lv.m
+                ));
+            }
+            let st = &self.streams[lv.stream];
+            let within = |next: u64, b: &Buf<R::X>| next >= b.base && next <= b.end() + 4 * lv.mp;
+            let within_c = |next: u64, b: &Buf<R::C>| next >= b.base && next <= b.end() + 4 * lv.mp;
+            let stats = self.cfg.stats;
+            let bad = (stats.avar && !within(lv.avar.next, &st.x))
+                || (stats.hvar && !within(lv.hvar.next, &st.x))
+                || (self.cfg.noise_id && !within(lv.nid_next, &st.x))
+                || (stats.mvar && !within_c(lv.mvar.next, &st.c))
+                || (stats.mvar && lv.stream == 0 && !within(lv.mvar.next, &st.x));
+            if bad {
+                return Err(format!(
+                    "the level of m = {} points outside the data it holds",
+                    lv.m
+                ));
+            }
+        }
+        if self.n_points > self.n_steps.saturating_add(self.segments) || self.n_steps > MAX_INDEX {
+            return Err(format!(
+                "{} points in {} steps and {} segments",
+                self.n_points, self.n_steps, self.segments
+            ));
+        }
+        Ok(())
+    }
+
     /// Bytes held by the streams (the part of memory that could grow with the run).
     pub fn stream_bytes(&self) -> usize {
         self.streams
@@ -1391,6 +1514,20 @@ impl ChannelAccumulator {
 
     pub fn stream_bytes(&self) -> usize {
         self.engine().bytes()
+    }
+
+    /// [`Engine::check_restored`] for whichever engine this is; a count scale must be a
+    /// finite non-zero number.
+    pub fn check_restored(&self) -> Result<(), String> {
+        match self {
+            ChannelAccumulator::Counts { engine, scale } => {
+                if !(scale.is_finite() && *scale != 0.0) {
+                    return Err(format!("count scale {scale}"));
+                }
+                engine.check_restored()
+            }
+            ChannelAccumulator::Real(e) => e.check_restored(),
+        }
     }
 
     /// Readings in u^2/s^2 (counts scaled).

@@ -51,6 +51,14 @@ fn gather(
                     evidence.push(GapEvidence::new(cfg.clone()));
                 }
             }
+            if names.len() > crate::ranges::MAX_CHANNELS {
+                return Err(super::usage(format!(
+                    "{input}: {} channels; at most {} are diagnosed in one run (choose some \
+                     with --channel)",
+                    names.len(),
+                    crate::ranges::MAX_CHANNELS
+                )));
+            }
             let width = reader.names().len();
             let mut last_phase: Vec<Option<f64>> = vec![None; columns.len()];
             let mut rows = Vec::with_capacity(BATCH_ROWS * width);
