@@ -18,12 +18,14 @@
 //! `--null-seed`, and prints the oracle bounds of docs/gap.md ("Oracle bounds"): the power of
 //! tests told the true effect, and Cramér-Rao bounds on its parameters (`allanscope::gap::oracle`).
 
-use allanscope::gap::diagnose::{
-    fit_warmup, forward_steps, jump_forward_mixture_log_bf, jump_forward_mixture_stat,
-    jump_mixture_log_bf, jump_mixture_stat, step_scan, GapProblem, ModelSpec, StepScan,
+use allanscope::gap::jump_mixture::{
+    jump_forward_mixture_log_bf, jump_forward_mixture_stat, jump_mixture_log_bf, jump_mixture_stat,
     JUMP_FWD_Z_MIN,
 };
 use allanscope::gap::oracle::{self, BlockGls};
+use allanscope::gap::problem::{GapProblem, ModelSpec};
+use allanscope::gap::steps::{forward_steps, step_scan, StepScan};
+use allanscope::gap::warmup::fit_warmup;
 use allanscope::gap::{
     diagnose, DiagnoseOptions, EffectKind, EffectParams, EvidenceSnapshot, GapConfig, GapEvidence,
 };
@@ -1190,14 +1192,11 @@ fn main() {
             "warm-up: {:?}",
             fit_warmup(&snap.block_means, block_s, t_run, &c5, &[])
         );
-        if let Some(se) = allanscope::gap::diagnose::step_standard_errors(
-            snap.block_means.len(),
-            block_s,
-            &c5,
-            &[],
-        ) {
+        if let Some(se) =
+            allanscope::gap::steps::step_standard_errors(snap.block_means.len(), block_s, &c5, &[])
+        {
             let tb = 10.0 * t_run / 10.0;
-            let true_se = allanscope::gap::diagnose::step_standard_errors(
+            let true_se = allanscope::gap::steps::step_standard_errors(
                 snap.block_means.len(),
                 block_s,
                 &[

@@ -1,7 +1,7 @@
 //! Distribution functions shared by the stages: the chi-squared quantile behind every 95%
 //! interval (the Allan curve's points, THEORY.md section 1; the fit's coefficients, section 2).
 //! Written here rather than taken from statrs, whose inverse CDF is a slow general-purpose
-//! root search and loses digits at small degrees of freedom (tests/fit_chi2_quantile.rs).
+//! root search and loses digits at small degrees of freedom (tests/model/chi2_quantile.rs).
 
 /// The `p` quantile of the chi-squared distribution with `nu > 0` degrees of freedom (NaN for
 /// bad arguments; `0 < p < 1`). Chi-squared with `nu` is twice the gamma of shape `a = nu/2`,
@@ -10,7 +10,7 @@
 /// the answer; below it, the expansion or Wilson-Hilferty's cube-root normal approximation
 /// (the small-`x` form `P ~ x^a / Gamma(a + 1)` where that fails) starts Halley steps in
 /// `ln x` on [`gamma_pq`], kept inside a bracket. `nu = 2` is the closed form `-2 ln(1 - p)`.
-/// Tested against statrs' `inverse_cdf` to 1e-10 relative (tests/fit_chi2_quantile.rs).
+/// Tested against statrs' `inverse_cdf` to 1e-10 relative (tests/model/chi2_quantile.rs).
 pub fn chi2_quantile(nu: f64, p: f64) -> f64 {
     if !(nu > 0.0 && nu.is_finite() && p > 0.0 && p < 1.0) {
         return f64::NAN;

@@ -188,7 +188,7 @@ fn analyze_text(
         .filter(|(_, n)| !AUXILIARY_COLUMNS.contains(&n.as_str()))
         .map(|(i, n)| ChannelSetup {
             name: n.clone(),
-            unit: d.unit.clone(),
+            unit: crate::model::units::increment_unit_label(&d.unit, d.rate),
             column: i,
             counts_lsb: None,
         })

@@ -79,6 +79,10 @@ pub struct DiagnoseArgs {
     /// A second run of the same unit, on which the effects fitted on INPUT are judged.
     #[arg(long)]
     pub holdout: Option<String>,
+    /// Write the fitted unit (five terms, LSB, tau0, accepted effects) as a model file that
+    /// `simulate --model` reads. An existing file is never overwritten.
+    #[arg(long, value_name = "FILE")]
+    pub model_out: Option<PathBuf>,
     #[command(flatten)]
     pub data: DataArgs,
 }
@@ -130,7 +134,8 @@ pub struct DataArgs {
     /// Text columns hold phase (the running sum of increments, u).
     #[arg(long)]
     pub phase: bool,
-    /// Unit label of text columns.
+    /// Unit of the increment of text columns, also with --rate or --phase (with --rate, `deg/s`
+    /// means `deg`): deg, rad, mrad, arcsec, m/s, ft/s, g (g*s), mg give datasheet units.
     #[arg(long, default_value = "u")]
     pub unit: String,
     /// Cluster sizes: `octave` (powers of two), `decade` (1, 2, 4 per decade) or a list of m.

@@ -4,21 +4,39 @@
 //!
 //! Layout: [`evidence`] gathers, in one streaming pass over increments, the dense AVAR curve,
 //! per-segment curves and block means ([`GapEvidence`]); [`effects`] holds the candidate effects
-//! and their AVAR columns; [`diagnose`](mod@diagnose) fits them and decides ([`Diagnosis`]); [`record`]
-//! writes CONTRACT.md's `diagnosis` record. Everything is pure and synchronous.
+//! and their AVAR columns; [`problem`] is the GLS fit on the curve, [`block_cov`] the noise model
+//! of the time-domain tests [`warmup`] and [`steps`] ([`jump_mixture`]: statistics measured and
+//! not adopted); [`segments`] tests homogeneity in time; [`diagnose`](mod@diagnose) orchestrates
+//! them and decides ([`Diagnosis`]) by [`thresholds`]; [`holdout`] judges a held-out run;
+//! [`oracle`] bounds what any test could do; [`record`] writes CONTRACT.md's `diagnosis` record;
+//! [`unit_model`] turns a diagnosis into the simulator model of the fitted unit (with the LSB
+//! that [`lsb`] reads off the values).
+//! Everything is pure and synchronous.
 //!
 //! Wiring: feed a [`GapEvidence`] (from [`GapConfig::new`], with `expected_increments` when the
 //! run length is known) with `push_increment` / `push_gap`; at the end (or any time) call
 //! `snapshot()`, then [`diagnose::diagnose`], and [`record::DiagnosisRecord::new`]; with a
-//! held-out run, [`diagnose::holdout_gap`] on its snapshot.
+//! held-out run, [`holdout::holdout_gap`] on its snapshot.
 
+pub mod block_cov;
 pub mod diagnose;
 pub mod effects;
 pub mod evidence;
+pub mod holdout;
+pub mod jump_mixture;
+pub mod lsb;
 pub mod oracle;
+pub mod problem;
 pub mod record;
+pub mod segments;
+pub mod steps;
+pub mod thresholds;
+pub mod unit_model;
+pub mod warmup;
 
-pub use diagnose::{diagnose, holdout_gap, DiagnoseOptions, Diagnosis, Thresholds, Verdict};
+pub use diagnose::{diagnose, DiagnoseOptions, Diagnosis, Verdict};
 pub use effects::{EffectKind, EffectParams};
 pub use evidence::{EvidenceSnapshot, GapConfig, GapEvidence};
+pub use holdout::holdout_gap;
 pub use record::DiagnosisRecord;
+pub use thresholds::Thresholds;

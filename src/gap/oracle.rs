@@ -18,10 +18,10 @@
 //! the five amplitudes only after linearising `ln AVAR` at the truth, so there `z` is the score
 //! statistic of that linearisation.
 
-use super::diagnose::{
-    block_diff_covariance, usable_block_means, warmup_block_shape, GapProblem, ModelSpec,
-};
+use super::block_cov::{block_diff_covariance, usable_block_means};
 use super::effects::{effect_column, EffectKind};
+use super::problem::{GapProblem, ModelSpec};
+use super::warmup::warmup_block_shape;
 use crate::model::terms::basis;
 use nalgebra::{DMatrix, DVector};
 
@@ -494,5 +494,5 @@ pub fn jumps_marginal_oracle(
     if logw.is_empty() {
         return None;
     }
-    Some(super::diagnose::log_mean_exp(&logw))
+    Some(super::warmup::log_mean_exp(&logw))
 }

@@ -1,6 +1,7 @@
 //! CONTRACT.md's `diagnosis` record: `type`, `channel`, `gap_before`, `gap_after`, `verdict`,
 //! `regions`, `effects`, optional `holdout`, plus extra fields (`final`, `t_data`, `tau_span`,
-//! `base_coef`, `final_coef`, `segments`, `jumps`, `residual_shape`).
+//! `base_coef`, `final_coef`, `segments`, `jumps`, `residual_shape`, `model_tau`, `model_base`,
+//! `model_effects`).
 
 use super::diagnose::{Diagnosis, Verdict};
 use serde::{Deserialize, Serialize};
@@ -69,10 +70,19 @@ pub struct DiagnosisRecord {
     pub segments: Vec<SegmentRecord>,
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub residual_shape: Option<String>,
+    /// The taus of the curve diagnosed (s), and at each the deviation (u/s) of the five-term
+    /// model alone (`model_base`) and with the effects in (`model_effects`): the two lines a
+    /// plot draws over the measured curve.
+    #[serde(default)]
+    pub model_tau: Vec<f64>,
+    #[serde(default)]
+    pub model_base: Vec<f64>,
+    #[serde(default)]
+    pub model_effects: Vec<f64>,
 }
 
 impl DiagnosisRecord {
-    /// The record of a diagnosis; `holdout` from [`super::diagnose::holdout_gap`].
+    /// The record of a diagnosis; `holdout` from [`super::holdout::holdout_gap`].
     pub fn new(channel: &str, d: &Diagnosis, holdout: Option<(f64, f64)>, is_final: bool) -> Self {
         Self {
             kind: "diagnosis".into(),
@@ -120,6 +130,17 @@ impl DiagnosisRecord {
                 })
                 .collect(),
             residual_shape: d.residual_shape.clone(),
+            model_tau: d.model_tau_s.clone(),
+            model_base: d
+                .model_base_avar
+                .iter()
+                .map(|v| v.max(0.0).sqrt())
+                .collect(),
+            model_effects: d
+                .model_final_avar
+                .iter()
+                .map(|v| v.max(0.0).sqrt())
+                .collect(),
         }
     }
 

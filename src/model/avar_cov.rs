@@ -33,7 +33,7 @@
 //! `|h| = 16 max(m1, m2)` it is evaluated from its far-field series in `1/h` (`flicker_series`,
 //! no logarithms, and free of the cancellation the direct nine-term sum suffers there). Against
 //! the exact lag-by-lag sum the quadrature agrees to better than 1e-6 relative
-//! (tests/fit_covariance.rs).
+//! (tests/model/covariance.rs).
 //!
 //! Live refits: as the run grows every count grows by the same `d`, `n(h)` grows by exactly `d` on
 //! the old range, and the range gains `d` lags at each end. The cache keeps, per pair, the sums

@@ -2,6 +2,9 @@
 //! Stable32 result tables, and the named tolerances.
 #![allow(dead_code)]
 
+pub mod fit;
+pub mod pipeline;
+
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 
@@ -25,19 +28,17 @@ pub fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures")
 }
 
-/// `../shared/reference` beside the repository, when it exists. Tests that need it print a
-/// plain message and return when it does not (CI clones main with shared/ beside it).
-pub fn shared_reference() -> Option<PathBuf> {
+/// `../shared/reference` beside the repository, for the few tests whose recordings are too
+/// large for fixtures/. Those tests are `#[ignore]`d (`.ci/run` runs them when the folder is
+/// there); run without it, they fail with this message instead of passing unchecked.
+pub fn shared_reference() -> PathBuf {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/reference");
-    if p.is_dir() {
-        Some(p)
-    } else {
-        eprintln!(
-            "NOTE: {} does not exist; the tests on the large reference recordings are skipped",
-            p.display()
-        );
-        None
-    }
+    assert!(
+        p.is_dir(),
+        "{} does not exist: this test needs the shared reference recordings",
+        p.display()
+    );
+    p
 }
 
 /// Numbers of a text file, one per line (first column), `#` lines and blank lines skipped;

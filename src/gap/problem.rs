@@ -1,0 +1,412 @@
+//! The generalised-least-squares problem on one measured AVAR curve (THEORY.md section 5): the
+//! curve's taus, `ln AVAR_hat`, and the covariance `S` of the log estimates (the analytic
+//! covariance of the five-term model fitted to the curve, [`AvarCovariance`], with a ridge
+//! [`RIDGE`]); the GLS fit of a model (five terms plus effect columns and a fixed offset), the
+//! gap statistic `G`, the regions outside the band, and the scan of an effect's shape. Used by
+//! [`super::diagnose`](mod@super::diagnose), [`super::holdout`] and [`super::oracle`].
+
+use super::diagnose::{DiagnoseError, DiagnoseOptions, Region};
+use super::effects::{effect_column, EffectKind, Grid};
+use super::evidence::EvidenceSnapshot;
+use crate::allan::CurvePoint;
+use crate::model::avar_cov::{AvarCovariance, CovPoint};
+use crate::model::fit::{fit, FitOptions};
+use crate::model::nnls::nnls;
+use crate::model::terms::basis;
+use nalgebra::{DMatrix, DVector};
+
+/// Ridge added to the log covariance, as a fraction of its diagonal (see the module doc).
+pub const RIDGE: f64 = 0.05;
+/// Reweighting passes of each GLS fit (the model-weighted fit settles in 3-5).
+const GLS_PASSES: usize = 4;
+
+/// The curve with its log covariance, ready for GLS fits.
+#[derive(Debug, Clone)]
+pub struct GapProblem {
+    pub ms: Vec<u64>,
+    pub tau: Vec<f64>,
+    pub y: Vec<f64>,
+    ln_y: DVector<f64>,
+    /// Inverse Cholesky factor of the ridged log covariance.
+    linv: DMatrix<f64>,
+    /// Diagonal of the (unridged) log covariance.
+    pub s_diag: Vec<f64>,
+    /// The unridged log covariance `S` itself (for the oracle bounds of [`super::oracle`]).
+    s_plain: DMatrix<f64>,
+    /// The unridged covariance seen through the whitening, `Linv S Linv'` (for the expectation
+    /// of `r' S_ridge^-1 r`).
+    m_white: DMatrix<f64>,
+    pub tau0_s: f64,
+    pub n_inc: u64,
+    /// The plain five-term fit (the paper's model-weighted NNLS) that set the covariance.
+    pub c_init: [f64; 5],
+}
+
+/// One model to fit: the five terms (N column optionally filtered) plus free effect columns and
+/// a fixed offset.
+#[derive(Debug, Clone, Default)]
+pub struct ModelSpec {
+    pub filter_tc_s: Option<f64>,
+    pub extra: Vec<Vec<f64>>,
+    pub offset: Option<Vec<f64>>,
+}
+
+/// A GLS fit.
+#[derive(Debug, Clone)]
+pub struct GlsFit {
+    /// Five-term `c = (Q^2, N^2, B^2, K^2, R^2)` then the extra columns' amplitudes squared.
+    pub coef: Vec<f64>,
+    pub model: Vec<f64>,
+    /// `r' S^-1 r`.
+    pub chi2: f64,
+    /// Its expectation when the model is right: `tr((I - H) M)` with `H` the whitened hat
+    /// matrix of the active columns and `M` the whitened covariance (as fit.rs's gof), less one
+    /// per shape parameter (each extra column or filter of the spec).
+    pub expected: f64,
+}
+
+impl GlsFit {
+    /// The gap statistic `G = r' S^-1 r / E[r' S^-1 r]`, about 1 when the model is right.
+    pub fn gap(&self) -> f64 {
+        self.chi2 / self.expected.max(1.0)
+    }
+}
+
+impl GapProblem {
+    /// Builds the problem from the dense curve of `snap`.
+    pub fn new(snap: &EvidenceSnapshot, opts: &DiagnoseOptions) -> Result<Self, DiagnoseError> {
+        let n = snap.n_increments.max(1);
+        let m_max = ((n as f64) * opts.tau_max_fraction).floor() as u64;
+        let pts: Vec<_> = snap
+            .curve
+            .iter()
+            .filter(|p| p.m <= m_max && p.avar.is_finite() && p.avar > 0.0 && p.count > 0)
+            .collect();
+        let need = 8;
+        if pts.len() < need {
+            return Err(DiagnoseError::TooFewPoints(pts.len(), need));
+        }
+        let cps: Vec<CurvePoint> = pts
+            .iter()
+            .map(|p| CurvePoint {
+                m: p.m,
+                tau_s: p.tau_s,
+                var: p.avar,
+                count: p.count,
+                edf: f64::NAN,
+                alpha: 0,
+                sigma_lo: f64::NAN,
+                sigma_hi: f64::NAN,
+            })
+            .collect();
+        let base =
+            fit(&cps, &FitOptions::default()).map_err(|e| DiagnoseError::Fit(e.to_string()))?;
+        let c_init = base.c;
+        let tau0 = snap.tau0_s;
+        // Full-overlap counts: the bounded estimator's stride-s differences stand for the
+        // count * stride differences of the full overlap (THEORY.md section 1).
+        let cov_pts: Vec<CovPoint> = pts
+            .iter()
+            .map(|p| CovPoint {
+                m: p.m,
+                count: (p.count * p.stride).clamp(1, (n + 1).saturating_sub(2 * p.m).max(1)),
+            })
+            .collect();
+        let cov = AvarCovariance::new().matrix(tau0, &cov_pts, &c_init);
+        let a: Vec<f64> = pts
+            .iter()
+            .map(|p| base.model_avar(p.tau_s).max(1e-300))
+            .collect();
+        let j = pts.len();
+        let mut s = DMatrix::from_fn(j, j, |r, c| cov[(r, c)] / (a[r] * a[c]));
+        let s_diag: Vec<f64> = (0..j).map(|i| s[(i, i)]).collect();
+        if s_diag.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+            return Err(DiagnoseError::Covariance);
+        }
+        let s_plain = s.clone();
+        for i in 0..j {
+            s[(i, i)] *= 1.0 + RIDGE;
+        }
+        let chol = s.cholesky().ok_or(DiagnoseError::Covariance)?;
+        let l = chol.l();
+        let linv = l
+            .solve_lower_triangular(&DMatrix::identity(j, j))
+            .ok_or(DiagnoseError::Covariance)?;
+        let m_white = &linv * &s_plain * linv.transpose();
+        Ok(Self {
+            ms: pts.iter().map(|p| p.m).collect(),
+            tau: pts.iter().map(|p| p.tau_s).collect(),
+            y: pts.iter().map(|p| p.avar).collect(),
+            ln_y: DVector::from_iterator(j, pts.iter().map(|p| p.avar.ln())),
+            linv,
+            s_diag,
+            s_plain,
+            m_white,
+            tau0_s: tau0,
+            n_inc: n,
+            c_init,
+        })
+    }
+
+    pub fn len(&self) -> usize {
+        self.tau.len()
+    }
+
+    /// The unridged covariance `S` of `ln AVAR_hat` at the curve's taus (the analytic
+    /// covariance of the five-term fit `c_init`, THEORY.md section 5).
+    pub fn log_covariance(&self) -> &DMatrix<f64> {
+        &self.s_plain
+    }
+
+    /// `ln AVAR_hat` at the curve's taus.
+    pub fn ln_avar(&self) -> &DVector<f64> {
+        &self.ln_y
+    }
+
+    /// `L^-1 v`, with `L L'` the ridged covariance the GLS fits whiten with, so that
+    /// `|L^-1 r|^2` is the `r' S^-1 r` of [`GapProblem::chi2_of`].
+    pub fn whiten(&self, v: &DVector<f64>) -> DVector<f64> {
+        &self.linv * v
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.tau.is_empty()
+    }
+
+    /// The design columns of a spec.
+    fn columns(&self, spec: &ModelSpec) -> DMatrix<f64> {
+        let j = self.len();
+        let k = 5 + spec.extra.len();
+        let filt = spec.filter_tc_s.map(|t| {
+            effect_column(
+                EffectKind::OutputFilter,
+                t,
+                &self.ms,
+                self.tau0_s,
+                self.n_inc,
+            )
+        });
+        DMatrix::from_fn(j, k, |r, c| {
+            if c < 5 {
+                match (&filt, c) {
+                    (Some(f), 1) => f[r],
+                    _ => basis(self.tau[r])[c],
+                }
+            } else {
+                spec.extra[c - 5][r]
+            }
+        })
+    }
+
+    /// `r' S^-1 r` of a model curve.
+    pub fn chi2_of(&self, model: &[f64]) -> f64 {
+        let r = DVector::from_iterator(
+            self.len(),
+            model
+                .iter()
+                .zip(self.ln_y.iter())
+                .map(|(m, ly)| ly - m.max(1e-300).ln()),
+        );
+        (&self.linv * r).norm_squared()
+    }
+
+    /// Generalised least squares with model-based weights, coefficients `>= 0`.
+    pub fn gls(&self, spec: &ModelSpec) -> Option<GlsFit> {
+        let j = self.len();
+        let x = self.columns(spec);
+        let k = x.ncols();
+        let off = spec.offset.clone().unwrap_or_else(|| vec![0.0; j]);
+        let mut d: Vec<f64> = self.y.clone();
+        let mut coef = DVector::zeros(k);
+        let mut model = vec![0.0; j];
+        let mut a_last = DMatrix::zeros(j, k);
+        for _ in 0..GLS_PASSES {
+            let xd = DMatrix::from_fn(j, k, |r, c| x[(r, c)] / d[r]);
+            let yd = DVector::from_fn(j, |r, _| (self.y[r] - off[r]) / d[r]);
+            let mut a = &self.linv * xd;
+            let b = &self.linv * yd;
+            let mut norms = vec![1.0; k];
+            for (c, nrm) in norms.iter_mut().enumerate() {
+                let v = a.column(c).norm();
+                if v > 0.0 && v.is_finite() {
+                    *nrm = v;
+                    a.column_mut(c).scale_mut(1.0 / v);
+                }
+            }
+            let sol = nnls(&a, &b).ok()?;
+            a_last = a.clone();
+            coef = DVector::from_fn(k, |c, _| sol.x[c] / norms[c]);
+            let mv = &x * &coef;
+            for r in 0..j {
+                model[r] = mv[r] + off[r];
+            }
+            // Floor the weights' model at a tiny fraction of the data (a term-less stretch).
+            for r in 0..j {
+                d[r] = model[r].max(1e-6 * self.y[r]);
+            }
+        }
+        let chi2 = self.chi2_of(&model);
+        let active: Vec<usize> = (0..k).filter(|&c| coef[c] > 0.0).collect();
+        let tr_m = self.m_white.trace();
+        let mut expected = tr_m;
+        if !active.is_empty() {
+            let xa = a_last.select_columns(&active);
+            let xtx = xa.transpose() * &xa;
+            if let Some(inv) = xtx.try_inverse() {
+                expected -= (inv * xa.transpose() * &self.m_white * &xa).trace();
+            }
+        }
+        let n_shape = spec.extra.len() + usize::from(spec.filter_tc_s.is_some());
+        expected -= n_shape as f64 * tr_m / j as f64;
+        Some(GlsFit {
+            coef: coef.iter().copied().collect(),
+            model,
+            chi2,
+            expected,
+        })
+    }
+
+    /// Per-tau `z_j = r_j / sqrt(S_jj)` of a model.
+    pub fn z(&self, model: &[f64]) -> Vec<f64> {
+        (0..self.len())
+            .map(|i| (self.ln_y[i] - model[i].max(1e-300).ln()) / self.s_diag[i].sqrt())
+            .collect()
+    }
+
+    /// Runs of taus outside `|z| < band` with their sign and worst ADEV ratio.
+    pub fn regions(&self, model: &[f64], band: f64) -> Vec<Region> {
+        let z = self.z(model);
+        let mut out: Vec<Region> = Vec::new();
+        let mut open: Option<(usize, i32, usize)> = None; // start, sign, worst index
+        for i in 0..=z.len() {
+            let s = z.get(i).map(|&v| {
+                if v > band {
+                    1
+                } else if v < -band {
+                    -1
+                } else {
+                    0
+                }
+            });
+            match (open, s) {
+                (Some((st, sg, w)), Some(s)) if s == sg => {
+                    let w = if z[i].abs() > z[w].abs() { i } else { w };
+                    open = Some((st, sg, w));
+                }
+                (cur, s) => {
+                    if let Some((st, sg, w)) = cur {
+                        out.push(Region {
+                            tau_lo_s: self.tau[st],
+                            tau_hi_s: self.tau[i - 1],
+                            sign: sg,
+                            worst_ratio: (self.y[w] / model[w].max(1e-300)).sqrt(),
+                        });
+                    }
+                    open = match s {
+                        Some(s) if s != 0 => Some((i, s, i)),
+                        _ => None,
+                    };
+                }
+            }
+        }
+        out
+    }
+
+    /// The shape grid of a candidate over this curve.
+    pub fn grid(&self, kind: EffectKind) -> Grid {
+        let tmin = self.tau[0];
+        let tmax = self.tau[self.len() - 1];
+        let t_run = self.n_inc as f64 * self.tau0_s;
+        match kind {
+            EffectKind::GaussMarkov => Grid {
+                lo: tmin / 2.0,
+                hi: tmax,
+                per_decade: 12.0,
+            },
+            // First maximum of the sinusoid's AVAR at 0.371 / f0 (THEORY.md section 3).
+            EffectKind::Sinusoid => Grid {
+                lo: 0.371 / tmax,
+                hi: (0.5 / self.tau0_s).min(0.371 / tmin * 2.0),
+                per_decade: 60.0,
+            },
+            EffectKind::OutputFilter => Grid {
+                lo: 0.3 * self.tau0_s,
+                hi: 30.0 * self.tau0_s,
+                per_decade: 12.0,
+            },
+            EffectKind::Warmup => Grid {
+                lo: tmin.max(self.tau0_s * 4.0),
+                hi: t_run / 3.0,
+                per_decade: 12.0,
+            },
+            EffectKind::BiasJumps => Grid {
+                lo: 1.0,
+                hi: 1.0,
+                per_decade: 1.0,
+            },
+        }
+    }
+
+    /// `base` with one candidate effect of shape `shape` added (a filtered N column for the
+    /// output filter, an extra column otherwise).
+    pub(crate) fn spec_with(&self, base: &ModelSpec, kind: EffectKind, shape: f64) -> ModelSpec {
+        let mut s = base.clone();
+        if kind == EffectKind::OutputFilter {
+            s.filter_tc_s = Some(shape);
+        } else {
+            s.extra.push(effect_column(
+                kind,
+                shape,
+                &self.ms,
+                self.tau0_s,
+                self.n_inc,
+            ));
+        }
+        s
+    }
+
+    /// Best shape of one candidate on top of `base`: grid scan, then golden-section polish
+    /// in `ln shape`. Returns `(shape, fit)`.
+    pub fn scan(&self, base: &ModelSpec, kind: EffectKind) -> Option<(f64, GlsFit)> {
+        let pts = self.grid(kind).points();
+        if pts.len() < 2 {
+            return None;
+        }
+        let eval = |sh: f64| self.gls(&self.spec_with(base, kind, sh));
+        let mut best: Option<(usize, f64)> = None;
+        for (i, &sh) in pts.iter().enumerate() {
+            if let Some(f) = eval(sh) {
+                if best.is_none_or(|(_, c)| f.chi2 < c) {
+                    best = Some((i, f.chi2));
+                }
+            }
+        }
+        let (bi, _) = best?;
+        let mut lo = pts[bi.saturating_sub(1)].ln();
+        let mut hi = pts[(bi + 1).min(pts.len() - 1)].ln();
+        let g = 0.618_033_988_749_895;
+        let f = |x: f64| eval(x.exp()).map_or(f64::INFINITY, |f| f.chi2);
+        let mut x1 = hi - g * (hi - lo);
+        let mut x2 = lo + g * (hi - lo);
+        let (mut f1, mut f2) = (f(x1), f(x2));
+        for _ in 0..24 {
+            if f1 < f2 {
+                hi = x2;
+                x2 = x1;
+                f2 = f1;
+                x1 = hi - g * (hi - lo);
+                f1 = f(x1);
+            } else {
+                lo = x1;
+                x1 = x2;
+                f1 = f2;
+                x2 = lo + g * (hi - lo);
+                f2 = f(x2);
+            }
+        }
+        let cand = [pts[bi].ln(), 0.5 * (lo + hi)];
+        cand.iter()
+            .filter_map(|&x| eval(x.exp()).map(|fit| (x.exp(), fit)))
+            .min_by(|a, b| a.1.chi2.total_cmp(&b.1.chi2))
+    }
+}

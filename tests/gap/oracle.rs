@@ -1,0 +1,169 @@
+//! The oracle bounds of `allanscope::gap::oracle` (docs/gap.md, "Oracle bounds") against
+//! simulation: the Gauss-Markov oracle's chi-squared drop averages to the noncentrality the
+//! Jacobian and covariance predict, the Cramér-Rao bound of `ln tau_c` matches the spread of the
+//! scanned `tau_c` over seeds, and the warm-up's known-signal `z` has mean `delta` and unit
+//! spread with the Cramér-Rao bound of `ln T` matching the spread of the maximum-likelihood `T`.
+//!
+//! Runs of one hour at tau0 = 4 ms of the VOG4-like base of tests/gap/diagnosis.rs, ten seeds
+//! each. Tolerances come from the sampling error of ten draws (stated at each assert).
+
+use allanscope::gap::oracle::{gm_curve_crb, gm_oracle, warmup_crb, warmup_oracle, BlockGls};
+use allanscope::gap::problem::{GapProblem, ModelSpec};
+use allanscope::gap::{DiagnoseOptions, EffectKind, EvidenceSnapshot, GapConfig, GapEvidence};
+use allanscope::model::terms;
+use allanscope::sim::{SimModel, Simulator};
+use std::path::Path;
+
+const TAU0: f64 = 0.004;
+const DURATION_S: f64 = 3600.0;
+const N: f64 = 0.254;
+const B: f64 = 0.225;
+const K: f64 = 1.826e-2;
+const LSB: f64 = 0.004;
+const SEEDS: std::ops::Range<u64> = 11..21;
+
+fn snapshot(extra: &str, seed: u64) -> EvidenceSnapshot {
+    let toml = format!(
+        "tau0_s = {TAU0}\n[[channel]]\nname = \"g\"\nunit = \"arcsec\"\nlsb = {LSB}\nN = {N}\nB = {B}\nK = {K}\nflicker_band_s = [{TAU0}, 1.0e5]\n{extra}\n"
+    );
+    let m = SimModel::from_toml_str(&toml, Path::new("<test>")).expect("model");
+    let mut sim = Simulator::new(&m, seed);
+    let mut out = vec![0.0; (DURATION_S / TAU0) as usize];
+    sim.fill_channel(0, &mut out);
+    GapEvidence::from_increments(GapConfig::new(TAU0), &out).snapshot()
+}
+
+fn c_true() -> [f64; 5] {
+    let q = terms::quantization_q(LSB);
+    [q * q, N * N, B * B, K * K, 0.0]
+}
+
+fn mean_sd(v: &[f64]) -> (f64, f64) {
+    let n = v.len() as f64;
+    let m = v.iter().sum::<f64>() / n;
+    let s = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    (m, s)
+}
+
+/// Spread of the sample sd of ten normal draws relative to the true sd: the central 95% of
+/// `sqrt(chi2_9 / 9)` is 0.55 to 1.45.
+const SD_RATIO: (f64, f64) = (0.55, 1.45);
+
+#[test]
+fn gauss_markov_oracle_drop_and_crb_match_simulation() {
+    // A bump of peak ADEV about 1.2 times the base's (tau_c = 2 s, where the white-rate and
+    // flicker terms meet; the R column, tau^2 / 2, is nearly orthogonal to it there).
+    let (sigma, tau_c) = (0.3, 2.0);
+    let extra = format!("gauss_markov = {{ sigma = {sigma}, tau_c = {tau_c} }}");
+    let opts = DiagnoseOptions::default();
+    let (mut drops, mut expect, mut ln_err, mut crb, mut zs, mut deltas) =
+        (vec![], vec![], vec![], vec![], vec![], vec![]);
+    for seed in SEEDS {
+        let snap = snapshot(&extra, seed);
+        let prob = GapProblem::new(&snap, &opts).expect("problem");
+        let o = gm_oracle(&prob, sigma, tau_c).expect("oracle");
+        let r_known = [true, true, true, true, false];
+        let c = gm_curve_crb(&prob, &c_true(), sigma, tau_c, r_known).expect("crb");
+        // The diagnosis's estimate of tau_c: grid scan and golden-section polish.
+        let (tc_hat, _) = prob
+            .scan(&ModelSpec::default(), EffectKind::GaussMarkov)
+            .expect("scan");
+        drops.push(o.drop_fitted);
+        expect.push(c.noncentrality + c.noise);
+        zs.push(o.z_known);
+        deltas.push(o.delta);
+        ln_err.push((tc_hat / tau_c).ln());
+        crb.push(c.sd_ln_tau_c);
+    }
+    let (m_drop, s_drop) = mean_sd(&drops);
+    let (m_expect, _) = mean_sd(&expect);
+    let (_, s_ln) = mean_sd(&ln_err);
+    let (m_crb, _) = mean_sd(&crb);
+    let (m_z, _) = mean_sd(&zs);
+    let (m_delta, _) = mean_sd(&deltas);
+    eprintln!(
+        "GM: drop {m_drop:.2} (sd {s_drop:.2}), lambda + noise {m_expect:.2}; z {m_z:.2}, delta {m_delta:.2}; sd ln tau_c {s_ln:.3}, CRB {m_crb:.3}"
+    );
+    // The drop's mean is the noncentrality plus the noise term to first order. Tolerance 25%:
+    // two standard errors of the mean of ten drops (sd about sqrt(2 + 4 lambda), 11% here)
+    // plus the linearisation's own error, which the two linearisation points of the crate
+    // (truth for `gm_curve_crb`, the base fit for `gm_oracle`'s `delta^2`) put at about 11%.
+    assert!(
+        (m_drop / m_expect - 1.0).abs() < 0.25,
+        "mean drop {m_drop:.2} (sd {s_drop:.2}) against lambda + noise {m_expect:.2}"
+    );
+    // The known-signal score is linear in the data: its mean is delta (sd of the mean about
+    // 0.3, tolerance 10% of delta = 0.8).
+    assert!(
+        (m_z - m_delta).abs() < 0.1 * m_delta,
+        "mean z {m_z:.2} against delta {m_delta:.2}"
+    );
+    // The scanned tau_c is a (nearly) efficient estimate here: its spread over ten seeds matches
+    // the Cramér-Rao sd within the sampling range of a ten-draw sd.
+    let ratio = s_ln / m_crb;
+    assert!(
+        (SD_RATIO.0..SD_RATIO.1).contains(&ratio),
+        "sd of ln tau_c {s_ln:.3} against CRB {m_crb:.3} (ratio {ratio:.2})"
+    );
+}
+
+/// Maximum-likelihood `ln T` of a warm-up with the block GLS's covariance: the `T` whose column
+/// brings the largest drop (golden section in `ln T` over a factor 3 either side of `t0`).
+fn ml_time_constant(gls: &BlockGls, t0: f64) -> f64 {
+    let f = |x: f64| -gls.drop(&[BlockGls::diff(&gls.warmup_profile(x.exp()))]);
+    let (mut lo, mut hi) = ((t0 / 3.0).ln(), (t0 * 3.0).ln());
+    let g = 0.618_033_988_749_895;
+    for _ in 0..60 {
+        let (x1, x2) = (hi - g * (hi - lo), lo + g * (hi - lo));
+        if f(x1) < f(x2) {
+            hi = x2;
+        } else {
+            lo = x1;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+#[test]
+fn warmup_oracle_z_and_crb_match_simulation() {
+    // A strong warm-up (15 arcsec/s, T = 300 s) so that ln T is in the linear regime (CRB sd
+    // about 0.1); the covariance is the true five terms'.
+    let (amp, t_c) = (15.0, 300.0);
+    let extra = format!("warmup = {{ amplitude = {amp}, time_constant = {t_c} }}");
+    let (mut zs, mut deltas, mut ln_err, mut crb) = (vec![], vec![], vec![], vec![]);
+    for seed in SEEDS {
+        let snap = snapshot(&extra, seed);
+        let block_s = snap.block_len as f64 * TAU0;
+        let gls = BlockGls::new(&snap.block_means, block_s, &c_true()).expect("gls");
+        let (w, z, delta) = warmup_oracle(&gls, amp, t_c);
+        // W at the true T is the square of the known-signal z (one column, sign free).
+        assert!((w - z * z).abs() < 1e-6 * w.max(1.0), "W {w} z {z}");
+        let c = warmup_crb(&gls, amp, t_c).expect("crb");
+        zs.push(z);
+        deltas.push(delta);
+        ln_err.push(ml_time_constant(&gls, t_c) - t_c.ln());
+        crb.push(c.sd_ln_t);
+    }
+    let (m_z, s_z) = mean_sd(&zs);
+    let (m_d, _) = mean_sd(&deltas);
+    let (_, s_ln) = mean_sd(&ln_err);
+    let (m_crb, _) = mean_sd(&crb);
+    eprintln!(
+        "warm-up: z {m_z:.2} (sd {s_z:.2}), delta {m_d:.2}; sd of ML ln T {s_ln:.3}, CRB {m_crb:.3}"
+    );
+    // z is exactly linear in the block means: mean delta (standard error 0.3, tolerance 1.5),
+    // unit spread when the covariance is right.
+    assert!(
+        (m_z - m_d).abs() < 1.5,
+        "mean z {m_z:.2} against delta {m_d:.2}"
+    );
+    assert!(
+        (SD_RATIO.0..SD_RATIO.1).contains(&s_z),
+        "sd of z {s_z:.2} (1 when the covariance is right)"
+    );
+    let ratio = s_ln / m_crb;
+    assert!(
+        (SD_RATIO.0..SD_RATIO.1).contains(&ratio),
+        "sd of the ML ln T {s_ln:.3} against CRB {m_crb:.3} (ratio {ratio:.2})"
+    );
+}

@@ -1,0 +1,15 @@
+//! The live pipeline (src/pipeline/, src/source/, checkpoints): transports, backpressure,
+//! outages, signals, damaged captures, stand configs.
+//! One test binary per stage; each topic is a module of it.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod backpressure;
+mod checkpoint;
+mod config;
+mod corruption;
+mod live_bench;
+mod serial_outage;
+mod signal;
+mod transports;

@@ -1,0 +1,190 @@
+//! A serial port that disappears and comes back (and a UDP stream that goes silent): the outage
+//! is recorded as a gap sized by the frame counter and the wall time together.
+//!
+//! The test plays a KVH 1750 (kvh1750 frames at 1000 Hz, counter modulo 128) in real time into
+//! a pseudo-terminal reached through a symlink, the way a stand reaches a USB adapter through a
+//! udev name. After 0.5 s it closes the terminal (the port disappears; the unit keeps running
+//! and its frames are lost), opens a new one behind the same symlink, and once the listener has
+//! reopened it goes on with the frame that is due by then. The outage spans several hundred
+//! frames, more than the counter's modulus, so the counter alone cannot size it: the health
+//! record must show exactly the frames the unit produced while the port was gone.
+
+use std::sync::atomic::Ordering;
+use std::time::{Duration, Instant};
+
+use crate::common::pipeline::*;
+use allanscope::frame::FrameDescriptor;
+use allanscope::pipeline::RunControl;
+use allanscope::source::SourceSpec;
+use tokio::io::AsyncWriteExt;
+use tokio_serial::SerialPort;
+
+const FRAME_LEN: usize = 36;
+const RATE_HZ: f64 = 1000.0;
+/// Frames before and after the outage.
+const PHASE_FRAMES: usize = 500;
+/// The port is gone for at least this long (the listener's backoff adds to it).
+const OUTAGE: Duration = Duration::from_millis(300);
+const TIMEOUT: Duration = Duration::from_secs(30);
+
+fn wait_until(what: &str, f: impl Fn() -> bool) {
+    let t0 = Instant::now();
+    while !f() {
+        assert!(t0.elapsed() < TIMEOUT, "timed out waiting for {what}");
+        std::thread::sleep(Duration::from_millis(1));
+    }
+}
+
+/// Writes frames `from..to` of `bytes` at their real-time instants after `t0`.
+async fn play(
+    port: &mut tokio_serial::SerialStream,
+    bytes: &[u8],
+    t0: Instant,
+    from: usize,
+    to: usize,
+) {
+    let mut next = from;
+    while next < to {
+        let due = ((t0.elapsed().as_secs_f64() * RATE_HZ) as usize).min(to);
+        if due > next {
+            AsyncWriteExt::write_all(port, &bytes[next * FRAME_LEN..due * FRAME_LEN])
+                .await
+                .expect("write pty");
+            next = due;
+        }
+        tokio::time::sleep(Duration::from_millis(2)).await;
+    }
+}
+
+#[test]
+fn outage_longer_than_the_counter_is_sized_by_time() {
+    let bytes =
+        std::fs::read(fixtures().join("captures/kvh1750_stand_1min_seed1.kvh1750")).expect("kvh");
+    let desc = FrameDescriptor::load("kvh1750").expect("kvh1750");
+    let dir = std::env::temp_dir().join(format!("allanscope-outage-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("tmp");
+    let link = dir.join("ttyIMU");
+    let rt = tokio::runtime::Runtime::new().expect("runtime");
+    let repoint = |target: &str| {
+        let tmp = dir.join("ttyIMU.new");
+        let _ = std::fs::remove_file(&tmp);
+        std::os::unix::fs::symlink(target, &tmp).expect("symlink");
+        std::fs::rename(&tmp, &link).expect("rename symlink");
+    };
+
+    let (mut master, slave) = rt
+        .block_on(async { tokio_serial::SerialStream::pair() })
+        .expect("pty");
+    repoint(&slave.name().expect("pty name"));
+    let ctl = RunControl::default();
+    let (ctl2, desc2, link2) = (ctl.clone(), desc.clone(), link.clone());
+    let listener = std::thread::spawn(move || {
+        let spec = SourceSpec::Serial {
+            path: link2,
+            baud: 921_600,
+        };
+        run_to_records(spec, &desc2, &ctl2).0
+    });
+    std::thread::sleep(Duration::from_millis(300));
+
+    let t0 = Instant::now();
+    rt.block_on(play(&mut master, &bytes, t0, 0, PHASE_FRAMES));
+    wait_until("phase 1 frames", || {
+        ctl.progress.frames() == PHASE_FRAMES as u64
+    });
+    // The port disappears.
+    drop(master);
+    drop(slave);
+    std::thread::sleep(OUTAGE);
+    let (mut master, slave) = rt
+        .block_on(async { tokio_serial::SerialStream::pair() })
+        .expect("pty");
+    repoint(&slave.name().expect("pty name"));
+    wait_until("the reconnection", || {
+        ctl.progress.reconnects.load(Ordering::Relaxed) == 1
+    });
+    // The unit has been running all along: go on with the frame due now.
+    let k1 = (t0.elapsed().as_secs_f64() * RATE_HZ) as usize;
+    rt.block_on(play(&mut master, &bytes, t0, k1, k1 + PHASE_FRAMES));
+    wait_until("phase 2 frames", || {
+        ctl.progress.frames() == 2 * PHASE_FRAMES as u64
+    });
+    ctl.shutdown.cancel();
+    let recs = listener.join().expect("listener");
+    drop(slave);
+    let _ = std::fs::remove_dir_all(&dir);
+
+    // Frames 0..500 arrived, then k1.. : the lost ones are 500..k1.
+    let lost = (k1 - PHASE_FRAMES) as u64;
+    eprintln!("lost {lost} frames in the outage");
+    assert!(lost > 128, "the outage should exceed the counter's modulus");
+    let h = last_of(&recs, "health");
+    assert_eq!(h["frames"], 2 * PHASE_FRAMES as u64);
+    assert_eq!(h["outages"], 1);
+    assert_eq!(h["outage_missing"], lost);
+    assert_eq!(h["missing"], lost);
+    // Data time covers the gap: (500 + lost + 500) frames of 1 ms.
+    let s = last_of(&recs, "summary");
+    let t = s["t_data"].as_f64().expect("t_data");
+    let want = (2 * PHASE_FRAMES as u64 + lost) as f64 / RATE_HZ;
+    assert!((t - want).abs() < 1e-9, "t_data {t} != {want}");
+    assert_eq!(s["segments"][0], 2);
+}
+
+/// The same rule for a UDP stream that goes silent (the unit's Ethernet link down for a
+/// while): kvh1750 frames at 1000 Hz, one per datagram; the sender stops for 400 ms while the
+/// unit keeps counting, then goes on with the frame due. The silence exceeds half the counter
+/// period (64 ms), so the listener sizes the gap by counter and time: the lost frames exactly.
+#[test]
+fn udp_silence_longer_than_the_counter_is_sized_by_time() {
+    let bytes =
+        std::fs::read(fixtures().join("captures/kvh1750_stand_1min_seed1.kvh1750")).expect("kvh");
+    let desc = FrameDescriptor::load("kvh1750").expect("kvh1750");
+    let port = free_udp_port();
+    let ctl = RunControl::default();
+    let (ctl2, desc2) = (ctl.clone(), desc.clone());
+    let listener = std::thread::spawn(move || {
+        let spec = SourceSpec::Udp {
+            bind: ([127, 0, 0, 1], port).into(),
+        };
+        run_to_records(spec, &desc2, &ctl2).0
+    });
+    std::thread::sleep(Duration::from_millis(200));
+    let sock = std::net::UdpSocket::bind("127.0.0.1:0").expect("bind");
+    let send = |t0: Instant, from: usize, to: usize| {
+        let mut next = from;
+        while next < to {
+            let due = ((t0.elapsed().as_secs_f64() * RATE_HZ) as usize).min(to);
+            while next < due {
+                sock.send_to(
+                    &bytes[next * FRAME_LEN..(next + 1) * FRAME_LEN],
+                    ("127.0.0.1", port),
+                )
+                .expect("send");
+                next += 1;
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    };
+    let t0 = Instant::now();
+    send(t0, 0, PHASE_FRAMES);
+    std::thread::sleep(Duration::from_millis(400));
+    let k1 = (t0.elapsed().as_secs_f64() * RATE_HZ) as usize;
+    send(t0, k1, k1 + PHASE_FRAMES);
+    wait_until("all frames", || {
+        ctl.progress.frames() == 2 * PHASE_FRAMES as u64
+    });
+    ctl.shutdown.cancel();
+    let recs = listener.join().expect("listener");
+    let lost = (k1 - PHASE_FRAMES) as u64;
+    eprintln!("lost {lost} frames in the silence");
+    assert!(
+        lost > 128,
+        "the silence should exceed the counter's modulus"
+    );
+    let h = last_of(&recs, "health");
+    assert_eq!(h["frames"], 2 * PHASE_FRAMES as u64);
+    assert_eq!(h["outages"], 1);
+    assert_eq!(h["missing"], lost);
+    assert_eq!(h["udp_late"], 0);
+}
