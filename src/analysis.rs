@@ -227,7 +227,7 @@ impl RunAnalysis {
             ));
         }
         // The next interim record is due at a data-second ahead of zero, or never.
-        if !(state.next_emit_s >= 0.0) {
+        if state.next_emit_s.is_nan() || state.next_emit_s < 0.0 {
             return Err(format!(
                 "the next interim record is due at {} data-seconds",
                 state.next_emit_s

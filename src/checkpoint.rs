@@ -262,7 +262,7 @@ impl Checkpoint {
             crate::ranges::check_interval(ck.every_s)
                 .map_err(|e| format!("damaged: saved checkpoint interval {e}"))?;
         }
-        if !(ck.analysis.next_emit_s >= 0.0) {
+        if ck.analysis.next_emit_s.is_nan() || ck.analysis.next_emit_s < 0.0 {
             return Err(format!(
                 "damaged: the next interim record is due at {} data-seconds",
                 crate::ranges::show(ck.analysis.next_emit_s)
