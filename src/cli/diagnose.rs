@@ -8,13 +8,15 @@ use std::path::Path;
 use anyhow::{Context, Result};
 
 use super::{format_and_tau0, open_input, usage, DiagnoseArgs};
-use crate::analysis::InputKind;
-use crate::frame::{Decoder, FrameDescriptor, FrameEvent};
-use crate::gap::lsb::LsbEstimator;
-use crate::gap::unit_model::{fitted_channel, fitted_unit, ChannelFacts};
-use crate::gap::{diagnose, holdout_gap, DiagnoseOptions, DiagnosisRecord, GapConfig, GapEvidence};
-use crate::input::text::{TextReader, BATCH_ROWS};
-use crate::sim::model_write::model_toml;
+use allanscope::analysis::InputKind;
+use allanscope::frame::{Decoder, FrameDescriptor, FrameEvent};
+use allanscope::gap::lsb::LsbEstimator;
+use allanscope::gap::unit_model::{fitted_channel, fitted_unit, ChannelFacts};
+use allanscope::gap::{
+    diagnose, holdout_gap, DiagnoseOptions, DiagnosisRecord, GapConfig, GapEvidence,
+};
+use allanscope::input::text::{TextReader, BATCH_ROWS};
+use allanscope::sim::model_write::model_toml;
 
 /// One channel's evidence, gathered from a whole input.
 struct Gathered {
@@ -85,11 +87,11 @@ fn gather(
                 .iter()
                 .filter(|n| *n != "temperature_c" && wanted(n))
                 .count();
-            if chosen > crate::ranges::MAX_CHANNELS {
+            if chosen > allanscope::ranges::MAX_CHANNELS {
                 return Err(super::usage(format!(
                     "{input}: {chosen} channels; at most {} are diagnosed in one run (choose \
                      some with --channel)",
-                    crate::ranges::MAX_CHANNELS
+                    allanscope::ranges::MAX_CHANNELS
                 )));
             }
             for (i, n) in reader.names().iter().enumerate() {
@@ -195,7 +197,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
     if let Some(p) = &a.model_out {
         check_model_out(p)?;
     }
-    let mut sink = crate::sink::json::JsonLines::new(super::analyze::output_writer(d)?);
+    let mut sink = allanscope::sink::json::JsonLines::new(super::analyze::output_writer(d)?);
     let (desc, tau0) = format_and_tau0(d)?;
     let opts = DiagnoseOptions::default();
     let mut main = gather(&a.input, a, desc.as_ref(), tau0)?;
@@ -220,7 +222,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
                 .map_err(|e| tracing::warn!("{}: holdout channel {name}: {e}", a.input))
                 .ok()
         });
-        let rec = DiagnosisRecord::new(name, &diag, holdout, true);
+        let rec = DiagnosisRecord::new(name, &diag, holdout.as_ref(), true);
         sink.write(&rec)?;
         if a.model_out.is_some() {
             let t_run = snap.n_increments as f64 * tau0;

@@ -1,4 +1,5 @@
-//! The command line: argument parsing here, one file per subcommand beside it. `main.rs` only calls
+//! The command line (a module of the binary, not of the library): argument parsing here, one file
+//! per subcommand beside it, each over `allanscope::...`. `main.rs` only calls
 //! [`main_with_args`] and maps errors to exit statuses (CONTRACT.md: 2 for usage and
 //! configuration errors, 1 for anything else).
 
@@ -6,6 +7,7 @@ mod aggregate;
 mod analyze;
 mod diagnose;
 mod listen;
+mod metrics;
 mod plot;
 mod report;
 mod run;
@@ -17,10 +19,10 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 use clap::{Args, Parser, Subcommand};
 
-use crate::allan::accum::{AccumConfig, Overlap, StatSet, TauSpec, DEFAULT_L};
-use crate::analysis::{AnalysisOptions, ChannelSetup, InputKind};
-use crate::error::UsageError;
-use crate::model::fit::{FitMethod, FitOptions};
+use allanscope::allan::accum::{AccumConfig, Overlap, StatSet, TauSpec, DEFAULT_L};
+use allanscope::analysis::{AnalysisOptions, ChannelSetup, InputKind};
+use allanscope::error::UsageError;
+use allanscope::model::fit::{FitMethod, FitOptions};
 
 #[derive(Debug, Parser)]
 #[command(
@@ -180,6 +182,10 @@ pub struct DataArgs {
     /// text columns) and a checkpoint is on disk.
     #[arg(long, hide = true, value_name = "N")]
     pub abort_after_frames: Option<u64>,
+    /// Serve the latest fits, limit verdicts and decoder health at http://ADDR:PORT/metrics
+    /// (Prometheus text format); a bare PORT listens on 127.0.0.1 only.
+    #[arg(long, value_name = "ADDR:PORT")]
+    pub metrics: Option<String>,
 }
 
 #[derive(Debug, Args)]
@@ -246,65 +252,26 @@ pub(crate) fn usage(msg: impl Into<String>) -> anyhow::Error {
     anyhow::Error::new(UsageError::Option(msg.into()))
 }
 
-/// Parses `--taus`.
+/// Parses `--taus` ([`TauSpec`]'s `FromStr`, shared with the stand config).
 pub fn parse_taus(s: &str) -> Result<TauSpec> {
-    match s {
-        "octave" => Ok(TauSpec::Octave),
-        "decade" => Ok(TauSpec::Decade),
-        list => {
-            let ms: Result<Vec<u64>, _> =
-                list.split(',').map(|t| t.trim().parse::<u64>()).collect();
-            match ms {
-                Ok(v) if !v.is_empty() && v.iter().all(|&m| m >= 1) => Ok(TauSpec::List(v)),
-                _ => Err(usage(format!(
-                    "--taus `{list}`: expected octave, decade or a comma list of cluster sizes m >= 1"
-                ))),
-            }
-        }
-    }
+    s.parse::<TauSpec>()
+        .map_err(|e| usage(format!("--taus `{s}`: {e}")))
 }
 
 /// Parses `--overlap`.
 pub fn parse_overlap(s: &str) -> Result<Overlap> {
-    match s {
-        "full" => Ok(Overlap::Full),
-        l => match l.parse::<u64>() {
-            Ok(l) if l >= 1 => Ok(Overlap::Bounded(l)),
-            _ => Err(usage(format!(
-                "--overlap `{l}`: expected `full` or an integer L >= 1"
-            ))),
-        },
-    }
+    s.parse::<Overlap>()
+        .map_err(|e| usage(format!("--overlap `{s}`: {e}")))
 }
 
 fn parse_stats(list: &[String]) -> Result<StatSet> {
-    let mut set = StatSet {
-        avar: false,
-        hvar: false,
-        mvar: false,
-    };
-    for s in list {
-        match s.trim() {
-            "avar" => set.avar = true,
-            "hvar" => set.hvar = true,
-            "mvar" => set.mvar = true,
-            other => {
-                return Err(usage(format!(
-                    "--stats: unknown statistic `{other}` (allowed: avar, hvar, mvar)"
-                )))
-            }
-        }
-    }
-    if !(set.avar || set.hvar || set.mvar) {
-        return Err(usage("--stats: at least one statistic"));
-    }
-    Ok(set)
+    StatSet::from_names(list.iter().map(String::as_str)).map_err(|e| usage(format!("--stats: {e}")))
 }
 
 /// Parses a duration (`--duration`): seconds, or a number with `s`, `min`, `h` or `d`, within
-/// [`crate::ranges::MAX_SECONDS`].
+/// [`allanscope::ranges::MAX_SECONDS`].
 pub fn parse_duration_s(s: &str) -> Result<f64> {
-    crate::ranges::parse_duration(s).map_err(|e| usage(format!("--duration {e}")))
+    allanscope::ranges::parse_duration(s).map_err(|e| usage(format!("--duration {e}")))
 }
 
 /// Clap's parser of `--tau0`: a number of seconds within the sampling-step range.
@@ -313,7 +280,7 @@ fn tau0_arg(s: &str) -> Result<f64, String> {
         .trim()
         .parse()
         .map_err(|_| format!("`{s}` is not a number"))?;
-    crate::ranges::check_tau0(v)
+    allanscope::ranges::check_tau0(v)
 }
 
 /// Clap's parser of `--every` and `--checkpoint-every`: seconds within the interval range.
@@ -322,21 +289,23 @@ fn interval_arg(s: &str) -> Result<f64, String> {
         .trim()
         .parse()
         .map_err(|_| format!("`{s}` is not a number"))?;
-    crate::ranges::check_interval(v)
+    allanscope::ranges::check_interval(v)
 }
 
 /// The frame descriptor (`None` for text columns) and the sampling step: `--tau0` when given,
 /// else the descriptor's; required for text columns.
 pub(crate) fn format_and_tau0(
     d: &DataArgs,
-) -> Result<(Option<crate::frame::FrameDescriptor>, f64)> {
+) -> Result<(Option<allanscope::frame::FrameDescriptor>, f64)> {
     let desc = if d.format == "csv" {
         None
     } else {
-        Some(crate::frame::FrameDescriptor::load(&d.format).map_err(anyhow::Error::new)?)
+        Some(allanscope::frame::FrameDescriptor::load(&d.format).map_err(anyhow::Error::new)?)
     };
     let tau0 = match (&desc, d.tau0) {
-        (_, Some(t)) => crate::ranges::check_tau0(t).map_err(|e| usage(format!("--tau0 {e}")))?,
+        (_, Some(t)) => {
+            allanscope::ranges::check_tau0(t).map_err(|e| usage(format!("--tau0 {e}")))?
+        }
         (Some(desc), None) => desc.tau0_s(),
         (None, None) => return Err(usage("--tau0 is required for --format csv")),
     };
@@ -345,7 +314,7 @@ pub(crate) fn format_and_tau0(
 
 /// The analysis options common to every run of a command.
 pub(crate) fn analysis_options(d: &DataArgs, tau0_s: f64) -> Result<AnalysisOptions> {
-    crate::ranges::check_tau0(tau0_s).map_err(|e| usage(format!("tau0 {e}")))?;
+    allanscope::ranges::check_tau0(tau0_s).map_err(|e| usage(format!("tau0 {e}")))?;
     let mut accum = AccumConfig::new(tau0_s);
     accum.taus = parse_taus(&d.taus)?;
     accum.overlap = parse_overlap(&d.overlap)?;
@@ -358,7 +327,7 @@ pub(crate) fn analysis_options(d: &DataArgs, tau0_s: f64) -> Result<AnalysisOpti
         }),
     };
     if let Some(e) = d.every {
-        crate::ranges::check_interval(e).map_err(|p| usage(format!("--every {p}")))?;
+        allanscope::ranges::check_interval(e).map_err(|p| usage(format!("--every {p}")))?;
     }
     Ok(AnalysisOptions {
         accum,
@@ -373,7 +342,7 @@ pub(crate) fn analysis_options(d: &DataArgs, tau0_s: f64) -> Result<AnalysisOpti
         fit,
         run: None,
         limits: match &d.limits {
-            Some(p) => crate::model::limits::load_file(p)?,
+            Some(p) => allanscope::model::limits::load_file(p)?,
             None => Vec::new(),
         },
         diagnose: d.diagnose,
@@ -386,8 +355,8 @@ pub(crate) fn checkpoint_header(
     format: &str,
     opts: &AnalysisOptions,
     channels: &[ChannelSetup],
-) -> crate::checkpoint::Header {
-    use crate::allan::accum::Overlap;
+) -> allanscope::checkpoint::Header {
+    use allanscope::allan::accum::Overlap;
     let s = opts.accum.stats;
     let stats = [("avar", s.avar), ("hvar", s.hvar), ("mvar", s.mvar)]
         .iter()
@@ -395,10 +364,10 @@ pub(crate) fn checkpoint_header(
         .map(|x| x.0.to_string())
         .collect();
     let file = Path::new(input);
-    crate::checkpoint::Header {
+    allanscope::checkpoint::Header {
         input: input.into(),
         input_fingerprint: (input != "-" && file.is_file())
-            .then(|| crate::checkpoint::fingerprint(file))
+            .then(|| allanscope::checkpoint::fingerprint(file))
             .flatten(),
         format: format.into(),
         kind: match opts.kind {
@@ -421,8 +390,8 @@ pub(crate) fn checkpoint_header(
 
 /// A run's checkpoint plan for the pipeline and, when resuming, the saved checkpoint.
 pub(crate) type CheckpointSetup = (
-    crate::checkpoint::CheckpointPlan,
-    Option<crate::checkpoint::Checkpoint>,
+    allanscope::checkpoint::CheckpointPlan,
+    Option<allanscope::checkpoint::Checkpoint>,
 );
 
 impl DataArgs {
@@ -430,7 +399,7 @@ impl DataArgs {
     /// `--abort-after-frames` and `--out`.
     pub(crate) fn checkpoint_setup(
         &self,
-        header: crate::checkpoint::Header,
+        header: allanscope::checkpoint::Header,
         data_seconds: bool,
         replay: bool,
     ) -> Result<Option<CheckpointSetup>> {
@@ -453,11 +422,11 @@ pub(crate) fn checkpoint_setup(
     resume: bool,
     abort_after_frames: Option<u64>,
     out: Option<&Path>,
-    header: crate::checkpoint::Header,
+    header: allanscope::checkpoint::Header,
     data_seconds: bool,
     replay: bool,
 ) -> Result<Option<CheckpointSetup>> {
-    use crate::checkpoint::{
+    use allanscope::checkpoint::{
         check_fresh_start, check_resume, path_for, Checkpoint, CheckpointPlan,
     };
     if every.is_none() && !resume {
@@ -473,7 +442,8 @@ pub(crate) fn checkpoint_setup(
         )));
     };
     if let Some(e) = every {
-        crate::ranges::check_interval(e).map_err(|p| usage(format!("--checkpoint-every {p}")))?;
+        allanscope::ranges::check_interval(e)
+            .map_err(|p| usage(format!("--checkpoint-every {p}")))?;
     }
     let path = path_for(out);
     let mut plan = CheckpointPlan {
@@ -513,14 +483,14 @@ pub(crate) fn start_analysis(
     input: &str,
     setups: Vec<ChannelSetup>,
     opts: AnalysisOptions,
-    resume: Option<&crate::checkpoint::Checkpoint>,
+    resume: Option<&allanscope::checkpoint::Checkpoint>,
     path: Option<&Path>,
-) -> Result<crate::analysis::RunAnalysis> {
+) -> Result<allanscope::analysis::RunAnalysis> {
     // A limit that no channel matches would never be judged: a misspelt name, refused here.
     for l in &opts.limits {
         if !setups
             .iter()
-            .any(|c| crate::model::limits::channel_matches(&l.channel, &c.name))
+            .any(|c| allanscope::model::limits::channel_matches(&l.channel, &c.name))
         {
             return Err(usage(format!(
                 "datasheet limit on channel `{}`: {input} has no such channel (it has: {})",
@@ -534,8 +504,8 @@ pub(crate) fn start_analysis(
         }
     }
     match resume {
-        None => Ok(crate::analysis::RunAnalysis::new(input, setups, opts)),
-        Some(ck) => crate::analysis::RunAnalysis::restore(ck.analysis.clone(), &setups, opts)
+        None => Ok(allanscope::analysis::RunAnalysis::new(input, setups, opts)),
+        Some(ck) => allanscope::analysis::RunAnalysis::restore(ck.analysis.clone(), &setups, opts)
             .map_err(|p| {
                 anyhow::Error::new(UsageError::Checkpoint {
                     file: path.map(Path::to_path_buf).unwrap_or_default(),
@@ -568,16 +538,16 @@ pub(crate) fn select_channels(
         usage(format!(
             "{input}: {n} channels; at most {} are analysed in one run (choose some with \
              --channels, or check the column separator)",
-            crate::ranges::MAX_CHANNELS
+            allanscope::ranges::MAX_CHANNELS
         ))
     };
     let Some(w) = wanted else {
-        if all.len() > crate::ranges::MAX_CHANNELS {
+        if all.len() > allanscope::ranges::MAX_CHANNELS {
             return Err(too_many(all.len()));
         }
         return Ok(all);
     };
-    if w.len() > crate::ranges::MAX_CHANNELS {
+    if w.len() > allanscope::ranges::MAX_CHANNELS {
         return Err(too_many(w.len()));
     }
     for name in w {

@@ -3,8 +3,8 @@
 use anyhow::{Context, Result};
 
 use super::{read_json_lines, usage, PlotArgs};
-use crate::sink::plot::{render_svg, Series};
-use crate::sink::records::{CurveRecord, FitRecord};
+use allanscope::sink::plot::{render_svg, Series};
+use allanscope::sink::records::{CurveRecord, FitRecord};
 
 pub fn run(a: &PlotArgs) -> Result<()> {
     let mut curves: Vec<(String, CurveRecord)> = Vec::new();

@@ -3,7 +3,7 @@
 use anyhow::{Context, Result};
 
 use super::{read_json_lines, ReportArgs};
-use crate::sink::report::{render_html, ReportInput};
+use allanscope::sink::report::{render_html, ReportInput};
 
 pub fn run(a: &ReportArgs) -> Result<()> {
     let inputs = a

@@ -1,5 +1,5 @@
 //! `run --config FILE`: the pipeline with source, channels, statistics, outputs and limits from
-//! a stand config (`crate::stand`; `config/stand.toml` is the example).
+//! a stand config (`allanscope::stand`; `config/stand.toml` is the example).
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -9,14 +9,14 @@ use anyhow::Result;
 use clap::Args;
 
 use super::select_channels;
-use crate::allan::accum::AccumConfig;
-use crate::analysis::{AnalysisOptions, InputKind};
-use crate::error::UsageError;
-use crate::frame::FrameDescriptor;
-use crate::model::fit::FitOptions;
-use crate::pipeline::{RecordWriter, RunControl};
-use crate::source::{Pace, SourceSpec};
-use crate::stand::StandConfig;
+use allanscope::allan::accum::AccumConfig;
+use allanscope::analysis::{AnalysisOptions, InputKind};
+use allanscope::error::UsageError;
+use allanscope::frame::FrameDescriptor;
+use allanscope::model::fit::FitOptions;
+use allanscope::pipeline::{RecordWriter, RunControl};
+use allanscope::source::{Pace, SourceSpec};
+use allanscope::stand::StandConfig;
 
 #[derive(Debug, Args)]
 pub struct RunArgs {
@@ -31,6 +31,9 @@ pub struct RunArgs {
     /// Test hook: abort once this many frames are decoded and a checkpoint is on disk.
     #[arg(long, hide = true, value_name = "N")]
     pub abort_after_frames: Option<u64>,
+    /// Serve /metrics here (overrides the config's `run.metrics`); a bare PORT is on 127.0.0.1.
+    #[arg(long, value_name = "ADDR:PORT")]
+    pub metrics: Option<String>,
 }
 
 pub fn run(r: &RunArgs) -> Result<()> {
@@ -43,14 +46,15 @@ pub fn run(r: &RunArgs) -> Result<()> {
             problem: e.to_string(),
         })
     })?;
-    let limits = crate::model::limits::from_tables(&cfg.limits_raw, &cfg.file).map_err(|errs| {
-        let all = errs
-            .iter()
-            .map(|e| e.to_string())
-            .collect::<Vec<_>>()
-            .join("\n");
-        anyhow::Error::new(UsageError::Option(all))
-    })?;
+    let limits =
+        allanscope::model::limits::from_tables(&cfg.limits_raw, &cfg.file).map_err(|errs| {
+            let all = errs
+                .iter()
+                .map(|e| e.to_string())
+                .collect::<Vec<_>>()
+                .join("\n");
+            anyhow::Error::new(UsageError::Option(all))
+        })?;
     let mut spec = cfg.source.clone();
     let live = spec.is_live();
     if let SourceSpec::File { pace, .. } | SourceSpec::Stdin { pace } = &mut spec {
@@ -76,7 +80,7 @@ pub fn run(r: &RunArgs) -> Result<()> {
         diagnose: cfg.diagnose,
     };
     let setups = select_channels(
-        crate::analysis::ChannelSetup::for_frames(&desc),
+        allanscope::analysis::ChannelSetup::for_frames(&desc),
         &cfg.channels,
         &spec.name(),
     )
@@ -102,6 +106,12 @@ pub fn run(r: &RunArgs) -> Result<()> {
     .map_err(|e| e.context(format!("stand config {}", cfg.file.display())))?;
     let saved = ckpt.as_ref().and_then(|c| c.1.as_ref());
     let ck_path = ckpt.as_ref().map(|c| c.0.path.clone());
+    let server = match (&r.metrics, cfg.metrics) {
+        (Some(_), _) => super::metrics::start_option(r.metrics.as_deref())?,
+        (None, Some(addr)) => Some(super::metrics::MetricsServer::start(addr)?),
+        (None, None) => None,
+    };
+    let metrics = server.as_ref().map(|s| s.tap(&spec.name(), &opts.limits));
     let analysis = super::start_analysis(&spec.name(), setups, opts, saved, ck_path.as_deref())?;
     let out: Box<dyn Write + Send> = super::analyze::output_file(cfg.output.as_deref(), r.resume)?;
     let ctl = RunControl {
@@ -115,10 +125,11 @@ pub fn run(r: &RunArgs) -> Result<()> {
             None
         },
         show_progress: !live && std::io::IsTerminal::is_terminal(&std::io::stderr()),
+        metrics,
         ..RunControl::default()
     };
     let writer = RecordWriter::spawn(out);
-    let result = crate::pipeline::run_frames(spec, &desc, analysis, writer.queue(), &ctl);
+    let result = allanscope::pipeline::run_frames(spec, &desc, analysis, writer.queue(), &ctl);
     let written = writer.finish();
     result?;
     written?;

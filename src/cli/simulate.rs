@@ -3,7 +3,7 @@
 //! The capture is written to `OUT.partial` beside the output and renamed over it when
 //! complete: a failed or interrupted run leaves no file (nor a 0-byte one), and an existing
 //! output is replaced only with `--force`. The size is estimated before anything is written
-//! and refused above [`crate::ranges::MAX_SIMULATED_BYTES`]. A pipe or device given with
+//! and refused above [`allanscope::ranges::MAX_SIMULATED_BYTES`]. A pipe or device given with
 //! `--force` (`-o /dev/stdout`) is written directly.
 
 use std::io::Write;
@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 
 use super::{parse_duration_s, usage, SimulateArgs};
-use crate::frame::FrameDescriptor;
+use allanscope::frame::FrameDescriptor;
 
 /// Bytes a text row takes per channel, at most: a separator and a `{:.9e}`-style number.
 const CSV_BYTES_PER_VALUE: u64 = 24;
@@ -25,7 +25,7 @@ pub fn run(s: &SimulateArgs) -> Result<()> {
             s.out.display()
         )));
     }
-    let model = crate::sim::SimModel::load(&s.model)?;
+    let model = allanscope::sim::SimModel::load(&s.model)?;
     let desc = if s.format == "csv" {
         None
     } else {
@@ -43,13 +43,13 @@ pub fn run(s: &SimulateArgs) -> Result<()> {
         }
     };
     let bytes = steps * per_step as f64;
-    if bytes > crate::ranges::MAX_SIMULATED_BYTES as f64 {
+    if bytes > allanscope::ranges::MAX_SIMULATED_BYTES as f64 {
         return Err(usage(format!(
             "--duration {}: {steps:.3e} steps of {per_step} bytes would write about {:.3e} bytes, \
              more than the {} GiB one simulated file may hold; simulate a shorter run",
             s.duration,
             bytes,
-            crate::ranges::MAX_SIMULATED_BYTES >> 30
+            allanscope::ranges::MAX_SIMULATED_BYTES >> 30
         )));
     }
     if std::fs::metadata(&s.out).is_ok_and(|m| !m.is_file()) {
@@ -84,7 +84,7 @@ fn partial_path(out: &Path) -> PathBuf {
 
 fn write_capture(
     s: &SimulateArgs,
-    model: &crate::sim::SimModel,
+    model: &allanscope::sim::SimModel,
     desc: Option<&FrameDescriptor>,
     duration: f64,
     path: &Path,
@@ -97,15 +97,15 @@ fn write_capture(
         .with_context(|| format!("cannot create {}", path.display()))?;
     let mut w = std::io::BufWriter::with_capacity(1 << 16, f);
     let steps = match desc {
-        None => crate::sim::simulate_to_writer(
+        None => allanscope::sim::simulate_to_writer(
             model,
             duration,
             s.seed,
-            crate::sim::OutputFormat::Csv,
+            allanscope::sim::OutputFormat::Csv,
             &mut w,
         )?,
         Some(desc) => {
-            crate::sim::capture::simulate_to_frames(model, desc, duration, s.seed, &mut w)?
+            allanscope::sim::capture::simulate_to_frames(model, desc, duration, s.seed, &mut w)?
         }
     };
     w.flush()

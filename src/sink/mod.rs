@@ -4,6 +4,7 @@
 //! their doc comments); [`json`] writes them one per line.
 
 pub mod json;
+pub mod metrics;
 pub mod plot;
 pub mod records;
 pub mod report;
