@@ -85,7 +85,7 @@ fn draw_effect(
     let effect = kind.map(|k| match k {
         EffectKind::GaussMarkov => {
             let tc = log_uniform(rng, 20.0 * tau0, t_run / 50.0);
-            // Peak ADEV 0.6174 sigma at tau = 1.893 tau_c (THEORY.md section 3).
+            // Peak ADEV 0.6174 sigma at tau = 1.893 tau_c (docs/theory.md section 3).
             let sigma = rho * base.adev(1.893 * tc) / 0.6174;
             EffectParams::GaussMarkov { sigma, tau_c_s: tc }
         }
@@ -126,6 +126,13 @@ fn draw_effect(
             let s = rho * base.adev(tau) / (tau / (3.0 * mean_interval)).sqrt();
             EffectParams::BiasJumps { count, rms_size: s }
         }
+        // Not drawn: these runs carry no temperature column (gap::temperature has its own
+        // study, examples/temperature_study.rs).
+        EffectKind::Temperature => EffectParams::Temperature {
+            coefficient: 0.0,
+            lo: 0.0,
+            hi: 0.0,
+        },
     });
     Draw { base, effect, rho }
 }
@@ -160,6 +167,7 @@ fn model_toml(d: &Draw, tau0: f64) -> String {
         }
         // Bias jumps are added by `simulate` itself.
         Some(EffectParams::BiasJumps { .. }) | None => {}
+        Some(EffectParams::Temperature { .. }) => {}
     }
     s
 }

@@ -1,12 +1,12 @@
-//! Candidate effects of the diagnosis (THEORY.md section 3) and their AVAR columns: for a fixed
-//! shape parameter each effect's AVAR is linear in its amplitude squared (THEORY.md section 5),
+//! Candidate effects of the diagnosis (docs/theory.md section 3) and their AVAR columns: for a fixed
+//! shape parameter each effect's AVAR is linear in its amplitude squared (docs/theory.md section 5),
 //! so a candidate is a column generator `shape -> column` plus the parameter names of
-//! CONTRACT.md's `diagnosis` record.
+//! docs/records.md's `diagnosis` record.
 
 use crate::model::terms;
 use serde::{Deserialize, Serialize};
 
-/// The kinds of effect CONTRACT.md names.
+/// The kinds of effect docs/records.md names.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum EffectKind {
@@ -15,15 +15,18 @@ pub enum EffectKind {
     OutputFilter,
     Warmup,
     BiasJumps,
+    /// A bias following the unit's temperature (only when the input carries one).
+    Temperature,
 }
 
 impl EffectKind {
-    pub const ALL: [EffectKind; 5] = [
+    pub const ALL: [EffectKind; 6] = [
         EffectKind::GaussMarkov,
         EffectKind::Sinusoid,
         EffectKind::OutputFilter,
         EffectKind::Warmup,
         EffectKind::BiasJumps,
+        EffectKind::Temperature,
     ];
 
     /// Stationary effects are fitted on the curve as columns; warm-ups and jumps are found in
@@ -43,6 +46,7 @@ impl EffectKind {
             EffectKind::OutputFilter => "output_filter",
             EffectKind::Warmup => "warmup",
             EffectKind::BiasJumps => "bias_jumps",
+            EffectKind::Temperature => "temperature",
         }
     }
 
@@ -50,13 +54,13 @@ impl EffectKind {
     /// filter only its time constant, since it reshapes the N term).
     pub fn n_params(self) -> usize {
         match self {
-            EffectKind::OutputFilter => 1,
+            EffectKind::OutputFilter | EffectKind::Temperature => 1,
             _ => 2,
         }
     }
 }
 
-/// A fitted effect with CONTRACT.md's parameters (rate units u/s, times s, frequencies Hz).
+/// A fitted effect with docs/records.md's parameters (rate units u/s, times s, frequencies Hz).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum EffectParams {
     GaussMarkov {
@@ -78,6 +82,12 @@ pub enum EffectParams {
         count: u64,
         rms_size: f64,
     },
+    /// u/s per degC, with its 95% interval.
+    Temperature {
+        coefficient: f64,
+        lo: f64,
+        hi: f64,
+    },
 }
 
 impl EffectParams {
@@ -88,10 +98,11 @@ impl EffectParams {
             EffectParams::OutputFilter { .. } => EffectKind::OutputFilter,
             EffectParams::Warmup { .. } => EffectKind::Warmup,
             EffectParams::BiasJumps { .. } => EffectKind::BiasJumps,
+            EffectParams::Temperature { .. } => EffectKind::Temperature,
         }
     }
 
-    /// The `params` object of the record, with CONTRACT.md's names.
+    /// The `params` object of the record, with docs/records.md's names.
     pub fn to_json(&self) -> serde_json::Value {
         use serde_json::json;
         match *self {
@@ -112,10 +123,15 @@ impl EffectParams {
             EffectParams::BiasJumps { count, rms_size } => {
                 json!({"count": count, "rms_size": rms_size})
             }
+            EffectParams::Temperature {
+                coefficient,
+                lo,
+                hi,
+            } => json!({"coefficient": coefficient, "lo": lo, "hi": hi}),
         }
     }
 
-    /// The shape parameter (s for times, Hz for the sinusoid), NaN for jumps.
+    /// The shape parameter (s for times, Hz for the sinusoid), NaN for jumps and temperature.
     pub fn shape(&self) -> f64 {
         match *self {
             EffectParams::GaussMarkov { tau_c_s, .. } => tau_c_s,
@@ -124,11 +140,12 @@ impl EffectParams {
             EffectParams::Warmup {
                 time_constant_s, ..
             } => time_constant_s,
-            EffectParams::BiasJumps { .. } => f64::NAN,
+            EffectParams::BiasJumps { .. } | EffectParams::Temperature { .. } => f64::NAN,
         }
     }
 
-    /// Its amplitude (u/s; NaN for the filter, the rms size for jumps).
+    /// Its amplitude (u/s; NaN for the filter, the rms size for jumps, u/s per degC for the
+    /// temperature coefficient).
     pub fn amplitude(&self) -> f64 {
         match *self {
             EffectParams::GaussMarkov { sigma, .. } => sigma,
@@ -136,6 +153,7 @@ impl EffectParams {
             EffectParams::OutputFilter { .. } => f64::NAN,
             EffectParams::Warmup { amplitude, .. } => amplitude,
             EffectParams::BiasJumps { rms_size, .. } => rms_size,
+            EffectParams::Temperature { coefficient, .. } => coefficient,
         }
     }
 }
@@ -163,7 +181,7 @@ impl Grid {
 }
 
 /// The column an effect of unit amplitude adds at each cluster size `ms` (AVAR, u^2/s^2 per
-/// (u/s)^2), THEORY.md section 3 via [`crate::model::terms`]. For the output filter it is the
+/// (u/s)^2), docs/theory.md section 3 via [`crate::model::terms`]. For the output filter it is the
 /// replacement of the N column: filtered white rate of unit N.
 pub fn effect_column(
     kind: EffectKind,
@@ -183,8 +201,9 @@ pub fn effect_column(
                 }
                 EffectKind::Warmup => terms::warmup_avar(1.0, shape, tau0_s, m, n_inc),
                 // Bias jumps have the second-order law of a rate random walk (terms.rs): the
-                // K column already holds them, so they add no column.
-                EffectKind::BiasJumps => 0.0,
+                // K column already holds them, so they add no column. The temperature's AVAR is
+                // the recorded temperature's own (gap::temperature), a fixed offset.
+                EffectKind::BiasJumps | EffectKind::Temperature => 0.0,
             }
         })
         .collect()

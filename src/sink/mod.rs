@@ -1,4 +1,4 @@
-//! Where results go: JSON-lines records (CONTRACT.md) to standard output or a file.
+//! Where results go: JSON-lines records (docs/records.md) to standard output or a file.
 //!
 //! [`records`] defines the records as typed structs (the contract's field names, units in
 //! their doc comments); [`json`] writes them one per line.
