@@ -21,6 +21,7 @@
 //! Text columns (`--format csv`) enter the same analysis and writer stages from a reader
 //! thread instead of the source task and decode thread.
 
+pub mod checkpointing;
 pub mod decode;
 pub mod reorder;
 pub mod signals;
@@ -36,13 +37,14 @@ use anyhow::{Context, Result};
 use tokio_util::sync::CancellationToken;
 
 use crate::analysis::RunAnalysis;
-use crate::checkpoint::{Checkpoint, CheckpointPlan, Collector, Piece, Position, Schedule};
+use crate::checkpoint::{Checkpoint, CheckpointPlan, Position};
 use crate::frame::{FrameDescriptor, Health};
 use crate::input::text::{TextReader, BATCH_ROWS};
 use crate::input::Chunk;
 use crate::sink::metrics::MetricsTap;
 use crate::sink::records::{HealthRecord, Record};
 use crate::source::{Capture, CaptureSlot, Progress, SourceContext, SourceEvent, SourceSpec};
+use checkpointing::{Collector, Piece, Schedule};
 use decode::DecodeStage;
 pub use signals::SignalWatch;
 pub use writer::{Delivery, RecordQueue, RecordWriter, WriterStats, RECORD_QUEUE};
@@ -394,10 +396,13 @@ pub fn run_text<R: BufRead + Send + 'static>(
         // The analysis state leaves the reader's bad rows out (the position holds them).
         let complete = !(plan.data_seconds && ctl.shutdown.is_cancelled());
         let bad_rows = position.bad_rows;
+        let invalid = position.invalid_values;
         final_checkpoint(plan, written, complete, Position::Text(position), &analysis);
         analysis.add_bad_rows(bad_rows);
+        analysis.add_invalid_values(invalid);
     } else {
         analysis.add_bad_rows(position.bad_rows);
+        analysis.add_invalid_values(position.invalid_values);
     }
     let read_to_end = ctl.progress.input_ended();
     finish_records(&mut analysis, None, queue, ctl);
