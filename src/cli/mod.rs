@@ -14,7 +14,7 @@ mod simulate;
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::{Args, Parser, Subcommand};
 
 use crate::allan::accum::{AccumConfig, Overlap, StatSet, TauSpec, DEFAULT_L};
@@ -67,6 +67,9 @@ pub struct ReportArgs {
     /// Title of the page.
     #[arg(long, default_value = "allanscope test report")]
     pub title: String,
+    /// Overwrite an existing non-empty -o file.
+    #[arg(long)]
+    pub force: bool,
 }
 
 #[derive(Debug, Args)]
@@ -103,6 +106,13 @@ pub struct PlotArgs {
     /// Leave out the fitted model lines.
     #[arg(long)]
     pub no_model: bool,
+    /// Also draw the dynamic Allan view (time x tau) of each curve, from its interim records
+    /// (written with --every): where in the run the noise changed.
+    #[arg(long)]
+    pub dynamic: bool,
+    /// Overwrite an existing non-empty -o file.
+    #[arg(long)]
+    pub force: bool,
 }
 
 #[derive(Debug, Args)]
@@ -572,7 +582,13 @@ pub(crate) fn select_channels(
 
 /// Reads a whole text file of JSON lines into values (for `aggregate`, `plot`, tests).
 pub fn read_json_lines(path: &Path) -> Result<Vec<serde_json::Value>> {
-    let f = std::fs::File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
+    let f = std::fs::File::open(path).map_err(|e| {
+        // A file that is not there is the user's mistake (exit status 2), like a bad option.
+        anyhow::Error::new(UsageError::Option(format!(
+            "{}: cannot open: {e}",
+            path.display()
+        )))
+    })?;
     let mut out = Vec::new();
     for (i, line) in BufReader::new(f).lines().enumerate() {
         let line = line?;

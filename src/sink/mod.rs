@@ -1,9 +1,15 @@
-//! Where results go: JSON-lines records (CONTRACT.md) to standard output or a file.
+//! Where results go: JSON-lines records (CONTRACT.md) to standard output or a file, and the
+//! figures and pages made from them.
 //!
 //! [`records`] defines the records as typed structs (the contract's field names, units in
-//! their doc comments); [`json`] writes them one per line.
+//! their doc comments); [`json`] writes them one per line. [`results`] reads them back, typed
+//! and labelled by run, for [`plot`] (Allan-deviation panels), [`dynamic`] (the time x tau
+//! view) and [`report`] (the HTML page); [`page_file`] writes those without overwriting.
 
+pub mod dynamic;
 pub mod json;
+pub mod page_file;
 pub mod plot;
 pub mod records;
 pub mod report;
+pub mod results;
