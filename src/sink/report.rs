@@ -560,8 +560,13 @@ fn diagnosis(h: &mut String, res: &Results) {
             .iter()
             .map(|e| format!("{} (gap {:.2})", esc(&effect_words(&e.kind, &e.params, &unit)), e.gap_after))
             .collect();
-        let regions: Vec<String> = d
-            .regions
+        // The four regions the model misses most; the count of the others.
+        let mut worst: Vec<&crate::gap::record::RegionRecord> = d.regions.iter().collect();
+        worst.sort_by(|a, b| b.worst_ratio.ln().abs().total_cmp(&a.worst_ratio.ln().abs()));
+        let more = worst.len().saturating_sub(4);
+        worst.truncate(4);
+        worst.sort_by(|a, b| a.tau_lo.total_cmp(&b.tau_lo));
+        let mut regions: Vec<String> = worst
             .iter()
             .map(|r| {
                 let taus = if r.tau_lo == r.tau_hi {
@@ -576,6 +581,9 @@ fn diagnosis(h: &mut String, res: &Results) {
                 )
             })
             .collect();
+        if more > 0 {
+            regions.push(format!("and {more} more, closer to the model"));
+        }
         let verdict = serde_json::to_value(d.verdict)
             .ok()
             .and_then(|v| v.as_str().map(String::from))
@@ -583,7 +591,10 @@ fn diagnosis(h: &mut String, res: &Results) {
         let shape = d
             .residual_shape
             .as_ref()
-            .map(|s| format!("<br><span class=\"small\">left: {}</span>", esc(s)))
+            .map(|s| format!(
+                    "<br><span class=\"small\">what is left unexplained: {}</span>",
+                    esc(s)
+                ))
             .unwrap_or_default();
         let _ = writeln!(
             h,

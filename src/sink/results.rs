@@ -98,14 +98,20 @@ impl Results {
                     None => f.name.clone(),
                 }
             };
-            let run_of = |v: &Value| v.get("run").and_then(Value::as_u64).map(|r| r as usize);
-            let wrap = |v: &Value| -> (Option<usize>, String) {
-                let r = run_of(v);
-                (r, label(r))
-            };
+            // A record without a `run` index in a file of several runs (the diagnosis record
+            // has none) belongs to the run of the indexed record before it: `analyze` writes
+            // each run's records together.
+            let mut current: Option<usize> = None;
             for v in &f.records {
                 let t = v.get("type").and_then(Value::as_str).unwrap_or("");
-                let (run, lab) = wrap(v);
+                let run = match v.get("run").and_then(Value::as_u64) {
+                    Some(r) => {
+                        current = Some(r as usize);
+                        current
+                    }
+                    None => current,
+                };
+                let lab = label(run);
                 let at = Labelled {
                     file: fi,
                     run,
