@@ -11,7 +11,8 @@ use crate::frame::{ChannelValue, FrameEvent};
 use crate::gap::{diagnose, DiagnoseOptions, DiagnosisRecord, GapConfig, GapEvidence};
 use crate::input::Chunk;
 use crate::model::fit::{FitOptions, FitResult, Fitter};
-use crate::model::units::{datasheet, quantization_ratio, SensorKind};
+use crate::model::readout::readouts;
+use crate::model::units::{quantization_ratio, DatasheetRecord, IncrementUnit};
 use crate::sink::records::{CurveRecord, FitRecord, Record, SummaryRecord};
 
 /// What the values of a text column are.
@@ -385,13 +386,13 @@ impl RunAnalysis {
                 )));
             }
             if let Some(f) = fit {
-                out.push(Record::Fit(fit_record(
-                    &ch.setup,
-                    &f,
-                    final_,
-                    ch.acc.t_data_s(),
-                    run,
-                )));
+                let readouts = curves
+                    .iter()
+                    .find(|c| c.stat == Stat::Avar)
+                    .map(|c| Box::new(readouts(&c.points).record(&ch.setup.unit)));
+                let mut rec = fit_record(&ch.setup, &f, final_, ch.acc.t_data_s(), run);
+                rec.readouts = readouts;
+                out.push(Record::Fit(rec));
                 ch.last_fit = Some(f);
             }
             if let Some(g) = &mut ch.gap {
@@ -551,14 +552,6 @@ fn analyze_channel(
     (curves, Some(fit))
 }
 
-fn sensor_kind(unit: &str) -> Option<SensorKind> {
-    match unit {
-        "arcsec" => Some(SensorKind::GyroArcsec),
-        "m/s" => Some(SensorKind::AccelMps),
-        _ => None,
-    }
-}
-
 fn fit_record(
     setup: &ChannelSetup,
     f: &FitResult,
@@ -566,21 +559,12 @@ fn fit_record(
     t_data_s: f64,
     run: Option<usize>,
 ) -> FitRecord {
-    let native: [f64; 5] = std::array::from_fn(|i| f.coef[i].value);
-    let datasheet = sensor_kind(&setup.unit).map(|k| {
-        let d = datasheet(native, k);
-        let mut m = serde_json::Map::new();
-        for (i, name) in crate::model::terms::TERM_NAMES.iter().enumerate() {
-            m.insert(
-                (*name).into(),
-                serde_json::json!({
-                    "value": f.coef[i].determined.then_some(d.values[i]),
-                    "unit": d.units[i],
-                }),
-            );
-        }
-        serde_json::Value::Object(m)
+    let native: [(Option<f64>, f64, f64); 5] = std::array::from_fn(|i| {
+        let c = &f.coef[i];
+        (c.determined.then_some(c.value), c.lo, c.hi)
     });
+    let datasheet = IncrementUnit::parse(&setup.unit)
+        .and_then(|u| serde_json::to_value(DatasheetRecord::new(native, &u)).ok());
     let q = &f.coef[0];
     FitRecord {
         kind: "fit".into(),
@@ -593,6 +577,7 @@ fn fit_record(
         method: f.method.name().into(),
         model_c: f.c.to_vec(),
         datasheet,
+        readouts: None,
         q_over_lsb: setup
             .counts_lsb
             .filter(|_| q.determined)

@@ -16,25 +16,28 @@
 //! pipeline: the threads and bounded channels between those stages, shutdown, back-pressure
 //! sim (model files, generators, capture writer)           model file -> capture
 //! stand (the stand config of `run`)                       TOML -> sources, options, limits
+//! plan (option values shared by the command line and the stand config)   text -> checked options
 //! stats: the chi-squared quantile behind every interval
-//! cli: one file per subcommand over the above; main.rs maps errors to exit statuses
 //! ```
+//!
+//! The command line is not part of the library: `src/cli/` (one file per subcommand, clap) is a
+//! module of the `allanscope` binary (`src/main.rs`), which also maps errors to exit statuses.
 //!
 //! Numerical stages (`allan`, `model`, `gap`, `sim`) are plain synchronous code: they never know
 //! where samples came from and never await. I/O lives at the edges (`source`, `input`, `sink`,
-//! `cli`); `pipeline` connects them with bounded crossbeam channels.
+//! and the binary's `cli`); `pipeline` connects them with bounded crossbeam channels.
 #![forbid(unsafe_code)]
 
 pub mod allan;
 pub mod analysis;
 pub mod checkpoint;
-pub mod cli;
 pub mod error;
 pub mod frame;
 pub mod gap;
 pub mod input;
 pub mod model;
 pub mod pipeline;
+pub mod plan;
 pub mod sim;
 pub mod sink;
 pub mod source;

@@ -1,6 +1,8 @@
 //! The `allanscope` binary: logging to standard error, the command line, exit statuses.
 #![forbid(unsafe_code)]
 
+mod cli;
+
 fn main() {
     tracing_subscriber::fmt()
         .with_writer(std::io::stderr)
@@ -10,7 +12,7 @@ fn main() {
                 .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info")),
         )
         .init();
-    if let Err(e) = allanscope::cli::main_with_args(std::env::args_os()) {
+    if let Err(e) = cli::main_with_args(std::env::args_os()) {
         eprintln!("allanscope: {e:#}");
         std::process::exit(allanscope::error::exit_status(&e));
     }

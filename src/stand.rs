@@ -392,7 +392,7 @@ impl StandConfig {
             }
             match r.get("duration") {
                 None => {}
-                Some(toml::Value::String(d)) => match crate::cli::parse_duration_s(d) {
+                Some(toml::Value::String(d)) => match crate::plan::options::parse_duration_s(d) {
                     Ok(v) => duration_s = Some(v),
                     Err(_) => ck.bad(
                         "run.duration",

@@ -1,5 +1,5 @@
 //! `aggregate`: run-to-run statistics (the seed paper's table 2) from the JSON lines `analyze`
-//! wrote, one file per run. The statistics themselves are [`crate::model::aggregate`]'s.
+//! wrote, one file per run. The statistics themselves are [`allanscope::model::aggregate`]'s.
 //!
 //! From each file the final `fit` record of each channel is taken (`"final": true`; a file cut
 //! short without one falls back to the channel's last `fit` record, with a warning). A file that
@@ -11,15 +11,15 @@ use std::path::Path;
 use anyhow::Result;
 
 use super::{read_json_lines, usage, AggregateArgs};
-use crate::model::aggregate::{aggregate_channels, CoefAggregate, RunCoefs};
-use crate::sink::json::JsonLines;
-use crate::sink::records::AggregateRecord;
+use allanscope::model::aggregate::{aggregate_channels, CoefAggregate, RunCoefs};
+use allanscope::sink::json::JsonLines;
+use allanscope::sink::records::AggregateRecord;
 
 pub fn run(a: &AggregateArgs) -> Result<()> {
     let mut runs: Vec<Vec<RunCoefs>> = Vec::new();
     for path in &a.inputs {
         if !path.is_file() {
-            return Err(anyhow::Error::new(crate::error::UsageError::Input {
+            return Err(anyhow::Error::new(allanscope::error::UsageError::Input {
                 file: path.clone(),
                 line: 0,
                 problem: "cannot open: no such file".into(),

@@ -1,5 +1,5 @@
 //! `analyze`: replays text columns or captures of frames through the live pipeline
-//! (`crate::pipeline`), one run per input: the same source, decode, analysis and writer stages
+//! (`allanscope::pipeline`), one run per input: the same source, decode, analysis and writer stages
 //! as `listen`, with a file or standard input as the source.
 
 use std::io::{BufReader, IsTerminal, Write};
@@ -14,14 +14,14 @@ use super::{
     analysis_options, checkpoint_header, format_and_tau0, open_input, select_channels,
     start_analysis, usage, AnalyzeArgs, DataArgs,
 };
-use crate::analysis::{AnalysisOptions, ChannelSetup, RunAnalysis};
-use crate::checkpoint::Position;
-use crate::frame::FrameDescriptor;
-use crate::input::text::TextReader;
-use crate::model::aggregate::{aggregate_channels, RunCoefs};
-use crate::pipeline::{RecordQueue, RecordWriter, RunControl};
-use crate::sink::records::Record;
-use crate::source::{Pace, SourceSpec};
+use allanscope::analysis::{AnalysisOptions, ChannelSetup, RunAnalysis};
+use allanscope::checkpoint::Position;
+use allanscope::frame::FrameDescriptor;
+use allanscope::input::text::TextReader;
+use allanscope::model::aggregate::{aggregate_channels, RunCoefs};
+use allanscope::pipeline::{RecordQueue, RecordWriter, RunControl};
+use allanscope::sink::records::Record;
+use allanscope::source::{Pace, SourceSpec};
 
 /// Text columns the analysis does not treat as channels (the simulator's temperature column).
 const AUXILIARY_COLUMNS: [&str; 1] = ["temperature_c"];
@@ -145,9 +145,9 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue) -> Result<()> {
             queue.push_final(Record::Aggregate(super::aggregate::record(a)));
         }
         // Run-to-run datasheet limits (e.g. the sd of B over runs) in a closing summary.
-        let j = crate::model::limits::judge_runs(&base.limits, &aggregates);
+        let j = allanscope::model::limits::judge_runs(&base.limits, &aggregates);
         if !j.results.is_empty() {
-            queue.push_final(Record::Summary(crate::sink::records::SummaryRecord {
+            queue.push_final(Record::Summary(allanscope::sink::records::SummaryRecord {
                 kind: "summary".into(),
                 input: a.inputs.join(" "),
                 run: None,
@@ -187,7 +187,7 @@ fn analyze_text(
         .filter(|(_, n)| !AUXILIARY_COLUMNS.contains(&n.as_str()))
         .map(|(i, n)| ChannelSetup {
             name: n.clone(),
-            unit: d.unit.clone(),
+            unit: allanscope::model::units::increment_unit_label(&d.unit, d.rate),
             column: i,
             counts_lsb: None,
         })
@@ -228,7 +228,7 @@ fn analyze_text(
     let mut ctl = ctl.clone();
     ctl.checkpoint = ckpt.map(|c| Arc::new(c.0));
     let rows_per_s = realtime.then_some(1.0 / tau0);
-    Ok(crate::pipeline::run_text(reader, path, rows_per_s, analysis, queue, &ctl)?.analysis)
+    Ok(allanscope::pipeline::run_text(reader, path, rows_per_s, analysis, queue, &ctl)?.analysis)
 }
 
 /// A capture of frames (a file, or `-`): the file source, the decode stage, the analysis.
@@ -265,12 +265,12 @@ fn analyze_frames(
             pace,
         }
     };
-    Ok(crate::pipeline::run_frames(spec, desc, analysis, queue, ctl)?.analysis)
+    Ok(allanscope::pipeline::run_frames(spec, desc, analysis, queue, ctl)?.analysis)
 }
 
 /// Each run's determined coefficients, for the run-to-run statistics.
 fn run_coefs(
-    runs: &[Vec<(String, String, Option<crate::model::fit::FitResult>)>],
+    runs: &[Vec<(String, String, Option<allanscope::model::fit::FitResult>)>],
 ) -> Vec<Vec<RunCoefs>> {
     runs.iter()
         .map(|run| {

@@ -8,15 +8,48 @@ use std::path::Path;
 use anyhow::{Context, Result};
 
 use super::{format_and_tau0, open_input, usage, DiagnoseArgs};
-use crate::analysis::InputKind;
-use crate::frame::{Decoder, FrameDescriptor, FrameEvent};
-use crate::gap::{diagnose, holdout_gap, DiagnoseOptions, DiagnosisRecord, GapConfig, GapEvidence};
-use crate::input::text::{TextReader, BATCH_ROWS};
+use allanscope::analysis::InputKind;
+use allanscope::frame::{Decoder, FrameDescriptor, FrameEvent};
+use allanscope::gap::lsb::LsbEstimator;
+use allanscope::gap::unit_model::{fitted_channel, fitted_unit, ChannelFacts};
+use allanscope::gap::{
+    diagnose, holdout_gap, DiagnoseOptions, DiagnosisRecord, GapConfig, GapEvidence,
+};
+use allanscope::input::text::{TextReader, BATCH_ROWS};
+use allanscope::sim::model_write::model_toml;
 
 /// One channel's evidence, gathered from a whole input.
 struct Gathered {
     names: Vec<String>,
+    /// Each channel's unit (the descriptor's, or `--unit` for text columns).
+    units: Vec<String>,
     evidence: Vec<GapEvidence>,
+    /// The quantization step of each channel's increments and their sum (u), for the model file.
+    lsb: Vec<LsbEstimator>,
+    sums: Vec<f64>,
+}
+
+impl Gathered {
+    /// One increment (u) of channel `k`.
+    fn push(&mut self, k: usize, d: f64) {
+        self.evidence[k].push_increment(d);
+        self.lsb[k].push(d);
+        self.sums[k] += d;
+    }
+
+    /// A missing increment of channel `k`.
+    fn gap(&mut self, k: usize, missing: u64) {
+        self.evidence[k].push_gap(missing);
+        self.lsb[k].push(f64::NAN);
+    }
+
+    fn add_channel(&mut self, name: &str, unit: &str, cfg: &GapConfig) {
+        self.names.push(name.to_string());
+        self.units.push(unit.to_string());
+        self.evidence.push(GapEvidence::new(cfg.clone()));
+        self.lsb.push(LsbEstimator::new());
+        self.sums.push(0.0);
+    }
 }
 
 /// Reads a run and feeds every selected channel's increments to its evidence.
@@ -27,8 +60,13 @@ fn gather(
     tau0: f64,
 ) -> Result<Gathered> {
     let cfg = GapConfig::new(tau0);
-    let mut names = Vec::new();
-    let mut evidence = Vec::new();
+    let mut g = Gathered {
+        names: Vec::new(),
+        units: Vec::new(),
+        evidence: Vec::new(),
+        lsb: Vec::new(),
+        sums: Vec::new(),
+    };
     let mut columns = Vec::new();
     let wanted = |n: &str| a.channel.as_ref().is_none_or(|c| c.iter().any(|w| w == n));
     match desc {
@@ -46,9 +84,8 @@ fn gather(
                     .map_err(anyhow::Error::new)?;
             for (i, n) in reader.names().iter().enumerate() {
                 if n != "temperature_c" && wanted(n) {
-                    names.push(n.clone());
+                    g.add_channel(n, &a.data.unit, &cfg);
                     columns.push(i);
-                    evidence.push(GapEvidence::new(cfg.clone()));
                 }
             }
             let width = reader.names().len();
@@ -64,20 +101,20 @@ fn gather(
                     break;
                 }
                 for row in rows.chunks_exact(width) {
-                    for (k, (&col, ev)) in columns.iter().zip(evidence.iter_mut()).enumerate() {
+                    for (k, &col) in columns.iter().enumerate() {
                         let v = row[col];
                         match kind {
                             InputKind::Phase => {
                                 match (last_phase[k], v.is_finite()) {
-                                    (Some(p), true) => ev.push_increment(v - p),
-                                    (_, false) => ev.push_gap(1),
+                                    (Some(p), true) => g.push(k, v - p),
+                                    (_, false) => g.gap(k, 1),
                                     (None, true) => {}
                                 }
                                 last_phase[k] = v.is_finite().then_some(v);
                             }
-                            _ if v.is_nan() => ev.push_gap(1),
-                            InputKind::Increments => ev.push_increment(v),
-                            InputKind::Rate => ev.push_increment(v * tau0),
+                            _ if v.is_nan() => g.gap(k, 1),
+                            InputKind::Increments => g.push(k, v),
+                            InputKind::Rate => g.push(k, v * tau0),
                         }
                     }
                 }
@@ -87,9 +124,8 @@ fn gather(
             let chans = desc.channels();
             for (i, c) in chans.iter().enumerate() {
                 if wanted(&c.name) {
-                    names.push(c.name.clone());
+                    g.add_channel(&c.name, &c.unit, &cfg);
                     columns.push(i);
-                    evidence.push(GapEvidence::new(cfg.clone()));
                 }
             }
             let scales: Vec<Option<f64>> = chans.iter().map(|c| c.scale).collect();
@@ -108,15 +144,15 @@ fn gather(
                 for ev in decoder.drain() {
                     match ev {
                         FrameEvent::Frame(f) => {
-                            for (&col, e) in columns.iter().zip(evidence.iter_mut()) {
+                            for (k, &col) in columns.iter().enumerate() {
                                 match f.values.get(col).copied().flatten() {
-                                    Some(v) => e.push_increment(v.physical(scales[col])),
-                                    None => e.push_gap(1),
+                                    Some(v) => g.push(k, v.physical(scales[col])),
+                                    None => g.gap(k, 1),
                                 }
                             }
                         }
                         FrameEvent::Gap { missing } => {
-                            evidence.iter_mut().for_each(|e| e.push_gap(missing))
+                            (0..columns.len()).for_each(|k| g.gap(k, missing))
                         }
                     }
                 }
@@ -128,14 +164,14 @@ fn gather(
     }
     if let Some(c) = &a.channel {
         for w in c {
-            if !names.contains(w) {
+            if !g.names.contains(w) {
                 return Err(usage(format!(
                     "--channel: `{w}` is not a channel of {input}"
                 )));
             }
         }
     }
-    Ok(Gathered { names, evidence })
+    Ok(g)
 }
 
 pub fn run(a: &DiagnoseArgs) -> Result<()> {
@@ -146,7 +182,10 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
              and --resume are for analyze, listen and run",
         ));
     }
-    let mut sink = crate::sink::json::JsonLines::new(super::analyze::output_writer(d)?);
+    if let Some(p) = &a.model_out {
+        check_model_out(p)?;
+    }
+    let mut sink = allanscope::sink::json::JsonLines::new(super::analyze::output_writer(d)?);
     let (desc, tau0) = format_and_tau0(d)?;
     let opts = DiagnoseOptions::default();
     let mut main = gather(&a.input, a, desc.as_ref(), tau0)?;
@@ -154,6 +193,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
         Some(h) => Some(gather(h, a, desc.as_ref(), tau0)?),
         None => None,
     };
+    let mut fitted = Vec::new();
     for (i, name) in main.names.iter().enumerate() {
         let snap = main.evidence[i].snapshot();
         let diag = match diagnose(&snap, &opts) {
@@ -172,7 +212,64 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
         });
         let rec = DiagnosisRecord::new(name, &diag, holdout, true);
         sink.write(&rec)?;
+        if a.model_out.is_some() {
+            let t_run = snap.n_increments as f64 * tau0;
+            let facts = ChannelFacts {
+                name: name.clone(),
+                unit: main.units[i].clone(),
+                // The step of rate samples is not a phase LSB (it is the rate-sample
+                // quantization of a MEMS part), so only increments and phase give one.
+                lsb: if d.rate { None } else { main.lsb[i].estimate() },
+                bias: if t_run > 0.0 {
+                    main.sums[i] / t_run
+                } else {
+                    0.0
+                },
+                temperature_coefficient: 0.0,
+            };
+            fitted.push(fitted_channel(&facts, &diag, tau0));
+        }
     }
     sink.flush()?;
+    if let Some(p) = &a.model_out {
+        if fitted.is_empty() {
+            return Err(anyhow::anyhow!(
+                "--model-out {}: no channel could be diagnosed, no model written",
+                p.display()
+            ));
+        }
+        let model = fitted_unit(tau0, fitted, None);
+        let header = vec![
+            format!("The unit fitted by `allanscope diagnose {}`.", a.input),
+            "Five terms with the accepted effects in; a sinusoid's phase is not estimated (0)."
+                .to_string(),
+        ];
+        let text = model_toml(&model, &format!("fitted from {}", a.input), &header);
+        write_new(p, &text)?;
+    }
     Ok(())
+}
+
+/// `--model-out` never replaces a file: refused before any input is read (exit 2).
+fn check_model_out(p: &Path) -> Result<()> {
+    if p.exists() {
+        return Err(usage(format!(
+            "--model-out {}: the file exists; remove it or choose another name",
+            p.display()
+        )));
+    }
+    Ok(())
+}
+
+/// Writes `text` to a new file (never over an existing one).
+fn write_new(p: &Path, text: &str) -> Result<()> {
+    use std::io::Write as _;
+    let mut f = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(p)
+        .with_context(|| format!("--model-out {}: cannot create", p.display()))?;
+    f.write_all(text.as_bytes())
+        .and_then(|_| f.sync_all())
+        .with_context(|| format!("--model-out {}: cannot write", p.display()))
 }

@@ -9,9 +9,9 @@ use clap::{ArgGroup, Args};
 
 use super::analyze::output_writer;
 use super::{analysis_options, parse_duration_s, select_channels, usage, DataArgs};
-use crate::frame::FrameDescriptor;
-use crate::pipeline::{RecordWriter, RunControl};
-use crate::source::{Pace, SourceSpec};
+use allanscope::frame::FrameDescriptor;
+use allanscope::pipeline::{RecordWriter, RunControl};
+use allanscope::source::{Pace, SourceSpec};
 
 #[derive(Debug, Args)]
 #[command(group(ArgGroup::new("source").required(true).args(["serial", "udp", "input"])))]
@@ -47,7 +47,8 @@ fn source_spec(l: &ListenArgs) -> Result<SourceSpec> {
         });
     }
     if let Some(u) = &l.udp {
-        let bind = crate::source::udp::parse_bind(u).map_err(|e| usage(format!("--udp {e}")))?;
+        let bind =
+            allanscope::source::udp::parse_bind(u).map_err(|e| usage(format!("--udp {e}")))?;
         return Ok(SourceSpec::Udp { bind });
     }
     match l.input.as_deref() {
@@ -73,7 +74,7 @@ pub fn run(l: &ListenArgs) -> Result<()> {
     // Live: --every is wall-seconds, kept by the pipeline, not data-seconds.
     opts.every_s = None;
     let setups = select_channels(
-        crate::analysis::ChannelSetup::for_frames(&desc),
+        allanscope::analysis::ChannelSetup::for_frames(&desc),
         &d.channels,
         &spec.name(),
     )?;
@@ -94,7 +95,7 @@ pub fn run(l: &ListenArgs) -> Result<()> {
         ..RunControl::default()
     };
     let writer = RecordWriter::spawn(output_writer(d)?);
-    let result = crate::pipeline::run_frames(spec, &desc, analysis, writer.queue(), &ctl);
+    let result = allanscope::pipeline::run_frames(spec, &desc, analysis, writer.queue(), &ctl);
     let written = writer.finish();
     result?;
     written?;

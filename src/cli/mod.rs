@@ -1,4 +1,5 @@
-//! The command line: argument parsing here, one file per subcommand beside it. `main.rs` only calls
+//! The command line (a module of the binary, not of the library): argument parsing here, one file
+//! per subcommand beside it, each over `allanscope::...`. `main.rs` only calls
 //! [`main_with_args`] and maps errors to exit statuses (CONTRACT.md: 2 for usage and
 //! configuration errors, 1 for anything else).
 
@@ -17,10 +18,10 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 use clap::{Args, Parser, Subcommand};
 
-use crate::allan::accum::{AccumConfig, Overlap, StatSet, TauSpec, DEFAULT_L};
-use crate::analysis::{AnalysisOptions, ChannelSetup, InputKind};
-use crate::error::UsageError;
-use crate::model::fit::{FitMethod, FitOptions};
+use allanscope::allan::accum::{AccumConfig, Overlap, StatSet, TauSpec, DEFAULT_L};
+use allanscope::analysis::{AnalysisOptions, ChannelSetup, InputKind};
+use allanscope::error::UsageError;
+use allanscope::model::fit::{FitMethod, FitOptions};
 
 #[derive(Debug, Parser)]
 #[command(
@@ -82,6 +83,10 @@ pub struct DiagnoseArgs {
     /// A second run of the same unit, on which the effects fitted on INPUT are judged.
     #[arg(long)]
     pub holdout: Option<String>,
+    /// Write the fitted unit (five terms, LSB, tau0, accepted effects) as a model file that
+    /// `simulate --model` reads. An existing file is never overwritten.
+    #[arg(long, value_name = "FILE")]
+    pub model_out: Option<PathBuf>,
     #[command(flatten)]
     pub data: DataArgs,
 }
@@ -140,7 +145,8 @@ pub struct DataArgs {
     /// Text columns hold phase (the running sum of increments, u).
     #[arg(long)]
     pub phase: bool,
-    /// Unit label of text columns.
+    /// Unit of the increment of text columns, also with --rate or --phase (with --rate, `deg/s`
+    /// means `deg`): deg, rad, mrad, arcsec, m/s, ft/s, g (g*s), mg give datasheet units.
     #[arg(long, default_value = "u")]
     pub unit: String,
     /// Cluster sizes: `octave` (powers of two), `decade` (1, 2, 4 per decade) or a list of m.
@@ -247,92 +253,36 @@ pub(crate) fn usage(msg: impl Into<String>) -> anyhow::Error {
     anyhow::Error::new(UsageError::Option(msg.into()))
 }
 
-/// Parses `--taus`.
+/// Parses `--taus` ([`TauSpec`]'s `FromStr`, shared with the stand config).
 pub fn parse_taus(s: &str) -> Result<TauSpec> {
-    match s {
-        "octave" => Ok(TauSpec::Octave),
-        "decade" => Ok(TauSpec::Decade),
-        list => {
-            let ms: Result<Vec<u64>, _> =
-                list.split(',').map(|t| t.trim().parse::<u64>()).collect();
-            match ms {
-                Ok(v) if !v.is_empty() && v.iter().all(|&m| m >= 1) => Ok(TauSpec::List(v)),
-                _ => Err(usage(format!(
-                    "--taus `{list}`: expected octave, decade or a comma list of cluster sizes m >= 1"
-                ))),
-            }
-        }
-    }
+    s.parse::<TauSpec>()
+        .map_err(|e| usage(format!("--taus `{s}`: {e}")))
 }
 
 /// Parses `--overlap`.
 pub fn parse_overlap(s: &str) -> Result<Overlap> {
-    match s {
-        "full" => Ok(Overlap::Full),
-        l => match l.parse::<u64>() {
-            Ok(l) if l >= 1 => Ok(Overlap::Bounded(l)),
-            _ => Err(usage(format!(
-                "--overlap `{l}`: expected `full` or an integer L >= 1"
-            ))),
-        },
-    }
+    s.parse::<Overlap>()
+        .map_err(|e| usage(format!("--overlap `{s}`: {e}")))
 }
 
 fn parse_stats(list: &[String]) -> Result<StatSet> {
-    let mut set = StatSet {
-        avar: false,
-        hvar: false,
-        mvar: false,
-    };
-    for s in list {
-        match s.trim() {
-            "avar" => set.avar = true,
-            "hvar" => set.hvar = true,
-            "mvar" => set.mvar = true,
-            other => {
-                return Err(usage(format!(
-                    "--stats: unknown statistic `{other}` (allowed: avar, hvar, mvar)"
-                )))
-            }
-        }
-    }
-    if !(set.avar || set.hvar || set.mvar) {
-        return Err(usage("--stats: at least one statistic"));
-    }
-    Ok(set)
+    StatSet::from_names(list.iter().map(String::as_str)).map_err(|e| usage(format!("--stats: {e}")))
 }
 
 /// Parses a duration: seconds, or a number with `s`, `min`, `h` or `d`.
 pub fn parse_duration_s(s: &str) -> Result<f64> {
-    let t = s.trim();
-    let (num, mult) = if let Some(v) = t.strip_suffix("min") {
-        (v, 60.0)
-    } else if let Some(v) = t.strip_suffix('h') {
-        (v, 3600.0)
-    } else if let Some(v) = t.strip_suffix('d') {
-        (v, 86400.0)
-    } else if let Some(v) = t.strip_suffix('s') {
-        (v, 1.0)
-    } else {
-        (t, 1.0)
-    };
-    match num.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v * mult),
-        _ => Err(usage(format!(
-            "duration `{s}`: expected a positive number of seconds, or with s, min, h or d"
-        ))),
-    }
+    allanscope::plan::options::parse_duration_s(s).map_err(usage)
 }
 
 /// The frame descriptor (`None` for text columns) and the sampling step: `--tau0` when given,
 /// else the descriptor's; required for text columns.
 pub(crate) fn format_and_tau0(
     d: &DataArgs,
-) -> Result<(Option<crate::frame::FrameDescriptor>, f64)> {
+) -> Result<(Option<allanscope::frame::FrameDescriptor>, f64)> {
     let desc = if d.format == "csv" {
         None
     } else {
-        Some(crate::frame::FrameDescriptor::load(&d.format).map_err(anyhow::Error::new)?)
+        Some(allanscope::frame::FrameDescriptor::load(&d.format).map_err(anyhow::Error::new)?)
     };
     let tau0 = match (&desc, d.tau0) {
         (_, Some(t)) if t.is_finite() && t > 0.0 => t,
@@ -385,7 +335,7 @@ pub(crate) fn analysis_options(d: &DataArgs, tau0_s: f64) -> Result<AnalysisOpti
         fit,
         run: None,
         limits: match &d.limits {
-            Some(p) => crate::model::limits::load_file(p)?,
+            Some(p) => allanscope::model::limits::load_file(p)?,
             None => Vec::new(),
         },
         diagnose: d.diagnose,
@@ -398,8 +348,8 @@ pub(crate) fn checkpoint_header(
     format: &str,
     opts: &AnalysisOptions,
     channels: &[ChannelSetup],
-) -> crate::checkpoint::Header {
-    use crate::allan::accum::Overlap;
+) -> allanscope::checkpoint::Header {
+    use allanscope::allan::accum::Overlap;
     let s = opts.accum.stats;
     let stats = [("avar", s.avar), ("hvar", s.hvar), ("mvar", s.mvar)]
         .iter()
@@ -407,10 +357,10 @@ pub(crate) fn checkpoint_header(
         .map(|x| x.0.to_string())
         .collect();
     let file = Path::new(input);
-    crate::checkpoint::Header {
+    allanscope::checkpoint::Header {
         input: input.into(),
         input_fingerprint: (input != "-" && file.is_file())
-            .then(|| crate::checkpoint::fingerprint(file))
+            .then(|| allanscope::checkpoint::fingerprint(file))
             .flatten(),
         format: format.into(),
         kind: match opts.kind {
@@ -433,8 +383,8 @@ pub(crate) fn checkpoint_header(
 
 /// A run's checkpoint plan for the pipeline and, when resuming, the saved checkpoint.
 pub(crate) type CheckpointSetup = (
-    crate::checkpoint::CheckpointPlan,
-    Option<crate::checkpoint::Checkpoint>,
+    allanscope::checkpoint::CheckpointPlan,
+    Option<allanscope::checkpoint::Checkpoint>,
 );
 
 impl DataArgs {
@@ -442,7 +392,7 @@ impl DataArgs {
     /// `--abort-after-frames` and `--out`.
     pub(crate) fn checkpoint_setup(
         &self,
-        header: crate::checkpoint::Header,
+        header: allanscope::checkpoint::Header,
         data_seconds: bool,
         replay: bool,
     ) -> Result<Option<CheckpointSetup>> {
@@ -465,11 +415,11 @@ pub(crate) fn checkpoint_setup(
     resume: bool,
     abort_after_frames: Option<u64>,
     out: Option<&Path>,
-    header: crate::checkpoint::Header,
+    header: allanscope::checkpoint::Header,
     data_seconds: bool,
     replay: bool,
 ) -> Result<Option<CheckpointSetup>> {
-    use crate::checkpoint::{
+    use allanscope::checkpoint::{
         check_fresh_start, check_resume, path_for, Checkpoint, CheckpointPlan,
     };
     if every.is_none() && !resume {
@@ -529,17 +479,19 @@ pub(crate) fn start_analysis(
     input: &str,
     setups: Vec<ChannelSetup>,
     opts: AnalysisOptions,
-    resume: Option<&crate::checkpoint::Checkpoint>,
+    resume: Option<&allanscope::checkpoint::Checkpoint>,
     path: Option<&Path>,
-) -> Result<crate::analysis::RunAnalysis> {
+) -> Result<allanscope::analysis::RunAnalysis> {
     match resume {
-        None => Ok(crate::analysis::RunAnalysis::new(input, setups, opts)),
-        Some(ck) => crate::analysis::RunAnalysis::restore(ck.analysis.clone(), opts).map_err(|p| {
-            anyhow::Error::new(UsageError::Checkpoint {
-                file: path.map(Path::to_path_buf).unwrap_or_default(),
-                problem: p,
+        None => Ok(allanscope::analysis::RunAnalysis::new(input, setups, opts)),
+        Some(ck) => {
+            allanscope::analysis::RunAnalysis::restore(ck.analysis.clone(), opts).map_err(|p| {
+                anyhow::Error::new(UsageError::Checkpoint {
+                    file: path.map(Path::to_path_buf).unwrap_or_default(),
+                    problem: p,
+                })
             })
-        }),
+        }
     }
 }
 

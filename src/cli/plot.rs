@@ -4,10 +4,10 @@
 use anyhow::Result;
 
 use super::{read_json_lines, usage, PlotArgs};
-use crate::sink::dynamic::{render_dynamic_svg, stack};
-use crate::sink::page_file::write_page;
-use crate::sink::plot::{default_title, render_svg, Series};
-use crate::sink::results::{ResultFile, Results};
+use allanscope::sink::dynamic::{render_dynamic_svg, stack};
+use allanscope::sink::page_file::write_page;
+use allanscope::sink::plot::{default_title, render_svg, Series};
+use allanscope::sink::results::{ResultFile, Results};
 
 pub fn run(a: &PlotArgs) -> Result<()> {
     let files = a

@@ -4,9 +4,9 @@
 use anyhow::Result;
 
 use super::{read_json_lines, ReportArgs};
-use crate::sink::page_file::write_page;
-use crate::sink::report::render_html;
-use crate::sink::results::ResultFile;
+use allanscope::sink::page_file::write_page;
+use allanscope::sink::report::render_html;
+use allanscope::sink::results::ResultFile;
 
 pub fn run(a: &ReportArgs) -> Result<()> {
     let inputs = a

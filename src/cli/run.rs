@@ -1,5 +1,5 @@
 //! `run --config FILE`: the pipeline with source, channels, statistics, outputs and limits from
-//! a stand config (`crate::stand`; `config/stand.toml` is the example).
+//! a stand config (`allanscope::stand`; `config/stand.toml` is the example).
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -9,14 +9,14 @@ use anyhow::Result;
 use clap::Args;
 
 use super::select_channels;
-use crate::allan::accum::AccumConfig;
-use crate::analysis::{AnalysisOptions, InputKind};
-use crate::error::UsageError;
-use crate::frame::FrameDescriptor;
-use crate::model::fit::FitOptions;
-use crate::pipeline::{RecordWriter, RunControl};
-use crate::source::{Pace, SourceSpec};
-use crate::stand::StandConfig;
+use allanscope::allan::accum::AccumConfig;
+use allanscope::analysis::{AnalysisOptions, InputKind};
+use allanscope::error::UsageError;
+use allanscope::frame::FrameDescriptor;
+use allanscope::model::fit::FitOptions;
+use allanscope::pipeline::{RecordWriter, RunControl};
+use allanscope::source::{Pace, SourceSpec};
+use allanscope::stand::StandConfig;
 
 #[derive(Debug, Args)]
 pub struct RunArgs {
@@ -42,14 +42,15 @@ pub fn run(r: &RunArgs) -> Result<()> {
             problem: e.to_string(),
         })
     })?;
-    let limits = crate::model::limits::from_tables(&cfg.limits_raw, &cfg.file).map_err(|errs| {
-        let all = errs
-            .iter()
-            .map(|e| e.to_string())
-            .collect::<Vec<_>>()
-            .join("\n");
-        anyhow::Error::new(UsageError::Option(all))
-    })?;
+    let limits =
+        allanscope::model::limits::from_tables(&cfg.limits_raw, &cfg.file).map_err(|errs| {
+            let all = errs
+                .iter()
+                .map(|e| e.to_string())
+                .collect::<Vec<_>>()
+                .join("\n");
+            anyhow::Error::new(UsageError::Option(all))
+        })?;
     let mut spec = cfg.source.clone();
     let live = spec.is_live();
     if let SourceSpec::File { pace, .. } | SourceSpec::Stdin { pace } = &mut spec {
@@ -75,7 +76,7 @@ pub fn run(r: &RunArgs) -> Result<()> {
         diagnose: cfg.diagnose,
     };
     let setups = select_channels(
-        crate::analysis::ChannelSetup::for_frames(&desc),
+        allanscope::analysis::ChannelSetup::for_frames(&desc),
         &cfg.channels,
         &spec.name(),
     )
@@ -116,7 +117,7 @@ pub fn run(r: &RunArgs) -> Result<()> {
         ..RunControl::default()
     };
     let writer = RecordWriter::spawn(out);
-    let result = crate::pipeline::run_frames(spec, &desc, analysis, writer.queue(), &ctl);
+    let result = allanscope::pipeline::run_frames(spec, &desc, analysis, writer.queue(), &ctl);
     let written = writer.finish();
     result?;
     written?;

@@ -5,25 +5,25 @@ use std::io::Write;
 use anyhow::{Context, Result};
 
 use super::{parse_duration_s, SimulateArgs};
-use crate::frame::FrameDescriptor;
+use allanscope::frame::FrameDescriptor;
 
 pub fn run(s: &SimulateArgs) -> Result<()> {
     let duration = parse_duration_s(&s.duration)?;
-    let model = crate::sim::SimModel::load(&s.model)?;
+    let model = allanscope::sim::SimModel::load(&s.model)?;
     let f = std::fs::File::create(&s.out)
         .with_context(|| format!("cannot create {}", s.out.display()))?;
     let mut w = std::io::BufWriter::with_capacity(1 << 16, f);
     let steps = if s.format == "csv" {
-        crate::sim::simulate_to_writer(
+        allanscope::sim::simulate_to_writer(
             &model,
             duration,
             s.seed,
-            crate::sim::OutputFormat::Csv,
+            allanscope::sim::OutputFormat::Csv,
             &mut w,
         )?
     } else {
         let desc = FrameDescriptor::load(&s.format).map_err(anyhow::Error::new)?;
-        crate::sim::capture::simulate_to_frames(&model, &desc, duration, s.seed, &mut w)?
+        allanscope::sim::capture::simulate_to_frames(&model, &desc, duration, s.seed, &mut w)?
     };
     w.flush()?;
     tracing::info!("{}: {steps} steps written", s.out.display());

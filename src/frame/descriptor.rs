@@ -62,8 +62,8 @@ use super::field::{ByteOrder, FieldType, FIELD_TYPE_NAMES};
 use super::ChannelInfo;
 use crate::error::UsageError;
 
-/// Standard gravity, m/s^2 (CGPM 1901), for `accel_g` fields.
-pub const G0_M_S2: f64 = 9.80665;
+/// Standard gravity, m/s^2 (CGPM 1901), for `accel_g` fields (one constant, in model::units).
+pub use crate::model::units::G0_M_S2;
 
 /// The descriptors that ship with the program, embedded so the binary works from any directory.
 pub const BUILTIN: &[(&str, &str)] = &[

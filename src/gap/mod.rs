@@ -8,7 +8,9 @@
 //! of the time-domain tests [`warmup`] and [`steps`] ([`jump_mixture`]: statistics measured and
 //! not adopted); [`segments`] tests homogeneity in time; [`diagnose`](mod@diagnose) orchestrates
 //! them and decides ([`Diagnosis`]) by [`thresholds`]; [`holdout`] judges a held-out run;
-//! [`oracle`] bounds what any test could do; [`record`] writes CONTRACT.md's `diagnosis` record.
+//! [`oracle`] bounds what any test could do; [`record`] writes CONTRACT.md's `diagnosis` record;
+//! [`unit_model`] turns a diagnosis into the simulator model of the fitted unit (with the LSB
+//! that [`lsb`] reads off the values).
 //! Everything is pure and synchronous.
 //!
 //! Wiring: feed a [`GapEvidence`] (from [`GapConfig::new`], with `expected_increments` when the
@@ -22,12 +24,14 @@ pub mod effects;
 pub mod evidence;
 pub mod holdout;
 pub mod jump_mixture;
+pub mod lsb;
 pub mod oracle;
 pub mod problem;
 pub mod record;
 pub mod segments;
 pub mod steps;
 pub mod thresholds;
+pub mod unit_model;
 pub mod warmup;
 
 pub use diagnose::{diagnose, DiagnoseOptions, Diagnosis, Verdict};

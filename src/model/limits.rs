@@ -195,107 +195,8 @@ pub fn channel_matches(pattern: &str, name: &str) -> bool {
 // ---------------------------------------------------------------------------------------------
 // Units
 
-/// A unit as a factor to (arcsec, m, s) and the exponents of angle, length and time.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Unit {
-    pub factor: f64,
-    pub angle: f64,
-    pub length: f64,
-    pub time: f64,
-}
-
-impl Unit {
-    const ONE: Unit = Unit {
-        factor: 1.0,
-        angle: 0.0,
-        length: 0.0,
-        time: 0.0,
-    };
-
-    fn pow(self, e: f64) -> Unit {
-        Unit {
-            factor: self.factor.powf(e),
-            angle: self.angle * e,
-            length: self.length * e,
-            time: self.time * e,
-        }
-    }
-
-    fn mul(self, o: Unit) -> Unit {
-        Unit {
-            factor: self.factor * o.factor,
-            angle: self.angle + o.angle,
-            length: self.length + o.length,
-            time: self.time + o.time,
-        }
-    }
-
-    fn same_dimension(&self, o: &Unit) -> bool {
-        let eq = |a: f64, b: f64| (a - b).abs() < 1e-9;
-        eq(self.angle, o.angle) && eq(self.length, o.length) && eq(self.time, o.time)
-    }
-}
-
-/// Arcseconds per radian.
-const ARCSEC_PER_RAD: f64 = 180.0 * 3600.0 / std::f64::consts::PI;
-/// Standard gravity, m/s^2.
-const G0: f64 = crate::model::units::G0_M_S2;
-
-fn atom(name: &str) -> Option<Unit> {
-    let u = |factor, angle, length, time| Unit {
-        factor,
-        angle,
-        length,
-        time,
-    };
-    Some(match name {
-        "1" => Unit::ONE,
-        "arcsec" => u(1.0, 1.0, 0.0, 0.0),
-        "deg" => u(3600.0, 1.0, 0.0, 0.0),
-        "rad" => u(ARCSEC_PER_RAD, 1.0, 0.0, 0.0),
-        "mrad" => u(ARCSEC_PER_RAD * 1e-3, 1.0, 0.0, 0.0),
-        "urad" => u(ARCSEC_PER_RAD * 1e-6, 1.0, 0.0, 0.0),
-        "m" => u(1.0, 0.0, 1.0, 0.0),
-        "mm" => u(1e-3, 0.0, 1.0, 0.0),
-        "s" => u(1.0, 0.0, 0.0, 1.0),
-        "min" => u(60.0, 0.0, 0.0, 1.0),
-        "h" | "hr" => u(3600.0, 0.0, 0.0, 1.0),
-        "g" => u(G0, 0.0, 1.0, -2.0),
-        "mg" => u(G0 * 1e-3, 0.0, 1.0, -2.0),
-        "ug" => u(G0 * 1e-6, 0.0, 1.0, -2.0),
-        _ => return None,
-    })
-}
-
-/// Parses a unit expression (module doc). `None` when it is not one.
-pub fn parse_unit(text: &str) -> Option<Unit> {
-    let t = text
-        .trim()
-        .to_lowercase()
-        .replace("micro-", "u")
-        .replace('µ', "u")
-        .replace(' ', "");
-    if t.is_empty() {
-        return None;
-    }
-    let mut out = Unit::ONE;
-    for (i, tok) in t.split('/').enumerate() {
-        let (inner, mut e) = match tok.strip_prefix("sqrt(").and_then(|r| r.strip_suffix(')')) {
-            Some(x) => (x, 0.5),
-            None => (tok, 1.0),
-        };
-        let (base, pow) = match inner.split_once('^') {
-            Some((b, p)) => (b, p.parse::<f64>().ok().filter(|p| p.is_finite())?),
-            None => (inner, 1.0),
-        };
-        e *= pow;
-        if i > 0 {
-            e = -e;
-        }
-        out = out.mul(atom(base)?.pow(e));
-    }
-    Some(out)
-}
+use crate::model::units::{atom, channel_unit as parse_channel_unit};
+pub use crate::model::units::{parse_unit, Unit};
 
 /// Factor `f` such that a coefficient in its native unit times `f` is in `limit_unit`, for a
 /// channel in `channel_unit`; `Err` says why not.
@@ -306,10 +207,10 @@ pub fn conversion(channel_unit: &str, coef: Coef, limit_unit: Option<&str>) -> R
         Some(u) => u,
     };
     let limit = parse_unit(lu).ok_or_else(|| format!("unknown unit `{lu}`"))?;
-    let chan = parse_unit(channel_unit).ok_or_else(|| {
+    let chan = parse_channel_unit(channel_unit).ok_or_else(|| {
         format!("channel unit `{channel_unit}` is not a known unit: state the limit as native")
     })?;
-    let native = chan.mul(atom("s").map_or(Unit::ONE, |s| s.pow(coef.time_exponent())));
+    let native = chan.times(atom("s").map_or(Unit::ONE, |s| s.pow(coef.time_exponent())));
     if !native.same_dimension(&limit) {
         return Err(format!(
             "`{lu}` is not a unit of {:?} for a channel in {channel_unit}",

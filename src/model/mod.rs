@@ -1,10 +1,11 @@
 //! The noise model: the five-term Allan-variance model (THEORY.md section 2), its fit, run-to-run
-//! aggregation, datasheet units and limits. Works on curves only; never sees samples.
+//! aggregation, datasheet units, IEEE 952 read-outs and limits. Works on curves only; never sees samples.
 
 pub mod aggregate;
 pub mod avar_cov;
 pub mod fit;
 pub mod limits;
 pub mod nnls;
+pub mod readout;
 pub mod terms;
 pub mod units;

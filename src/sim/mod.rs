@@ -21,7 +21,9 @@
 //! (integer counts) hide such differences except with vanishing probability.
 
 pub mod effects;
+pub mod model_avar;
 pub mod model_file;
+pub mod model_write;
 pub mod noise;
 pub mod writer;
 

@@ -20,7 +20,7 @@
 //!
 //! [[channel]]
 //! name = "g4"                     # CSV column name
-//! unit = "arcsec"                 # u; the stand needs arcsec | deg | rad (gyro) or m/s (accelerometer)
+//! unit = "arcsec"                 # u; an axis needs an angle or velocity unit (model::units)
 //! lsb = 0.004                     # optional: quantization step of the integrated signal (u)
 //! axis = "down"                   # optional: up|down|north|south|east|west or [east, north, up]
 //! bias = 0.0                      # u/s, default 0
@@ -41,7 +41,6 @@
 use std::path::{Path, PathBuf};
 
 use crate::error::UsageError;
-use crate::model::terms;
 
 use super::effects::TemperatureProfile;
 use super::noise::FlickerBank;
@@ -49,7 +48,8 @@ use super::noise::FlickerBank;
 /// Earth rotation rate (WGS-84), rad/s.
 pub const EARTH_RATE_RAD_S: f64 = 7.292_115e-5;
 /// Arcseconds per radian.
-pub const ARCSEC_PER_RAD: f64 = 180.0 * 3600.0 / std::f64::consts::PI;
+pub use crate::model::units::ARCSEC_PER_RAD;
+use crate::model::units::{IncrementUnit, SensorKind};
 /// Default upper end of the flicker band in units of tau0 (six decades).
 pub const FLICKER_BAND_DECADES_DEFAULT: f64 = 6.0;
 
@@ -69,17 +69,6 @@ pub struct Stand {
     pub latitude_deg: f64,
     /// Local gravity in m/s^2.
     pub gravity_m_s2: f64,
-}
-
-/// What a channel's unit measures, for the stand projection.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum SensorKind {
-    /// A gyro; the unit is this many u per radian.
-    Angle { u_per_rad: f64 },
-    /// An accelerometer in m/s (delta-velocity).
-    Velocity,
-    /// Neither; cannot take an `axis`.
-    Other,
 }
 
 /// One channel's noise model.
@@ -108,7 +97,8 @@ pub struct ChannelModel {
     pub flicker: Option<FlickerBank>,
     /// Sensor axis in the local level frame (east, north, up), unit length.
     pub axis_enu: Option<[f64; 3]>,
-    pub kind: SensorKind,
+    /// What the unit measures (`None`: neither an angle nor a velocity; cannot take an `axis`).
+    pub kind: Option<IncrementUnit>,
     /// u/s per degC.
     pub temperature_coefficient: f64,
     pub gauss_markov: Vec<GaussMarkov>,
@@ -199,70 +189,19 @@ impl SimModel {
             return 0.0;
         };
         match c.kind {
-            SensorKind::Angle { u_per_rad } => {
+            Some(IncrementUnit {
+                kind: SensorKind::Gyro,
+                si_per_unit,
+            }) => {
                 let lat = stand.latitude_deg.to_radians();
-                EARTH_RATE_RAD_S * u_per_rad * (axis[1] * lat.cos() + axis[2] * lat.sin())
+                EARTH_RATE_RAD_S / si_per_unit * (axis[1] * lat.cos() + axis[2] * lat.sin())
             }
-            SensorKind::Velocity => stand.gravity_m_s2 * axis[2],
-            SensorKind::Other => 0.0,
+            Some(IncrementUnit {
+                kind: SensorKind::Accel,
+                si_per_unit,
+            }) => stand.gravity_m_s2 / si_per_unit * axis[2],
+            None => 0.0,
         }
-    }
-
-    /// The model's Allan variance (u^2/s^2) of channel `ch` at cluster `m`, for a record of
-    /// `n_increments` starting at power-on, from the exact discrete closed forms of
-    /// [`crate::model::terms`]: Q (with `lsb / sqrt(12)` added in quadrature), N (through the
-    /// output filter when there is one), the flicker bank, K, R, Gauss-Markov, sinusoids (times
-    /// the output filter's gain), warm-up, bias jumps (as K) and the temperature-driven bias
-    /// (its settling as a warm-up, its sine as a sinusoid).
-    ///
-    /// Not included: the output filter's effect on terms other than N and the sinusoids (small
-    /// where those terms matter, at tau >> the filter's time constant), and the cross terms
-    /// between the deterministic parts (ramp, warm-up, sinusoids, temperature) on a finite
-    /// record, which average out over many periods.
-    pub fn avar_closed_form(&self, ch: usize, m: u64, n_increments: u64) -> f64 {
-        let Some(c) = self.channels.get(ch) else {
-            return f64::NAN;
-        };
-        let tau0 = self.tau0_s;
-        let tau = m as f64 * tau0;
-        let q2 = c.q * c.q + c.lsb.map_or(0.0, |l| terms::quantization_q(l).powi(2));
-        let mut v = terms::white_phase_avar(q2.sqrt(), tau);
-        let filter = c.output_filter.map(|f| f.time_constant_s);
-        v += match filter {
-            Some(t) if c.n > 0.0 => terms::filtered_white_rate_avar(c.n, t, tau0, m),
-            _ => terms::white_rate_avar(c.n, tau),
-        };
-        if let Some(bank) = &c.flicker {
-            v += bank.avar(tau);
-        }
-        v += terms::rate_random_walk_avar(c.k, tau);
-        v += terms::rate_ramp_avar(c.r, tau);
-        for g in &c.gauss_markov {
-            v += terms::gauss_markov_avar(g.sigma, g.tau_c_s, tau);
-        }
-        let gain =
-            |f_hz: f64| filter.map_or(1.0, |t| terms::output_filter_power_gain(t, tau0, f_hz));
-        for s in &c.sinusoids {
-            v += gain(s.frequency_hz) * terms::sinusoid_avar(s.amplitude, s.frequency_hz, tau);
-        }
-        if let Some(w) = c.warmup {
-            v += terms::warmup_avar(w.amplitude, w.time_constant_s, tau0, m, n_increments);
-        }
-        if let Some(j) = c.bias_jumps {
-            v += terms::bias_jumps_avar(j.mean_interval_s, j.rms_size, tau);
-        }
-        if let (Some(t), true) = (&self.temperature, c.temperature_coefficient != 0.0) {
-            let a = c.temperature_coefficient * (t.start_c - t.final_c);
-            if a != 0.0 {
-                v += terms::warmup_avar(a, t.time_constant_s, tau0, m, n_increments);
-            }
-            if t.sine_amplitude_c != 0.0 {
-                let f = 1.0 / t.sine_period_s;
-                let amp = c.temperature_coefficient * t.sine_amplitude_c;
-                v += gain(f) * terms::sinusoid_avar(amp, f, tau);
-            }
-        }
-        v
     }
 }
 
@@ -270,21 +209,6 @@ impl SimModel {
 pub fn normal_gravity_m_s2(latitude_deg: f64) -> f64 {
     let s2 = latitude_deg.to_radians().sin().powi(2);
     9.780_325_335_9 * (1.0 + 0.001_931_852_652_41 * s2) / (1.0 - 0.006_694_379_990_13 * s2).sqrt()
-}
-
-/// The sensor kind a unit name implies.
-pub fn sensor_kind(unit: &str) -> SensorKind {
-    match unit {
-        "arcsec" => SensorKind::Angle {
-            u_per_rad: ARCSEC_PER_RAD,
-        },
-        "deg" => SensorKind::Angle {
-            u_per_rad: 180.0 / std::f64::consts::PI,
-        },
-        "rad" => SensorKind::Angle { u_per_rad: 1.0 },
-        "m/s" => SensorKind::Velocity,
-        _ => SensorKind::Other,
-    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -631,7 +555,7 @@ fn parse_channel(
     if !t.contains_key("unit") {
         errs.push(&k.path("unit"), "missing");
     }
-    let kind = sensor_kind(&unit);
+    let kind = IncrementUnit::parse(&unit);
     let lsb = k.num_pos("lsb", true, errs);
     let bias = k.num("bias", errs).unwrap_or(0.0);
     let q = k.num_pos("Q", false, errs).unwrap_or(0.0);
@@ -664,11 +588,11 @@ fn parse_channel(
     };
     let axis_path = k.path("axis");
     let axis_enu = k.get("axis").and_then(|v| parse_axis(v, &axis_path, errs));
-    if axis_enu.is_some() && kind == SensorKind::Other {
+    if axis_enu.is_some() && kind.is_none() {
         errs.push(
             &axis_path,
             format!(
-                "an axis needs a unit of angle (arcsec, deg, rad) or velocity (m/s), not `{unit}`"
+                "an axis needs a unit of angle (arcsec, deg, rad, mrad) or velocity (m/s, ft/s, g, mg), not `{unit}`"
             ),
         );
     }

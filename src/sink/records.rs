@@ -88,6 +88,10 @@ pub struct FitRecord {
     /// The same coefficients in datasheet units, where the unit is known.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub datasheet: Option<serde_json::Value>,
+    /// IEEE 952 read-outs of the AVAR curve beside the fit (model::readout): `arw`,
+    /// `bias_instability`, `rrw`.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub readouts: Option<Box<crate::model::readout::ReadoutsRecord>>,
     /// Q divided by LSB/sqrt(12), where the LSB is known (the seed paper's comparison).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub q_over_lsb: Option<f64>,

@@ -1,4 +1,4 @@
-//! The command-line binary end to end (`analyze`, `diagnose`, `aggregate`, `limits`), run as a
+//! The command-line binary end to end (`analyze`, `diagnose` and its `--model-out`, `aggregate`, `limits`), run as a
 //! child process and its JSON lines parsed back.
 //! One test binary per stage; each topic is a module of it.
 
@@ -9,3 +9,4 @@ mod aggregate;
 mod analyze;
 mod diagnose;
 mod limits_summary;
+mod model_out;

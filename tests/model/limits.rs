@@ -8,7 +8,7 @@ use allanscope::model::limits::{
     channel_matches, conversion, decide, judge, judge_runs, sd_interval, ChannelFit, Coef,
     LimitSpec, Scope, Verdict,
 };
-use allanscope::model::units::{datasheet, SensorKind};
+use allanscope::model::units::{datasheet, IncrementUnit};
 use serde::Deserialize;
 
 /// Unit factors are products of exact decimal constants: only rounding separates them.
@@ -70,8 +70,8 @@ fn toml_form_of_the_module_doc() {
 fn unit_conversions_match_theory_section_2() {
     // THEORY.md section 2 and model::units::datasheet: gyro in arcsec, accelerometer in m/s.
     let native = [1.0, 1.0, 1.0, 1.0, 1.0];
-    let gyro = datasheet(native, SensorKind::GyroArcsec);
-    let accel = datasheet(native, SensorKind::AccelMps);
+    let gyro = datasheet(native, &IncrementUnit::parse("arcsec").unwrap());
+    let accel = datasheet(native, &IncrementUnit::parse("m/s").unwrap());
     let coefs = [Coef::Q, Coef::N, Coef::B, Coef::K, Coef::R];
     for i in 0..5 {
         let g = conversion("arcsec", coefs[i], Some(gyro.units[i])).unwrap();

@@ -14,3 +14,4 @@ mod limits;
 mod nnls;
 mod noisy;
 mod sim_study;
+mod units;

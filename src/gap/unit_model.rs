@@ -1,0 +1,124 @@
+//! The fitted unit as a simulator model (`diagnose --model-out`): the five terms with the
+//! effects in (`Diagnosis::final_coef`), the quantization step, the sampling step and every
+//! accepted effect with its parameters, as a [`SimModel`] that `simulate --model` reads. This
+//! closes the loop of the sim-to-real gap: the twin can be simulated and diagnosed again.
+//!
+//! What the record's parameters do not fix is chosen plainly: a sinusoid's phase is 0, bias
+//! jumps become a Poisson process with the run's mean interval (`t_run / count`) and the
+//! record's rms size, the flicker band is the simulator's default (six decades from `tau0`).
+
+use crate::model::terms;
+use crate::model::units::IncrementUnit;
+use crate::sim::effects::TemperatureProfile;
+use crate::sim::model_file::{
+    BiasJumps, ChannelModel, GaussMarkov, OutputFilterSpec, SimModel, Sinusoid, Warmup,
+    FLICKER_BAND_DECADES_DEFAULT,
+};
+use crate::sim::noise::FlickerBank;
+
+use super::diagnose::Diagnosis;
+use super::effects::EffectParams;
+
+/// What is known of one channel besides its diagnosis.
+#[derive(Debug, Clone)]
+pub struct ChannelFacts {
+    pub name: String,
+    pub unit: String,
+    /// Quantization step of the increments (u), when the values are whole multiples of one.
+    pub lsb: Option<f64>,
+    /// Mean rate over the run (u/s), written as the model's constant bias.
+    pub bias: f64,
+    /// Temperature coefficient (u/s per degC) when a temperature effect was accepted.
+    pub temperature_coefficient: f64,
+}
+
+/// The channel model of a diagnosed channel.
+pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> ChannelModel {
+    let [q, n, b, k, r] = d.final_coef;
+    // The fitted Q holds the quantization's white phase (LSB / sqrt(12)); the model file adds
+    // it back from `lsb`, so only the excess is written.
+    let q_model = match facts.lsb {
+        Some(l) => (q * q - terms::quantization_q(l).powi(2)).max(0.0).sqrt(),
+        None => q,
+    };
+    let band = (tau0_s, tau0_s * 10f64.powf(FLICKER_BAND_DECADES_DEFAULT));
+    let mut ch = ChannelModel {
+        name: facts.name.clone(),
+        unit: facts.unit.clone(),
+        lsb: facts.lsb,
+        bias: facts.bias,
+        q: q_model,
+        n,
+        b,
+        k,
+        r,
+        flicker_band_s: band,
+        flicker: (b > 0.0).then(|| FlickerBank::design(b, band.0, band.1)),
+        axis_enu: None,
+        kind: IncrementUnit::parse(&facts.unit),
+        temperature_coefficient: facts.temperature_coefficient,
+        gauss_markov: Vec::new(),
+        sinusoids: Vec::new(),
+        output_filter: None,
+        warmup: None,
+        bias_jumps: None,
+    };
+    for e in &d.effects {
+        match e.params {
+            EffectParams::GaussMarkov { sigma, tau_c_s } => {
+                ch.gauss_markov.push(GaussMarkov { sigma, tau_c_s })
+            }
+            EffectParams::Sinusoid {
+                amplitude,
+                frequency_hz,
+            } => ch.sinusoids.push(Sinusoid {
+                amplitude,
+                frequency_hz,
+                phase_rad: 0.0,
+            }),
+            EffectParams::OutputFilter { time_constant_s } => {
+                ch.output_filter = Some(OutputFilterSpec { time_constant_s })
+            }
+            EffectParams::Warmup {
+                amplitude,
+                time_constant_s,
+            } => {
+                ch.warmup = Some(Warmup {
+                    amplitude,
+                    time_constant_s,
+                })
+            }
+            EffectParams::BiasJumps { count, rms_size } if count > 0 => {
+                ch.bias_jumps = Some(BiasJumps {
+                    mean_interval_s: d.t_data_s / count as f64,
+                    rms_size,
+                })
+            }
+            EffectParams::BiasJumps { .. } => {}
+        }
+    }
+    ch
+}
+
+/// The model file of a diagnosed unit: its channels and, when one was fitted, its temperature
+/// profile. Without a profile no channel can carry a temperature coefficient (the model file
+/// would be refused), so the coefficients are dropped; without a coefficient the profile is.
+pub fn fitted_unit(
+    tau0_s: f64,
+    mut channels: Vec<ChannelModel>,
+    temperature: Option<TemperatureProfile>,
+) -> SimModel {
+    let temperature =
+        temperature.filter(|_| channels.iter().any(|c| c.temperature_coefficient != 0.0));
+    if temperature.is_none() {
+        channels
+            .iter_mut()
+            .for_each(|c| c.temperature_coefficient = 0.0);
+    }
+    SimModel {
+        tau0_s,
+        stand: None,
+        temperature,
+        channels,
+    }
+}
