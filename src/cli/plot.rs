@@ -21,7 +21,11 @@ pub fn run(a: &PlotArgs) -> Result<()> {
         })
         .collect::<Result<Vec<_>>>()?;
     let res = Results::from_files(&files);
-    let wanted = |ch: &str| a.channels.as_ref().is_none_or(|c| c.iter().any(|x| x == ch));
+    let wanted = |ch: &str| {
+        a.channels
+            .as_ref()
+            .is_none_or(|c| c.iter().any(|x| x == ch))
+    };
     let finals: Vec<_> = res
         .curves
         .iter()
@@ -43,7 +47,11 @@ pub fn run(a: &PlotArgs) -> Result<()> {
         .iter()
         .map(|c| Series {
             curve: &c.rec,
-            run_label: if several { c.label.clone() } else { String::new() },
+            run_label: if several {
+                c.label.clone()
+            } else {
+                String::new()
+            },
             fit: if a.no_model { None } else { res.fit_of(c) },
             diagnosis: if a.no_model {
                 None

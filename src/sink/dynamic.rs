@@ -43,10 +43,9 @@ pub fn windows(curves: &[&CurveRecord]) -> Vec<Window> {
         Some(
             taus.iter()
                 .map(|t| {
-                    c.tau
-                        .iter()
-                        .position(|x| x == t)
-                        .map_or((0.0, 0), |j| (c.sigma[j] * c.sigma[j] * c.count[j] as f64, c.count[j]))
+                    c.tau.iter().position(|x| x == t).map_or((0.0, 0), |j| {
+                        (c.sigma[j] * c.sigma[j] * c.count[j] as f64, c.count[j])
+                    })
                 })
                 .collect(),
         )
@@ -200,7 +199,13 @@ pub fn render_dynamic_svg(curves: &[&CurveRecord], label: &str) -> String {
             colour(f64::log2(*r)),
             kx + 36.0,
             y + 13.0,
-            if i == 0 { " or more" } else if i == 4 { " or less" } else { "" }
+            if i == 0 {
+                " or more"
+            } else if i == 4 {
+                " or less"
+            } else {
+                ""
+            }
         );
     }
     let _ = writeln!(

@@ -184,10 +184,7 @@ impl Axes {
 pub fn panels_by_unit<'a>(series: Vec<Series<'a>>) -> Vec<Vec<Series<'a>>> {
     let mut panels: Vec<Vec<Series>> = Vec::new();
     for s in series {
-        match panels
-            .iter_mut()
-            .find(|p| p[0].curve.unit == s.curve.unit)
-        {
+        match panels.iter_mut().find(|p| p[0].curve.unit == s.curve.unit) {
             Some(p) => p.push(s),
             None => panels.push(vec![s]),
         }
@@ -250,7 +247,10 @@ pub fn render_svg(series: Vec<Series>, title: &str) -> String {
 fn marker(svg: &mut String, i: usize, x: f64, y: f64, col: &str) {
     let r = 3.2;
     let _ = match i % 4 {
-        0 => writeln!(svg, r#"<circle cx="{x:.1}" cy="{y:.1}" r="{r}" fill="{col}"/>"#),
+        0 => writeln!(
+            svg,
+            r#"<circle cx="{x:.1}" cy="{y:.1}" r="{r}" fill="{col}"/>"#
+        ),
         1 => writeln!(
             svg,
             r#"<rect x="{:.1}" y="{:.1}" width="{:.1}" height="{:.1}" fill="{col}"/>"#,
@@ -305,7 +305,11 @@ fn render_panel(svg: &mut String, series: &[Series], y_off: f64) -> f64 {
                 .filter_map(|(h, y)| h.map(|h| h.min(3.0 * y))),
         );
     }
-    let pos = |v: Vec<f64>| -> Vec<f64> { v.into_iter().filter(|x| *x > 0.0 && x.is_finite()).collect() };
+    let pos = |v: Vec<f64>| -> Vec<f64> {
+        v.into_iter()
+            .filter(|x| *x > 0.0 && x.is_finite())
+            .collect()
+    };
     let (xs, ys) = (pos(xs), pos(ys));
     // Legend lines first: the panel grows to hold them.
     let mut legend: Vec<LegendLine> = Vec::new();
@@ -341,9 +345,16 @@ fn render_panel(svg: &mut String, series: &[Series], y_off: f64) -> f64 {
                 }
             }
             let gof = f.gof.map(|g| format!(", gof {g:.2}")).unwrap_or_default();
-            legend.push(LegendLine::Style(i, Dash::Model, format!("five-term model{gof}")));
+            legend.push(LegendLine::Style(
+                i,
+                Dash::Model,
+                format!("five-term model{gof}"),
+            ));
         }
-        if let Some(d) = s.diagnosis.filter(|d| !d.model_effects.is_empty() && !d.effects.is_empty()) {
+        if let Some(d) = s
+            .diagnosis
+            .filter(|d| !d.model_effects.is_empty() && !d.effects.is_empty())
+        {
             let names: Vec<&str> = d.effects.iter().map(|e| e.kind.as_str()).collect();
             let names: Vec<&str> = names.iter().map(|k| effect_name(k)).collect();
             legend.push(LegendLine::Style(
@@ -355,17 +366,32 @@ fn render_panel(svg: &mut String, series: &[Series], y_off: f64) -> f64 {
         if let Some(d) = s.diagnosis.filter(|d| !d.regions.is_empty()) {
             legend.push(LegendLine::Shade(
                 i,
-                format!("base model misses (gap {:.2}, {})", d.gap_before, verdict_word(d)),
+                format!(
+                    "base model misses (gap {:.2}, {})",
+                    d.gap_before,
+                    verdict_word(d)
+                ),
             ));
         }
         legend.push(LegendLine::Gap);
     }
     if compact {
         if series.iter().any(|s| s.fit.is_some()) && stat == "avar" {
-            legend.push(LegendLine::Style(6, Dash::Model, "five-term model of each curve".into()));
+            legend.push(LegendLine::Style(
+                6,
+                Dash::Model,
+                "five-term model of each curve".into(),
+            ));
         }
-        if series.iter().any(|s| s.diagnosis.is_some_and(|d| !d.effects.is_empty())) {
-            legend.push(LegendLine::Style(6, Dash::Effects, "model with the diagnosed effects".into()));
+        if series
+            .iter()
+            .any(|s| s.diagnosis.is_some_and(|d| !d.effects.is_empty()))
+        {
+            legend.push(LegendLine::Style(
+                6,
+                Dash::Effects,
+                "model with the diagnosed effects".into(),
+            ));
         }
     }
     let legend_h: f64 = legend.iter().map(LegendLine::height).sum::<f64>() + 24.0;
@@ -398,7 +424,12 @@ fn render_panel(svg: &mut String, series: &[Series], y_off: f64) -> f64 {
         );
         return panel_h;
     }
-    let lmin = |v: &[f64]| v.iter().fold(f64::INFINITY, |a, &b| a.min(b)).log10().floor() as i32;
+    let lmin = |v: &[f64]| {
+        v.iter()
+            .fold(f64::INFINITY, |a, &b| a.min(b))
+            .log10()
+            .floor() as i32
+    };
     let lmax = |v: &[f64]| v.iter().fold(0.0f64, |a, &b| a.max(b)).log10().ceil() as i32;
     let ax = Axes {
         x0: lmin(&xs),
@@ -506,7 +537,13 @@ fn draw_grid(svg: &mut String, ax: &Axes) {
             .map(|(k, j)| (10f64.powi(k) * j as f64, j == 1))
             .collect()
     };
-    let style = |major: bool| if major { ("#b0b0b0", 1.0) } else { ("#e6e6e6", 0.7) };
+    let style = |major: bool| {
+        if major {
+            ("#b0b0b0", 1.0)
+        } else {
+            ("#e6e6e6", 0.7)
+        }
+    };
     let (top, bottom, right) = (ax.top, ax.top + ax.ph, LEFT + ax.pw);
     for (v, major) in grid(ax.x0, ax.x1) {
         let (stroke, wd) = style(major);
@@ -633,7 +670,7 @@ fn draw_series(
         .iter()
         .filter(|t| **t > 0.0)
         .fold((f64::INFINITY, 0.0f64), |(a, b), &t| (a.min(t), b.max(t)));
-    if !(t_lo < t_hi) {
+    if t_lo.partial_cmp(&t_hi) != Some(std::cmp::Ordering::Less) {
         return;
     }
     // The five-term model, over the measured taus only (AVAR only: the fit is of AVAR).
@@ -650,13 +687,19 @@ fn draw_series(
             draw_asymptotes(svg, ax, f, (t_lo, t_hi), col, clip, labelled);
         }
     }
-    if let Some(d) = s.diagnosis.filter(|d| !d.effects.is_empty() && c.stat.name() == "avar") {
+    if let Some(d) = s
+        .diagnosis
+        .filter(|d| !d.effects.is_empty() && c.stat.name() == "avar")
+    {
         let _ = writeln!(
             svg,
             r#"<polyline class="model-effects" points="{}" fill="none" stroke="{col}" stroke-width="2" stroke-dasharray="2 3" clip-path="url(#{clip})"/>"#,
             polyline(
                 ax,
-                d.model_tau.iter().copied().zip(d.model_effects.iter().copied())
+                d.model_tau
+                    .iter()
+                    .copied()
+                    .zip(d.model_effects.iter().copied())
             )
         );
     }

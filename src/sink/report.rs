@@ -25,6 +25,9 @@ fn num(v: &Value) -> String {
     v.as_f64().map_or("&ndash;".into(), tick)
 }
 
+/// A run: its file and its `run` index inside the file.
+type RunKey = (usize, Option<usize>);
+
 /// The seed paper's column order in table 2.
 const PAPER_ORDER: [usize; 5] = [4, 3, 2, 1, 0];
 
@@ -117,17 +120,34 @@ pub fn render_html(files: &[ResultFile], title: &str, generated: &str) -> String
 fn banner(h: &mut String, res: &Results) {
     let b = banner_of(res);
     let (class, word, note) = match b {
-        Banner::Pass => ("b-pass", "PASS", "every datasheet limit is met at 97.5% one-sided confidence"),
-        Banner::Fail => ("b-fail", "FAIL", "at least one datasheet limit is exceeded (table below)"),
-        Banner::Undecided => ("b-und", "NOT DECIDED", "no limit fails, but some interval straddles its limit: more data needed"),
-        Banner::NoLimits => ("b-none", "NO LIMITS JUDGED", "no datasheet limits were given (--limits or a stand config's [[limits]])"),
+        Banner::Pass => (
+            "b-pass",
+            "PASS",
+            "every datasheet limit is met at 97.5% one-sided confidence",
+        ),
+        Banner::Fail => (
+            "b-fail",
+            "FAIL",
+            "at least one datasheet limit is exceeded (table below)",
+        ),
+        Banner::Undecided => (
+            "b-und",
+            "NOT DECIDED",
+            "no limit fails, but some interval straddles its limit: more data needed",
+        ),
+        Banner::NoLimits => (
+            "b-none",
+            "NO LIMITS JUDGED",
+            "no datasheet limits were given (--limits or a stand config's [[limits]])",
+        ),
     };
     let warn: Vec<String> = res
         .summaries
         .iter()
         .filter_map(|s| {
             let c = Completion::of_summary(&s.rec);
-            c.is_warning().then(|| format!("{}: {}", s.label, c.phrase()))
+            c.is_warning()
+                .then(|| format!("{}: {}", s.label, c.phrase()))
         })
         .collect();
     let _ = write!(
@@ -143,11 +163,19 @@ fn banner(h: &mut String, res: &Results) {
                 "{} {} {} {} {} (measured {}{})",
                 l.rec["channel"].as_str().unwrap_or(""),
                 l.rec["coef"].as_str().unwrap_or(""),
-                if l.rec["bound"].as_str() == Some("min") { "&ge;" } else { "&le;" },
+                if l.rec["bound"].as_str() == Some("min") {
+                    "&ge;"
+                } else {
+                    "&le;"
+                },
                 num(&l.rec["limit"]),
                 esc(&limit_unit(res, &l.rec)),
                 num(&l.rec["value"]),
-                if res.summaries.len() > 1 { format!(", {}", esc(&l.label)) } else { String::new() }
+                if res.summaries.len() > 1 {
+                    format!(", {}", esc(&l.label))
+                } else {
+                    String::new()
+                }
             )
         })
         .collect();
@@ -171,7 +199,12 @@ fn runs_table(h: &mut String, res: &Results) {
         let c = Completion::of_summary(v);
         let chans = v["channels"]
             .as_array()
-            .map(|a| a.iter().filter_map(Value::as_str).collect::<Vec<_>>().join(", "))
+            .map(|a| {
+                a.iter()
+                    .filter_map(Value::as_str)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            })
             .unwrap_or_default();
         let _ = writeln!(
             h,
@@ -240,7 +273,9 @@ fn limit_unit(res: &Results, l: &Value) -> String {
         return u.to_string();
     }
     let ch = l["channel"].as_str().unwrap_or("");
-    let idx = TERM_NAMES.iter().position(|k| Some(*k) == l["coef"].as_str());
+    let idx = TERM_NAMES
+        .iter()
+        .position(|k| Some(*k) == l["coef"].as_str());
     let cu = res
         .fits
         .iter()
@@ -266,7 +301,11 @@ fn figures(h: &mut String, res: &Results) {
         .iter()
         .map(|c| Series {
             curve: &c.rec,
-            run_label: if several { c.label.clone() } else { String::new() },
+            run_label: if several {
+                c.label.clone()
+            } else {
+                String::new()
+            },
             fit: res.fit_of(c),
             diagnosis: res.diagnosis_of(c),
         })
@@ -293,7 +332,10 @@ fn figures(h: &mut String, res: &Results) {
             series.into_iter().partition(|s| s.curve.channel == ch);
         series = rest;
         let unit = mine[0].curve.unit.clone();
-        h.push_str(&render_svg(mine, &format!("{ch} [{unit}]: the runs overlaid")));
+        h.push_str(&render_svg(
+            mine,
+            &format!("{ch} [{unit}]: the runs overlaid"),
+        ));
     }
 }
 
@@ -329,9 +371,11 @@ fn noise_model(h: &mut String, res: &Results) {
     // files came from separate analyses.
     let mut aggs: Vec<Value> = res.aggregates.iter().map(|a| a.rec.clone()).collect();
     if aggs.is_empty() {
-        let mut runs: Vec<((usize, Option<usize>), Vec<RunCoefs>)> = Vec::new();
+        let mut runs: Vec<(RunKey, Vec<RunCoefs>)> = Vec::new();
         for f in &finals {
-            let Some(rc) = RunCoefs::from_fit_record(&serde_json::to_value(&f.rec).unwrap_or_default()) else {
+            let Some(rc) =
+                RunCoefs::from_fit_record(&serde_json::to_value(&f.rec).unwrap_or_default())
+            else {
                 continue;
             };
             match runs.iter_mut().find(|(k, _)| *k == (f.file, f.run)) {
@@ -413,14 +457,19 @@ fn noise_model(h: &mut String, res: &Results) {
             }
             h.push_str("</tr>\n");
         }
-        let stat_row = |h: &mut String, name: &str, key: &str, cell: &dyn Fn(&Value, i32) -> String| {
-            let _ = write!(h, "<tr class=\"stat\" data-row=\"{key}\"><td class=\"l\">{name}</td>");
-            for (c, &i) in PAPER_ORDER.iter().enumerate() {
-                let txt = agg_of(TERM_NAMES[i]).map_or("&ndash;".into(), |a| cell(a, scales[c]));
-                let _ = write!(h, "<td>{txt}</td>");
-            }
-            h.push_str("</tr>\n");
-        };
+        let stat_row =
+            |h: &mut String, name: &str, key: &str, cell: &dyn Fn(&Value, i32) -> String| {
+                let _ = write!(
+                    h,
+                    "<tr class=\"stat\" data-row=\"{key}\"><td class=\"l\">{name}</td>"
+                );
+                for (c, &i) in PAPER_ORDER.iter().enumerate() {
+                    let txt =
+                        agg_of(TERM_NAMES[i]).map_or("&ndash;".into(), |a| cell(a, scales[c]));
+                    let _ = write!(h, "<td>{txt}</td>");
+                }
+                h.push_str("</tr>\n");
+            };
         let pair = |v: &Value, e: i32| match v.as_array() {
             Some(p) if p.len() == 2 => format!(
                 "[{}; {}]",
@@ -430,8 +479,12 @@ fn noise_model(h: &mut String, res: &Results) {
             _ => "&ndash;".into(),
         };
         stat_row(h, "mean", "mean", &|a, e| scaled(a["mean"].as_f64(), e));
-        stat_row(h, "95% interval of the mean", "ci_z", &|a, e| pair(&a["ci_z"], e));
-        stat_row(h, "Student 95% interval", "ci_t", &|a, e| pair(&a["ci_t"], e));
+        stat_row(h, "95% interval of the mean", "ci_z", &|a, e| {
+            pair(&a["ci_z"], e)
+        });
+        stat_row(h, "Student 95% interval", "ci_t", &|a, e| {
+            pair(&a["ci_t"], e)
+        });
         stat_row(h, "sd (1 sigma)", "sd", &|a, e| scaled(a["sd"].as_f64(), e));
         stat_row(h, "runs determined (n)", "n", &|a, _| {
             a["n"].as_u64().map_or("&ndash;".into(), |n| n.to_string())
@@ -455,7 +508,12 @@ fn single_run_fits(h: &mut String, fits: &[&Labelled<FitRecord>]) {
                     num(&d["hi"]),
                     esc(d["unit"].as_str().unwrap_or("")),
                 ),
-                None => ("&ndash;".into(), "&ndash;".into(), "&ndash;".into(), String::new()),
+                None => (
+                    "&ndash;".into(),
+                    "&ndash;".into(),
+                    "&ndash;".into(),
+                    String::new(),
+                ),
             };
             let first = if i == 0 {
                 format!(
@@ -498,7 +556,10 @@ pub fn effect_words(kind: &str, params: &Value, unit: &str) -> String {
             p("amplitude"),
             p("frequency")
         ),
-        "output_filter" => format!("output low-pass filter: time constant = {} s", p("time_constant")),
+        "output_filter" => format!(
+            "output low-pass filter: time constant = {} s",
+            p("time_constant")
+        ),
         "warmup" => format!(
             "warm-up drift: amplitude = {} {unit}/s, time constant = {} s",
             p("amplitude"),
@@ -506,7 +567,9 @@ pub fn effect_words(kind: &str, params: &Value, unit: &str) -> String {
         ),
         "bias_jumps" => format!(
             "bias jumps: {} jumps, rms size = {} {unit}/s",
-            params["count"].as_u64().map_or("?".into(), |n| n.to_string()),
+            params["count"]
+                .as_u64()
+                .map_or("?".into(), |n| n.to_string()),
             p("rms_size")
         ),
         "temperature" => format!(
@@ -549,7 +612,13 @@ fn diagnosis(h: &mut String, res: &Results) {
             .iter()
             .filter(|d| d.file == *file && d.run == *run && &d.rec.channel == ch)
             .collect();
-        let Some(last) = mine.iter().rev().find(|d| d.rec.is_final).or(mine.last()).copied() else {
+        let Some(last) = mine
+            .iter()
+            .rev()
+            .find(|d| d.rec.is_final)
+            .or(mine.last())
+            .copied()
+        else {
             continue;
         };
         interim.extend(mine.iter().filter(|d| !std::ptr::eq(**d, last)));
@@ -558,11 +627,22 @@ fn diagnosis(h: &mut String, res: &Results) {
         let effects: Vec<String> = d
             .effects
             .iter()
-            .map(|e| format!("{} (gap {:.2})", esc(&effect_words(&e.kind, &e.params, &unit)), e.gap_after))
+            .map(|e| {
+                format!(
+                    "{} (gap {:.2})",
+                    esc(&effect_words(&e.kind, &e.params, &unit)),
+                    e.gap_after
+                )
+            })
             .collect();
         // The four regions the model misses most; the count of the others.
         let mut worst: Vec<&crate::gap::record::RegionRecord> = d.regions.iter().collect();
-        worst.sort_by(|a, b| b.worst_ratio.ln().abs().total_cmp(&a.worst_ratio.ln().abs()));
+        worst.sort_by(|a, b| {
+            b.worst_ratio
+                .ln()
+                .abs()
+                .total_cmp(&a.worst_ratio.ln().abs())
+        });
         let more = worst.len().saturating_sub(4);
         worst.truncate(4);
         worst.sort_by(|a, b| a.tau_lo.total_cmp(&b.tau_lo));
@@ -591,10 +671,12 @@ fn diagnosis(h: &mut String, res: &Results) {
         let shape = d
             .residual_shape
             .as_ref()
-            .map(|s| format!(
+            .map(|s| {
+                format!(
                     "<br><span class=\"small\">what is left unexplained: {}</span>",
                     esc(s)
-                ))
+                )
+            })
             .unwrap_or_default();
         let _ = writeln!(
             h,
@@ -644,7 +726,12 @@ fn dynamic_view(h: &mut String, res: &Results) {
         let all: Vec<_> = res
             .curves
             .iter()
-            .filter(|x| x.file == c.file && x.run == c.run && x.rec.channel == c.rec.channel && x.rec.stat == c.rec.stat)
+            .filter(|x| {
+                x.file == c.file
+                    && x.run == c.run
+                    && x.rec.channel == c.rec.channel
+                    && x.rec.stat == c.rec.stat
+            })
             .map(|x| &x.rec)
             .collect();
         if all.len() < 3 {
@@ -671,7 +758,10 @@ fn health(h: &mut String, res: &Results) {
     // The last health record of each run.
     let mut last: Vec<&Labelled<Value>> = Vec::new();
     for hl in &res.health {
-        match last.iter_mut().find(|x| x.file == hl.file && x.run == hl.run) {
+        match last
+            .iter_mut()
+            .find(|x| x.file == hl.file && x.run == hl.run)
+        {
             Some(x) => *x = hl,
             None => last.push(hl),
         }

@@ -131,12 +131,17 @@ impl Results {
                     }
                     "diagnosis" => {
                         if let Ok(c) = serde_json::from_value::<DiagnosisRecord>(v.clone()) {
-out.diagnoses.push(at.with(c));
+                            out.diagnoses.push(at.with(c));
                         }
                     }
                     "summary" => {
-                        for l in v.get("limits").and_then(Value::as_array).into_iter().flatten() {
-out.limits.push(at.with(l.clone()));
+                        for l in v
+                            .get("limits")
+                            .and_then(Value::as_array)
+                            .into_iter()
+                            .flatten()
+                        {
+                            out.limits.push(at.with(l.clone()));
                         }
                         out.summaries.push(at.with(v.clone()));
                     }
@@ -204,7 +209,10 @@ pub enum Completion {
 impl Completion {
     /// From a `summary` record's `read_to_end` and `stopped_by`.
     pub fn of_summary(s: &Value) -> Completion {
-        let stopped = s.get("stopped_by").and_then(Value::as_str).map(String::from);
+        let stopped = s
+            .get("stopped_by")
+            .and_then(Value::as_str)
+            .map(String::from);
         match (s.get("read_to_end").and_then(Value::as_bool), stopped) {
             (Some(true), _) => Completion::Complete,
             (_, Some(by)) if by.starts_with("--duration") || by == "duration" => {

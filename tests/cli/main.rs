@@ -10,3 +10,4 @@ mod analyze;
 mod diagnose;
 mod limits_summary;
 mod model_out;
+mod plot_report;
