@@ -210,7 +210,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
                 .map_err(|e| tracing::warn!("{}: holdout channel {name}: {e}", a.input))
                 .ok()
         });
-        let rec = DiagnosisRecord::new(name, &diag, holdout, true);
+        let rec = DiagnosisRecord::new(name, &diag, holdout.as_ref(), true);
         sink.write(&rec)?;
         if a.model_out.is_some() {
             let t_run = snap.n_increments as f64 * tau0;

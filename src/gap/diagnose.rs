@@ -5,8 +5,10 @@
 //! # Method
 //!
 //! - Covariance. `S`, the covariance of the log estimates `ln AVAR_hat(tau_j)`, is the analytic
-//!   covariance of the five-term model fitted to the curve ([`AvarCovariance`](crate::model::avar_cov::AvarCovariance), full-overlap
-//!   counts), divided by `AVAR_i AVAR_j`. It is computed once per curve and used for every
+//!   covariance of the five-term model fitted to the curve
+//!   ([`AvarCovariance::matrix_strided`](crate::model::avar_cov::AvarCovariance::matrix_strided):
+//!   each level at the stride the bounded-overlap estimator took it, which costs white phase
+//!   noise its degrees of freedom), divided by `AVAR_i AVAR_j`. It is computed once per curve and used for every
 //!   candidate model, so the gap statistics of different models are comparable. A ridge
 //!   `S + RIDGE diag(S)` keeps the inverse from amplifying the small mismatch between the
 //!   analytic covariance and the bounded-overlap estimator in its smallest eigen-directions;
@@ -28,6 +30,11 @@
 //! - A warm-up is found in time too ([`fit_warmup`]): its test statistic is the block-mean
 //!   evidence integrated over the scanned time constant ([`WarmupFinding::log_bf`](super::warmup::WarmupFinding::log_bf), against
 //!   [`Thresholds::warmup_bf`]), not its maximum (docs/gap.md, "Mixture statistics").
+//! - Bookkeeping: the effects found are added again in their order, each kept only if it
+//!   lowers the gap of the model with the effects kept before it; an effect's `gap_after` is
+//!   that model's gap, so the final gap is never above the base model's. The verdict is
+//!   `consistent` when nothing is kept and the base `G` is not flagged (docs/gap.md,
+//!   "Bookkeeping").
 //!
 //! Layout: the GLS problem on the curve is [`super::problem`], its thresholds
 //! [`super::thresholds`]; the time-domain tests are [`super::warmup`] and [`super::steps`] on the
@@ -98,7 +105,8 @@ pub struct Region {
     pub worst_ratio: f64,
 }
 
-/// An effect added to the model, with the gap once it is in.
+/// An effect kept in the model, with the gap of the model of the effects kept up to and
+/// including it (each lower than the one before).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AddedEffect {
     pub params: EffectParams,
@@ -181,7 +189,6 @@ pub fn diagnose(
         .ok_or(DiagnoseError::Fit("base GLS".into()))?;
     let gap_before = base.gap();
     let regions = prob.regions(&base.model, th.band_z);
-    let flagged = gap_before > th.gap_crit;
 
     let mut effects: Vec<AddedEffect> = Vec::new();
     let block_s = snap.block_len as f64 * snap.tau0_s;
@@ -205,17 +212,16 @@ pub fn diagnose(
         opts,
         true,
     );
-    let flagged = flagged || !effects.is_empty();
 
     // 2. A warm-up, in time: the block means against the model found so far.
     let mut warm_curve: Option<Vec<f64>> = None;
-    let mut time_flag = false;
+    // The exact AVAR on this record of each effect found in time, for the bookkeeping below.
+    let mut time_offsets: Vec<(EffectKind, Vec<f64>)> = Vec::new();
     if opts.candidates.contains(&EffectKind::Warmup) {
         let c5: [f64; 5] = std::array::from_fn(|i| cur.coef.get(i).copied().unwrap_or(0.0));
         let stat_params: Vec<EffectParams> = effects.iter().map(|e| e.params).collect();
         let warm = fit_warmup(&snap.block_means, block_s, t_run, &c5, &stat_params);
         if let Some(w) = warm.filter(|w| w.w_stat > th.warmup_w || w.log_bf > th.warmup_bf) {
-            time_flag = true;
             // Its AVAR, exact for the estimator on this record, enters as a fixed offset.
             let col = effect_column(
                 EffectKind::Warmup,
@@ -224,9 +230,11 @@ pub fn diagnose(
                 prob.tau0_s,
                 prob.n_inc,
             );
-            for (o, c) in offset.iter_mut().zip(&col) {
-                *o += w.amplitude * w.amplitude * c;
+            let warm_offset: Vec<f64> = col.iter().map(|c| w.amplitude * w.amplitude * c).collect();
+            for (o, c) in offset.iter_mut().zip(&warm_offset) {
+                *o += c;
             }
+            time_offsets.push((EffectKind::Warmup, warm_offset));
             // Keep only the stationary effects still needed beside it, then look again.
             let kept = still_needed(&prob, &effects, &offset, opts);
             let prev = cur.clone();
@@ -290,17 +298,23 @@ pub fn diagnose(
         None
     };
     if let Some(f) = jumps.as_ref().filter(|f| !f.sizes.is_empty()) {
-        time_flag = true;
         let rms = (f.sizes.iter().map(|s| s * s).sum::<f64>() / f.sizes.len() as f64).sqrt();
         // In law the jumps are part of K (a rate random walk's), but a few large ones leave
         // their own shape on this record's curve, which a stationary candidate may have taken
         // (a slow sinusoid, typically). Their exact AVAR on the record enters as a fixed offset,
         // as a warm-up's does; the stationary effects must then pass the forward rules again.
         let (positions, sizes) = f.merged_steps(prob.tau0_s);
-        let mut offset_j = offset.clone();
-        for (o, &m) in offset_j.iter_mut().zip(&prob.ms) {
-            *o += terms::steps_avar(&positions, &sizes, m, prob.n_inc);
-        }
+        let jump_offset: Vec<f64> = prob
+            .ms
+            .iter()
+            .map(|&m| terms::steps_avar(&positions, &sizes, m, prob.n_inc))
+            .collect();
+        let offset_j: Vec<f64> = offset
+            .iter()
+            .zip(&jump_offset)
+            .map(|(o, j)| o + j)
+            .collect();
+        time_offsets.push((EffectKind::BiasJumps, jump_offset));
         let kept = still_needed(&prob, &effects, &offset_j, opts);
         let before = cur.chi2;
         if let Some(fit) = prob.gls(&spec_from(&prob, &kept, &offset_j)) {
@@ -319,15 +333,30 @@ pub fn diagnose(
             delta_chi2: before - cur.chi2,
         });
     }
-    let flagged = flagged || time_flag;
-    let mut gap_after = cur.gap();
-    gap_after = if gap_after.is_finite() {
-        gap_after
-    } else {
-        gap_before
-    };
-    let verdict = if !flagged {
-        Verdict::Consistent
+    // 4. The bookkeeping: the effects found, in order, each kept only if it lowers the gap of
+    // the model with the effects kept before it; its `gap_after` is that model's gap.
+    let (effects, cur) = settle(&prob, &effects, &time_offsets, &base);
+    let mut jumps = jumps;
+    if !effects
+        .iter()
+        .any(|e| e.params.kind() == EffectKind::BiasJumps)
+    {
+        if let Some(f) = jumps.as_mut() {
+            *f = JumpFinding {
+                block_s: f.block_s,
+                ..JumpFinding::default()
+            };
+        }
+    }
+    let gap_after = cur.gap();
+    // Flagged: by `G` on the base model, or by an effect that was kept (the likelihood-ratio
+    // candidates and the time-domain tests flag only through the effect they bring).
+    let verdict = if effects.is_empty() {
+        if gap_before > th.gap_crit {
+            Verdict::Unexplained
+        } else {
+            Verdict::Consistent
+        }
     } else if gap_after <= th.gap_crit {
         Verdict::Explained
     } else {
@@ -354,6 +383,46 @@ pub fn diagnose(
         model_base_avar: base.model.clone(),
         model_final_avar: cur.model.clone(),
     })
+}
+
+/// The honest bookkeeping of the effects found: in their order, each is added to the model
+/// of the effects kept before it (a stationary effect as a free column of its shape, a warm-up
+/// or jumps as their exact AVAR on the record, `time_offsets`) and kept only if that model's
+/// gap is below the previous one; its `gap_after` and `delta_chi2` are against the previous
+/// model. So the final gap is never above the base model's (`base`), which it returns when
+/// nothing is kept.
+fn settle(
+    prob: &GapProblem,
+    effects: &[AddedEffect],
+    time_offsets: &[(EffectKind, Vec<f64>)],
+    base: &GlsFit,
+) -> (Vec<AddedEffect>, GlsFit) {
+    let mut kept: Vec<AddedEffect> = Vec::new();
+    let mut offset = vec![0.0; prob.len()];
+    let mut cur = base.clone();
+    for e in effects {
+        let mut trial_offset = offset.clone();
+        if let Some((_, o)) = time_offsets.iter().find(|(k, _)| *k == e.params.kind()) {
+            for (t, v) in trial_offset.iter_mut().zip(o) {
+                *t += v;
+            }
+        }
+        let mut trial = kept.clone();
+        trial.push(*e);
+        let Some(fit) = prob.gls(&spec_from(prob, &trial, &trial_offset)) else {
+            continue;
+        };
+        if fit.gap().is_finite() && fit.gap() < cur.gap() {
+            kept.push(AddedEffect {
+                params: e.params,
+                gap_after: fit.gap(),
+                delta_chi2: cur.chi2 - fit.chi2,
+            });
+            offset = trial_offset;
+            cur = fit;
+        }
+    }
+    (kept, cur)
 }
 
 /// The stationary effects of `effects` still needed once `offset` (a warm-up's or jumps' exact

@@ -103,8 +103,11 @@ impl GapProblem {
             fit(&cps, &FitOptions::default()).map_err(|e| DiagnoseError::Fit(e.to_string()))?;
         let c_init = base.c;
         let tau0 = snap.tau0_s;
-        // Full-overlap counts: the bounded estimator's stride-s differences stand for the
-        // count * stride differences of the full overlap (THEORY.md section 1).
+        // Each point's count is that of the span its strided differences cover (`count *
+        // stride`), and the covariance is that of differences taken at the point's stride
+        // (`matrix_strided`): for N, B and K that is the full overlap's over the span, but white
+        // phase noise (Q, quantization) loses degrees of freedom to the stride (THEORY.md
+        // section 1; docs/gap.md, "Covariance at strided levels").
         let cov_pts: Vec<CovPoint> = pts
             .iter()
             .map(|p| CovPoint {
@@ -112,7 +115,8 @@ impl GapProblem {
                 count: (p.count * p.stride).clamp(1, (n + 1).saturating_sub(2 * p.m).max(1)),
             })
             .collect();
-        let cov = AvarCovariance::new().matrix(tau0, &cov_pts, &c_init);
+        let strides: Vec<u64> = pts.iter().map(|p| p.stride.max(1)).collect();
+        let cov = AvarCovariance::new().matrix_strided(tau0, &cov_pts, &strides, &c_init);
         let a: Vec<f64> = pts
             .iter()
             .map(|p| base.model_avar(p.tau_s).max(1e-300))

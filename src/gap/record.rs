@@ -4,6 +4,7 @@
 //! `model_effects`).
 
 use super::diagnose::{Diagnosis, Verdict};
+use super::holdout::HoldoutGap;
 use serde::{Deserialize, Serialize};
 
 /// One region of the record.
@@ -23,11 +24,30 @@ pub struct EffectRecord {
     pub gap_after: f64,
 }
 
-/// The gap on a held-out run.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// The gap on a held-out run (CONTRACT.md's `gap_before`, `gap_after`; extra fields `carried`
+/// and `effects`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct HoldoutRecord {
     pub gap_before: f64,
+    /// With the effects that carried: never above `gap_before`.
     pub gap_after: f64,
+    /// Whether any effect of the fitting run lowered the held-out gap; `false` says plainly
+    /// that the diagnosis did not carry to this run.
+    #[serde(default)]
+    pub carried: bool,
+    /// Each effect of the fitting run on the held-out run, in order (bias jumps left out).
+    #[serde(default)]
+    pub effects: Vec<HeldEffectRecord>,
+}
+
+/// One effect on the held-out run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HeldEffectRecord {
+    pub kind: String,
+    /// The held-out gap with it added to the effects that carried before it.
+    pub gap_after: f64,
+    /// Whether it lowered the held-out gap (kept for the effects after it).
+    pub carried: bool,
 }
 
 /// One segment homogeneity test (extra field `segments`).
@@ -83,7 +103,7 @@ pub struct DiagnosisRecord {
 
 impl DiagnosisRecord {
     /// The record of a diagnosis; `holdout` from [`super::holdout::holdout_gap`].
-    pub fn new(channel: &str, d: &Diagnosis, holdout: Option<(f64, f64)>, is_final: bool) -> Self {
+    pub fn new(channel: &str, d: &Diagnosis, holdout: Option<&HoldoutGap>, is_final: bool) -> Self {
         Self {
             kind: "diagnosis".into(),
             channel: channel.into(),
@@ -109,9 +129,19 @@ impl DiagnosisRecord {
                     gap_after: e.gap_after,
                 })
                 .collect(),
-            holdout: holdout.map(|(b, a)| HoldoutRecord {
-                gap_before: b,
-                gap_after: a,
+            holdout: holdout.map(|h| HoldoutRecord {
+                gap_before: h.gap_before,
+                gap_after: h.gap_after,
+                carried: h.carried(),
+                effects: h
+                    .effects
+                    .iter()
+                    .map(|e| HeldEffectRecord {
+                        kind: e.kind.name().into(),
+                        gap_after: e.gap_after,
+                        carried: e.carried,
+                    })
+                    .collect(),
             }),
             is_final,
             t_data: d.t_data_s,

@@ -8,7 +8,7 @@ use super::effects::EffectParams;
 use nalgebra::{DMatrix, DVector};
 
 /// Bias jumps found in the block means.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct JumpFinding {
     /// Times of the jumps (s from the start).
     pub times_s: Vec<f64>,

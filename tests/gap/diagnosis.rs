@@ -45,7 +45,19 @@ fn simulate(extra: &str, seed: u64) -> Vec<f64> {
 fn run(extra: &str, seed: u64) -> Diagnosis {
     let inc = simulate(extra, seed);
     let mut ev = GapEvidence::from_increments(GapConfig::new(TAU0), &inc);
-    diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis")
+    let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
+    // The bookkeeping (docs/gap.md, "Bookkeeping"): each effect's gap_after is the gap once it
+    // is added, below the one before; the last is the final gap, never above the base's.
+    let mut prev = d.gap_before;
+    for e in &d.effects {
+        assert!(
+            e.gap_after < prev,
+            "{e:?} did not lower the gap from {prev}"
+        );
+        prev = e.gap_after;
+    }
+    assert_eq!(d.gap_after, prev);
+    d
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -224,8 +236,10 @@ fn held_out_gap_shrinks_as_on_the_fitting_run() {
     let d = run(extra, 8);
     let inc2 = simulate(extra, 9);
     let mut ev2 = GapEvidence::from_increments(GapConfig::new(TAU0), &inc2);
-    let (before, after) =
-        holdout_gap(&d, &ev2.snapshot(), &DiagnoseOptions::default()).expect("holdout");
+    let held = holdout_gap(&d, &ev2.snapshot(), &DiagnoseOptions::default()).expect("holdout");
+    let (before, after) = (held.gap_before, held.gap_after);
+    // The Gauss-Markov term is the same on both runs: it carries.
+    assert!(held.carried(), "{held:?}");
     assert!(before > 3.0, "held-out gap before {before}");
     // As small as on the fitting run: below the critical gap (1.7, the null 97% quantile) and no more than 1.5
     // times the fitting run's.
@@ -234,8 +248,9 @@ fn held_out_gap_shrinks_as_on_the_fitting_run() {
         "{after} vs {}",
         d.gap_after
     );
-    let rec = DiagnosisRecord::new("g4", &d, Some((before, after)), true);
+    let rec = DiagnosisRecord::new("g4", &d, Some(&held), true);
     let back: serde_json::Value = serde_json::from_str(&rec.to_json_line()).expect("json");
+    assert_eq!(back["holdout"]["carried"], true);
     assert!(
         rel(
             back["holdout"]["gap_after"].as_f64().unwrap_or(f64::NAN),

@@ -3,6 +3,7 @@
 //! One test binary per stage; each topic is a module of it.
 
 mod diagnosis;
+mod families;
 mod mixture;
 mod oracle;
 mod reference;
