@@ -11,8 +11,10 @@
 //!
 //! Families (units: increments in the unit's angle or velocity; rates per second):
 //! - `navfog`: navigation-grade FOG, ARW 0.001-0.005 deg/sqrt(h), flicker 0.001-0.01 deg/h
-//!   dominating the floor, tiny K, a fine angle LSB (0.05-0.5 of N at 1 s), 200-1000 Hz;
-//! - `tacfog`: tactical FOG, ARW 0.01-0.1 deg/sqrt(h), flicker 0.05-0.5 deg/h, 200-1000 Hz;
+//!   dominating the floor, tiny K, a fine angle LSB (0.1-1 of the per-sample noise
+//!   `N sqrt(tau0)`), 200-1000 Hz;
+//! - `tacfog`: tactical FOG, ARW 0.01-0.1 deg/sqrt(h), flicker 0.05-0.5 deg/h, the same
+//!   LSB rule, 200-1000 Hz;
 //! - `vog4`: the seed paper's VOG4 (config/models/vog4.toml's N, B, K each scaled 0.5-2,
 //!   LSB 0.004 arcsec), 250 Hz;
 //! - `memsgyro`: MEMS gyro, ARW 0.1-1 deg/sqrt(h), flicker 2-20 deg/h, K 1-10 deg/h/sqrt(h),
@@ -113,7 +115,9 @@ fn draw_unit(rng: &mut Xoshiro256PlusPlus, family: &'static str) -> Unit {
             u.c[2] = log_uniform(rng, flk.0, flk.1) * DEG_H;
             u.c[3] = log_uniform(rng, rrw.0, rrw.1) * RRW;
             u.tau0 = rate(rng, 200.0, 1000.0);
-            u.lsb = log_uniform(rng, 0.05, 0.5) * u.c[1];
+            // A fine LSB: 0.1-1 of the per-sample noise `N sqrt(tau0)` (an LSB far above it
+            // makes the quantization error a slow, non-white wander; docs/gap.md).
+            u.lsb = log_uniform(rng, 0.1, 1.0) * u.c[1] * u.tau0.sqrt();
         }
         "vog4" => {
             u.c[1] = 0.254 * log_uniform(rng, 0.5, 2.0);

@@ -21,6 +21,7 @@
 //! capture = "stand.siu8"      # optional: every received byte (live sources)
 //! diagnose = true              # optional: `diagnosis` records with the fits (default false)
 //! checkpoint_every = 300.0    # optional: save the state beside output.path (run --resume)
+//! metrics = "127.0.0.1:9464"  # optional: serve /metrics for Prometheus (a port: 127.0.0.1)
 //!
 //! [statistics]
 //! stats = ["avar", "hvar", "mvar"]
@@ -68,6 +69,8 @@ pub struct StandConfig {
     pub diagnose: bool,
     /// `run.capture`.
     pub capture: Option<PathBuf>,
+    /// Serve `/metrics` here (`run.metrics`, ADDR:PORT or a port on 127.0.0.1).
+    pub metrics: Option<std::net::SocketAddr>,
     pub stats: StatSet,
     pub taus: TauSpec,
     pub overlap: Overlap,
@@ -369,6 +372,7 @@ impl StandConfig {
         let (mut duration_s, mut every_s, mut capture) = (None, None, None);
         let mut checkpoint_every_s = None;
         let mut diagnose = false;
+        let mut metrics = None;
         if let Some(r) = ck.table(&root, "run") {
             ck.known_keys(
                 "run",
@@ -379,8 +383,24 @@ impl StandConfig {
                     "capture",
                     "diagnose",
                     "checkpoint_every",
+                    "metrics",
                 ],
             );
+            match r.get("metrics") {
+                None => {}
+                Some(toml::Value::Integer(p)) => match u16::try_from(*p) {
+                    Ok(port) => metrics = Some(std::net::SocketAddr::from(([127, 0, 0, 1], port))),
+                    Err(_) => ck.bad("run.metrics", format!("port {p} is not in 0..=65535")),
+                },
+                Some(toml::Value::String(a)) => match crate::source::udp::parse_bind(a) {
+                    Ok(addr) => metrics = Some(addr),
+                    Err(e) => ck.bad("run.metrics", e),
+                },
+                Some(v) => ck.bad(
+                    "run.metrics",
+                    format!("expected \"ADDR:PORT\" or a port, not {}", show(v)),
+                ),
+            }
             checkpoint_every_s = ck.positive(r, "run", "checkpoint_every");
             match r.get("diagnose") {
                 None => {}
@@ -556,6 +576,7 @@ impl StandConfig {
                 checkpoint_every_s,
                 every_s,
                 capture,
+                metrics,
                 diagnose,
                 stats,
                 taus,

@@ -121,7 +121,8 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue) -> Result<()> {
             "--checkpoint-every and --resume take one input (one run per output file)",
         ));
     }
-    let ctl = RunControl {
+    let server = super::metrics::start_option(d.metrics.as_deref())?;
+    let mut ctl = RunControl {
         handle_signals: true,
         show_progress: std::io::stderr().is_terminal(),
         ..RunControl::default()
@@ -133,6 +134,7 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue) -> Result<()> {
         }
         let mut opts = base.clone();
         opts.run = several.then_some(run);
+        ctl.metrics = server.as_ref().map(|s| s.tap(input, &opts.limits));
         let analysis = match &descriptor {
             None => analyze_text(input, d, opts, realtime, queue, &ctl)?,
             Some(desc) => analyze_frames(input, desc, d, opts, realtime, queue, &ctl)?,

@@ -82,8 +82,11 @@ pub fn run(l: &ListenArgs) -> Result<()> {
     let ckpt = d.checkpoint_setup(header, false, false)?;
     let saved = ckpt.as_ref().and_then(|c| c.1.as_ref());
     let ck_path = ckpt.as_ref().map(|c| c.0.path.clone());
+    let server = super::metrics::start_option(d.metrics.as_deref())?;
+    let metrics = server.as_ref().map(|s| s.tap(&spec.name(), &opts.limits));
     let analysis = super::start_analysis(&spec.name(), setups, opts, saved, ck_path.as_deref())?;
     let ctl = RunControl {
+        metrics,
         checkpoint: ckpt.map(|c| std::sync::Arc::new(c.0)),
         duration: match &l.duration {
             Some(s) => Some(Duration::from_secs_f64(parse_duration_s(s)?)),

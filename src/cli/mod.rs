@@ -7,6 +7,7 @@ mod aggregate;
 mod analyze;
 mod diagnose;
 mod listen;
+mod metrics;
 mod plot;
 mod report;
 mod run;
@@ -191,6 +192,10 @@ pub struct DataArgs {
     /// text columns) and a checkpoint is on disk.
     #[arg(long, hide = true, value_name = "N")]
     pub abort_after_frames: Option<u64>,
+    /// Serve the latest fits, limit verdicts and decoder health at http://ADDR:PORT/metrics
+    /// (Prometheus text format); a bare PORT listens on 127.0.0.1 only.
+    #[arg(long, value_name = "ADDR:PORT")]
+    pub metrics: Option<String>,
 }
 
 #[derive(Debug, Args)]

@@ -31,6 +31,9 @@ pub struct RunArgs {
     /// Test hook: abort once this many frames are decoded and a checkpoint is on disk.
     #[arg(long, hide = true, value_name = "N")]
     pub abort_after_frames: Option<u64>,
+    /// Serve /metrics here (overrides the config's `run.metrics`); a bare PORT is on 127.0.0.1.
+    #[arg(long, value_name = "ADDR:PORT")]
+    pub metrics: Option<String>,
 }
 
 pub fn run(r: &RunArgs) -> Result<()> {
@@ -101,6 +104,12 @@ pub fn run(r: &RunArgs) -> Result<()> {
     .map_err(|e| e.context(format!("stand config {}", cfg.file.display())))?;
     let saved = ckpt.as_ref().and_then(|c| c.1.as_ref());
     let ck_path = ckpt.as_ref().map(|c| c.0.path.clone());
+    let server = match (&r.metrics, cfg.metrics) {
+        (Some(_), _) => super::metrics::start_option(r.metrics.as_deref())?,
+        (None, Some(addr)) => Some(super::metrics::MetricsServer::start(addr)?),
+        (None, None) => None,
+    };
+    let metrics = server.as_ref().map(|s| s.tap(&spec.name(), &opts.limits));
     let analysis = super::start_analysis(&spec.name(), setups, opts, saved, ck_path.as_deref())?;
     let out: Box<dyn Write + Send> = super::analyze::output_file(cfg.output.as_deref(), r.resume)?;
     let ctl = RunControl {
@@ -114,6 +123,7 @@ pub fn run(r: &RunArgs) -> Result<()> {
             None
         },
         show_progress: !live && std::io::IsTerminal::is_terminal(&std::io::stderr()),
+        metrics,
         ..RunControl::default()
     };
     let writer = RecordWriter::spawn(out);

@@ -249,7 +249,8 @@ impl LimitSpec {
         self.unit.clone().unwrap_or_else(|| "native".into())
     }
 
-    fn bounds(&self) -> Vec<(&'static str, f64)> {
+    /// The bounds this limit states: ("max", value) and/or ("min", value).
+    pub fn bounds(&self) -> Vec<(&'static str, f64)> {
         let mut b = Vec::new();
         if let Some(v) = self.max {
             b.push(("max", v));

@@ -39,6 +39,7 @@ use crate::checkpoint::{Checkpoint, CheckpointPlan, Collector, Piece, Position, 
 use crate::frame::{FrameDescriptor, Health};
 use crate::input::text::{TextReader, BATCH_ROWS};
 use crate::input::Chunk;
+use crate::sink::metrics::MetricsTap;
 use crate::sink::records::{HealthRecord, Record};
 use crate::source::{Capture, Progress, SourceContext, SourceEvent, SourceSpec};
 use decode::DecodeStage;
@@ -78,6 +79,9 @@ pub struct RunControl {
     /// Checkpoints (`--checkpoint-every`, `--resume`): where, how often, and the position to
     /// continue from.
     pub checkpoint: Option<Arc<CheckpointPlan>>,
+    /// Metrics for monitoring (`--metrics`): every fit record and the decoder's health, as the
+    /// run goes.
+    pub metrics: Option<MetricsTap>,
 }
 
 impl Default for RunControl {
@@ -91,6 +95,7 @@ impl Default for RunControl {
             show_progress: false,
             every_wall: None,
             checkpoint: None,
+            metrics: None,
         }
     }
 }
@@ -145,6 +150,7 @@ pub fn run_frames(
         queue.clone(),
         ctl.every_wall,
         plan.as_deref(),
+        ctl.metrics.clone(),
     )?;
     let progress = ctl.progress.clone();
     let mut schedule = plan.as_deref().map(|p| Schedule::new(p, desc.tau0_s()));
@@ -152,6 +158,7 @@ pub fn run_frames(
         .as_ref()
         .map(|c| (c.sender(), c.in_flight.clone(), c.written.clone()));
     let abort_after = plan.as_ref().and_then(|p| p.abort_after_frames);
+    let metrics = ctl.metrics.clone();
     let decode = std::thread::Builder::new()
         .name("allanscope-decode".into())
         .spawn(move || {
@@ -172,6 +179,9 @@ pub fn run_frames(
                 let before = events.len();
                 let n = stage.push(ev, &mut events);
                 progress.frames.fetch_add(n, Ordering::Relaxed);
+                if let Some(m) = &metrics {
+                    m.health(&stage.health());
+                }
                 let due = match (&mut schedule, &ck) {
                     (Some(s), Some((_, in_flight, _))) => {
                         s.add_steps(events[before..].iter().map(steps_of).sum());
@@ -272,7 +282,10 @@ pub fn run_frames(
             .extra
             .insert("outage_missing".into(), stage.outage.missing.into());
     }
-    finish_records(&mut analysis, Some(record), queue);
+    if let Some(m) = &ctl.metrics {
+        m.health(&health);
+    }
+    finish_records(&mut analysis, Some(record), queue, ctl.metrics.as_ref());
     Ok(RunOutcome {
         analysis,
         health: Some(health),
@@ -299,6 +312,7 @@ pub fn run_text<R: BufRead + Send + 'static>(
         queue.clone(),
         ctl.every_wall,
         plan.as_deref(),
+        ctl.metrics.clone(),
     )?;
     let mut schedule = plan.as_deref().map(|p| Schedule::new(p, tau0));
     let ck = collector
@@ -360,7 +374,7 @@ pub fn run_text<R: BufRead + Send + 'static>(
     } else {
         analysis.add_bad_rows(position.bad_rows);
     }
-    finish_records(&mut analysis, None, queue);
+    finish_records(&mut analysis, None, queue, ctl.metrics.as_ref());
     Ok(RunOutcome {
         analysis,
         health: None,
@@ -409,6 +423,7 @@ fn spawn_analysis(
     queue: RecordQueue,
     every_wall: Option<Duration>,
     plan: Option<&CheckpointPlan>,
+    metrics: Option<MetricsTap>,
 ) -> Result<(
     ChunkSender,
     Vec<std::thread::JoinHandle<RunAnalysis>>,
@@ -426,6 +441,7 @@ fn spawn_analysis(
         txs.push(tx);
         let (queue, recycle) = (queue.clone(), recycle.clone());
         let pieces = collector.as_ref().map(Collector::sender);
+        let metrics = metrics.clone();
         let h = std::thread::Builder::new()
             .name("allanscope-analysis".into())
             .spawn(move || {
@@ -453,6 +469,9 @@ fn spawn_analysis(
                         recv(tick) -> _ => out.extend(part.records(false)),
                     }
                     for r in out.drain(..) {
+                        if let Some(m) = &metrics {
+                            m.observe(&r);
+                        }
                         queue.push_interim(r);
                     }
                 }
@@ -586,8 +605,16 @@ async fn wait_for_signal(enabled: bool) -> &'static str {
 }
 
 /// The final curve and fit records, the health record and the summary, never coalesced.
-fn finish_records(analysis: &mut RunAnalysis, health: Option<HealthRecord>, queue: &RecordQueue) {
+fn finish_records(
+    analysis: &mut RunAnalysis,
+    health: Option<HealthRecord>,
+    queue: &RecordQueue,
+    metrics: Option<&MetricsTap>,
+) {
     for r in analysis.records(true) {
+        if let Some(m) = metrics {
+            m.observe(&r);
+        }
         queue.push_final(r);
     }
     if let Some(h) = health {

@@ -8,6 +8,7 @@
 
 pub mod dynamic;
 pub mod json;
+pub mod metrics;
 pub mod page_file;
 pub mod plot;
 pub mod records;

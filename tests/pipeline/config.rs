@@ -150,3 +150,51 @@ fn file_config_gives_the_records_of_analyze() {
     assert_eq!(final_curves_and_fits(&got), final_curves_and_fits(&want));
     assert_eq!(last_of(&got, "health")["frames"], 75_000);
 }
+
+#[test]
+fn run_metrics_key_takes_a_port_or_an_address_and_names_a_bad_one() {
+    let base = "[source]\nkind = \"udp\"\naddress = \"127.0.0.1:5000\"\nformat = \"siu8\"\n[run]\n";
+    let load = |m: &str| {
+        allanscope::stand::StandConfig::from_toml_str(
+            &format!("{base}metrics = {m}\n"),
+            Path::new("lab.toml"),
+        )
+    };
+    let port = load("9464").expect("a port");
+    assert_eq!(port.metrics, Some(([127, 0, 0, 1], 9464).into()));
+    let addr = load("\"0.0.0.0:9100\"").expect("an address");
+    assert_eq!(addr.metrics, Some(([0, 0, 0, 0], 9100).into()));
+    for bad in ["\"localhost\"", "70000", "true"] {
+        let e = load(bad).expect_err(bad).to_string();
+        assert!(
+            e.contains("run.metrics") && e.contains("lab.toml"),
+            "{bad}: {e}"
+        );
+    }
+}
+
+#[test]
+fn a_bad_metrics_option_exits_2() {
+    let fixture =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/captures/siu8_stand_5min_seed1.siu8");
+    let out = Command::new(env!("CARGO_BIN_EXE_allanscope"))
+        .args([
+            "analyze",
+            fixture.to_str().expect("utf-8"),
+            "--format",
+            "siu8",
+        ])
+        .args(["--metrics", "nowhere"])
+        .output()
+        .expect("run");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--metrics") && err.contains("nowhere"),
+        "{err}"
+    );
+    assert!(
+        out.stdout.is_empty(),
+        "nothing analysed before the option is checked"
+    );
+}

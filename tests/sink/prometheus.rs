@@ -1,0 +1,306 @@
+//! `--metrics` scraped by the real Prometheus server, read back through its HTTP API.
+//!
+//! `allanscope listen --udp ... --metrics ...` receives the first 60 s of the siu8 fixture
+//! (15,000 frames, 10 per datagram) on loopback; a Prometheus server (Debian package
+//! `prometheus`, which `.ci/run` installs) scrapes it every second. Once the fits cover all 60 s,
+//! `/api/v1/query` must give every channel's coefficient interval ends (and the determined
+//! values) equal to the final `fit` records the run writes after SIGTERM (the interim and final
+//! fits differ only by the covariance cache, ~1e-11 relative), and the frame counters the
+//! truth: 15,000 frames, none missing. Everything on 127.0.0.1, every wait bounded.
+//!
+//! Without a `prometheus` binary the test is skipped, except under CI (`CI=true`), where it
+//! fails.
+
+use std::io::{Read, Write};
+use std::net::{TcpListener, TcpStream};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use crate::common::pipeline::*;
+
+const FRAMES: usize = 15_000;
+const FRAME_LEN: usize = 42;
+const PER_DATAGRAM: usize = 10;
+/// Longest wait for any one step.
+const STEP_TIMEOUT: Duration = Duration::from_secs(60);
+
+/// Kills the child when dropped (a failing assertion must not leave a server behind).
+struct Reaped(Child);
+
+impl Drop for Reaped {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+fn free_tcp_port() -> u16 {
+    let l = TcpListener::bind("127.0.0.1:0").expect("bind");
+    l.local_addr().expect("addr").port()
+}
+
+/// A plain HTTP/1.0 GET on 127.0.0.1 (the test's client side): status and body.
+fn http_get(port: u16, path: &str) -> Option<(u16, String)> {
+    let mut s = TcpStream::connect(("127.0.0.1", port)).ok()?;
+    s.set_read_timeout(Some(Duration::from_secs(5))).ok()?;
+    write!(s, "GET {path} HTTP/1.0\r\nHost: 127.0.0.1\r\n\r\n").ok()?;
+    let mut text = String::new();
+    s.read_to_string(&mut text).ok()?;
+    let (head, body) = text.split_once("\r\n\r\n")?;
+    let status = head.split_whitespace().nth(1)?.parse().ok()?;
+    Some((status, body.to_string()))
+}
+
+fn url_encode(q: &str) -> String {
+    q.bytes()
+        .map(|b| match b {
+            b'a'..=b'z' | b'A'..=b'Z' | b'0'..=b'9' | b'_' | b'-' | b'.' => (b as char).to_string(),
+            _ => format!("%{b:02X}"),
+        })
+        .collect()
+}
+
+/// Instant query through Prometheus's HTTP API: each series' labels and value.
+fn query(prom_port: u16, q: &str) -> Vec<(serde_json::Value, f64)> {
+    let Some((200, body)) = http_get(prom_port, &format!("/api/v1/query?query={}", url_encode(q)))
+    else {
+        return Vec::new();
+    };
+    let v: serde_json::Value = serde_json::from_str(&body).expect("API answer is JSON");
+    assert_eq!(v["status"], "success", "{body}");
+    v["data"]["result"]
+        .as_array()
+        .map(|a| {
+            a.iter()
+                .map(|s| {
+                    let x: f64 = s["value"][1]
+                        .as_str()
+                        .and_then(|t| t.parse().ok())
+                        .expect("a sample value");
+                    (s["metric"].clone(), x)
+                })
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// Waits until `cond` gives `Some`, at most [`STEP_TIMEOUT`].
+fn wait_for<T>(what: &str, mut cond: impl FnMut() -> Option<T>) -> T {
+    let t0 = Instant::now();
+    loop {
+        if let Some(v) = cond() {
+            return v;
+        }
+        assert!(t0.elapsed() < STEP_TIMEOUT, "timed out waiting for {what}");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+fn prometheus_available() -> bool {
+    Command::new("prometheus")
+        .arg("--version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+fn rel_eq(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-8 * a.abs().max(b.abs()) + 1e-300
+}
+
+#[test]
+fn prometheus_scrapes_the_coefficients_and_counters() {
+    if !prometheus_available() {
+        assert!(
+            std::env::var("CI").as_deref() != Ok("true"),
+            "CI=true but no `prometheus` binary: .ci/run must install the Debian package"
+        );
+        eprintln!("skipped: no `prometheus` binary (apt-get install prometheus)");
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("allanscope-prom-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("tmp dir");
+    let (udp, metrics, prom) = (free_udp_port(), free_tcp_port(), free_tcp_port());
+    let out = dir.join("out.jsonl");
+    let log = std::fs::File::create(dir.join("allanscope.log")).expect("log");
+    let listen = Reaped(
+        Command::new(env!("CARGO_BIN_EXE_allanscope"))
+            .args([
+                "listen",
+                "--udp",
+                &format!("127.0.0.1:{udp}"),
+                "--format",
+                "siu8",
+            ])
+            .args([
+                "--metrics",
+                &format!("127.0.0.1:{metrics}"),
+                "--every",
+                "0.5",
+            ])
+            .arg("--out")
+            .arg(&out)
+            .stdout(Stdio::null())
+            .stderr(log)
+            .spawn()
+            .expect("start allanscope"),
+    );
+    std::fs::write(
+        dir.join("prometheus.yml"),
+        format!(
+            "global:\n  scrape_interval: 1s\n  evaluation_interval: 1s\nscrape_configs:\n  \
+             - job_name: allanscope\n    static_configs:\n      - targets: ['127.0.0.1:{metrics}']\n"
+        ),
+    )
+    .expect("config");
+    let prom_log = std::fs::File::create(dir.join("prometheus.log")).expect("log");
+    let _prometheus = Reaped(
+        Command::new("prometheus")
+            .arg(format!(
+                "--config.file={}",
+                dir.join("prometheus.yml").display()
+            ))
+            .arg(format!(
+                "--storage.tsdb.path={}",
+                dir.join("tsdb").display()
+            ))
+            .arg(format!("--web.listen-address=127.0.0.1:{prom}"))
+            .stdout(Stdio::null())
+            .stderr(prom_log)
+            .spawn()
+            .expect("start prometheus"),
+    );
+
+    // The exporter answers before any data (an empty exposition).
+    let first = wait_for("the /metrics endpoint", || http_get(metrics, "/metrics"));
+    assert_eq!(first.0, 200);
+    assert!(first.1.ends_with("# EOF\n"), "{}", first.1);
+    assert_eq!(http_get(metrics, "/nothing").map(|r| r.0), Some(404));
+
+    // 60 s of frames at 20 times their rate: no pause near the half counter period that a live
+    // stream's outage detection would take for a silence (src/pipeline/decode.rs).
+    let bytes = siu8_capture()[..FRAMES * FRAME_LEN].to_vec();
+    let sock = std::net::UdpSocket::bind("127.0.0.1:0").expect("bind sender");
+    let frames_now = || -> u64 {
+        http_get(metrics, "/metrics")
+            .and_then(|(_, b)| {
+                b.lines()
+                    .find(|l| l.starts_with("allanscope_frames_total{"))
+                    .and_then(|l| l.rsplit(' ').next()?.parse().ok())
+            })
+            .unwrap_or(0)
+    };
+    let start = Instant::now();
+    for (i, d) in bytes.chunks(PER_DATAGRAM * FRAME_LEN).enumerate() {
+        let due = start + Duration::from_secs_f64((i * PER_DATAGRAM) as f64 / (20.0 * 250.0));
+        std::thread::sleep(due.saturating_duration_since(Instant::now()));
+        sock.send_to(d, ("127.0.0.1", udp)).expect("send");
+    }
+    let sent = FRAMES as u64;
+    // Through Prometheus: all frames counted, none missing, and fits of all 60 s.
+    let q_frames = r#"allanscope_frames_total{job="allanscope"}"#;
+    let mut last = (0, Instant::now());
+    let seen = wait_for("Prometheus to see the frames", || {
+        let n = query(prom, q_frames).first().map(|s| s.1)?;
+        let direct = frames_now();
+        if direct != last.0 {
+            last = (direct, Instant::now());
+        }
+        // Done when all arrived, or when the count has stood still for 3 s (frames lost).
+        let still = last.1.elapsed() > Duration::from_secs(3);
+        (direct as f64 == n && (direct == sent || still)).then_some(n)
+    });
+    let health: Vec<String> = http_get(metrics, "/metrics")
+        .map(|(_, b)| {
+            b.lines()
+                .filter(|l| l.contains("_total{"))
+                .map(String::from)
+                .collect()
+        })
+        .unwrap_or_default();
+    assert_eq!(
+        seen, FRAMES as f64,
+        "frames through Prometheus; exporter: {health:?}"
+    );
+    assert_eq!(
+        query(prom, "allanscope_missing_frames_total")
+            .first()
+            .map(|s| s.1),
+        Some(0.0)
+    );
+    assert_eq!(
+        query(prom, "allanscope_crc_errors_total")
+            .first()
+            .map(|s| s.1),
+        Some(0.0)
+    );
+    wait_for("Prometheus to hold fits of all 60 s", || {
+        let t = query(prom, "allanscope_fit_t_data_seconds");
+        (t.len() == 8 && t.iter().all(|s| rel_eq(s.1, 60.0))).then_some(())
+    });
+    let read = |name: &str| -> Vec<(String, String, f64)> {
+        query(prom, name)
+            .into_iter()
+            .map(|(m, x)| {
+                let s = |k: &str| m[k].as_str().unwrap_or("").to_string();
+                assert_eq!(m["unit"], format!("udp:127.0.0.1:{udp}"), "{m}");
+                (s("channel"), s("coef"), x)
+            })
+            .collect()
+    };
+    let (lo, hi, value) = (
+        read("allanscope_coef_lo"),
+        read("allanscope_coef_hi"),
+        read("allanscope_coef"),
+    );
+
+    // The final fit records, written on SIGTERM.
+    let pid = listen.0.id().to_string();
+    let st = Command::new("kill").args(["-TERM", &pid]).status();
+    assert!(st.is_ok_and(|s| s.success()));
+    let mut listen = listen;
+    let t0 = Instant::now();
+    while listen.0.try_wait().expect("wait").is_none() {
+        assert!(
+            t0.elapsed() < STEP_TIMEOUT,
+            "listen did not stop on SIGTERM"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let recs = parse_lines(&std::fs::read(&out).expect("output"));
+    let fits: Vec<&serde_json::Value> = recs
+        .iter()
+        .filter(|r| r["type"] == "fit" && r["final"] == true)
+        .collect();
+    assert_eq!(fits.len(), 8, "one final fit per channel");
+    assert_eq!(lo.len(), 40, "5 coefficients x 8 channels: {lo:?}");
+    assert_eq!(hi.len(), 40);
+    let mut determined = 0;
+    for f in fits {
+        let ch = f["channel"].as_str().expect("channel");
+        for coef in ["Q", "N", "B", "K", "R"] {
+            let c = &f["coef"][coef];
+            let find = |v: &[(String, String, f64)]| {
+                v.iter().find(|s| s.0 == ch && s.1 == coef).map(|s| s.2)
+            };
+            let want = |k: &str| c[k].as_f64();
+            for (k, got) in [("lo", find(&lo)), ("hi", find(&hi))] {
+                let (g, w) = (got.expect("scraped"), want(k).expect("in the record"));
+                assert!(rel_eq(g, w), "{ch} {coef} {k}: Prometheus {g}, record {w}");
+            }
+            match want("value") {
+                Some(w) => {
+                    let g = find(&value).unwrap_or_else(|| panic!("{ch} {coef} not scraped"));
+                    assert!(rel_eq(g, w), "{ch} {coef}: Prometheus {g}, record {w}");
+                    determined += 1;
+                }
+                None => assert_eq!(find(&value), None, "{ch} {coef} is not determined"),
+            }
+        }
+    }
+    // 60 s of the stand's unit determine at least N of every channel.
+    assert!(determined >= 8, "only {determined} coefficients determined");
+    let _ = std::fs::remove_dir_all(&dir);
+}
