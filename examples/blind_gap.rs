@@ -126,6 +126,13 @@ fn draw_effect(
             let s = rho * base.adev(tau) / (tau / (3.0 * mean_interval)).sqrt();
             EffectParams::BiasJumps { count, rms_size: s }
         }
+        // Not drawn: these runs carry no temperature column (gap::temperature has its own
+        // study, examples/temperature_study.rs).
+        EffectKind::Temperature => EffectParams::Temperature {
+            coefficient: 0.0,
+            lo: 0.0,
+            hi: 0.0,
+        },
     });
     Draw { base, effect, rho }
 }
@@ -160,6 +167,7 @@ fn model_toml(d: &Draw, tau0: f64) -> String {
         }
         // Bias jumps are added by `simulate` itself.
         Some(EffectParams::BiasJumps { .. }) | None => {}
+        Some(EffectParams::Temperature { .. }) => {}
     }
     s
 }

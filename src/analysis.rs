@@ -458,6 +458,10 @@ impl RunAnalysis {
             elapsed_s: self.started.elapsed().as_secs_f64(),
             limits: judgement.limits_json(),
             pass: judgement.pass,
+            // Filled in by the pipeline, which knows how the input ended.
+            read_to_end: false,
+            stopped_by: None,
+            capture_error: None,
         }
     }
 

@@ -11,15 +11,16 @@ use std::io::Seek;
 use std::sync::Arc;
 
 use super::{
-    analysis_options, checkpoint_header, format_and_tau0, open_input, select_channels,
-    start_analysis, usage, AnalyzeArgs, DataArgs,
+    analysis_options, checkpoint_header, finish_records, format_and_tau0, interrupted, open_input,
+    records_output, select_channels, start_analysis, usage, AnalyzeArgs, DataArgs,
 };
-use allanscope::analysis::{AnalysisOptions, ChannelSetup, RunAnalysis};
+use allanscope::analysis::{AnalysisOptions, ChannelSetup};
 use allanscope::checkpoint::Position;
 use allanscope::frame::FrameDescriptor;
 use allanscope::input::text::TextReader;
 use allanscope::model::aggregate::{aggregate_channels, RunCoefs};
-use allanscope::pipeline::{RecordQueue, RecordWriter, RunControl};
+use allanscope::pipeline::{RecordQueue, RecordWriter, RunControl, RunOutcome, SignalWatch};
+use allanscope::sink::output::OutputMode;
 use allanscope::sink::records::Record;
 use allanscope::source::{Pace, SourceSpec};
 
@@ -27,47 +28,52 @@ use allanscope::source::{Pace, SourceSpec};
 const AUXILIARY_COLUMNS: [&str; 1] = ["temperature_c"];
 
 pub fn run(a: &AnalyzeArgs) -> Result<()> {
-    let writer = RecordWriter::spawn(output_writer(&a.data)?);
-    let result = analyze_all(a, writer.queue());
-    let written = writer.finish();
-    result?;
-    written.context("writing the JSON lines")?;
-    Ok(())
+    let d = &a.data;
+    // Every option is checked before the output is opened.
+    parse_pace(&a.pace)?;
+    let (_, tau0) = format_and_tau0(d)?;
+    analysis_options(d, tau0)?;
+    let (out, dest) = records_output(
+        d.out.as_deref(),
+        OutputMode::new(d.force, d.resume),
+        "--out",
+    )?;
+    // A replay has no deadline: back-pressure, never coalesced interim records.
+    let writer = RecordWriter::spawn(out);
+    let ctl = RunControl {
+        show_progress: std::io::stderr().is_terminal(),
+        ..RunControl::default()
+    };
+    let signals = SignalWatch::start(
+        ctl.shutdown.clone(),
+        writer.queue().clone(),
+        ctl.progress.clone(),
+    );
+    let result = analyze_all(a, writer.queue(), &ctl);
+    let written = finish_records(writer, &dest, &signals);
+    let unfinished = result?;
+    written?;
+    match unfinished {
+        Some(input) => Err(interrupted(&input, &ctl.progress)),
+        None => Ok(()),
+    }
 }
 
-/// Where the JSON lines go: `--out FILE` or standard output.
+/// Where the JSON lines of a one-pass command go (`diagnose`): `--out FILE` (see
+/// [`records_output`]) or standard output.
 pub(crate) fn output_writer(d: &DataArgs) -> Result<Box<dyn Write + Send>> {
-    // A resumed run adds to the records already written.
-    output_file(d.out.as_deref(), d.resume)
-}
-
-/// JSON lines to `out` (created, or appended to when `append`), or to standard output.
-pub(crate) fn output_file(
-    out: Option<&std::path::Path>,
-    append: bool,
-) -> Result<Box<dyn Write + Send>> {
-    Ok(match out {
-        Some(p) => {
-            let f = if append {
-                std::fs::OpenOptions::new()
-                    .append(true)
-                    .create(true)
-                    .open(p)
-                    .and_then(|f| drop_torn_last_line(p).map(|_| f))
-            } else {
-                std::fs::File::create(p)
-            }
-            .with_context(|| format!("cannot create output {}", p.display()))?;
-            Box::new(std::io::BufWriter::new(f))
-        }
-        None => Box::new(std::io::BufWriter::new(std::io::stdout())),
-    })
+    Ok(records_output(
+        d.out.as_deref(),
+        OutputMode::new(d.force, d.resume),
+        "--out",
+    )?
+    .0)
 }
 
 /// A run that crashed may have left its last JSON line half written (the writer's buffer is
 /// flushed in blocks, not lines). Before a resumed run appends, the file is cut back to its last
 /// complete line, so every line stays a whole record; returns the bytes dropped.
-fn drop_torn_last_line(path: &std::path::Path) -> std::io::Result<u64> {
+pub(crate) fn drop_torn_last_line(path: &std::path::Path) -> std::io::Result<u64> {
     use std::io::{Read, SeekFrom};
     let mut f = std::fs::OpenOptions::new()
         .read(true)
@@ -110,7 +116,8 @@ pub(crate) fn parse_pace(s: &str) -> Result<bool> {
     }
 }
 
-fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue) -> Result<()> {
+/// Runs every input; returns the first input not read to its end (a stopped replay).
+fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue, ctl: &RunControl) -> Result<Option<String>> {
     let d = &a.data;
     let realtime = parse_pace(&a.pace)?;
     let (descriptor, tau0) = format_and_tau0(d)?;
@@ -122,24 +129,25 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue) -> Result<()> {
         ));
     }
     let server = super::metrics::start_option(d.metrics.as_deref())?;
-    let mut ctl = RunControl {
-        handle_signals: true,
-        show_progress: std::io::stderr().is_terminal(),
-        ..RunControl::default()
-    };
+    let mut ctl = ctl.clone();
     let mut fits = Vec::new();
+    let mut unfinished = None;
     for (run, input) in a.inputs.iter().enumerate() {
         if ctl.shutdown.is_cancelled() {
+            unfinished.get_or_insert_with(|| input.clone());
             break;
         }
         let mut opts = base.clone();
         opts.run = several.then_some(run);
         ctl.metrics = server.as_ref().map(|s| s.tap(input, &opts.limits));
-        let analysis = match &descriptor {
+        let outcome = match &descriptor {
             None => analyze_text(input, d, opts, realtime, queue, &ctl)?,
             Some(desc) => analyze_frames(input, desc, d, opts, realtime, queue, &ctl)?,
         };
-        fits.push(analysis.last_fits());
+        if !outcome.read_to_end {
+            unfinished.get_or_insert_with(|| input.clone());
+        }
+        fits.push(outcome.analysis.last_fits());
     }
     if several {
         let aggregates = aggregate_channels(&run_coefs(&fits));
@@ -163,10 +171,13 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue) -> Result<()> {
                 elapsed_s: 0.0,
                 limits: j.limits_json(),
                 pass: j.pass,
+                read_to_end: unfinished.is_none(),
+                stopped_by: None,
+                capture_error: None,
             }));
         }
     }
-    Ok(())
+    Ok(unfinished)
 }
 
 /// Text columns: a reader thread feeds the analysis.
@@ -177,7 +188,7 @@ fn analyze_text(
     realtime: bool,
     queue: &RecordQueue,
     ctl: &RunControl,
-) -> Result<RunAnalysis> {
+) -> Result<RunOutcome> {
     let path = PathBuf::from(input);
     let tau0 = opts.accum.tau0_s;
     let reader = TextReader::new(BufReader::with_capacity(1 << 16, open_input(input)?), &path)
@@ -230,7 +241,7 @@ fn analyze_text(
     let mut ctl = ctl.clone();
     ctl.checkpoint = ckpt.map(|c| Arc::new(c.0));
     let rows_per_s = realtime.then_some(1.0 / tau0);
-    Ok(allanscope::pipeline::run_text(reader, path, rows_per_s, analysis, queue, &ctl)?.analysis)
+    allanscope::pipeline::run_text(reader, path, rows_per_s, analysis, queue, &ctl)
 }
 
 /// A capture of frames (a file, or `-`): the file source, the decode stage, the analysis.
@@ -242,7 +253,7 @@ fn analyze_frames(
     realtime: bool,
     queue: &RecordQueue,
     ctl: &RunControl,
-) -> Result<RunAnalysis> {
+) -> Result<RunOutcome> {
     let setups = select_channels(ChannelSetup::for_frames(desc), &d.channels, input)?;
     let header = checkpoint_header(input, &d.format, &opts, &setups);
     let ckpt = d.checkpoint_setup(header, true, input != "-")?;
@@ -267,7 +278,7 @@ fn analyze_frames(
             pace,
         }
     };
-    Ok(allanscope::pipeline::run_frames(spec, desc, analysis, queue, ctl)?.analysis)
+    allanscope::pipeline::run_frames(spec, desc, analysis, queue, ctl)
 }
 
 /// Each run's determined coefficients, for the run-to-run statistics.

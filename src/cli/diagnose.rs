@@ -10,11 +10,12 @@ use anyhow::{Context, Result};
 use super::{format_and_tau0, open_input, usage, DiagnoseArgs};
 use allanscope::analysis::InputKind;
 use allanscope::frame::{Decoder, FrameDescriptor, FrameEvent};
+use allanscope::gap::diagnose::diagnose_with_temperature;
 use allanscope::gap::lsb::LsbEstimator;
+use allanscope::gap::temperature::settling_profile;
 use allanscope::gap::unit_model::{fitted_channel, fitted_unit, ChannelFacts};
-use allanscope::gap::{
-    diagnose, holdout_gap, DiagnoseOptions, DiagnosisRecord, GapConfig, GapEvidence,
-};
+use allanscope::gap::EffectParams;
+use allanscope::gap::{holdout_gap, DiagnoseOptions, DiagnosisRecord, GapConfig, GapEvidence};
 use allanscope::input::text::{TextReader, BATCH_ROWS};
 use allanscope::sim::model_write::model_toml;
 
@@ -27,6 +28,11 @@ struct Gathered {
     /// The quantization step of each channel's increments and their sum (u), for the model file.
     lsb: Vec<LsbEstimator>,
     sums: Vec<f64>,
+    /// The unit's temperature (degC) when the input has one, as evidence fed `T tau0` per step
+    /// (the channels' block layout: gap::temperature), and its sum over the steps.
+    temperature: Option<GapEvidence>,
+    temperature_sum: f64,
+    temperature_n: u64,
 }
 
 impl Gathered {
@@ -41,6 +47,20 @@ impl Gathered {
     fn gap(&mut self, k: usize, missing: u64) {
         self.evidence[k].push_gap(missing);
         self.lsb[k].push(f64::NAN);
+    }
+
+    /// The temperature of one step (NaN or None: not known for this step).
+    fn push_temperature(&mut self, t: Option<f64>, tau0: f64) {
+        if let Some(ev) = self.temperature.as_mut() {
+            match t.filter(|t| t.is_finite()) {
+                Some(t) => {
+                    ev.push_increment(t * tau0);
+                    self.temperature_sum += t;
+                    self.temperature_n += 1;
+                }
+                None => ev.push_gap(1),
+            }
+        }
     }
 
     fn add_channel(&mut self, name: &str, unit: &str, cfg: &GapConfig) {
@@ -66,6 +86,9 @@ fn gather(
         evidence: Vec::new(),
         lsb: Vec::new(),
         sums: Vec::new(),
+        temperature: None,
+        temperature_sum: 0.0,
+        temperature_n: 0,
     };
     let mut columns = Vec::new();
     let wanted = |n: &str| a.channel.as_ref().is_none_or(|c| c.iter().any(|w| w == n));
@@ -88,7 +111,13 @@ fn gather(
                     columns.push(i);
                 }
             }
+            // The temperature column (CONTRACT.md's `temperature_c`), read here only.
+            let temp_col = reader.names().iter().position(|n| n == "temperature_c");
+            if temp_col.is_some() {
+                g.temperature = Some(GapEvidence::new(cfg.clone()));
+            }
             let width = reader.names().len();
+            let mut first_row = true;
             let mut last_phase: Vec<Option<f64>> = vec![None; columns.len()];
             let mut rows = Vec::with_capacity(BATCH_ROWS * width);
             loop {
@@ -101,6 +130,12 @@ fn gather(
                     break;
                 }
                 for row in rows.chunks_exact(width) {
+                    // Phase gives no increment on its first row: the temperature starts with
+                    // the first increment too, so both evidences see the same steps.
+                    if !(first_row && kind == InputKind::Phase) {
+                        g.push_temperature(temp_col.map(|c| row[c]), tau0);
+                    }
+                    first_row = false;
                     for (k, &col) in columns.iter().enumerate() {
                         let v = row[col];
                         match kind {
@@ -121,6 +156,9 @@ fn gather(
             }
         }
         Some(desc) => {
+            if desc.frame().temperature.is_some() {
+                g.temperature = Some(GapEvidence::new(cfg.clone()));
+            }
             let chans = desc.channels();
             for (i, c) in chans.iter().enumerate() {
                 if wanted(&c.name) {
@@ -144,6 +182,7 @@ fn gather(
                 for ev in decoder.drain() {
                     match ev {
                         FrameEvent::Frame(f) => {
+                            g.push_temperature(f.temperature_c, tau0);
                             for (k, &col) in columns.iter().enumerate() {
                                 match f.values.get(col).copied().flatten() {
                                     Some(v) => g.push(k, v.physical(scales[col])),
@@ -152,7 +191,10 @@ fn gather(
                             }
                         }
                         FrameEvent::Gap { missing } => {
-                            (0..columns.len()).for_each(|k| g.gap(k, missing))
+                            (0..columns.len()).for_each(|k| g.gap(k, missing));
+                            if let Some(t) = g.temperature.as_mut() {
+                                t.push_gap(missing);
+                            }
                         }
                     }
                 }
@@ -194,9 +236,14 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
         None => None,
     };
     let mut fitted = Vec::new();
+    let temp_snap = main.temperature.as_mut().map(|t| t.snapshot());
+    // The recorded temperature as the simulator's settling profile (for --model-out).
+    let profile = temp_snap
+        .as_ref()
+        .and_then(|t| settling_profile(&t.block_means, t.block_len as f64 * tau0));
     for (i, name) in main.names.iter().enumerate() {
         let snap = main.evidence[i].snapshot();
-        let diag = match diagnose(&snap, &opts) {
+        let diag = match diagnose_with_temperature(&snap, temp_snap.as_ref(), &opts) {
             Ok(x) => x,
             Err(e) => {
                 tracing::warn!("{}: channel {name}: {e}", a.input);
@@ -214,7 +261,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
         sink.write(&rec)?;
         if a.model_out.is_some() {
             let t_run = snap.n_increments as f64 * tau0;
-            let facts = ChannelFacts {
+            let mut facts = ChannelFacts {
                 name: name.clone(),
                 unit: main.units[i].clone(),
                 // The step of rate samples is not a phase LSB (it is the rate-sample
@@ -227,6 +274,16 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
                 },
                 temperature_coefficient: 0.0,
             };
+            // A temperature effect: its coefficient, the bias at the profile's reference.
+            let coef = diag.effects.iter().find_map(|e| match e.params {
+                EffectParams::Temperature { coefficient, .. } => Some(coefficient),
+                _ => None,
+            });
+            if let (Some(c), Some(p), true) = (coef, &profile, main.temperature_n > 0) {
+                let mean_t = main.temperature_sum / main.temperature_n as f64;
+                facts.temperature_coefficient = c;
+                facts.bias -= c * (mean_t - p.reference_c);
+            }
             fitted.push(fitted_channel(&facts, &diag, tau0));
         }
     }
@@ -238,7 +295,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
                 p.display()
             ));
         }
-        let model = fitted_unit(tau0, fitted, None);
+        let model = fitted_unit(tau0, fitted, profile);
         let header = vec![
             format!("The unit fitted by `allanscope diagnose {}`.", a.input),
             "Five terms with the accepted effects in; a sinusoid's phase is not estimated (0)."

@@ -7,10 +7,13 @@ use std::time::Duration;
 use anyhow::Result;
 use clap::{ArgGroup, Args};
 
-use super::analyze::output_writer;
-use super::{analysis_options, parse_duration_s, select_channels, usage, DataArgs};
+use super::{
+    analysis_options, capture_output, finish_records, parse_duration_s, records_output,
+    select_channels, usage, DataArgs,
+};
 use allanscope::frame::FrameDescriptor;
-use allanscope::pipeline::{RecordWriter, RunControl};
+use allanscope::pipeline::{RecordWriter, RunControl, SignalWatch};
+use allanscope::sink::output::OutputMode;
 use allanscope::source::{Pace, SourceSpec};
 
 #[derive(Debug, Args)]
@@ -31,7 +34,9 @@ pub struct ListenArgs {
     /// Stop after this long (seconds, or with s, min, h, d).
     #[arg(long)]
     pub duration: Option<String>,
-    /// Also write every received byte to this file, for replay later.
+    /// Also write every received byte to this file, for replay later. An existing non-empty
+    /// file is refused unless --force (or --resume, which appends). A write error stops the
+    /// capture, not the run (reported in `health` and `summary`).
     #[arg(long)]
     pub capture: Option<PathBuf>,
     #[command(flatten)]
@@ -85,6 +90,11 @@ pub fn run(l: &ListenArgs) -> Result<()> {
     let server = super::metrics::start_option(d.metrics.as_deref())?;
     let metrics = server.as_ref().map(|s| s.tap(&spec.name(), &opts.limits));
     let analysis = super::start_analysis(&spec.name(), setups, opts, saved, ck_path.as_deref())?;
+    let mode = OutputMode::new(d.force, d.resume);
+    // Outputs last: every option has been accepted; they are only emptied once the source
+    // is open and delivers (allanscope::sink::output).
+    let capture = capture_output(l.capture.as_deref(), mode, "--capture")?;
+    let (out, dest) = records_output(d.out.as_deref(), mode, "--out")?;
     let ctl = RunControl {
         metrics,
         checkpoint: ckpt.map(|c| std::sync::Arc::new(c.0)),
@@ -92,15 +102,20 @@ pub fn run(l: &ListenArgs) -> Result<()> {
             Some(s) => Some(Duration::from_secs_f64(parse_duration_s(s)?)),
             None => None,
         },
-        capture: l.capture.clone(),
-        handle_signals: true,
+        capture,
         every_wall: d.every.map(Duration::from_secs_f64),
         ..RunControl::default()
     };
-    let writer = RecordWriter::spawn(output_writer(d)?);
+    // Live: a consumer that falls behind gets the newest interim records (coalesced), and
+    // ingestion never waits for it.
+    let writer = RecordWriter::spawn_coalescing(out);
+    let signals = SignalWatch::start(
+        ctl.shutdown.clone(),
+        writer.queue().clone(),
+        ctl.progress.clone(),
+    );
     let result = allanscope::pipeline::run_frames(spec, &desc, analysis, writer.queue(), &ctl);
-    let written = writer.finish();
+    let written = finish_records(writer, &dest, &signals);
     result?;
-    written?;
-    Ok(())
+    written
 }

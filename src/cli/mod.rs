@@ -6,6 +6,7 @@
 mod aggregate;
 mod analyze;
 mod diagnose;
+mod export;
 mod listen;
 mod metrics;
 mod plot;
@@ -56,6 +57,9 @@ pub enum Command {
     /// Run-to-run statistics (the seed paper's table 2) from the final `fit` records of several
     /// runs, one JSON-lines file per run.
     Aggregate(AggregateArgs),
+    /// The fitted noise model in another tool's format (Kalibr, OpenVINS, VINS, KF-GINS), or
+    /// the curves as CSV or a Stable32-style table.
+    Export(export::ExportArgs),
 }
 
 #[derive(Debug, Args)]
@@ -168,9 +172,15 @@ pub struct DataArgs {
     /// Fit method: model (default), paper, slopes, loglog, or none.
     #[arg(long, default_value = "model")]
     pub fit: String,
-    /// JSON lines to this file instead of standard output.
+    /// JSON lines to this file instead of standard output. An existing non-empty file is
+    /// refused unless --force (or --resume, which appends); it is only replaced once the input
+    /// is open and the first record is written.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Overwrite a non-empty --out (and --capture): without it an earlier result is never
+    /// touched.
+    #[arg(long)]
+    pub force: bool,
     /// Datasheet limits (a TOML file with `[[limits]]` tables, as in a stand config), judged
     /// with the fits' intervals; verdicts in `summary`.
     #[arg(long)]
@@ -251,7 +261,72 @@ where
         Command::Plot(p) => plot::run(&p),
         Command::Report(r) => report::run(&r),
         Command::Aggregate(a) => aggregate::run(&a),
+        Command::Export(e) => export::run(&e),
     }
+}
+
+/// Where a command's JSON lines go: `out` (a result file, opened as [`OutputFile`] explains: an
+/// earlier result refused unless `mode` allows, replaced only at the first record) or standard
+/// output; and the destination's name for messages.
+pub(crate) fn records_output(
+    out: Option<&Path>,
+    mode: allanscope::sink::output::OutputMode,
+    what: &str,
+) -> Result<(Box<dyn std::io::Write + Send>, String)> {
+    use allanscope::sink::output::{OutputFile, OutputMode};
+    Ok(match out {
+        Some(p) => {
+            if mode == OutputMode::Append && p.is_file() {
+                // A resumed run adds whole lines after the last whole line written.
+                analyze::drop_torn_last_line(p)
+                    .with_context(|| format!("{what} {}", p.display()))?;
+            }
+            let f = OutputFile::open(p, mode, what).map_err(anyhow::Error::new)?;
+            (
+                Box::new(std::io::BufWriter::new(f)),
+                p.display().to_string(),
+            )
+        }
+        None => (
+            Box::new(std::io::BufWriter::new(std::io::stdout())),
+            "standard output".into(),
+        ),
+    })
+}
+
+/// The `--capture` file of a live run, opened as [`allanscope::sink::output::OutputFile`] explains.
+pub(crate) fn capture_output(
+    path: Option<&Path>,
+    mode: allanscope::sink::output::OutputMode,
+    what: &str,
+) -> Result<Option<allanscope::source::CaptureSlot>> {
+    let Some(p) = path else { return Ok(None) };
+    let f =
+        allanscope::sink::output::OutputFile::open(p, mode, what).map_err(anyhow::Error::new)?;
+    Ok(Some(allanscope::source::CaptureSlot::new(f)))
+}
+
+/// Ends a command's record writer: every record written (within the grace the signals allow)
+/// or an error naming the destination.
+pub(crate) fn finish_records(
+    writer: allanscope::pipeline::RecordWriter,
+    dest: &str,
+    signals: &allanscope::pipeline::SignalWatch,
+) -> Result<()> {
+    writer
+        .finish_within(|| signals.grace())
+        .with_context(|| format!("writing the JSON lines to {dest}"))?;
+    Ok(())
+}
+
+/// The error of a replay that was stopped before its input ended (exit status 1; CONTRACT.md:
+/// 0 only when the input was read to its end). The final records were written all the same.
+pub(crate) fn interrupted(input: &str, progress: &allanscope::source::Progress) -> anyhow::Error {
+    anyhow::anyhow!(
+        "{input}: stopped by {} before the end of the input; the final records cover the data \
+         read (the summary says `read_to_end: false`)",
+        progress.stopped_by().unwrap_or("a signal")
+    )
 }
 
 pub(crate) fn usage(msg: impl Into<String>) -> anyhow::Error {

@@ -1,7 +1,6 @@
 //! `run --config FILE`: the pipeline with source, channels, statistics, outputs and limits from
 //! a stand config (`allanscope::stand`; `config/stand.toml` is the example).
 
-use std::io::Write;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -14,7 +13,8 @@ use allanscope::analysis::{AnalysisOptions, InputKind};
 use allanscope::error::UsageError;
 use allanscope::frame::FrameDescriptor;
 use allanscope::model::fit::FitOptions;
-use allanscope::pipeline::{RecordWriter, RunControl};
+use allanscope::pipeline::{RecordWriter, RunControl, SignalWatch};
+use allanscope::sink::output::OutputMode;
 use allanscope::source::{Pace, SourceSpec};
 use allanscope::stand::StandConfig;
 
@@ -28,6 +28,10 @@ pub struct RunArgs {
     /// the outage as a gap; records are appended to the output.
     #[arg(long)]
     pub resume: bool,
+    /// Overwrite a non-empty output or capture file of the config: without it an earlier
+    /// result is never touched.
+    #[arg(long)]
+    pub force: bool,
     /// Test hook: abort once this many frames are decoded and a checkpoint is on disk.
     #[arg(long, hide = true, value_name = "N")]
     pub abort_after_frames: Option<u64>,
@@ -111,12 +115,17 @@ pub fn run(r: &RunArgs) -> Result<()> {
     };
     let metrics = server.as_ref().map(|s| s.tap(&spec.name(), &opts.limits));
     let analysis = super::start_analysis(&spec.name(), setups, opts, saved, ck_path.as_deref())?;
-    let out: Box<dyn Write + Send> = super::analyze::output_file(cfg.output.as_deref(), r.resume)?;
+    // Outputs last: every option has been accepted; they are only emptied once the source
+    // is open and delivers (allanscope::sink::output).
+    let mode = OutputMode::new(r.force, r.resume);
+    let capture = super::capture_output(cfg.capture.as_deref(), mode, "[run] capture")
+        .map_err(|e| e.context(format!("stand config {}", cfg.file.display())))?;
+    let (out, dest) = super::records_output(cfg.output.as_deref(), mode, "[output] path")
+        .map_err(|e| e.context(format!("stand config {}", cfg.file.display())))?;
     let ctl = RunControl {
         checkpoint: ckpt.map(|c| std::sync::Arc::new(c.0)),
         duration: cfg.duration_s.map(Duration::from_secs_f64),
-        capture: cfg.capture.clone(),
-        handle_signals: true,
+        capture,
         every_wall: if live {
             cfg.every_s.map(Duration::from_secs_f64)
         } else {
@@ -126,10 +135,24 @@ pub fn run(r: &RunArgs) -> Result<()> {
         metrics,
         ..RunControl::default()
     };
-    let writer = RecordWriter::spawn(out);
+    // Live: interim records coalesced for a slow consumer; a replay waits for it instead.
+    let writer = if live {
+        RecordWriter::spawn_coalescing(out)
+    } else {
+        RecordWriter::spawn(out)
+    };
+    let signals = SignalWatch::start(
+        ctl.shutdown.clone(),
+        writer.queue().clone(),
+        ctl.progress.clone(),
+    );
+    let name = spec.name();
     let result = allanscope::pipeline::run_frames(spec, &desc, analysis, writer.queue(), &ctl);
-    let written = writer.finish();
-    result?;
+    let written = super::finish_records(writer, &dest, &signals);
+    let outcome = result?;
     written?;
+    if !live && !outcome.read_to_end {
+        return Err(super::interrupted(&name, &ctl.progress));
+    }
     Ok(())
 }

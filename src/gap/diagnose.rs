@@ -46,6 +46,7 @@ use super::evidence::EvidenceSnapshot;
 use super::problem::{GapProblem, GlsFit, ModelSpec};
 use super::segments::{segment_tests, SegmentTest};
 use super::steps::{detect_steps, JumpFinding};
+use super::temperature::{enter_temperature, TEMPERATURE_Z};
 use super::thresholds::Thresholds;
 use super::warmup::fit_warmup;
 use crate::model::terms;
@@ -173,12 +174,28 @@ fn params_of(kind: EffectKind, shape: f64, fit: &GlsFit) -> EffectParams {
             count: 0,
             rms_size: 0.0,
         },
+        EffectKind::Temperature => EffectParams::Temperature {
+            coefficient: amp,
+            lo: f64::NAN,
+            hi: f64::NAN,
+        },
     }
 }
 
 /// Diagnoses one channel's evidence.
 pub fn diagnose(
     snap: &EvidenceSnapshot,
+    opts: &DiagnoseOptions,
+) -> Result<Diagnosis, DiagnoseError> {
+    diagnose_with_temperature(snap, None, opts)
+}
+
+/// Diagnoses one channel's evidence with, when the input has one, the unit's temperature
+/// gathered beside it (the same [`GapConfig`](super::evidence::GapConfig), fed `T tau0` per step:
+/// [`super::temperature`]).
+pub fn diagnose_with_temperature(
+    snap: &EvidenceSnapshot,
+    temperature: Option<&EvidenceSnapshot>,
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
     let prob = GapProblem::new(snap, opts)?;
@@ -200,27 +217,42 @@ pub fn diagnose(
         .filter(|k| !matches!(k, EffectKind::BiasJumps | EffectKind::Warmup))
         .collect();
 
-    // 1. Stationary effects on the curve, while the gap stays significant.
+    // 0. The temperature-driven bias, when the input has a temperature: its AVAR on the curve
+    // is a fixed offset, and the time-domain tests see the block means without it.
     let mut offset = vec![0.0; j];
+    let mut start = base.clone();
+    let mut block_means = snap.block_means.clone();
+    let mut temp_in = None;
+    if let Some(ts) = temperature.filter(|_| opts.candidates.contains(&EffectKind::Temperature)) {
+        if let Some((t, fit)) = enter_temperature(&prob, snap, ts, &base, TEMPERATURE_Z) {
+            offset = t.curve_offset();
+            block_means = t.remove_from(&snap.block_means);
+            effects.push(AddedEffect {
+                params: t.finding.params(),
+                gap_after: fit.gap(),
+                delta_chi2: base.chi2 - fit.chi2,
+            });
+            start = fit;
+            temp_in = Some(t);
+        }
+    }
+
+    // 1. Stationary effects on the curve, while the gap stays significant.
     // Flagged by `G`, or by the best candidate's likelihood ratio (add_stationary).
-    let (mut spec, mut cur) = add_stationary(
-        &prob,
-        &stationary,
-        &offset,
-        &mut effects,
-        base.clone(),
-        opts,
-        true,
-    );
+    let (mut spec, mut cur) =
+        add_stationary(&prob, &stationary, &offset, &mut effects, start, opts, true);
 
     // 2. A warm-up, in time: the block means against the model found so far.
     let mut warm_curve: Option<Vec<f64>> = None;
     // The exact AVAR on this record of each effect found in time, for the bookkeeping below.
     let mut time_offsets: Vec<(EffectKind, Vec<f64>)> = Vec::new();
+    if let Some(t) = &temp_in {
+        time_offsets.push((EffectKind::Temperature, t.curve_offset()));
+    }
     if opts.candidates.contains(&EffectKind::Warmup) {
         let c5: [f64; 5] = std::array::from_fn(|i| cur.coef.get(i).copied().unwrap_or(0.0));
         let stat_params: Vec<EffectParams> = effects.iter().map(|e| e.params).collect();
-        let warm = fit_warmup(&snap.block_means, block_s, t_run, &c5, &stat_params);
+        let warm = fit_warmup(&block_means, block_s, t_run, &c5, &stat_params);
         if let Some(w) = warm.filter(|w| w.w_stat > th.warmup_w || w.log_bf > th.warmup_bf) {
             // Its AVAR, exact for the estimator on this record, enters as a fixed offset.
             let col = effect_column(
@@ -272,6 +304,26 @@ pub fn diagnose(
                 spec = spec_from(&prob, &effects, &offset);
             }
             warm_curve = Some(w.block_curve(snap.block_means.len(), block_s));
+            // The temperature and the warm-up fitted jointly: the coefficient once more, with
+            // the warm-up's block shape as a column beside it.
+            if let Some(t) = temp_in.as_mut() {
+                let shape = w.block_curve(snap.block_means.len(), block_s);
+                let c5: [f64; 5] = std::array::from_fn(|i| cur.coef.get(i).copied().unwrap_or(0.0));
+                t.refit(&snap.block_means, block_s, &c5, &stat_params, &[shape]);
+                block_means = t.remove_from(&snap.block_means);
+                if let Some(e) = effects
+                    .iter_mut()
+                    .find(|e| e.params.kind() == EffectKind::Temperature)
+                {
+                    e.params = t.finding.params();
+                }
+                if let Some(o) = time_offsets
+                    .iter_mut()
+                    .find(|(k, _)| *k == EffectKind::Temperature)
+                {
+                    o.1 = t.curve_offset();
+                }
+            }
         }
     }
     let _ = &spec;
@@ -279,13 +331,8 @@ pub fn diagnose(
     // 3. Bias jumps, in time (after the warm-up is taken out of the block means).
     let jumps = if opts.candidates.contains(&EffectKind::BiasJumps) {
         let resid: Vec<f64> = match &warm_curve {
-            Some(wc) => snap
-                .block_means
-                .iter()
-                .zip(wc)
-                .map(|(b, w)| b - w)
-                .collect(),
-            None => snap.block_means.clone(),
+            Some(wc) => block_means.iter().zip(wc).map(|(b, w)| b - w).collect(),
+            None => block_means.clone(),
         };
         let c5: [f64; 5] = std::array::from_fn(|i| cur.coef.get(i).copied().unwrap_or(0.0));
         let stat_params: Vec<EffectParams> = effects

@@ -15,15 +15,18 @@ pub enum EffectKind {
     OutputFilter,
     Warmup,
     BiasJumps,
+    /// A bias following the unit's temperature (only when the input carries one).
+    Temperature,
 }
 
 impl EffectKind {
-    pub const ALL: [EffectKind; 5] = [
+    pub const ALL: [EffectKind; 6] = [
         EffectKind::GaussMarkov,
         EffectKind::Sinusoid,
         EffectKind::OutputFilter,
         EffectKind::Warmup,
         EffectKind::BiasJumps,
+        EffectKind::Temperature,
     ];
 
     /// Stationary effects are fitted on the curve as columns; warm-ups and jumps are found in
@@ -43,6 +46,7 @@ impl EffectKind {
             EffectKind::OutputFilter => "output_filter",
             EffectKind::Warmup => "warmup",
             EffectKind::BiasJumps => "bias_jumps",
+            EffectKind::Temperature => "temperature",
         }
     }
 
@@ -50,7 +54,7 @@ impl EffectKind {
     /// filter only its time constant, since it reshapes the N term).
     pub fn n_params(self) -> usize {
         match self {
-            EffectKind::OutputFilter => 1,
+            EffectKind::OutputFilter | EffectKind::Temperature => 1,
             _ => 2,
         }
     }
@@ -78,6 +82,12 @@ pub enum EffectParams {
         count: u64,
         rms_size: f64,
     },
+    /// u/s per degC, with its 95% interval.
+    Temperature {
+        coefficient: f64,
+        lo: f64,
+        hi: f64,
+    },
 }
 
 impl EffectParams {
@@ -88,6 +98,7 @@ impl EffectParams {
             EffectParams::OutputFilter { .. } => EffectKind::OutputFilter,
             EffectParams::Warmup { .. } => EffectKind::Warmup,
             EffectParams::BiasJumps { .. } => EffectKind::BiasJumps,
+            EffectParams::Temperature { .. } => EffectKind::Temperature,
         }
     }
 
@@ -112,10 +123,15 @@ impl EffectParams {
             EffectParams::BiasJumps { count, rms_size } => {
                 json!({"count": count, "rms_size": rms_size})
             }
+            EffectParams::Temperature {
+                coefficient,
+                lo,
+                hi,
+            } => json!({"coefficient": coefficient, "lo": lo, "hi": hi}),
         }
     }
 
-    /// The shape parameter (s for times, Hz for the sinusoid), NaN for jumps.
+    /// The shape parameter (s for times, Hz for the sinusoid), NaN for jumps and temperature.
     pub fn shape(&self) -> f64 {
         match *self {
             EffectParams::GaussMarkov { tau_c_s, .. } => tau_c_s,
@@ -124,11 +140,12 @@ impl EffectParams {
             EffectParams::Warmup {
                 time_constant_s, ..
             } => time_constant_s,
-            EffectParams::BiasJumps { .. } => f64::NAN,
+            EffectParams::BiasJumps { .. } | EffectParams::Temperature { .. } => f64::NAN,
         }
     }
 
-    /// Its amplitude (u/s; NaN for the filter, the rms size for jumps).
+    /// Its amplitude (u/s; NaN for the filter, the rms size for jumps, u/s per degC for the
+    /// temperature coefficient).
     pub fn amplitude(&self) -> f64 {
         match *self {
             EffectParams::GaussMarkov { sigma, .. } => sigma,
@@ -136,6 +153,7 @@ impl EffectParams {
             EffectParams::OutputFilter { .. } => f64::NAN,
             EffectParams::Warmup { amplitude, .. } => amplitude,
             EffectParams::BiasJumps { rms_size, .. } => rms_size,
+            EffectParams::Temperature { coefficient, .. } => coefficient,
         }
     }
 }
@@ -183,8 +201,9 @@ pub fn effect_column(
                 }
                 EffectKind::Warmup => terms::warmup_avar(1.0, shape, tau0_s, m, n_inc),
                 // Bias jumps have the second-order law of a rate random walk (terms.rs): the
-                // K column already holds them, so they add no column.
-                EffectKind::BiasJumps => 0.0,
+                // K column already holds them, so they add no column. The temperature's AVAR is
+                // the recorded temperature's own (gap::temperature), a fixed offset.
+                EffectKind::BiasJumps | EffectKind::Temperature => 0.0,
             }
         })
         .collect()

@@ -30,6 +30,7 @@ pub mod problem;
 pub mod record;
 pub mod segments;
 pub mod steps;
+pub mod temperature;
 pub mod thresholds;
 pub mod unit_model;
 pub mod warmup;

@@ -343,7 +343,7 @@ impl GapProblem {
                 hi: t_run / 3.0,
                 per_decade: 12.0,
             },
-            EffectKind::BiasJumps => Grid {
+            EffectKind::BiasJumps | EffectKind::Temperature => Grid {
                 lo: 1.0,
                 hi: 1.0,
                 per_decade: 1.0,

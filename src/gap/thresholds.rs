@@ -42,7 +42,7 @@ impl Thresholds {
             EffectKind::GaussMarkov => self.lr_crit[0],
             EffectKind::Sinusoid => self.lr_crit[1],
             EffectKind::OutputFilter => self.lr_crit[2],
-            EffectKind::Warmup | EffectKind::BiasJumps => f64::INFINITY,
+            EffectKind::Warmup | EffectKind::BiasJumps | EffectKind::Temperature => f64::INFINITY,
         }
     }
 }

@@ -95,6 +95,9 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
                 })
             }
             EffectParams::BiasJumps { .. } => {}
+            // The coefficient comes with the facts (it needs the recorded temperature's
+            // profile, which the record does not hold).
+            EffectParams::Temperature { .. } => {}
         }
     }
     ch

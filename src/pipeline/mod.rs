@@ -23,6 +23,7 @@
 
 pub mod decode;
 pub mod reorder;
+pub mod signals;
 pub mod writer;
 
 use std::io::BufRead;
@@ -41,9 +42,10 @@ use crate::input::text::{TextReader, BATCH_ROWS};
 use crate::input::Chunk;
 use crate::sink::metrics::MetricsTap;
 use crate::sink::records::{HealthRecord, Record};
-use crate::source::{Capture, Progress, SourceContext, SourceEvent, SourceSpec};
+use crate::source::{Capture, CaptureSlot, Progress, SourceContext, SourceEvent, SourceSpec};
 use decode::DecodeStage;
-pub use writer::{RecordQueue, RecordWriter, WriterStats, RECORD_QUEUE};
+pub use signals::SignalWatch;
+pub use writer::{Delivery, RecordQueue, RecordWriter, WriterStats, RECORD_QUEUE};
 
 /// Capacity of the channel from the decode (or text reader) thread to the analysis, in
 /// chunks. A replayed chunk is one 64 KiB read (about 1560 siu8 frames, 300 KB decoded), so
@@ -65,8 +67,9 @@ pub struct RunControl {
     pub shutdown: CancellationToken,
     /// Stop after this much wall time.
     pub duration: Option<Duration>,
-    /// Also write every received byte to this file.
-    pub capture: Option<PathBuf>,
+    /// Also write every received byte to this file (opened by the command, see
+    /// [`crate::sink::output`]).
+    pub capture: Option<CaptureSlot>,
     /// Counters the caller may watch.
     pub progress: Arc<Progress>,
     /// Stop on SIGINT and SIGTERM (the binary); off in tests that run several pipelines.
@@ -104,6 +107,9 @@ impl Default for RunControl {
 pub struct RunOutcome {
     pub analysis: RunAnalysis,
     pub health: Option<Health>,
+    /// The input was read to its end (false for a replay stopped by SIGINT, and for live
+    /// sources, which have no end).
+    pub read_to_end: bool,
 }
 
 /// Runs a source of frames through decoding and analysis until the input ends or shutdown;
@@ -115,6 +121,7 @@ pub fn run_frames(
     queue: &RecordQueue,
     ctl: &RunControl,
 ) -> Result<RunOutcome> {
+    ctl.progress.input_ended.store(false, Ordering::SeqCst);
     let (src_tx, mut src_rx) = tokio::sync::mpsc::channel(spec.queue_capacity());
     // Chunks come back from the analysis to be cleared and reused here: the decoded frames are
     // freed by the thread that allocated them, and the chunk vectors are not reallocated
@@ -235,10 +242,11 @@ pub fn run_frames(
     let source_result = drive(ctl, {
         let ctl = ctl.clone();
         async move {
-            let capture = match &ctl.capture {
-                Some(p) => Some(Capture::create(p.clone()).await?),
-                None => None,
-            };
+            let capture = ctl
+                .capture
+                .as_ref()
+                .and_then(CaptureSlot::take)
+                .map(|f| Capture::new(f, ctl.progress.capture.clone()));
             let ctx = SourceContext {
                 start_offset,
                 tx: src_tx,
@@ -282,13 +290,24 @@ pub fn run_frames(
             .extra
             .insert("outage_missing".into(), stage.outage.missing.into());
     }
+    if ctl.capture.is_some() {
+        let c = &ctl.progress.capture;
+        record
+            .extra
+            .insert("capture_bytes".into(), c.bytes().into());
+        if let Some(e) = c.error() {
+            record.extra.insert("capture_error".into(), e.into());
+        }
+    }
     if let Some(m) = &ctl.metrics {
         m.health(&health);
     }
-    finish_records(&mut analysis, Some(record), queue, ctl.metrics.as_ref());
+    let read_to_end = ctl.progress.input_ended();
+    finish_records(&mut analysis, Some(record), queue, ctl);
     Ok(RunOutcome {
         analysis,
         health: Some(health),
+        read_to_end,
     })
 }
 
@@ -320,6 +339,8 @@ pub fn run_text<R: BufRead + Send + 'static>(
         .map(|c| (c.sender(), c.in_flight.clone(), c.written.clone()));
     let abort_after = plan.as_ref().and_then(|p| p.abort_after_frames);
     let shutdown = ctl.shutdown.clone();
+    let progress = ctl.progress.clone();
+    progress.input_ended.store(false, Ordering::SeqCst);
     let read = move || -> Result<crate::input::text::TextPosition> {
         let mut reader = reader;
         let started = Instant::now();
@@ -329,7 +350,11 @@ pub fn run_text<R: BufRead + Send + 'static>(
             let n = reader
                 .read_rows(&mut values, batch)
                 .with_context(|| format!("reading {}", path.display()))?;
-            if n == 0 || !tx.send(Chunk::Rows { values, width }) {
+            if n == 0 {
+                progress.input_ended.store(true, Ordering::SeqCst);
+                break;
+            }
+            if !tx.send(Chunk::Rows { values, width }) {
                 break;
             }
             if let (Some(s), Some((ptx, in_flight, _))) = (&mut schedule, &ck) {
@@ -374,10 +399,12 @@ pub fn run_text<R: BufRead + Send + 'static>(
     } else {
         analysis.add_bad_rows(position.bad_rows);
     }
-    finish_records(&mut analysis, None, queue, ctl.metrics.as_ref());
+    let read_to_end = ctl.progress.input_ended();
+    finish_records(&mut analysis, None, queue, ctl);
     Ok(RunOutcome {
         analysis,
         health: None,
+        read_to_end,
     })
 }
 
@@ -563,6 +590,7 @@ where
         let token = ctl.shutdown.clone();
         let duration = ctl.duration;
         let signals = ctl.handle_signals;
+        let progress = ctl.progress.clone();
         let watcher = tokio::spawn(async move {
             let sleep = async {
                 match duration {
@@ -571,8 +599,14 @@ where
                 }
             };
             tokio::select! {
-                _ = sleep => tracing::info!("--duration reached; finishing"),
-                s = wait_for_signal(signals) => tracing::info!("{s}; finishing"),
+                _ = sleep => {
+                    tracing::info!("--duration reached; finishing");
+                    progress.set_stopped_by("--duration");
+                }
+                s = wait_for_signal(signals) => {
+                    tracing::info!("{s}; finishing");
+                    progress.set_stopped_by(s);
+                }
                 _ = token.cancelled() => {}
             }
             token.cancel();
@@ -604,13 +638,16 @@ async fn wait_for_signal(enabled: bool) -> &'static str {
     }
 }
 
-/// The final curve and fit records, the health record and the summary, never coalesced.
+/// The final curve and fit records, the health record and the summary, never coalesced. The
+/// summary says whether the input was read to its end, what stopped the run otherwise, and
+/// whether the capture file failed.
 fn finish_records(
     analysis: &mut RunAnalysis,
     health: Option<HealthRecord>,
     queue: &RecordQueue,
-    metrics: Option<&MetricsTap>,
+    ctl: &RunControl,
 ) {
+    let metrics = ctl.metrics.as_ref();
     for r in analysis.records(true) {
         if let Some(m) = metrics {
             m.observe(&r);
@@ -620,7 +657,17 @@ fn finish_records(
     if let Some(h) = health {
         queue.push_final(Record::Health(h));
     }
-    queue.push_final(Record::Summary(analysis.summary()));
+    let mut summary = analysis.summary();
+    let p = &ctl.progress;
+    summary.read_to_end = p.input_ended();
+    summary.stopped_by = (!summary.read_to_end)
+        .then(|| p.stopped_by())
+        .flatten()
+        .map(String::from);
+    if ctl.capture.is_some() {
+        summary.capture_error = p.capture.error();
+    }
+    queue.push_final(Record::Summary(summary));
 }
 
 /// The `health` record: the CONTRACT.md fields, then the decoder's extra detail.

@@ -1,26 +1,37 @@
-//! The record writer: JSON lines written on a thread of their own, behind a bounded queue that
-//! never blocks the analysis.
+//! The record writer: JSON lines written on a thread of their own, behind a bounded queue.
 //!
-//! A slow or stalled consumer of the JSON lines (a full pipe, a stuck monitor) must not stall
-//! ingestion: frames keep being decoded and accumulated. The queue holds at most
-//! [`RECORD_QUEUE`] records; when it is full, an *interim* record replaces the queued interim
-//! records of the same key (record type, channel, statistic, run): only the newest interim
-//! curve of each channel and statistic survives, which is all a monitor would look at. Final
-//! records (and health and summary records) are never dropped: they are few (one set per run),
-//! so the queue's size stays bounded by `RECORD_QUEUE` plus the number of keys plus the final
-//! records.
+//! What a full queue does depends on the source ([`Delivery`]):
+//!
+//! - **Live** (serial, UDP: [`Delivery::Coalesce`]). A slow or stalled consumer of the JSON lines
+//!   (a full pipe, a stuck monitor) must not stall ingestion: frames keep being decoded and
+//!   accumulated. The queue holds at most [`RECORD_QUEUE`] records; when it is full, an *interim*
+//!   record replaces the queued interim records of the same key (record type, channel,
+//!   statistic, run): only the newest interim curve of each channel and statistic survives,
+//!   which is all a monitor would look at.
+//! - **Replay** (files, standard input: [`Delivery::Backpressure`]). A replay has no deadline:
+//!   the analysis waits for room instead, so every interim record is written and the output of
+//!   a replay never depends on how fast it was read. Once the run is being stopped (SIGINT,
+//!   [`RecordQueue::release`]) it coalesces like a live run, so a consumer that stopped reading
+//!   cannot hold the stop up.
+//!
+//! Final records (and health and summary records) are never dropped: they are few (one set per
+//! run), so the queue's size stays bounded by `RECORD_QUEUE` plus the number of keys plus the
+//! final records.
 
 use std::collections::VecDeque;
 use std::io::Write;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
 
 use crate::allan::Stat;
 use crate::sink::json::JsonLines;
 use crate::sink::records::Record;
 
-/// Records the queue holds before interim records start to be coalesced: a few full sets of
-/// interim records (8 channels x 3 statistics + 8 fits = 32 per set).
+/// Records the queue holds before interim records start to be coalesced (live) or the analysis
+/// waits (replay): a few full sets of interim records (8 channels x 3 statistics + 8 fits = 32
+/// per set).
 pub const RECORD_QUEUE: usize = 256;
 
 /// What the writer thread did.
@@ -32,6 +43,17 @@ pub struct WriterStats {
     pub coalesced: u64,
 }
 
+/// What a full queue does to the next interim record.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Delivery {
+    /// The analysis waits until there is room (a replay: no deadline, so every interim record
+    /// is written and the output does not depend on how fast the consumer reads).
+    Backpressure,
+    /// Older interim records of the same key are replaced (a live source: ingestion must never
+    /// wait for the consumer).
+    Coalesce,
+}
+
 #[derive(Default)]
 struct QueueState {
     items: VecDeque<(Record, bool)>,
@@ -39,13 +61,26 @@ struct QueueState {
     coalesced: u64,
     /// The writer failed (e.g. the consumer closed the pipe); records are discarded from then on.
     failed: bool,
+    /// Back-pressure lifted (the run is being stopped): a full queue coalesces from now on.
+    released: bool,
+}
+
+struct Shared {
+    state: Mutex<QueueState>,
+    /// Signalled when records arrive or the queue closes.
+    items: Condvar,
+    /// Signalled when the writer has taken records (room in the queue) or failed.
+    room: Condvar,
+    /// Records written so far (the writer's progress, watched by [`RecordWriter::finish_within`]).
+    written: AtomicU64,
 }
 
 /// The sending side of the record queue; cheap to clone.
 #[derive(Clone)]
 pub struct RecordQueue {
-    inner: Arc<(Mutex<QueueState>, Condvar)>,
+    inner: Arc<Shared>,
     capacity: usize,
+    delivery: Delivery,
 }
 
 /// The coalescing key of an interim record: type, channel, statistic, run.
@@ -60,13 +95,24 @@ fn key(r: &Record) -> Option<(&'static str, &str, Option<Stat>, Option<usize>)> 
 impl RecordQueue {
     fn lock(&self) -> MutexGuard<'_, QueueState> {
         // A poisoned lock means the writer panicked; the state is still usable.
-        self.inner.0.lock().unwrap_or_else(|p| p.into_inner())
+        self.inner.state.lock().unwrap_or_else(|p| p.into_inner())
     }
 
-    /// Queues an interim record; never blocks. When the queue is full, older interim records
-    /// of the same key are removed first.
+    /// Queues an interim record. With [`Delivery::Coalesce`] it never blocks: when the queue is
+    /// full, older interim records of the same key are removed first. With
+    /// [`Delivery::Backpressure`] it waits for room, until [`RecordQueue::release`].
     pub fn push_interim(&self, rec: Record) {
         let mut st = self.lock();
+        if self.delivery == Delivery::Backpressure {
+            while st.items.len() >= self.capacity && !st.failed && !st.released && !st.closed {
+                st = self
+                    .inner
+                    .room
+                    .wait_timeout(st, Duration::from_millis(100))
+                    .unwrap_or_else(|p| p.into_inner())
+                    .0;
+            }
+        }
         if st.failed {
             return;
         }
@@ -80,7 +126,7 @@ impl RecordQueue {
         }
         st.items.push_back((rec, false));
         drop(st);
-        self.inner.1.notify_one();
+        self.inner.items.notify_one();
     }
 
     /// Queues a final record (final curves and fits, health, summary, aggregate); never
@@ -92,7 +138,14 @@ impl RecordQueue {
         }
         st.items.push_back((rec, true));
         drop(st);
-        self.inner.1.notify_one();
+        self.inner.items.notify_one();
+    }
+
+    /// Lifts back-pressure for good: a run being stopped (SIGINT) must not wait for a consumer
+    /// that may never read again. Full queues coalesce from then on.
+    pub fn release(&self) {
+        self.lock().released = true;
+        self.inner.room.notify_all();
     }
 
     /// Records waiting to be written.
@@ -103,6 +156,11 @@ impl RecordQueue {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
+
+    /// How a full queue treats interim records.
+    pub fn delivery(&self) -> Delivery {
+        self.delivery
+    }
 }
 
 /// The writer thread and its queue.
@@ -112,15 +170,31 @@ pub struct RecordWriter {
 }
 
 impl RecordWriter {
-    /// Starts a writer thread over `out` with the default capacity.
+    /// Starts a writer thread over `out` with the default capacity and back-pressure (for
+    /// replays and anything without a deadline).
     pub fn spawn(out: Box<dyn Write + Send>) -> RecordWriter {
-        Self::with_capacity(out, RECORD_QUEUE)
+        Self::with_capacity(out, RECORD_QUEUE, Delivery::Backpressure)
     }
 
-    pub fn with_capacity(out: Box<dyn Write + Send>, capacity: usize) -> RecordWriter {
+    /// Starts a writer thread whose full queue coalesces interim records (live sources).
+    pub fn spawn_coalescing(out: Box<dyn Write + Send>) -> RecordWriter {
+        Self::with_capacity(out, RECORD_QUEUE, Delivery::Coalesce)
+    }
+
+    pub fn with_capacity(
+        out: Box<dyn Write + Send>,
+        capacity: usize,
+        delivery: Delivery,
+    ) -> RecordWriter {
         let queue = RecordQueue {
-            inner: Arc::new((Mutex::new(QueueState::default()), Condvar::new())),
+            inner: Arc::new(Shared {
+                state: Mutex::new(QueueState::default()),
+                items: Condvar::new(),
+                room: Condvar::new(),
+                written: AtomicU64::new(0),
+            }),
             capacity: capacity.max(1),
+            delivery,
         };
         let q = queue.clone();
         let thread = std::thread::Builder::new()
@@ -136,11 +210,42 @@ impl RecordWriter {
 
     /// Closes the queue, waits until every queued record is written, and reports.
     pub fn finish(self) -> std::io::Result<WriterStats> {
+        self.finish_within(|| None)
+    }
+
+    /// [`RecordWriter::finish`], but gives up once the writer has written nothing for as long
+    /// as `grace()` allows (`None`: no limit; asked again as time passes, so a signal that
+    /// arrives while waiting counts): a consumer that stopped reading cannot hold up the end of
+    /// a stopped run. The error says how many records were not written.
+    pub fn finish_within(
+        self,
+        grace: impl Fn() -> Option<Duration>,
+    ) -> std::io::Result<WriterStats> {
         {
             let mut st = self.queue.lock();
             st.closed = true;
         }
-        self.queue.inner.1.notify_all();
+        self.queue.inner.items.notify_all();
+        self.queue.inner.room.notify_all();
+        let mut seen = self.queue.inner.written.load(Ordering::SeqCst);
+        let mut since = Instant::now();
+        while !self.thread.is_finished() {
+            std::thread::sleep(Duration::from_millis(10));
+            let now = self.queue.inner.written.load(Ordering::SeqCst);
+            if now != seen {
+                (seen, since) = (now, Instant::now());
+            } else if grace().is_some_and(|g| since.elapsed() >= g) {
+                let mut st = self.queue.lock();
+                let left = st.items.len();
+                st.failed = true;
+                st.items.clear();
+                return Err(std::io::Error::other(format!(
+                    "the output is not being read: gave up after {:.1} s without progress, {left} \
+                     records queued and the batch being written lost ({seen} written)",
+                    since.elapsed().as_secs_f64()
+                )));
+            }
+        }
         let written = self
             .thread
             .join()
@@ -157,17 +262,19 @@ fn write_loop(q: RecordQueue, mut sink: JsonLines) -> std::io::Result<u64> {
         {
             let mut st = q.lock();
             while st.items.is_empty() && !st.closed {
-                st = q.inner.1.wait(st).unwrap_or_else(|p| p.into_inner());
+                st = q.inner.items.wait(st).unwrap_or_else(|p| p.into_inner());
             }
             if st.items.is_empty() && st.closed {
                 break;
             }
             batch.extend(st.items.drain(..));
         }
+        q.inner.room.notify_all();
         let res = (|| {
             for (r, _) in batch.drain(..) {
                 sink.write(&r)?;
                 written += 1;
+                q.inner.written.store(written, Ordering::SeqCst);
             }
             sink.flush()
         })();
@@ -175,6 +282,8 @@ fn write_loop(q: RecordQueue, mut sink: JsonLines) -> std::io::Result<u64> {
             let mut st = q.lock();
             st.failed = true;
             st.items.clear();
+            drop(st);
+            q.inner.room.notify_all();
             return Err(e);
         }
     }

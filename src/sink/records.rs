@@ -143,6 +143,16 @@ pub struct SummaryRecord {
     pub limits: Vec<serde_json::Value>,
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub pass: Option<bool>,
+    /// True when the input was read to its end (CONTRACT.md); false for a replay stopped early
+    /// (SIGINT) and for a live source, which has no end (`stopped_by` says what ended it).
+    #[serde(default)]
+    pub read_to_end: bool,
+    /// What stopped the run before its input ended: `SIGINT`, `SIGTERM` or `--duration`.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub stopped_by: Option<String>,
+    /// The `--capture` file's write error, when the capture stopped early (the analysis went on).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub capture_error: Option<String>,
 }
 
 /// `aggregate`: run-to-run statistics of one coefficient of one channel (the seed paper's

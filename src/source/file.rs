@@ -50,6 +50,9 @@ pub async fn read_stream<R: AsyncRead + Unpin>(
             n = r.read_buf(&mut buf) => n.context("reading the input")?,
         };
         if n == 0 {
+            ctx.progress
+                .input_ended
+                .store(true, std::sync::atomic::Ordering::SeqCst);
             break;
         }
         total += n as u64;

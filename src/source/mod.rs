@@ -19,7 +19,7 @@ pub mod udp;
 use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
@@ -27,6 +27,8 @@ use bytes::Bytes;
 use tokio::io::AsyncWriteExt;
 use tokio::sync::mpsc;
 use tokio_util::sync::CancellationToken;
+
+use crate::sink::output::OutputFile;
 
 /// How fast a file is replayed.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -111,6 +113,12 @@ pub struct Progress {
     pub frames: AtomicU64,
     /// Serial: times the port was reopened.
     pub reconnects: AtomicU64,
+    /// The input reached its end (a file or standard input read to its last byte).
+    pub input_ended: std::sync::atomic::AtomicBool,
+    /// Why the run was stopped before its input ended: `SIGINT`, `SIGTERM`, `--duration`.
+    pub stopped_by: Mutex<Option<&'static str>>,
+    /// The `--capture` file's bytes and error.
+    pub capture: Arc<CaptureStatus>,
 }
 
 impl Progress {
@@ -119,6 +127,21 @@ impl Progress {
     }
     pub fn bytes(&self) -> u64 {
         self.bytes.load(Ordering::Relaxed)
+    }
+
+    /// True once the input has been read to its end.
+    pub fn input_ended(&self) -> bool {
+        self.input_ended.load(Ordering::SeqCst)
+    }
+
+    /// Records why the run is being stopped (the first reason given wins).
+    pub fn set_stopped_by(&self, why: &'static str) {
+        let mut s = self.stopped_by.lock().unwrap_or_else(|p| p.into_inner());
+        s.get_or_insert(why);
+    }
+
+    pub fn stopped_by(&self) -> Option<&'static str> {
+        *self.stopped_by.lock().unwrap_or_else(|p| p.into_inner())
     }
 }
 
@@ -145,42 +168,116 @@ impl SourceContext {
                 .bytes
                 .fetch_add(b.len() as u64, Ordering::Relaxed);
             if let Some(c) = &mut self.capture {
-                c.write(b).await?;
+                c.write(b).await;
             }
         }
         Ok(self.tx.send(ev).await.is_ok())
     }
 }
 
-/// `--capture FILE`: every received byte, in arrival order.
+/// A capture file the command has opened (refused if it holds an earlier capture, see
+/// [`crate::sink::output`]), handed to the source task, which takes it when the run starts.
+#[derive(Debug, Clone)]
+pub struct CaptureSlot(Arc<Mutex<Option<OutputFile>>>);
+
+impl CaptureSlot {
+    pub fn new(file: OutputFile) -> CaptureSlot {
+        CaptureSlot(Arc::new(Mutex::new(Some(file))))
+    }
+
+    /// The file, once (later calls: `None`).
+    pub fn take(&self) -> Option<OutputFile> {
+        self.0.lock().unwrap_or_else(|p| p.into_inner()).take()
+    }
+}
+
+/// What became of the capture file (reported in the `health` and `summary` records).
+#[derive(Debug, Default)]
+pub struct CaptureStatus {
+    /// Bytes written to the capture file.
+    pub bytes: AtomicU64,
+    /// The first write error; the capture stopped there, the run went on.
+    pub error: Mutex<Option<String>>,
+}
+
+impl CaptureStatus {
+    pub fn bytes(&self) -> u64 {
+        self.bytes.load(Ordering::Relaxed)
+    }
+
+    pub fn error(&self) -> Option<String> {
+        self.error.lock().unwrap_or_else(|p| p.into_inner()).clone()
+    }
+}
+
+/// `--capture FILE`: every received byte, in arrival order. A write error (a full disk, a
+/// removed drive) stops the capture, not the run: the analysis goes on, the error is logged once
+/// and reported in [`CaptureStatus`].
 pub struct Capture {
     path: PathBuf,
-    out: tokio::io::BufWriter<tokio::fs::File>,
+    /// The file until the first byte arrives (an earlier capture is only replaced then).
+    pending: Option<OutputFile>,
+    out: Option<tokio::io::BufWriter<tokio::fs::File>>,
+    status: Arc<CaptureStatus>,
+    failed: bool,
 }
 
 impl Capture {
-    pub async fn create(path: PathBuf) -> Result<Capture> {
-        let f = tokio::fs::File::create(&path)
-            .await
-            .with_context(|| format!("cannot create capture file {}", path.display()))?;
-        Ok(Capture {
-            out: tokio::io::BufWriter::with_capacity(1 << 16, f),
-            path,
-        })
+    pub fn new(file: OutputFile, status: Arc<CaptureStatus>) -> Capture {
+        Capture {
+            path: file.path().to_path_buf(),
+            pending: Some(file),
+            out: None,
+            status,
+            failed: false,
+        }
     }
 
-    async fn write(&mut self, b: &[u8]) -> Result<()> {
-        self.out
-            .write_all(b)
-            .await
-            .with_context(|| format!("writing capture file {}", self.path.display()))
+    fn fail(&mut self, e: &std::io::Error) {
+        let msg = format!(
+            "capture file {}: {e}; the capture stopped after {} bytes, the analysis goes on",
+            self.path.display(),
+            self.status.bytes()
+        );
+        tracing::error!("{msg}");
+        *self.status.error.lock().unwrap_or_else(|p| p.into_inner()) = Some(msg);
+        self.failed = true;
+        self.out = None;
     }
 
-    pub async fn finish(&mut self) -> Result<()> {
-        self.out
-            .flush()
-            .await
-            .with_context(|| format!("writing capture file {}", self.path.display()))
+    async fn write(&mut self, b: &[u8]) {
+        if self.failed || b.is_empty() {
+            return;
+        }
+        if let Some(f) = self.pending.take() {
+            match f.into_started() {
+                Ok(f) => {
+                    self.out = Some(tokio::io::BufWriter::with_capacity(
+                        1 << 16,
+                        tokio::fs::File::from_std(f),
+                    ))
+                }
+                Err(e) => return self.fail(&e),
+            }
+        }
+        let Some(out) = &mut self.out else { return };
+        match out.write_all(b).await {
+            // Counted when handed to the buffer; a later flush error is reported all the same.
+            Ok(()) => {
+                self.status
+                    .bytes
+                    .fetch_add(b.len() as u64, Ordering::Relaxed);
+            }
+            Err(e) => self.fail(&e),
+        }
+    }
+
+    pub async fn finish(&mut self) {
+        if let Some(out) = &mut self.out {
+            if let Err(e) = out.flush().await {
+                self.fail(&e);
+            }
+        }
     }
 }
 
@@ -227,7 +324,7 @@ pub async fn run(spec: SourceSpec, mut ctx: SourceContext, show_progress: bool) 
         SourceSpec::Udp { bind } => udp::run(bind, &mut ctx).await,
     };
     if let Some(c) = &mut ctx.capture {
-        c.finish().await?;
+        c.finish().await;
     }
     res
 }

@@ -111,12 +111,15 @@ pub fn free_udp_port() -> u16 {
     s.local_addr().expect("addr").port()
 }
 
-/// The summary fields that do not depend on the wall clock or the input's name.
+/// The summary fields that do not depend on the wall clock, the input's name or its kind (a
+/// live source is never "read to its end").
 pub fn summary_core(s: &serde_json::Value) -> serde_json::Value {
     let mut s = s.clone();
     if let Some(o) = s.as_object_mut() {
         o.remove("elapsed_s");
         o.remove("input");
+        o.remove("read_to_end");
+        o.remove("stopped_by");
     }
     s
 }

@@ -1,5 +1,5 @@
 //! The sim-to-real gap diagnosis (src/gap/): simulated hidden effects, mixture statistics,
-//! oracle bounds and a real recording.
+//! oracle bounds, a real recording, and the temperature effect.
 //! One test binary per stage; each topic is a module of it.
 
 mod diagnosis;
@@ -7,3 +7,4 @@ mod families;
 mod mixture;
 mod oracle;
 mod reference;
+mod temperature;

@@ -1,5 +1,7 @@
-//! A stalled consumer of the JSON lines never stalls ingestion.
+//! A stalled consumer of the JSON lines never stalls the ingestion of a live source.
 //!
+//! The writer coalesces interim records as it does for live sources (`spawn_coalescing`; a
+//! replay's writer applies back-pressure instead, tested in `tests/cli/stop.rs`).
 //! The record writer's output blocks on its first write until the test releases it. The
 //! 5-minute siu8 fixture is replayed with interim records every 5 data-seconds (60 sets of 32
 //! records, 1,920 in all, against a queue of 256): ingestion must finish while the writer is
@@ -57,7 +59,7 @@ fn stalled_writer_does_not_stall_ingestion() {
     let gate = Arc::new((Mutex::new(false), std::sync::Condvar::new()));
     let blocked = Arc::new(AtomicBool::new(false));
     let out = SharedBuf::default();
-    let writer = RecordWriter::spawn(Box::new(Gated {
+    let writer = RecordWriter::spawn_coalescing(Box::new(Gated {
         gate: gate.clone(),
         blocked: blocked.clone(),
         out: out.clone(),

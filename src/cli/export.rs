@@ -1,0 +1,184 @@
+//! `export`: the fitted noise model of a results file in another tool's format (Kalibr,
+//! OpenVINS, VINS, KF-GINS), or its curves as CSV or a Stable32-style table (sink::export).
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::Args;
+
+use super::{read_json_lines, usage};
+use allanscope::model::units::{IncrementUnit, SensorKind};
+use allanscope::sink::export::{self, ExportFormat, ImuNoise};
+use allanscope::sink::records::{CurveRecord, FitRecord};
+
+#[derive(Debug, Args)]
+pub struct ExportArgs {
+    /// A JSON-lines file written by `analyze`, `listen` or `run` (its final records are used).
+    pub input: PathBuf,
+    /// kalibr | openvins | vins | kf-gins | csv | stable32.
+    #[arg(long)]
+    pub to: String,
+    /// The file to write (never overwritten without --force).
+    #[arg(short = 'o', long = "out")]
+    pub out: PathBuf,
+    /// Gyro channels (comma-separated; default: every channel in an angle unit).
+    #[arg(long, value_delimiter = ',')]
+    pub gyro: Option<Vec<String>>,
+    /// Accelerometer channels (default: every channel in a velocity unit).
+    #[arg(long, value_delimiter = ',')]
+    pub accel: Option<Vec<String>>,
+    /// Replace an existing output file.
+    #[arg(long)]
+    pub force: bool,
+}
+
+fn kind_of(f: &FitRecord) -> Option<SensorKind> {
+    IncrementUnit::parse(&f.unit).map(|u| u.kind)
+}
+
+/// The fits of one kind: the named channels, or every channel of that kind.
+fn chosen<'a>(
+    fits: &[&'a FitRecord],
+    names: &Option<Vec<String>>,
+    kind: SensorKind,
+    flag: &str,
+) -> Result<Vec<&'a FitRecord>> {
+    match names {
+        Some(names) => names
+            .iter()
+            .map(|n| {
+                fits.iter()
+                    .copied()
+                    .find(|f| &f.channel == n)
+                    .ok_or_else(|| {
+                        usage(format!(
+                            "--{flag} {n}: no final fit of that channel in the input (it has: {})",
+                            fits.iter()
+                                .map(|f| f.channel.as_str())
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ))
+                    })
+            })
+            .collect(),
+        None => Ok(fits
+            .iter()
+            .copied()
+            .filter(|f| kind_of(f) == Some(kind))
+            .collect()),
+    }
+}
+
+pub fn run(a: &ExportArgs) -> Result<()> {
+    let format: ExportFormat = a.to.parse().map_err(usage)?;
+    if !a.force && a.out.exists() {
+        return Err(usage(format!(
+            "{} exists: give --force to replace it",
+            a.out.display()
+        )));
+    }
+    let mut fits: Vec<FitRecord> = Vec::new();
+    let mut curves: Vec<CurveRecord> = Vec::new();
+    let mut tau0: Option<f64> = None;
+    let tag = a.input.display().to_string();
+    for v in read_json_lines(&a.input)? {
+        match v.get("type").and_then(|t| t.as_str()) {
+            Some("fit") if v["final"] == true => {
+                let f: FitRecord =
+                    serde_json::from_value(v).with_context(|| format!("{tag}: a fit record"))?;
+                // A later final fit of the same channel and run replaces an earlier one.
+                fits.retain(|g| !(g.channel == f.channel && g.run == f.run));
+                fits.push(f);
+            }
+            Some("curve") if v["final"] == true => {
+                let c: CurveRecord =
+                    serde_json::from_value(v).with_context(|| format!("{tag}: a curve record"))?;
+                curves.retain(|g| !(g.channel == c.channel && g.run == c.run && g.stat == c.stat));
+                curves.push(c);
+            }
+            Some("summary") => tau0 = v.get("tau0").and_then(|t| t.as_f64()).or(tau0),
+            _ => {}
+        }
+    }
+    let text = match format {
+        ExportFormat::Csv | ExportFormat::Stable32 => {
+            if curves.is_empty() {
+                return Err(usage(format!("{tag}: no final curve records to export")));
+            }
+            let refs: Vec<&CurveRecord> = curves.iter().collect();
+            if format == ExportFormat::Csv {
+                export::curves_csv(&refs)
+            } else {
+                export::stable32(&refs)
+            }
+        }
+        _ => {
+            if fits.is_empty() {
+                return Err(usage(format!("{tag}: no final fit records to export")));
+            }
+            let runs: std::collections::BTreeSet<Option<usize>> =
+                fits.iter().map(|f| f.run).collect();
+            if runs.len() > 1 {
+                tracing::warn!(
+                    "{tag} holds {} runs; exporting the largest figure over all of them",
+                    runs.len()
+                );
+            }
+            let refs: Vec<&FitRecord> = fits.iter().collect();
+            let gyro = chosen(&refs, &a.gyro, SensorKind::Gyro, "gyro")?;
+            let accel = chosen(&refs, &a.accel, SensorKind::Accel, "accel")?;
+            let noise = |v: &[&FitRecord], k| {
+                if v.is_empty() {
+                    Ok(None)
+                } else {
+                    export::kind_noise(v, k).map(Some).map_err(usage)
+                }
+            };
+            let tau0 = tau0.ok_or_else(|| {
+                usage(format!(
+                    "{tag}: no summary record gives the sampling step tau0"
+                ))
+            })?;
+            let imu = ImuNoise {
+                gyro: noise(&gyro, SensorKind::Gyro)?,
+                accel: noise(&accel, SensorKind::Accel)?,
+                update_rate_hz: 1.0 / tau0,
+            };
+            for k in [&imu.gyro, &imu.accel].into_iter().flatten() {
+                for (name, t) in [
+                    ("N", k.white),
+                    ("K", k.random_walk),
+                    ("B", k.bias_instability),
+                ] {
+                    if t.bound {
+                        tracing::warn!(
+                            "{}: {name} is not determined; its upper 95% bound is exported",
+                            k.channels.join(",")
+                        );
+                    }
+                }
+            }
+            match format {
+                ExportFormat::Kalibr => export::kalibr(&imu),
+                ExportFormat::OpenVins => export::openvins(&imu),
+                ExportFormat::Vins => export::vins(&imu),
+                _ => export::kf_gins(&imu),
+            }
+            .map_err(usage)?
+        }
+    };
+    let mut f = if a.force {
+        std::fs::File::create(&a.out)
+    } else {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&a.out)
+    }
+    .with_context(|| format!("cannot write {}", a.out.display()))?;
+    f.write_all(text.as_bytes())
+        .with_context(|| format!("cannot write {}", a.out.display()))?;
+    tracing::info!("{}: written ({})", a.out.display(), a.to);
+    Ok(())
+}

@@ -1,0 +1,380 @@
+//! The temperature effect: a bias that follows the unit's temperature, `b(t) = c (T(t) - T_ref)`
+//! with `c` in u/s per degC (docs/gap.md, "Temperature"). When the input carries a temperature
+//! (a `temperature_c` text column, or a descriptor's temperature field), it is gathered beside
+//! each channel as a [`GapEvidence`] of its own, fed `T tau0` as if it were an increment, so its
+//! block means and its AVAR curve share the channel's blocks and cluster sizes exactly.
+//!
+//! Fit: generalised least squares of the first differences of the channel's block-mean rate on
+//! a drift, the first differences of the temperature's block means and, when a warm-up is in the
+//! model, the first differences of its block shape (the warm-up and the temperature fitted
+//! jointly):
+//!
+//! ```text
+//! b_{i+1} - b_i = r + c (T_{i+1} - T_i) [+ A (e_{i+1} - e_i)] + noise,
+//! ```
+//!
+//! the noise covariance from the fitted model ([`block_diff_covariance`], five terms plus the
+//! stationary effects found). The differences remove the unknown constant (bias and `T_ref`);
+//! the drift `r` takes up a rate ramp. `c` is the GLS estimate, its standard error
+//! `sqrt((X' C^-1 X)^-1_cc)`, scaled up by `sqrt(rss / (n - p))` when the residuals are larger
+//! than the model says (never down), and the interval is `c +- 1.96 se`. The test statistic is
+//! `z = c / se` (about N(0, 1) without a temperature effect: the regressor is given, nothing
+//! is scanned).
+//!
+//! On the curve, the temperature-driven bias is a deterministic signal whose AVAR on this record
+//! is `c^2` times the temperature curve's own AVAR at each cluster size (computed by the same
+//! estimator at the same strides); it enters the curve fit as a fixed offset, as a warm-up's
+//! exact AVAR does.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::block_cov::{block_diff_covariance, usable_block_means};
+use super::effects::EffectParams;
+use super::evidence::EvidenceSnapshot;
+use super::problem::{GapProblem, GlsFit, ModelSpec};
+use super::warmup::warmup_block_shape;
+use crate::sim::effects::TemperatureProfile;
+
+/// The two-sided 97.5% normal quantile of the 95% interval.
+const Z95: f64 = 1.959_963_984_540_054;
+
+/// The temperature effect is taken in when `|z|` exceeds this. The regressor is given, not
+/// searched, so under the null `z` is about N(0, 1); the threshold was set on clean runs with a
+/// temperature profile and no coefficient (docs/gap.md, "Temperature").
+pub const TEMPERATURE_Z: f64 = 4.0;
+
+/// A temperature coefficient fitted to the block means.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TemperatureFinding {
+    /// `c`, u/s per degC.
+    pub coefficient: f64,
+    /// Its standard error (u/s per degC).
+    pub std_error: f64,
+    /// `c / se`.
+    pub z: f64,
+    /// Residual variance against the model's: `rss / (n - p)`, about 1 when the noise model is
+    /// right (the standard error is scaled by its square root when it is above 1).
+    pub scale: f64,
+}
+
+impl TemperatureFinding {
+    /// The 95% interval of the coefficient (u/s per degC).
+    pub fn interval(&self) -> (f64, f64) {
+        (
+            self.coefficient - Z95 * self.std_error,
+            self.coefficient + Z95 * self.std_error,
+        )
+    }
+
+    /// The record's effect.
+    pub fn params(&self) -> EffectParams {
+        let (lo, hi) = self.interval();
+        EffectParams::Temperature {
+            coefficient: self.coefficient,
+            lo,
+            hi,
+        }
+    }
+
+    /// The temperature-driven bias over each block (u/s), up to a constant.
+    pub fn block_curve(&self, temperature_block_means: &[f64]) -> Vec<f64> {
+        temperature_block_means
+            .iter()
+            .map(|t| self.coefficient * t)
+            .collect()
+    }
+}
+
+/// The temperature's block means (degC) from its evidence (fed `T tau0` per step).
+pub fn temperature_blocks(temp: &EvidenceSnapshot) -> Vec<f64> {
+    temp.block_means.clone()
+}
+
+/// The AVAR (degC^2) of the temperature at each cluster size of `ms`, from its evidence; `None`
+/// when one of them is missing (the two evidences did not see the same steps).
+pub fn temperature_avar(temp: &EvidenceSnapshot, ms: &[u64]) -> Option<Vec<f64>> {
+    ms.iter()
+        .map(|&m| temp.curve.iter().find(|p| p.m == m).map(|p| p.avar))
+        .collect()
+}
+
+/// The temperature effect in the model of one channel: the finding, and the recorded
+/// temperature's block means (degC) and AVAR (degC^2) at the curve's cluster sizes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TemperatureInModel {
+    pub finding: TemperatureFinding,
+    pub blocks_c: Vec<f64>,
+    pub avar_c2: Vec<f64>,
+}
+
+impl TemperatureInModel {
+    /// Its AVAR on the curve (u^2/s^2 at each cluster size): `c^2 AVAR_T`.
+    pub fn curve_offset(&self) -> Vec<f64> {
+        let c2 = self.finding.coefficient.powi(2);
+        self.avar_c2.iter().map(|v| c2 * v).collect()
+    }
+
+    /// The channel's block means with the temperature-driven bias taken out.
+    pub fn remove_from(&self, block_means: &[f64]) -> Vec<f64> {
+        block_means
+            .iter()
+            .zip(self.finding.block_curve(&self.blocks_c))
+            .map(|(b, t)| b - t)
+            .collect()
+    }
+
+    /// Refits the coefficient with more of the model known: the five terms `c`, the
+    /// stationary `effects` and `extra` block curves fitted jointly (a warm-up's shape).
+    pub fn refit(
+        &mut self,
+        block_means: &[f64],
+        block_s: f64,
+        c: &[f64; 5],
+        effects: &[EffectParams],
+        extra: &[Vec<f64>],
+    ) {
+        if let Some(f) = fit_temperature(block_means, &self.blocks_c, block_s, c, effects, extra) {
+            self.finding = f;
+        }
+    }
+}
+
+/// The five terms of a GLS fit (squared coefficients, as the block covariance takes them).
+fn c5_of(fit: &GlsFit) -> [f64; 5] {
+    std::array::from_fn(|i| fit.coef.get(i).copied().unwrap_or(0.0))
+}
+
+/// Step 0 of the diagnosis: the temperature's coefficient on the block means with the base
+/// model's noise, and, when `|z| > z_crit`, once more with the noise of the model refitted with
+/// the temperature's AVAR in (the base fit's `K` and `R` hold part of the temperature-driven
+/// wander, which would widen the interval). Returns the effect and the curve fit with its
+/// offset in, or `None` when there is no temperature effect (or no usable temperature).
+pub fn enter_temperature(
+    prob: &GapProblem,
+    snap: &EvidenceSnapshot,
+    temp: &EvidenceSnapshot,
+    base: &GlsFit,
+    z_crit: f64,
+) -> Option<(TemperatureInModel, GlsFit)> {
+    let block_s = snap.block_len as f64 * snap.tau0_s;
+    let blocks_c = temperature_blocks(temp);
+    let avar_c2 = temperature_avar(temp, &prob.ms)?;
+    let first = fit_temperature(
+        &snap.block_means,
+        &blocks_c,
+        block_s,
+        &c5_of(base),
+        &[],
+        &[],
+    )?;
+    if first.z.abs() <= z_crit {
+        return None;
+    }
+    let mut t = TemperatureInModel {
+        finding: first,
+        blocks_c,
+        avar_c2,
+    };
+    let spec = |t: &TemperatureInModel| ModelSpec {
+        offset: Some(t.curve_offset()),
+        ..ModelSpec::default()
+    };
+    let fit1 = prob.gls(&spec(&t))?;
+    t.refit(&snap.block_means, block_s, &c5_of(&fit1), &[], &[]);
+    if t.finding.z.abs() <= z_crit {
+        return None;
+    }
+    let fit2 = prob.gls(&spec(&t))?;
+    Some((t, fit2))
+}
+
+/// A settling profile `T(t) = final + (start - final) e^{-t/time_constant}` fitted to the
+/// temperature's block means by least squares (the time constant scanned on a log grid from a
+/// block to ten runs, 24 per decade, then 960 per decade around the best; `start` and `final`
+/// linear at each), for the model file of
+/// the fitted unit: the simulator's temperature is such a profile. The reference temperature is
+/// `final` (the bias the model file writes is the one at `final`).
+pub fn settling_profile(blocks_c: &[f64], block_s: f64) -> Option<TemperatureProfile> {
+    let nb = blocks_c.len();
+    if nb < 3 || !blocks_c.iter().all(|t| t.is_finite()) {
+        return None;
+    }
+    let grid = super::effects::Grid {
+        lo: block_s,
+        hi: 10.0 * block_s * nb as f64,
+        per_decade: 24.0,
+    };
+    let y = DVector::from_column_slice(blocks_c);
+    let at = |tc: f64| -> Option<(f64, f64, f64, f64)> {
+        let e = DVector::from_iterator(nb, (0..nb).map(|i| warmup_block_shape(i, block_s, tc)));
+        let x = DMatrix::from_columns(&[DVector::from_element(nb, 1.0), e]);
+        let beta = (x.transpose() * &x).try_inverse()? * x.transpose() * &y;
+        Some(((&y - &x * &beta).norm_squared(), tc, beta[0], beta[1]))
+    };
+    let better = |a: Option<(f64, f64, f64, f64)>, b: Option<(f64, f64, f64, f64)>| match (a, b) {
+        (Some(a), Some(b)) => Some(if b.0 < a.0 { b } else { a }),
+        (a, b) => a.or(b),
+    };
+    let coarse = grid.points().into_iter().map(at).fold(None, better)?;
+    // Then 40 times finer around the best grid point.
+    let fine = (-20..=20)
+        .map(|k| at(coarse.1 * 10f64.powf(k as f64 / 960.0)))
+        .fold(Some(coarse), better);
+    let (_, tc, final_c, settle) = fine?;
+    Some(TemperatureProfile {
+        start_c: final_c + settle,
+        final_c,
+        time_constant_s: tc,
+        sine_amplitude_c: 0.0,
+        sine_period_s: 1.0,
+        reference_c: final_c,
+    })
+}
+
+/// GLS of the block-mean differences on a drift, the temperature's differences and the
+/// differences of each `extra` block curve (module doc). `block_means` (u/s) and
+/// `temperature` (degC) are per block, `c` the five-term coefficients, `effects` the stationary
+/// effects in the noise model. `None` when the block means cannot carry the test (fewer than 24
+/// blocks, missing blocks, no temperature change, singular design).
+pub fn fit_temperature(
+    block_means: &[f64],
+    temperature: &[f64],
+    block_s: f64,
+    c: &[f64; 5],
+    effects: &[EffectParams],
+    extra: &[Vec<f64>],
+) -> Option<TemperatureFinding> {
+    let nb = block_means.len();
+    if !usable_block_means(block_means)
+        || temperature.len() != nb
+        || !temperature.iter().all(|t| t.is_finite())
+        || extra.iter().any(|e| e.len() != nb)
+    {
+        return None;
+    }
+    let diff = |v: &[f64]| DVector::from_iterator(nb - 1, v.windows(2).map(|p| p[1] - p[0]));
+    let y = diff(block_means);
+    let mut cols = vec![DVector::from_element(nb - 1, 1.0), diff(temperature)];
+    cols.extend(extra.iter().map(|e| diff(e)));
+    let chol = block_diff_covariance(nb, block_s, c, effects)?.cholesky()?;
+    let l = chol.l();
+    let yw = l.solve_lower_triangular(&y)?;
+    let xw_cols: Vec<DVector<f64>> = cols
+        .iter()
+        .map(|x| l.solve_lower_triangular(x))
+        .collect::<Option<_>>()?;
+    let xw = DMatrix::from_columns(&xw_cols);
+    let xtx_inv = (xw.transpose() * &xw).try_inverse()?;
+    let beta = &xtx_inv * xw.transpose() * &yw;
+    let rss = (&yw - &xw * &beta).norm_squared();
+    let dof = (nb - 1).saturating_sub(xw_cols.len()).max(1) as f64;
+    let scale = rss / dof;
+    let var = xtx_inv[(1, 1)] * scale.max(1.0);
+    if !(var.is_finite() && var > 0.0) {
+        return None;
+    }
+    let se = var.sqrt();
+    Some(TemperatureFinding {
+        coefficient: beta[1],
+        std_error: se,
+        z: beta[1] / se,
+        scale,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, StandardNormal};
+
+    /// White rate noise only (N = 1 u/sqrt(s)): the block-mean rate is white with variance
+    /// `N^2 / tb`, so the GLS of the block means is ordinary least squares and its estimate can be
+    /// checked against a known coefficient over many draws: the z score of the error is N(0, 1)
+    /// (mean within 0.1, sd within 10%), and the 95% interval covers the truth in 90-99% of 400
+    /// draws.
+    #[test]
+    fn coefficient_and_interval_are_calibrated_on_white_noise() {
+        let (nb, tb) = (256, 10.0);
+        let c5 = [0.0, 1.0, 0.0, 0.0, 0.0];
+        let truth = 0.05;
+        let temp: Vec<f64> = (0..nb)
+            .map(|i| {
+                let t = (i as f64 + 0.5) * tb;
+                30.0 - 10.0 * (-t / 600.0).exp() + 0.5 * (t / 300.0).sin()
+            })
+            .collect();
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(11);
+        let (mut zs, mut covered) = (Vec::new(), 0);
+        for _ in 0..400 {
+            let b: Vec<f64> = temp
+                .iter()
+                .map(|t| {
+                    let e: f64 = StandardNormal.sample(&mut rng);
+                    7.0 + truth * t + e / tb.sqrt()
+                })
+                .collect();
+            let f = fit_temperature(&b, &temp, tb, &c5, &[], &[]).expect("fit");
+            zs.push((f.coefficient - truth) / f.std_error);
+            let (lo, hi) = f.interval();
+            covered += usize::from(lo <= truth && truth <= hi);
+        }
+        let n = zs.len() as f64;
+        let mean = zs.iter().sum::<f64>() / n;
+        let sd = (zs.iter().map(|z| (z - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+        assert!(mean.abs() < 0.1, "mean z {mean}");
+        assert!((sd - 1.0).abs() < 0.1, "sd z {sd}");
+        assert!((360..=396).contains(&covered), "covered {covered}/400");
+    }
+
+    /// A warm-up of the same time constant as the temperature's settling cannot be told apart
+    /// from it by the settling alone; with the temperature's sine it can, and the joint fit
+    /// (warm-up shape as an extra column) gives back the coefficient within 5 standard errors.
+    #[test]
+    fn joint_fit_with_a_warmup_column() {
+        let (nb, tb) = (256, 10.0);
+        let c5 = [0.0, 1.0, 0.0, 0.0, 0.0];
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(5);
+        let temp: Vec<f64> = (0..nb)
+            .map(|i| 25.0 + 2.0 * ((i as f64 + 0.5) * tb / 200.0).sin())
+            .collect();
+        let warm: Vec<f64> = (0..nb)
+            .map(|i| super::super::warmup::warmup_block_shape(i, tb, 300.0))
+            .collect();
+        let b: Vec<f64> = (0..nb)
+            .map(|i| {
+                let e: f64 = StandardNormal.sample(&mut rng);
+                0.1 * temp[i] + 2.0 * warm[i] + e / tb.sqrt()
+            })
+            .collect();
+        let f = fit_temperature(&b, &temp, tb, &c5, &[], &[warm]).expect("fit");
+        assert!((f.coefficient - 0.1).abs() < 5.0 * f.std_error, "{f:?}");
+        assert!(f.z > 5.0, "{f:?}");
+    }
+
+    /// A settling temperature, sampled as block means, gives back its profile: start, final
+    /// within 0.01 degC and the time constant within 1%.
+    #[test]
+    fn settling_profile_of_block_means() {
+        let (nb, tb) = (256, 40.0);
+        let t: Vec<f64> = (0..nb)
+            .map(|i| 35.0 - 13.0 * super::super::warmup::warmup_block_shape(i, tb, 1500.0))
+            .collect();
+        let p = settling_profile(&t, tb).expect("profile");
+        assert!((p.final_c - 35.0).abs() < 0.01, "{p:?}");
+        assert!((p.start_c - 22.0).abs() < 0.01, "{p:?}");
+        assert!((p.time_constant_s / 1500.0 - 1.0).abs() < 0.01, "{p:?}");
+    }
+
+    /// Too few blocks, a constant temperature or missing blocks give no fit.
+    #[test]
+    fn no_fit_without_evidence() {
+        let c5 = [0.0, 1.0, 0.0, 0.0, 0.0];
+        let b = vec![1.0; 40];
+        assert!(fit_temperature(&b, &vec![20.0; 40], 1.0, &c5, &[], &[]).is_none());
+        assert!(fit_temperature(&b[..10], &[1.0; 10], 1.0, &c5, &[], &[]).is_none());
+        let mut t: Vec<f64> = (0..40).map(f64::from).collect();
+        t[3] = f64::NAN;
+        assert!(fit_temperature(&b, &t, 1.0, &c5, &[], &[]).is_none());
+    }
+}

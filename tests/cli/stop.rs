@@ -1,0 +1,276 @@
+//! How runs end (issue 11, "Data loss"), on the built binary:
+//!
+//! - A replay's output does not depend on timing: with a consumer that reads nothing for the
+//!   first second, `analyze` still writes every interim record (back-pressure, never coalesced):
+//!   the same 30 interim `t_data` values (10, 20, ... 300 s) in two runs, 994 records in all.
+//! - A replay stopped by SIGINT (`--pace realtime`) writes its final records for the data read,
+//!   says `read_to_end: false, stopped_by: "SIGINT"` in `summary`, and exits 1.
+//! - A live run whose standard output is no longer read ends within a bounded time after SIGINT
+//!   (the writer's grace, 3 s), at once after a second SIGINT, with an error naming standard
+//!   output; with `--out FILE` the final records are in the file.
+
+use std::io::{BufRead, BufReader, Read};
+use std::process::{Child, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use crate::common::{exe, fixtures, tmp_in};
+
+const FRAME_LEN: usize = 42;
+const TAU0_S: f64 = 0.004;
+
+fn siu8_path() -> String {
+    fixtures()
+        .join("captures/siu8_stand_5min_seed1.siu8")
+        .to_str()
+        .expect("utf-8")
+        .to_string()
+}
+
+fn signal(child: &Child, sig: &str) {
+    let ok = std::process::Command::new("kill")
+        .args([sig, &child.id().to_string()])
+        .status()
+        .expect("kill");
+    assert!(ok.success());
+}
+
+/// Waits for the child at most `limit`; its exit status and the time it took.
+fn wait_at_most(child: &mut Child, limit: Duration) -> (Option<i32>, Duration) {
+    let t0 = Instant::now();
+    loop {
+        if let Some(s) = child.try_wait().expect("try_wait") {
+            return (s.code(), t0.elapsed());
+        }
+        if t0.elapsed() > limit {
+            let _ = child.kill();
+            panic!("allanscope did not end within {limit:?}");
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// Standard error lines, forwarded to a channel.
+fn stderr_lines(child: &mut Child) -> mpsc::Receiver<String> {
+    let err = BufReader::new(child.stderr.take().expect("stderr"));
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for l in err.lines().map_while(Result::ok) {
+            let _ = tx.send(l);
+        }
+    });
+    rx
+}
+
+fn wait_for_line(rx: &mpsc::Receiver<String>, what: &str) -> Vec<String> {
+    let mut seen = Vec::new();
+    let t0 = Instant::now();
+    while t0.elapsed() < Duration::from_secs(30) {
+        if let Ok(l) = rx.recv_timeout(Duration::from_millis(100)) {
+            let hit = l.contains(what);
+            seen.push(l);
+            if hit {
+                return seen;
+            }
+        }
+    }
+    panic!("no `{what}` on standard error: {seen:?}");
+}
+
+/// The interim `t_data` values of g1's avar curve, and the record count, of a replay whose
+/// consumer starts reading only after `pause`.
+fn replay_interims(pause: Duration) -> (Vec<f64>, usize) {
+    let mut child = exe()
+        .args(["analyze", &siu8_path(), "--format", "siu8", "--every", "10"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn");
+    std::thread::sleep(pause);
+    let mut text = String::new();
+    child
+        .stdout
+        .take()
+        .expect("stdout")
+        .read_to_string(&mut text)
+        .expect("read");
+    assert!(child.wait().expect("wait").success());
+    let recs: Vec<serde_json::Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("JSON line"))
+        .collect();
+    let t = recs
+        .iter()
+        .filter(|r| {
+            r["type"] == "curve"
+                && r["channel"] == "g1"
+                && r["stat"] == "avar"
+                && r["final"] == false
+        })
+        .map(|r| r["t_data"].as_f64().expect("t_data"))
+        .collect();
+    let s = recs.last().expect("records");
+    assert_eq!(s["type"], "summary");
+    assert_eq!(s["read_to_end"], true);
+    (t, recs.len())
+}
+
+#[test]
+fn a_replay_writes_every_interim_record_whatever_the_consumer() {
+    // 300 s of data, an interim set every 10 data-seconds.
+    let want: Vec<f64> = (1..=30).map(|k| 10.0 * k as f64).collect();
+    let (slow, n_slow) = replay_interims(Duration::from_millis(1000));
+    let (fast, n_fast) = replay_interims(Duration::ZERO);
+    assert_eq!(slow, want);
+    assert_eq!(fast, want);
+    // 30 sets of 8 channels x 3 statistics + 8 fits, then 32 finals, health and summary.
+    assert_eq!(n_slow, 30 * 32 + 34);
+    assert_eq!(n_fast, n_slow);
+}
+
+#[test]
+fn a_replay_stopped_by_sigint_says_so_and_exits_1() {
+    let out = tmp_in("stop-replay", "out.jsonl");
+    let _ = std::fs::remove_file(&out);
+    let mut child = exe()
+        .args([
+            "analyze",
+            &siu8_path(),
+            "--format",
+            "siu8",
+            "--pace",
+            "realtime",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let rx = stderr_lines(&mut child);
+    std::thread::sleep(Duration::from_millis(1500));
+    signal(&child, "-INT");
+    let (code, took) = wait_at_most(&mut child, Duration::from_secs(10));
+    assert_eq!(code, Some(1));
+    assert!(took < Duration::from_secs(3), "{took:?}");
+    let err: Vec<String> = rx.try_iter().collect();
+    assert!(
+        err.iter()
+            .any(|l| l.contains("stopped by SIGINT before the end")),
+        "{err:?}"
+    );
+    let recs: Vec<serde_json::Value> = std::fs::read_to_string(&out)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let s = recs.last().unwrap();
+    assert_eq!(s["type"], "summary");
+    assert_eq!(s["read_to_end"], false);
+    assert_eq!(s["stopped_by"], "SIGINT");
+    // About 1.5 s of the 300 s were read in real time, every frame of it analysed.
+    let t = s["t_data"].as_f64().unwrap();
+    assert!(t > 0.5 && t < 10.0, "t_data {t}");
+    let h = recs.iter().rev().find(|r| r["type"] == "health").unwrap();
+    assert_eq!(h["frames"].as_f64().unwrap() * TAU0_S, t);
+    let finals = recs
+        .iter()
+        .filter(|r| r["type"] == "curve" && r["final"] == true)
+        .count();
+    assert_eq!(finals, 24);
+}
+
+/// A live listener with `--every 0.05` fed 10 s of frames over UDP; standard output piped and
+/// never read, `--out` when given.
+fn stalled_listener(out: Option<&str>) -> (Child, mpsc::Receiver<String>) {
+    let port = std::net::UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let mut args = vec![
+        "listen".to_string(),
+        "--udp".into(),
+        format!("127.0.0.1:{port}"),
+        "--format".into(),
+        "siu8".into(),
+        "--every".into(),
+        "0.05".into(),
+    ];
+    if let Some(o) = out {
+        args.extend(["--out".into(), o.into()]);
+    }
+    let mut child = exe()
+        .args(&args)
+        .env("ALLANSCOPE_LOG", "info")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let rx = stderr_lines(&mut child);
+    wait_for_line(&rx, "listening on udp");
+    let bytes = std::fs::read(siu8_path()).unwrap();
+    let sock = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    for d in bytes[..2500 * FRAME_LEN].chunks(5 * FRAME_LEN) {
+        sock.send_to(d, ("127.0.0.1", port)).unwrap();
+        std::thread::sleep(Duration::from_micros(300));
+    }
+    // Interim sets every 50 ms fill the pipe (64 KiB) long before this.
+    std::thread::sleep(Duration::from_millis(1000));
+    (child, rx)
+}
+
+#[test]
+fn sigint_ends_a_run_whose_output_is_not_read() {
+    // One SIGINT: the writer's grace (3 s without progress), then exit 1 naming standard output.
+    let (mut child, rx) = stalled_listener(None);
+    signal(&child, "-INT");
+    let (code, took) = wait_at_most(&mut child, Duration::from_secs(15));
+    assert_eq!(code, Some(1));
+    assert!(
+        took >= Duration::from_millis(2900) && took < Duration::from_secs(6),
+        "{took:?}"
+    );
+    std::thread::sleep(Duration::from_millis(100));
+    let err: Vec<String> = rx.try_iter().collect();
+    assert!(
+        err.iter()
+            .any(|l| l.contains("writing the JSON lines to standard output")
+                && l.contains("not being read")),
+        "{err:?}"
+    );
+    drop(child);
+
+    // Two SIGINTs: no grace after the second.
+    let (mut child, _rx) = stalled_listener(None);
+    signal(&child, "-INT");
+    std::thread::sleep(Duration::from_millis(300));
+    signal(&child, "-INT");
+    let (code, took) = wait_at_most(&mut child, Duration::from_secs(15));
+    assert_eq!(code, Some(1));
+    assert!(took < Duration::from_millis(1500), "{took:?}");
+
+    // With --out, the final records are in the file, and the run ends at once with 0.
+    let out = tmp_in("stop-live", "out.jsonl");
+    let _ = std::fs::remove_file(&out);
+    let (mut child, _rx) = stalled_listener(Some(out.to_str().unwrap()));
+    signal(&child, "-INT");
+    let (code, took) = wait_at_most(&mut child, Duration::from_secs(15));
+    assert_eq!(code, Some(0));
+    assert!(took < Duration::from_secs(2), "{took:?}");
+    let recs: Vec<serde_json::Value> = std::fs::read_to_string(&out)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let finals: Vec<&serde_json::Value> = recs
+        .iter()
+        .filter(|r| (r["type"] == "curve" || r["type"] == "fit") && r["final"] == true)
+        .collect();
+    assert_eq!(finals.len(), 32);
+    let h = recs.iter().rev().find(|r| r["type"] == "health").unwrap();
+    assert_eq!(h["frames"], 2500);
+    let s = recs.last().unwrap();
+    assert_eq!(s["stopped_by"], "SIGINT");
+    assert_eq!(s["t_data"], 2500.0 * TAU0_S);
+}
