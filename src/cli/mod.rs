@@ -17,7 +17,7 @@ mod simulate;
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 
 use allanscope::allan::accum::{AccumConfig, Overlap, StatSet, TauSpec, DEFAULT_L};
