@@ -26,7 +26,7 @@ use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 const TAU0_S: f64 = 0.004;
-/// The seed paper's MA4 run-3 magnitudes (SEED.md table 2), m/s units.
+/// The seed paper's MA4 run-3 magnitudes (the seed paper's table 2 (docs/theory.md section 6)), m/s units.
 const COEF: [f64; 5] = [7.741e-4, 2.706e-4, 0.477e-4, 2.413e-6, 5.982e-8];
 /// The same terms as a simulator model (Q, N, B, K, R), 250 Hz.
 const MA4: &str = "rate_hz = 250\n[[channel]]\nname = \"a\"\nunit = \"m/s\"\n\

@@ -85,7 +85,7 @@ fn draw_effect(
     let effect = kind.map(|k| match k {
         EffectKind::GaussMarkov => {
             let tc = log_uniform(rng, 20.0 * tau0, t_run / 50.0);
-            // Peak ADEV 0.6174 sigma at tau = 1.893 tau_c (THEORY.md section 3).
+            // Peak ADEV 0.6174 sigma at tau = 1.893 tau_c (docs/theory.md section 3).
             let sigma = rho * base.adev(1.893 * tc) / 0.6174;
             EffectParams::GaussMarkov { sigma, tau_c_s: tc }
         }

@@ -18,7 +18,7 @@ use crate::sink::records::{CurveRecord, FitRecord, Record, SummaryRecord};
 /// What the values of a text column are.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum InputKind {
-    /// Increments over each step, in u (the default; THEORY.md section 1).
+    /// Increments over each step, in u (the default; docs/theory.md section 1).
     #[default]
     Increments,
     /// Rate samples in u/s: the increment is `y * tau0`.
@@ -355,6 +355,12 @@ impl RunAnalysis {
     }
 
     fn emit_if_due(&mut self, out: &mut Vec<Record>) {
+        // No interim schedule (a replay without --every, or a live run, whose interim records
+        // the pipeline times): skip the fold over the channels after every frame (profiled:
+        // 6.6% of a replay's instructions, BENCHMARKS.md).
+        if self.next_emit_s == f64::INFINITY {
+            return;
+        }
         if self.t_data_s() >= self.next_emit_s {
             out.extend(self.records(false));
             let every = self.opts.every_s.unwrap_or(f64::INFINITY);
@@ -396,7 +402,7 @@ impl RunAnalysis {
                 ch.last_fit = Some(f);
             }
             if let Some(g) = &mut ch.gap {
-                // The diagnosis refreshed with the fits (THEORY.md section 5); a run still too
+                // The diagnosis refreshed with the fits (docs/theory.md section 5); a run still too
                 // short for it gives no record yet.
                 match diagnose(&g.snapshot(), &DiagnoseOptions::default()) {
                     Ok(d) => {

@@ -23,6 +23,9 @@
 //! pieces and writes the file. Only one checkpoint is in flight at a time, so memory stays
 //! bounded however small S is.
 //!
+//! This module is the file and what it holds; the threads that take the cut (the schedule and
+//! the collector) are the pipeline's, in `pipeline::checkpointing`.
+//!
 //! # File format
 //!
 //! `ALLANSCOPE-CKPT\n`, the format version (u32, little-endian), the body length (u64), the
@@ -34,9 +37,7 @@
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::Arc;
-use std::time::{Instant, SystemTime, UNIX_EPOCH};
+use std::time::{SystemTime, UNIX_EPOCH};
 
 use serde::{Deserialize, Serialize};
 
@@ -373,194 +374,8 @@ pub struct CheckpointPlan {
     pub header: Header,
     /// The position to continue from (`--resume`), and the sequence number reached.
     pub resume: Option<(Position, u64)>,
-    /// Test hook (`--abort-after-frames`, hidden): abort the process, as a crash would, once this
-    /// many frames have been decoded and a checkpoint is on disk.
+    /// Test hook (`--abort-after-frames`, hidden): once this many frames (rows) have been read
+    /// and a checkpoint is on disk, the pipeline calls `RunControl::crash_hook` (the binary's
+    /// aborts the process, as a crash would).
     pub abort_after_frames: Option<u64>,
-}
-
-/// One piece of a checkpoint on its way to the collector.
-pub enum Piece {
-    Position {
-        seq: u64,
-        position: Box<Position>,
-    },
-    Part {
-        seq: u64,
-        index: usize,
-        state: AnalysisState,
-    },
-}
-
-/// The collector thread: assembles the pieces of each checkpoint and writes it.
-pub struct Collector {
-    tx: crossbeam_channel::Sender<Piece>,
-    handle: std::thread::JoinHandle<()>,
-    /// Cleared when the checkpoint in flight has been written (or failed).
-    pub in_flight: Arc<AtomicBool>,
-    /// Checkpoints written.
-    pub written: Arc<AtomicU64>,
-}
-
-/// What a run's checkpointing did (logged at the end).
-#[derive(Debug, Clone, Copy, Default)]
-pub struct CollectorStats {
-    pub written: u64,
-    pub failed: u64,
-    pub last_bytes: usize,
-    pub last_write_s: f64,
-}
-
-impl Collector {
-    /// Starts the collector for a run with `parts` analysis threads.
-    pub fn spawn(plan: &CheckpointPlan, parts: usize) -> anyhow::Result<Collector> {
-        let (tx, rx) = crossbeam_channel::unbounded::<Piece>();
-        let in_flight = Arc::new(AtomicBool::new(false));
-        let written = Arc::new(AtomicU64::new(0));
-        let (flag, count) = (in_flight.clone(), written.clone());
-        let (path, header, every_s) = (plan.path.clone(), plan.header.clone(), plan.every_s);
-        let handle = std::thread::Builder::new()
-            .name("allanscope-checkpoint".into())
-            .spawn(move || {
-                let mut seq = 0;
-                let mut position = None;
-                let mut states: Vec<Option<AnalysisState>> = vec![None; parts];
-                for piece in rx {
-                    match piece {
-                        Piece::Position {
-                            seq: s,
-                            position: p,
-                        } => {
-                            seq = s;
-                            position = Some(*p);
-                            states.iter_mut().for_each(|x| *x = None);
-                        }
-                        Piece::Part {
-                            seq: s,
-                            index,
-                            state,
-                        } if s == seq && index < parts => states[index] = Some(state),
-                        Piece::Part { .. } => continue,
-                    }
-                    if position.is_none() || states.iter().any(Option::is_none) {
-                        continue;
-                    }
-                    let parts_done: Vec<AnalysisState> =
-                        states.iter_mut().filter_map(Option::take).collect();
-                    let ck = Checkpoint {
-                        header: header.clone(),
-                        every_s,
-                        sequence: seq,
-                        complete: false,
-                        saved_unix_s: unix_now_s(),
-                        position: position.take().expect("checked above"),
-                        analysis: join_states(parts_done),
-                    };
-                    let t = Instant::now();
-                    match ck.write_atomic(&path) {
-                        Ok(n) => {
-                            count.fetch_add(1, Ordering::SeqCst);
-                            tracing::debug!(
-                                "checkpoint {seq}: {} ({n} bytes, {:.1} ms)",
-                                path.display(),
-                                t.elapsed().as_secs_f64() * 1e3
-                            );
-                        }
-                        Err(e) => tracing::warn!("checkpoint not written: {e:#}"),
-                    }
-                    flag.store(false, Ordering::SeqCst);
-                }
-            })
-            .map_err(|e| anyhow::anyhow!("cannot start the checkpoint thread: {e}"))?;
-        Ok(Collector {
-            tx,
-            handle,
-            in_flight,
-            written,
-        })
-    }
-
-    /// The sending side, for the stages.
-    pub fn sender(&self) -> crossbeam_channel::Sender<Piece> {
-        self.tx.clone()
-    }
-
-    /// Waits for the checkpoint in flight, if any, and stops the thread.
-    pub fn finish(self) -> u64 {
-        drop(self.tx);
-        let _ = self.handle.join();
-        self.written.load(Ordering::SeqCst)
-    }
-}
-
-/// The analysis parts of one run (consecutive channels) put back together.
-pub fn join_states(parts: Vec<AnalysisState>) -> AnalysisState {
-    let mut it = parts.into_iter();
-    let mut first = it.next().unwrap_or(AnalysisState {
-        input: String::new(),
-        channels: Vec::new(),
-        next_emit_s: f64::INFINITY,
-        bad_rows: 0,
-        elapsed_s: 0.0,
-    });
-    for p in it {
-        first.channels.extend(p.channels);
-        first.bad_rows += p.bad_rows;
-        first.next_emit_s = first.next_emit_s.max(p.next_emit_s);
-    }
-    first
-}
-
-/// When the next checkpoint is due: after `every_s` data-seconds (counted in steps) or
-/// wall-seconds.
-pub struct Schedule {
-    every_s: f64,
-    data_seconds: bool,
-    tau0_s: f64,
-    steps: u64,
-    next_steps: u64,
-    next_wall: Instant,
-    pub seq: u64,
-}
-
-impl Schedule {
-    pub fn new(plan: &CheckpointPlan, tau0_s: f64) -> Schedule {
-        let every_steps = ((plan.every_s / tau0_s).round() as u64).max(1);
-        Schedule {
-            every_s: plan.every_s,
-            data_seconds: plan.data_seconds,
-            tau0_s,
-            steps: 0,
-            next_steps: every_steps,
-            next_wall: Instant::now() + std::time::Duration::from_secs_f64(plan.every_s),
-            seq: plan.resume.as_ref().map_or(0, |r| r.1),
-        }
-    }
-
-    /// Counts steps read (frames and lost frames, or rows).
-    pub fn add_steps(&mut self, n: u64) {
-        self.steps += n;
-    }
-
-    /// True when a checkpoint is due and none is in flight; then the next is scheduled and the
-    /// sequence number advanced.
-    pub fn due(&mut self, in_flight: &AtomicBool) -> bool {
-        let now = Instant::now();
-        let due = if self.data_seconds {
-            self.steps >= self.next_steps
-        } else {
-            now >= self.next_wall
-        };
-        if !due || in_flight.swap(true, Ordering::SeqCst) {
-            return false;
-        }
-        let every_steps = ((self.every_s / self.tau0_s).round() as u64).max(1);
-        while self.next_steps <= self.steps {
-            self.next_steps += every_steps;
-        }
-        while self.next_wall <= now {
-            self.next_wall += std::time::Duration::from_secs_f64(self.every_s);
-        }
-        self.seq += 1;
-        true
-    }
 }

@@ -1,4 +1,4 @@
-//! Errors that reach the user, and the exit status each maps to (CONTRACT.md: 2 for usage or
+//! Errors that reach the user, and the exit status each maps to (docs/records.md: 2 for usage or
 //! configuration errors, 1 for anything else).
 
 use std::path::PathBuf;

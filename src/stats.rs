@@ -1,5 +1,5 @@
 //! Distribution functions shared by the stages: the chi-squared quantile behind every 95%
-//! interval (the Allan curve's points, THEORY.md section 1; the fit's coefficients, section 2).
+//! interval (the Allan curve's points, docs/theory.md section 1; the fit's coefficients, section 2).
 //! Written here rather than taken from statrs, whose inverse CDF is a slow general-purpose
 //! root search and loses digits at small degrees of freedom (tests/model/chi2_quantile.rs).
 

@@ -1,8 +1,8 @@
-//! The textbook batch formulas of THEORY.md section 1, written as plainly as possible.
+//! The textbook batch formulas of docs/theory.md section 1, written as plainly as possible.
 //!
 //! They are the reference the streaming accumulators are tested against, and they are slow
 //! (no sharing between cluster sizes). Input is phase (u), in one or more contiguous segments:
-//! a difference never spans two segments (THEORY.md section 1, "Gaps").
+//! a difference never spans two segments (docs/theory.md section 1, "Gaps").
 
 /// A neumaier-compensated running sum, so reference sums of many squares stay exact to ~1 ulp.
 #[derive(Debug, Clone, Copy, Default, serde::Serialize, serde::Deserialize)]
@@ -37,7 +37,7 @@ pub struct BatchPoint {
     pub count: u64,
 }
 
-/// Phase from increments: `x_0 = 0`, `x_k = d_1 + ... + d_k` (THEORY.md section 1), summed with
+/// Phase from increments: `x_0 = 0`, `x_k = d_1 + ... + d_k` (docs/theory.md section 1), summed with
 /// compensation.
 pub fn phase_from_increments(d: &[f64]) -> Vec<f64> {
     let mut x = Vec::with_capacity(d.len() + 1);
@@ -57,7 +57,7 @@ fn finish(sum: CompensatedSum, count: u64, denom_per_term: f64) -> Option<BatchP
     })
 }
 
-/// Overlapping Allan variance (THEORY.md section 1, the seed paper's formula (4)):
+/// Overlapping Allan variance (docs/theory.md section 1, the seed paper's formula (4)):
 /// `sum (x_{k+2m} - 2x_{k+m} + x_k)^2 / (2 tau^2 count)`.
 pub fn oavar(segments: &[&[f64]], m: usize, tau0_s: f64) -> Option<BatchPoint> {
     let tau = m as f64 * tau0_s;
@@ -73,7 +73,7 @@ pub fn oavar(segments: &[&[f64]], m: usize, tau0_s: f64) -> Option<BatchPoint> {
     finish(sum, count, 2.0 * tau * tau)
 }
 
-/// Overlapping Hadamard variance (THEORY.md section 1):
+/// Overlapping Hadamard variance (docs/theory.md section 1):
 /// `sum (x_{k+3m} - 3x_{k+2m} + 3x_{k+m} - x_k)^2 / (6 tau^2 count)`.
 pub fn ohvar(segments: &[&[f64]], m: usize, tau0_s: f64) -> Option<BatchPoint> {
     let tau = m as f64 * tau0_s;
@@ -89,7 +89,7 @@ pub fn ohvar(segments: &[&[f64]], m: usize, tau0_s: f64) -> Option<BatchPoint> {
     finish(sum, count, 6.0 * tau * tau)
 }
 
-/// Modified Allan variance (THEORY.md section 1):
+/// Modified Allan variance (docs/theory.md section 1):
 /// `sum_j (sum_{i=j}^{j+m-1} (x_{i+2m} - 2x_{i+m} + x_i))^2 / (2 m^2 tau^2 count)`.
 pub fn mvar(segments: &[&[f64]], m: usize, tau0_s: f64) -> Option<BatchPoint> {
     let tau = m as f64 * tau0_s;

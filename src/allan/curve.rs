@@ -1,12 +1,12 @@
 //! Turns accumulator readings into curves: per tau, the noise type, the equivalent degrees of
-//! freedom (Greenhall and Riley 2003) and a 95% chi-squared interval (THEORY.md section 4).
+//! freedom (Greenhall and Riley 2003) and a 95% chi-squared interval (docs/theory.md section 4).
 
 use super::accum::{LevelReading, StatSet};
 use super::edf::{edf, sigma_interval};
 use super::noise_id::{alpha_from_lag1, dmax_for, Lag1};
 use super::{Curve, CurvePoint, Stat};
 
-/// Confidence of the intervals written in `curve` records (CONTRACT.md: 95%).
+/// Confidence of the intervals written in `curve` records (docs/records.md: 95%).
 pub const CONFIDENCE: f64 = 0.95;
 
 /// Where the power-law noise type at each tau comes from.

@@ -1,5 +1,5 @@
 //! Equivalent degrees of freedom (edf) of the Allan-family estimators and their chi-squared
-//! confidence intervals (THEORY.md section 4).
+//! confidence intervals (docs/theory.md section 4).
 //!
 //! The edf is Greenhall's algorithm: C. A. Greenhall and W. J. Riley, "Uncertainty of stability
 //! variances based on finite differences", 35th PTTI meeting, 2003 (the method Stable32 and
@@ -259,13 +259,13 @@ pub fn greenhall_edf(alpha: i32, d: u32, m: u64, f: u64, s: f64, n_phase: u64) -
 }
 
 /// The edf of one statistic of [`Stat`] at cluster `m`, for `n_phase` phase points, when the
-/// estimator takes a difference every `stride` samples (1: fully overlapped, as in THEORY.md
+/// estimator takes a difference every `stride` samples (1: fully overlapped, as in docs/theory.md
 /// section 1; `m`: non-overlapped; the bounded-memory mode uses `max(1, m / L)`).
 ///
 /// Maps to [`greenhall_edf`] with `d` from [`Stat::diff_order`], `F = 1` for MVAR and `F = m`
 /// otherwise, and `S = m / stride`. The estimator is assumed to average
 /// `1 + floor((N - L) / stride)` differences (`L = m/F + m d`), which is the count of the
-/// overlapped formulas of THEORY.md section 1 when `stride = 1`. For MVAR, each difference is
+/// overlapped formulas of docs/theory.md section 1 when `stride = 1`. For MVAR, each difference is
 /// taken to average all `m` phase second differences of its window.
 pub fn edf(stat: Stat, alpha: i32, m: u64, stride: u64, n_phase: u64) -> Option<f64> {
     if m == 0 || stride == 0 {
@@ -279,7 +279,7 @@ pub fn edf(stat: Stat, alpha: i32, m: u64, stride: u64, n_phase: u64) -> Option<
     greenhall_edf(alpha, stat.diff_order(), m, f, s, n_phase)
 }
 
-/// Chi-squared confidence interval of a variance (THEORY.md section 4):
+/// Chi-squared confidence interval of a variance (docs/theory.md section 4):
 /// `[edf var / chi2_{(1+c)/2}(edf), edf var / chi2_{(1-c)/2}(edf)]` for a two-sided confidence
 /// `c` in (0, 1) (0.683 is Stable32's one-sigma interval, 0.95 the curve records'). `edf` need not
 /// be an integer. Returns `None` for `edf <= 0`, a confidence outside (0, 1) or a non-finite or
@@ -403,7 +403,7 @@ mod tests {
 
     #[test]
     fn white_fm_strided_is_the_exact_covariance_sum() {
-        // THEORY.md section 4: edf = 2 AVAR^2 / Var(AVAR_hat) = M^2 c(0)^2 / sum_{k,l} c(k-l)^2
+        // docs/theory.md section 4: edf = 2 AVAR^2 / Var(AVAR_hat) = M^2 c(0)^2 / sum_{k,l} c(k-l)^2
         // for Gaussian differences z_k taken every `stride` samples. For white FM (unit variance
         // per sample) c(h) = 2m - 3|h| for |h| <= m and -(2m - |h|) for m <= |h| <= 2m (the
         // autocorrelation of the -1/+1 window of length 2m). With m (d+1) > J_MAX the paper's

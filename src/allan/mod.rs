@@ -1,6 +1,6 @@
 //! The Allan family: overlapping Allan (AVAR), overlapping Hadamard (HVAR) and modified Allan
-//! (MVAR) variances (THEORY.md section 1), streamed sample by sample, with their degrees of
-//! freedom and confidence intervals (THEORY.md section 4).
+//! (MVAR) variances (docs/theory.md section 1), streamed sample by sample, with their degrees of
+//! freedom and confidence intervals (docs/theory.md section 4).
 //!
 //! This stage is pure: it takes increments or phase points and knows nothing about where they
 //! came from. [`accum`] holds the streaming accumulators, [`batch`] the textbook formulas they

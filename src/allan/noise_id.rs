@@ -1,6 +1,6 @@
 //! Power-law noise identification at one cluster size by the lag-1 autocorrelation (W. J. Riley
 //! and C. A. Greenhall, "Power law noise identification using the lag 1 autocorrelation", 18th
-//! EFTF, 2004), giving the `alpha` that [`super::edf`] needs (THEORY.md section 4).
+//! EFTF, 2004), giving the `alpha` that [`super::edf`] needs (docs/theory.md section 4).
 //!
 //! At cluster `m` the method looks at the `m`-averaged frequency `ybar`, successive blocks `m`
 //! samples apart, and at its first and second differences (the second and third differences of

@@ -111,7 +111,7 @@ fn gather(
                     columns.push(i);
                 }
             }
-            // The temperature column (CONTRACT.md's `temperature_c`), read here only.
+            // The temperature column (docs/records.md's `temperature_c`), read here only.
             let temp_col = reader.names().iter().position(|n| n == "temperature_c");
             if temp_col.is_some() {
                 g.temperature = Some(GapEvidence::new(cfg.clone()));

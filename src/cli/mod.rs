@@ -1,6 +1,6 @@
 //! The command line (a module of the binary, not of the library): argument parsing here, one file
 //! per subcommand beside it, each over `allanscope::...`. `main.rs` only calls
-//! [`main_with_args`] and maps errors to exit statuses (CONTRACT.md: 2 for usage and
+//! [`main_with_args`] and maps errors to exit statuses (docs/records.md: 2 for usage and
 //! configuration errors, 1 for anything else).
 
 mod aggregate;
@@ -135,7 +135,7 @@ pub struct AggregateArgs {
     pub out: Option<PathBuf>,
 }
 
-/// Options shared by the commands that read data (CONTRACT.md).
+/// Options shared by the commands that read data (docs/records.md).
 #[derive(Debug, Args, Clone)]
 pub struct DataArgs {
     /// A frame descriptor (a name from config/frames, or a path), or `csv` for text columns.
@@ -319,7 +319,7 @@ pub(crate) fn finish_records(
     Ok(())
 }
 
-/// The error of a replay that was stopped before its input ended (exit status 1; CONTRACT.md:
+/// The error of a replay that was stopped before its input ended (exit status 1; docs/records.md:
 /// 0 only when the input was read to its end). The final records were written all the same.
 pub(crate) fn interrupted(input: &str, progress: &allanscope::source::Progress) -> anyhow::Error {
     anyhow::anyhow!(

@@ -35,7 +35,7 @@ use super::descriptor::{BitMeaning, FrameDescriptor, MessageSpec};
 use super::field::{read, read_bits, RawValue};
 use super::{ChannelValue, DecodedFrame, FrameEvent};
 
-/// Decoder health: the CONTRACT.md `health` fields first, then extra detail.
+/// Decoder health: the docs/records.md `health` fields first, then extra detail.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Health {
     /// Good frames delivered (duplicates not included).
@@ -543,7 +543,7 @@ mod tests {
         assert_eq!(br, 0);
     }
 
-    /// The `health` record carries the CONTRACT.md field names.
+    /// The `health` record carries the docs/records.md field names.
     #[test]
     fn health_serializes_contract_fields() {
         let v = serde_json::to_value(Health::default()).expect("serialize");

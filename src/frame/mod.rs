@@ -3,7 +3,7 @@
 //! - [`descriptor`]: the TOML descriptor language and its checked form [`FrameDescriptor`].
 //! - [`decoder`]: [`Decoder`], fed arbitrary chunks of a byte stream; finds sync, checks length
 //!   and checksum, resynchronises after garbage, follows the frame counter (gaps, duplicates)
-//!   and keeps the [`Health`] counters of CONTRACT.md.
+//!   and keeps the [`Health`] counters of docs/records.md.
 //! - [`encoder`]: builds valid frames of a descriptor (for the simulator and tests).
 //! - [`checksum`], [`field`]: the checksum algorithms and wire types they share.
 //!

@@ -1,5 +1,5 @@
-//! The diagnosis proper (THEORY.md section 5): where the measured AVAR curve departs from the
-//! fitted five-term model (on the tau axis and in time), which effect of THEORY.md section 3
+//! The diagnosis proper (docs/theory.md section 5): where the measured AVAR curve departs from the
+//! fitted five-term model (on the tau axis and in time), which effect of docs/theory.md section 3
 //! closes the gap, and by how much. Works on an [`EvidenceSnapshot`]; pure and synchronous.
 //!
 //! # Method
@@ -15,8 +15,8 @@
 //!   [`Thresholds`] are calibrated by simulation with that ridge.
 //! - Fit of a model (five terms plus effect columns): generalised least squares with the
 //!   covariance `D S D`, `D = diag(model)`, solved as NNLS after whitening, reweighted from the
-//!   model a few times (weights from the data bias the fit low: THEORY.md section 2).
-//! - Gap statistic `G = r' S^-1 r / (J - p)`, `r = ln AVAR_hat - ln AVAR_model` (THEORY.md
+//!   model a few times (weights from the data bias the fit low: docs/theory.md section 2).
+//! - Gap statistic `G = r' S^-1 r / (J - p)`, `r = ln AVAR_hat - ln AVAR_model` (docs/theory.md
 //!   section 5); near 1 when the model is right.
 //! - Effects: for each candidate, its shape parameter on a log grid (NNLS at each), the best one
 //!   polished by golden section; the candidate with the largest drop in `r' S^-1 r` is added if
@@ -86,7 +86,7 @@ pub enum DiagnoseError {
     Covariance,
 }
 
-/// The verdict of CONTRACT.md's `diagnosis` record.
+/// The verdict of docs/records.md's `diagnosis` record.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Verdict {
@@ -273,7 +273,7 @@ pub fn diagnose_with_temperature(
             let f = prob
                 .gls(&spec_from(&prob, &kept, &offset))
                 .unwrap_or_else(|| prev.clone());
-            // In the order they were added (CONTRACT.md): the stationary effects kept, then
+            // In the order they were added (docs/records.md): the stationary effects kept, then
             // the warm-up.
             effects = kept;
             for e in effects.iter_mut() {

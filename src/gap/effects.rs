@@ -1,12 +1,12 @@
-//! Candidate effects of the diagnosis (THEORY.md section 3) and their AVAR columns: for a fixed
-//! shape parameter each effect's AVAR is linear in its amplitude squared (THEORY.md section 5),
+//! Candidate effects of the diagnosis (docs/theory.md section 3) and their AVAR columns: for a fixed
+//! shape parameter each effect's AVAR is linear in its amplitude squared (docs/theory.md section 5),
 //! so a candidate is a column generator `shape -> column` plus the parameter names of
-//! CONTRACT.md's `diagnosis` record.
+//! docs/records.md's `diagnosis` record.
 
 use crate::model::terms;
 use serde::{Deserialize, Serialize};
 
-/// The kinds of effect CONTRACT.md names.
+/// The kinds of effect docs/records.md names.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum EffectKind {
@@ -60,7 +60,7 @@ impl EffectKind {
     }
 }
 
-/// A fitted effect with CONTRACT.md's parameters (rate units u/s, times s, frequencies Hz).
+/// A fitted effect with docs/records.md's parameters (rate units u/s, times s, frequencies Hz).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum EffectParams {
     GaussMarkov {
@@ -102,7 +102,7 @@ impl EffectParams {
         }
     }
 
-    /// The `params` object of the record, with CONTRACT.md's names.
+    /// The `params` object of the record, with docs/records.md's names.
     pub fn to_json(&self) -> serde_json::Value {
         use serde_json::json;
         match *self {
@@ -181,7 +181,7 @@ impl Grid {
 }
 
 /// The column an effect of unit amplitude adds at each cluster size `ms` (AVAR, u^2/s^2 per
-/// (u/s)^2), THEORY.md section 3 via [`crate::model::terms`]. For the output filter it is the
+/// (u/s)^2), docs/theory.md section 3 via [`crate::model::terms`]. For the output filter it is the
 /// replacement of the N column: filtered white rate of unit N.
 pub fn effect_column(
     kind: EffectKind,

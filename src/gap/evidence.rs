@@ -1,5 +1,5 @@
 //! Evidence for the sim-to-real diagnosis, gathered in one streaming pass over a channel's
-//! increments (THEORY.md section 5): the AVAR curve at dense taus, per-segment AVAR curves (a
+//! increments (docs/theory.md section 5): the AVAR curve at dense taus, per-segment AVAR curves (a
 //! dynamic Allan variance) and block means of the rate. Pure and synchronous: the same object is
 //! fed by a file replay or a live stream, and [`GapEvidence::snapshot`] can be taken at any time.
 //!

@@ -1,4 +1,4 @@
-//! The gap on a held-out run (THEORY.md section 5): the effects fitted on one run held fixed on
+//! The gap on a held-out run (docs/theory.md section 5): the effects fitted on one run held fixed on
 //! another, only the five-term amplitudes refitted, judged as the fitting run's effects are
 //! (each kept only if it lowers the held-out gap), so the record says which effects carried.
 

@@ -1,4 +1,4 @@
-//! The sim-to-real gap (SEED.md, "The gap they left open"; THEORY.md sections 3-5): where a
+//! The sim-to-real gap (the seed paper, docs/theory.md section 6; docs/theory.md sections 3-5): where a
 //! channel's measured Allan curve departs from the fitted five-term model, which effect closes
 //! the departure, and by how much.
 //!
@@ -8,7 +8,7 @@
 //! of the time-domain tests [`warmup`] and [`steps`] ([`jump_mixture`]: statistics measured and
 //! not adopted); [`segments`] tests homogeneity in time; [`diagnose`](mod@diagnose) orchestrates
 //! them and decides ([`Diagnosis`]) by [`thresholds`]; [`holdout`] judges a held-out run;
-//! [`oracle`] bounds what any test could do; [`record`] writes CONTRACT.md's `diagnosis` record;
+//! [`oracle`] bounds what any test could do; [`record`] writes docs/records.md's `diagnosis` record;
 //! [`unit_model`] turns a diagnosis into the simulator model of the fitted unit (with the LSB
 //! that [`lsb`] reads off the values).
 //! Everything is pure and synchronous.

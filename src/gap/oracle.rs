@@ -5,7 +5,7 @@
 //!
 //! Evidence models (the ones the diagnosis fits with):
 //! - the curve: `ln AVAR_hat ~ N(ln AVAR(theta), S)` with `S` the analytic log covariance of
-//!   [`GapProblem`] (THEORY.md section 5), the five-term amplitudes as nuisance;
+//!   [`GapProblem`] (docs/theory.md section 5), the five-term amplitudes as nuisance;
 //! - the block means: their first differences `d ~ N(r 1 + signal, Sigma)` with `Sigma` from
 //!   the five-term model ([`block_diff_covariance`]), the drift `r` as nuisance (the level drops
 //!   out of the differences).

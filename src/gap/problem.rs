@@ -1,4 +1,4 @@
-//! The generalised-least-squares problem on one measured AVAR curve (THEORY.md section 5): the
+//! The generalised-least-squares problem on one measured AVAR curve (docs/theory.md section 5): the
 //! curve's taus, `ln AVAR_hat`, and the covariance `S` of the log estimates (the analytic
 //! covariance of the five-term model fitted to the curve, [`AvarCovariance`], with a ridge
 //! [`RIDGE`]); the GLS fit of a model (five terms plus effect columns and a fixed offset), the
@@ -106,7 +106,7 @@ impl GapProblem {
         // Each point's count is that of the span its strided differences cover (`count *
         // stride`), and the covariance is that of differences taken at the point's stride
         // (`matrix_strided`): for N, B and K that is the full overlap's over the span, but white
-        // phase noise (Q, quantization) loses degrees of freedom to the stride (THEORY.md
+        // phase noise (Q, quantization) loses degrees of freedom to the stride (docs/theory.md
         // section 1; docs/gap.md, "Covariance at strided levels").
         let cov_pts: Vec<CovPoint> = pts
             .iter()
@@ -157,7 +157,7 @@ impl GapProblem {
     }
 
     /// The unridged covariance `S` of `ln AVAR_hat` at the curve's taus (the analytic
-    /// covariance of the five-term fit `c_init`, THEORY.md section 5).
+    /// covariance of the five-term fit `c_init`, docs/theory.md section 5).
     pub fn log_covariance(&self) -> &DMatrix<f64> {
         &self.s_plain
     }
@@ -327,7 +327,7 @@ impl GapProblem {
                 hi: tmax,
                 per_decade: 12.0,
             },
-            // First maximum of the sinusoid's AVAR at 0.371 / f0 (THEORY.md section 3).
+            // First maximum of the sinusoid's AVAR at 0.371 / f0 (docs/theory.md section 3).
             EffectKind::Sinusoid => Grid {
                 lo: 0.371 / tmax,
                 hi: (0.5 / self.tau0_s).min(0.371 / tmin * 2.0),

@@ -1,4 +1,4 @@
-//! CONTRACT.md's `diagnosis` record: `type`, `channel`, `gap_before`, `gap_after`, `verdict`,
+//! docs/records.md's `diagnosis` record: `type`, `channel`, `gap_before`, `gap_after`, `verdict`,
 //! `regions`, `effects`, optional `holdout`, plus extra fields (`final`, `t_data`, `tau_span`,
 //! `base_coef`, `final_coef`, `segments`, `jumps`, `residual_shape`, `model_tau`, `model_base`,
 //! `model_effects`).
@@ -16,7 +16,7 @@ pub struct RegionRecord {
     pub worst_ratio: f64,
 }
 
-/// One effect of the record (`params` with CONTRACT.md's names: u/s, s, Hz).
+/// One effect of the record (`params` with docs/records.md's names: u/s, s, Hz).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct EffectRecord {
     pub kind: String,
@@ -24,7 +24,7 @@ pub struct EffectRecord {
     pub gap_after: f64,
 }
 
-/// The gap on a held-out run (CONTRACT.md's `gap_before`, `gap_after`; extra fields `carried`
+/// The gap on a held-out run (docs/records.md's `gap_before`, `gap_after`; extra fields `carried`
 /// and `effects`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct HoldoutRecord {
@@ -81,7 +81,7 @@ pub struct DiagnosisRecord {
     /// Tau range of the curve used (s).
     #[serde(default)]
     pub tau_span: [f64; 2],
-    /// Five-term fit alone and with the effects, `[Q, N, B, K, R]` (THEORY.md section 2 units).
+    /// Five-term fit alone and with the effects, `[Q, N, B, K, R]` (docs/theory.md section 2 units).
     #[serde(default)]
     pub base_coef: [f64; 5],
     #[serde(default)]

@@ -1,4 +1,4 @@
-//! Homogeneity of the curve across the run's segments (THEORY.md section 5, "Where in time"):
+//! Homogeneity of the curve across the run's segments (docs/theory.md section 5, "Where in time"):
 //! the per-segment AVAR at each octave tau against the segments' weighted mean, scaled by the
 //! model's relative variance. Part of [`super::diagnose`](mod@super::diagnose)'s record; decides nothing.
 
@@ -7,7 +7,7 @@ use crate::model::avar_cov::{AvarCovariance, CovPoint};
 use crate::model::terms::basis;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
-/// Homogeneity of one tau across the segments (THEORY.md section 5, "Where in time").
+/// Homogeneity of one tau across the segments (docs/theory.md section 5, "Where in time").
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SegmentTest {
     pub tau_s: f64,
@@ -22,7 +22,7 @@ pub struct SegmentTest {
 
 /// Homogeneity across the segments of each octave tau with enough differences per segment:
 /// `ln v_k` against its weighted mean, scaled by the model's relative variance at the
-/// segment's count (THEORY.md section 5, "Where in time"). Segments shorter than half the
+/// segment's count (docs/theory.md section 5, "Where in time"). Segments shorter than half the
 /// longest are left out.
 pub fn segment_tests(snap: &EvidenceSnapshot, c: &[f64; 5]) -> Vec<SegmentTest> {
     let longest = snap.segments.iter().map(|s| s.len).max().unwrap_or(0);

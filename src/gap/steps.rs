@@ -1,4 +1,4 @@
-//! Bias jumps found in time (THEORY.md sections 3 and 5): steps in the block-mean rate by
+//! Bias jumps found in time (docs/theory.md sections 3 and 5): steps in the block-mean rate by
 //! generalised least squares with the fitted model's noise covariance ([`super::block_cov`]),
 //! forward selection and the acceptance rule of [`JumpFinding::accepted`]; the single-step scan
 //! and standard errors the calibration and [`super::jump_mixture`] use.
@@ -72,7 +72,7 @@ impl JumpFinding {
 }
 
 /// Bias jumps by generalised least squares on the first differences of the block-mean rate
-/// (THEORY.md sections 3 and 5): `d = r 1 + sum_j s_j p_j + noise`, the noise covariance from
+/// (docs/theory.md sections 3 and 5): `d = r 1 + sum_j s_j p_j + noise`, the noise covariance from
 /// the fitted model (five terms `c`, flicker and random walk included, plus the stationary
 /// `effects`: [`block_diff_covariance`]). A jump at a block boundary is a spike `p = e_k` in `d`; one
 /// inside block `k` splits over `d_{k-1}` and `d_k` (`p = (e_{k-1} + e_k) / 2`). Forward

@@ -1,4 +1,4 @@
-//! A warm-up found in time (THEORY.md section 3): `A e^{-t/T}` fitted by generalised least squares
+//! A warm-up found in time (docs/theory.md section 3): `A e^{-t/T}` fitted by generalised least squares
 //! to the first differences of the block-mean rate, with the covariance of [`super::block_cov`],
 //! `T` scanned on a log grid; its statistic integrated over `T` ([`WarmupFinding::log_bf`]).
 
@@ -38,7 +38,7 @@ pub fn warmup_block_shape(i: usize, tb: f64, t: f64) -> f64 {
 
 /// A warm-up in the block means: generalised least squares of the first differences of the
 /// block-mean rate on `r + A (e_{i+1} - e_i)`, `e_i` the block mean of `e^{-t/T}` (the warm-up
-/// of THEORY.md section 3 over a linear drift `r`), with the covariance of the differences from
+/// of docs/theory.md section 3 over a linear drift `r`), with the covariance of the differences from
 /// the fitted model (five terms `c` plus the stationary `effects`). `T` is scanned on a log grid
 /// from half a block to a quarter of the run. The statistic is the drop of the whitened
 /// residual sum of squares against the drift alone (about chi-squared with one degree of

@@ -1,4 +1,4 @@
-//! Inputs that are not frames: text columns (CONTRACT.md, "Text columns").
+//! Inputs that are not frames: text columns (docs/records.md, "Text columns").
 //!
 //! A reader turns bytes into [`Chunk`]s of rows; it knows nothing of statistics.
 

@@ -1,5 +1,5 @@
 //! Text columns: one row per sample, columns separated by commas, tabs or spaces, an optional
-//! first row of channel names (otherwise `c1`, `c2`, ...), `#` lines skipped (CONTRACT.md).
+//! first row of channel names (otherwise `c1`, `c2`, ...), `#` lines skipped (docs/records.md).
 //!
 //! Streams: rows are read line by line and handed on in batches; the file is never held in
 //! memory. An empty row, or a row whose every field is empty or `nan`, is a gap for every

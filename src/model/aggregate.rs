@@ -1,4 +1,4 @@
-//! Run-to-run statistics of fitted coefficients (THEORY.md section 2, the seed paper's table 2):
+//! Run-to-run statistics of fitted coefficients (docs/theory.md section 2, the seed paper's table 2):
 //! over the runs where a coefficient is determined, the mean, the sample standard deviation
 //! (n - 1), the Student 95% interval of the mean, and the paper's `mean +- 1.96 sd / sqrt(n)`.
 
@@ -65,7 +65,7 @@ pub fn aggregate(runs: &[[Option<f64>; 5]]) -> [Option<RunStats>; 5] {
     std::array::from_fn(|i| run_stats(&runs.iter().map(|r| r[i]).collect::<Vec<_>>()))
 }
 
-/// One run's determined values from a fit (the `value` of CONTRACT.md's `coef`).
+/// One run's determined values from a fit (the `value` of docs/records.md's `coef`).
 pub fn determined_values(fit: &crate::model::fit::FitResult) -> [Option<f64>; 5] {
     std::array::from_fn(|i| fit.coef[i].determined.then_some(fit.coef[i].value))
 }
@@ -90,7 +90,7 @@ impl RunCoefs {
         }
     }
 
-    /// From a `fit` record as CONTRACT.md writes it (`channel`, `unit`, `coef.{Q..R}.value` and
+    /// From a `fit` record as docs/records.md writes it (`channel`, `unit`, `coef.{Q..R}.value` and
     /// `.determined`). `None` when the object is not a well-formed `fit` record.
     pub fn from_fit_record(rec: &serde_json::Value) -> Option<RunCoefs> {
         if rec.get("type")?.as_str()? != "fit" {
@@ -123,7 +123,7 @@ impl RunCoefs {
     }
 }
 
-/// Run-to-run statistics of one coefficient of one channel (CONTRACT.md's `aggregate` record).
+/// Run-to-run statistics of one coefficient of one channel (docs/records.md's `aggregate` record).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CoefAggregate {
     pub channel: String,

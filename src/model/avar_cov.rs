@@ -1,5 +1,5 @@
 //! Covariance of overlapping Allan-variance estimates between cluster sizes under the five-term
-//! model (THEORY.md sections 4 and 5).
+//! model (docs/theory.md sections 4 and 5).
 //!
 //! The phase of each random term has a generalized covariance function `G(t)` (valid for filters
 //! that annihilate polynomials of degree <= 1, such as the second difference):
@@ -820,7 +820,7 @@ impl AvarCovariance {
     }
 
     /// `Cov(AVAR_hat_i, AVAR_hat_j)` in (u/s)^4 for the five-term model with
-    /// `c = (Q^2, N^2, B^2, K^2, R^2)`, sampling step `tau0_s` (THEORY.md section 5), for
+    /// `c = (Q^2, N^2, B^2, K^2, R^2)`, sampling step `tau0_s` (docs/theory.md section 5), for
     /// full-overlap estimates.
     pub fn matrix(&mut self, tau0_s: f64, points: &[CovPoint], c: &[f64; 5]) -> DMatrix<f64> {
         self.matrix_strided(tau0_s, points, &[], c)

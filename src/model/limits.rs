@@ -8,7 +8,7 @@
 //! coef = "N"                 # Q, N, B, K or R
 //! max = 0.3                  # an upper bound (`min` for a lower one; both may be given)
 //! unit = "arcsec/sqrt(s)"    # the unit the bound is stated in; "native" (the default) is the
-//!                            # coefficient's own unit (THEORY.md section 2 table)
+//!                            # coefficient's own unit (docs/theory.md section 2 table)
 //!
 //! [[limits]]
 //! channel = "g4"
@@ -19,7 +19,7 @@
 //! [[limits]]
 //! channel = "a4"
 //! coef = "B"
-//! over = "runs_sd"           # run-to-run: the sd of B over the runs (SEED.md: <= 5e-4 m/s^2)
+//! over = "runs_sd"           # run-to-run: the sd of B over the runs (the seed paper (docs/theory.md section 6): <= 5e-4 m/s^2)
 //! max = 5e-4
 //! unit = "m/s^2"
 //! ```
@@ -71,7 +71,7 @@ impl Coef {
     }
 
     /// Power of time the coefficient carries beyond the channel's unit: Q u, N u/sqrt(s),
-    /// B u/s, K u/s/sqrt(s), R u/s^2 (THEORY.md section 2).
+    /// B u/s, K u/s/sqrt(s), R u/s^2 (docs/theory.md section 2).
     fn time_exponent(self) -> f64 {
         -0.5 * self.index() as f64
     }
@@ -347,7 +347,7 @@ pub fn judge(specs: &[LimitSpec], fits: &[ChannelFit]) -> Judgement {
 }
 
 /// 95% interval of a standard deviation `sd` from `n` samples: `sd sqrt((n-1) / chi2_{q}(n-1))`
-/// at `q = 0.975, 0.025` (THEORY.md section 4's form).
+/// at `q = 0.975, 0.025` (docs/theory.md section 4's form).
 pub fn sd_interval(sd: f64, n: usize) -> Option<(f64, f64)> {
     if n < 2 {
         return None;

@@ -1,4 +1,4 @@
-//! The noise model: the five-term Allan-variance model (THEORY.md section 2), its fit, run-to-run
+//! The noise model: the five-term Allan-variance model (docs/theory.md section 2), its fit, run-to-run
 //! aggregation, datasheet units, IEEE 952 read-outs and limits. Works on curves only; never sees samples.
 
 pub mod aggregate;

@@ -1,6 +1,6 @@
 //! Non-negative least squares for small dense problems: minimise `||A x - b||_2` subject to
 //! `x >= 0` by the active-set method of Lawson and Hanson ("Solving Least Squares Problems", 1974,
-//! chapter 23, algorithm NNLS). THEORY.md section 2: the five-term model is linear in
+//! chapter 23, algorithm NNLS). docs/theory.md section 2: the five-term model is linear in
 //! `c = (Q^2, N^2, B^2, K^2, R^2) >= 0`, so a weighted fit is exactly this problem.
 //!
 //! Sized for the model fit (a handful of columns, tens of rows); the inner least-squares

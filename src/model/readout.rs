@@ -4,7 +4,7 @@
 //! at tau = 3 s. They come from the curve alone, not from the five-term fit (model::fit), so the
 //! two can be compared. Units are native (u/sqrt(s), u/s, u/s/sqrt(s)); model::units converts.
 //!
-//! The rules (THEORY.md section 2; IEEE 952 annex C.1 to C.3):
+//! The rules (docs/theory.md section 2; IEEE 952 annex C.1 to C.3):
 //! - a white-rate term alone gives `sigma(tau) = N / sqrt(tau)`: N is the -1/2 line at tau = 1 s;
 //! - a flicker term alone gives the flat `sigma = B sqrt(2 ln 2 / pi) = 0.664 B`: B is the curve's
 //!   minimum over 0.664 (the minimum being where the flicker floor shows; where white rate and

@@ -1,4 +1,4 @@
-//! Closed forms of the Allan variance for the five-term model (THEORY.md section 2, the seed
+//! Closed forms of the Allan variance for the five-term model (docs/theory.md section 2, the seed
 //! paper's formula (3), IEEE Std 952-1997 annex C).
 
 use std::f64::consts::{LN_2, PI};
@@ -7,7 +7,7 @@ use std::f64::consts::{LN_2, PI};
 pub const TERM_NAMES: [&str; 5] = ["Q", "N", "B", "K", "R"];
 
 /// The basis functions of the five-term model at `tau_s`: `AVAR(tau) = sum_i c_i * basis_i(tau)`
-/// with `c = (Q^2, N^2, B^2, K^2, R^2)` (THEORY.md section 2).
+/// with `c = (Q^2, N^2, B^2, K^2, R^2)` (docs/theory.md section 2).
 pub fn basis(tau_s: f64) -> [f64; 5] {
     [
         3.0 / (tau_s * tau_s),
@@ -31,7 +31,7 @@ pub fn avar(coef: [f64; 5], tau_s: f64) -> f64 {
 // Exact discrete-time closed forms, for increments sampled at tau0 (the simulator's output).
 //
 // Derivation. Let `x_k` be the phase at `t = k tau0` and `D_k(m) = x_{k+2m} - 2 x_{k+m} + x_k` the
-// second difference, so that `AVAR(m tau0) = E[D^2] / (2 tau^2)` (THEORY.md section 1). When the
+// second difference, so that `AVAR(m tau0) = E[D^2] / (2 tau^2)` (docs/theory.md section 1). When the
 // increments are stationary with phase structure function `S(n) = Var(x_{k+n} - x_k)`, writing
 // `D = A - B` with `A`, `B` the two consecutive m-blocks gives `Var D = 2 S(m) - 2 Cov(A, B)` and
 // `S(2m) = 2 S(m) + 2 Cov(A, B)`, hence
@@ -58,12 +58,12 @@ pub fn avar_from_structure(s: impl Fn(u64) -> f64, m: u64, tau0_s: f64) -> f64 {
     (4.0 * s(m) - s(2 * m)) / (2.0 * tau * tau)
 }
 
-/// Quantization with the remainder carried: `Q = lsb / sqrt(12)` in u (THEORY.md section 2).
+/// Quantization with the remainder carried: `Q = lsb / sqrt(12)` in u (docs/theory.md section 2).
 pub fn quantization_q(lsb_u: f64) -> f64 {
     lsb_u / 12f64.sqrt()
 }
 
-/// White phase noise (Q in u): `3 Q^2 / tau^2`, exact at every m (THEORY.md section 2).
+/// White phase noise (Q in u): `3 Q^2 / tau^2`, exact at every m (docs/theory.md section 2).
 pub fn white_phase_avar(q_u: f64, tau_s: f64) -> f64 {
     3.0 * q_u * q_u / (tau_s * tau_s)
 }
@@ -73,13 +73,13 @@ pub fn white_rate_avar(n: f64, tau_s: f64) -> f64 {
     n * n / tau_s
 }
 
-/// Flicker rate noise (B in u/s): `(2 ln2 / pi) B^2`, flat (THEORY.md section 2).
+/// Flicker rate noise (B in u/s): `(2 ln2 / pi) B^2`, flat (docs/theory.md section 2).
 pub fn flicker_avar(b: f64) -> f64 {
     2.0 * LN_2 / PI * b * b
 }
 
 /// Rate random walk (K in u/s/sqrt(s)) with increments integrated exactly: `K^2 tau / 3` at
-/// every m (THEORY.md section 2).
+/// every m (docs/theory.md section 2).
 pub fn rate_random_walk_avar(k: f64, tau_s: f64) -> f64 {
     k * k * tau_s / 3.0
 }
@@ -120,7 +120,7 @@ fn gm_shape(x: f64) -> f64 {
 }
 
 /// First-order Gauss-Markov rate noise of stationary sd `sigma` (u/s) and correlation time
-/// `tau_c_s` (THEORY.md section 3): `(2 s^2 T / tau) (1 - (T / 2tau)(3 - 4 e^{-tau/T} + e^{-2tau/T}))`.
+/// `tau_c_s` (docs/theory.md section 3): `(2 s^2 T / tau) (1 - (T / 2tau)(3 - 4 e^{-tau/T} + e^{-2tau/T}))`.
 /// Exact at every m for the simulator's exactly integrated increments.
 pub fn gauss_markov_avar(sigma: f64, tau_c_s: f64, tau_s: f64) -> f64 {
     let x = tau_s / tau_c_s;
@@ -128,7 +128,7 @@ pub fn gauss_markov_avar(sigma: f64, tau_c_s: f64, tau_s: f64) -> f64 {
 }
 
 /// Sinusoidal rate `A sin(2 pi f0 t + phi)` (A in u/s, f0 in Hz), averaged over the phase
-/// (THEORY.md section 3): `A^2 sin^4(pi f0 tau) / (pi f0 tau)^2`. Holds at every m since the
+/// (docs/theory.md section 3): `A^2 sin^4(pi f0 tau) / (pi f0 tau)^2`. Holds at every m since the
 /// increments are exact integrals; a finite record departs from it by O(1 / (f0 * duration)).
 pub fn sinusoid_avar(amplitude: f64, frequency_hz: f64, tau_s: f64) -> f64 {
     let x = PI * frequency_hz * tau_s;
@@ -164,7 +164,7 @@ pub fn output_filter_power_gain(time_constant_s: f64, tau0_s: f64, frequency_hz:
 /// `A^2 T^2 (1 - e^{-tau/T})^4 (1 - psi^M) / ((1 - psi) 2 tau^2 M)`, `psi = e^{-2 tau0/T}`,
 /// `M = n - 2m + 1`: each second difference is `-A T e^{-k tau0/T} (1 - e^{-tau/T})^2`, a
 /// geometric sequence in k. Deterministic; grows like tau^2 for tau << T, fades as the record
-/// lengthens (THEORY.md section 3: localised in time). Returns 0 when `M < 1`.
+/// lengthens (docs/theory.md section 3: localised in time). Returns 0 when `M < 1`.
 pub fn warmup_avar(
     amplitude: f64,
     time_constant_s: f64,
@@ -186,7 +186,7 @@ pub fn warmup_avar(
 
 /// The overlapped AVAR (u^2/s^2) at cluster `m`, on a record of `n_increments`, of the rate steps
 /// alone: `y_n = sum_i s_i [n >= p_i]`, sizes `sizes` (u/s) at sample indices `positions`
-/// (THEORY.md section 1 applied to this deterministic signal; section 3 for the jumps). Each
+/// (docs/theory.md section 1 applied to this deterministic signal; section 3 for the jumps). Each
 /// step adds to the difference of neighbouring cluster means a triangle in the start index `k`,
 /// of height `s_i` and base `2m` ending at `p_i`. Past 64 points per triangle side the sum over
 /// `k` is taken at the midpoints of runs of `m / 64` starts (the summand is piecewise quadratic,
@@ -246,7 +246,7 @@ pub fn steps_avar(positions: &[u64], sizes: &[f64], m: u64, n_increments: u64) -
 /// Bias jumps at Poisson times (mean interval `M` s) with Gaussian sizes of rms `s` (u/s): the
 /// rate is a compound Poisson walk whose increments are independent with variance `s^2 / M` per
 /// second, the same second-order law as a rate random walk with `K^2 = s^2 / M`, so
-/// `AVAR = (s^2 / M) tau / 3` (THEORY.md section 3; the estimate is far from Gaussian when few jumps).
+/// `AVAR = (s^2 / M) tau / 3` (docs/theory.md section 3; the estimate is far from Gaussian when few jumps).
 pub fn bias_jumps_avar(mean_interval_s: f64, rms_size: f64, tau_s: f64) -> f64 {
     rms_size * rms_size / mean_interval_s * tau_s / 3.0
 }

@@ -1,7 +1,7 @@
 //! Units, in one place: the constants (standard gravity, arcsec per radian, the foot), what a
 //! channel's increment unit measures ([`SensorKind`], [`IncrementUnit`]), the unit expressions
 //! of limits ([`Unit`], [`parse_unit`]), and the five coefficients in datasheet units beside the
-//! native ones (THEORY.md section 2), with the quantization check `Q / (LSB / sqrt(12))`.
+//! native ones (docs/theory.md section 2), with the quantization check `Q / (LSB / sqrt(12))`.
 //!
 //! A channel's unit `u` is always the unit of its *increment* (an angle or a velocity change over
 //! one sample), whether the input held increments, rates or phase. Datasheet units depend only
@@ -110,7 +110,7 @@ pub fn increment_unit_label(unit: &str, rate: bool) -> String {
 /// Index of each coefficient in the arrays below: Q, N, B, K, R.
 pub const COEF_NAMES: [&str; 5] = ["Q", "N", "B", "K", "R"];
 
-/// Native unit of each coefficient for a channel in `u` (THEORY.md section 2 table).
+/// Native unit of each coefficient for a channel in `u` (docs/theory.md section 2 table).
 pub fn native_units(u: &str) -> [String; 5] {
     [
         u.to_string(),
@@ -144,7 +144,7 @@ pub fn datasheet_units(kind: SensorKind) -> [&'static str; 5] {
 /// deg/h/sqrt(h); R: `3600^2 d` deg/h^2. Accelerometer Q: `d` m/s; N: `60 d` m/s/sqrt(h);
 /// B: `d / ug` micro-g; K: `60 d / ug` micro-g/sqrt(h); R: `3600 d / ug` micro-g/h.
 /// (For a gyro in arcsec, `d = 1/3600`: N/60 is deg/sqrt(h) and B in arcsec/s is deg/h, the
-/// checks of THEORY.md section 2.)
+/// checks of docs/theory.md section 2.)
 pub fn datasheet_factors(unit: &IncrementUnit) -> [f64; 5] {
     match unit.kind {
         SensorKind::Gyro => {
@@ -230,7 +230,7 @@ pub fn datasheet(native: [f64; 5], unit: &IncrementUnit) -> Datasheet {
     }
 }
 
-/// THEORY.md section 2: uniform rounding of the phase with step `lsb` gives `Q = lsb / sqrt(12)`;
+/// docs/theory.md section 2: uniform rounding of the phase with step `lsb` gives `Q = lsb / sqrt(12)`;
 /// the ratio above 1 is excess white-phase noise.
 pub fn quantization_ratio(q: f64, lsb: f64) -> f64 {
     q / (lsb / 12f64.sqrt())

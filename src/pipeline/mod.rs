@@ -21,6 +21,7 @@
 //! Text columns (`--format csv`) enter the same analysis and writer stages from a reader
 //! thread instead of the source task and decode thread.
 
+pub mod checkpointing;
 pub mod decode;
 pub mod reorder;
 pub mod signals;
@@ -36,13 +37,14 @@ use anyhow::{Context, Result};
 use tokio_util::sync::CancellationToken;
 
 use crate::analysis::RunAnalysis;
-use crate::checkpoint::{Checkpoint, CheckpointPlan, Collector, Piece, Position, Schedule};
+use crate::checkpoint::{Checkpoint, CheckpointPlan, Position};
 use crate::frame::{FrameDescriptor, Health};
 use crate::input::text::{TextReader, BATCH_ROWS};
 use crate::input::Chunk;
 use crate::sink::metrics::MetricsTap;
 use crate::sink::records::{HealthRecord, Record};
 use crate::source::{Capture, CaptureSlot, Progress, SourceContext, SourceEvent, SourceSpec};
+use checkpointing::{Collector, Piece, Schedule};
 use decode::DecodeStage;
 pub use signals::SignalWatch;
 pub use writer::{Delivery, RecordQueue, RecordWriter, WriterStats, RECORD_QUEUE};
@@ -670,7 +672,7 @@ fn finish_records(
     queue.push_final(Record::Summary(summary));
 }
 
-/// The `health` record: the CONTRACT.md fields, then the decoder's extra detail.
+/// The `health` record: the docs/records.md fields, then the decoder's extra detail.
 pub fn health_record(h: &Health, run: Option<usize>) -> HealthRecord {
     let mut rec = HealthRecord {
         kind: "health".into(),

@@ -3,7 +3,7 @@
 //!
 //! Channels are matched by name. An integer increment field gets the unit's own counting: the
 //! increment is quantized to the field's LSB with the remainder carried to the next step
-//! (THEORY.md section 2, `Q = LSB/sqrt(12)`), or the simulator's own counts are used when the
+//! (docs/theory.md section 2, `Q = LSB/sqrt(12)`), or the simulator's own counts are used when the
 //! model's LSB is the field's.
 
 use std::io::Write;

@@ -1,4 +1,4 @@
-//! Effects the five-term model leaves out (THEORY.md section 3), as streaming generators of the
+//! Effects the five-term model leaves out (docs/theory.md section 3), as streaming generators of the
 //! increment (u) over one step: sinusoid, warm-up, bias jumps, the unit's output filter and the
 //! temperature profile with its temperature-driven bias. Gauss-Markov noise is
 //! [`super::noise::IntegratedGaussMarkov`].

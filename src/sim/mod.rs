@@ -2,8 +2,8 @@
 //! into a stream of per-step increments, effects and stand included, for captures and for
 //! checking the estimators against closed forms.
 //!
-//! Layout: [`noise`] holds the five-term generators (THEORY.md section 2), [`effects`] the
-//! effects of THEORY.md section 3, [`model_file`] the checked model, [`writer`] the text-column
+//! Layout: [`noise`] holds the five-term generators (docs/theory.md section 2), [`effects`] the
+//! effects of docs/theory.md section 3, [`model_file`] the checked model, [`writer`] the text-column
 //! output. Frame encoding is left to the frame layer, which can drive [`Simulator::next_step`].
 //!
 //! Per channel and step the signal is built in this order: rate-domain terms integrated over

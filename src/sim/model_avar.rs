@@ -1,5 +1,5 @@
 //! The closed-form Allan variance of a simulated channel ([`SimModel::avar_closed_form`]): the
-//! sum of the exact discrete AVAR of every term and effect of a model file (THEORY.md sections 2
+//! sum of the exact discrete AVAR of every term and effect of a model file (docs/theory.md sections 2
 //! and 3, via [`crate::model::terms`]), which the simulator's tests and the diagnosis's round
 //! trip check against.
 

@@ -1,4 +1,4 @@
-//! Streaming generators of the five-term noise model (THEORY.md section 2), each producing the
+//! Streaming generators of the five-term noise model (docs/theory.md section 2), each producing the
 //! increment (u) over one step `tau0` from standard normal draws, in constant memory.
 //!
 //! Every rate-domain term is integrated exactly over the step (the increment is drawn from the
@@ -157,7 +157,7 @@ pub struct GmComponent {
 /// Flicker rate noise (B) as a bank of independent first-order Gauss-Markov rates with
 /// log-spaced correlation times: equal variances per log-interval of `T` make the summed PSD
 /// ~ 1/f between the extreme corners, hence a flat Allan curve
-/// `(2 ln2 / pi) B^2` (THEORY.md section 2). Its AVAR is exactly the sum of the components'
+/// `(2 ln2 / pi) B^2` (docs/theory.md section 2). Its AVAR is exactly the sum of the components'
 /// Gauss-Markov AVARs ([`FlickerBank::avar`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FlickerBank {
@@ -172,7 +172,7 @@ pub const FLICKER_COMPONENTS_PER_DECADE: f64 = 1.25;
 /// Decades of correlation time added beyond each end of the band (the end components take
 /// larger variances to make up for their missing neighbours).
 pub const FLICKER_MARGIN_DECADES: f64 = 0.5;
-/// The Gauss-Markov Allan deviation peaks at `tau = 1.893 T` (THEORY.md section 3).
+/// The Gauss-Markov Allan deviation peaks at `tau = 1.893 T` (docs/theory.md section 3).
 const GM_PEAK_TAU_OVER_T: f64 = 1.893;
 /// Design grid: taus per decade over the band.
 const FLICKER_GRID_PER_DECADE: f64 = 40.0;

@@ -11,7 +11,7 @@
 //!
 //! | name | type | labels | value |
 //! |---|---|---|---|
-//! | `allanscope_coef` | gauge | unit, channel, coef | fitted value, native units of THEORY.md section 2 (absent while not determined) |
+//! | `allanscope_coef` | gauge | unit, channel, coef | fitted value, native units of docs/theory.md section 2 (absent while not determined) |
 //! | `allanscope_coef_lo`, `allanscope_coef_hi` | gauge | unit, channel, coef | ends of its 95% interval |
 //! | `allanscope_coef_determined` | gauge | unit, channel, coef | 1 determined, 0 not |
 //! | `allanscope_coef_datasheet` | gauge | unit, channel, coef, datasheet_unit | the value in datasheet units (absent while not determined) |
@@ -139,7 +139,7 @@ impl Metrics {
         };
         let coef = gauge(
             "coef",
-            "Latest fitted noise coefficient, native units (THEORY.md section 2); absent while not determined",
+            "Latest fitted noise coefficient, native units (docs/theory.md section 2); absent while not determined",
         );
         let coef_lo = gauge(
             "coef_lo",

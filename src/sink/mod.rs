@@ -1,4 +1,4 @@
-//! Where results go: JSON-lines records (CONTRACT.md) to standard output or a file, and the
+//! Where results go: JSON-lines records (docs/records.md) to standard output or a file, and the
 //! figures and pages made from them.
 //!
 //! [`records`] defines the records as typed structs (the contract's field names, units in

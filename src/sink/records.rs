@@ -1,4 +1,4 @@
-//! The JSON-lines records of CONTRACT.md, as serde structs. Field names and units here are the
+//! The JSON-lines records of docs/records.md, as serde structs. Field names and units here are the
 //! contract: scripts read them. Extra fields may be added; none may be renamed.
 
 use serde::{Deserialize, Serialize};
@@ -74,13 +74,13 @@ pub struct FitRecord {
     pub unit: String,
     pub r#final: bool,
     pub t_data: f64,
-    /// `{Q, N, B, K, R}`, each `{value, lo, hi, determined}` (THEORY.md section 2 units).
+    /// `{Q, N, B, K, R}`, each `{value, lo, hi, determined}` (docs/theory.md section 2 units).
     pub coef: serde_json::Value,
     /// Goodness of fit, near 1 when the model explains the curve.
     pub gof: Option<f64>,
     /// The fit method (`model`, `paper`, `slopes`, `loglog`).
     pub method: String,
-    /// The fitted linear coefficients `(Q^2, N^2, B^2, K^2, R^2)` of THEORY.md section 2,
+    /// The fitted linear coefficients `(Q^2, N^2, B^2, K^2, R^2)` of docs/theory.md section 2,
     /// determined or not: the model curve `AVAR(tau) = sum c_i basis_i(tau)` (for plots and
     /// the diagnosis).
     #[serde(default)]
@@ -99,7 +99,7 @@ pub struct FitRecord {
     pub run: Option<usize>,
 }
 
-/// `health`: what the decoder saw (CONTRACT.md).
+/// `health`: what the decoder saw (docs/records.md).
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq, Default)]
 pub struct HealthRecord {
     #[serde(rename = "type")]
@@ -143,7 +143,7 @@ pub struct SummaryRecord {
     pub limits: Vec<serde_json::Value>,
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub pass: Option<bool>,
-    /// True when the input was read to its end (CONTRACT.md); false for a replay stopped early
+    /// True when the input was read to its end (docs/records.md); false for a replay stopped early
     /// (SIGINT) and for a live source, which has no end (`stopped_by` says what ended it).
     #[serde(default)]
     pub read_to_end: bool,

@@ -1,4 +1,4 @@
-//! Precision of the accumulators where naive arithmetic fails (THEORY.md section 1,
+//! Precision of the accumulators where naive arithmetic fails (docs/theory.md section 1,
 //! "Precision"): integer counts summed exactly, MVAR's running sum of phase in 128 bits when a
 //! 64-bit third difference could overflow, and floating input over 1e9 samples of a 1 g
 //! accelerometer checked against the exact integer computation.

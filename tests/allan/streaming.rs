@@ -1,4 +1,4 @@
-//! Streaming accumulators against the batch formulas (THEORY.md section 1) on seeded random
+//! Streaming accumulators against the batch formulas (docs/theory.md section 1) on seeded random
 //! data: random lengths, values and gap patterns; integer and floating paths; bounded mode.
 
 use crate::common::STREAM_VS_BATCH_REL;

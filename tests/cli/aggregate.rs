@@ -1,5 +1,5 @@
 //! `allanscope aggregate` on JSON-lines files (the real binary): the seed paper's MA4 table 2
-//! (SEED.md) from three runs' final `fit` records, and the errors a user can make.
+//! (the seed paper, docs/theory.md section 6) from three runs' final `fit` records, and the errors a user can make.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -15,7 +15,7 @@ const T975_DF2: f64 = 4.302_652_729_911_275;
 /// Rounding of the last printed digit of the quantile above.
 const QUANTILE_TOL: f64 = 1e-9;
 
-/// MA4 runs of SEED.md table 2 in Q, N, B, K, R order, in the table's display units (the fit
+/// MA4 runs of the seed paper's table 2 (docs/theory.md section 6) in Q, N, B, K, R order, in the table's display units (the fit
 /// record carries m/s units; the scale factors 1e-4, 1e-4, 1e-4, 1e-6, 1e-8 are applied below).
 const MA4: [[Option<f64>; 5]; 3] = [
     [Some(5.955), None, Some(0.294), Some(2.052), Some(5.327)],
@@ -112,7 +112,7 @@ fn ma4_table2_from_three_result_files() {
         assert_eq!(r.kind, "aggregate");
         assert_eq!(r.channel, "a4");
         assert_eq!(r.unit, "m/s");
-        // N was "-" in run 1 (SEED.md): n = 2.
+        // N was "-" in run 1 (the seed paper, docs/theory.md section 6): n = 2.
         assert_eq!(r.n, if *name == "N" { 2 } else { 3 });
         let mean = r.mean.expect("mean") / SCALE[i];
         let sd = r.sd.expect("sd") / SCALE[i];
@@ -127,7 +127,7 @@ fn ma4_table2_from_three_result_files() {
             assert!((t - T975_DF2).abs() < QUANTILE_TOL, "{name}: t {t}");
         }
     }
-    // THEORY.md section 2's worked check: MA4's R gives 6.020 +- 0.807 = [5.213, 6.827].
+    // docs/theory.md section 2's worked check: MA4's R gives 6.020 +- 0.807 = [5.213, 6.827].
     let r = recs.iter().find(|r| r.coef == "R").unwrap();
     let ci = r.ci_z.unwrap();
     assert!((ci[0] / 1e-8 - 5.213).abs() <= PRINTED && (ci[1] / 1e-8 - 6.827).abs() <= PRINTED);
@@ -218,7 +218,7 @@ fn analyze_then_aggregate() {
             None => assert_eq!((r.n, r.mean), (0, None)),
         }
     }
-    // N and B dominate a 2-minute FOG curve (SEED.md: VOG4's N and B are determined).
+    // N and B dominate a 2-minute FOG curve (the seed paper (docs/theory.md section 6): VOG4's N and B are determined).
     assert!(determined >= 2, "{recs:?}");
     std::fs::remove_dir_all(&dir).ok();
 }

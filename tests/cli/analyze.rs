@@ -1,5 +1,5 @@
 //! The `analyze` command end to end, through the built binary: records parsed back field by
-//! field against CONTRACT.md, interim records with `--every`, several runs with `aggregate`
+//! field against docs/records.md, interim records with `--every`, several runs with `aggregate`
 //! records, and exit statuses for bad input.
 
 use crate::common::exe;

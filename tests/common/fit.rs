@@ -28,12 +28,12 @@ impl Truth {
 
 /// Flicker bank: 12 Gauss-Markov processes, correlation times 1 ms * 4^i (1 ms .. 4194 s), equal
 /// variances. With tau0 = 0.01 s its AVAR is flat to 0.3% over 0.3 .. 300 s and within 7% over
-/// 0.01 .. 655 s (closed form of THEORY.md section 3, checked in `flicker_bank_is_flat`).
+/// 0.01 .. 655 s (closed form of docs/theory.md section 3, checked in `flicker_bank_is_flat`).
 pub const BANK_T0_S: f64 = 1e-3;
 pub const BANK_RATIO: f64 = 4.0;
 pub const BANK_SIZE: usize = 12;
 
-/// THEORY.md section 3: AVAR of a first-order Gauss-Markov rate with variance s2, time T.
+/// docs/theory.md section 3: AVAR of a first-order Gauss-Markov rate with variance s2, time T.
 pub fn gm_avar(tau: f64, s2: f64, t: f64) -> f64 {
     2.0 * s2 * t / tau
         * (1.0 - (t / (2.0 * tau)) * (3.0 - 4.0 * (-tau / t).exp() + (-2.0 * tau / t).exp()))

@@ -1,7 +1,7 @@
 //! The diagnosis on simulated captures with a known hidden effect (ground truth from the
 //! simulator's model file): clean data is `consistent`, each effect is named with its parameters
 //! within tolerance, the held-out gap shrinks as on the fitting run, the record parses back
-//! field by field (CONTRACT.md), and live streaming gives the batch curve.
+//! field by field (docs/records.md), and live streaming gives the batch curve.
 //!
 //! Runs of one hour at tau0 = 4 ms (900 000 increments, the seed paper's step) of a VOG4-like
 //! base (config/models/vog4.toml's N, B, K, LSB). The blind benchmark (examples/blind_gap.rs,
@@ -330,7 +330,7 @@ fn jumps_are_kept_by_the_one_strong_or_several_moderate_rule() {
 #[test]
 fn steps_avar_matches_the_batch_estimator_on_a_step_signal() {
     // Rate steps (u/s) at known samples, through the batch overlapped AVAR of their phase
-    // (THEORY.md section 1), against the closed-form triangles of `terms::steps_avar`.
+    // (docs/theory.md section 1), against the closed-form triangles of `terms::steps_avar`.
     use allanscope::allan::batch::{oavar, phase_from_increments};
     use allanscope::model::terms::steps_avar;
     let n = 20_000u64;

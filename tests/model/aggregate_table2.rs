@@ -1,5 +1,5 @@
-//! Run-to-run statistics against the seed paper's table 2 (SEED.md), computed from its per-run
-//! values, "-" runs included, plus the datasheet-unit conversions of THEORY.md section 2.
+//! Run-to-run statistics against the seed paper's table 2 (the seed paper, docs/theory.md section 6), computed from its per-run
+//! values, "-" runs included, plus the datasheet-unit conversions of docs/theory.md section 2.
 
 use allanscope::model::aggregate::{aggregate, run_stats};
 use allanscope::model::units::{datasheet, quantization_ratio, IncrementUnit};
@@ -13,7 +13,7 @@ fn matches(x: f64, printed: f64) -> bool {
     (x - printed).abs() <= PRINTED
 }
 
-/// MA4 (SEED.md table 2), columns R, K, B, N, Q as printed; `None` is "-".
+/// MA4 (the seed paper's table 2 (docs/theory.md section 6)), columns R, K, B, N, Q as printed; `None` is "-".
 const MA4_RUNS: [[Option<f64>; 5]; 3] = [
     [Some(5.327), Some(2.052), Some(0.294), None, Some(5.955)],
     [
@@ -62,7 +62,7 @@ const VOG4_CI: [Option<[f64; 2]>; 5] = [
 /// its intervals are not symmetric about its own means, so those ends are misprints or were
 /// computed from different (unrounded) values; we keep the formula and list the exceptions.
 const MA4_CI_MATCH: [[bool; 2]; 5] = [
-    [true, false], // R: 6.827 vs printed 6.823 (THEORY.md section 2's worked check)
+    [true, false], // R: 6.827 vs printed 6.823 (docs/theory.md section 2's worked check)
     [true, true],  // K: [2.0239, 2.4328] vs [2.023, 2.432] (within the roundings)
     [true, true],  // B
     [true, false], // N: 3.018 vs 3.017
@@ -107,7 +107,7 @@ fn ma4_table2_reproduced() {
             );
         }
     }
-    // THEORY.md section 2's worked check: R = 6.020 +- 0.807 = [5.213, 6.827] (1.96 * 0.7128 /
+    // docs/theory.md section 2's worked check: R = 6.020 +- 0.807 = [5.213, 6.827] (1.96 * 0.7128 /
     // sqrt 3 = 0.8066).
     let r = st[0].unwrap();
     let ci = r.ci_z.unwrap();
@@ -168,7 +168,7 @@ fn single_and_empty_inputs() {
 
 #[test]
 fn datasheet_units() {
-    // SEED.md: VOG4 N = 0.254 arcsec/sqrt(s) -> 0.254/60 deg/sqrt(h); B 0.225 arcsec/s = deg/h.
+    // the seed paper (docs/theory.md section 6): VOG4 N = 0.254 arcsec/sqrt(s) -> 0.254/60 deg/sqrt(h); B 0.225 arcsec/s = deg/h.
     let d = datasheet(
         [0.0, 0.254, 0.225, 1.826e-2, 0.891e-4],
         &IncrementUnit::parse("arcsec").unwrap(),
@@ -185,7 +185,7 @@ fn datasheet_units() {
     );
     assert!((d.values[2] - 0.403e-4 / 9.80665e-6).abs() < 1e-12);
     assert!((d.values[1] - 2.811e-4 * 60.0).abs() < 1e-15);
-    // SEED.md: MA4's Q 6.867e-4 m/s against its LSB 2.104e-4 m/s: Q / (LSB/sqrt 12) = 11.31.
+    // the seed paper (docs/theory.md section 6): MA4's Q 6.867e-4 m/s against its LSB 2.104e-4 m/s: Q / (LSB/sqrt 12) = 11.31.
     let ratio = quantization_ratio(6.867e-4, 2.104e-4);
     assert!((ratio - 6.867 / 2.104 * 12f64.sqrt()).abs() < 1e-12);
     assert!((ratio - 11.306).abs() < 1e-3, "ratio {ratio}");

@@ -24,7 +24,7 @@ fn rel(a: f64, b: f64) -> f64 {
 #[test]
 fn generalized_covariances_reproduce_avar_closed_forms() {
     // Var D_m = 2 tau^2 AVAR(tau) with tau = m (tau0 = 1) and unit coefficients; closed forms of
-    // THEORY.md section 2: 3/tau^2, 1/tau, 2 ln2/pi, tau/3.
+    // docs/theory.md section 2: 3/tau^2, 1/tau, 2 ln2/pi, tau/3.
     for m in [1u64, 2, 7, 64, 1000, 1 << 20] {
         let tau = m as f64;
         let v = second_difference_cov(0, m, m);

@@ -1,14 +1,14 @@
 //! The fit on exact model curves (no noise): every method that is exact for the model must give the
-//! coefficients back; the `coef` JSON has CONTRACT.md's shape.
+//! coefficients back; the `coef` JSON has docs/records.md's shape.
 #![allow(clippy::needless_range_loop)]
 
 use crate::common::fit::model_curve;
 use allanscope::model::fit::{fit, FitMethod, FitOptions, Fitter};
 
-/// Exact data, exact model: only rounding separates the fit from the truth (THEORY.md section 2).
+/// Exact data, exact model: only rounding separates the fit from the truth (docs/theory.md section 2).
 const EXACT_REL_TOL: f64 = 1e-9;
 
-/// The seed paper's MA4 run-3 magnitudes (SEED.md table 2, m/s units), tau0 = 0.004 s, 3 hours.
+/// The seed paper's MA4 run-3 magnitudes (the seed paper's table 2 (docs/theory.md section 6), m/s units), tau0 = 0.004 s, 3 hours.
 const MA4: [f64; 5] = [7.741e-4, 2.706e-4, 0.477e-4, 2.413e-6, 5.982e-8];
 
 fn rel(a: f64, b: f64) -> f64 {

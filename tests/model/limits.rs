@@ -1,4 +1,4 @@
-//! Datasheet limits (src/model/limits.rs): the TOML form, unit conversions against THEORY.md
+//! Datasheet limits (src/model/limits.rs): the TOML form, unit conversions against docs/theory.md
 //! section 2, and verdicts with the fit's intervals on the seed paper's VOG4 and MA4 figures.
 #![allow(clippy::needless_range_loop)]
 
@@ -68,7 +68,7 @@ fn toml_form_of_the_module_doc() {
 
 #[test]
 fn unit_conversions_match_theory_section_2() {
-    // THEORY.md section 2 and model::units::datasheet: gyro in arcsec, accelerometer in m/s.
+    // docs/theory.md section 2 and model::units::datasheet: gyro in arcsec, accelerometer in m/s.
     let native = [1.0, 1.0, 1.0, 1.0, 1.0];
     let gyro = datasheet(native, &IncrementUnit::parse("arcsec").unwrap());
     let accel = datasheet(native, &IncrementUnit::parse("m/s").unwrap());
@@ -114,9 +114,9 @@ fn patterns_and_rule() {
 
 #[test]
 fn vog4_arw_against_its_datasheet() {
-    // The seed paper's VOG4 means (SEED.md table 2; Q = LSB 0.004/sqrt(12)) as an exact 3-hour
+    // The seed paper's VOG4 means (the seed paper's table 2 (docs/theory.md section 6); Q = LSB 0.004/sqrt(12)) as an exact 3-hour
     // curve at tau0 = 4 ms: the fit returns N = 0.254 arcsec/sqrt(s) with its 95% interval, which
-    // lies well inside the datasheet's 0.3 (SEED.md) and straddles 0.254 itself.
+    // lies well inside the datasheet's 0.3 (the seed paper, docs/theory.md section 6) and straddles 0.254 itself.
     let truth = [0.004 / 12f64.sqrt(), 0.254, 0.225, 1.826e-2, 0.891e-4];
     let tau0 = 0.004;
     let n = (3.0 * 3600.0 / tau0) as usize;
@@ -175,7 +175,7 @@ fn run_to_run_limits_on_table_2() {
     assert!(rel(lo, (1.0 / -(0.025f64.ln())).sqrt()) < 1e-9);
     assert!(rel(hi, (1.0 / -(0.975f64.ln())).sqrt()) < 1e-9);
     // MA4's B runs 0.294, 0.436, 0.477 (1e-4 m/s^2): sd 0.096e-4, upper bound 0.096e-4 * 6.29,
-    // within the datasheet's run-to-run 5e-4 m/s^2 (SEED.md): pass.
+    // within the datasheet's run-to-run 5e-4 m/s^2 (the seed paper, docs/theory.md section 6): pass.
     let run = |b: f64, n: Option<f64>| {
         vec![
             RunCoefs {

@@ -95,7 +95,7 @@ fn report(name: &str, st: &Stats) {
 #[test]
 fn flicker_bank_is_flat() {
     // The bank's AVAR against (2 ln2/pi) B^2 over the taus where B dominates the model (1..32 s):
-    // within 1% (closed form of THEORY.md section 3).
+    // within 1% (closed form of docs/theory.md section 3).
     let s2 = crate::common::fit::bank_variance(TRUTH.b);
     let target = 2.0 * LN_2 / PI * TRUTH.b * TRUTH.b;
     for k in 0..6 {

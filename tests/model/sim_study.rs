@@ -3,7 +3,7 @@
 //! streaming accumulator in bounded mode at the default L, `build_curves` with the two-pass noise
 //! type of src/analysis.rs), then the fit. The truth is the model file's coefficients, Q being
 //! the total white phase: `sqrt(Q_file^2 + LSB^2 / 12)` (quantization with carry,
-//! THEORY.md section 2).
+//! docs/theory.md section 2).
 //!
 //! - `sim_study_ci`: 40 seeds of 3-hour runs per model, asserting the bias of each determined
 //!   coefficient, its 95% coverage and the gof mean, with tolerances set by the seed count.
@@ -20,7 +20,7 @@ use allanscope::model::fit::{CoefEstimate, FitMethod, FitOptions, FitResult, Fit
 use allanscope::model::terms::{basis, TERM_NAMES};
 use allanscope::sim::{SimModel, Simulator};
 
-/// Seed paper's run length: 3 hours (SEED.md).
+/// Seed paper's run length: 3 hours (the seed paper, docs/theory.md section 6).
 const DURATION_S: f64 = 3.0 * 3600.0;
 /// Seeds of the CI test: coverage of a 95% interval over 40 seeds has a binomial sd of 3.4%, so
 /// 85% is three sds below; the bias allowance is 5% plus three standard errors of the mean
@@ -228,7 +228,7 @@ impl Tally {
 
 type Rule = (&'static str, fn(&CoefEstimate) -> bool);
 
-/// Readings of THEORY.md section 2's `determined` compared in docs/fit.md ("Which terms are
+/// Readings of docs/theory.md section 2's `determined` compared in docs/fit.md ("Which terms are
 /// determined"); the first is the fit's own.
 const RULES: [Rule; 5] = [
     ("dominant, lower end >= value / 3 (the fit's rule)", |e| {

@@ -1,5 +1,5 @@
 //! Datasheet units of every increment unit the tool accepts, against hand computations, and the
-//! IEEE 952 read-outs (model::readout) of simulated runs against the closed forms of THEORY.md
+//! IEEE 952 read-outs (model::readout) of simulated runs against the closed forms of docs/theory.md
 //! section 2, through the `fit` record `analyze` writes.
 
 use allanscope::model::units::{
@@ -190,7 +190,7 @@ fn readouts_and_datasheet_of_a_simulated_gyro() {
 
 /// An accelerometer in m/s: white rate N and flicker B, with K so the curve has a minimum. The
 /// bias instability read-out is the curve's minimum over sqrt(2 ln2/pi) = 0.6643; the closed
-/// form at that tau is sqrt(N^2/tau + 0.4413 B^2 + K^2 tau/3) (THEORY.md section 2), and its
+/// form at that tau is sqrt(N^2/tau + 0.4413 B^2 + K^2 tau/3) (docs/theory.md section 2), and its
 /// 95% interval must contain the closed form's value divided by 0.6643. Datasheet: micro-g.
 #[test]
 fn bias_instability_readout_of_a_simulated_accelerometer() {

@@ -1,7 +1,7 @@
 //! The simulator against the exact discrete closed forms of `allanscope::model::terms`.
 //!
 //! Ensemble criterion: each case is simulated with `SEEDS` seeds of `N_INC` increments; at every
-//! octave cluster size `m <= N_INC / MIN_BLOCKS` the overlapping AVAR (batch formula, THEORY.md
+//! octave cluster size `m <= N_INC / MIN_BLOCKS` the overlapping AVAR (batch formula, docs/theory.md
 //! section 1) is averaged over the seeds and compared with the closed form by
 //! `z = (mean - closed) / (sd / sqrt(SEEDS))`, `sd` the sample standard deviation over the seeds.
 //! Under a correct simulator `z` is close to Student's t with `SEEDS - 1` degrees of freedom; the
@@ -157,7 +157,7 @@ fn channel(body: &str) -> String {
     format!("{HEAD}[[channel]]\nname = \"x\"\nunit = \"u\"\n{body}\n")
 }
 
-// Closed forms: THEORY.md sections 2-3, exact discrete versions in src/model/terms.rs.
+// Closed forms: docs/theory.md sections 2-3, exact discrete versions in src/model/terms.rs.
 
 #[test]
 fn white_phase_q() {
@@ -166,7 +166,7 @@ fn white_phase_q() {
 
 #[test]
 fn quantization_with_carry() {
-    // Q = lsb / sqrt(12) (THEORY.md section 2) on top of N; N sqrt(tau0) = 2 lsb keeps the
+    // Q = lsb / sqrt(12) (docs/theory.md section 2) on top of N; N sqrt(tau0) = 2 lsb keeps the
     // remainders uniform and independent.
     check_ensemble("lsb", |_| channel("lsb = 0.05\nN = 1.0"));
 }
@@ -288,7 +288,7 @@ fn deterministic_case(name: &str, text: &str) {
 
 #[test]
 fn ramp_r_exact() {
-    // R^2 tau^2 / 2 exactly (THEORY.md section 2): the ramp's second difference is R tau^2.
+    // R^2 tau^2 / 2 exactly (docs/theory.md section 2): the ramp's second difference is R tau^2.
     deterministic_case("R", &channel("R = 1e-3"));
 }
 
@@ -356,7 +356,7 @@ fn flicker_flatness() {
 
 #[test]
 fn stand_projection() {
-    // Seed paper setup (SEED.md): 56.8 deg N, a gyro down sees -15.041 arcsec/s * sin(56.8 deg)
+    // Seed paper setup (the seed paper, docs/theory.md section 6): 56.8 deg N, a gyro down sees -15.041 arcsec/s * sin(56.8 deg)
     // = -12.586 arcsec/s, an accelerometer up sees +g (WGS-84 normal gravity there: 9.8166).
     let text = "rate_hz = 250\n[stand]\nlatitude_deg = 56.8\n\
                 [[channel]]\nname = \"g\"\nunit = \"arcsec\"\naxis = \"down\"\n\
@@ -452,7 +452,7 @@ fn determinism() {
 #[test]
 fn seed_paper_models_load() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/models");
-    // Table 2 means (SEED.md), MA4 Q as the excess over quantization (see ma4.toml).
+    // Table 2 means (the seed paper, docs/theory.md section 6), MA4 Q as the excess over quantization (see ma4.toml).
     let ma4 = SimModel::load(&dir.join("ma4.toml")).expect("ma4");
     let c = &ma4.channels[0];
     assert_eq!((ma4.tau0_s, c.lsb), (0.004, Some(2.104e-4)));

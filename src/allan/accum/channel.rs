@@ -1,0 +1,128 @@
+//! The facade a channel uses ([`ChannelAccumulator`]): one engine for integer counts or
+//! floating input, whichever the channel delivers.
+
+#[allow(unused_imports)]
+use super::*;
+
+/// What a channel's accumulator needs of its engine, whatever the number representation.
+pub(super) trait ChannelEngine {
+    fn gap(&mut self, missing: u64);
+    fn break_seg(&mut self);
+    fn points(&self) -> u64;
+    fn seconds(&self) -> f64;
+    fn segment_count(&self) -> u64;
+    fn cfg(&self) -> &AccumConfig;
+    fn bytes(&self) -> usize;
+}
+
+impl<R: Repr> ChannelEngine for Engine<R> {
+    fn gap(&mut self, missing: u64) {
+        self.push_gap(missing)
+    }
+    fn break_seg(&mut self) {
+        self.break_segment()
+    }
+    fn points(&self) -> u64 {
+        self.phase_points()
+    }
+    fn seconds(&self) -> f64 {
+        self.t_data_s()
+    }
+    fn segment_count(&self) -> u64 {
+        self.segments()
+    }
+    fn cfg(&self) -> &AccumConfig {
+        self.config()
+    }
+    fn bytes(&self) -> usize {
+        self.stream_bytes()
+    }
+}
+
+/// A channel's accumulator for whichever kind of input it receives.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub enum ChannelAccumulator {
+    /// Integer counts (frame fields); the reading is scaled by `scale` (u per count).
+    Counts { engine: Engine<IntRepr>, scale: f64 },
+    /// Floating increments or phase in u.
+    Real(Engine<FloatRepr>),
+}
+
+impl ChannelAccumulator {
+    pub fn counts(cfg: AccumConfig, scale: f64) -> Self {
+        ChannelAccumulator::Counts {
+            engine: Engine::new(cfg),
+            scale,
+        }
+    }
+
+    pub fn real(cfg: AccumConfig) -> Self {
+        ChannelAccumulator::Real(Engine::new(cfg))
+    }
+
+    /// The engine behind the channel, whichever its representation.
+    fn engine(&self) -> &dyn ChannelEngine {
+        match self {
+            ChannelAccumulator::Counts { engine, .. } => engine,
+            ChannelAccumulator::Real(e) => e,
+        }
+    }
+
+    fn engine_mut(&mut self) -> &mut dyn ChannelEngine {
+        match self {
+            ChannelAccumulator::Counts { engine, .. } => engine,
+            ChannelAccumulator::Real(e) => e,
+        }
+    }
+
+    pub fn push_gap(&mut self, missing: u64) {
+        self.engine_mut().gap(missing)
+    }
+
+    /// Ends the current phase segment without accounting for time: the data after it are not
+    /// contiguous with the data before (a resumed live run), so no difference spans the break.
+    pub fn break_segment(&mut self) {
+        self.engine_mut().break_seg()
+    }
+
+    pub fn phase_points(&self) -> u64 {
+        self.engine().points()
+    }
+
+    pub fn t_data_s(&self) -> f64 {
+        self.engine().seconds()
+    }
+
+    pub fn segments(&self) -> u64 {
+        self.engine().segment_count()
+    }
+
+    pub fn config(&self) -> &AccumConfig {
+        self.engine().cfg()
+    }
+
+    pub fn stream_bytes(&self) -> usize {
+        self.engine().bytes()
+    }
+
+    /// Readings in u^2/s^2 (counts scaled).
+    pub fn read(&mut self) -> Vec<LevelReading> {
+        match self {
+            ChannelAccumulator::Counts { engine, scale } => {
+                let s2 = *scale * *scale;
+                let sc = |v: Option<(f64, u64)>| v.map(|(var, n)| (var * s2, n));
+                engine
+                    .read()
+                    .into_iter()
+                    .map(|r| LevelReading {
+                        avar: sc(r.avar),
+                        hvar: sc(r.hvar),
+                        mvar: sc(r.mvar),
+                        ..r
+                    })
+                    .collect()
+            }
+            ChannelAccumulator::Real(e) => e.read(),
+        }
+    }
+}
