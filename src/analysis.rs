@@ -114,6 +114,8 @@ pub struct RunAnalysis {
     channels: Vec<ChannelState>,
     next_emit_s: f64,
     bad_rows: u64,
+    /// Text values infinite or out of range, read as gaps (from the reader, like `bad_rows`).
+    invalid_values: u64,
     started: Instant,
 }
 
@@ -146,6 +148,7 @@ impl RunAnalysis {
             opts,
             channels,
             bad_rows: 0,
+            invalid_values: 0,
             started: Instant::now(),
         }
     }
@@ -217,6 +220,7 @@ impl RunAnalysis {
                 .collect(),
             next_emit_s: state.next_emit_s,
             bad_rows: state.bad_rows,
+            invalid_values: 0,
             started,
         })
     }
@@ -251,6 +255,11 @@ impl RunAnalysis {
     /// Counts rows the input could not read (they were fed as gaps).
     pub fn add_bad_rows(&mut self, n: u64) {
         self.bad_rows += n;
+    }
+
+    /// Counts text values that were infinite or out of range (they were fed as gaps).
+    pub fn add_invalid_values(&mut self, n: u64) {
+        self.invalid_values += n;
     }
 
     /// Feeds a chunk; interim records that fall due inside it are appended to `out`.
@@ -457,6 +466,7 @@ impl RunAnalysis {
             samples: self.channels.iter().map(|c| c.acc.phase_points()).collect(),
             segments: self.channels.iter().map(|c| c.acc.segments()).collect(),
             bad_rows: self.bad_rows,
+            invalid_values: self.invalid_values,
             overlap: match self.opts.accum.overlap {
                 Overlap::Full => "full".into(),
                 Overlap::Bounded(l) => l.to_string(),
@@ -486,6 +496,7 @@ impl RunAnalysis {
                 channels: channels.by_ref().take(per).collect(),
                 next_emit_s: self.next_emit_s,
                 bad_rows: if i == 0 { self.bad_rows } else { 0 },
+                invalid_values: if i == 0 { self.invalid_values } else { 0 },
                 started: self.started,
             });
         }
@@ -499,6 +510,7 @@ impl RunAnalysis {
         for p in it {
             first.channels.extend(p.channels);
             first.bad_rows += p.bad_rows;
+            first.invalid_values += p.invalid_values;
             first.next_emit_s = first.next_emit_s.max(p.next_emit_s);
         }
         Some(first)

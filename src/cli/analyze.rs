@@ -167,6 +167,7 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue, ctl: &RunControl) -> Result
                 samples: Vec::new(),
                 segments: Vec::new(),
                 bad_rows: 0,
+                invalid_values: 0,
                 overlap: d.overlap.clone(),
                 elapsed_s: 0.0,
                 limits: j.limits_json(),
@@ -228,6 +229,7 @@ fn analyze_text(
             // Standard input cannot be rewound: what follows is a new stretch.
             analysis.break_segments();
             analysis.add_bad_rows(pos.bad_rows);
+            analysis.add_invalid_values(pos.invalid_values);
             reader
         }
         Some(Position::Frames { .. }) => {

@@ -27,6 +27,8 @@ pub struct TextReader<R> {
     pending: Option<Vec<f64>>,
     line: Vec<u8>,
     bad_rows: u64,
+    /// Values infinite or beyond `MAX_ABS_VALUE`, read as gaps.
+    invalid_values: u64,
     rows: u64,
     /// Bytes of the input consumed so far (header and comment lines included).
     offset: u64,
@@ -41,6 +43,9 @@ pub struct TextPosition {
     pub line_no: u64,
     pub rows: u64,
     pub bad_rows: u64,
+    /// Values infinite or beyond [`super::MAX_ABS_VALUE`], read as gaps.
+    #[serde(default)]
+    pub invalid_values: u64,
 }
 
 fn parse_field(t: &str) -> Result<f64, ()> {
@@ -100,6 +105,7 @@ impl<R: BufRead> TextReader<R> {
                 pending,
                 line: line.into_bytes(),
                 bad_rows: 0,
+                invalid_values: 0,
                 rows: 0,
                 offset,
             });
@@ -117,6 +123,7 @@ impl<R: BufRead> TextReader<R> {
             pending: None,
             line: Vec::new(),
             bad_rows: pos.bad_rows,
+            invalid_values: pos.invalid_values,
             rows: pos.rows,
             offset: pos.offset,
         }
@@ -130,6 +137,7 @@ impl<R: BufRead> TextReader<R> {
             line_no: self.line_no - u64::from(self.pending.is_some()),
             rows: self.rows,
             bad_rows: self.bad_rows,
+            invalid_values: self.invalid_values,
         }
     }
 
@@ -199,7 +207,17 @@ impl<R: BufRead> TextReader<R> {
     fn push_row(&mut self, out: &mut Vec<f64>, row: Result<Vec<f64>, String>) {
         self.rows += 1;
         match row {
-            Ok(v) => out.extend_from_slice(&v),
+            Ok(v) => {
+                // `inf`, `1e308`: counted, and a gap like `nan`.
+                let start = out.len();
+                out.extend_from_slice(&v);
+                for x in &mut out[start..] {
+                    if super::plausible(*x).is_none() {
+                        *x = f64::NAN;
+                        self.invalid_values += 1;
+                    }
+                }
+            }
             Err(problem) => {
                 self.bad_rows += 1;
                 if self.bad_rows <= BAD_ROWS_LOGGED {
