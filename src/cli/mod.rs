@@ -73,6 +73,9 @@ pub struct ReportArgs {
     /// Title of the page.
     #[arg(long, default_value = "allanscope test report")]
     pub title: String,
+    /// Overwrite an existing non-empty -o file.
+    #[arg(long)]
+    pub force: bool,
 }
 
 #[derive(Debug, Args)]
@@ -113,6 +116,13 @@ pub struct PlotArgs {
     /// Leave out the fitted model lines.
     #[arg(long)]
     pub no_model: bool,
+    /// Also draw the dynamic Allan view (time x tau) of each curve, from its interim records
+    /// (written with --every): where in the run the noise changed.
+    #[arg(long)]
+    pub dynamic: bool,
+    /// Overwrite an existing non-empty -o file.
+    #[arg(long)]
+    pub force: bool,
 }
 
 #[derive(Debug, Args)]

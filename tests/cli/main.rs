@@ -13,4 +13,5 @@ mod limits_summary;
 mod malformed;
 mod model_out;
 mod outputs;
+mod plot_report;
 mod stop;
