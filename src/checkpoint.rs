@@ -259,10 +259,8 @@ impl Checkpoint {
             ciborium::from_reader(body).map_err(|e| format!("cannot decode its contents: {e}"))?;
         // The numbers a resume drives timers and loops with (the accumulators are checked when
         // restored, against the options of the resuming run).
-        if ck.every_s != 0.0 {
-            crate::ranges::check_interval(ck.every_s)
-                .map_err(|e| format!("damaged: saved checkpoint interval {e}"))?;
-        }
+        crate::ranges::check_interval(ck.every_s)
+            .map_err(|e| format!("damaged: saved checkpoint interval {e}"))?;
         if ck.analysis.next_emit_s.is_nan() || ck.analysis.next_emit_s < 0.0 {
             return Err(format!(
                 "damaged: the next interim record is due at {} data-seconds",
