@@ -107,6 +107,37 @@ pub struct AnalysisState {
     pub elapsed_s: f64,
 }
 
+/// The first of `next, next + every, next + 2 every, ...` (summed one by one, as the records'
+/// data-seconds always were) that lies after `t`. The sum is taken at most a few thousand times;
+/// past that (a long gap, a tiny interval against a huge time, a restored `next` far behind),
+/// the multiple of `every` after `t` is computed directly, so the time this takes is bounded
+/// whatever the numbers; an `every` too small to move `next` at all gives infinity (no more
+/// interim records) rather than a loop that never ends.
+fn next_after(mut next: f64, every: f64, t: f64) -> f64 {
+    const SUMMED: u32 = 4096;
+    for _ in 0..SUMMED {
+        if next > t {
+            return next;
+        }
+        let moved = next + every;
+        if moved <= next || moved.is_nan() {
+            return f64::INFINITY;
+        }
+        next = moved;
+    }
+    if next > t {
+        return next;
+    }
+    let mut after = next + ((t - next) / every).floor() * every;
+    for _ in 0..4 {
+        if after > t && after.is_finite() {
+            return after;
+        }
+        after += every;
+    }
+    f64::INFINITY
+}
+
 /// A run in progress.
 pub struct RunAnalysis {
     input: String,
@@ -114,6 +145,8 @@ pub struct RunAnalysis {
     channels: Vec<ChannelState>,
     next_emit_s: f64,
     bad_rows: u64,
+    /// Text values infinite or out of range, read as gaps (from the reader, like `bad_rows`).
+    invalid_values: u64,
     started: Instant,
 }
 
@@ -146,6 +179,7 @@ impl RunAnalysis {
             opts,
             channels,
             bad_rows: 0,
+            invalid_values: 0,
             started: Instant::now(),
         }
     }
@@ -173,14 +207,42 @@ impl RunAnalysis {
 
     /// Continues a run from its saved state with `opts`, which must accumulate the same way
     /// (same tau0, cluster sizes, overlap and statistics; the diagnosis on or off as before).
-    pub fn restore(state: AnalysisState, opts: AnalysisOptions) -> Result<RunAnalysis, String> {
+    /// `setups` are the channels the input has now: the saved ones must be the same.
+    pub fn restore(
+        state: AnalysisState,
+        setups: &[ChannelSetup],
+        opts: AnalysisOptions,
+    ) -> Result<RunAnalysis, String> {
+        let saved: Vec<&ChannelSetup> = state.channels.iter().map(|c| &c.setup).collect();
+        if saved.len() != setups.len() || saved.iter().zip(setups).any(|(a, b)| *a != b) {
+            return Err(format!(
+                "saved for the channels [{}], the input now has [{}]",
+                saved
+                    .iter()
+                    .map(|c| c.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                setups
+                    .iter()
+                    .map(|c| c.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+        // The next interim record is due at a data-second ahead of zero, or never.
+        if state.next_emit_s.is_nan() || state.next_emit_s < 0.0 {
+            return Err(format!(
+                "the next interim record is due at {} data-seconds",
+                state.next_emit_s
+            ));
+        }
         for c in &state.channels {
             if c.acc.config() != &opts.accum {
                 return Err(format!(
-                    "channel {} was accumulated with other settings ({:?}) than asked now ({:?})",
+                    "channel {} was accumulated with other settings than asked now (saved vs \
+                     now: {}); resume with the options of the saved run",
                     c.setup.name,
-                    c.acc.config(),
-                    opts.accum
+                    c.acc.config().differences(&opts.accum).join("; ")
                 ));
             }
             if c.gap.is_some() != opts.diagnose {
@@ -195,9 +257,25 @@ impl RunAnalysis {
                 ));
             }
         }
+        for c in &state.channels {
+            c.acc
+                .check_restored()
+                .map_err(|e| format!("channel {}: {e}", c.setup.name))?;
+            if let Some(g) = &c.gap {
+                g.check_restored(opts.accum.tau0_s)
+                    .map_err(|e| format!("channel {}: {e}", c.setup.name))?;
+            }
+            if c.last_phase.is_some_and(|x| !x.is_finite()) {
+                return Err(format!("channel {}: last phase not finite", c.setup.name));
+            }
+        }
         let started = Instant::now()
             .checked_sub(std::time::Duration::from_secs_f64(
-                state.elapsed_s.clamp(0.0, 1.0e9),
+                if state.elapsed_s.is_finite() {
+                    state.elapsed_s.clamp(0.0, 1.0e9)
+                } else {
+                    0.0
+                },
             ))
             .unwrap_or_else(Instant::now);
         Ok(RunAnalysis {
@@ -217,6 +295,7 @@ impl RunAnalysis {
                 .collect(),
             next_emit_s: state.next_emit_s,
             bad_rows: state.bad_rows,
+            invalid_values: 0,
             started,
         })
     }
@@ -251,6 +330,11 @@ impl RunAnalysis {
     /// Counts rows the input could not read (they were fed as gaps).
     pub fn add_bad_rows(&mut self, n: u64) {
         self.bad_rows += n;
+    }
+
+    /// Counts text values that were infinite or out of range (they were fed as gaps).
+    pub fn add_invalid_values(&mut self, n: u64) {
+        self.invalid_values += n;
     }
 
     /// Feeds a chunk; interim records that fall due inside it are appended to `out`.
@@ -364,9 +448,7 @@ impl RunAnalysis {
         if self.t_data_s() >= self.next_emit_s {
             out.extend(self.records(false));
             let every = self.opts.every_s.unwrap_or(f64::INFINITY);
-            while self.next_emit_s <= self.t_data_s() {
-                self.next_emit_s += every;
-            }
+            self.next_emit_s = next_after(self.next_emit_s, every, self.t_data_s());
         }
     }
 
@@ -457,6 +539,7 @@ impl RunAnalysis {
             samples: self.channels.iter().map(|c| c.acc.phase_points()).collect(),
             segments: self.channels.iter().map(|c| c.acc.segments()).collect(),
             bad_rows: self.bad_rows,
+            invalid_values: self.invalid_values,
             overlap: match self.opts.accum.overlap {
                 Overlap::Full => "full".into(),
                 Overlap::Bounded(l) => l.to_string(),
@@ -486,6 +569,7 @@ impl RunAnalysis {
                 channels: channels.by_ref().take(per).collect(),
                 next_emit_s: self.next_emit_s,
                 bad_rows: if i == 0 { self.bad_rows } else { 0 },
+                invalid_values: if i == 0 { self.invalid_values } else { 0 },
                 started: self.started,
             });
         }
@@ -499,6 +583,7 @@ impl RunAnalysis {
         for p in it {
             first.channels.extend(p.channels);
             first.bad_rows += p.bad_rows;
+            first.invalid_values += p.invalid_values;
             first.next_emit_s = first.next_emit_s.max(p.next_emit_s);
         }
         Some(first)

@@ -255,7 +255,19 @@ impl Checkpoint {
         if CRC32.checksum(body) != crc {
             return Err("damaged: the CRC-32 of its contents does not match".into());
         }
-        ciborium::from_reader(body).map_err(|e| format!("cannot decode its contents: {e}"))
+        let ck: Checkpoint =
+            ciborium::from_reader(body).map_err(|e| format!("cannot decode its contents: {e}"))?;
+        // The numbers a resume drives timers and loops with (the accumulators are checked when
+        // restored, against the options of the resuming run).
+        crate::ranges::check_interval(ck.every_s)
+            .map_err(|e| format!("damaged: saved checkpoint interval {e}"))?;
+        if ck.analysis.next_emit_s.is_nan() || ck.analysis.next_emit_s < 0.0 {
+            return Err(format!(
+                "damaged: the next interim record is due at {} data-seconds",
+                crate::ranges::show(ck.analysis.next_emit_s)
+            ));
+        }
+        Ok(ck)
     }
 
     /// Writes the checkpoint atomically: `FILE.tmp`, flushed to disk, renamed over `FILE`.

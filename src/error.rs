@@ -15,9 +15,12 @@ pub enum UsageError {
         line: u64,
         problem: String,
     },
-    #[error("{file}: key `{key}`: {problem}")]
+    /// A problem in a TOML file (descriptor, stand config, model, limits), at `line` when the
+    /// key is written in the file (`crate::toml_check`).
+    #[error("{}{}: key `{key}`: {problem}", file.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
     Config {
         file: PathBuf,
+        line: Option<usize>,
         key: String,
         problem: String,
     },
@@ -28,10 +31,11 @@ pub enum UsageError {
 
 /// The exit status for an error chain: 2 when a [`UsageError`] is anywhere in it, else 1.
 pub fn exit_status(err: &anyhow::Error) -> i32 {
-    if err
-        .chain()
-        .any(|e| e.downcast_ref::<UsageError>().is_some())
-    {
+    if err.chain().any(|e| {
+        e.downcast_ref::<UsageError>().is_some()
+            || e.downcast_ref::<crate::toml_check::ConfigErrors>()
+                .is_some()
+    }) {
         2
     } else {
         1

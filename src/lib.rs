@@ -18,6 +18,8 @@
 //! stand (the stand config of `run`)                       TOML -> sources, options, limits
 //! plan (option values shared by the command line and the stand config)   text -> checked options
 //! stats: the chi-squared quantile behind every interval
+//! toml_check: the one error collector of every TOML file read (file, line, key, problem)
+//! ranges: the bounds every user-given number is checked against where it is parsed
 //! ```
 //!
 //! The command line is not part of the library: `src/cli/` (one file per subcommand, clap) is a
@@ -38,8 +40,10 @@ pub mod input;
 pub mod model;
 pub mod pipeline;
 pub mod plan;
+pub mod ranges;
 pub mod sim;
 pub mod sink;
 pub mod source;
 pub mod stand;
 pub mod stats;
+pub mod toml_check;

@@ -39,7 +39,6 @@
 //! channel = "g4"              # the model's limit checker
 //! ```
 
-use std::fmt;
 use std::path::{Path, PathBuf};
 
 use crate::allan::accum::{Overlap, StatSet, TauSpec, DEFAULT_L};
@@ -84,49 +83,21 @@ pub struct StandConfig {
     pub limits_raw: Vec<toml::Value>,
 }
 
-/// All problems found in one stand config. Each is a [`UsageError::Config`] (exit status 2);
-/// the first is the error's `source`.
-#[derive(Debug)]
-pub struct StandConfigErrors {
-    pub problems: Vec<UsageError>,
-}
+/// All problems found in one stand config, each a [`UsageError::Config`] with its line and key
+/// (exit status 2): the one TOML error type, `crate::toml_check::ConfigErrors`.
+pub type StandConfigErrors = crate::toml_check::ConfigErrors;
 
-impl fmt::Display for StandConfigErrors {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let n = self.problems.len();
-        write!(
-            f,
-            "stand config: {n} problem{}",
-            if n == 1 { "" } else { "s" }
-        )?;
-        for p in &self.problems {
-            write!(f, "\n  {p}")?;
-        }
-        Ok(())
-    }
-}
-
-impl std::error::Error for StandConfigErrors {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        self.problems
-            .first()
-            .map(|e| e as &(dyn std::error::Error + 'static))
-    }
-}
+/// What a stand config's errors are called.
+const WHAT: &str = "stand config";
 
 /// Collects problems with the file name attached.
 struct Check {
-    file: PathBuf,
-    problems: Vec<UsageError>,
+    c: crate::toml_check::Collector,
 }
 
 impl Check {
     fn bad(&mut self, key: &str, problem: impl Into<String>) {
-        self.problems.push(UsageError::Config {
-            file: self.file.clone(),
-            key: key.into(),
-            problem: problem.into(),
-        });
+        self.c.bad(key, problem);
     }
 
     /// A table's keys must all be in `allowed`.
@@ -166,21 +137,33 @@ impl Check {
         }
     }
 
-    fn positive(&mut self, t: &toml::Table, prefix: &str, key: &str) -> Option<f64> {
+    /// A number of seconds in `[min, max]` (`crate::ranges`).
+    fn seconds(
+        &mut self,
+        t: &toml::Table,
+        prefix: &str,
+        key: &str,
+        min: f64,
+        max: f64,
+    ) -> Option<f64> {
         let v = t.get(key)?;
         let x = match v {
             toml::Value::Float(f) => *f,
             toml::Value::Integer(i) => *i as f64,
-            _ => f64::NAN,
+            _ => {
+                self.bad(
+                    &join(prefix, key),
+                    format!("must be a number of seconds, not {}", show(v)),
+                );
+                return None;
+            }
         };
-        if x.is_finite() && x > 0.0 {
-            Some(x)
-        } else {
-            self.bad(
-                &join(prefix, key),
-                format!("must be a positive number, not {}", show(v)),
-            );
-            None
+        match crate::ranges::check_seconds(x, min, max) {
+            Ok(x) => Some(x),
+            Err(e) => {
+                self.bad(&join(prefix, key), e);
+                None
+            }
         }
     }
 }
@@ -205,39 +188,18 @@ fn show(v: &toml::Value) -> String {
 impl StandConfig {
     /// Reads and checks a stand config file.
     pub fn load(path: &Path) -> Result<StandConfig, StandConfigErrors> {
-        let text = std::fs::read_to_string(path).map_err(|e| StandConfigErrors {
-            problems: vec![UsageError::Config {
-                file: path.into(),
-                key: "(file)".into(),
-                problem: format!("cannot read: {e}"),
-            }],
-        })?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| crate::toml_check::Collector::unreadable(path, &e).into_errors(WHAT))?;
         Self::from_toml_str(&text, path)
     }
 
     /// Parses and checks config text; `file` names it in errors.
     pub fn from_toml_str(text: &str, file: &Path) -> Result<StandConfig, StandConfigErrors> {
         let mut ck = Check {
-            file: file.into(),
-            problems: Vec::new(),
+            c: crate::toml_check::Collector::new(file, text),
         };
-        let root: toml::Table = match text.parse::<toml::Table>() {
-            Ok(t) => t,
-            Err(e) => {
-                let line = e
-                    .span()
-                    .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
-                ck.bad(
-                    "(syntax)",
-                    match line {
-                        Some(l) => format!("not valid TOML at line {l}: {}", e.message()),
-                        None => format!("not valid TOML: {}", e.message()),
-                    },
-                );
-                return Err(StandConfigErrors {
-                    problems: ck.problems,
-                });
-            }
+        let Some(root) = ck.c.parse(text) else {
+            return Err(ck.c.into_errors(WHAT));
         };
         ck.known_keys(
             "",
@@ -401,7 +363,9 @@ impl StandConfig {
                     format!("expected \"ADDR:PORT\" or a port, not {}", show(v)),
                 ),
             }
-            checkpoint_every_s = ck.positive(r, "run", "checkpoint_every");
+            use crate::ranges::{MAX_SECONDS, MIN_INTERVAL_S};
+            checkpoint_every_s =
+                ck.seconds(r, "run", "checkpoint_every", MIN_INTERVAL_S, MAX_SECONDS);
             match r.get("diagnose") {
                 None => {}
                 Some(toml::Value::Boolean(b)) => diagnose = *b,
@@ -412,16 +376,13 @@ impl StandConfig {
             }
             match r.get("duration") {
                 None => {}
-                Some(toml::Value::String(d)) => match crate::plan::options::parse_duration_s(d) {
+                Some(toml::Value::String(d)) => match crate::ranges::parse_duration(d) {
                     Ok(v) => duration_s = Some(v),
-                    Err(_) => ck.bad(
-                        "run.duration",
-                        format!("\"{d}\": expected seconds, or a number with s, min, h or d"),
-                    ),
+                    Err(e) => ck.bad("run.duration", e),
                 },
-                Some(_) => duration_s = ck.positive(r, "run", "duration"),
+                Some(_) => duration_s = ck.seconds(r, "run", "duration", 0.0, MAX_SECONDS),
             }
-            every_s = ck.positive(r, "run", "every_s");
+            every_s = ck.seconds(r, "run", "every_s", MIN_INTERVAL_S, MAX_SECONDS);
             capture = ck.string(r, "run", "capture").map(PathBuf::from);
         }
 
@@ -567,7 +528,16 @@ impl StandConfig {
             ),
         }
 
-        match (ck.problems.is_empty(), source) {
+        // The limits are checked here, so their problems come with the others, with lines.
+        if let Err(errs) = crate::model::limits::from_tables(&limits_raw, file) {
+            for e in errs {
+                if let UsageError::Config { key, problem, .. } = e {
+                    ck.bad(&key, problem);
+                }
+            }
+        }
+
+        match (ck.c.is_empty(), source) {
             (true, Some(source)) => Ok(StandConfig {
                 file: file.into(),
                 source,
@@ -586,9 +556,7 @@ impl StandConfig {
                 output,
                 limits_raw,
             }),
-            _ => Err(StandConfigErrors {
-                problems: ck.problems,
-            }),
+            _ => Err(ck.c.into_errors(WHAT)),
         }
     }
 }

@@ -167,6 +167,7 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue, ctl: &RunControl) -> Result
                 samples: Vec::new(),
                 segments: Vec::new(),
                 bad_rows: 0,
+                invalid_values: 0,
                 overlap: d.overlap.clone(),
                 elapsed_s: 0.0,
                 limits: j.limits_json(),
@@ -191,6 +192,7 @@ fn analyze_text(
 ) -> Result<RunOutcome> {
     let path = PathBuf::from(input);
     let tau0 = opts.accum.tau0_s;
+    sniff(input, None)?;
     let reader = TextReader::with_options(
         BufReader::with_capacity(1 << 16, open_input(input)?),
         &path,
@@ -230,6 +232,7 @@ fn analyze_text(
             // Standard input cannot be rewound: what follows is a new stretch.
             analysis.break_segments();
             analysis.add_bad_rows(pos.bad_rows);
+            analysis.add_invalid_values(pos.invalid_values);
             reader
         }
         Some(Position::Frames { .. }) => {
@@ -256,6 +259,7 @@ fn analyze_frames(
     queue: &RecordQueue,
     ctl: &RunControl,
 ) -> Result<RunOutcome> {
+    sniff(input, Some(desc))?;
     let setups = select_channels(ChannelSetup::for_frames(desc), &d.channels, input)?;
     let header = checkpoint_header(input, &d.format, &opts, &setups);
     let ckpt = d.checkpoint_setup(header, true, input != "-")?;
@@ -280,7 +284,67 @@ fn analyze_frames(
             pace,
         }
     };
-    allanscope::pipeline::run_frames(spec, desc, analysis, queue, ctl)
+    let outcome = allanscope::pipeline::run_frames(spec, desc, analysis, queue, ctl)?;
+    if let Some(h) = &outcome.health {
+        if h.frames == 0 && h.bytes_in > 0 && !d.resume {
+            return Err(usage(format!(
+                "{input}: no {} frame found in {} bytes: is it a {} capture? (another unit's \
+                 frames need their --format; text columns need --format csv)",
+                desc.name, h.bytes_in, desc.name
+            )));
+        }
+    }
+    Ok(outcome)
+}
+
+/// Bytes looked at to tell text from binary data before a run starts.
+const SNIFF_BYTES: usize = 4096;
+
+/// Refuses an input whose first bytes show it is the other kind than the format says: binary
+/// data read as text columns, or text read as frames (standard input is not looked at).
+fn sniff(input: &str, frames: Option<&FrameDescriptor>) -> Result<()> {
+    use std::io::Read;
+    if input == "-" {
+        return Ok(());
+    }
+    let mut head = Vec::with_capacity(SNIFF_BYTES);
+    let Ok(f) = std::fs::File::open(input) else {
+        return Ok(()); // open_input reports it
+    };
+    if f.take(SNIFF_BYTES as u64).read_to_end(&mut head).is_err() || head.is_empty() {
+        return Ok(());
+    }
+    let text_like = |b: &u8| matches!(b, b'\t' | b'\n' | b'\r' | 0x20..=0x7e);
+    match frames {
+        None => {
+            let utf8 = match std::str::from_utf8(&head) {
+                Ok(_) => true,
+                // Cut in the middle of a character by the sniff: still text.
+                Err(e) => e.error_len().is_none(),
+            };
+            if head.contains(&0) || !utf8 {
+                let names: Vec<&str> = allanscope::frame::descriptor::BUILTIN
+                    .iter()
+                    .map(|(n, _)| *n)
+                    .collect();
+                return Err(usage(format!(
+                    "{input}: binary data, not text columns; for a capture of frames give \
+                     --format NAME ({})",
+                    names.join(", ")
+                )));
+            }
+        }
+        Some(desc) => {
+            if head.iter().all(text_like) {
+                return Err(usage(format!(
+                    "{input}: text, not {} frames; for text columns give --format csv with \
+                     --tau0",
+                    desc.name
+                )));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Each run's determined coefficients, for the run-to-run statistics.

@@ -108,6 +108,18 @@ fn gather(
                 &a.data.text_options(),
             )
             .map_err(anyhow::Error::new)?;
+            let chosen = reader
+                .names()
+                .iter()
+                .filter(|n| *n != "temperature_c" && wanted(n))
+                .count();
+            if chosen > allanscope::ranges::MAX_CHANNELS {
+                return Err(super::usage(format!(
+                    "{input}: {chosen} channels; at most {} are diagnosed in one run (choose \
+                     some with --channel)",
+                    allanscope::ranges::MAX_CHANNELS
+                )));
+            }
             for (i, n) in reader.names().iter().enumerate() {
                 if n != "temperature_c" && wanted(n) {
                     g.add_channel(n, &a.data.unit, &cfg);

@@ -74,6 +74,9 @@ pub struct ReportArgs {
     /// Title of the page.
     #[arg(long, default_value = "allanscope test report")]
     pub title: String,
+    /// Overwrite an existing non-empty -o file.
+    #[arg(long)]
+    pub force: bool,
 }
 
 #[derive(Debug, Args)]
@@ -114,6 +117,13 @@ pub struct PlotArgs {
     /// Leave out the fitted model lines.
     #[arg(long)]
     pub no_model: bool,
+    /// Also draw the dynamic Allan view (time x tau) of each curve, from its interim records
+    /// (written with --every): where in the run the noise changed.
+    #[arg(long)]
+    pub dynamic: bool,
+    /// Overwrite an existing non-empty -o file.
+    #[arg(long)]
+    pub force: bool,
 }
 
 #[derive(Debug, Args)]
@@ -133,7 +143,7 @@ pub struct DataArgs {
     #[arg(long, default_value = "csv")]
     pub format: String,
     /// Sampling step in seconds (required for csv; taken from the descriptor for frames).
-    #[arg(long)]
+    #[arg(long, value_parser = tau0_arg)]
     pub tau0: Option<f64>,
     /// Text columns hold rate samples (u/s) instead of increments (u).
     #[arg(long, conflicts_with = "phase")]
@@ -166,7 +176,7 @@ pub struct DataArgs {
     #[arg(long, value_delimiter = ',', default_value = "avar,hvar,mvar")]
     pub stats: Vec<String>,
     /// Seconds between interim records: data-seconds (analyze), wall-seconds (listen, run).
-    #[arg(long)]
+    #[arg(long, value_parser = interval_arg)]
     pub every: Option<f64>,
     /// Fit method: model (default), paper, slopes, loglog, or none.
     #[arg(long, default_value = "model")]
@@ -190,7 +200,7 @@ pub struct DataArgs {
     /// Save the analysis state every S seconds beside the output (`--out FILE` -> FILE.ckpt),
     /// and at the end: data-seconds when replaying a file, wall-seconds live. Written to a
     /// temporary file and renamed, so a crash never leaves a partial checkpoint.
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", value_parser = interval_arg)]
     pub checkpoint_every: Option<f64>,
     /// Continue the run saved in FILE.ckpt (after a crash): a replayed file from the saved byte
     /// offset, giving the final records of an uninterrupted run; a live source from now on, the
@@ -232,9 +242,13 @@ pub struct SimulateArgs {
     /// `csv` for text columns, or a frame descriptor (`siu8`, `kvh1750`, a path).
     #[arg(long, default_value = "csv")]
     pub format: String,
-    /// Output file.
+    /// Output file. Written beside it under a temporary name and renamed when complete, so a
+    /// failed run leaves nothing; an existing file is refused unless --force.
     #[arg(short = 'o', long = "out")]
     pub out: PathBuf,
+    /// Replace an existing output file.
+    #[arg(long)]
+    pub force: bool,
 }
 
 impl DataArgs {
@@ -358,9 +372,28 @@ fn parse_stats(list: &[String]) -> Result<StatSet> {
     StatSet::from_names(list.iter().map(String::as_str)).map_err(|e| usage(format!("--stats: {e}")))
 }
 
-/// Parses a duration: seconds, or a number with `s`, `min`, `h` or `d`.
+/// Parses a duration (`--duration`): seconds, or a number with `s`, `min`, `h` or `d`, within
+/// [`allanscope::ranges::MAX_SECONDS`].
 pub fn parse_duration_s(s: &str) -> Result<f64> {
-    allanscope::plan::options::parse_duration_s(s).map_err(usage)
+    allanscope::ranges::parse_duration(s).map_err(|e| usage(format!("--duration {e}")))
+}
+
+/// Clap's parser of `--tau0`: a number of seconds within the sampling-step range.
+fn tau0_arg(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number"))?;
+    allanscope::ranges::check_tau0(v)
+}
+
+/// Clap's parser of `--every` and `--checkpoint-every`: seconds within the interval range.
+fn interval_arg(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number"))?;
+    allanscope::ranges::check_interval(v)
 }
 
 /// The frame descriptor (`None` for text columns) and the sampling step: `--tau0` when given,
@@ -374,11 +407,8 @@ pub(crate) fn format_and_tau0(
         Some(allanscope::frame::FrameDescriptor::load(&d.format).map_err(anyhow::Error::new)?)
     };
     let tau0 = match (&desc, d.tau0) {
-        (_, Some(t)) if t.is_finite() && t > 0.0 => t,
         (_, Some(t)) => {
-            return Err(usage(format!(
-                "--tau0 {t}: must be a positive number of seconds"
-            )))
+            allanscope::ranges::check_tau0(t).map_err(|e| usage(format!("--tau0 {e}")))?
         }
         (Some(desc), None) => desc.tau0_s(),
         (None, None) => return Err(usage("--tau0 is required for --format csv")),
@@ -388,11 +418,7 @@ pub(crate) fn format_and_tau0(
 
 /// The analysis options common to every run of a command.
 pub(crate) fn analysis_options(d: &DataArgs, tau0_s: f64) -> Result<AnalysisOptions> {
-    if !(tau0_s.is_finite() && tau0_s > 0.0) {
-        return Err(usage(format!(
-            "--tau0 {tau0_s}: must be a positive number of seconds"
-        )));
-    }
+    allanscope::ranges::check_tau0(tau0_s).map_err(|e| usage(format!("tau0 {e}")))?;
     let mut accum = AccumConfig::new(tau0_s);
     accum.taus = parse_taus(&d.taus)?;
     accum.overlap = parse_overlap(&d.overlap)?;
@@ -405,11 +431,7 @@ pub(crate) fn analysis_options(d: &DataArgs, tau0_s: f64) -> Result<AnalysisOpti
         }),
     };
     if let Some(e) = d.every {
-        if !(e.is_finite() && e > 0.0) {
-            return Err(usage(format!(
-                "--every {e}: must be a positive number of seconds"
-            )));
-        }
+        allanscope::ranges::check_interval(e).map_err(|p| usage(format!("--every {p}")))?;
     }
     Ok(AnalysisOptions {
         accum,
@@ -524,11 +546,8 @@ pub(crate) fn checkpoint_setup(
         )));
     };
     if let Some(e) = every {
-        if !(e.is_finite() && e > 0.0) {
-            return Err(usage(format!(
-                "--checkpoint-every {e}: must be a positive number of seconds"
-            )));
-        }
+        allanscope::ranges::check_interval(e)
+            .map_err(|p| usage(format!("--checkpoint-every {p}")))?;
     }
     let path = path_for(out);
     let mut plan = CheckpointPlan {
@@ -571,16 +590,32 @@ pub(crate) fn start_analysis(
     resume: Option<&allanscope::checkpoint::Checkpoint>,
     path: Option<&Path>,
 ) -> Result<allanscope::analysis::RunAnalysis> {
+    // A limit that no channel matches would never be judged: a misspelt name, refused here.
+    for l in &opts.limits {
+        if !setups
+            .iter()
+            .any(|c| allanscope::model::limits::channel_matches(&l.channel, &c.name))
+        {
+            return Err(usage(format!(
+                "datasheet limit on channel `{}`: {input} has no such channel (it has: {})",
+                l.channel,
+                setups
+                    .iter()
+                    .map(|c| c.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )));
+        }
+    }
     match resume {
         None => Ok(allanscope::analysis::RunAnalysis::new(input, setups, opts)),
-        Some(ck) => {
-            allanscope::analysis::RunAnalysis::restore(ck.analysis.clone(), opts).map_err(|p| {
+        Some(ck) => allanscope::analysis::RunAnalysis::restore(ck.analysis.clone(), &setups, opts)
+            .map_err(|p| {
                 anyhow::Error::new(UsageError::Checkpoint {
                     file: path.map(Path::to_path_buf).unwrap_or_default(),
                     problem: p,
                 })
-            })
-        }
+            }),
     }
 }
 
@@ -588,13 +623,12 @@ pub(crate) fn open_input(input: &str) -> Result<Box<dyn Read + Send>> {
     if input == "-" {
         Ok(Box::new(std::io::stdin()))
     } else {
-        let f = std::fs::File::open(input).map_err(|e| {
-            anyhow::Error::new(UsageError::Input {
-                file: input.into(),
-                line: 0,
-                problem: format!("cannot open: {e}"),
-            })
-        })?;
+        let path = Path::new(input);
+        if path.is_dir() {
+            return Err(usage(format!("{input}: is a directory, not an input file")));
+        }
+        let f =
+            std::fs::File::open(path).map_err(|e| usage(format!("{input}: cannot open: {e}")))?;
         Ok(Box::new(f))
     }
 }
@@ -604,9 +638,22 @@ pub(crate) fn select_channels(
     wanted: &Option<Vec<String>>,
     input: &str,
 ) -> Result<Vec<ChannelSetup>> {
+    let too_many = |n: usize| {
+        usage(format!(
+            "{input}: {n} channels; at most {} are analysed in one run (choose some with \
+             --channels, or check the column separator)",
+            allanscope::ranges::MAX_CHANNELS
+        ))
+    };
     let Some(w) = wanted else {
+        if all.len() > allanscope::ranges::MAX_CHANNELS {
+            return Err(too_many(all.len()));
+        }
         return Ok(all);
     };
+    if w.len() > allanscope::ranges::MAX_CHANNELS {
+        return Err(too_many(w.len()));
+    }
     for name in w {
         if !all.iter().any(|c| &c.name == name) {
             return Err(usage(format!(
@@ -623,10 +670,23 @@ pub(crate) fn select_channels(
 
 /// Reads a whole text file of JSON lines into values (for `aggregate`, `plot`, tests).
 pub fn read_json_lines(path: &Path) -> Result<Vec<serde_json::Value>> {
-    let f = std::fs::File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
+    if path.is_dir() {
+        return Err(usage(format!(
+            "{}: is a directory, not a file of JSON lines",
+            path.display()
+        )));
+    }
+    let f = std::fs::File::open(path)
+        .map_err(|e| usage(format!("{}: cannot open: {e}", path.display())))?;
     let mut out = Vec::new();
     for (i, line) in BufReader::new(f).lines().enumerate() {
-        let line = line?;
+        let line = line.map_err(|e| {
+            usage(format!(
+                "{}: line {}: not text ({e}); give a file of JSON lines written by allanscope",
+                path.display(),
+                i + 1
+            ))
+        })?;
         if line.trim().is_empty() {
             continue;
         }

@@ -1,40 +1,37 @@
-//! `plot`: an Allan-deviation SVG from the JSON lines `analyze` (or `listen`) wrote.
+//! `plot`: Allan-deviation figures (SVG) from the JSON lines allanscope wrote; the drawing is
+//! [`crate::sink::plot`]'s and [`crate::sink::dynamic`]'s.
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 
 use super::{read_json_lines, usage, PlotArgs};
-use allanscope::sink::plot::{render_svg, Series};
-use allanscope::sink::records::{CurveRecord, FitRecord};
+use allanscope::sink::dynamic::{render_dynamic_svg, stack};
+use allanscope::sink::page_file::write_page;
+use allanscope::sink::plot::{default_title, render_svg, Series};
+use allanscope::sink::results::{ResultFile, Results};
 
 pub fn run(a: &PlotArgs) -> Result<()> {
-    let mut curves: Vec<(String, CurveRecord)> = Vec::new();
-    let mut fits: Vec<(String, FitRecord)> = Vec::new();
-    for path in &a.inputs {
-        for v in read_json_lines(path)? {
-            let tag = path.display().to_string();
-            match v.get("type").and_then(|t| t.as_str()) {
-                Some("curve") => {
-                    let c: CurveRecord = serde_json::from_value(v)
-                        .with_context(|| format!("{tag}: a curve record"))?;
-                    if c.r#final && c.stat.name() == a.stat {
-                        curves.push((tag, c));
-                    }
-                }
-                Some("fit") => {
-                    let f: FitRecord = serde_json::from_value(v)
-                        .with_context(|| format!("{tag}: a fit record"))?;
-                    if f.r#final {
-                        fits.push((tag, f));
-                    }
-                }
-                _ => {}
-            }
-        }
-    }
-    if let Some(ch) = &a.channels {
-        curves.retain(|(_, c)| ch.contains(&c.channel));
-    }
-    if curves.is_empty() {
+    let files = a
+        .inputs
+        .iter()
+        .map(|p| {
+            Ok(ResultFile {
+                name: file_name(p),
+                records: read_json_lines(p)?,
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let res = Results::from_files(&files);
+    let wanted = |ch: &str| {
+        a.channels
+            .as_ref()
+            .is_none_or(|c| c.iter().any(|x| x == ch))
+    };
+    let finals: Vec<_> = res
+        .curves
+        .iter()
+        .filter(|c| c.rec.r#final && c.rec.stat.name() == a.stat && wanted(&c.rec.channel))
+        .collect();
+    if finals.is_empty() {
         return Err(usage(format!(
             "plot: no final `{}` curve records in the input{}",
             a.stat,
@@ -45,34 +42,61 @@ pub fn run(a: &PlotArgs) -> Result<()> {
             }
         )));
     }
-    let several_files = a.inputs.len() > 1;
-    let mut labelled: Vec<CurveRecord> = Vec::new();
-    let mut their_fits: Vec<Option<&FitRecord>> = Vec::new();
-    for (tag, c) in &curves {
-        let fit = fits
-            .iter()
-            .find(|(t, f)| t == tag && f.channel == c.channel && f.run == c.run)
-            .map(|(_, f)| f);
-        let mut c = c.clone();
-        if several_files || c.run.is_some() {
-            let run = c.run.map(|r| format!(" run {r}")).unwrap_or_default();
-            let file = std::path::Path::new(tag)
-                .file_name()
-                .map(|f| f.to_string_lossy().to_string())
-                .unwrap_or_default();
-            c.channel = format!("{} ({}{run})", c.channel, file);
-        }
-        labelled.push(c);
-        their_fits.push(if a.no_model { None } else { fit });
-    }
-    let series: Vec<Series> = labelled
+    let several = res.several_runs();
+    let series: Vec<Series> = finals
         .iter()
-        .zip(their_fits)
-        .map(|(curve, fit)| Series { curve, fit })
+        .map(|c| Series {
+            curve: &c.rec,
+            run_label: if several {
+                c.label.clone()
+            } else {
+                String::new()
+            },
+            fit: if a.no_model { None } else { res.fit_of(c) },
+            diagnosis: if a.no_model {
+                None
+            } else {
+                res.diagnosis_of(c)
+            },
+        })
         .collect();
-    let title = a.title.clone().unwrap_or_else(|| "allanscope".into());
-    let svg = render_svg(&series, &title);
-    std::fs::write(&a.out, svg).with_context(|| format!("cannot write {}", a.out.display()))?;
-    tracing::info!("{}: {} curves", a.out.display(), series.len());
+    let names: Vec<String> = files.iter().map(|f| f.name.clone()).collect();
+    let title = a
+        .title
+        .clone()
+        .unwrap_or_else(|| default_title(&series, &names));
+    let n = series.len();
+    let mut svg = render_svg(series, &title);
+    if a.dynamic {
+        let mut parts = vec![svg];
+        for c in &finals {
+            let all: Vec<_> = res
+                .curves
+                .iter()
+                .filter(|x| {
+                    x.file == c.file
+                        && x.run == c.run
+                        && x.rec.channel == c.rec.channel
+                        && x.rec.stat == c.rec.stat
+                })
+                .map(|x| &x.rec)
+                .collect();
+            let label = if several {
+                format!("{} [{}] \u{2014} {}", c.rec.channel, c.rec.unit, c.label)
+            } else {
+                format!("{} [{}]", c.rec.channel, c.rec.unit)
+            };
+            parts.push(render_dynamic_svg(&all, &label));
+        }
+        svg = stack(&parts);
+    }
+    write_page(&a.out, svg.as_bytes(), a.force)?;
+    tracing::info!("{}: {n} curves", a.out.display());
     Ok(())
+}
+
+fn file_name(p: &std::path::Path) -> String {
+    p.file_name()
+        .map(|f| f.to_string_lossy().to_string())
+        .unwrap_or_else(|| p.display().to_string())
 }

@@ -45,6 +45,7 @@ pub fn run(r: &RunArgs) -> Result<()> {
     let desc = FrameDescriptor::load(&cfg.format).map_err(|e| {
         anyhow::Error::new(UsageError::Config {
             file: cfg.file.clone(),
+            line: None,
             key: "source.format".into(),
             problem: e.to_string(),
         })
@@ -90,6 +91,7 @@ pub fn run(r: &RunArgs) -> Result<()> {
     .map_err(|e| {
         anyhow::Error::new(UsageError::Config {
             file: cfg.file.clone(),
+            line: None,
             key: "channels.include".into(),
             problem: e.to_string(),
         })

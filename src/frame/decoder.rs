@@ -19,13 +19,35 @@
 //! lost, reported as a [`FrameEvent::Gap`] before the next frame and added to `missing`. A
 //! loss of `M` or more consecutive frames is invisible to the counter (it wraps).
 //!
+//! # Counter plausibility (formats without interleave)
+//!
+//! A checksum lets a few damaged messages through (a 16-bit CRC passes about one random
+//! corruption in 65 536), and a link or a capture tool can repeat an earlier frame whole. Either
+//! shows as a counter jump: a stale frame 500 frames back reads as an advance of `M - 500`, a
+//! flipped high counter bit as thousands of lost frames. So a frame whose counter advanced by
+//! anything but 0 or 1 is **held** until the next frame says whether the jump was real:
+//!
+//! - the next frame continues the held one (advance 1), or lies beyond it: the jump was real,
+//!   the gap and the held frame are delivered as before (one frame later);
+//! - the next frame lies between the last delivered frame and the held one (it continues the
+//!   stream the held frame left): the held frame is dropped, counted in `stale_frames` when its
+//!   counter stepped back (an advance over `M / 2`: an earlier frame repeated) and in
+//!   `counter_rejects` otherwise (a damaged counter); no frame is counted lost for it.
+//!
+//! At the end of the input a held frame is delivered (nothing contradicts it). Clean data
+//! (advances of 1) never takes this path, so it costs nothing there.
+//!
 //! With `[interleave]` (hg4930) the frame and `count` other messages share one counter that
 //! advances once per message, the frame being every `count + 1`-th. The decoder then places
 //! every message in a slot: the smallest advance consistent with the counter *and* with the
 //! kind (frames only on slots that are multiples of `count + 1`). This combines the 2-bit
-//! counter with the count of control messages between two frames, and so sees a loss of up to
-//! `lcm(M, count + 1) - 1` consecutive messages. Messages before the first frame are only
-//! checked and skipped.
+//! counter with the count of control messages between two frames. An advance of
+//! `L = lcm(M, count + 1)` slots (12 for hg4930) leaves counter and kind as they were, so it
+//! looks like a repeated message; a repeat is byte for byte the same message, so a message whose
+//! counter and kind repeat but whose bytes differ is placed `L` slots on. The decoder so sees a
+//! loss of up to `L - 1` consecutive messages (11 for hg4930; tested in `tests/frame_hg4930.rs`);
+//! a loss of `L` or more is undercounted by a multiple of `L` slots. Messages before the first
+//! frame are only checked and skipped.
 
 use std::collections::VecDeque;
 
@@ -56,11 +78,20 @@ pub struct Health {
     pub bytes_accepted: u64,
     /// Good messages without increments (e.g. KVH built-in-test, hg4930 control), skipped.
     pub other_messages: u64,
-    /// Channel values marked invalid by their status bit (delivered as missing values).
+    /// Channel values marked invalid by their status bit, or not finite or beyond
+    /// `input::MAX_ABS_VALUE` (delivered as missing values).
     pub invalid_values: u64,
     /// Interleaved formats: counter values inconsistent with the message schedule (the
     /// decoder re-anchored and assumed no loss).
     pub counter_breaks: u64,
+    /// Frames dropped because their counter stepped back and the next frame continued the
+    /// stream before them: an earlier frame repeated (see "Counter plausibility").
+    #[serde(default)]
+    pub stale_frames: u64,
+    /// Frames dropped because their counter jumped forward and the next frame did not confirm
+    /// the jump: a damaged counter that passed the checksum.
+    #[serde(default)]
+    pub counter_rejects: u64,
 }
 
 /// Where a message landed in the counter sequence.
@@ -84,10 +115,43 @@ struct SeqTracker {
     last: Option<(u64, u64, bool)>,
     /// Seq of the last frame, kept across a re-anchor.
     last_seq: Option<u64>,
+    /// Bytes of the last tracked message (interleaved formats): a message with the same counter
+    /// and kind is a repeat only if its bytes are the same.
+    last_msg: Vec<u8>,
 }
 
 impl SeqTracker {
+    /// [`SeqTracker::place`] for an interleaved message: its bytes tell a repeat (same bytes)
+    /// from an advance of a whole `lcm(M, cycle)` (same counter and kind, other bytes).
+    fn observe_msg(
+        &mut self,
+        is_frame: bool,
+        counter: u64,
+        msg: &[u8],
+        breaks: &mut u64,
+    ) -> Placement {
+        let repeat = self.last_msg == msg;
+        let p = self.place(is_frame, counter, repeat, breaks);
+        if !matches!(p, Placement::Duplicate) {
+            self.last_msg.clear();
+            self.last_msg.extend_from_slice(msg);
+        }
+        p
+    }
+
+    /// Places a message whose bytes are not compared: the same counter and kind is a repeat.
     fn observe(&mut self, is_frame: bool, counter: u64, breaks: &mut u64) -> Placement {
+        self.place(is_frame, counter, true, breaks)
+    }
+
+    /// `may_repeat`: an advance of 0 (a repeated message) is allowed.
+    fn place(
+        &mut self,
+        is_frame: bool,
+        counter: u64,
+        may_repeat: bool,
+        breaks: &mut u64,
+    ) -> Placement {
         let m = self.modulus;
         let Some((slot, c_prev, prev_is_frame)) = self.last else {
             if !is_frame {
@@ -112,7 +176,7 @@ impl SeqTracker {
         while a <= m * self.cycle {
             let on_frame_slot = (slot + a).is_multiple_of(self.cycle);
             let ok = if a == 0 {
-                is_frame == prev_is_frame
+                may_repeat && is_frame == prev_is_frame
             } else {
                 on_frame_slot == is_frame
             };
@@ -139,7 +203,7 @@ impl SeqTracker {
                 *breaks += 1;
                 self.last = None;
                 if is_frame {
-                    self.observe(true, counter, breaks)
+                    self.place(true, counter, may_repeat, breaks)
                 } else {
                     Placement::Untracked
                 }
@@ -161,6 +225,12 @@ pub struct DecoderState {
     pub last: Option<(u64, u64, bool)>,
     pub last_seq: Option<u64>,
     pub next_index: u64,
+    /// A frame held until the next one confirms its counter jump (its bytes).
+    #[serde(default)]
+    pub held: Option<Vec<u8>>,
+    /// Interleaved formats: the bytes of the last tracked message.
+    #[serde(default)]
+    pub last_msg: Vec<u8>,
 }
 
 /// Streaming decoder for one descriptor. Feed it with [`Decoder::push`], take events with
@@ -178,6 +248,8 @@ pub struct Decoder {
     /// Running index for formats without a counter.
     next_index: u64,
     finished: bool,
+    /// A frame whose counter jumped, held for the next frame to confirm (its bytes).
+    held: Option<Vec<u8>>,
 }
 
 /// Compact the buffer once this many consumed bytes sit at its front.
@@ -199,9 +271,11 @@ impl Decoder {
                 cycle,
                 last: None,
                 last_seq: None,
+                last_msg: Vec::new(),
             },
             next_index: 0,
             finished: false,
+            held: None,
         }
     }
 
@@ -218,6 +292,8 @@ impl Decoder {
             last: self.tracker.last,
             last_seq: self.tracker.last_seq,
             next_index: self.next_index,
+            held: self.held.clone(),
+            last_msg: self.tracker.last_msg.clone(),
         })
     }
 
@@ -231,6 +307,8 @@ impl Decoder {
         d.tracker.last = st.last;
         d.tracker.last_seq = st.last_seq;
         d.next_index = st.next_index;
+        d.held = st.held.clone();
+        d.tracker.last_msg = st.last_msg.clone();
         d
     }
 
@@ -263,6 +341,10 @@ impl Decoder {
         self.run();
         let rest = self.buf.len() - self.pos;
         self.skip(rest);
+        // Nothing follows to contradict a held frame's jump.
+        if let Some(msg) = self.held.take() {
+            self.commit_frame(&msg);
+        }
     }
 
     /// The next decoded event, if any.
@@ -349,6 +431,9 @@ impl Decoder {
             self.skipping = false;
         }
         let is_frame = kind == self.desc.frame_kind;
+        if is_frame && self.tracker.cycle == 1 && self.desc.messages[kind].counter.is_some() {
+            return self.accept_counted_frame(start, len);
+        }
         let spec = &self.desc.messages[kind];
         let msg = &self.buf[start..start + len];
         let tracked = is_frame
@@ -362,7 +447,7 @@ impl Decoder {
                 let raw = read_bits(msg, c.offset, c.ty, c.order).unwrap_or(0);
                 let counter = (raw >> c.shift) % c.modulus;
                 self.tracker
-                    .observe(is_frame, counter, &mut self.health.counter_breaks)
+                    .observe_msg(is_frame, counter, msg, &mut self.health.counter_breaks)
             }
             _ => Placement::Untracked,
         };
@@ -392,6 +477,103 @@ impl Decoder {
         let frame = decode_frame(&self.desc, spec, msg, seq, &mut self.health.invalid_values);
         self.health.frames += 1;
         self.events.push_back(FrameEvent::Frame(frame));
+    }
+}
+
+/// The counter of a frame message (formats with a counter; 0 without).
+fn frame_counter(desc: &FrameDescriptor, msg: &[u8]) -> u64 {
+    let spec = &desc.messages[desc.frame_kind];
+    spec.counter.as_ref().map_or(0, |c| {
+        let raw = read_bits(msg, c.offset, c.ty, c.order).unwrap_or(0);
+        (raw >> c.shift) % c.modulus
+    })
+}
+
+impl Decoder {
+    /// The frame at `buf[start..start + len]`, of a format with its own counter (no
+    /// interleave): the counter rules with the plausibility check of the module documentation.
+    fn accept_counted_frame(&mut self, start: usize, len: usize) {
+        let m = self.tracker.modulus;
+        let c = frame_counter(&self.desc, &self.buf[start..start + len]);
+        if let Some(held) = self.held.take() {
+            let h = frame_counter(&self.desc, &held);
+            let prev = self.tracker.last.map_or(h, |l| l.1);
+            if c == prev % m {
+                // A repeat of the last frame delivered: the held frame waits on.
+                self.health.duplicates += 1;
+                self.held = Some(held);
+                return;
+            }
+            let adv = |from: u64, to: u64| (to + m - from % m) % m;
+            let (jump, from_held, from_prev) = (adv(prev, h), adv(h, c), adv(prev, c));
+            if from_held != 1 && from_prev < jump {
+                // `c` continues the stream before the held frame: the jump was not real.
+                if jump > m / 2 {
+                    self.health.stale_frames += 1;
+                } else {
+                    self.health.counter_rejects += 1;
+                }
+            } else {
+                self.commit_frame(&held);
+            }
+        }
+        let jumped = self
+            .tracker
+            .last
+            .is_some_and(|(_, prev, _)| !matches!((c + m - prev % m) % m, 0 | 1));
+        if jumped {
+            self.held = Some(self.buf[start..start + len].to_vec());
+        } else {
+            let msg = &self.buf[start..start + len];
+            commit(
+                &self.desc,
+                &mut self.tracker,
+                &mut self.health,
+                &mut self.events,
+                &mut self.next_index,
+                msg,
+            );
+        }
+    }
+
+    /// Delivers a held frame (see [`commit`]).
+    fn commit_frame(&mut self, msg: &[u8]) {
+        commit(
+            &self.desc,
+            &mut self.tracker,
+            &mut self.health,
+            &mut self.events,
+            &mut self.next_index,
+            msg,
+        );
+    }
+}
+
+/// Places a frame message by its counter and delivers it (with the gap before it), or counts it
+/// as a duplicate.
+fn commit(
+    desc: &FrameDescriptor,
+    tracker: &mut SeqTracker,
+    health: &mut Health,
+    events: &mut VecDeque<FrameEvent>,
+    next_index: &mut u64,
+    msg: &[u8],
+) {
+    let c = frame_counter(desc, msg);
+    match tracker.observe(true, c, &mut health.counter_breaks) {
+        Placement::Duplicate => health.duplicates += 1,
+        Placement::Advanced { missing, seq } => {
+            if missing > 0 {
+                health.missing += missing;
+                events.push_back(FrameEvent::Gap { missing });
+            }
+            *next_index = seq + 1;
+            let spec = &desc.messages[desc.frame_kind];
+            let frame = decode_frame(desc, spec, msg, seq, &mut health.invalid_values);
+            health.frames += 1;
+            events.push_back(FrameEvent::Frame(frame));
+        }
+        Placement::Untracked => {}
     }
 }
 
@@ -470,7 +652,16 @@ fn decode_frame(
             let raw = read(msg, c.offset, c.ty, c.order)?;
             Some(match raw {
                 RawValue::Int(n) if c.is_count() => ChannelValue::Count(n),
-                r => ChannelValue::Real(r.as_f64() * c.scale * desc.kind_factor(c.kind)),
+                r => {
+                    // NaN, infinite or absurd values (a float field's NaN, a damaged exponent)
+                    // are invalid: a gap, counted, never summed into the channel.
+                    let v = r.as_f64() * c.scale * desc.kind_factor(c.kind);
+                    if !v.is_finite() || v.abs() > crate::input::MAX_ABS_VALUE {
+                        *invalid += 1;
+                        return None;
+                    }
+                    ChannelValue::Real(v)
+                }
             })
         })
         .collect();
@@ -510,6 +701,7 @@ mod tests {
             cycle: 6,
             last: None,
             last_seq: None,
+            last_msg: Vec::new(),
         };
         let mut br = 0;
         // A control before any frame is not tracked.

@@ -238,6 +238,45 @@ impl GapEvidence {
         &self.cfg
     }
 
+    /// Checks evidence read back from a checkpoint against the run's sampling step: the
+    /// configuration a streamed run uses, both engines as their settings build them, and the
+    /// segment and block clocks inside their lengths (so that feeding it more data can neither
+    /// index out of bounds nor loop without end).
+    pub fn check_restored(&self, tau0_s: f64) -> Result<(), String> {
+        let mut want = GapConfig::new(tau0_s);
+        want.expected_increments = self.cfg.expected_increments;
+        if self.cfg != want || self.cfg.expected_increments.is_some_and(|n| n == 0) {
+            return Err("evidence saved with other settings".into());
+        }
+        // Segments double from INITIAL_SEGMENT; 2^50 increments is over 35 years at 1 kHz.
+        let clocks_ok = self.seg_len >= 1
+            && self.seg_len <= 1 << 50
+            && self.block_len >= 1
+            && self.block_len <= self.seg_len
+            && self.seg_pos < self.seg_len
+            && self.block_pos < self.block_len
+            && self.done.len() as u64 <= 2 * self.cfg.segments.max(2) + 1;
+        if !clocks_ok {
+            return Err(format!(
+                "evidence clocks out of range (segment {} of {}, block {} of {}, {} segments done)",
+                self.seg_pos,
+                self.seg_len,
+                self.block_pos,
+                self.block_len,
+                self.done.len()
+            ));
+        }
+        let main = accum_cfg(tau0_s, TauSpec::List(self.cfg.dense_cluster_sizes()));
+        let seg = accum_cfg(tau0_s, TauSpec::List(segment_ms(self.seg_len)));
+        if self.main.config() != &main || self.seg_engine.config() != &seg {
+            return Err("evidence accumulators saved with other settings".into());
+        }
+        self.main
+            .check_restored()
+            .and_then(|()| self.seg_engine.check_restored())
+            .map_err(|e| format!("evidence: {e}"))
+    }
+
     /// Feeds one increment `d_k` in u.
     #[inline]
     pub fn push_increment(&mut self, d: f64) {

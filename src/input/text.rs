@@ -190,6 +190,8 @@ pub struct TextReader<R> {
     pending: Option<Vec<f64>>,
     line: Vec<u8>,
     bad_rows: u64,
+    /// Values infinite or beyond `MAX_ABS_VALUE`, read as gaps.
+    invalid_values: u64,
     rows: u64,
     /// Values that are numbers (not gaps) read so far.
     samples: u64,
@@ -209,6 +211,9 @@ pub struct TextPosition {
     /// Values that were numbers (not gaps) so far.
     #[serde(default)]
     pub samples: u64,
+    /// Values infinite or beyond [`super::MAX_ABS_VALUE`], read as gaps.
+    #[serde(default)]
+    pub invalid_values: u64,
 }
 
 fn parse_field(t: &str) -> Result<f64, ()> {
@@ -302,6 +307,7 @@ impl<R: BufRead> TextReader<R> {
                 pending: Some(values),
                 line: line.into_bytes(),
                 bad_rows: 0,
+                invalid_values: 0,
                 rows: 0,
                 samples: 0,
                 offset,
@@ -321,6 +327,7 @@ impl<R: BufRead> TextReader<R> {
             pending: None,
             line: Vec::new(),
             bad_rows: pos.bad_rows,
+            invalid_values: pos.invalid_values,
             rows: pos.rows,
             samples: pos.samples,
             offset: pos.offset,
@@ -336,6 +343,7 @@ impl<R: BufRead> TextReader<R> {
             rows: self.rows,
             bad_rows: self.bad_rows,
             samples: self.samples,
+            invalid_values: self.invalid_values,
         }
     }
 
@@ -402,8 +410,17 @@ impl<R: BufRead> TextReader<R> {
         self.rows += 1;
         match row {
             Ok(v) => {
-                self.samples += v.iter().filter(|x| x.is_finite()).count() as u64;
+                // `inf`, `1e308`: counted, and a gap like `nan`.
+                let start = out.len();
                 out.extend_from_slice(&v);
+                for x in &mut out[start..] {
+                    if super::plausible(*x).is_none() {
+                        *x = f64::NAN;
+                        self.invalid_values += 1;
+                    } else if !x.is_nan() {
+                        self.samples += 1;
+                    }
+                }
             }
             Err(problem) => {
                 self.bad_rows += 1;

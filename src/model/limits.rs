@@ -425,6 +425,7 @@ pub fn from_tables(
                 for (key, problem) in spec.problems() {
                     errors.push(crate::error::UsageError::Config {
                         file: file.into(),
+                        line: None,
                         key: format!("limits[{i}].{key}"),
                         problem,
                     });
@@ -433,6 +434,7 @@ pub fn from_tables(
             }
             Err(e) => errors.push(crate::error::UsageError::Config {
                 file: file.into(),
+                line: None,
                 key: format!("limits[{i}]"),
                 problem: e.message().to_string(),
             }),
@@ -445,36 +447,40 @@ pub fn from_tables(
     }
 }
 
-/// Reads a limits file: TOML with a `[[limits]]` array (the stand config's form).
+/// Reads a limits file: TOML with a `[[limits]]` array (the stand config's form). Every problem
+/// is reported once, with its line and key (`crate::toml_check`).
 pub fn load_file(path: &std::path::Path) -> anyhow::Result<Vec<LimitSpec>> {
-    use crate::error::UsageError;
-    let text = std::fs::read_to_string(path).map_err(|e| UsageError::Config {
-        file: path.into(),
-        key: "limits".into(),
-        problem: format!("cannot read: {e}"),
-    })?;
-    let root: toml::Table = text
-        .parse()
-        .map_err(|e: toml::de::Error| UsageError::Config {
-            file: path.into(),
-            key: "limits".into(),
-            problem: e.to_string(),
-        })?;
+    use crate::toml_check::Collector;
+    const WHAT: &str = "limits file";
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| Collector::unreadable(path, &e).into_errors(WHAT))?;
+    let mut c = Collector::new(path, &text);
+    let Some(root) = c.parse(&text) else {
+        return Err(c.into_errors(WHAT).into());
+    };
+    for k in root.keys().filter(|k| *k != "limits") {
+        c.bad(
+            k.as_str(),
+            "unknown key (a limits file holds [[limits]] tables)",
+        );
+    }
     let tables = match root.get("limits") {
         Some(toml::Value::Array(a)) => a.clone(),
         _ => {
-            return Err(UsageError::Config {
-                file: path.into(),
-                key: "limits".into(),
-                problem: "expected an array of tables ([[limits]])".into(),
-            }
-            .into())
+            c.bad("limits", "expected an array of tables ([[limits]])");
+            return Err(c.into_errors(WHAT).into());
         }
     };
-    from_tables(&tables, path).map_err(|errs| {
-        let first = errs
-            .into_iter()
-            .reduce(|a, b| UsageError::Option(format!("{a}\n{b}")));
-        anyhow::Error::new(first.unwrap_or(UsageError::Option("limits".into())))
-    })
+    match from_tables(&tables, path) {
+        Ok(specs) if c.is_empty() => Ok(specs),
+        Ok(_) => Err(c.into_errors(WHAT).into()),
+        Err(errs) => {
+            for e in errs {
+                if let crate::error::UsageError::Config { key, problem, .. } = e {
+                    c.bad(key, problem);
+                }
+            }
+            Err(c.into_errors(WHAT).into())
+        }
+    }
 }

@@ -156,14 +156,22 @@ pub struct Schedule {
 
 impl Schedule {
     pub fn new(plan: &CheckpointPlan, tau0_s: f64) -> Schedule {
-        let every_steps = ((plan.every_s / tau0_s).round() as u64).max(1);
+        // Checked against `crate::ranges` where parsed; clamped here too, so that no value can
+        // overflow the clock or make the wall-clock advance below a loop that never ends.
+        let every_s = if plan.every_s.is_finite() {
+            plan.every_s
+                .clamp(crate::ranges::MIN_INTERVAL_S, crate::ranges::MAX_SECONDS)
+        } else {
+            crate::ranges::MAX_SECONDS
+        };
+        let every_steps = ((every_s / tau0_s).round() as u64).max(1);
         Schedule {
-            every_s: plan.every_s,
+            every_s,
             data_seconds: plan.data_seconds,
             tau0_s,
             steps: 0,
             next_steps: every_steps,
-            next_wall: Instant::now() + std::time::Duration::from_secs_f64(plan.every_s),
+            next_wall: Instant::now() + std::time::Duration::from_secs_f64(every_s),
             seq: plan.resume.as_ref().map_or(0, |r| r.1),
         }
     }
@@ -186,11 +194,18 @@ impl Schedule {
             return false;
         }
         let every_steps = ((self.every_s / self.tau0_s).round() as u64).max(1);
-        while self.next_steps <= self.steps {
-            self.next_steps += every_steps;
+        if self.next_steps <= self.steps {
+            // The first multiple of the interval after the steps read, without a loop (a long
+            // gap of lost frames can jump the count by many intervals).
+            let behind = (self.steps - self.next_steps) / every_steps + 1;
+            self.next_steps = self
+                .next_steps
+                .saturating_add(behind.saturating_mul(every_steps));
         }
-        while self.next_wall <= now {
-            self.next_wall += std::time::Duration::from_secs_f64(self.every_s);
+        if self.next_wall <= now {
+            let wall = std::time::Duration::from_secs_f64(self.every_s);
+            let behind = now.duration_since(self.next_wall).as_secs_f64() / wall.as_secs_f64();
+            self.next_wall += wall.mul_f64(behind.floor() + 1.0);
         }
         self.seq += 1;
         true

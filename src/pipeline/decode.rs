@@ -336,6 +336,8 @@ fn add_health(a: &mut Health, b: &Health) {
     a.other_messages += b.other_messages;
     a.invalid_values += b.invalid_values;
     a.counter_breaks += b.counter_breaks;
+    a.stale_frames += b.stale_frames;
+    a.counter_rejects += b.counter_rejects;
 }
 
 #[cfg(test)]

@@ -406,10 +406,13 @@ pub fn run_text<R: BufRead + Send + 'static>(
         // The analysis state leaves the reader's bad rows out (the position holds them).
         let complete = !(plan.data_seconds && ctl.shutdown.is_cancelled());
         let bad_rows = position.bad_rows;
+        let invalid = position.invalid_values;
         final_checkpoint(plan, written, complete, Position::Text(position), &analysis);
         analysis.add_bad_rows(bad_rows);
+        analysis.add_invalid_values(invalid);
     } else {
         analysis.add_bad_rows(position.bad_rows);
+        analysis.add_invalid_values(position.invalid_values);
     }
     let read_to_end = ctl.progress.input_ended();
     finish_records(&mut analysis, None, queue, ctl);

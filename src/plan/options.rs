@@ -15,23 +15,9 @@ pub struct Seconds(pub f64);
 
 impl FromStr for Seconds {
     type Err = String;
+    /// Within `(0, crate::ranges::MAX_SECONDS]`, so that any accepted value makes a timer.
     fn from_str(s: &str) -> Result<Self, String> {
-        let t = s.trim();
-        let (num, mult) = if let Some(v) = t.strip_suffix("min") {
-            (v, 60.0)
-        } else if let Some(v) = t.strip_suffix('h') {
-            (v, 3600.0)
-        } else if let Some(v) = t.strip_suffix('d') {
-            (v, 86400.0)
-        } else if let Some(v) = t.strip_suffix('s') {
-            (v, 1.0)
-        } else {
-            (t, 1.0)
-        };
-        match num.trim().parse::<f64>() {
-            Ok(v) if v.is_finite() && v > 0.0 && (v * mult).is_finite() => Ok(Seconds(v * mult)),
-            _ => Err("expected a positive number of seconds, or with s, min, h or d".to_string()),
-        }
+        crate::ranges::parse_duration(s).map(Seconds)
     }
 }
 

@@ -38,9 +38,9 @@
 //! bias_jumps = { mean_interval = 1800.0, rms_size = 0.01 }          # s, u/s
 //! ```
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use crate::error::UsageError;
+use crate::toml_check::{Collector, ConfigErrors};
 
 use super::effects::TemperatureProfile;
 use super::noise::FlickerBank;
@@ -146,34 +146,31 @@ pub struct BiasJumps {
 impl SimModel {
     /// Read and check a model file.
     pub fn load(path: &Path) -> anyhow::Result<SimModel> {
-        let text = std::fs::read_to_string(path).map_err(|e| UsageError::Config {
-            file: path.to_path_buf(),
-            key: String::new(),
-            problem: format!("cannot read: {e}"),
-        })?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| Collector::unreadable(path, &e).into_errors(WHAT))?;
         Ok(Self::from_toml_str(&text, path)?)
     }
 
-    /// Parse and check a model given as TOML text; `file` names it in errors.
-    pub fn from_toml_str(text: &str, file: &Path) -> Result<SimModel, UsageError> {
-        let table: toml::Table = toml::from_str(text).map_err(|e| {
-            let line = e
-                .span()
-                .map(|r| text[..r.start.min(text.len())].matches('\n').count() + 1);
-            UsageError::Config {
-                file: file.to_path_buf(),
-                key: String::new(),
-                problem: match line {
-                    Some(l) => format!("not valid TOML at line {l}: {}", e.message()),
-                    None => format!("not valid TOML: {}", e.message()),
-                },
-            }
-        })?;
+    /// Parse and check a model given as TOML text; `file` names it in errors, every problem
+    /// once with its line and key (`crate::toml_check`).
+    pub fn from_toml_str(text: &str, file: &Path) -> Result<SimModel, ConfigErrors> {
+        let mut c = Collector::new(file, text);
+        let Some(table) = c.parse(text) else {
+            return Err(c.into_errors(WHAT));
+        };
         let mut errs = Problems::default();
         let model = parse_model(&table, &mut errs);
         match (errs.list.is_empty(), model) {
             (true, Some(m)) => Ok(m),
-            _ => Err(errs.into_error(file)),
+            _ => {
+                if errs.list.is_empty() {
+                    c.bad("(model)", "invalid model");
+                }
+                for (key, problem) in errs.list {
+                    c.bad(key, problem);
+                }
+                Err(c.into_errors(WHAT))
+            }
         }
     }
 
@@ -212,7 +209,11 @@ pub fn normal_gravity_m_s2(latitude_deg: f64) -> f64 {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Parsing: a small key walker that records every problem with its key path.
+// Parsing: a small key walker that records every problem with its key path; the problems are
+// handed to the one collector (`crate::toml_check`) that adds the file and line.
+
+/// What a model file's errors are called.
+const WHAT: &str = "model file";
 
 #[derive(Default)]
 struct Problems {
@@ -222,22 +223,6 @@ struct Problems {
 impl Problems {
     fn push(&mut self, key: &str, problem: impl Into<String>) {
         self.list.push((key.to_string(), problem.into()));
-    }
-
-    fn into_error(self, file: &Path) -> UsageError {
-        let mut it = self.list.into_iter();
-        let (key, mut problem) = it
-            .next()
-            .unwrap_or_else(|| (String::new(), "invalid model".to_string()));
-        let rest: Vec<String> = it.map(|(k, p)| format!("`{k}`: {p}")).collect();
-        if !rest.is_empty() {
-            problem = format!("{problem} (also: {})", rest.join("; "));
-        }
-        UsageError::Config {
-            file: PathBuf::from(file),
-            key,
-            problem,
-        }
     }
 }
 

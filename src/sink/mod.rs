@@ -1,12 +1,20 @@
-//! Where results go: JSON-lines records (docs/records.md) to standard output or a file.
+//! Where results go: JSON-lines records (docs/records.md) to standard output or a file, and the
+//! figures and pages made from them.
 //!
 //! [`records`] defines the records as typed structs (the contract's field names, units in
-//! their doc comments); [`json`] writes them one per line.
+//! their doc comments); [`json`] writes them one per line. [`results`] reads them back, typed
+//! and labelled by run, for [`plot`] (Allan-deviation panels), [`dynamic`] (the time x tau
+//! view) and [`report`] (the HTML page); [`page_file`] writes those without overwriting;
+//! [`output`] opens result files, [`export`] writes the noise model for other tools, [`metrics`]
+//! serves live figures.
 
+pub mod dynamic;
 pub mod export;
 pub mod json;
 pub mod metrics;
 pub mod output;
+pub mod page_file;
 pub mod plot;
 pub mod records;
 pub mod report;
+pub mod results;

@@ -10,6 +10,10 @@ fn finite(v: f64) -> Option<f64> {
     v.is_finite().then_some(v)
 }
 
+fn is_zero(n: &u64) -> bool {
+    *n == 0
+}
+
 /// `curve`: one statistic of one channel. Arrays are parallel, one entry per tau.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct CurveRecord {
@@ -135,6 +139,10 @@ pub struct SummaryRecord {
     pub segments: Vec<u64>,
     /// Input rows or frames that could not be read and were skipped as gaps.
     pub bad_rows: u64,
+    /// Text values that were infinite or beyond `input::MAX_ABS_VALUE`, read as gaps (frames
+    /// count theirs in `health`'s `invalid_values`).
+    #[serde(skip_serializing_if = "is_zero", default)]
+    pub invalid_values: u64,
     pub overlap: String,
     /// Wall-clock seconds spent.
     pub elapsed_s: f64,

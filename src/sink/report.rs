@@ -1,256 +1,789 @@
-//! A test report as one self-contained HTML page: the Allan-deviation plot of each unit
-//! (inline SVG), the noise-model coefficients with their 95% intervals in native and datasheet
-//! units, run-to-run statistics, the decoder's health, the diagnosis of the sim-to-real gap and
-//! the datasheet verdicts, all read from the JSON lines allanscope wrote.
+//! A test report as one self-contained HTML page a lead can sign: a PASS/FAIL banner from the
+//! datasheet limits, the runs and whether each input was read to its end, the limits with their
+//! units, the Allan-deviation figures (one panel per channel unit, runs labelled by file), the
+//! noise model (the seed paper's table 2 layout per channel when there are several runs: runs
+//! as rows, the five coefficients as columns, then mean, 95% interval of the mean and sd), the
+//! final diagnosis in words with each effect's parameters named and in units (interim diagnoses
+//! in a small time table), the dynamic Allan view where interim curves exist, the decoder's
+//! health, and a signature block. Print CSS keeps tables and figures whole on A4.
 
 use std::fmt::Write;
 
 use serde_json::Value;
 
-use crate::sink::plot::{render_svg, Series};
-use crate::sink::records::{CurveRecord, FitRecord};
-
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
+use crate::gap::DiagnosisRecord;
+use crate::model::aggregate::{aggregate_channels, RunCoefs};
+use crate::model::terms::TERM_NAMES;
+use crate::sink::dynamic::render_dynamic_svg;
+use crate::sink::plot::{
+    coef_units, effect_name, escape as esc, ratio_text, render_svg, tick, Series,
+};
+use crate::sink::records::FitRecord;
+use crate::sink::results::{Completion, Labelled, ResultFile, Results};
 
 fn num(v: &Value) -> String {
-    match v.as_f64() {
-        Some(0.0) => "0".into(),
-        Some(x) if (1e-3..1e4).contains(&x.abs()) => format!("{x:.4}"),
-        Some(x) => format!("{x:.4e}"),
+    v.as_f64().map_or("&ndash;".into(), tick)
+}
+
+/// A run: its file and its `run` index inside the file.
+type RunKey = (usize, Option<usize>);
+
+/// The seed paper's column order in table 2.
+const PAPER_ORDER: [usize; 5] = [4, 3, 2, 1, 0];
+
+/// The overall verdict of the limits over every run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Banner {
+    Pass,
+    Fail,
+    /// Some limit straddles its interval, none fails.
+    Undecided,
+    /// No limit was given.
+    NoLimits,
+}
+
+/// PASS when every judged limit passes, FAIL when any fails, else undecided.
+pub fn banner_of(res: &Results) -> Banner {
+    let verdicts: Vec<&str> = res
+        .limits
+        .iter()
+        .filter_map(|l| l.rec.get("verdict").and_then(Value::as_str))
+        .collect();
+    let summary_pass: Vec<Option<bool>> = res
+        .summaries
+        .iter()
+        .map(|s| s.rec.get("pass").and_then(Value::as_bool))
+        .collect();
+    if verdicts.is_empty() && summary_pass.iter().all(Option::is_none) {
+        Banner::NoLimits
+    } else if verdicts.contains(&"fail") || summary_pass.contains(&Some(false)) {
+        Banner::Fail
+    } else if verdicts.iter().all(|v| *v == "pass") && !summary_pass.is_empty() {
+        Banner::Pass
+    } else {
+        Banner::Undecided
+    }
+}
+
+const CSS: &str = "
+body{font-family:Helvetica,Arial,sans-serif;max-width:1120px;margin:1.5em auto;color:#111;font-size:14px;line-height:1.35}
+h1{font-size:24px;margin:0 0 .3em} h2{font-size:19px;border-bottom:2px solid #333;padding-bottom:2px;margin-top:1.6em}
+h3{font-size:16px;margin:1.2em 0 .3em}
+table{border-collapse:collapse;margin:.4em 0 1.2em}
+td,th{border:1px solid #999;padding:3px 8px;text-align:right;vertical-align:top}
+th{background:#eee} td.l,th.l{text-align:left} caption{text-align:left;font-weight:bold;padding:4px 0}
+tr.stat td{background:#f6f6f6}
+.banner{font-size:30px;font-weight:bold;padding:14px 20px;border:4px solid;margin:.6em 0 1em}
+.banner small{display:block;font-size:14px;font-weight:normal;margin-top:4px}
+.b-pass{color:#005a32;border-color:#005a32;background:#e5f5e0}
+.b-fail{color:#a50f15;border-color:#a50f15;background:#fee0d2}
+.b-und{color:#7a4b00;border-color:#b07000;background:#fff3d6}
+.b-none{color:#333;border-color:#777;background:#f0f0f0}
+.warn{color:#a50f15;font-weight:bold}
+.pass{color:#005a32;font-weight:bold} .fail{color:#a50f15;font-weight:bold} .und{color:#7a4b00;font-weight:bold}
+.meta{color:#444} svg{max-width:100%;height:auto;display:block;margin:.5em 0}
+.sign table{width:100%} .sign td{height:2.6em;text-align:left;width:25%}
+.small{font-size:12px;color:#444}
+@page{size:A4;margin:14mm}
+@media print{body{max-width:none;margin:0;font-size:11px} h2{break-after:avoid} table,svg,.banner,.sign{break-inside:avoid}
+ .banner,th,tr.stat td,.b-pass,.b-fail,.b-und{-webkit-print-color-adjust:exact;print-color-adjust:exact}}
+";
+
+/// Renders the page. `generated` is the date and time written under the title.
+pub fn render_html(files: &[ResultFile], title: &str, generated: &str) -> String {
+    let res = Results::from_files(files);
+    let mut h = String::new();
+    let _ = write!(
+        h,
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{t}</title>\n<style>{CSS}</style></head><body>\n<h1>{t}</h1>\n<p class=\"meta\">Files: {f}. Written {g} by allanscope {v}.</p>\n",
+        t = esc(title),
+        f = esc(&files.iter().map(|f| f.name.as_str()).collect::<Vec<_>>().join(", ")),
+        g = esc(generated),
+        v = env!("CARGO_PKG_VERSION")
+    );
+    banner(&mut h, &res);
+    runs_table(&mut h, &res);
+    limits_table(&mut h, &res);
+    figures(&mut h, &res);
+    noise_model(&mut h, &res);
+    diagnosis(&mut h, &res);
+    dynamic_view(&mut h, &res);
+    health(&mut h, &res);
+    h.push_str(
+        "<h2>Sign-off</h2>\n<div class=\"sign\"><table><tr><th class=\"l\">role</th><th class=\"l\">name</th><th class=\"l\">signature</th><th class=\"l\">date</th></tr>\n\
+         <tr><td>Tested by</td><td></td><td></td><td></td></tr>\n<tr><td>Checked by</td><td></td><td></td><td></td></tr>\n<tr><td>Approved by</td><td></td><td></td><td></td></tr></table></div>\n\
+         <p class=\"small\">Written by allanscope from its JSON-lines records; coefficients in the units of THEORY.md section 2 (u = the channel's unit), 95% intervals in brackets.</p>\n</body></html>\n",
+    );
+    h
+}
+
+fn banner(h: &mut String, res: &Results) {
+    let b = banner_of(res);
+    let (class, word, note) = match b {
+        Banner::Pass => (
+            "b-pass",
+            "PASS",
+            "every datasheet limit is met at 97.5% one-sided confidence",
+        ),
+        Banner::Fail => (
+            "b-fail",
+            "FAIL",
+            "at least one datasheet limit is exceeded (table below)",
+        ),
+        Banner::Undecided => (
+            "b-und",
+            "NOT DECIDED",
+            "no limit fails, but some interval straddles its limit: more data needed",
+        ),
+        Banner::NoLimits => (
+            "b-none",
+            "NO LIMITS JUDGED",
+            "no datasheet limits were given (--limits or a stand config's [[limits]])",
+        ),
+    };
+    let warn: Vec<String> = res
+        .summaries
+        .iter()
+        .filter_map(|s| {
+            let c = Completion::of_summary(&s.rec);
+            c.is_warning()
+                .then(|| format!("{}: {}", s.label, c.phrase()))
+        })
+        .collect();
+    let _ = write!(
+        h,
+        "<div class=\"banner {class}\" data-verdict=\"{word}\">{word}<small>{note}</small>"
+    );
+    let failed: Vec<String> = res
+        .limits
+        .iter()
+        .filter(|l| l.rec["verdict"].as_str() == Some("fail"))
+        .map(|l| {
+            format!(
+                "{} {} {} {} {} (measured {}{})",
+                l.rec["channel"].as_str().unwrap_or(""),
+                l.rec["coef"].as_str().unwrap_or(""),
+                if l.rec["bound"].as_str() == Some("min") {
+                    "&ge;"
+                } else {
+                    "&le;"
+                },
+                num(&l.rec["limit"]),
+                esc(&limit_unit(res, &l.rec)),
+                num(&l.rec["value"]),
+                if res.summaries.len() > 1 {
+                    format!(", {}", esc(&l.label))
+                } else {
+                    String::new()
+                }
+            )
+        })
+        .collect();
+    if !failed.is_empty() {
+        let _ = write!(h, "<small>failed: {}</small>", failed.join("; "));
+    }
+    for w in &warn {
+        let _ = write!(h, "<small class=\"warn\">{}</small>", esc(w));
+    }
+    h.push_str("</div>\n");
+}
+
+fn runs_table(h: &mut String, res: &Results) {
+    if res.summaries.is_empty() {
+        h.push_str("<p class=\"warn\">No summary record: the run may have been cut short before its end.</p>\n");
+        return;
+    }
+    h.push_str("<h2>Runs</h2>\n<table><tr><th class=\"l\">run</th><th class=\"l\">input</th><th>data (s)</th><th>&#964;0 (s)</th><th class=\"l\">channels</th><th>unreadable rows</th><th class=\"l\">input read</th></tr>\n");
+    for s in &res.summaries {
+        let v = &s.rec;
+        let c = Completion::of_summary(v);
+        let chans = v["channels"]
+            .as_array()
+            .map(|a| {
+                a.iter()
+                    .filter_map(Value::as_str)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            })
+            .unwrap_or_default();
+        let _ = writeln!(
+            h,
+            "<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td>{}</td><td>{}</td><td class=\"l\">{}</td><td>{}</td><td class=\"l{}\">{}</td></tr>",
+            esc(&s.label),
+            esc(v["input"].as_str().unwrap_or("")),
+            num(&v["t_data"]),
+            num(&v["tau0"]),
+            esc(&chans),
+            v["bad_rows"].as_u64().unwrap_or(0),
+            if c.is_warning() { " warn" } else { "" },
+            esc(&c.phrase())
+        );
+    }
+    h.push_str("</table>\n");
+}
+
+fn limits_table(h: &mut String, res: &Results) {
+    if res.limits.is_empty() {
+        return;
+    }
+    let several = res.summaries.len() > 1;
+    h.push_str("<h2>Datasheet limits</h2>\n<table><tr>");
+    if several {
+        h.push_str("<th class=\"l\">run</th>");
+    }
+    h.push_str("<th class=\"l\">channel</th><th>coefficient</th><th class=\"l\">over</th><th class=\"l\">bound</th><th>limit</th><th class=\"l\">unit</th><th>value</th><th>95% interval</th><th class=\"l\">verdict</th></tr>\n");
+    for l in &res.limits {
+        let v = &l.rec;
+        let verdict = v["verdict"].as_str().unwrap_or("?");
+        let class = match verdict {
+            "pass" => "pass",
+            "fail" => "fail",
+            _ => "und",
+        };
+        h.push_str("<tr>");
+        if several {
+            let _ = write!(h, "<td class=\"l\">{}</td>", esc(&l.label));
+        }
+        let note = v["note"]
+            .as_str()
+            .map(|n| format!("<br><span class=\"small\">{}</span>", esc(n)))
+            .unwrap_or_default();
+        let _ = writeln!(
+            h,
+            "<td class=\"l\">{}</td><td>{}</td><td class=\"l\">{}</td><td class=\"l\">{}</td><td>{}</td><td class=\"l\">{}</td><td>{}</td><td>[{}, {}]</td><td class=\"l {class}\">{}{note}</td></tr>",
+            esc(v["channel"].as_str().unwrap_or("")),
+            esc(v["coef"].as_str().unwrap_or("")),
+            esc(v["over"].as_str().unwrap_or("run")),
+            esc(v["bound"].as_str().unwrap_or("max")),
+            num(&v["limit"]),
+            esc(&limit_unit(res, v)),
+            num(&v["value"]),
+            num(&v["lo"]),
+            num(&v["hi"]),
+            esc(&verdict.to_uppercase())
+        );
+    }
+    h.push_str("</table>\n");
+}
+
+/// A limit's unit; `native` spelt out as the coefficient's unit for the channel's unit.
+fn limit_unit(res: &Results, l: &Value) -> String {
+    let u = l["unit"].as_str().unwrap_or("native");
+    if u != "native" {
+        return u.to_string();
+    }
+    let ch = l["channel"].as_str().unwrap_or("");
+    let idx = TERM_NAMES
+        .iter()
+        .position(|k| Some(*k) == l["coef"].as_str());
+    let cu = res
+        .fits
+        .iter()
+        .find(|f| f.rec.channel == ch)
+        .map(|f| f.rec.unit.clone());
+    match (idx, cu) {
+        (Some(i), Some(cu)) => coef_units(&cu)[i].clone(),
+        _ => "native".into(),
+    }
+}
+
+fn figures(h: &mut String, res: &Results) {
+    let finals: Vec<&Labelled<_>> = res
+        .curves
+        .iter()
+        .filter(|c| c.rec.r#final && c.rec.stat.name() == "avar")
+        .collect();
+    if finals.is_empty() {
+        return;
+    }
+    let several = res.several_runs();
+    let series: Vec<Series> = finals
+        .iter()
+        .map(|c| Series {
+            curve: &c.rec,
+            run_label: if several {
+                c.label.clone()
+            } else {
+                String::new()
+            },
+            fit: res.fit_of(c),
+            diagnosis: res.diagnosis_of(c),
+        })
+        .collect();
+    h.push_str("<h2>Allan deviation</h2>\n");
+    if !several {
+        h.push_str(&render_svg(
+            series,
+            "Final Allan deviation curves, fitted model and diagnosis",
+        ));
+        return;
+    }
+    // Several runs: one figure per channel, its runs overlaid and named by file (the seed
+    // paper's figure 2), so each run's model and asymptotes stay readable.
+    let mut channels: Vec<String> = Vec::new();
+    for s in &series {
+        if !channels.contains(&s.curve.channel) {
+            channels.push(s.curve.channel.clone());
+        }
+    }
+    let mut series = series;
+    for ch in channels {
+        let (mine, rest): (Vec<Series>, Vec<Series>) =
+            series.into_iter().partition(|s| s.curve.channel == ch);
+        series = rest;
+        let unit = mine[0].curve.unit.clone();
+        h.push_str(&render_svg(
+            mine,
+            &format!("{ch} [{unit}]: the runs overlaid"),
+        ));
+    }
+}
+
+/// The scale of a table-2 column: a power of ten that brings the largest value into [1, 10).
+fn column_scale(values: &[f64]) -> i32 {
+    let m = values.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    if m > 0.0 && m.is_finite() {
+        m.log10().floor() as i32
+    } else {
+        0
+    }
+}
+
+fn scaled(v: Option<f64>, e: i32) -> String {
+    match v {
+        Some(x) => format!("<span data-value=\"{x:e}\">{:.3}</span>", x / 10f64.powi(e)),
         None => "&ndash;".into(),
     }
 }
 
-/// One input file's records.
-pub struct ReportInput {
-    pub name: String,
-    pub records: Vec<Value>,
-}
-
-fn of_type<'a>(records: &'a [Value], t: &str) -> impl Iterator<Item = &'a Value> + 'a {
-    let t = t.to_string();
-    records
-        .iter()
-        .filter(move |r| r.get("type").and_then(Value::as_str) == Some(t.as_str()))
-}
-
-/// Renders the report.
-pub fn render_html(inputs: &[ReportInput], title: &str) -> String {
-    let mut h = String::new();
-    let _ = write!(
-        h,
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{t}</title>\n<style>\n\
-         body{{font-family:sans-serif;max-width:1000px;margin:2em auto;color:#222}}\n\
-         table{{border-collapse:collapse;margin:0.5em 0 1.5em}}\n\
-         td,th{{border:1px solid #ccc;padding:3px 8px;text-align:right}}\n\
-         th{{background:#f2f2f2}} td.l,th.l{{text-align:left}}\n\
-         .pass{{color:#0a0;font-weight:bold}} .fail{{color:#c00;font-weight:bold}} .und{{color:#b70}}\n\
-         </style></head><body>\n<h1>{t}</h1>\n",
-        t = esc(title)
-    );
-    for input in inputs {
-        let recs = &input.records;
-        let _ = writeln!(h, "<h2>{}</h2>", esc(&input.name));
-        if let Some(s) = of_type(recs, "summary").last() {
-            let _ =
-                writeln!(
-                h,
-                "<p>{} s of data at tau0 = {} s; channels {}; overlap {}; {} unreadable rows.</p>",
-                num(&s["t_data"]),
-                num(&s["tau0"]),
-                esc(&s["channels"].as_array().map(|a| {
-                    a.iter().filter_map(Value::as_str).collect::<Vec<_>>().join(", ")
-                }).unwrap_or_default()),
-                esc(s["overlap"].as_str().unwrap_or("?")),
-                s["bad_rows"].as_u64().unwrap_or(0)
-            );
-            if let Some(p) = s.get("pass").and_then(Value::as_bool) {
-                let _ = writeln!(
-                    h,
-                    "<p>Datasheet limits: <span class=\"{}\">{}</span></p>",
-                    if p { "pass" } else { "fail" },
-                    if p { "PASS" } else { "FAIL" }
-                );
+fn noise_model(h: &mut String, res: &Results) {
+    let finals: Vec<&Labelled<FitRecord>> = res.fits.iter().filter(|f| f.rec.r#final).collect();
+    if finals.is_empty() {
+        return;
+    }
+    h.push_str("<h2>Noise model</h2>\n");
+    let several = res.several_runs();
+    if !several {
+        single_run_fits(h, &finals);
+        return;
+    }
+    // The aggregate records written with the runs; computed here as `aggregate` would when the
+    // files came from separate analyses.
+    let mut aggs: Vec<Value> = res.aggregates.iter().map(|a| a.rec.clone()).collect();
+    if aggs.is_empty() {
+        let mut runs: Vec<(RunKey, Vec<RunCoefs>)> = Vec::new();
+        for f in &finals {
+            let Some(rc) =
+                RunCoefs::from_fit_record(&serde_json::to_value(&f.rec).unwrap_or_default())
+            else {
+                continue;
+            };
+            match runs.iter_mut().find(|(k, _)| *k == (f.file, f.run)) {
+                Some((_, v)) => v.push(rc),
+                None => runs.push(((f.file, f.run), vec![rc])),
             }
-            if let Some(limits) = s.get("limits").and_then(Value::as_array) {
-                if !limits.is_empty() {
-                    h.push_str("<table><tr><th class=\"l\">channel</th><th>coef</th><th class=\"l\">limit</th><th>value</th><th>95% interval</th><th class=\"l\">verdict</th></tr>\n");
-                    for l in limits {
-                        let verdict = l["verdict"].as_str().unwrap_or("?");
-                        let class = match verdict {
-                            "pass" => "pass",
-                            "fail" => "fail",
-                            _ => "und",
-                        };
-                        let _ = writeln!(
-                            h,
-                            "<tr><td class=\"l\">{}</td><td>{}</td><td class=\"l\">{}</td><td>{}</td><td>[{}, {}]</td><td class=\"l {class}\">{}</td></tr>",
-                            esc(l["channel"].as_str().unwrap_or("")),
-                            esc(l["coef"].as_str().unwrap_or("")),
-                            esc(&l["limit"].to_string()),
-                            num(&l["value"]),
-                            num(&l["lo"]),
-                            num(&l["hi"]),
-                            esc(verdict)
-                        );
-                    }
-                    h.push_str("</table>\n");
+        }
+        let runs: Vec<Vec<RunCoefs>> = runs.into_iter().map(|(_, v)| v).collect();
+        aggs = aggregate_channels(&runs)
+            .iter()
+            .map(|a| {
+                let s = a.stats.as_ref();
+                serde_json::json!({"type": "aggregate", "channel": a.channel, "unit": a.unit, "coef": a.coef,
+                    "n": s.map_or(0, |s| s.n), "mean": s.map(|s| s.mean), "sd": s.and_then(|s| s.sd),
+                    "ci_t": s.and_then(|s| s.ci_t), "ci_z": s.and_then(|s| s.ci_z)})
+            })
+            .collect();
+    }
+    h.push_str("<p>The seed paper's table 2 layout: one table per channel, one row per run (named by its file), the coefficients as columns scaled by the power of ten in the heading; &ndash; = not determined. The mean, the 95% interval of the mean (mean &plusmn; 1.96 sd/&radic;n, as the paper; the Student interval below it) and the sd are over the runs that determined the coefficient.</p>\n");
+    let mut channels: Vec<(String, String)> = Vec::new();
+    for f in &finals {
+        let k = (f.rec.channel.clone(), f.rec.unit.clone());
+        if !channels.contains(&k) {
+            channels.push(k);
+        }
+    }
+    for (ch, unit) in channels {
+        let rows: Vec<&&Labelled<FitRecord>> =
+            finals.iter().filter(|f| f.rec.channel == ch).collect();
+        let agg_of = |k: &str| {
+            aggs.iter().find(|a| {
+                a["channel"].as_str() == Some(ch.as_str()) && a["coef"].as_str() == Some(k)
+            })
+        };
+        let units = coef_units(&unit);
+        let value = |f: &FitRecord, i: usize| -> Option<f64> {
+            let c = &f.coef[TERM_NAMES[i]];
+            (c["determined"].as_bool() != Some(false))
+                .then(|| c["value"].as_f64())
+                .flatten()
+        };
+        let scales: Vec<i32> = PAPER_ORDER
+            .iter()
+            .map(|&i| {
+                let mut v: Vec<f64> = rows.iter().filter_map(|f| value(&f.rec, i)).collect();
+                if let Some(m) = agg_of(TERM_NAMES[i]).and_then(|a| a["mean"].as_f64()) {
+                    v.push(m);
                 }
-            }
-        }
-        // Plots: one per unit, final AVAR curves with the fitted models.
-        let curves: Vec<CurveRecord> = of_type(recs, "curve")
-            .filter_map(|v| serde_json::from_value::<CurveRecord>(v.clone()).ok())
-            .filter(|c| c.r#final && c.stat.name() == "avar")
+                column_scale(&v)
+            })
             .collect();
-        let fits: Vec<FitRecord> = of_type(recs, "fit")
-            .filter_map(|v| serde_json::from_value::<FitRecord>(v.clone()).ok())
-            .filter(|f| f.r#final)
-            .collect();
-        let mut units: Vec<&str> = curves.iter().map(|c| c.unit.as_str()).collect();
-        units.dedup();
-        units.sort_unstable();
-        units.dedup();
-        for unit in units {
-            let series: Vec<Series> = curves
-                .iter()
-                .filter(|c| c.unit == unit)
-                .map(|c| Series {
-                    curve: c,
-                    fit: fits
-                        .iter()
-                        .find(|f| f.channel == c.channel && f.run == c.run),
-                })
-                .collect();
-            let svg = render_svg(&series, &format!("{} ({unit})", input.name));
-            h.push_str(&svg);
+        let _ = write!(
+            h,
+            "<table class=\"table2\" data-channel=\"{}\"><caption>{} [{}]</caption><tr><th class=\"l\">run</th>",
+            esc(&ch),
+            esc(&ch),
+            esc(&unit)
+        );
+        for (c, &i) in PAPER_ORDER.iter().enumerate() {
+            let e = scales[c];
+            let sc = if e == 0 {
+                String::new()
+            } else {
+                format!("&#215;10<sup>{e}</sup> ")
+            };
+            let _ = write!(
+                h,
+                "<th data-coef=\"{}\">{}<br><span class=\"small\">{sc}{}</span></th>",
+                TERM_NAMES[i],
+                TERM_NAMES[i],
+                esc(&units[i])
+            );
         }
-        if !fits.is_empty() {
-            h.push_str("<h3>Noise model (95% intervals; &ndash; = not determined)</h3>\n<table><tr><th class=\"l\">channel</th>");
-            for k in ["Q", "N", "B", "K", "R"] {
-                let _ = write!(h, "<th>{k}</th>");
+        h.push_str("</tr>\n");
+        for f in &rows {
+            let _ = write!(h, "<tr><td class=\"l\">{}</td>", esc(&f.label));
+            for (c, &i) in PAPER_ORDER.iter().enumerate() {
+                let _ = write!(h, "<td>{}</td>", scaled(value(&f.rec, i), scales[c]));
             }
-            h.push_str("<th>gof</th></tr>\n");
-            for f in &fits {
+            h.push_str("</tr>\n");
+        }
+        let stat_row =
+            |h: &mut String, name: &str, key: &str, cell: &dyn Fn(&Value, i32) -> String| {
                 let _ = write!(
                     h,
-                    "<tr><td class=\"l\">{} [{}]</td>",
-                    esc(&f.channel),
-                    esc(&f.unit)
+                    "<tr class=\"stat\" data-row=\"{key}\"><td class=\"l\">{name}</td>"
                 );
-                for k in ["Q", "N", "B", "K", "R"] {
-                    let c = &f.coef[k];
-                    let ds = f
-                        .datasheet
-                        .as_ref()
-                        .and_then(|d| d.get(k))
-                        .filter(|d| !d["value"].is_null())
-                        .map(|d| {
-                            format!(
-                                "<br><small>{} {}</small>",
-                                num(&d["value"]),
-                                esc(d["unit"].as_str().unwrap_or(""))
-                            )
-                        })
-                        .unwrap_or_default();
-                    let _ = write!(
-                        h,
-                        "<td>{}<br><small>[{}, {}]</small>{ds}</td>",
-                        num(&c["value"]),
-                        num(&c["lo"]),
-                        num(&c["hi"])
-                    );
+                for (c, &i) in PAPER_ORDER.iter().enumerate() {
+                    let txt =
+                        agg_of(TERM_NAMES[i]).map_or("&ndash;".into(), |a| cell(a, scales[c]));
+                    let _ = write!(h, "<td>{txt}</td>");
                 }
-                let _ = writeln!(
-                    h,
-                    "<td>{}</td></tr>",
-                    f.gof.map(|g| format!("{g:.2}")).unwrap_or("&ndash;".into())
-                );
-            }
-            h.push_str("</table>\n");
-        }
-        let agg: Vec<&Value> = of_type(recs, "aggregate").collect();
-        if !agg.is_empty() {
-            h.push_str("<h3>Run to run (the seed paper's table 2)</h3>\n<table><tr><th class=\"l\">channel</th><th>coef</th><th>n</th><th>mean</th><th>sd</th><th>Student 95%</th><th>mean &plusmn; 1.96 sd/&radic;n</th></tr>\n");
-            for a in agg {
-                let pair = |v: &Value| match v.as_array() {
-                    Some(p) if p.len() == 2 => format!("[{}, {}]", num(&p[0]), num(&p[1])),
-                    _ => "&ndash;".into(),
-                };
-                let _ = writeln!(
-                    h,
-                    "<tr><td class=\"l\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-                    esc(a["channel"].as_str().unwrap_or("")),
-                    esc(a["coef"].as_str().unwrap_or("")),
-                    a["n"].as_u64().unwrap_or(0),
-                    num(&a["mean"]),
-                    num(&a["sd"]),
-                    pair(&a["ci_t"]),
-                    pair(&a["ci_z"])
-                );
-            }
-            h.push_str("</table>\n");
-        }
-        let diags: Vec<&Value> = of_type(recs, "diagnosis").collect();
-        if !diags.is_empty() {
-            h.push_str("<h3>Sim-to-real gap</h3>\n<table><tr><th class=\"l\">channel</th><th class=\"l\">verdict</th><th>gap before</th><th>gap after</th><th class=\"l\">effects</th><th class=\"l\">where the model misses</th></tr>\n");
-            for d in diags {
-                let effects: Vec<String> = d["effects"]
-                    .as_array()
-                    .map(|a| {
-                        a.iter()
-                            .map(|e| {
-                                format!("{} {}", e["kind"].as_str().unwrap_or("?"), e["params"])
-                            })
-                            .collect()
-                    })
-                    .unwrap_or_default();
-                let regions: Vec<String> = d["regions"]
-                    .as_array()
-                    .map(|a| {
-                        a.iter()
-                            .map(|r| {
-                                format!(
-                                    "{}..{} s {} (x{})",
-                                    num(&r["tau_lo"]),
-                                    num(&r["tau_hi"]),
-                                    if r["sign"].as_f64().unwrap_or(0.0) > 0.0 {
-                                        "above"
-                                    } else {
-                                        "below"
-                                    },
-                                    num(&r["worst_ratio"])
-                                )
-                            })
-                            .collect()
-                    })
-                    .unwrap_or_default();
-                let _ = writeln!(
-                    h,
-                    "<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td>{}</td><td>{}</td><td class=\"l\">{}</td><td class=\"l\">{}</td></tr>",
-                    esc(d["channel"].as_str().unwrap_or("")),
-                    esc(d["verdict"].as_str().unwrap_or("")),
-                    num(&d["gap_before"]),
-                    num(&d["gap_after"]),
-                    esc(&effects.join("; ")),
-                    esc(&regions.join("; "))
-                );
-            }
-            h.push_str("</table>\n");
-        }
-        if let Some(hl) = of_type(recs, "health").last() {
+                h.push_str("</tr>\n");
+            };
+        let pair = |v: &Value, e: i32| match v.as_array() {
+            Some(p) if p.len() == 2 => format!(
+                "[{}; {}]",
+                scaled(p[0].as_f64(), e),
+                scaled(p[1].as_f64(), e)
+            ),
+            _ => "&ndash;".into(),
+        };
+        stat_row(h, "mean", "mean", &|a, e| scaled(a["mean"].as_f64(), e));
+        stat_row(h, "95% interval of the mean", "ci_z", &|a, e| {
+            pair(&a["ci_z"], e)
+        });
+        stat_row(h, "Student 95% interval", "ci_t", &|a, e| {
+            pair(&a["ci_t"], e)
+        });
+        stat_row(h, "sd (1 sigma)", "sd", &|a, e| scaled(a["sd"].as_f64(), e));
+        stat_row(h, "runs determined (n)", "n", &|a, _| {
+            a["n"].as_u64().map_or("&ndash;".into(), |n| n.to_string())
+        });
+        h.push_str("</table>\n");
+    }
+}
+
+fn single_run_fits(h: &mut String, fits: &[&Labelled<FitRecord>]) {
+    h.push_str("<table class=\"fits\"><tr><th class=\"l\">channel</th><th class=\"l\">term</th><th>value</th><th>95% interval</th><th class=\"l\">unit</th><th>datasheet value</th><th>95% interval</th><th class=\"l\">datasheet unit</th></tr>\n");
+    for f in fits {
+        let units = coef_units(&f.rec.unit);
+        for (i, k) in TERM_NAMES.iter().enumerate() {
+            let c = &f.rec.coef[*k];
+            let determined = c["determined"].as_bool() != Some(false) && c["value"].is_f64();
+            let ds = f.rec.datasheet.as_ref().and_then(|d| d.get(*k));
+            let (dv, dlo, dhi, du) = match ds {
+                Some(d) => (
+                    num(&d["value"]),
+                    num(&d["lo"]),
+                    num(&d["hi"]),
+                    esc(d["unit"].as_str().unwrap_or("")),
+                ),
+                None => (
+                    "&ndash;".into(),
+                    "&ndash;".into(),
+                    "&ndash;".into(),
+                    String::new(),
+                ),
+            };
+            let first = if i == 0 {
+                format!(
+                    "<td class=\"l\" rowspan=\"5\"><b>{}</b><br><span class=\"small\">gof {}</span></td>",
+                    esc(&f.rec.channel),
+                    f.rec.gof.map_or("&ndash;".into(), |g| format!("{g:.2}"))
+                )
+            } else {
+                String::new()
+            };
             let _ = writeln!(
                 h,
-                "<h3>Decoder health</h3>\n<p>{} frames, {} checksum errors, {} resynchronisations, {} missing, {} duplicated, {} bytes skipped.</p>",
-                hl["frames"], hl["crc_errors"], hl["resyncs"], hl["missing"], hl["duplicates"], hl["bytes_skipped"]
+                "<tr>{first}<td class=\"l\">{k}</td><td>{}</td><td>[{}, {}]</td><td class=\"l\">{}</td><td>{dv}</td><td>{}</td><td class=\"l\">{du}</td></tr>",
+                if determined { num(&c["value"]) } else { "not determined".into() },
+                num(&c["lo"]),
+                num(&c["hi"]),
+                esc(&units[i]),
+                if dlo.starts_with('&') && dhi.starts_with('&') {
+                    "&ndash;".to_string()
+                } else {
+                    format!("[{dlo}, {dhi}]")
+                }
             );
         }
     }
-    h.push_str("<p><small>Written by allanscope from its JSON-lines records.</small></p>\n</body></html>\n");
-    h
+    h.push_str("</table>\n");
+}
+
+/// An effect's name and parameters in words and units (CONTRACT.md's parameter names).
+pub fn effect_words(kind: &str, params: &Value, unit: &str) -> String {
+    let p = |k: &str| num(&params[k]);
+    match kind {
+        "gauss_markov" => format!(
+            "correlated (Gauss-Markov) noise: sigma = {} {unit}/s, correlation time = {} s",
+            p("sigma"),
+            p("tau_c")
+        ),
+        "sinusoid" => format!(
+            "sinusoid: amplitude = {} {unit}/s, frequency = {} Hz",
+            p("amplitude"),
+            p("frequency")
+        ),
+        "output_filter" => format!(
+            "output low-pass filter: time constant = {} s",
+            p("time_constant")
+        ),
+        "warmup" => format!(
+            "warm-up drift: amplitude = {} {unit}/s, time constant = {} s",
+            p("amplitude"),
+            p("time_constant")
+        ),
+        "bias_jumps" => format!(
+            "bias jumps: {} jumps, rms size = {} {unit}/s",
+            params["count"]
+                .as_u64()
+                .map_or("?".into(), |n| n.to_string()),
+            p("rms_size")
+        ),
+        "temperature" => format!(
+            "temperature sensitivity: {} {unit}/s per deg C",
+            p("coefficient")
+        ),
+        other => {
+            let kv: Vec<String> = params
+                .as_object()
+                .map(|o| o.iter().map(|(k, v)| format!("{k} = {}", num(v))).collect())
+                .unwrap_or_default();
+            format!("{other}: {}", kv.join(", "))
+        }
+    }
+}
+
+fn diagnosis(h: &mut String, res: &Results) {
+    if res.diagnoses.is_empty() {
+        return;
+    }
+    h.push_str("<h2>Sim-to-real gap (diagnosis)</h2>\n<p>The gap statistic is near 1 when the model explains the curve. Final diagnosis of each channel:</p>\n<table class=\"diagnosis\"><tr><th class=\"l\">run</th><th class=\"l\">channel</th><th class=\"l\">verdict</th><th>gap before</th><th>gap after</th><th class=\"l\">effects (in the order added; gap after each)</th><th class=\"l\">where the base model misses</th></tr>\n");
+    // The final (or last) diagnosis per run and channel.
+    let mut keys: Vec<(usize, Option<usize>, String)> = Vec::new();
+    for d in &res.diagnoses {
+        let k = (d.file, d.run, d.rec.channel.clone());
+        if !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    let unit_of = |d: &Labelled<DiagnosisRecord>| {
+        res.curves
+            .iter()
+            .find(|c| c.file == d.file && c.rec.channel == d.rec.channel)
+            .map_or("u".to_string(), |c| c.rec.unit.clone())
+    };
+    let mut interim: Vec<&Labelled<DiagnosisRecord>> = Vec::new();
+    for (file, run, ch) in &keys {
+        let mine: Vec<&Labelled<DiagnosisRecord>> = res
+            .diagnoses
+            .iter()
+            .filter(|d| d.file == *file && d.run == *run && &d.rec.channel == ch)
+            .collect();
+        let Some(last) = mine
+            .iter()
+            .rev()
+            .find(|d| d.rec.is_final)
+            .or(mine.last())
+            .copied()
+        else {
+            continue;
+        };
+        interim.extend(mine.iter().filter(|d| !std::ptr::eq(**d, last)));
+        let d = &last.rec;
+        let unit = unit_of(last);
+        let effects: Vec<String> = d
+            .effects
+            .iter()
+            .map(|e| {
+                format!(
+                    "{} (gap {:.2})",
+                    esc(&effect_words(&e.kind, &e.params, &unit)),
+                    e.gap_after
+                )
+            })
+            .collect();
+        // The four regions the model misses most; the count of the others.
+        let mut worst: Vec<&crate::gap::record::RegionRecord> = d.regions.iter().collect();
+        worst.sort_by(|a, b| {
+            b.worst_ratio
+                .ln()
+                .abs()
+                .total_cmp(&a.worst_ratio.ln().abs())
+        });
+        let more = worst.len().saturating_sub(4);
+        worst.truncate(4);
+        worst.sort_by(|a, b| a.tau_lo.total_cmp(&b.tau_lo));
+        let mut regions: Vec<String> = worst
+            .iter()
+            .map(|r| {
+                let taus = if r.tau_lo == r.tau_hi {
+                    format!("&#964; = {} s", tick(r.tau_lo))
+                } else {
+                    format!("&#964; {}&ndash;{} s", tick(r.tau_lo), tick(r.tau_hi))
+                };
+                format!(
+                    "{taus}: data {} the model (&#215;{} at worst)",
+                    if r.sign > 0 { "above" } else { "below" },
+                    ratio_text(r.worst_ratio)
+                )
+            })
+            .collect();
+        if more > 0 {
+            regions.push(format!("and {more} more, closer to the model"));
+        }
+        let verdict = serde_json::to_value(d.verdict)
+            .ok()
+            .and_then(|v| v.as_str().map(String::from))
+            .unwrap_or_default();
+        let shape = d
+            .residual_shape
+            .as_ref()
+            .map(|s| {
+                format!(
+                    "<br><span class=\"small\">what is left unexplained: {}</span>",
+                    esc(s)
+                )
+            })
+            .unwrap_or_default();
+        let _ = writeln!(
+            h,
+            "<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td class=\"l\"><b>{}</b>{shape}</td><td>{:.2}</td><td>{:.2}</td><td class=\"l\">{}</td><td class=\"l\">{}</td></tr>",
+            esc(&last.label),
+            esc(ch),
+            esc(&verdict),
+            d.gap_before,
+            d.gap_after,
+            if effects.is_empty() { "none".into() } else { effects.join("<br>") },
+            if regions.is_empty() { "nowhere".into() } else { regions.join("<br>") }
+        );
+    }
+    h.push_str("</table>\n");
+    if !interim.is_empty() {
+        h.push_str("<h3>Interim diagnoses</h3>\n<table class=\"interim small\"><tr><th class=\"l\">run</th><th class=\"l\">channel</th><th>data (s)</th><th class=\"l\">verdict</th><th>gap before</th><th>gap after</th><th class=\"l\">effects</th></tr>\n");
+        for d in interim {
+            let verdict = serde_json::to_value(d.rec.verdict)
+                .ok()
+                .and_then(|v| v.as_str().map(String::from))
+                .unwrap_or_default();
+            let kinds: Vec<&str> = d.rec.effects.iter().map(|e| effect_name(&e.kind)).collect();
+            let _ = writeln!(
+                h,
+                "<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td>{}</td><td class=\"l\">{}</td><td>{:.2}</td><td>{:.2}</td><td class=\"l\">{}</td></tr>",
+                esc(&d.label),
+                esc(&d.rec.channel),
+                tick(d.rec.t_data),
+                esc(&verdict),
+                d.rec.gap_before,
+                d.rec.gap_after,
+                esc(&if kinds.is_empty() { "none".to_string() } else { kinds.join(", ") })
+            );
+        }
+        h.push_str("</table>\n");
+    }
+}
+
+fn dynamic_view(h: &mut String, res: &Results) {
+    let finals: Vec<_> = res
+        .curves
+        .iter()
+        .filter(|c| c.rec.r#final && c.rec.stat.name() == "avar")
+        .collect();
+    let mut first = true;
+    for c in finals {
+        let all: Vec<_> = res
+            .curves
+            .iter()
+            .filter(|x| {
+                x.file == c.file
+                    && x.run == c.run
+                    && x.rec.channel == c.rec.channel
+                    && x.rec.stat == c.rec.stat
+            })
+            .map(|x| &x.rec)
+            .collect();
+        if all.len() < 3 {
+            continue;
+        }
+        if first {
+            h.push_str("<h2>Where in the run (dynamic Allan view)</h2>\n<p>Each column is the stretch of the run between two interim records; its colour is that stretch's Allan deviation divided by the whole run's, at each &#964;. Red: noisier than the run as a whole; blue: quieter.</p>\n");
+            first = false;
+        }
+        let label = if res.several_runs() {
+            format!("{} [{}] \u{2014} {}", c.rec.channel, c.rec.unit, c.label)
+        } else {
+            format!("{} [{}]", c.rec.channel, c.rec.unit)
+        };
+        h.push_str(&render_dynamic_svg(&all, &label));
+    }
+}
+
+fn health(h: &mut String, res: &Results) {
+    if res.health.is_empty() {
+        return;
+    }
+    h.push_str("<h2>Decoder health</h2>\n<table><tr><th class=\"l\">run</th><th>frames</th><th>checksum errors</th><th>resynchronisations</th><th>missing</th><th>duplicated</th><th>bytes skipped</th></tr>\n");
+    // The last health record of each run.
+    let mut last: Vec<&Labelled<Value>> = Vec::new();
+    for hl in &res.health {
+        match last
+            .iter_mut()
+            .find(|x| x.file == hl.file && x.run == hl.run)
+        {
+            Some(x) => *x = hl,
+            None => last.push(hl),
+        }
+    }
+    for hl in last {
+        let v = &hl.rec;
+        let n = |k: &str| v[k].as_u64().map_or("&ndash;".into(), |x| x.to_string());
+        let bad = ["crc_errors", "missing", "duplicates"]
+            .iter()
+            .any(|k| v[*k].as_u64().unwrap_or(0) > 0);
+        let _ = writeln!(
+            h,
+            "<tr><td class=\"l\">{}</td><td>{}</td><td{c}>{}</td><td>{}</td><td{c}>{}</td><td{c}>{}</td><td>{}</td></tr>",
+            esc(&hl.label),
+            n("frames"),
+            n("crc_errors"),
+            n("resyncs"),
+            n("missing"),
+            n("duplicates"),
+            n("bytes_skipped"),
+            c = if bad { " class=\"warn\"" } else { "" }
+        );
+    }
+    h.push_str("</table>\n");
 }

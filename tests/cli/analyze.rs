@@ -321,11 +321,12 @@ fn plot_draws_each_channel_with_its_intervals_and_model() {
             _ => None,
         })
         .sum();
-    // One marker per point, one interval bar per point, two data lines and two model lines.
-    assert_eq!(text.matches("<circle").count(), points);
-    assert_eq!(text.matches("stroke-dasharray").count(), 2);
-    assert_eq!(text.matches("<polyline").count(), 4);
-    assert!(text.contains("Allan deviation (arcsec/s)"));
+    // One interval bar per point, two data lines and two model lines (one panel: one unit).
+    assert_eq!(text.matches("class=\"interval\"").count(), points);
+    assert_eq!(text.matches("class=\"curve\"").count(), 2);
+    assert_eq!(text.matches("class=\"model\"").count(), 2);
+    assert_eq!(text.matches("class=\"panel\"").count(), 1);
+    assert!(text.contains("Allan deviation &#963;(&#964;) (arcsec/s)"));
     assert!(text.contains(">gx<") && text.contains(">gy<"));
     // Nothing to plot is a usage error.
     let out = exe()
@@ -375,10 +376,13 @@ fn report_is_one_page_with_plots_tables_and_health() {
         String::from_utf8_lossy(&out.stderr)
     );
     let text = std::fs::read_to_string(&html).unwrap();
-    // Two units (arcsec gyros, m/s accelerometers): two inline plots; eight fit rows; health.
-    assert_eq!(text.matches("<svg").count(), 2);
-    assert_eq!(text.matches("<tr><td class=\"l\">").count(), 8);
-    assert!(text.contains("75000 frames, 0 checksum errors"));
+    // Two units (arcsec gyros, m/s accelerometers): one figure of two panels; eight channels
+    // of five terms in the fit table; health.
+    assert_eq!(text.matches("<svg").count(), 1);
+    assert_eq!(text.matches("class=\"panel\"").count(), 2);
+    assert_eq!(text.matches("rowspan=\"5\"").count(), 8);
+    assert!(text.contains("<h2>Decoder health</h2>"));
+    assert!(text.contains("<td>75000</td><td>0</td>"));
     assert!(!text.contains("src=\"http"), "self-contained");
 }
 

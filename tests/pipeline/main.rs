@@ -5,6 +5,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod arbitrary_checkpoint;
 mod backpressure;
 mod checkpoint;
 mod config;

@@ -524,7 +524,12 @@ fn model_errors_name_file_and_key() {
         let err =
             SimModel::from_toml_str(&text, Path::new("models/bad.toml")).expect_err("rejected");
         let msg = err.to_string();
-        assert!(msg.starts_with("models/bad.toml: key `"), "{msg}");
+        assert!(
+            msg.starts_with("model file: ")
+                && msg.contains(" problem")
+                && msg.contains("\n  models/bad.toml:"),
+            "{msg}"
+        );
         assert!(msg.contains(&format!("`{key}`")), "want key {key}: {msg}");
         assert!(msg.contains(problem), "want {problem}: {msg}");
     }
@@ -537,7 +542,7 @@ fn model_syntax_error_names_the_line() {
         .expect_err("rejected")
         .to_string();
     assert!(
-        msg.starts_with("m.toml: ") && msg.contains("line 3"),
+        msg.starts_with("model file: 1 problem\n  m.toml:3: key `(syntax)`: not valid TOML"),
         "{msg}"
     );
 }

@@ -105,6 +105,20 @@ impl ChannelAccumulator {
         self.engine().bytes()
     }
 
+    /// [`Engine::check_restored`] for whichever engine this is; a count scale must be a
+    /// finite non-zero number.
+    pub fn check_restored(&self) -> Result<(), String> {
+        match self {
+            ChannelAccumulator::Counts { engine, scale } => {
+                if !(scale.is_finite() && *scale != 0.0) {
+                    return Err(format!("count scale {scale}"));
+                }
+                engine.check_restored()
+            }
+            ChannelAccumulator::Real(e) => e.check_restored(),
+        }
+    }
+
     /// Readings in u^2/s^2 (counts scaled).
     pub fn read(&mut self) -> Vec<LevelReading> {
         match self {

@@ -109,6 +109,60 @@ pub struct AccumConfig {
 }
 
 impl AccumConfig {
+    /// Each setting that differs from `other`'s, as `name: this vs other` (empty when equal),
+    /// in the words of the command line.
+    pub fn differences(&self, other: &AccumConfig) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.tau0_s.to_bits() != other.tau0_s.to_bits() {
+            out.push(format!("tau0: {:?} s vs {:?} s", self.tau0_s, other.tau0_s));
+        }
+        if self.stats != other.stats {
+            let names = |s: StatSet| {
+                [("avar", s.avar), ("hvar", s.hvar), ("mvar", s.mvar)]
+                    .iter()
+                    .filter(|x| x.1)
+                    .map(|x| x.0)
+                    .collect::<Vec<_>>()
+                    .join(",")
+            };
+            out.push(format!(
+                "--stats: {} vs {}",
+                names(self.stats),
+                names(other.stats)
+            ));
+        }
+        if self.overlap != other.overlap {
+            let show = |o: Overlap| match o {
+                Overlap::Full => "full".to_string(),
+                Overlap::Bounded(l) => l.to_string(),
+            };
+            out.push(format!(
+                "--overlap: {} vs {}",
+                show(self.overlap),
+                show(other.overlap)
+            ));
+        }
+        if self.taus != other.taus {
+            let show = |t: &TauSpec| match t {
+                TauSpec::Octave => "octave".to_string(),
+                TauSpec::Decade => "decade".to_string(),
+                TauSpec::List(v) => v.iter().map(u64::to_string).collect::<Vec<_>>().join(","),
+            };
+            out.push(format!(
+                "--taus: {} vs {}",
+                show(&self.taus),
+                show(&other.taus)
+            ));
+        }
+        if self.noise_id != other.noise_id {
+            out.push(format!(
+                "noise identification: {} vs {}",
+                self.noise_id, other.noise_id
+            ));
+        }
+        out
+    }
+
     pub fn new(tau0_s: f64) -> AccumConfig {
         AccumConfig {
             tau0_s,

@@ -558,6 +558,75 @@ impl<R: Repr> Engine<R> {
             .collect()
     }
 
+    /// Checks a state read back from a checkpoint: the streams and levels must be the ones its
+    /// configuration builds, and every index must point into what the streams hold, so that a
+    /// damaged or forged state is refused rather than read out of bounds. The numbers in the
+    /// sums are not checked (any value is a possible sum).
+    pub fn check_restored(&self) -> Result<(), String> {
+        let fresh = Engine::<R>::new(self.cfg.clone());
+        if self.streams.len() != fresh.streams.len() || self.levels.len() != fresh.levels.len() {
+            return Err(format!(
+                "{} streams and {} levels, where its settings give {} and {}",
+                self.streams.len(),
+                self.levels.len(),
+                fresh.streams.len(),
+                fresh.levels.len()
+            ));
+        }
+        // Indices stay far below u64::MAX, so the sums of index and span cannot overflow.
+        const MAX_INDEX: u64 = 1 << 62;
+        for (i, (s, f)) in self.streams.iter().zip(&fresh.streams).enumerate() {
+            if (s.stride, s.parent, s.factor, s.needs_c)
+                != (f.stride, f.parent, f.factor, f.needs_c)
+            {
+                return Err(format!("stream {i} is not the one its settings build"));
+            }
+            for (name, base, len, new_from) in [
+                ("x", s.x.base, s.x.data.len(), s.x.new_from),
+                ("c", s.c.base, s.c.data.len(), s.c.new_from),
+            ] {
+                if new_from > len || base > MAX_INDEX || len as u64 > MAX_INDEX {
+                    return Err(format!(
+                        "stream {i} ({name}): new points from {new_from} of {len} held, base {base}"
+                    ));
+                }
+            }
+            if !s.needs_c && !s.c.data.is_empty() {
+                return Err(format!("stream {i} holds running sums it does not use"));
+            }
+        }
+        for (lv, f) in self.levels.iter().zip(&fresh.levels) {
+            if (lv.m, lv.stream, lv.mp) != (f.m, f.stream, f.mp) {
+                return Err(format!(
+                    "the level of m = {} is not the one its settings build",
+                    lv.m
+                ));
+            }
+            let st = &self.streams[lv.stream];
+            let within = |next: u64, b: &Buf<R::X>| next >= b.base && next <= b.end() + 4 * lv.mp;
+            let within_c = |next: u64, b: &Buf<R::C>| next >= b.base && next <= b.end() + 4 * lv.mp;
+            let stats = self.cfg.stats;
+            let bad = (stats.avar && !within(lv.avar.next, &st.x))
+                || (stats.hvar && !within(lv.hvar.next, &st.x))
+                || (self.cfg.noise_id && !within(lv.nid_next, &st.x))
+                || (stats.mvar && !within_c(lv.mvar.next, &st.c))
+                || (stats.mvar && lv.stream == 0 && !within(lv.mvar.next, &st.x));
+            if bad {
+                return Err(format!(
+                    "the level of m = {} points outside the data it holds",
+                    lv.m
+                ));
+            }
+        }
+        if self.n_points > self.n_steps.saturating_add(self.segments) || self.n_steps > MAX_INDEX {
+            return Err(format!(
+                "{} points in {} steps and {} segments",
+                self.n_points, self.n_steps, self.segments
+            ));
+        }
+        Ok(())
+    }
+
     /// Bytes held by the streams (the part of memory that could grow with the run).
     pub fn stream_bytes(&self) -> usize {
         self.streams

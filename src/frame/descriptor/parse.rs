@@ -1,406 +1,20 @@
-//! Frame descriptors: the TOML language that tells the decoder how a unit frames its data, and
-//! its checked form [`FrameDescriptor`]. Loading collects every problem it finds (file, key,
-//! what is wrong, what is allowed) and rejects unknown keys; nothing here reads a byte stream.
-//!
-//! # The language
-//!
-//! ```toml
-//! name = "siu8"                 # optional; defaults to the file stem
-//! description = "..."           # optional
-//! rate_hz = 250.0               # nominal frame rate; tau0 = 1 / rate_hz
-//! byte_order = "little"         # default for every field ("little" | "big")
-//!
-//! [sync]                        # bytes every message starts with, at `offset` in the message
-//! bytes = [0xAA, 0x55]
-//! offset = 0                    # optional, default 0
-//! id_offset = 2                 # where a message's `id` bytes sit (only with [[messages]])
-//!
-//! # One message kind: its keys at the top level, as below. Several kinds: one [[messages]]
-//! # table each, with `name` and `id = [bytes]`; exactly one kind carries `channels`.
-//! length = 42
-//! [checksum]
-//! algorithm = "CRC-16/IBM-3740" # or CRC-16/XMODEM, CRC-32/MPEG-2, CRC-32/ISO-HDLC, sum16, sum8
-//! range = [2, 39]               # covered bytes, inclusive
-//! at = 40                       # where the checksum is stored
-//! byte_order = "little"         # optional
-//! [counter]
-//! offset = 2
-//! type = "u16"
-//! modulus = 65536               # the counter is (raw >> shift) % modulus
-//! shift = 0                     # optional
-//! [status]
-//! offset = 38
-//! type = "u16"
-//! bit_set_means = "fault"       # or "valid": what a 1 in a channel's status_bit says
-//! [temperature]                 # optional
-//! offset = 36
-//! type = "i16"
-//! scale = 0.01                  # degC per LSB
-//! status_bit = 8                # optional: the reading is missing when this bit says so
-//! [[channels]]
-//! name = "g1"
-//! offset = 4
-//! type = "i32"
-//! scale = 0.004                 # channel unit per LSB
-//! unit = "arcsec"               # unit of the delivered increment
-//! kind = "increment"            # "increment" | "rate" (x tau0) | "accel_g" (x g0 x tau0)
-//! status_bit = 0                # optional
-//!
-//! [interleave]                  # optional: another kind shares the frame's counter, `count`
-//! message = "control"           # of them between two frames (the hg4930 schedule)
-//! count = 5
-//! ```
+//! The descriptor checker: a walk over the TOML tables of a descriptor that builds the
+//! [`FrameDescriptor`] types and records every problem with its key path in the one collector
+//! (`crate::toml_check`): unknown keys, missing or mistyped values, fields past the message's
+//! end or overlapping each other, and numbers outside `crate::ranges` (rate, scale, length,
+//! channel count).
 
 use std::collections::BTreeSet;
-use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use toml::{Table, Value};
 
-use super::checksum::{ChecksumAlgorithm, ALGORITHM_NAMES};
-use super::field::{ByteOrder, FieldType, FIELD_TYPE_NAMES};
-use super::ChannelInfo;
-use crate::error::UsageError;
+use super::*;
+use crate::frame::checksum::{ChecksumAlgorithm, ALGORITHM_NAMES};
+use crate::frame::field::{ByteOrder, FieldType, FIELD_TYPE_NAMES};
+use crate::toml_check::Collector;
 
-/// Standard gravity, m/s^2 (CGPM 1901), for `accel_g` fields (one constant, in model::units).
-pub use crate::model::units::G0_M_S2;
-
-/// The descriptors that ship with the program, embedded so the binary works from any directory.
-pub const BUILTIN: &[(&str, &str)] = &[
-    ("siu8", include_str!("../../config/frames/siu8.toml")),
-    ("kvh1750", include_str!("../../config/frames/kvh1750.toml")),
-    (
-        "kvh1750b",
-        include_str!("../../config/frames/kvh1750b.toml"),
-    ),
-    ("hg4930", include_str!("../../config/frames/hg4930.toml")),
-];
-
-/// What a channel's number is, and so how it becomes an increment over one step.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ChannelKind {
-    /// Already the increment over one step.
-    Increment,
-    /// A rate: increment = value x scale x tau0.
-    Rate,
-    /// An acceleration in g: delta-velocity = value x scale x g0 x tau0, in m/s.
-    AccelG,
-}
-
-/// What a set status bit says about the value it guards.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum BitMeaning {
-    Fault,
-    Valid,
-}
-
-/// The bytes all messages start with.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SyncSpec {
-    pub bytes: Vec<u8>,
-    /// Offset of the sync bytes in a message.
-    pub offset: usize,
-    /// Offset of the message id bytes in a message.
-    pub id_offset: usize,
-}
-
-/// One increment channel.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ChannelSpec {
-    pub name: String,
-    pub offset: usize,
-    pub ty: FieldType,
-    pub order: ByteOrder,
-    /// Channel unit per LSB (before the kind's factor).
-    pub scale: f64,
-    pub unit: String,
-    pub kind: ChannelKind,
-    pub status_bit: Option<u32>,
-}
-
-impl ChannelSpec {
-    /// True when the decoder delivers exact integer counts (an integer `increment` field).
-    pub fn is_count(&self) -> bool {
-        self.ty.is_integer() && self.kind == ChannelKind::Increment
-    }
-}
-
-/// The frame counter.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CounterSpec {
-    pub offset: usize,
-    pub ty: FieldType,
-    pub order: ByteOrder,
-    pub modulus: u64,
-    pub shift: u32,
-}
-
-/// The checksum of a message.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ChecksumSpec {
-    pub algorithm: ChecksumAlgorithm,
-    /// First covered byte.
-    pub start: usize,
-    /// Last covered byte (inclusive).
-    pub end: usize,
-    /// Where the checksum is stored.
-    pub at: usize,
-    pub order: ByteOrder,
-}
-
-/// The status field whose bits mark channels valid or faulty.
-#[derive(Debug, Clone, PartialEq)]
-pub struct StatusSpec {
-    pub offset: usize,
-    pub ty: FieldType,
-    pub order: ByteOrder,
-    pub bit_set_means: BitMeaning,
-}
-
-/// An optional temperature reading.
-#[derive(Debug, Clone, PartialEq)]
-pub struct TemperatureSpec {
-    pub offset: usize,
-    pub ty: FieldType,
-    pub order: ByteOrder,
-    /// degC per LSB.
-    pub scale: f64,
-    pub status_bit: Option<u32>,
-}
-
-/// One kind of message in the stream.
-#[derive(Debug, Clone, PartialEq)]
-pub struct MessageSpec {
-    pub name: String,
-    /// Id bytes at `sync.id_offset` (empty for a single-kind format).
-    pub id: Vec<u8>,
-    /// Total length in bytes.
-    pub length: usize,
-    pub checksum: ChecksumSpec,
-    pub counter: Option<CounterSpec>,
-    pub status: Option<StatusSpec>,
-    pub temperature: Option<TemperatureSpec>,
-    /// Empty for messages that carry no increments (skipped by the decoder).
-    pub channels: Vec<ChannelSpec>,
-}
-
-/// Another message kind that shares the frame counter: `count` of them between two frames.
-#[derive(Debug, Clone, PartialEq)]
-pub struct InterleaveSpec {
-    /// Index into [`FrameDescriptor::messages`].
-    pub message: usize,
-    pub count: u64,
-}
-
-/// A checked frame descriptor.
-#[derive(Debug, Clone, PartialEq)]
-pub struct FrameDescriptor {
-    pub name: String,
-    pub description: String,
-    /// The file it was read from (`<builtin>/NAME.toml` for an embedded one).
-    pub source: PathBuf,
-    pub rate_hz: f64,
-    pub sync: SyncSpec,
-    pub messages: Vec<MessageSpec>,
-    /// Index of the message kind that carries the channels.
-    pub frame_kind: usize,
-    pub interleave: Option<InterleaveSpec>,
-}
-
-/// All problems found in one descriptor (or why it could not be found). Each is a
-/// [`UsageError`], so the program exits with status 2; the first is the error's `source`.
-#[derive(Debug)]
-pub struct DescriptorErrors {
-    pub problems: Vec<UsageError>,
-}
-
-impl fmt::Display for DescriptorErrors {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let n = self.problems.len();
-        write!(
-            f,
-            "frame descriptor: {n} problem{}",
-            if n == 1 { "" } else { "s" }
-        )?;
-        for p in &self.problems {
-            write!(f, "\n  {p}")?;
-        }
-        Ok(())
-    }
-}
-
-impl std::error::Error for DescriptorErrors {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        self.problems
-            .first()
-            .map(|e| e as &(dyn std::error::Error + 'static))
-    }
-}
-
-impl FrameDescriptor {
-    /// The message kind that carries the channels.
-    pub fn frame(&self) -> &MessageSpec {
-        &self.messages[self.frame_kind]
-    }
-
-    /// Sampling step in seconds (1 / rate_hz).
-    pub fn tau0_s(&self) -> f64 {
-        1.0 / self.rate_hz
-    }
-
-    /// Length in bytes of the frame message.
-    pub fn frame_len(&self) -> usize {
-        self.frame().length
-    }
-
-    /// Names, units and (for integer counts) LSBs of the channels, in decoder order.
-    pub fn channels(&self) -> Vec<ChannelInfo> {
-        self.frame()
-            .channels
-            .iter()
-            .map(|c| ChannelInfo {
-                name: c.name.clone(),
-                unit: c.unit.clone(),
-                scale: c.is_count().then_some(c.scale),
-            })
-            .collect()
-    }
-
-    /// The factor from `raw x scale` to the increment over one step for a channel kind.
-    pub fn kind_factor(&self, kind: ChannelKind) -> f64 {
-        match kind {
-            ChannelKind::Increment => 1.0,
-            ChannelKind::Rate => self.tau0_s(),
-            ChannelKind::AccelG => G0_M_S2 * self.tau0_s(),
-        }
-    }
-
-    /// The status value that marks every channel and the temperature valid (0 without status).
-    pub fn status_all_valid(&self) -> u64 {
-        let f = self.frame();
-        match &f.status {
-            Some(s) if s.bit_set_means == BitMeaning::Valid => f
-                .channels
-                .iter()
-                .filter_map(|c| c.status_bit)
-                .chain(f.temperature.as_ref().and_then(|t| t.status_bit))
-                .fold(0, |acc, b| acc | (1u64 << b)),
-            _ => 0,
-        }
-    }
-
-    /// The directories searched for `NAME.toml`, in order: `./config/frames`, the executable's
-    /// `../../config/frames`, and the crate's own `config/frames` as it was at compile time.
-    pub fn search_dirs() -> Vec<PathBuf> {
-        let mut dirs = vec![PathBuf::from("config/frames")];
-        if let Ok(exe) = std::env::current_exe() {
-            if let Some(d) = exe.parent().and_then(Path::parent).and_then(Path::parent) {
-                dirs.push(d.join("config/frames"));
-            }
-        }
-        dirs.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("config/frames"));
-        dirs
-    }
-
-    /// Loads a descriptor by name (`siu8`: searched in [`Self::search_dirs`], then the embedded
-    /// copies in [`BUILTIN`]) or by path (anything with a path separator or ending in `.toml`).
-    pub fn load(name_or_path: &str) -> Result<Self, DescriptorErrors> {
-        let looks_like_path = name_or_path.contains('/')
-            || name_or_path.contains(std::path::MAIN_SEPARATOR)
-            || name_or_path.ends_with(".toml");
-        if looks_like_path {
-            return Self::from_path(Path::new(name_or_path));
-        }
-        let dirs = Self::search_dirs();
-        for d in &dirs {
-            let p = d.join(format!("{name_or_path}.toml"));
-            if p.is_file() {
-                return Self::from_path(&p);
-            }
-        }
-        if let Some(d) = Self::builtin(name_or_path) {
-            return d;
-        }
-        let known: Vec<&str> = BUILTIN.iter().map(|(n, _)| *n).collect();
-        let searched: Vec<String> = dirs.iter().map(|d| d.display().to_string()).collect();
-        Err(DescriptorErrors {
-            problems: vec![UsageError::Option(format!(
-                "unknown frame format `{name_or_path}`: no {name_or_path}.toml in {} and no \
-                 built-in of that name (built-in: {})",
-                searched.join(", "),
-                known.join(", ")
-            ))],
-        })
-    }
-
-    /// The embedded copy of a shipped descriptor.
-    pub fn builtin(name: &str) -> Option<Result<Self, DescriptorErrors>> {
-        BUILTIN.iter().find(|(n, _)| *n == name).map(|(n, text)| {
-            Self::from_toml_str(text, &PathBuf::from(format!("<builtin>/{n}.toml")))
-        })
-    }
-
-    /// Reads and checks a descriptor file.
-    pub fn from_path(path: &Path) -> Result<Self, DescriptorErrors> {
-        let text = std::fs::read_to_string(path).map_err(|e| DescriptorErrors {
-            problems: vec![UsageError::Config {
-                file: path.to_path_buf(),
-                key: "(file)".into(),
-                problem: format!("cannot read: {e}"),
-            }],
-        })?;
-        Self::from_toml_str(&text, path)
-    }
-
-    /// Parses and checks descriptor text; `source` names it in errors.
-    pub fn from_toml_str(text: &str, source: &Path) -> Result<Self, DescriptorErrors> {
-        let mut ctx = Ctx {
-            file: source.to_path_buf(),
-            errors: Vec::new(),
-        };
-        let table: Table = match toml::from_str(text) {
-            Ok(t) => t,
-            Err(e) => {
-                ctx.err("(syntax)", e.to_string().trim_end().replace('\n', " "));
-                return Err(ctx.into_errors());
-            }
-        };
-        let out = parse_descriptor(&mut ctx, &table, source);
-        match out {
-            Some(d) if ctx.errors.is_empty() => Ok(d),
-            _ => {
-                if ctx.errors.is_empty() {
-                    ctx.err("(descriptor)", "invalid descriptor");
-                }
-                Err(ctx.into_errors())
-            }
-        }
-    }
-}
-
-// ---------------------------------------------------------------------------------------------
-// The checker: a walk over the TOML tables that records each problem with its key path.
-
-struct Ctx {
-    file: PathBuf,
-    errors: Vec<UsageError>,
-}
-
-impl Ctx {
-    fn err(&mut self, key: impl Into<String>, problem: impl Into<String>) {
-        self.errors.push(UsageError::Config {
-            file: self.file.clone(),
-            key: key.into(),
-            problem: problem.into(),
-        });
-    }
-
-    fn into_errors(self) -> DescriptorErrors {
-        DescriptorErrors {
-            problems: self.errors,
-        }
-    }
-}
+type Ctx = Collector;
 
 /// One TOML table being read: its key path, the keys it may have, the keys read so far.
 struct Tbl<'t> {
@@ -441,7 +55,7 @@ impl<'t> Tbl<'t> {
     fn finish(self, ctx: &mut Ctx) {
         for k in self.t.keys() {
             if !self.allowed.contains(&k.as_str()) {
-                ctx.err(
+                ctx.bad(
                     self.key(k),
                     format!("unknown key (allowed here: {})", self.allowed.join(", ")),
                 );
@@ -453,13 +67,13 @@ impl<'t> Tbl<'t> {
         match self.get(k) {
             None => {
                 if required {
-                    ctx.err(self.key(k), "missing (a non-negative integer)");
+                    ctx.bad(self.key(k), "missing (a non-negative integer)");
                 }
                 None
             }
             Some(Value::Integer(i)) if *i >= 0 => Some(*i as u64),
             Some(v) => {
-                ctx.err(
+                ctx.bad(
                     self.key(k),
                     format!("expected a non-negative integer, found {}", show(v)),
                 );
@@ -472,14 +86,14 @@ impl<'t> Tbl<'t> {
         match self.get(k) {
             None => {
                 if required {
-                    ctx.err(self.key(k), "missing (a number)");
+                    ctx.bad(self.key(k), "missing (a number)");
                 }
                 None
             }
             Some(Value::Integer(i)) => Some(*i as f64),
             Some(Value::Float(f)) if f.is_finite() => Some(*f),
             Some(v) => {
-                ctx.err(
+                ctx.bad(
                     self.key(k),
                     format!("expected a finite number, found {}", show(v)),
                 );
@@ -492,13 +106,13 @@ impl<'t> Tbl<'t> {
         match self.get(k) {
             None => {
                 if required {
-                    ctx.err(self.key(k), "missing (a string)");
+                    ctx.bad(self.key(k), "missing (a string)");
                 }
                 None
             }
             Some(Value::String(s)) => Some(s.as_str()),
             Some(v) => {
-                ctx.err(self.key(k), format!("expected a string, found {}", show(v)));
+                ctx.bad(self.key(k), format!("expected a string, found {}", show(v)));
                 None
             }
         }
@@ -508,7 +122,7 @@ impl<'t> Tbl<'t> {
         match self.get(k) {
             None => {
                 if required {
-                    ctx.err(
+                    ctx.bad(
                         self.key(k),
                         "missing (an array of bytes, e.g. [0xAA, 0x55])",
                     );
@@ -521,7 +135,7 @@ impl<'t> Tbl<'t> {
                     match v {
                         Value::Integer(b) if (0..=255).contains(b) => out.push(*b as u8),
                         _ => {
-                            ctx.err(
+                            ctx.bad(
                                 format!("{}[{i}]", self.key(k)),
                                 format!("expected a byte 0..=255, found {}", show(v)),
                             );
@@ -530,13 +144,13 @@ impl<'t> Tbl<'t> {
                     }
                 }
                 if out.is_empty() {
-                    ctx.err(self.key(k), "must not be empty");
+                    ctx.bad(self.key(k), "must not be empty");
                     return None;
                 }
                 Some(out)
             }
             Some(v) => {
-                ctx.err(
+                ctx.bad(
                     self.key(k),
                     format!("expected an array of bytes, found {}", show(v)),
                 );
@@ -550,7 +164,7 @@ impl<'t> Tbl<'t> {
             None => None,
             Some(Value::Table(t)) => Some(t),
             Some(v) => {
-                ctx.err(self.key(k), format!("expected a table, found {}", show(v)));
+                ctx.bad(self.key(k), format!("expected a table, found {}", show(v)));
                 None
             }
         }
@@ -564,7 +178,7 @@ impl<'t> Tbl<'t> {
                 for (i, v) in a.iter().enumerate() {
                     match v {
                         Value::Table(t) => out.push(t),
-                        _ => ctx.err(
+                        _ => ctx.bad(
                             format!("{}[{i}]", self.key(k)),
                             format!("expected a table, found {}", show(v)),
                         ),
@@ -573,7 +187,7 @@ impl<'t> Tbl<'t> {
                 Some(out)
             }
             Some(v) => {
-                ctx.err(
+                ctx.bad(
                     self.key(k),
                     format!("expected an array of tables, found {}", show(v)),
                 );
@@ -586,7 +200,7 @@ impl<'t> Tbl<'t> {
         let s = self.string(ctx, k, true)?;
         let t = FieldType::parse(s);
         if t.is_none() {
-            ctx.err(
+            ctx.bad(
                 self.key(k),
                 format!("unknown type `{s}` (allowed: {FIELD_TYPE_NAMES})"),
             );
@@ -598,7 +212,7 @@ impl<'t> Tbl<'t> {
         match self.string(ctx, "byte_order", false) {
             None => default,
             Some(s) => ByteOrder::parse(s).unwrap_or_else(|| {
-                ctx.err(
+                ctx.bad(
                     self.key("byte_order"),
                     format!("unknown byte order `{s}` (allowed: little, big)"),
                 );
@@ -625,10 +239,66 @@ fn show(v: &Value) -> String {
     s.chars().take(60).collect()
 }
 
+/// Records a problem when a scale is 0 or outside the magnitudes `crate::ranges` allows.
+fn check_scale(ctx: &mut Ctx, key: String, scale: f64) {
+    use crate::ranges::{MAX_SCALE, MIN_SCALE};
+    if !(MIN_SCALE..=MAX_SCALE).contains(&scale.abs()) {
+        ctx.bad(
+            key,
+            format!(
+                "{}: the magnitude must be from {MIN_SCALE:e} to {MAX_SCALE:e} units per LSB",
+                crate::ranges::show(scale)
+            ),
+        );
+    }
+}
+
+/// Records a problem for each pair of a message's fields that share a byte: sync, id, stored
+/// checksum, counter, status, temperature and channels each own their bytes.
+fn check_overlaps(ctx: &mut Ctx, prefix: &str, sync: &SyncSpec, multi: bool, m: &MessageSpec) {
+    let mut fields: Vec<(String, usize, usize)> =
+        vec![("sync.bytes".into(), sync.offset, sync.bytes.len())];
+    if multi {
+        fields.push((format!("{prefix}id"), sync.id_offset, m.id.len()));
+    }
+    fields.push((
+        format!("{prefix}checksum.at"),
+        m.checksum.at,
+        m.checksum.algorithm.width(),
+    ));
+    if let Some(c) = &m.counter {
+        fields.push((format!("{prefix}counter"), c.offset, c.ty.size()));
+    }
+    if let Some(s) = &m.status {
+        fields.push((format!("{prefix}status"), s.offset, s.ty.size()));
+    }
+    if let Some(t) = &m.temperature {
+        fields.push((format!("{prefix}temperature"), t.offset, t.ty.size()));
+    }
+    for (i, c) in m.channels.iter().enumerate() {
+        fields.push((format!("{prefix}channels[{i}]"), c.offset, c.ty.size()));
+    }
+    for (j, (key, off, len)) in fields.iter().enumerate() {
+        if let Some((other, o2, l2)) = fields[..j]
+            .iter()
+            .find(|(_, o2, l2)| off < &(o2 + l2) && o2 < &(off + len))
+        {
+            ctx.bad(
+                key.clone(),
+                format!(
+                    "bytes {off}..{} overlap {other} (bytes {o2}..{})",
+                    off + len - 1,
+                    o2 + l2 - 1
+                ),
+            );
+        }
+    }
+}
+
 /// Records a problem when `offset + size` runs past `length`.
 fn check_span(ctx: &mut Ctx, key: String, offset: usize, size: usize, length: usize) {
     if offset.saturating_add(size) > length {
-        ctx.err(
+        ctx.bad(
             key,
             format!(
                 "offset {offset} + {size} byte(s) runs past the message length {length} \
@@ -688,7 +358,11 @@ const CHANNEL_KEYS: &[&str] = &[
 ];
 const INTERLEAVE_KEYS: &[&str] = &["message", "count"];
 
-fn parse_descriptor(ctx: &mut Ctx, table: &Table, source: &Path) -> Option<FrameDescriptor> {
+pub(super) fn parse_descriptor(
+    ctx: &mut Ctx,
+    table: &Table,
+    source: &Path,
+) -> Option<FrameDescriptor> {
     let multi = table.contains_key("messages");
     let mut top = Tbl::new(
         table,
@@ -709,8 +383,15 @@ fn parse_descriptor(ctx: &mut Ctx, table: &Table, source: &Path) -> Option<Frame
         .to_string();
     let rate_hz = top.float(ctx, "rate_hz", true);
     if let Some(r) = rate_hz {
-        if r <= 0.0 {
-            ctx.err("rate_hz", format!("must be > 0, found {r}"));
+        use crate::ranges::{MAX_RATE_HZ, MIN_RATE_HZ};
+        if !(MIN_RATE_HZ..=MAX_RATE_HZ).contains(&r) {
+            ctx.bad(
+                "rate_hz",
+                format!(
+                    "must be from {MIN_RATE_HZ:e} to {MAX_RATE_HZ:e} Hz, found {}",
+                    crate::ranges::show(r)
+                ),
+            );
         }
     }
     let order = top.byte_order(ctx, ByteOrder::Little);
@@ -722,7 +403,7 @@ fn parse_descriptor(ctx: &mut Ctx, table: &Table, source: &Path) -> Option<Frame
             let offset = s.uint(ctx, "offset", false).unwrap_or(0) as usize;
             let id_offset = s.uint(ctx, "id_offset", false);
             if multi && id_offset.is_none() {
-                ctx.err(
+                ctx.bad(
                     "sync.id_offset",
                     "missing: several message kinds need the offset of their `id` bytes",
                 );
@@ -735,7 +416,7 @@ fn parse_descriptor(ctx: &mut Ctx, table: &Table, source: &Path) -> Option<Frame
             })
         }
         None => {
-            ctx.err("sync", "missing (a table with `bytes` and `offset`)");
+            ctx.bad("sync", "missing (a table with `bytes` and `offset`)");
             None
         }
     };
@@ -744,7 +425,7 @@ fn parse_descriptor(ctx: &mut Ctx, table: &Table, source: &Path) -> Option<Frame
     if multi {
         let tables = top.tables(ctx, "messages").unwrap_or_default();
         if tables.is_empty() {
-            ctx.err("messages", "must list at least one message kind");
+            ctx.bad("messages", "must list at least one message kind");
         }
         for (i, t) in tables.into_iter().enumerate() {
             let mut m = Tbl::new(t, format!("messages[{i}]"), MESSAGE_KEYS);
@@ -793,7 +474,7 @@ fn parse_descriptor(ctx: &mut Ctx, table: &Table, source: &Path) -> Option<Frame
                 m.length,
             );
             if m.id.len() != messages[0].id.len() {
-                ctx.err(
+                ctx.bad(
                     format!("{}id", prefix(i)),
                     format!(
                         "has {} byte(s); every message id must have the same length as \
@@ -804,17 +485,30 @@ fn parse_descriptor(ctx: &mut Ctx, table: &Table, source: &Path) -> Option<Frame
                 );
             }
             if let Some(j) = messages[..i].iter().position(|o| o.id == m.id) {
-                ctx.err(
+                ctx.bad(
                     format!("{}id", prefix(i)),
                     format!("same id as messages[{j}]"),
                 );
             }
             if let Some(j) = messages[..i].iter().position(|o| o.name == m.name) {
-                ctx.err(
+                ctx.bad(
                     format!("{}name", prefix(i)),
                     format!("same name as messages[{j}]"),
                 );
             }
+        }
+    }
+    for (i, m) in messages.iter().enumerate() {
+        check_overlaps(ctx, &prefix(i), &sync, multi, m);
+        if m.channels.len() > crate::ranges::MAX_CHANNELS {
+            ctx.bad(
+                format!("{}channels", prefix(i)),
+                format!(
+                    "{} channels: at most {} are analysed in one run",
+                    m.channels.len(),
+                    crate::ranges::MAX_CHANNELS
+                ),
+            );
         }
     }
     let with_channels: Vec<usize> = (0..messages.len())
@@ -823,7 +517,7 @@ fn parse_descriptor(ctx: &mut Ctx, table: &Table, source: &Path) -> Option<Frame
     let frame_kind = match with_channels.as_slice() {
         [k] => *k,
         [] => {
-            ctx.err(
+            ctx.bad(
                 format!(
                     "{}channels",
                     if multi {
@@ -838,7 +532,7 @@ fn parse_descriptor(ctx: &mut Ctx, table: &Table, source: &Path) -> Option<Frame
         }
         [_, rest @ ..] => {
             for &k in rest {
-                ctx.err(
+                ctx.bad(
                     format!("{}channels", prefix(k)),
                     "only one message kind may carry channels",
                 );
@@ -855,7 +549,7 @@ fn parse_descriptor(ctx: &mut Ctx, table: &Table, source: &Path) -> Option<Frame
         it.finish(ctx);
         if let (Some(mname), Some(count)) = (mname, count) {
             match messages.iter().position(|m| m.name == mname) {
-                None => ctx.err(
+                None => ctx.bad(
                     "interleave.message",
                     format!(
                         "no message kind named `{mname}` (have: {})",
@@ -866,23 +560,23 @@ fn parse_descriptor(ctx: &mut Ctx, table: &Table, source: &Path) -> Option<Frame
                             .join(", ")
                     ),
                 ),
-                Some(k) if k == frame_kind => ctx.err(
+                Some(k) if k == frame_kind => ctx.bad(
                     "interleave.message",
                     "must name a message kind other than the one with channels",
                 ),
                 Some(k) => {
                     if count == 0 {
-                        ctx.err("interleave.count", "must be >= 1");
+                        ctx.bad("interleave.count", "must be >= 1");
                     }
                     let fc = messages[frame_kind].counter.as_ref();
                     let ic = messages[k].counter.as_ref();
                     match (fc, ic) {
                         (Some(a), Some(b)) if a.modulus == b.modulus => {}
-                        (Some(_), Some(_)) => ctx.err(
+                        (Some(_), Some(_)) => ctx.bad(
                             format!("{}counter.modulus", prefix(k)),
                             "interleaved messages must share the frame's counter modulus",
                         ),
-                        _ => ctx.err(
+                        _ => ctx.bad(
                             "interleave",
                             "both the frame message and the interleaved message need a counter",
                         ),
@@ -895,7 +589,7 @@ fn parse_descriptor(ctx: &mut Ctx, table: &Table, source: &Path) -> Option<Frame
     for (i, m) in messages.iter().enumerate() {
         let shares = i == frame_kind || interleave.as_ref().is_some_and(|s| s.message == i);
         if m.counter.is_some() && !shares {
-            ctx.err(
+            ctx.bad(
                 format!("{}counter", prefix(i)),
                 "a counter on a message without channels needs [interleave] naming it",
             );
@@ -930,15 +624,27 @@ fn parse_message(
     } else {
         Vec::new()
     };
-    let length = m.uint(ctx, "length", true).map(|v| v as usize);
-    if length == Some(0) {
-        ctx.err(m.key("length"), "must be > 0");
+    let mut length = m.uint(ctx, "length", true);
+    match length {
+        Some(0) => ctx.bad(m.key("length"), "must be > 0"),
+        Some(l) if l > crate::ranges::MAX_MESSAGE_BYTES => {
+            ctx.bad(
+                m.key("length"),
+                format!(
+                    "{l} bytes: a message may have at most {} bytes",
+                    crate::ranges::MAX_MESSAGE_BYTES
+                ),
+            );
+            length = None;
+        }
+        _ => {}
     }
+    let length = length.map(|v| v as usize);
     let len = length.unwrap_or(usize::MAX);
 
     let checksum = match m.table(ctx, "checksum") {
         None => {
-            ctx.err(
+            ctx.bad(
                 m.key("checksum"),
                 "missing (a table with `algorithm`, `range`, `at`)",
             );
@@ -962,13 +668,13 @@ fn parse_message(
         if let (Some(off), Some(ty)) = (offset, ty) {
             check_span(ctx, key, off, ty.size(), len);
             if !ty.is_integer() {
-                ctx.err(c.key("type"), "a counter must be an integer type");
+                ctx.bad(c.key("type"), "a counter must be an integer type");
             }
         }
         if let (Some(ty), Some(md)) = (ty, modulus) {
             let room = ty.bits().saturating_sub(shift as u32);
             if md < 2 || (room < 64 && md > (1u64 << room)) {
-                ctx.err(
+                ctx.bad(
                     c.key("modulus"),
                     format!(
                         "{md} does not fit: must be 2..=2^{room} for a {} field shifted by {shift}",
@@ -978,7 +684,7 @@ fn parse_message(
             }
         }
         if shift >= 32 {
-            ctx.err(c.key("shift"), "must be < 32");
+            ctx.bad(c.key("shift"), "must be < 32");
         }
         c.finish(ctx);
         Some(CounterSpec {
@@ -997,7 +703,7 @@ fn parse_message(
             Some("fault") => Some(BitMeaning::Fault),
             Some("valid") => Some(BitMeaning::Valid),
             Some(other) => {
-                ctx.err(
+                ctx.bad(
                     s.key("bit_set_means"),
                     format!("unknown value `{other}` (allowed: fault, valid)"),
                 );
@@ -1009,7 +715,7 @@ fn parse_message(
         if let (Some(off), Some(ty)) = (offset, ty) {
             check_span(ctx, s.key("offset"), off, ty.size(), len);
             if !ty.is_integer() {
-                ctx.err(s.key("type"), "a status field must be an integer type");
+                ctx.bad(s.key("type"), "a status field must be an integer type");
             }
         }
         s.finish(ctx);
@@ -1028,12 +734,12 @@ fn parse_message(
         match status_bits {
             Some(n) if b < u64::from(n) => Some(b as u32),
             Some(n) => {
-                ctx.err(key, format!("bit {b} is outside the {n}-bit status field"));
+                ctx.bad(key, format!("bit {b} is outside the {n}-bit status field"));
                 None
             }
             None => {
                 if !has_status_table {
-                    ctx.err(key, "needs a [status] field in the same message");
+                    ctx.bad(key, "needs a [status] field in the same message");
                 }
                 None
             }
@@ -1051,9 +757,7 @@ fn parse_message(
         if let (Some(off), Some(ty)) = (offset, ty) {
             check_span(ctx, s.key("offset"), off, ty.size(), len);
         }
-        if scale == 0.0 {
-            ctx.err(s.key("scale"), "must not be 0");
-        }
+        check_scale(ctx, s.key("scale"), scale);
         let bit = check_bit(ctx, bit_key, bit);
         s.finish(ctx);
         Some(TemperatureSpec {
@@ -1084,7 +788,7 @@ fn parse_message(
             Some("rate") => Some(ChannelKind::Rate),
             Some("accel_g") => Some(ChannelKind::AccelG),
             Some(other) => {
-                ctx.err(
+                ctx.bad(
                     c.key("kind"),
                     format!("unknown kind `{other}` (allowed: increment, rate, accel_g)"),
                 );
@@ -1098,14 +802,14 @@ fn parse_message(
         if let (Some(off), Some(ty)) = (offset, ty) {
             check_span(ctx, c.key("offset"), off, ty.size(), len);
         }
-        if scale == Some(0.0) {
-            ctx.err(c.key("scale"), "must not be 0");
+        if let Some(sc) = scale {
+            check_scale(ctx, c.key("scale"), sc);
         }
         if let Some(n) = cname {
             if n.is_empty() {
-                ctx.err(c.key("name"), "must not be empty");
+                ctx.bad(c.key("name"), "must not be empty");
             } else if channels.iter().any(|x: &ChannelSpec| x.name == n) {
-                ctx.err(c.key("name"), format!("duplicate channel name `{n}`"));
+                ctx.bad(c.key("name"), format!("duplicate channel name `{n}`"));
             }
         }
         c.finish(ctx);
@@ -1149,7 +853,7 @@ fn parse_checksum(
     let algorithm = c.string(ctx, "algorithm", true).and_then(|s| {
         let a = ChecksumAlgorithm::parse(s);
         if a.is_none() {
-            ctx.err(
+            ctx.bad(
                 c.key("algorithm"),
                 format!("unknown checksum `{s}` (allowed: {ALGORITHM_NAMES})"),
             );
@@ -1163,10 +867,10 @@ fn parse_checksum(
             let s = a[0].as_integer().unwrap_or(0) as usize;
             let e = a[1].as_integer().unwrap_or(0) as usize;
             if s > e {
-                ctx.err(c.key("range"), format!("start {s} is after end {e}"));
+                ctx.bad(c.key("range"), format!("start {s} is after end {e}"));
                 None
             } else if e >= len {
-                ctx.err(
+                ctx.bad(
                     c.key("range"),
                     format!(
                         "end {e} runs past the message length {len} (the last byte is {})",
@@ -1179,14 +883,14 @@ fn parse_checksum(
             }
         }
         None => {
-            ctx.err(
+            ctx.bad(
                 c.key("range"),
                 "missing ([first, last] covered byte, inclusive)",
             );
             None
         }
         Some(v) => {
-            ctx.err(
+            ctx.bad(
                 c.key("range"),
                 format!(
                     "expected [first, last] (two non-negative integers), found {}",
@@ -1202,7 +906,7 @@ fn parse_checksum(
         check_span(ctx, c.key("at"), at, a.width(), len);
         if let Some((s, e)) = range {
             if at <= e && s < at + a.width() {
-                ctx.err(
+                ctx.bad(
                     c.key("range"),
                     format!(
                         "covers the checksum itself (bytes {at}..{})",
@@ -1211,7 +915,7 @@ fn parse_checksum(
                 );
             }
             if a == ChecksumAlgorithm::Sum16 && (e - s + 1) % 2 != 0 {
-                ctx.err(
+                ctx.bad(
                     c.key("range"),
                     "a sum16 checksum needs an even number of covered bytes",
                 );
@@ -1255,9 +959,9 @@ mod tests {
         e.problems
             .iter()
             .map(|p| match p {
-                UsageError::Config { file, key, problem } => {
-                    (file.display().to_string(), key.clone(), problem.clone())
-                }
+                UsageError::Config {
+                    file, key, problem, ..
+                } => (file.display().to_string(), key.clone(), problem.clone()),
                 other => panic!("not a config error: {other}"),
             })
             .collect()
@@ -1345,7 +1049,7 @@ kind = "velocity"
         let e = FrameDescriptor::from_toml_str(text, Path::new("bad.toml")).expect_err("fails");
         let msg = e.to_string();
         assert!(
-            msg.contains("bad.toml: key `messages[0].lenght`: unknown key"),
+            msg.contains("bad.toml:12: key `messages[0].lenght`: unknown key"),
             "{msg}"
         );
         assert_eq!(crate::error::exit_status(&anyhow::Error::from(e)), 2);

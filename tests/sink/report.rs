@@ -1,0 +1,266 @@
+//! The HTML report parsed back: the banner's verdict for a failing and a passing limit, the
+//! limits' unit column, the seed paper's table 2 layout with the aggregate records' values and
+//! the runs named by file, "interrupted" when the summary says the input was not read to its
+//! end, and the effects in words with their units.
+
+use allanscope::model::aggregate::{aggregate_channels, RunCoefs};
+use allanscope::sink::report::render_html;
+use allanscope::sink::results::ResultFile;
+use serde_json::{json, Value};
+
+use crate::plot::{fit_of, model_curve};
+
+fn summary(input: &str, run: Option<usize>, limits: Value, pass: Option<bool>) -> Value {
+    let mut s = json!({"type": "summary", "input": input, "channels": ["g4"], "tau0": 0.004,
+        "t_data": 3600.0, "samples": [900000], "segments": [1], "bad_rows": 0, "overlap": "16",
+        "elapsed_s": 1.0, "limits": limits, "read_to_end": true});
+    if let Some(r) = run {
+        s["run"] = json!(r);
+    }
+    if let Some(p) = pass {
+        s["pass"] = json!(p);
+    }
+    s
+}
+
+fn limit(verdict: &str, value: f64) -> Value {
+    json!({"channel": "g4", "coef": "N", "over": "run", "bound": "max", "limit": 0.3,
+           "unit": "native", "value": value, "lo": 0.95 * value, "hi": 1.05 * value, "verdict": verdict})
+}
+
+fn one_run(limits: Value, pass: Option<bool>) -> Vec<ResultFile> {
+    let c = model_curve("g4", "arcsec", [0.0, 0.254, 0.225, 0.0, 0.0], 12);
+    let f = fit_of("g4", "arcsec", [0.0, 0.254, 0.225, 0.0, 0.0]);
+    vec![ResultFile {
+        name: "vog4.jsonl".into(),
+        records: vec![
+            serde_json::to_value(&c).unwrap(),
+            serde_json::to_value(&f).unwrap(),
+            summary("vog4.csv", None, limits, pass),
+        ],
+    }]
+}
+
+/// The `data-verdict` of the banner.
+fn banner(html: &str) -> &str {
+    let i = html.find("class=\"banner").expect("a banner");
+    let rest = &html[i..];
+    let j = rest.find("data-verdict=\"").unwrap() + 14;
+    rest[j..].split('"').next().unwrap()
+}
+
+#[test]
+fn the_banner_says_fail_for_a_failing_limit_and_pass_for_a_passing_one() {
+    let html = render_html(
+        &one_run(json!([limit("fail", 0.35)]), Some(false)),
+        "t",
+        "now",
+    );
+    assert_eq!(banner(&html), "FAIL");
+    // The failed limit named in the banner, with its unit spelt out (native -> arcsec/sqrt(s)).
+    assert!(
+        html.contains("failed: g4 N &le; 0.3 arcsec/sqrt(s) (measured 0.35)"),
+        "{html}"
+    );
+    assert!(
+        html.contains("<td class=\"l\">arcsec/sqrt(s)</td>"),
+        "unit column"
+    );
+    let html = render_html(
+        &one_run(json!([limit("pass", 0.254)]), Some(true)),
+        "t",
+        "now",
+    );
+    assert_eq!(banner(&html), "PASS");
+    assert!(!html.contains("failed:"));
+    let html = render_html(&one_run(json!([limit("undecided", 0.3)]), None), "t", "now");
+    assert_eq!(banner(&html), "NOT DECIDED");
+    let html = render_html(&one_run(json!([]), None), "t", "now");
+    assert_eq!(banner(&html), "NO LIMITS JUDGED");
+}
+
+#[test]
+fn an_interrupted_run_is_shown_as_interrupted() {
+    let mut files = one_run(json!([]), None);
+    let s = files[0].records.last_mut().unwrap();
+    s["read_to_end"] = json!(false);
+    s["stopped_by"] = json!("SIGINT");
+    let html = render_html(&files, "t", "now");
+    assert!(html.contains("INTERRUPTED (SIGINT): input not read to its end"));
+    // In the banner, not only in the runs table.
+    let b = &html[html.find("class=\"banner").unwrap()..];
+    assert!(b[..b.find("</div>").unwrap()].contains("INTERRUPTED"));
+    // A run read to its end says so and nothing is flagged.
+    let html = render_html(&one_run(json!([]), None), "t", "now");
+    assert!(!html.contains("INTERRUPTED") && !html.contains("INCOMPLETE"));
+    assert!(html.contains("read to its end"));
+}
+
+/// The seed paper's VOG4 runs (SEED.md table 2): N, B, K per run; R only in run 1.
+const RUNS: [[Option<f64>; 5]; 3] = [
+    [
+        None,
+        Some(0.273),
+        Some(0.248),
+        Some(0.811e-2),
+        Some(0.891e-4),
+    ],
+    [None, Some(0.210), Some(0.213), Some(2.978e-2), None],
+    [None, Some(0.278), Some(0.213), Some(1.691e-2), None],
+];
+
+fn fit_record(run: usize, v: [Option<f64>; 5]) -> Value {
+    let term = |x: Option<f64>| json!({"value": x, "lo": x.map(|x| 0.9 * x), "hi": x.map(|x| 1.1 * x), "determined": x.is_some()});
+    json!({"type": "fit", "channel": "g4", "unit": "arcsec", "final": true, "t_data": 10800.0,
+           "coef": {"Q": term(v[0]), "N": term(v[1]), "B": term(v[2]), "K": term(v[3]), "R": term(v[4])},
+           "gof": 1.0, "method": "paper", "run": run})
+}
+
+/// The `data-value`s of one row of the table, in column order.
+fn row_values(table: &str, row_start: &str) -> Vec<Option<f64>> {
+    let i = table
+        .find(row_start)
+        .unwrap_or_else(|| panic!("row {row_start}"));
+    let row = &table[i..i + table[i..].find("</tr>").unwrap()];
+    row.split("<td>")
+        .skip(1)
+        .map(|cell| {
+            cell.find("data-value=\"").map(|j| {
+                cell[j + 12..]
+                    .split('"')
+                    .next()
+                    .unwrap()
+                    .parse::<f64>()
+                    .unwrap()
+            })
+        })
+        .collect()
+}
+
+#[test]
+fn several_runs_give_table_2_with_the_aggregate_records_values() {
+    let runs: Vec<Vec<RunCoefs>> = RUNS
+        .iter()
+        .map(|v| {
+            vec![RunCoefs {
+                channel: "g4".into(),
+                unit: "arcsec".into(),
+                values: *v,
+            }]
+        })
+        .collect();
+    let mut records: Vec<Value> = Vec::new();
+    for (r, v) in RUNS.iter().enumerate() {
+        records.push(fit_record(r, *v));
+        records.push(summary(
+            &format!("/data/vog4_run{}.siu8", r + 1),
+            Some(r),
+            json!([]),
+            None,
+        ));
+    }
+    for a in aggregate_channels(&runs) {
+        let s = a.stats.as_ref();
+        records.push(
+            json!({"type": "aggregate", "channel": a.channel, "unit": a.unit, "coef": a.coef,
+            "n": s.map_or(0, |s| s.n), "mean": s.map(|s| s.mean), "sd": s.and_then(|s| s.sd),
+            "ci_t": s.and_then(|s| s.ci_t), "ci_z": s.and_then(|s| s.ci_z)}),
+        );
+    }
+    let aggs: Vec<Value> = records
+        .iter()
+        .filter(|r| r["type"] == "aggregate")
+        .cloned()
+        .collect();
+    let html = render_html(
+        &[ResultFile {
+            name: "three.jsonl".into(),
+            records,
+        }],
+        "t",
+        "now",
+    );
+    let t0 = html
+        .find("<table class=\"table2\" data-channel=\"g4\"")
+        .expect("table 2 for g4");
+    let table = &html[t0..t0 + html[t0..].find("</table>").unwrap()];
+    // Columns in the paper's order, R K B N Q.
+    let heads: Vec<&str> = table
+        .match_indices("data-coef=\"")
+        .map(|(i, _)| &table[i + 11..i + 12])
+        .collect();
+    assert_eq!(heads, ["R", "K", "B", "N", "Q"]);
+    let order = [4usize, 3, 2, 1, 0];
+    // Runs named by their input files, each row the fit's values ("-" where not determined).
+    for (r, v) in RUNS.iter().enumerate() {
+        let got = row_values(
+            table,
+            &format!("<tr><td class=\"l\">vog4_run{}.siu8</td>", r + 1),
+        );
+        let want: Vec<Option<f64>> = order.iter().map(|&i| v[i]).collect();
+        assert_eq!(got, want, "run {}", r + 1);
+    }
+    // Mean and sd rows carry the aggregate records' numbers exactly.
+    let agg = |k: &str, f: &str| {
+        aggs.iter()
+            .find(|a| a["coef"] == k)
+            .and_then(|a| a[f].as_f64())
+    };
+    let mean = row_values(table, "data-row=\"mean\"");
+    let sd = row_values(table, "data-row=\"sd\"");
+    for (c, &i) in order.iter().enumerate() {
+        let k = ["Q", "N", "B", "K", "R"][i];
+        assert_eq!(mean[c], agg(k, "mean"), "mean of {k}");
+        assert_eq!(sd[c], agg(k, "sd"), "sd of {k}");
+    }
+    // SEED.md: VOG4 N mean 0.254, sd 0.038; B mean 0.225 (printed 3 decimals at the column's
+    // scale: N and B in units of 1e-1 arcsec).
+    assert!((mean[3].unwrap() - 0.2537).abs() < 5e-4 && (sd[3].unwrap() - 0.038).abs() < 5e-4);
+    assert!(
+        table.contains(">2.537</span>"),
+        "N mean printed at 1e-1 scale"
+    );
+    // The interval of the mean: [lo; hi] from ci_z.
+    let ci = agg_pair(&aggs, "N", "ci_z");
+    let i = table.find("data-row=\"ci_z\"").unwrap();
+    let row = &table[i..i + table[i..].find("</tr>").unwrap()];
+    assert!(
+        row.contains(&format!("data-value=\"{:e}\"", ci[0])),
+        "{row}"
+    );
+    assert!(row.contains(&format!("data-value=\"{:e}\"", ci[1])));
+}
+
+fn agg_pair(aggs: &[Value], k: &str, f: &str) -> [f64; 2] {
+    let a = aggs.iter().find(|a| a["coef"] == k).unwrap();
+    [a[f][0].as_f64().unwrap(), a[f][1].as_f64().unwrap()]
+}
+
+#[test]
+fn effects_are_named_with_units_and_only_the_final_diagnosis_is_in_the_main_table() {
+    let mut files = one_run(json!([]), None);
+    let d = |t: f64, fin: bool, f: f64| {
+        json!({"type": "diagnosis", "channel": "g4", "gap_before": 5.0, "gap_after": 0.9,
+            "verdict": "explained", "regions": [], "final": fin, "t_data": t,
+            "effects": [{"kind": "sinusoid", "params": {"amplitude": 0.3, "frequency": f}, "gap_after": 0.9},
+                        {"kind": "gauss_markov", "params": {"sigma": 0.5, "tau_c": 2.0}, "gap_after": 0.8}]})
+    };
+    files[0].records.push(d(1800.0, false, 0.7));
+    files[0].records.push(d(3600.0, true, 0.8));
+    let html = render_html(&files, "t", "now");
+    let main = &html[html.find("<table class=\"diagnosis\"").unwrap()..];
+    let main = &main[..main.find("</table>").unwrap()];
+    assert!(
+        main.contains("sinusoid: amplitude = 0.3 arcsec/s, frequency = 0.8 Hz"),
+        "{main}"
+    );
+    assert!(main
+        .contains("correlated (Gauss-Markov) noise: sigma = 0.5 arcsec/s, correlation time = 2 s"));
+    assert!(
+        !main.contains("0.7 Hz"),
+        "the interim diagnosis is not in the main table"
+    );
+    assert!(!main.contains('{'), "no JSON");
+    let interim = &html[html.find("<table class=\"interim").expect("interim table")..];
+    assert!(interim[..interim.find("</table>").unwrap()].contains("<td>1800</td>"));
+}
