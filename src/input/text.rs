@@ -187,7 +187,7 @@ pub struct TextReader<R> {
     layout: Layout,
     names: Vec<String>,
     /// The first data row, read while looking for a header.
-    pending: Option<Vec<f64>>,
+    pending: Option<Result<Vec<f64>, String>>,
     line: Vec<u8>,
     bad_rows: u64,
     /// Values infinite or beyond `MAX_ABS_VALUE`, read as gaps.
@@ -244,8 +244,8 @@ impl<R: BufRead> TextReader<R> {
     /// Opens the stream and reads up to the first data row (taking a header row if present).
     /// Fails with a usage error (exit status 2) when there is no data row at all, when the
     /// header names a column twice, when `opts` names a column the input does not have, or when
-    /// a channel of the first data row is not a number (a text column, or a separator the
-    /// header does not share).
+    /// a channel of the first data row is not a number (a text column such as a status flag;
+    /// a row of the wrong width is a counted bad row, as later).
     pub fn with_options(mut src: R, path: &Path, opts: &TextOptions) -> Result<Self, UsageError> {
         let mut line = String::new();
         let mut line_no = 0u64;
@@ -272,7 +272,9 @@ impl<R: BufRead> TextReader<R> {
             }
             let (values, layout) = match layout.take() {
                 Some(l) => match l.parse(t) {
-                    Ok(v) => (v, l),
+                    Ok(v) => (Ok(v), l),
+                    // A row of the wrong width is a bad row, as later ones are.
+                    Err(problem) if split(t).len() != l.width_in => (Err(problem), l),
                     Err(problem) => {
                         return Err(input_error(
                             path,
@@ -287,7 +289,7 @@ impl<R: BufRead> TextReader<R> {
                         let names = (1..=fields.len()).map(|i| format!("c{i}")).collect();
                         let l = Layout::new(names, false, opts, path, line_no)?;
                         let v = l.parse(t).map_err(|p| input_error(path, line_no, p))?;
-                        (v, l)
+                        (Ok(v), l)
                     } else {
                         let names = fields
                             .iter()
@@ -372,7 +374,7 @@ impl<R: BufRead> TextReader<R> {
         let width = self.names.len();
         let mut n = 0;
         if let Some(first) = self.pending.take() {
-            self.push_row(out, Ok(first));
+            self.push_row(out, first);
             n += 1;
         }
         while n < max_rows {
