@@ -144,7 +144,11 @@ fn model_fit_is_unbiased_with_honest_intervals() {
     );
 }
 
+// A speed figure, not a correctness check: the guide keeps speed targets in benchmarks
+// (`cargo bench --bench fit`, BENCHMARKS.md), because a shared machine makes timed assertions
+// flaky (this one failed once at load 19). Run by hand with `--ignored`.
 #[test]
+#[ignore]
 fn refit_time_per_channel() {
     // ~20 octave taus: 2^21 increments at 4 ms (2.3 h), m = 1 .. 2^20.
     let tau0 = 0.004;
