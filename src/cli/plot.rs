@@ -70,22 +70,8 @@ pub fn run(a: &PlotArgs) -> Result<()> {
     if a.dynamic {
         let mut parts = vec![svg];
         for c in &finals {
-            let all: Vec<_> = res
-                .curves
-                .iter()
-                .filter(|x| {
-                    x.file == c.file
-                        && x.run == c.run
-                        && x.rec.channel == c.rec.channel
-                        && x.rec.stat == c.rec.stat
-                })
-                .map(|x| &x.rec)
-                .collect();
-            let label = if several {
-                format!("{} [{}] \u{2014} {}", c.rec.channel, c.rec.unit, c.label)
-            } else {
-                format!("{} [{}]", c.rec.channel, c.rec.unit)
-            };
+            let all = res.history_of(c);
+            let label = res.curve_caption(c);
             parts.push(render_dynamic_svg(&all, &label));
         }
         svg = stack(&parts);

@@ -723,17 +723,7 @@ fn dynamic_view(h: &mut String, res: &Results) {
         .collect();
     let mut first = true;
     for c in finals {
-        let all: Vec<_> = res
-            .curves
-            .iter()
-            .filter(|x| {
-                x.file == c.file
-                    && x.run == c.run
-                    && x.rec.channel == c.rec.channel
-                    && x.rec.stat == c.rec.stat
-            })
-            .map(|x| &x.rec)
-            .collect();
+        let all = res.history_of(c);
         if all.len() < 3 {
             continue;
         }
@@ -741,11 +731,7 @@ fn dynamic_view(h: &mut String, res: &Results) {
             h.push_str("<h2>Where in the run (dynamic Allan view)</h2>\n<p>Each column is the stretch of the run between two interim records; its colour is that stretch's Allan deviation divided by the whole run's, at each &#964;. Red: noisier than the run as a whole; blue: quieter.</p>\n");
             first = false;
         }
-        let label = if res.several_runs() {
-            format!("{} [{}] \u{2014} {}", c.rec.channel, c.rec.unit, c.label)
-        } else {
-            format!("{} [{}]", c.rec.channel, c.rec.unit)
-        };
+        let label = res.curve_caption(c);
         h.push_str(&render_dynamic_svg(&all, &label));
     }
 }

@@ -179,6 +179,30 @@ impl Results {
             .map(|d| &d.rec)
     }
 
+    /// Every record (interim and final) of the same curve as `c`: same run, channel and
+    /// statistic, in the order written; the dynamic Allan view reads its windows from these.
+    pub fn history_of<'a>(&'a self, c: &Labelled<CurveRecord>) -> Vec<&'a CurveRecord> {
+        self.curves
+            .iter()
+            .filter(|x| {
+                x.file == c.file
+                    && x.run == c.run
+                    && x.rec.channel == c.rec.channel
+                    && x.rec.stat == c.rec.stat
+            })
+            .map(|x| &x.rec)
+            .collect()
+    }
+
+    /// A curve's caption: channel and unit, with the run's label when there are several runs.
+    pub fn curve_caption(&self, c: &Labelled<CurveRecord>) -> String {
+        if self.several_runs() {
+            format!("{} [{}] \u{2014} {}", c.rec.channel, c.rec.unit, c.label)
+        } else {
+            format!("{} [{}]", c.rec.channel, c.rec.unit)
+        }
+    }
+
     /// Whether the records span several runs (files, or run indices inside a file).
     pub fn several_runs(&self) -> bool {
         let mut runs: Vec<(usize, Option<usize>)> =
