@@ -488,7 +488,8 @@ impl RunAnalysis {
                 // short for it gives no record yet.
                 match diagnose(&g.snapshot(), &DiagnoseOptions::default()) {
                     Ok(d) => {
-                        let rec = DiagnosisRecord::new(&ch.setup.name, &d, None, final_);
+                        let mut rec = DiagnosisRecord::new(&ch.setup.name, &d, None, final_);
+                        rec.run = run;
                         if let Ok(v) = serde_json::to_value(&rec) {
                             out.push(Record::Other(v));
                         }

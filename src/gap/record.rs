@@ -1,7 +1,7 @@
 //! docs/records.md's `diagnosis` record: `type`, `channel`, `gap_before`, `gap_after`, `verdict`,
 //! `regions`, `effects`, optional `holdout`, plus extra fields (`final`, `t_data`, `tau_span`,
 //! `base_coef`, `final_coef`, `segments`, `jumps`, `residual_shape`, `model_tau`, `model_base`,
-//! `model_effects`).
+//! `model_effects`, and `run` when several inputs are analyzed).
 
 use super::diagnose::{Diagnosis, Verdict};
 use super::holdout::HoldoutGap;
@@ -99,6 +99,9 @@ pub struct DiagnosisRecord {
     pub model_base: Vec<f64>,
     #[serde(default)]
     pub model_effects: Vec<f64>,
+    /// Run index (0-based) when several inputs are analyzed, as in the other records.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub run: Option<usize>,
 }
 
 impl DiagnosisRecord {
@@ -171,6 +174,7 @@ impl DiagnosisRecord {
                 .iter()
                 .map(|v| v.max(0.0).sqrt())
                 .collect(),
+            run: None,
         }
     }
 
