@@ -115,3 +115,53 @@ fn stalled_writer_does_not_stall_ingestion() {
         summary_core(last_of(&free, "summary"))
     );
 }
+
+/// With `--diagnose`, each interim set also carries a diagnosis per channel. Those are coalesced
+/// like curves and fits (the newest per channel), so a stalled consumer of a live run still
+/// leaves the queue bounded: without their key, 60 sets x 8 diagnoses would pile up beside the capacity.
+#[test]
+fn stalled_writer_with_diagnoses_keeps_the_queue_bounded() {
+    let desc = siu8();
+    let gate = Arc::new((Mutex::new(false), std::sync::Condvar::new()));
+    let blocked = Arc::new(AtomicBool::new(false));
+    let out = SharedBuf::default();
+    let writer = RecordWriter::spawn_coalescing(Box::new(Gated {
+        gate: gate.clone(),
+        blocked: blocked.clone(),
+        out: out.clone(),
+    }));
+    let mut opts = options(&desc, Some(EVERY_S));
+    opts.diagnose = true;
+    let analysis = allanscope::analysis::RunAnalysis::new("test", channels(&desc), opts);
+    let outcome = run_frames(
+        spec(),
+        &desc,
+        analysis,
+        writer.queue(),
+        &RunControl::default(),
+    )
+    .expect("run");
+    assert!(
+        blocked.load(Ordering::SeqCst),
+        "the writer should be blocked"
+    );
+    assert_eq!(outcome.health.as_ref().map(|h| h.frames), Some(FRAMES));
+    // Capacity + one interim record per key (24 curves + 8 fits + 8 diagnoses) + the final
+    // records (24 curves, 8 fits, at most 8 diagnoses, health, summary).
+    let queued = writer.queue().len();
+    assert!(
+        queued <= RECORD_QUEUE + 40 + 42,
+        "queue grew to {queued} records"
+    );
+    {
+        let (m, cv) = &*gate;
+        *m.lock().expect("lock") = true;
+        cv.notify_all();
+    }
+    let stats = writer.finish().expect("writer");
+    let recs = out.records();
+    let diagnoses = recs.iter().filter(|r| r["type"] == "diagnosis").count();
+    eprintln!("writer {stats:?}; {diagnoses} diagnosis records delivered");
+    assert!(diagnoses >= 8, "the final diagnoses are delivered");
+    assert!(stats.coalesced > 0);
+}
