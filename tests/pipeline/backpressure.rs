@@ -118,10 +118,36 @@ fn stalled_writer_does_not_stall_ingestion() {
 
 /// With `--diagnose`, each interim set also carries a diagnosis per channel. Those are coalesced
 /// like curves and fits (the newest per channel), so a stalled consumer of a live run still
-/// leaves the queue bounded: without their key, 60 sets x 8 diagnoses would pile up beside the capacity.
+/// leaves the queue bounded: without their key, every interim diagnosis would pile up beside the
+/// capacity. The diagnoses are those of a real run of the fixture (final, one per channel),
+/// pushed again as 100 interim sets, each set marked by its `t_data`.
 #[test]
 fn stalled_writer_with_diagnoses_keeps_the_queue_bounded() {
+    const SETS: usize = 100;
     let desc = siu8();
+    let mut opts = options(&desc, None);
+    opts.diagnose = true;
+    opts.fit = Some(allanscope::model::fit::FitOptions::default());
+    let analysis = allanscope::analysis::RunAnalysis::new("test", channels(&desc), opts);
+    let buf = SharedBuf::default();
+    let free_writer = RecordWriter::spawn(Box::new(buf.clone()));
+    run_frames(
+        spec(),
+        &desc,
+        analysis,
+        free_writer.queue(),
+        &RunControl::default(),
+    )
+    .expect("run");
+    free_writer.finish().expect("writer");
+    let free = buf.records();
+    let diagnoses: Vec<allanscope::gap::DiagnosisRecord> = free
+        .iter()
+        .filter(|r| r["type"] == "diagnosis")
+        .map(|r| serde_json::from_value(r.clone()).expect("a diagnosis record"))
+        .collect();
+    assert_eq!(diagnoses.len(), 8, "one final diagnosis per channel");
+
     let gate = Arc::new((Mutex::new(false), std::sync::Condvar::new()));
     let blocked = Arc::new(AtomicBool::new(false));
     let out = SharedBuf::default();
@@ -130,38 +156,37 @@ fn stalled_writer_with_diagnoses_keeps_the_queue_bounded() {
         blocked: blocked.clone(),
         out: out.clone(),
     }));
-    let mut opts = options(&desc, Some(EVERY_S));
-    opts.diagnose = true;
-    let analysis = allanscope::analysis::RunAnalysis::new("test", channels(&desc), opts);
-    let outcome = run_frames(
-        spec(),
-        &desc,
-        analysis,
-        writer.queue(),
-        &RunControl::default(),
-    )
-    .expect("run");
-    assert!(
-        blocked.load(Ordering::SeqCst),
-        "the writer should be blocked"
-    );
-    assert_eq!(outcome.health.as_ref().map(|h| h.frames), Some(FRAMES));
-    // Capacity + one interim record per key (24 curves + 8 fits + 8 diagnoses) + the final
-    // records (24 curves, 8 fits, at most 8 diagnoses, health, summary).
+    for set in 0..SETS {
+        for d in &diagnoses {
+            let mut d = d.clone();
+            d.is_final = false;
+            d.t_data = set as f64;
+            writer
+                .queue()
+                .push_interim(allanscope::sink::records::Record::Diagnosis(Box::new(d)));
+        }
+    }
+    // 800 interim diagnoses against a queue of 256: the newest per channel replace older ones
+    // (plus at most the one record the blocked writer holds).
     let queued = writer.queue().len();
-    assert!(
-        queued <= RECORD_QUEUE + 40 + 42,
-        "queue grew to {queued} records"
-    );
+    assert!(queued <= RECORD_QUEUE + 8, "queue grew to {queued} records");
     {
         let (m, cv) = &*gate;
         *m.lock().expect("lock") = true;
         cv.notify_all();
     }
     let stats = writer.finish().expect("writer");
-    let recs = out.records();
-    let diagnoses = recs.iter().filter(|r| r["type"] == "diagnosis").count();
-    eprintln!("writer {stats:?}; {diagnoses} diagnosis records delivered");
-    assert!(diagnoses >= 8, "the final diagnoses are delivered");
+    assert!(blocked.load(Ordering::SeqCst), "the writer was blocked");
+    assert_eq!(stats.written + stats.coalesced, (SETS * 8) as u64);
     assert!(stats.coalesced > 0);
+    // Each channel's newest diagnosis (the last set) is delivered.
+    let recs = out.records();
+    for d in &diagnoses {
+        let last = recs
+            .iter()
+            .filter(|r| r["type"] == "diagnosis" && r["channel"] == d.channel.as_str())
+            .next_back()
+            .expect("a diagnosis of the channel");
+        assert_eq!(last["t_data"], (SETS - 1) as f64, "{}", d.channel);
+    }
 }
