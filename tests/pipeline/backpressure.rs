@@ -156,6 +156,22 @@ fn stalled_writer_with_diagnoses_keeps_the_queue_bounded() {
         blocked: blocked.clone(),
         out: out.clone(),
     }));
+    // A first record, and the writer stuck writing it, before the sets arrive.
+    let mut first = diagnoses[0].clone();
+    first.t_data = -1.0;
+    writer
+        .queue()
+        .push_interim(allanscope::sink::records::Record::Diagnosis(Box::new(
+            first,
+        )));
+    let until = std::time::Instant::now() + std::time::Duration::from_secs(30);
+    while !blocked.load(Ordering::SeqCst) && std::time::Instant::now() < until {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    assert!(
+        blocked.load(Ordering::SeqCst),
+        "the writer should be blocked"
+    );
     for set in 0..SETS {
         for d in &diagnoses {
             let mut d = d.clone();
@@ -176,16 +192,14 @@ fn stalled_writer_with_diagnoses_keeps_the_queue_bounded() {
         cv.notify_all();
     }
     let stats = writer.finish().expect("writer");
-    assert!(blocked.load(Ordering::SeqCst), "the writer was blocked");
-    assert_eq!(stats.written + stats.coalesced, (SETS * 8) as u64);
+    assert_eq!(stats.written + stats.coalesced, (SETS * 8 + 1) as u64);
     assert!(stats.coalesced > 0);
     // Each channel's newest diagnosis (the last set) is delivered.
     let recs = out.records();
     for d in &diagnoses {
         let last = recs
             .iter()
-            .filter(|r| r["type"] == "diagnosis" && r["channel"] == d.channel.as_str())
-            .next_back()
+            .rfind(|r| r["type"] == "diagnosis" && r["channel"] == d.channel.as_str())
             .expect("a diagnosis of the channel");
         assert_eq!(last["t_data"], (SETS - 1) as f64, "{}", d.channel);
     }
