@@ -21,3 +21,4 @@ pub mod records;
 #[cfg(feature = "plot")]
 pub mod report;
 pub mod results;
+pub mod table;
