@@ -490,9 +490,7 @@ impl RunAnalysis {
                     Ok(d) => {
                         let mut rec = DiagnosisRecord::new(&ch.setup.name, &d, None, final_);
                         rec.run = run;
-                        if let Ok(v) = serde_json::to_value(&rec) {
-                            out.push(Record::Other(v));
-                        }
+                        out.push(Record::Diagnosis(Box::new(rec)));
                     }
                     Err(e) => tracing::debug!("{}: {e}", ch.setup.name),
                 }
