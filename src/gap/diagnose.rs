@@ -43,8 +43,8 @@
 
 use super::effects::{effect_column, EffectKind, EffectParams};
 use super::evidence::EvidenceSnapshot;
-use super::problem::{GapProblem, GlsFit, ModelSpec};
 use super::outliers::OutlierCount;
+use super::problem::{GapProblem, GlsFit, ModelSpec};
 use super::quantization::{judge_quantization, QuantizationFinding};
 use super::segments::{segment_tests, SegmentTest};
 use super::steps::{detect_steps, JumpFinding};

@@ -44,7 +44,11 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
         .quantization
         .filter(|f| f.kind == QuantKind::Rate && facts.lsb.is_some());
     let (lsb, rate_lsb, n) = match rate_q {
-        Some(f) => (None, Some(f.rate_lsb), (n * n - f.n_q * f.n_q).max(0.0).sqrt()),
+        Some(f) => (
+            None,
+            Some(f.rate_lsb),
+            (n * n - f.n_q * f.n_q).max(0.0).sqrt(),
+        ),
         None => (facts.lsb, None, n),
     };
     // The fitted Q holds the quantization's white phase (LSB / sqrt(12)); the model file adds

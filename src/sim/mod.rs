@@ -28,8 +28,8 @@ pub mod model_write;
 pub mod noise;
 pub mod writer;
 
-use rand::SeedableRng;
 use rand::RngExt;
+use rand::SeedableRng;
 use rand_distr::{Distribution, Exp1, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 

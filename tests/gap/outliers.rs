@@ -96,8 +96,18 @@ fn spikes_are_counted_and_kept_out_of_the_fit() {
         "rms {} vs {rms}",
         d.outliers.rms_size()
     );
-    assert!(rel(d.base_coef[1], c.base_coef[1]) < 0.005, "N {:?} vs {:?}", d.base_coef, c.base_coef);
-    assert!(rel(d.base_coef[2], c.base_coef[2]) < 0.05, "B {:?} vs {:?}", d.base_coef, c.base_coef);
+    assert!(
+        rel(d.base_coef[1], c.base_coef[1]) < 0.005,
+        "N {:?} vs {:?}",
+        d.base_coef,
+        c.base_coef
+    );
+    assert!(
+        rel(d.base_coef[2], c.base_coef[2]) < 0.05,
+        "B {:?} vs {:?}",
+        d.base_coef,
+        c.base_coef
+    );
     assert!(d.effects.is_empty(), "{:?}", d.effects);
     assert!(d.jumps.as_ref().is_none_or(|j| j.sizes.is_empty()));
     assert_eq!(d.verdict, Verdict::Explained);
@@ -120,7 +130,11 @@ fn huge_spikes_pose_as_no_steps() {
     add_spikes(&mut dirty, 4, 30_000.0, 12);
     let c = diag(&clean, true);
     let raw = diag(&dirty, false);
-    assert!(raw.base_coef[1] > 2.0 * c.base_coef[1], "{:?}", raw.base_coef);
+    assert!(
+        raw.base_coef[1] > 2.0 * c.base_coef[1],
+        "{:?}",
+        raw.base_coef
+    );
     let d = diag(&dirty, true);
     assert_eq!(d.outliers.count, 4);
     assert!(d.effects.is_empty(), "{:?}", d.effects);
