@@ -130,7 +130,7 @@ fn gather(
             // The temperature column (docs/records.md's `temperature_c`), read here only.
             let temp_col = reader.names().iter().position(|n| n == "temperature_c");
             if temp_col.is_some() {
-                g.temperature = Some(GapEvidence::new(cfg.clone()));
+                g.temperature = Some(GapEvidence::new(cfg.clone()).without_outlier_filter());
             }
             let width = reader.names().len();
             let mut last_phase: Vec<Option<f64>> = vec![None; columns.len()];
@@ -190,7 +190,7 @@ fn gather(
                 &req,
             )?;
             if desc.frame().temperature.is_some() {
-                g.temperature = Some(GapEvidence::new(cfg.clone()));
+                g.temperature = Some(GapEvidence::new(cfg.clone()).without_outlier_filter());
             }
             for c in &plan.channels {
                 g.add_channel(&c.name, &c.unit, &cfg);
