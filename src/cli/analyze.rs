@@ -37,6 +37,7 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
         d.out.as_deref(),
         OutputMode::new(d.force, d.resume),
         "--out",
+        d.json,
     )?;
     // A replay has no deadline: back-pressure, never coalesced interim records.
     let writer = RecordWriter::spawn(out);
@@ -66,6 +67,7 @@ pub(crate) fn output_writer(d: &DataArgs) -> Result<Box<dyn Write + Send>> {
         d.out.as_deref(),
         OutputMode::new(d.force, d.resume),
         "--out",
+        d.json,
     )?
     .0)
 }

@@ -94,7 +94,7 @@ pub fn run(l: &ListenArgs) -> Result<()> {
     // Outputs last: every option has been accepted; they are only emptied once the source
     // is open and delivers (allanscope::sink::output).
     let capture = capture_output(l.capture.as_deref(), mode, "--capture")?;
-    let (out, dest) = records_output(d.out.as_deref(), mode, "--out")?;
+    let (out, dest) = records_output(d.out.as_deref(), mode, "--out", d.json)?;
     let ctl = RunControl {
         metrics,
         checkpoint: ckpt.map(|c| std::sync::Arc::new(c.0)),

@@ -13,6 +13,7 @@ mod plot;
 mod report;
 mod run;
 mod simulate;
+mod terminal;
 
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
@@ -134,6 +135,9 @@ pub struct AggregateArgs {
     /// JSON lines to this file instead of standard output.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// JSON lines even when standard output is a terminal (which otherwise gets a table).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Options shared by the commands that read data (docs/records.md).
@@ -190,6 +194,10 @@ pub struct DataArgs {
     /// touched.
     #[arg(long)]
     pub force: bool,
+    /// JSON lines even when standard output is a terminal (which otherwise gets a readable
+    /// table); pipes and files always get JSON lines.
+    #[arg(long)]
+    pub json: bool,
     /// Datasheet limits (a TOML file with `[[limits]]` tables, as in a stand config), judged
     /// with the fits' intervals; verdicts in `summary`.
     #[arg(long)]
@@ -290,11 +298,13 @@ where
 
 /// Where a command's JSON lines go: `out` (a result file, opened as [`OutputFile`] explains: an
 /// earlier result refused unless `mode` allows, replaced only at the first record) or standard
-/// output; and the destination's name for messages.
+/// output (a table on a terminal unless `json`, [`terminal`]); and the destination's name for
+/// messages.
 pub(crate) fn records_output(
     out: Option<&Path>,
     mode: allanscope::sink::output::OutputMode,
     what: &str,
+    json: bool,
 ) -> Result<(Box<dyn std::io::Write + Send>, String)> {
     use allanscope::sink::output::{OutputFile, OutputMode};
     Ok(match out {
@@ -310,10 +320,7 @@ pub(crate) fn records_output(
                 p.display().to_string(),
             )
         }
-        None => (
-            Box::new(std::io::BufWriter::new(std::io::stdout())),
-            "standard output".into(),
-        ),
+        None => (terminal::stdout_records(json), "standard output".into()),
     })
 }
 

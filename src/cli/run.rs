@@ -38,6 +38,10 @@ pub struct RunArgs {
     /// Serve /metrics here (overrides the config's `run.metrics`); a bare PORT is on 127.0.0.1.
     #[arg(long, value_name = "ADDR:PORT")]
     pub metrics: Option<String>,
+    /// JSON lines even when standard output is a terminal (which otherwise gets a readable
+    /// table); pipes and files always get JSON lines.
+    #[arg(long)]
+    pub json: bool,
 }
 
 pub fn run(r: &RunArgs) -> Result<()> {
@@ -122,7 +126,7 @@ pub fn run(r: &RunArgs) -> Result<()> {
     let mode = OutputMode::new(r.force, r.resume);
     let capture = super::capture_output(cfg.capture.as_deref(), mode, "[run] capture")
         .map_err(|e| e.context(format!("stand config {}", cfg.file.display())))?;
-    let (out, dest) = super::records_output(cfg.output.as_deref(), mode, "[output] path")
+    let (out, dest) = super::records_output(cfg.output.as_deref(), mode, "[output] path", r.json)
         .map_err(|e| e.context(format!("stand config {}", cfg.file.display())))?;
     let ctl = RunControl {
         checkpoint: ckpt.map(|c| std::sync::Arc::new(c.0)),

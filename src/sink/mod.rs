@@ -18,3 +18,4 @@ pub mod plot;
 pub mod records;
 pub mod report;
 pub mod results;
+pub mod table;
