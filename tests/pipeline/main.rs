@@ -11,6 +11,7 @@ mod block_feed;
 mod checkpoint;
 mod config;
 mod corruption;
+mod embed;
 mod live_bench;
 mod serial_outage;
 mod signal;
