@@ -491,7 +491,8 @@ impl RunAnalysis {
                 // short for it gives no record yet.
                 match diagnose(&g.snapshot(), &DiagnoseOptions::default()) {
                     Ok(d) => {
-                        let rec = DiagnosisRecord::new(&ch.setup.name, &d, None, final_);
+                        let mut rec = DiagnosisRecord::new(&ch.setup.name, &d, None, final_);
+                        rec.run = run;
                         out.push(Record::Diagnosis(Box::new(rec)));
                     }
                     Err(e) => tracing::debug!("{}: {e}", ch.setup.name),
