@@ -2,6 +2,8 @@
 //! and turned into records. Plain synchronous code: the pipeline runs it on a worker thread and
 //! tests and benchmarks call it directly. It never knows where the samples came from.
 
+mod block;
+
 use std::time::Instant;
 
 use crate::allan::accum::{AccumConfig, ChannelAccumulator, Overlap};
@@ -434,6 +436,7 @@ impl RunAnalysis {
                     self.emit_if_due(out);
                 }
             }
+            Chunk::Block(b) => self.push_block(b, out),
             // The pipeline saves the state at this mark; nothing to accumulate.
             Chunk::Checkpoint(_) => {}
         }
