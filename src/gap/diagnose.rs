@@ -41,9 +41,9 @@
 //! block-mean covariance of [`super::block_cov`]; [`super::segments`] tests homogeneity across
 //! segments and [`super::holdout`] judges a held-out run. This file orchestrates them.
 
+use super::alternatives::{alternatives, Alternative, CandidateScore, FirstScan};
 use super::effects::{effect_column, EffectKind, EffectParams};
 use super::evidence::EvidenceSnapshot;
-use super::alternatives::{alternatives, Alternative, CandidateScore, FirstScan};
 use super::outliers::OutlierCount;
 use super::problem::{GapProblem, GlsFit, ModelSpec};
 use super::quantization::{judge_quantization, QuantizationFinding};

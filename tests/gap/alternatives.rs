@@ -34,9 +34,7 @@ fn a_hump_or_a_raised_flicker_floor_is_said_out_loud() {
     let gm: Vec<_> = d
         .alternatives
         .iter()
-        .filter(|a| {
-            a.effects.len() == 1 && a.effects[0].kind() == EffectKind::GaussMarkov
-        })
+        .filter(|a| a.effects.len() == 1 && a.effects[0].kind() == EffectKind::GaussMarkov)
         .collect();
     assert_eq!(gm.len(), 1, "{:?}", d.alternatives);
     let a = gm[0];
@@ -46,7 +44,12 @@ fn a_hump_or_a_raised_flicker_floor_is_said_out_loud() {
         "{a:?}"
     );
     assert!(a.gap < d.gap_after, "{a:?} vs {}", d.gap_after);
-    assert!(a.coef[2] < d.final_coef[2], "B {:?} vs {:?}", a.coef, d.final_coef);
+    assert!(
+        a.coef[2] < d.final_coef[2],
+        "B {:?} vs {:?}",
+        a.coef,
+        d.final_coef
+    );
     // The hump's own parameters: tau_c within a factor 3 of 30 s.
     let tc = a.effects[0].shape();
     assert!(tc > 10.0 && tc < 90.0, "tau_c {tc}");
