@@ -1,7 +1,8 @@
 //! docs/records.md's `diagnosis` record: `type`, `channel`, `gap_before`, `gap_after`, `verdict`,
 //! `regions`, `effects`, optional `holdout`, plus extra fields (`final`, `t_data`, `tau_span`,
 //! `base_coef`, `final_coef`, `segments`, `jumps`, `residual_shape`, `model_tau`, `model_base`,
-//! `model_effects`, `outliers`, `quantization`, `alternatives`).
+//! `model_effects`, `outliers`, `quantization`, `alternatives`, and `run` when several inputs
+//! are analyzed).
 
 use super::diagnose::{Diagnosis, Verdict};
 use super::holdout::HoldoutGap;
@@ -111,6 +112,9 @@ pub struct DiagnosisRecord {
     /// choice is clear.
     #[serde(default)]
     pub alternatives: Vec<serde_json::Value>,
+    /// Run index (0-based) when several inputs are analyzed, as in the other records.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub run: Option<usize>,
 }
 
 /// The `outliers` object: how many, how often (per second of data), their rms and largest size
@@ -205,6 +209,7 @@ impl DiagnosisRecord {
             },
             quantization: d.quantization.map(|q| q.to_json()),
             alternatives: d.alternatives.iter().map(|a| a.to_json()).collect(),
+            run: None,
         }
     }
 
