@@ -148,6 +148,9 @@ pub struct RunAnalysis {
     /// Text values infinite or out of range, read as gaps (from the reader, like `bad_rows`).
     invalid_values: u64,
     started: Instant,
+    /// The run is being stopped ([`RunAnalysis::stop_interim`]): interim records fall due as
+    /// before but are not made.
+    stopping: bool,
 }
 
 /// The power-law exponent of S_y for the term that dominates the model at a tau: Q is white
@@ -181,6 +184,7 @@ impl RunAnalysis {
             bad_rows: 0,
             invalid_values: 0,
             started: Instant::now(),
+            stopping: false,
         }
     }
 
@@ -297,7 +301,16 @@ impl RunAnalysis {
             bad_rows: state.bad_rows,
             invalid_values: 0,
             started,
+            stopping: false,
         })
+    }
+
+    /// The run is being stopped (SIGINT/SIGTERM): the data already read is still analysed, to
+    /// the last frame, but no interim record is made any more (its schedule still advances, so
+    /// a checkpoint is as without the stop). A replay held by a stalled consumer would
+    /// otherwise spend seconds on interim records that nobody reads before its final ones.
+    pub fn stop_interim(&mut self) {
+        self.stopping = true;
     }
 
     /// Ends every channel's phase segment without accounting for time: what follows is not
@@ -446,7 +459,9 @@ impl RunAnalysis {
             return;
         }
         if self.t_data_s() >= self.next_emit_s {
-            out.extend(self.records(false));
+            if !self.stopping {
+                out.extend(self.records(false));
+            }
             let every = self.opts.every_s.unwrap_or(f64::INFINITY);
             self.next_emit_s = next_after(self.next_emit_s, every, self.t_data_s());
         }
@@ -571,6 +586,7 @@ impl RunAnalysis {
                 bad_rows: if i == 0 { self.bad_rows } else { 0 },
                 invalid_values: if i == 0 { self.invalid_values } else { 0 },
                 started: self.started,
+                stopping: self.stopping,
             });
         }
         out

@@ -501,6 +501,11 @@ fn spawn_analysis(
                                         state: part.snapshot(),
                                     });
                                 }
+                                // Stopped by a signal: the frames read still count, their
+                                // interim records are not made (RunAnalysis::stop_interim).
+                                if queue.is_released() {
+                                    part.stop_interim();
+                                }
                                 part.push_chunk(&c, &mut out);
                                 if let (Some(r), Ok(c)) = (&recycle, Arc::try_unwrap(c)) {
                                     let _ = r.try_send(c);
@@ -508,7 +513,9 @@ fn spawn_analysis(
                             }
                             Err(_) => break,
                         },
-                        recv(tick) -> _ => out.extend(part.records(false)),
+                        recv(tick) -> _ => if !queue.is_released() {
+                            out.extend(part.records(false));
+                        },
                     }
                     for r in out.drain(..) {
                         if let Some(m) = &metrics {

@@ -148,6 +148,11 @@ impl RecordQueue {
         self.inner.room.notify_all();
     }
 
+    /// Whether [`RecordQueue::release`] was called: the run is being stopped.
+    pub fn is_released(&self) -> bool {
+        self.lock().released
+    }
+
     /// Records waiting to be written.
     pub fn len(&self) -> usize {
         self.lock().items.len()
