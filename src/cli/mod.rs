@@ -591,22 +591,8 @@ pub(crate) fn start_analysis(
     path: Option<&Path>,
 ) -> Result<allanscope::analysis::RunAnalysis> {
     // A limit that no channel matches would never be judged: a misspelt name, refused here.
-    for l in &opts.limits {
-        if !setups
-            .iter()
-            .any(|c| allanscope::model::limits::channel_matches(&l.channel, &c.name))
-        {
-            return Err(usage(format!(
-                "datasheet limit on channel `{}`: {input} has no such channel (it has: {})",
-                l.channel,
-                setups
-                    .iter()
-                    .map(|c| c.name.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )));
-        }
-    }
+    let names: Vec<&str> = setups.iter().map(|c| c.name.as_str()).collect();
+    allanscope::model::limits::check_channels(&opts.limits, input, &names)?;
     match resume {
         None => Ok(allanscope::analysis::RunAnalysis::new(input, setups, opts)),
         Some(ck) => allanscope::analysis::RunAnalysis::restore(ck.analysis.clone(), &setups, opts)

@@ -42,23 +42,9 @@ pub struct RunArgs {
 
 pub fn run(r: &RunArgs) -> Result<()> {
     let cfg = StandConfig::load(&r.config).map_err(anyhow::Error::new)?;
-    let desc = FrameDescriptor::load(&cfg.format).map_err(|e| {
-        anyhow::Error::new(UsageError::Config {
-            file: cfg.file.clone(),
-            line: None,
-            key: "source.format".into(),
-            problem: e.to_string(),
-        })
-    })?;
-    let limits =
-        allanscope::model::limits::from_tables(&cfg.limits_raw, &cfg.file).map_err(|errs| {
-            let all = errs
-                .iter()
-                .map(|e| e.to_string())
-                .collect::<Vec<_>>()
-                .join("\n");
-            anyhow::Error::new(UsageError::Option(all))
-        })?;
+    // Checked with the config (StandConfig::load): a descriptor that fails now changed since.
+    let desc = FrameDescriptor::load(&cfg.format)?;
+    let limits = cfg.limits.clone();
     let mut spec = cfg.source.clone();
     let live = spec.is_live();
     if let SourceSpec::File { pace, .. } | SourceSpec::Stdin { pace } = &mut spec {

@@ -278,6 +278,8 @@ impl FrameDescriptor {
             }
         }
         dirs.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("config/frames"));
+        // An installed binary run from its build tree finds the crate's folder twice.
+        dirs.dedup();
         dirs
     }
 
