@@ -186,15 +186,33 @@ fn show(v: &toml::Value) -> String {
 }
 
 impl StandConfig {
-    /// Reads and checks a stand config file.
+    /// Reads and checks a stand config file (its frame descriptor a built-in or a path).
     pub fn load(path: &Path) -> Result<StandConfig, StandConfigErrors> {
+        Self::load_in(path, &[])
+    }
+
+    /// Reads and checks a stand config file; a descriptor named in `source.format` is also
+    /// searched for in `descriptor_dirs` (`FrameDescriptor::load_in`).
+    pub fn load_in(
+        path: &Path,
+        descriptor_dirs: &[PathBuf],
+    ) -> Result<StandConfig, StandConfigErrors> {
         let text = std::fs::read_to_string(path)
             .map_err(|e| crate::toml_check::Collector::unreadable(path, &e).into_errors(WHAT))?;
-        Self::from_toml_str(&text, path)
+        Self::from_toml_str_in(&text, path, descriptor_dirs)
     }
 
     /// Parses and checks config text; `file` names it in errors.
     pub fn from_toml_str(text: &str, file: &Path) -> Result<StandConfig, StandConfigErrors> {
+        Self::from_toml_str_in(text, file, &[])
+    }
+
+    /// [`StandConfig::from_toml_str`], the descriptor also searched for in `descriptor_dirs`.
+    pub fn from_toml_str_in(
+        text: &str,
+        file: &Path,
+        descriptor_dirs: &[PathBuf],
+    ) -> Result<StandConfig, StandConfigErrors> {
         let mut ck = Check {
             c: crate::toml_check::Collector::new(file, text),
         };
@@ -234,7 +252,8 @@ impl StandConfig {
                     Some(f) => {
                         // The descriptor is read now, so a bad one is refused with the rest:
                         // an unknown name at this key, a bad file by its own lines.
-                        if let Err(e) = crate::frame::FrameDescriptor::load(&f) {
+                        if let Err(e) = crate::frame::FrameDescriptor::load_in(&f, descriptor_dirs)
+                        {
                             for p in e.problems {
                                 match p {
                                     UsageError::Option(m) => ck.bad("source.format", m),

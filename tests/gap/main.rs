@@ -6,5 +6,7 @@ mod diagnosis;
 mod families;
 mod mixture;
 mod oracle;
+mod outliers;
+mod quantization;
 mod reference;
 mod temperature;

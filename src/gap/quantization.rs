@@ -1,0 +1,131 @@
+//! Which quantization the channel's values show: an angle (or velocity) counter that carries
+//! its remainder, or a rate sample rounded on its own (docs/gap.md, "Rate-sample
+//! quantization").
+//!
+//! Both deliver values that are whole multiples of one step `delta` (u per increment; read off
+//! the values by [`super::lsb`]), but they leave different noise on the curve:
+//! - a counter with carry errs on the integrated signal by at most half a step: white *phase*
+//!   noise of variance `delta^2 / 12`, `Q_q = delta / sqrt(12)`, AVAR `3 Q_q^2 / tau^2`;
+//! - a rate sample rounded without carry errs on each increment independently: white *rate*
+//!   noise of variance `delta^2 / 12` per step, `N_q^2 = delta^2 / (12 tau0)`, AVAR
+//!   `N_q^2 / tau` (the rounding error is uniform and independent of the signal when the
+//!   sample's own noise is above about half a step: Widrow and Kollar, "Quantization Noise",
+//!   2008, ch. 4-5, the quantization theorem; a finer-grained noise makes it a slow wander
+//!   that neither term describes).
+//!
+//! The test puts each one into the final model as a floor the fit must keep (a fixed offset,
+//! the free Q or N above it) and compares `r' S^-1 r` with the free fit: the hypothesis the
+//! curve cannot carry raises it by more than [`QUANT_CHI2`]. The rounding of rate samples is
+//! then its own white-rate contribution: its share of the fitted `N^2`, and the unit's own `N`
+//! is what is left (`sqrt(N^2 - N_q^2)`).
+
+use super::problem::{GapProblem, GlsFit, ModelSpec};
+use serde::Serialize;
+
+/// Rise of `r' S^-1 r` (one constraint) beyond which a hypothesis is rejected: 3 standard
+/// deviations of a chi-square with one degree of freedom at the boundary.
+pub const QUANT_CHI2: f64 = 9.0;
+
+/// The verdict on the values' step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum QuantKind {
+    /// A counter with carry: white phase `Q_q`.
+    Angle,
+    /// Rate samples rounded: white rate `N_q`.
+    Rate,
+    /// The curve cannot tell (the step is fine against the noise).
+    Either,
+    /// Neither floor fits (the step is coarse against the noise, or the values were rounded
+    /// after some other processing).
+    Neither,
+}
+
+/// What the values' step does to the curve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct QuantizationFinding {
+    pub kind: QuantKind,
+    /// The step of the increments, u.
+    pub lsb: f64,
+    /// The same step as a rate, `lsb / tau0` (u/s).
+    pub rate_lsb: f64,
+    /// White phase of a counter with carry, `lsb / sqrt(12)` (u).
+    pub q_q: f64,
+    /// White rate of rounded rate samples, `lsb / sqrt(12 tau0)` (u/sqrt(s)).
+    pub n_q: f64,
+    /// Rise of `r' S^-1 r` with each floor forced in.
+    pub delta_chi2_angle: f64,
+    pub delta_chi2_rate: f64,
+    /// `N_q^2 / N^2` of the final fit (the share of the white rate that is rounding).
+    pub share_of_n2: f64,
+    /// The unit's own white rate when the kind is `rate`: `sqrt(N^2 - N_q^2)` (u/sqrt(s)).
+    pub n_unit: f64,
+}
+
+impl QuantizationFinding {
+    /// docs/records.md's `quantization` object.
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "kind": self.kind,
+            "lsb": self.lsb,
+            "rate_lsb": self.rate_lsb,
+            "q_q": self.q_q,
+            "n_q": self.n_q,
+            "delta_chi2_angle": self.delta_chi2_angle,
+            "delta_chi2_rate": self.delta_chi2_rate,
+            "share_of_n2": self.share_of_n2,
+            "n_unit": self.n_unit,
+        })
+    }
+}
+
+/// Judges the step `lsb` (u) against the final model (`spec`, fitted as `fit`).
+pub fn judge_quantization(
+    prob: &GapProblem,
+    spec: &ModelSpec,
+    fit: &GlsFit,
+    lsb: f64,
+) -> Option<QuantizationFinding> {
+    if !(lsb > 0.0 && lsb.is_finite()) {
+        return None;
+    }
+    let tau0 = prob.tau0_s;
+    let q_q = lsb / 12f64.sqrt();
+    let n_q = lsb / (12.0 * tau0).sqrt();
+    let with_floor = |col: &dyn Fn(f64) -> f64| -> Option<f64> {
+        let mut s = spec.clone();
+        let base = s.offset.clone().unwrap_or_else(|| vec![0.0; prob.len()]);
+        s.offset = Some(
+            base.iter()
+                .zip(&prob.tau)
+                .map(|(o, &t)| o + col(t))
+                .collect(),
+        );
+        prob.gls(&s).map(|f| f.chi2 - fit.chi2)
+    };
+    let d_angle = with_floor(&|t| 3.0 * q_q * q_q / (t * t))?.max(0.0);
+    let d_rate = with_floor(&|t| n_q * n_q / t)?.max(0.0);
+    let kind = match (d_angle > QUANT_CHI2, d_rate > QUANT_CHI2) {
+        (false, false) => QuantKind::Either,
+        (true, false) => QuantKind::Rate,
+        (false, true) => QuantKind::Angle,
+        (true, true) => QuantKind::Neither,
+    };
+    let n2 = fit.coef.get(1).copied().unwrap_or(0.0).max(0.0);
+    let share = if n2 > 0.0 {
+        n_q * n_q / n2
+    } else {
+        f64::INFINITY
+    };
+    Some(QuantizationFinding {
+        kind,
+        lsb,
+        rate_lsb: lsb / tau0,
+        q_q,
+        n_q,
+        delta_chi2_angle: d_angle,
+        delta_chi2_rate: d_rate,
+        share_of_n2: share,
+        n_unit: (n2 - n_q * n_q).max(0.0).sqrt(),
+    })
+}
