@@ -2,6 +2,8 @@
 //! and turned into records. Plain synchronous code: the pipeline runs it on a worker thread and
 //! tests and benchmarks call it directly. It never knows where the samples came from.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::Instant;
 
 use crate::allan::accum::{AccumConfig, ChannelAccumulator, Overlap};
@@ -148,9 +150,9 @@ pub struct RunAnalysis {
     /// Text values infinite or out of range, read as gaps (from the reader, like `bad_rows`).
     invalid_values: u64,
     started: Instant,
-    /// The run is being stopped ([`RunAnalysis::stop_interim`]): interim records fall due as
-    /// before but are not made.
-    stopping: bool,
+    /// Set when the run is being stopped ([`RunAnalysis::stop_interim_when`]): interim records
+    /// fall due as before but are not made.
+    stopping: Arc<AtomicBool>,
 }
 
 /// The power-law exponent of S_y for the term that dominates the model at a tau: Q is white
@@ -184,7 +186,7 @@ impl RunAnalysis {
             bad_rows: 0,
             invalid_values: 0,
             started: Instant::now(),
-            stopping: false,
+            stopping: Arc::default(),
         }
     }
 
@@ -301,16 +303,17 @@ impl RunAnalysis {
             bad_rows: state.bad_rows,
             invalid_values: 0,
             started,
-            stopping: false,
+            stopping: Arc::default(),
         })
     }
 
-    /// The run is being stopped (SIGINT/SIGTERM): the data already read is still analysed, to
-    /// the last frame, but no interim record is made any more (its schedule still advances, so
-    /// a checkpoint is as without the stop). A replay held by a stalled consumer would
-    /// otherwise spend seconds on interim records that nobody reads before its final ones.
-    pub fn stop_interim(&mut self) {
-        self.stopping = true;
+    /// Once `flag` is set (the run is being stopped: SIGINT/SIGTERM), the data already read is
+    /// still analysed, to the last frame, but no interim record is made any more (their
+    /// schedule still advances, so a checkpoint is as without the stop). A replay held by a
+    /// stalled consumer would otherwise spend seconds on interim records nobody reads before
+    /// its final ones.
+    pub fn stop_interim_when(&mut self, flag: Arc<AtomicBool>) {
+        self.stopping = flag;
     }
 
     /// Ends every channel's phase segment without accounting for time: what follows is not
@@ -459,7 +462,7 @@ impl RunAnalysis {
             return;
         }
         if self.t_data_s() >= self.next_emit_s {
-            if !self.stopping {
+            if !self.stopping.load(Ordering::Relaxed) {
                 out.extend(self.records(false));
             }
             let every = self.opts.every_s.unwrap_or(f64::INFINITY);
@@ -584,7 +587,7 @@ impl RunAnalysis {
                 bad_rows: if i == 0 { self.bad_rows } else { 0 },
                 invalid_values: if i == 0 { self.invalid_values } else { 0 },
                 started: self.started,
-                stopping: self.stopping,
+                stopping: self.stopping.clone(),
             });
         }
         out

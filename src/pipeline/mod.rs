@@ -602,6 +602,10 @@ fn spawn_analysis(
         let h = std::thread::Builder::new()
             .name("allanscope-analysis".into())
             .spawn(move || {
+                // Stopped by a signal: the frames read still count, their interim records are
+                // not made (RunAnalysis::stop_interim_when).
+                let stopping = queue.stopping();
+                part.stop_interim_when(stopping.clone());
                 let mut out = Vec::new();
                 let tick =
                     every_wall.map_or_else(crossbeam_channel::never, crossbeam_channel::tick);
@@ -616,11 +620,6 @@ fn spawn_analysis(
                                         state: part.snapshot(),
                                     });
                                 }
-                                // Stopped by a signal: the frames read still count, their
-                                // interim records are not made (RunAnalysis::stop_interim).
-                                if queue.is_released() {
-                                    part.stop_interim();
-                                }
                                 part.push_chunk(&c, &mut out);
                                 if let (Some(r), Ok(c)) = (&recycle, Arc::try_unwrap(c)) {
                                     let _ = r.try_send(c);
@@ -628,7 +627,7 @@ fn spawn_analysis(
                             }
                             Err(_) => break,
                         },
-                        recv(tick) -> _ => if !queue.is_released() {
+                        recv(tick) -> _ => if !stopping.load(Ordering::Relaxed) {
                             out.extend(part.records(false));
                         },
                     }

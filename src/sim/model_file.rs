@@ -264,14 +264,14 @@ impl<'a> Keys<'a> {
             toml::Value::Integer(i) => *i as f64,
             other => {
                 errs.bad(
-                    &self.path(key),
+                    self.path(key),
                     format!("expected a number, found {}", other.type_str()),
                 );
                 return None;
             }
         };
         if !x.is_finite() {
-            errs.bad(&self.path(key), "must be finite");
+            errs.bad(self.path(key), "must be finite");
             return None;
         }
         Some(x)
@@ -282,7 +282,7 @@ impl<'a> Keys<'a> {
         let x = self.num(key, errs)?;
         if (strict && x <= 0.0) || x < 0.0 {
             let what = if strict { "> 0" } else { ">= 0" };
-            errs.bad(&self.path(key), format!("must be {what}, got {x}"));
+            errs.bad(self.path(key), format!("must be {what}, got {x}"));
             return None;
         }
         Some(x)
@@ -290,7 +290,7 @@ impl<'a> Keys<'a> {
 
     fn required(&mut self, key: &'static str, x: Option<f64>, errs: &mut Collector) -> f64 {
         if x.is_none() && !self.table.contains_key(key) {
-            errs.bad(&self.path(key), "missing");
+            errs.bad(self.path(key), "missing");
         }
         x.unwrap_or(f64::NAN)
     }
@@ -301,7 +301,7 @@ impl<'a> Keys<'a> {
             Some(s) => Some(s),
             None => {
                 errs.bad(
-                    &self.path(key),
+                    self.path(key),
                     format!("expected a string, found {}", v.type_str()),
                 );
                 None
@@ -325,7 +325,7 @@ impl<'a> Keys<'a> {
                     match v.as_table() {
                         Some(t) => out.push((format!("{path}[{i}]"), t)),
                         None => errs.bad(
-                            &format!("{path}[{i}]"),
+                            format!("{path}[{i}]"),
                             format!("expected a table, found {}", v.type_str()),
                         ),
                     }
@@ -353,7 +353,7 @@ impl<'a> Keys<'a> {
     ) -> Option<(String, &'a toml::Table)> {
         let v = self.tables(key, errs);
         if v.len() > 1 {
-            errs.bad(&self.path(key), "expected one table, found a list");
+            errs.bad(self.path(key), "expected one table, found a list");
         }
         v.into_iter().next()
     }
@@ -363,7 +363,7 @@ impl<'a> Keys<'a> {
         for k in self.table.keys() {
             if !self.taken.contains(&k.as_str()) {
                 errs.bad(
-                    &self.path(k),
+                    self.path(k),
                     format!("unknown key (allowed: {})", self.taken.join(", ")),
                 );
             }
@@ -413,7 +413,7 @@ fn parse_model(table: &toml::Table, errs: &mut Collector) -> Option<SimModel> {
         ) {
             if channels.iter().any(|o: &ChannelModel| o.name == c.name) {
                 errs.bad(
-                    &format!("{path}.name"),
+                    format!("{path}.name"),
                     format!("duplicate channel name `{}`", c.name),
                 );
             }
@@ -434,7 +434,7 @@ fn parse_stand(t: &toml::Table, path: &str, errs: &mut Collector) -> Stand {
     let latitude_deg = k.required("latitude_deg", lat, errs);
     if latitude_deg.abs() > 90.0 {
         errs.bad(
-            &k.path("latitude_deg"),
+            k.path("latitude_deg"),
             format!("must be within [-90, 90], got {latitude_deg}"),
         );
     }
@@ -534,16 +534,16 @@ fn parse_channel(
     let mut k = Keys::new(t, path);
     let name = k.string("name", errs).unwrap_or("").to_string();
     if !t.contains_key("name") {
-        errs.bad(&k.path("name"), "missing");
+        errs.bad(k.path("name"), "missing");
     } else if name.is_empty() || name.contains([',', '"', '\n', '\r']) {
         errs.bad(
-            &k.path("name"),
+            k.path("name"),
             "must be non-empty, without commas, quotes or line breaks",
         );
     }
     let unit = k.string("unit", errs).unwrap_or("").to_string();
     if !t.contains_key("unit") {
-        errs.bad(&k.path("unit"), "missing");
+        errs.bad(k.path("unit"), "missing");
     }
     let kind = IncrementUnit::parse(&unit);
     let lsb = k.num_pos("lsb", true, errs);
@@ -595,7 +595,7 @@ fn parse_channel(
     let temperature_coefficient = k.num("temperature_coefficient", errs).unwrap_or(0.0);
     if temperature_coefficient != 0.0 && !has_temperature {
         errs.bad(
-            &k.path("temperature_coefficient"),
+            k.path("temperature_coefficient"),
             "needs a top-level [temperature] profile",
         );
     }
@@ -662,7 +662,7 @@ fn parse_channel(
         let rate_per_s = e.required("rate", r, errs);
         if rate_per_s * tau0_s > 0.5 {
             errs.bad(
-                &e.path("rate"),
+                e.path("rate"),
                 format!("{rate_per_s} per second is more than one outlier every two samples"),
             );
         }
