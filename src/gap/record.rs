@@ -1,7 +1,7 @@
 //! docs/records.md's `diagnosis` record: `type`, `channel`, `gap_before`, `gap_after`, `verdict`,
 //! `regions`, `effects`, optional `holdout`, plus extra fields (`final`, `t_data`, `tau_span`,
 //! `base_coef`, `final_coef`, `segments`, `jumps`, `residual_shape`, `model_tau`, `model_base`,
-//! `model_effects`, `outliers`, `quantization`).
+//! `model_effects`, `outliers`, `quantization`, and `run` when several inputs are analyzed).
 
 use super::diagnose::{Diagnosis, Verdict};
 use super::holdout::HoldoutGap;
@@ -106,6 +106,9 @@ pub struct DiagnosisRecord {
     /// absent when the values are not whole multiples of one step.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub quantization: Option<serde_json::Value>,
+    /// Run index (0-based) when several inputs are analyzed, as in the other records.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub run: Option<usize>,
 }
 
 /// The `outliers` object: how many, how often (per second of data), their rms and largest size
@@ -199,6 +202,7 @@ impl DiagnosisRecord {
                 max_size: d.outliers.max_size,
             },
             quantization: d.quantization.map(|q| q.to_json()),
+            run: None,
         }
     }
 
