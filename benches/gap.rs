@@ -19,7 +19,11 @@ fn evidence(c: &mut Criterion) {
     let mut g = c.benchmark_group("gap_evidence_2^20");
     g.sample_size(10);
     for filter in [true, false] {
-        let name = if filter { "with_outlier_filter" } else { "without" };
+        let name = if filter {
+            "with_outlier_filter"
+        } else {
+            "without"
+        };
         g.bench_function(name, |b| {
             b.iter(|| {
                 let mut cfg = GapConfig::new(0.004);
