@@ -477,6 +477,7 @@ mod tests {
             min: None,
             unit: None,
             over: Scope::Run,
+            origin: None,
         }
     }
 
