@@ -16,6 +16,7 @@
 //! Block means: each segment is split into [`BLOCKS_PER_SEGMENT`] blocks whose rate means are
 //! kept (they merge with the segments), the time series on which warm-ups and bias jumps show.
 
+use super::lsb::LsbEstimator;
 use crate::allan::accum::{AccumConfig, Engine, FloatRepr, Overlap, StatSet, TauSpec};
 
 /// Segment length (increments) of the doubling scheme before the first merge.
@@ -147,6 +148,10 @@ pub struct EvidenceSnapshot {
     /// no data), in time order.
     pub block_len: u64,
     pub block_means: Vec<f64>,
+    /// The increments' quantization step (u) when they are whole multiples of one
+    /// ([`super::lsb`]): the diagnosis checks whether quantization is white at this step
+    /// ([`super::quantization`]).
+    pub lsb: Option<f64>,
 }
 
 /// The streaming evidence of one channel.
@@ -166,6 +171,10 @@ pub struct GapEvidence {
     block_pos: u64,
     n_increments: u64,
     n_received: u64,
+    /// The increments' LSB, read off the values (not checkpointed: after a resume it is read
+    /// off the increments that follow).
+    #[serde(skip, default = "LsbEstimator::new")]
+    lsb: LsbEstimator,
 }
 
 fn accum_cfg(tau0_s: f64, taus: TauSpec) -> AccumConfig {
@@ -213,6 +222,7 @@ impl GapEvidence {
             block_pos: 0,
             n_increments: 0,
             n_received: 0,
+            lsb: LsbEstimator::new(),
         }
     }
 
@@ -280,6 +290,7 @@ impl GapEvidence {
     /// Feeds one increment `d_k` in u.
     #[inline]
     pub fn push_increment(&mut self, d: f64) {
+        self.lsb.push(d);
         self.main.push_increment(d);
         self.seg_engine.push_increment(d);
         self.cur_block.0 += d;
@@ -293,6 +304,7 @@ impl GapEvidence {
         if missing == 0 {
             return;
         }
+        self.lsb.push(f64::NAN);
         self.main.push_gap(missing);
         // Walk the gap through segment and block boundaries.
         let mut left = missing;
@@ -420,6 +432,7 @@ impl GapEvidence {
             segments,
             block_len: self.block_len,
             block_means,
+            lsb: self.lsb.estimate(),
         }
     }
 }

@@ -1,7 +1,7 @@
 //! docs/records.md's `diagnosis` record: `type`, `channel`, `gap_before`, `gap_after`, `verdict`,
 //! `regions`, `effects`, optional `holdout`, plus extra fields (`final`, `t_data`, `tau_span`,
 //! `base_coef`, `final_coef`, `segments`, `jumps`, `residual_shape`, `model_tau`, `model_base`,
-//! `model_effects`).
+//! `model_effects`, `quantization_limited`).
 
 use super::diagnose::{Diagnosis, Verdict};
 use super::holdout::HoldoutGap;
@@ -99,6 +99,21 @@ pub struct DiagnosisRecord {
     pub model_base: Vec<f64>,
     #[serde(default)]
     pub model_effects: Vec<f64>,
+    /// Present when the unit's quantization is not white phase noise at the shortest taus
+    /// (its LSB is coarse against the per-sample noise; docs/gap.md, "Quantization-limited
+    /// units"): the curve was diagnosed from `tau_white` on.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub quantization_limited: Option<QuantizationRecord>,
+}
+
+/// The extra field `quantization_limited`: the increments' LSB (u), the per-sample rms change
+/// of the phase over it (`ratio`, below 0.5), and the shortest tau (s) where the quantization
+/// error is white again.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct QuantizationRecord {
+    pub lsb: f64,
+    pub ratio: f64,
+    pub tau_white: f64,
 }
 
 impl DiagnosisRecord {
@@ -171,6 +186,11 @@ impl DiagnosisRecord {
                 .iter()
                 .map(|v| v.max(0.0).sqrt())
                 .collect(),
+            quantization_limited: d.quantization_limited.map(|q| QuantizationRecord {
+                lsb: q.lsb,
+                ratio: q.ratio,
+                tau_white: q.tau_white_s,
+            }),
         }
     }
 

@@ -6,5 +6,6 @@ mod diagnosis;
 mod families;
 mod mixture;
 mod oracle;
+mod real_slice;
 mod reference;
 mod temperature;
