@@ -489,9 +489,7 @@ impl RunAnalysis {
                 match diagnose(&g.snapshot(), &DiagnoseOptions::default()) {
                     Ok(d) => {
                         let rec = DiagnosisRecord::new(&ch.setup.name, &d, None, final_);
-                        if let Ok(v) = serde_json::to_value(&rec) {
-                            out.push(Record::Other(v));
-                        }
+                        out.push(Record::Diagnosis(Box::new(rec)));
                     }
                     Err(e) => tracing::debug!("{}: {e}", ch.setup.name),
                 }

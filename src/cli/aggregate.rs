@@ -40,7 +40,7 @@ pub fn run(a: &AggregateArgs) -> Result<()> {
                 .map_err(|e| anyhow::anyhow!("cannot create output {}: {e}", p.display()))?;
             JsonLines::new(Box::new(std::io::BufWriter::new(f)))
         }
-        None => JsonLines::stdout(),
+        None => JsonLines::new(super::terminal::stdout_records(a.json)),
     };
     for agg in aggregate_channels(&runs) {
         sink.write(&record(&agg))?;

@@ -10,6 +10,7 @@ use anyhow::{Context, Result};
 use std::io::Seek;
 use std::sync::Arc;
 
+use super::process::SignalWatch;
 use super::{
     analysis_options, checkpoint_header, finish_records, format_and_tau0, interrupted, open_input,
     records_output, select_channels, start_analysis, usage, AnalyzeArgs, DataArgs,
@@ -19,7 +20,7 @@ use allanscope::checkpoint::Position;
 use allanscope::frame::FrameDescriptor;
 use allanscope::input::text::TextReader;
 use allanscope::model::aggregate::{aggregate_channels, RunCoefs};
-use allanscope::pipeline::{RecordQueue, RecordWriter, RunControl, RunOutcome, SignalWatch};
+use allanscope::pipeline::{RecordQueue, RecordWriter, RunControl, RunOutcome};
 use allanscope::sink::output::OutputMode;
 use allanscope::sink::records::Record;
 use allanscope::source::{Pace, SourceSpec};
@@ -37,17 +38,17 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
         d.out.as_deref(),
         OutputMode::new(d.force, d.resume),
         "--out",
+        d.json,
     )?;
     // A replay has no deadline: back-pressure, never coalesced interim records.
     let writer = RecordWriter::spawn(out);
-    let ctl = RunControl {
-        show_progress: std::io::stderr().is_terminal(),
-        ..RunControl::default()
-    };
+    let ctl = RunControl::default();
+    // SIGINT/SIGTERM end the current run and skip the rest.
     let signals = SignalWatch::start(
         ctl.shutdown.clone(),
         writer.queue().clone(),
         ctl.progress.clone(),
+        None,
     );
     let result = analyze_all(a, writer.queue(), &ctl);
     let written = finish_records(writer, &dest, &signals);
@@ -66,6 +67,7 @@ pub(crate) fn output_writer(d: &DataArgs) -> Result<Box<dyn Write + Send>> {
         d.out.as_deref(),
         OutputMode::new(d.force, d.resume),
         "--out",
+        d.json,
     )?
     .0)
 }
@@ -130,6 +132,7 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue, ctl: &RunControl) -> Result
     }
     let server = super::metrics::start_option(d.metrics.as_deref())?;
     let mut ctl = ctl.clone();
+    ctl.crash_hook = super::process::abort_hook(d.abort_after_frames);
     let mut fits = Vec::new();
     let mut unfinished = None;
     for (run, input) in a.inputs.iter().enumerate() {
@@ -268,6 +271,8 @@ fn analyze_frames(
     let analysis = start_analysis(input, setups, opts, saved, ck_path.as_deref())?;
     let mut ctl = ctl.clone();
     ctl.checkpoint = ckpt.map(|c| Arc::new(c.0));
+    let _bar = (input != "-" && std::io::stderr().is_terminal())
+        .then(|| super::process::ProgressBar::start(ctl.progress.clone()));
     let ctl = &ctl;
     let pace = if realtime {
         Pace::Realtime {

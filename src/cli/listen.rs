@@ -7,12 +7,12 @@ use std::time::Duration;
 use anyhow::Result;
 use clap::{ArgGroup, Args};
 
+use super::process::SignalWatch;
 use super::{
     analysis_options, capture_output, finish_records, parse_duration_s, records_output,
     select_channels, usage, DataArgs,
 };
-use allanscope::frame::FrameDescriptor;
-use allanscope::pipeline::{RecordWriter, RunControl, SignalWatch};
+use allanscope::pipeline::{RecordWriter, RunControl};
 use allanscope::sink::output::OutputMode;
 use allanscope::source::{Pace, SourceSpec};
 
@@ -73,7 +73,7 @@ pub fn run(l: &ListenArgs) -> Result<()> {
             "listen reads frames: give --format NAME (siu8, kvh1750, hg4930 or a descriptor file)",
         ));
     }
-    let desc = FrameDescriptor::load(&d.format).map_err(anyhow::Error::new)?;
+    let desc = super::load_descriptor(&d.format).map_err(anyhow::Error::new)?;
     let spec = source_spec(l)?;
     let mut opts = analysis_options(d, d.tau0.unwrap_or_else(|| desc.tau0_s()))?;
     // Live: --every is wall-seconds, kept by the pipeline, not data-seconds.
@@ -90,20 +90,21 @@ pub fn run(l: &ListenArgs) -> Result<()> {
     let server = super::metrics::start_option(d.metrics.as_deref())?;
     let metrics = server.as_ref().map(|s| s.tap(&spec.name(), &opts.limits));
     let analysis = super::start_analysis(&spec.name(), setups, opts, saved, ck_path.as_deref())?;
+    let duration = match &l.duration {
+        Some(s) => Some(Duration::from_secs_f64(parse_duration_s(s)?)),
+        None => None,
+    };
     let mode = OutputMode::new(d.force, d.resume);
     // Outputs last: every option has been accepted; they are only emptied once the source
     // is open and delivers (allanscope::sink::output).
     let capture = capture_output(l.capture.as_deref(), mode, "--capture")?;
-    let (out, dest) = records_output(d.out.as_deref(), mode, "--out")?;
+    let (out, dest) = records_output(d.out.as_deref(), mode, "--out", d.json)?;
     let ctl = RunControl {
         metrics,
         checkpoint: ckpt.map(|c| std::sync::Arc::new(c.0)),
-        duration: match &l.duration {
-            Some(s) => Some(Duration::from_secs_f64(parse_duration_s(s)?)),
-            None => None,
-        },
         capture,
         every_wall: d.every.map(Duration::from_secs_f64),
+        crash_hook: super::process::abort_hook(d.abort_after_frames),
         ..RunControl::default()
     };
     // Live: a consumer that falls behind gets the newest interim records (coalesced), and
@@ -113,6 +114,7 @@ pub fn run(l: &ListenArgs) -> Result<()> {
         ctl.shutdown.clone(),
         writer.queue().clone(),
         ctl.progress.clone(),
+        duration,
     );
     let result = allanscope::pipeline::run_frames(spec, &desc, analysis, writer.queue(), &ctl);
     let written = finish_records(writer, &dest, &signals);

@@ -10,9 +10,11 @@ mod export;
 mod listen;
 mod metrics;
 mod plot;
+mod process;
 mod report;
 mod run;
 mod simulate;
+mod terminal;
 
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
@@ -23,6 +25,7 @@ use clap::{Args, Parser, Subcommand};
 use allanscope::allan::accum::{AccumConfig, Overlap, StatSet, TauSpec, DEFAULT_L};
 use allanscope::analysis::{AnalysisOptions, ChannelSetup, InputKind};
 use allanscope::error::UsageError;
+use allanscope::frame::FrameDescriptor;
 use allanscope::input::text::{ColumnPick, TextOptions};
 use allanscope::model::fit::{FitMethod, FitOptions};
 
@@ -134,6 +137,9 @@ pub struct AggregateArgs {
     /// JSON lines to this file instead of standard output.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// JSON lines even when standard output is a terminal (which otherwise gets a table).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Options shared by the commands that read data (docs/records.md).
@@ -190,6 +196,10 @@ pub struct DataArgs {
     /// touched.
     #[arg(long)]
     pub force: bool,
+    /// JSON lines even when standard output is a terminal (which otherwise gets a readable
+    /// table); pipes and files always get JSON lines.
+    #[arg(long)]
+    pub json: bool,
     /// Datasheet limits (a TOML file with `[[limits]]` tables, as in a stand config), judged
     /// with the fits' intervals; verdicts in `summary`.
     #[arg(long)]
@@ -290,11 +300,13 @@ where
 
 /// Where a command's JSON lines go: `out` (a result file, opened as [`OutputFile`] explains: an
 /// earlier result refused unless `mode` allows, replaced only at the first record) or standard
-/// output; and the destination's name for messages.
+/// output (a table on a terminal unless `json`, [`terminal`]); and the destination's name for
+/// messages.
 pub(crate) fn records_output(
     out: Option<&Path>,
     mode: allanscope::sink::output::OutputMode,
     what: &str,
+    json: bool,
 ) -> Result<(Box<dyn std::io::Write + Send>, String)> {
     use allanscope::sink::output::{OutputFile, OutputMode};
     Ok(match out {
@@ -310,10 +322,7 @@ pub(crate) fn records_output(
                 p.display().to_string(),
             )
         }
-        None => (
-            Box::new(std::io::BufWriter::new(std::io::stdout())),
-            "standard output".into(),
-        ),
+        None => (terminal::stdout_records(json), "standard output".into()),
     })
 }
 
@@ -334,7 +343,7 @@ pub(crate) fn capture_output(
 pub(crate) fn finish_records(
     writer: allanscope::pipeline::RecordWriter,
     dest: &str,
-    signals: &allanscope::pipeline::SignalWatch,
+    signals: &process::SignalWatch,
 ) -> Result<()> {
     writer
         .finish_within(|| signals.grace())
@@ -396,15 +405,34 @@ fn interval_arg(s: &str) -> Result<f64, String> {
     allanscope::ranges::check_interval(v)
 }
 
+/// The folders searched for a descriptor given by name, in order: `./config/frames`, the
+/// executable's `../../config/frames`, and the crate's own `config/frames` as it was at compile
+/// time (then the library's embedded copies).
+pub(crate) fn descriptor_dirs() -> Vec<PathBuf> {
+    let mut dirs = vec![PathBuf::from("config/frames")];
+    if let Ok(exe) = std::env::current_exe() {
+        if let Some(d) = exe.parent().and_then(Path::parent).and_then(Path::parent) {
+            dirs.push(d.join("config/frames"));
+        }
+    }
+    dirs.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("config/frames"));
+    dirs
+}
+
+/// A frame descriptor by name (searched in [`descriptor_dirs`]) or path.
+pub(crate) fn load_descriptor(
+    name_or_path: &str,
+) -> Result<FrameDescriptor, allanscope::frame::descriptor::DescriptorErrors> {
+    FrameDescriptor::load_in(name_or_path, &descriptor_dirs())
+}
+
 /// The frame descriptor (`None` for text columns) and the sampling step: `--tau0` when given,
 /// else the descriptor's; required for text columns.
-pub(crate) fn format_and_tau0(
-    d: &DataArgs,
-) -> Result<(Option<allanscope::frame::FrameDescriptor>, f64)> {
+pub(crate) fn format_and_tau0(d: &DataArgs) -> Result<(Option<FrameDescriptor>, f64)> {
     let desc = if d.format == "csv" {
         None
     } else {
-        Some(allanscope::frame::FrameDescriptor::load(&d.format).map_err(anyhow::Error::new)?)
+        Some(load_descriptor(&d.format).map_err(anyhow::Error::new)?)
     };
     let tau0 = match (&desc, d.tau0) {
         (_, Some(t)) => {

@@ -7,13 +7,13 @@ use std::time::Duration;
 use anyhow::Result;
 use clap::Args;
 
+use super::process::SignalWatch;
 use super::select_channels;
 use allanscope::allan::accum::AccumConfig;
 use allanscope::analysis::{AnalysisOptions, InputKind};
 use allanscope::error::UsageError;
-use allanscope::frame::FrameDescriptor;
 use allanscope::model::fit::FitOptions;
-use allanscope::pipeline::{RecordWriter, RunControl, SignalWatch};
+use allanscope::pipeline::{RecordWriter, RunControl};
 use allanscope::sink::output::OutputMode;
 use allanscope::source::{Pace, SourceSpec};
 use allanscope::stand::StandConfig;
@@ -38,11 +38,15 @@ pub struct RunArgs {
     /// Serve /metrics here (overrides the config's `run.metrics`); a bare PORT is on 127.0.0.1.
     #[arg(long, value_name = "ADDR:PORT")]
     pub metrics: Option<String>,
+    /// JSON lines even when standard output is a terminal (which otherwise gets a readable
+    /// table); pipes and files always get JSON lines.
+    #[arg(long)]
+    pub json: bool,
 }
 
 pub fn run(r: &RunArgs) -> Result<()> {
     let cfg = StandConfig::load(&r.config).map_err(anyhow::Error::new)?;
-    let desc = FrameDescriptor::load(&cfg.format).map_err(|e| {
+    let desc = super::load_descriptor(&cfg.format).map_err(|e| {
         anyhow::Error::new(UsageError::Config {
             file: cfg.file.clone(),
             line: None,
@@ -122,19 +126,18 @@ pub fn run(r: &RunArgs) -> Result<()> {
     let mode = OutputMode::new(r.force, r.resume);
     let capture = super::capture_output(cfg.capture.as_deref(), mode, "[run] capture")
         .map_err(|e| e.context(format!("stand config {}", cfg.file.display())))?;
-    let (out, dest) = super::records_output(cfg.output.as_deref(), mode, "[output] path")
+    let (out, dest) = super::records_output(cfg.output.as_deref(), mode, "[output] path", r.json)
         .map_err(|e| e.context(format!("stand config {}", cfg.file.display())))?;
     let ctl = RunControl {
         checkpoint: ckpt.map(|c| std::sync::Arc::new(c.0)),
-        duration: cfg.duration_s.map(Duration::from_secs_f64),
         capture,
         every_wall: if live {
             cfg.every_s.map(Duration::from_secs_f64)
         } else {
             None
         },
-        show_progress: !live && std::io::IsTerminal::is_terminal(&std::io::stderr()),
         metrics,
+        crash_hook: super::process::abort_hook(r.abort_after_frames),
         ..RunControl::default()
     };
     // Live: interim records coalesced for a slow consumer; a replay waits for it instead.
@@ -147,7 +150,10 @@ pub fn run(r: &RunArgs) -> Result<()> {
         ctl.shutdown.clone(),
         writer.queue().clone(),
         ctl.progress.clone(),
+        cfg.duration_s.map(Duration::from_secs_f64),
     );
+    let _bar = (replay && std::io::IsTerminal::is_terminal(&std::io::stderr()))
+        .then(|| super::process::ProgressBar::start(ctl.progress.clone()));
     let name = spec.name();
     let result = allanscope::pipeline::run_frames(spec, &desc, analysis, writer.queue(), &ctl);
     let written = super::finish_records(writer, &dest, &signals);

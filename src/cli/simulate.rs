@@ -11,8 +11,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 
-use super::{parse_duration_s, usage, SimulateArgs};
 use allanscope::frame::FrameDescriptor;
+
+use super::{parse_duration_s, usage, SimulateArgs};
 
 /// Bytes a text row takes per channel, at most: a separator and a `{:.9e}`-style number.
 const CSV_BYTES_PER_VALUE: u64 = 24;
@@ -29,7 +30,7 @@ pub fn run(s: &SimulateArgs) -> Result<()> {
     let desc = if s.format == "csv" {
         None
     } else {
-        Some(FrameDescriptor::load(&s.format).map_err(anyhow::Error::new)?)
+        Some(super::load_descriptor(&s.format).map_err(anyhow::Error::new)?)
     };
     let steps = (duration / model.tau0_s).ceil();
     let per_step = match &desc {

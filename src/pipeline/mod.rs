@@ -5,18 +5,22 @@
 //!  file/stdin/serial/udp  mpsc, 4 | 1024   DecodeStage     crossbeam, 4   RunAnalysis     RecordQueue     JSON lines
 //! ```
 //!
-//! - I/O is async (a current-thread tokio runtime on the calling thread: the source task,
-//!   SIGINT/SIGTERM, `--duration`); decoding and statistics are plain sync code on threads of
-//!   their own; no stage awaits numerical work and no numerical stage awaits.
+//! - I/O is async: the source runs in the caller's tokio runtime ([`run_frames_async`]) or in a
+//!   current-thread runtime built for the run ([`run_frames`]); decoding and statistics are plain
+//!   sync code on threads of their own; no stage awaits numerical work and no numerical stage
+//!   awaits. Signals, `--duration` and the progress bar belong to the binary (`src/cli/`).
 //! - Every channel is bounded. The source waits when the decode stage is behind (for a file
 //!   that is back-pressure; for a socket the kernel buffer takes the slack), the decode thread
 //!   waits when the analysis is behind: **frames are never dropped**. The record writer is the
 //!   exception by design: its queue never blocks the analysis and coalesces interim records when
 //!   full ([`writer`]), so a stalled consumer of the JSON lines never stalls ingestion.
-//! - One shutdown token goes to the source. SIGINT, SIGTERM or the end of `--duration` fire it;
-//!   the source stops reading, and each stage after it finishes when its input channel closes:
-//!   the decoder is finished, the analysis writes its final curve, fit, health and summary
-//!   records, the writer drains its queue.
+//! - One shutdown token goes to the source. The caller cancels it (the binary on SIGINT, SIGTERM
+//!   or the end of `--duration`; an embedding program when it likes); the source stops reading,
+//!   and each stage after it finishes when its input channel closes: the decoder is finished,
+//!   the analysis writes its final curve, fit, health and summary records, the writer drains its
+//!   queue. A caller that must not wait for a stalled consumer of the records lifts the queue's
+//!   back-pressure ([`RecordQueue::release`]) and bounds the writer's last wait
+//!   ([`RecordWriter::finish_within`]): the library never ends the process.
 //!
 //! Text columns (`--format csv`) enter the same analysis and writer stages from a reader
 //! thread instead of the source task and decode thread.
@@ -24,7 +28,6 @@
 pub mod checkpointing;
 pub mod decode;
 pub mod reorder;
-pub mod signals;
 pub mod writer;
 
 use std::io::BufRead;
@@ -47,7 +50,6 @@ use crate::sink::records::{HealthRecord, Record};
 use crate::source::{Capture, CaptureSlot, Progress, SourceContext, SourceEvent, SourceSpec};
 use checkpointing::{Collector, Piece, Schedule};
 use decode::DecodeStage;
-pub use signals::SignalWatch;
 pub use writer::{Delivery, RecordQueue, RecordWriter, WriterStats, RECORD_QUEUE};
 
 /// Capacity of the channel from the decode (or text reader) thread to the analysis, in
@@ -63,22 +65,19 @@ const MAX_CHUNK_EVENTS: usize = 4096;
 /// them avoids regrowing the vector (profiled: 3% of the decode thread).
 const CHUNK_EVENTS_RESERVE: usize = 1600;
 
-/// How a run is driven and stopped.
+/// How a run is driven and stopped. The caller owns the process: it cancels `shutdown` (the
+/// binary does on SIGINT, SIGTERM or the end of `--duration`; an embedding program when it
+/// likes), and may watch `progress` (the binary's progress bar).
 #[derive(Debug, Clone)]
 pub struct RunControl {
-    /// Fired by SIGINT/SIGTERM, `--duration`, or the caller: the source stops reading.
+    /// Cancelled by the caller: the source stops reading, and the stages after it finish. The
+    /// caller also records why in `progress` ([`Progress::set_stopped_by`]) for the summary.
     pub shutdown: CancellationToken,
-    /// Stop after this much wall time.
-    pub duration: Option<Duration>,
     /// Also write every received byte to this file (opened by the command, see
     /// [`crate::sink::output`]).
     pub capture: Option<CaptureSlot>,
     /// Counters the caller may watch.
     pub progress: Arc<Progress>,
-    /// Stop on SIGINT and SIGTERM (the binary); off in tests that run several pipelines.
-    pub handle_signals: bool,
-    /// Show a progress bar (file replay, standard error a terminal).
-    pub show_progress: bool,
     /// Wall-seconds between interim records (live sources); `None`: the analysis's own
     /// data-second schedule (`AnalysisOptions::every_s`).
     pub every_wall: Option<Duration>,
@@ -88,21 +87,33 @@ pub struct RunControl {
     /// Metrics for monitoring (`--metrics`): every fit record and the decoder's health, as the
     /// run goes.
     pub metrics: Option<MetricsTap>,
+    /// Called once [`CheckpointPlan::abort_after_frames`] frames (rows) are read and a
+    /// checkpoint is on disk; the binary's `--abort-after-frames` test hook aborts the process
+    /// there, as a crash would. Without a hook the run goes on.
+    pub crash_hook: Option<CrashHook>,
 }
 
 impl Default for RunControl {
     fn default() -> Self {
         RunControl {
             shutdown: CancellationToken::new(),
-            duration: None,
             capture: None,
             progress: Arc::new(Progress::default()),
-            handle_signals: false,
-            show_progress: false,
             every_wall: None,
             checkpoint: None,
             metrics: None,
+            crash_hook: None,
         }
+    }
+}
+
+/// The callback of [`RunControl::crash_hook`].
+#[derive(Clone)]
+pub struct CrashHook(pub Arc<dyn Fn() + Send + Sync>);
+
+impl std::fmt::Debug for CrashHook {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("CrashHook")
     }
 }
 
@@ -117,6 +128,9 @@ pub struct RunOutcome {
 
 /// Runs a source of frames through decoding and analysis until the input ends or shutdown;
 /// then queues the final curve and fit records, the health record and the summary.
+///
+/// Blocks the calling thread on a current-thread tokio runtime of its own. Inside a tokio
+/// runtime it returns an error instead: await [`run_frames_async`] there.
 pub fn run_frames(
     spec: SourceSpec,
     desc: &FrameDescriptor,
@@ -124,7 +138,21 @@ pub fn run_frames(
     queue: &RecordQueue,
     ctl: &RunControl,
 ) -> Result<RunOutcome> {
+    block_on(run_frames_async(spec, desc, analysis, queue, ctl))
+}
+
+/// [`run_frames`] inside the caller's tokio runtime: the source runs in the awaiting task,
+/// decoding and analysis on threads of their own, and the end of the run (joining those
+/// threads, the last checkpoint, the final records) on the runtime's blocking pool.
+pub async fn run_frames_async(
+    spec: SourceSpec,
+    desc: &FrameDescriptor,
+    analysis: RunAnalysis,
+    queue: &RecordQueue,
+    ctl: &RunControl,
+) -> Result<RunOutcome> {
     ctl.progress.input_ended.store(false, Ordering::SeqCst);
+    ctl.progress.input_len.store(0, Ordering::Relaxed);
     let (src_tx, mut src_rx) = tokio::sync::mpsc::channel(spec.queue_capacity());
     // Chunks come back from the analysis to be cleared and reused here: the decoded frames are
     // freed by the thread that allocated them, and the chunk vectors are not reallocated
@@ -169,6 +197,7 @@ pub fn run_frames(
         .map(|c| (c.sender(), c.in_flight.clone(), c.written.clone()));
     let abort_after = plan.as_ref().and_then(|p| p.abort_after_frames);
     let metrics = ctl.metrics.clone();
+    let hook = ctl.crash_hook.clone();
     let decode = std::thread::Builder::new()
         .name("allanscope-decode".into())
         .spawn(move || {
@@ -182,6 +211,7 @@ pub fn run_frames(
             };
             let mut events = fresh();
             let mut open = true;
+            let mut crashed = false;
             while let Some(ev) = src_rx.blocking_recv() {
                 if let SourceEvent::Data { bytes, .. } | SourceEvent::Datagram { bytes, .. } = &ev {
                     offset += bytes.len() as u64;
@@ -229,8 +259,9 @@ pub fn run_frames(
                     }
                 }
                 if let (Some(limit), Some((_, _, written))) = (abort_after, &ck) {
-                    if progress.frames() >= limit {
-                        abort_for_test(written);
+                    if !crashed && progress.frames() >= limit {
+                        crash_point(written, hook.as_ref());
+                        crashed = true;
                     }
                 }
             }
@@ -242,30 +273,77 @@ pub fn run_frames(
             (stage, offset)
         })
         .context("cannot start the decode thread")?;
-    let source_result = drive(ctl, {
-        let ctl = ctl.clone();
-        async move {
-            let capture = ctl
-                .capture
-                .as_ref()
-                .and_then(CaptureSlot::take)
-                .map(|f| Capture::new(f, ctl.progress.capture.clone()));
-            let ctx = SourceContext {
-                start_offset,
-                tx: src_tx,
-                shutdown: ctl.shutdown.clone(),
-                capture,
-                progress: ctl.progress.clone(),
-            };
-            crate::source::run(spec, ctx, ctl.show_progress).await
-        }
-    });
-    let (stage, offset) = decode
-        .join()
-        .map_err(|_| anyhow::anyhow!("the decode thread panicked"))?;
-    let mut analysis = join_analysis(workers)?;
-    let written = collector.map(Collector::finish);
-    source_result?;
+    let source_result = async {
+        let capture = ctl
+            .capture
+            .as_ref()
+            .and_then(CaptureSlot::take)
+            .map(|f| Capture::new(f, ctl.progress.capture.clone()));
+        let ctx = SourceContext {
+            start_offset,
+            tx: src_tx,
+            shutdown: ctl.shutdown.clone(),
+            capture,
+            progress: ctl.progress.clone(),
+        };
+        crate::source::run(spec, ctx).await
+    }
+    .await;
+    let (ctl, queue) = (ctl.clone(), queue.clone());
+    let finish = move || -> Result<RunOutcome> {
+        let (stage, offset) = decode
+            .join()
+            .map_err(|_| anyhow::anyhow!("the decode thread panicked"))?;
+        let analysis = join_analysis(workers)?;
+        let written = collector.map(Collector::finish);
+        source_result?;
+        let flags = SourceFlags { live, udp, replay };
+        let end = FramesEnd {
+            stage,
+            offset,
+            written,
+            plan,
+        };
+        finish_frames(end, flags, analysis, &queue, &ctl)
+    };
+    tokio::task::spawn_blocking(finish)
+        .await
+        .map_err(|_| anyhow::anyhow!("the thread finishing the run panicked"))?
+}
+
+/// What kind of source a run of frames read, for its closing records.
+#[derive(Clone, Copy)]
+struct SourceFlags {
+    live: bool,
+    udp: bool,
+    replay: bool,
+}
+
+/// Where the decode stage of a run of frames ended, for its last checkpoint.
+struct FramesEnd {
+    stage: DecodeStage,
+    /// Bytes read from the input, from its start.
+    offset: u64,
+    /// Checkpoints written during the run (`None` without checkpoints).
+    written: Option<u64>,
+    plan: Option<Arc<CheckpointPlan>>,
+}
+
+/// The end of a run of frames: the last checkpoint, the health record, the final records.
+fn finish_frames(
+    end: FramesEnd,
+    flags: SourceFlags,
+    mut analysis: RunAnalysis,
+    queue: &RecordQueue,
+    ctl: &RunControl,
+) -> Result<RunOutcome> {
+    let SourceFlags { live, udp, replay } = flags;
+    let FramesEnd {
+        stage,
+        offset,
+        written,
+        plan,
+    } = end;
     if let (Some(plan), Some(written), Some(st)) = (&plan, written, stage.state()) {
         let complete = !(replay && ctl.shutdown.is_cancelled());
         let position = Position::Frames {
@@ -316,7 +394,24 @@ pub fn run_frames(
 
 /// Runs text columns (rows of `width` values) through the analysis; `rows_per_s` paces the
 /// reading at the data's own rate. Then queues the final records and the summary.
+///
+/// Blocks like [`run_frames`]; inside a tokio runtime, await [`run_text_async`].
 pub fn run_text<R: BufRead + Send + 'static>(
+    reader: TextReader<R>,
+    path: PathBuf,
+    rows_per_s: Option<f64>,
+    analysis: RunAnalysis,
+    queue: &RecordQueue,
+    ctl: &RunControl,
+) -> Result<RunOutcome> {
+    block_on(run_text_async(
+        reader, path, rows_per_s, analysis, queue, ctl,
+    ))
+}
+
+/// [`run_text`] inside the caller's tokio runtime: the reader runs on the runtime's blocking
+/// pool, the analysis on a thread of its own.
+pub async fn run_text_async<R: BufRead + Send + 'static>(
     reader: TextReader<R>,
     path: PathBuf,
     rows_per_s: Option<f64>,
@@ -341,12 +436,14 @@ pub fn run_text<R: BufRead + Send + 'static>(
         .as_ref()
         .map(|c| (c.sender(), c.in_flight.clone(), c.written.clone()));
     let abort_after = plan.as_ref().and_then(|p| p.abort_after_frames);
+    let hook = ctl.crash_hook.clone();
     let shutdown = ctl.shutdown.clone();
     let path_shown = path.clone();
     let progress = ctl.progress.clone();
     progress.input_ended.store(false, Ordering::SeqCst);
     let read = move || -> Result<crate::input::text::TextPosition> {
         let mut reader = reader;
+        let mut crashed = false;
         let started = Instant::now();
         let batch = rows_per_s.map_or(BATCH_ROWS, |r| ((r * 0.02) as usize).clamp(1, BATCH_ROWS));
         while !shutdown.is_cancelled() {
@@ -375,8 +472,9 @@ pub fn run_text<R: BufRead + Send + 'static>(
                 }
             }
             if let (Some(limit), Some((_, _, written))) = (abort_after, &ck) {
-                if reader.rows() >= limit {
-                    abort_for_test(written);
+                if !crashed && reader.rows() >= limit {
+                    crash_point(written, hook.as_ref());
+                    crashed = true;
                 }
             }
             if let Some(r) = rows_per_s {
@@ -386,11 +484,28 @@ pub fn run_text<R: BufRead + Send + 'static>(
         }
         Ok(reader.position())
     };
-    let result = drive(ctl, async move {
-        tokio::task::spawn_blocking(read)
-            .await
-            .map_err(|_| anyhow::anyhow!("the reader thread panicked"))?
-    });
+    let result = tokio::task::spawn_blocking(read)
+        .await
+        .map_err(|_| anyhow::anyhow!("the reader thread panicked"))
+        .and_then(|r| r);
+    let (ctl, queue) = (ctl.clone(), queue.clone());
+    let finish = move || finish_text(result, path_shown, workers, collector, plan, &queue, &ctl);
+    tokio::task::spawn_blocking(finish)
+        .await
+        .map_err(|_| anyhow::anyhow!("the thread finishing the run panicked"))?
+}
+
+/// The end of a run of text columns: the reader's position checked (no samples at all is an
+/// error), the last checkpoint, the final records.
+fn finish_text(
+    result: Result<crate::input::text::TextPosition>,
+    path_shown: PathBuf,
+    workers: Vec<std::thread::JoinHandle<RunAnalysis>>,
+    collector: Option<Collector>,
+    plan: Option<Arc<CheckpointPlan>>,
+    queue: &RecordQueue,
+    ctl: &RunControl,
+) -> Result<RunOutcome> {
     let mut analysis = join_analysis(workers)?;
     let written = collector.map(Collector::finish);
     let position = result?;
@@ -533,15 +648,15 @@ fn steps_of(ev: &crate::frame::FrameEvent) -> u64 {
     }
 }
 
-/// The test hook behind `--abort-after-frames`: once a checkpoint is on disk (waiting up to a
-/// minute for one), the process aborts as a crash would: no final records, no flush.
-fn abort_for_test(written: &std::sync::atomic::AtomicU64) -> ! {
+/// The crash point of [`RunControl::crash_hook`]: once a checkpoint is on disk (waiting up to a
+/// minute for one), the hook runs; the binary's hook aborts the process as a crash would.
+fn crash_point(written: &std::sync::atomic::AtomicU64, hook: Option<&CrashHook>) {
+    let Some(hook) = hook else { return };
     let until = Instant::now() + Duration::from_secs(60);
     while written.load(Ordering::SeqCst) == 0 && Instant::now() < until {
         std::thread::sleep(Duration::from_millis(2));
     }
-    eprintln!("allanscope: --abort-after-frames reached: aborting (test hook)");
-    std::process::abort();
+    (hook.0)();
 }
 
 /// The checkpoint at the end of a run (after the collector has stopped, so no older one can
@@ -591,66 +706,23 @@ fn join_analysis(handles: Vec<std::thread::JoinHandle<RunAnalysis>>) -> Result<R
     RunAnalysis::join(parts).ok_or_else(|| anyhow::anyhow!("no analysis thread"))
 }
 
-/// Runs `fut` (the source) on a current-thread runtime here, with SIGINT/SIGTERM and
-/// `--duration` firing the shutdown token.
-fn drive<F, T>(ctl: &RunControl, fut: F) -> Result<T>
+/// Runs a run's future on a current-thread tokio runtime built here, for callers outside any
+/// runtime; inside one it refuses (blocking there would stall the caller's runtime).
+fn block_on<F, T>(fut: F) -> Result<T>
 where
     F: std::future::Future<Output = Result<T>>,
 {
-    let rt = tokio::runtime::Builder::new_current_thread()
+    if tokio::runtime::Handle::try_current().is_ok() {
+        anyhow::bail!(
+            "run_frames and run_text block the calling thread: inside a tokio runtime, await \
+             run_frames_async or run_text_async instead"
+        );
+    }
+    tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()
-        .context("cannot start the I/O runtime")?;
-    rt.block_on(async {
-        let token = ctl.shutdown.clone();
-        let duration = ctl.duration;
-        let signals = ctl.handle_signals;
-        let progress = ctl.progress.clone();
-        let watcher = tokio::spawn(async move {
-            let sleep = async {
-                match duration {
-                    Some(d) => tokio::time::sleep(d).await,
-                    None => std::future::pending().await,
-                }
-            };
-            tokio::select! {
-                _ = sleep => {
-                    tracing::info!("--duration reached; finishing");
-                    progress.set_stopped_by("--duration");
-                }
-                s = wait_for_signal(signals) => {
-                    tracing::info!("{s}; finishing");
-                    progress.set_stopped_by(s);
-                }
-                _ = token.cancelled() => {}
-            }
-            token.cancel();
-        });
-        let r = fut.await;
-        watcher.abort();
-        r
-    })
-}
-
-/// Waits for SIGINT or SIGTERM (forever when `enabled` is false or they cannot be watched).
-async fn wait_for_signal(enabled: bool) -> &'static str {
-    if !enabled {
-        return std::future::pending().await;
-    }
-    use tokio::signal::unix::{signal, SignalKind};
-    match (
-        signal(SignalKind::interrupt()),
-        signal(SignalKind::terminate()),
-    ) {
-        (Ok(mut int), Ok(mut term)) => tokio::select! {
-            _ = int.recv() => "SIGINT",
-            _ = term.recv() => "SIGTERM",
-        },
-        _ => {
-            tracing::warn!("cannot watch SIGINT/SIGTERM");
-            std::future::pending().await
-        }
-    }
+        .context("cannot start the I/O runtime")?
+        .block_on(fut)
 }
 
 /// The final curve and fit records, the health record and the summary, never coalesced. The

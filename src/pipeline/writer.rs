@@ -83,11 +83,14 @@ pub struct RecordQueue {
     delivery: Delivery,
 }
 
-/// The coalescing key of an interim record: type, channel, statistic, run.
+/// The coalescing key of an interim record: type, channel, statistic, run. Interim diagnoses
+/// have one too (the newest of a channel is all a monitor needs), so `--diagnose` with a stalled
+/// consumer keeps the queue bounded.
 fn key(r: &Record) -> Option<(&'static str, &str, Option<Stat>, Option<usize>)> {
     match r {
         Record::Curve(c) => Some(("curve", c.channel.as_str(), Some(c.stat), c.run)),
         Record::Fit(f) => Some(("fit", f.channel.as_str(), None, f.run)),
+        Record::Diagnosis(d) => Some(("diagnosis", d.channel.as_str(), None, None)),
         _ => None,
     }
 }

@@ -8,13 +8,17 @@
 //! [`output`] opens result files, [`export`] writes the noise model for other tools, [`metrics`]
 //! serves live figures.
 
+#[cfg(feature = "plot")]
 pub mod dynamic;
 pub mod export;
 pub mod json;
 pub mod metrics;
 pub mod output;
 pub mod page_file;
+#[cfg(feature = "plot")]
 pub mod plot;
 pub mod records;
+#[cfg(feature = "plot")]
 pub mod report;
 pub mod results;
+pub mod table;

@@ -193,6 +193,8 @@ pub enum Record {
     Health(HealthRecord),
     Aggregate(AggregateRecord),
     Summary(SummaryRecord),
-    /// Records of other stages (e.g. the diagnosis), already as JSON.
+    /// `diagnosis`: the sim-to-real gap of one channel (`crate::gap::record`).
+    Diagnosis(Box<crate::gap::DiagnosisRecord>),
+    /// Records of other stages, already as JSON.
     Other(serde_json::Value),
 }

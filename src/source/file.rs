@@ -13,27 +13,11 @@ use super::{Pace, SourceContext, SourceEvent};
 /// small enough that the decode stage starts at once.
 pub const READ_BLOCK: usize = 1 << 16;
 
-/// A progress bar on standard error over `len` bytes (None when the length is unknown).
-pub fn progress_bar(len: Option<u64>) -> Option<indicatif::ProgressBar> {
-    let len = len?;
-    let bar = indicatif::ProgressBar::with_draw_target(
-        Some(len),
-        indicatif::ProgressDrawTarget::stderr_with_hz(4),
-    );
-    if let Ok(style) = indicatif::ProgressStyle::with_template(
-        "{bar:40} {bytes}/{total_bytes} {bytes_per_sec} eta {eta}",
-    ) {
-        bar.set_style(style);
-    }
-    Some(bar)
-}
-
 /// Reads `r` to its end (or until shutdown), passing each block on.
 pub async fn read_stream<R: AsyncRead + Unpin>(
     mut r: R,
     pace: Pace,
     ctx: &mut SourceContext,
-    bar: Option<indicatif::ProgressBar>,
 ) -> Result<()> {
     let started = Instant::now();
     let mut total: u64 = 0;
@@ -56,9 +40,6 @@ pub async fn read_stream<R: AsyncRead + Unpin>(
             break;
         }
         total += n as u64;
-        if let Some(b) = &bar {
-            b.set_position(ctx.start_offset + total);
-        }
         let ev = SourceEvent::Data {
             bytes: buf.freeze(),
             at: Instant::now(),
@@ -74,9 +55,6 @@ pub async fn read_stream<R: AsyncRead + Unpin>(
                 _ = tokio::time::sleep_until(due.into()) => {}
             }
         }
-    }
-    if let Some(b) = bar {
-        b.finish_and_clear();
     }
     Ok(())
 }

@@ -13,6 +13,7 @@
 //! also written to FILE, in arrival order, for replay later.
 
 pub mod file;
+#[cfg(feature = "serial")]
 pub mod serial;
 pub mod udp;
 
@@ -104,7 +105,7 @@ pub const SOURCE_QUEUE_LIVE: usize = 1024;
 pub const SOURCE_QUEUE_FILE: usize = 4;
 
 /// Counters a source and the stages after it share with whoever watches the run (tests, the
-/// progress bar).
+/// binary's progress bar).
 #[derive(Debug, Default)]
 pub struct Progress {
     /// Bytes received by the source.
@@ -119,6 +120,13 @@ pub struct Progress {
     pub stopped_by: Mutex<Option<&'static str>>,
     /// The `--capture` file's bytes and error.
     pub capture: Arc<CaptureStatus>,
+    /// File replay: the file's length in bytes (0 until known, and for other sources).
+    pub input_len: AtomicU64,
+    /// File replay: the byte offset reading started at (a resumed run's checkpoint position).
+    pub input_start: AtomicU64,
+    /// File replay: bytes received before this file was opened (the counters run on across the
+    /// inputs of one command).
+    pub input_base: AtomicU64,
 }
 
 impl Progress {
@@ -142,6 +150,15 @@ impl Progress {
 
     pub fn stopped_by(&self) -> Option<&'static str> {
         *self.stopped_by.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// File replay: `(offset reached, file length)` in bytes, once the length is known.
+    pub fn file_position(&self) -> Option<(u64, u64)> {
+        let len = self.input_len.load(Ordering::Relaxed);
+        let read = self
+            .bytes()
+            .saturating_sub(self.input_base.load(Ordering::Relaxed));
+        (len > 0).then(|| (self.input_start.load(Ordering::Relaxed) + read, len))
     }
 }
 
@@ -282,7 +299,7 @@ impl Capture {
 }
 
 /// Runs a source until its input ends or `ctx.shutdown` fires.
-pub async fn run(spec: SourceSpec, mut ctx: SourceContext, show_progress: bool) -> Result<()> {
+pub async fn run(spec: SourceSpec, mut ctx: SourceContext) -> Result<()> {
     let res = match spec {
         SourceSpec::File { path, pace } => {
             let f = tokio::fs::File::open(&path).await.map_err(|e| {
@@ -311,16 +328,21 @@ pub async fn run(spec: SourceSpec, mut ctx: SourceContext, show_progress: bool) 
                     .await
                     .with_context(|| format!("cannot seek in {}", path.display()))?;
             }
-            let bar = show_progress.then(|| file::progress_bar(len)).flatten();
-            if let Some(b) = &bar {
-                b.set_position(ctx.start_offset);
-            }
-            file::read_stream(f, pace, &mut ctx, bar).await
+            let p = &ctx.progress;
+            p.input_base.store(p.bytes(), Ordering::Relaxed);
+            p.input_start.store(ctx.start_offset, Ordering::Relaxed);
+            ctx.progress
+                .input_len
+                .store(len.unwrap_or(0), Ordering::Relaxed);
+            file::read_stream(f, pace, &mut ctx).await
         }
-        SourceSpec::Stdin { pace } => {
-            file::read_stream(tokio::io::stdin(), pace, &mut ctx, None).await
-        }
+        SourceSpec::Stdin { pace } => file::read_stream(tokio::io::stdin(), pace, &mut ctx).await,
+        #[cfg(feature = "serial")]
         SourceSpec::Serial { path, baud } => serial::run(&path, baud, &mut ctx).await,
+        #[cfg(not(feature = "serial"))]
+        SourceSpec::Serial { .. } => Err(anyhow::Error::new(crate::error::UsageError::Option(
+            "serial ports need allanscope built with the `serial` feature".into(),
+        ))),
         SourceSpec::Udp { bind } => udp::run(bind, &mut ctx).await,
     };
     if let Some(c) = &mut ctx.capture {

@@ -15,4 +15,5 @@ mod model_out;
 mod outputs;
 mod plot_report;
 mod stop;
+mod terminal;
 mod text_input;

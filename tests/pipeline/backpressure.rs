@@ -115,3 +115,92 @@ fn stalled_writer_does_not_stall_ingestion() {
         summary_core(last_of(&free, "summary"))
     );
 }
+
+/// With `--diagnose`, each interim set also carries a diagnosis per channel. Those are coalesced
+/// like curves and fits (the newest per channel), so a stalled consumer of a live run still
+/// leaves the queue bounded: without their key, every interim diagnosis would pile up beside the
+/// capacity. The diagnoses are those of a real run of the fixture (final, one per channel),
+/// pushed again as 100 interim sets, each set marked by its `t_data`.
+#[test]
+fn stalled_writer_with_diagnoses_keeps_the_queue_bounded() {
+    const SETS: usize = 100;
+    let desc = siu8();
+    let mut opts = options(&desc, None);
+    opts.diagnose = true;
+    opts.fit = Some(allanscope::model::fit::FitOptions::default());
+    let analysis = allanscope::analysis::RunAnalysis::new("test", channels(&desc), opts);
+    let buf = SharedBuf::default();
+    let free_writer = RecordWriter::spawn(Box::new(buf.clone()));
+    run_frames(
+        spec(),
+        &desc,
+        analysis,
+        free_writer.queue(),
+        &RunControl::default(),
+    )
+    .expect("run");
+    free_writer.finish().expect("writer");
+    let free = buf.records();
+    let diagnoses: Vec<allanscope::gap::DiagnosisRecord> = free
+        .iter()
+        .filter(|r| r["type"] == "diagnosis")
+        .map(|r| serde_json::from_value(r.clone()).expect("a diagnosis record"))
+        .collect();
+    assert_eq!(diagnoses.len(), 8, "one final diagnosis per channel");
+
+    let gate = Arc::new((Mutex::new(false), std::sync::Condvar::new()));
+    let blocked = Arc::new(AtomicBool::new(false));
+    let out = SharedBuf::default();
+    let writer = RecordWriter::spawn_coalescing(Box::new(Gated {
+        gate: gate.clone(),
+        blocked: blocked.clone(),
+        out: out.clone(),
+    }));
+    // A first record, and the writer stuck writing it, before the sets arrive.
+    let mut first = diagnoses[0].clone();
+    first.t_data = -1.0;
+    writer
+        .queue()
+        .push_interim(allanscope::sink::records::Record::Diagnosis(Box::new(
+            first,
+        )));
+    let until = std::time::Instant::now() + std::time::Duration::from_secs(30);
+    while !blocked.load(Ordering::SeqCst) && std::time::Instant::now() < until {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    assert!(
+        blocked.load(Ordering::SeqCst),
+        "the writer should be blocked"
+    );
+    for set in 0..SETS {
+        for d in &diagnoses {
+            let mut d = d.clone();
+            d.is_final = false;
+            d.t_data = set as f64;
+            writer
+                .queue()
+                .push_interim(allanscope::sink::records::Record::Diagnosis(Box::new(d)));
+        }
+    }
+    // 800 interim diagnoses against a queue of 256: the newest per channel replace older ones
+    // (plus at most the one record the blocked writer holds).
+    let queued = writer.queue().len();
+    assert!(queued <= RECORD_QUEUE + 8, "queue grew to {queued} records");
+    {
+        let (m, cv) = &*gate;
+        *m.lock().expect("lock") = true;
+        cv.notify_all();
+    }
+    let stats = writer.finish().expect("writer");
+    assert_eq!(stats.written + stats.coalesced, (SETS * 8 + 1) as u64);
+    assert!(stats.coalesced > 0);
+    // Each channel's newest diagnosis (the last set) is delivered.
+    let recs = out.records();
+    for d in &diagnoses {
+        let last = recs
+            .iter()
+            .rfind(|r| r["type"] == "diagnosis" && r["channel"] == d.channel.as_str())
+            .expect("a diagnosis of the channel");
+        assert_eq!(last["t_data"], (SETS - 1) as f64, "{}", d.channel);
+    }
+}

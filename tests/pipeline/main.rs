@@ -10,6 +10,7 @@ mod backpressure;
 mod checkpoint;
 mod config;
 mod corruption;
+mod embed;
 mod live_bench;
 mod serial_outage;
 mod signal;

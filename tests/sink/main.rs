@@ -10,3 +10,4 @@ mod grafana;
 mod plot;
 mod prometheus;
 mod report;
+mod table;

@@ -268,30 +268,23 @@ impl FrameDescriptor {
         }
     }
 
-    /// The directories searched for `NAME.toml`, in order: `./config/frames`, the executable's
-    /// `../../config/frames`, and the crate's own `config/frames` as it was at compile time.
-    pub fn search_dirs() -> Vec<PathBuf> {
-        let mut dirs = vec![PathBuf::from("config/frames")];
-        if let Ok(exe) = std::env::current_exe() {
-            if let Some(d) = exe.parent().and_then(Path::parent).and_then(Path::parent) {
-                dirs.push(d.join("config/frames"));
-            }
-        }
-        dirs.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("config/frames"));
-        dirs
+    /// Loads a descriptor by path (anything with a path separator or ending in `.toml`) or by
+    /// the name of an embedded copy in [`BUILTIN`]. [`Self::load_in`] also searches folders.
+    pub fn load(name_or_path: &str) -> Result<Self, DescriptorErrors> {
+        Self::load_in(name_or_path, &[])
     }
 
-    /// Loads a descriptor by name (`siu8`: searched in [`Self::search_dirs`], then the embedded
-    /// copies in [`BUILTIN`]) or by path (anything with a path separator or ending in `.toml`).
-    pub fn load(name_or_path: &str) -> Result<Self, DescriptorErrors> {
+    /// Loads a descriptor by name (`siu8`: `NAME.toml` searched in `dirs` in order, then the
+    /// embedded copies in [`BUILTIN`]) or by path. The binary passes its search path
+    /// (`./config/frames`, beside the executable, the crate's own).
+    pub fn load_in(name_or_path: &str, dirs: &[PathBuf]) -> Result<Self, DescriptorErrors> {
         let looks_like_path = name_or_path.contains('/')
             || name_or_path.contains(std::path::MAIN_SEPARATOR)
             || name_or_path.ends_with(".toml");
         if looks_like_path {
             return Self::from_path(Path::new(name_or_path));
         }
-        let dirs = Self::search_dirs();
-        for d in &dirs {
+        for d in dirs {
             let p = d.join(format!("{name_or_path}.toml"));
             if p.is_file() {
                 return Self::from_path(&p);
@@ -302,12 +295,16 @@ impl FrameDescriptor {
         }
         let known: Vec<&str> = BUILTIN.iter().map(|(n, _)| *n).collect();
         let searched: Vec<String> = dirs.iter().map(|d| d.display().to_string()).collect();
+        let looked = if searched.is_empty() {
+            String::new()
+        } else {
+            format!("no {name_or_path}.toml in {} and ", searched.join(", "))
+        };
         Err(DescriptorErrors {
             what: WHAT,
             problems: vec![UsageError::Option(format!(
-                "unknown frame format `{name_or_path}`: no {name_or_path}.toml in {} and no \
-                 built-in of that name (built-in: {})",
-                searched.join(", "),
+                "unknown frame format `{name_or_path}`: {looked}no built-in of that name \
+                 (built-in: {})",
                 known.join(", ")
             ))],
         })

@@ -1,0 +1,35 @@
+//! What standard output is: a terminal gets the readable table of `allanscope::sink::table`
+//! unless `--json` asks for JSON lines; a pipe or a file always gets JSON lines, byte for byte
+//! as the record writer makes them (docs/records.md).
+
+use std::io::{IsTerminal, Write};
+
+use allanscope::sink::table::{TableStyle, TableWriter};
+
+/// Whether standard output gets the table: a terminal, and no `--json`.
+pub(crate) fn table_on_stdout(json: bool) -> bool {
+    !json && std::io::stdout().is_terminal()
+}
+
+/// Colours unless the terminal says it has none (`TERM=dumb`) or the user asked for none
+/// (`NO_COLOR`, no-color.org).
+fn style() -> TableStyle {
+    let dumb = std::env::var("TERM").is_ok_and(|t| t == "dumb");
+    TableStyle {
+        color: !dumb && std::env::var_os("NO_COLOR").is_none_or(|v| v.is_empty()),
+    }
+}
+
+/// Standard output for a command's records: the table on a terminal (module doc), else JSON
+/// lines through a buffer.
+pub(crate) fn stdout_records(json: bool) -> Box<dyn Write + Send> {
+    if table_on_stdout(json) {
+        Box::new(TableWriter::new(
+            std::io::stdout(),
+            style(),
+            Some("(a table because standard output is a terminal: --json, --out FILE or a pipe give the JSON lines)".into()),
+        ))
+    } else {
+        Box::new(std::io::BufWriter::new(std::io::stdout()))
+    }
+}

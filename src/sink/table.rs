@@ -1,0 +1,891 @@
+//! The readable table a person sees when standard output is a terminal (docs/records.md: pipes
+//! and files always get JSON lines). [`render`] is a pure function from typed results
+//! ([`Results`]) to text: per run a heading (input, data length, whether it was read to its end,
+//! the decoder's health), per channel the five terms in datasheet units with their 95% intervals
+//! or `not determined` (with the interval's upper bound), the IEEE 952 read-outs beside the
+//! fitted N, B and K (model::readout), the datasheet limits with PASS/FAIL, and the diagnosis in
+//! one line; then the run-to-run statistics of several runs and the overall verdict.
+//! [`TableWriter`] is the adapter the binary puts in place of standard output: it takes the JSON
+//! lines the record writer produces, keeps the final records and prints a run's table when its
+//! `summary` arrives (the rest when it is dropped). Whether standard output is a terminal is the
+//! binary's business.
+
+use std::fmt::Write as _;
+use std::io::Write;
+
+use serde_json::Value;
+
+use crate::gap::DiagnosisRecord;
+use crate::model::readout::{ReadoutRecord, ReadoutsRecord};
+use crate::model::terms::TERM_NAMES;
+use crate::model::units::{
+    datasheet_factors, datasheet_units, native_units, IncrementUnit, SensorKind,
+};
+use crate::sink::records::FitRecord;
+use crate::sink::results::{Completion, Labelled, ResultFile, Results};
+
+/// How the text is dressed.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct TableStyle {
+    /// ANSI colours for PASS/FAIL and warnings (a terminal that has not asked for `NO_COLOR`).
+    pub color: bool,
+}
+
+impl TableStyle {
+    fn paint(&self, code: &str, text: &str) -> String {
+        if self.color {
+            format!("\x1b[{code}m{text}\x1b[0m")
+        } else {
+            text.to_string()
+        }
+    }
+    fn red(&self, t: &str) -> String {
+        self.paint("1;31", t)
+    }
+    fn green(&self, t: &str) -> String {
+        self.paint("1;32", t)
+    }
+    fn yellow(&self, t: &str) -> String {
+        self.paint("1;33", t)
+    }
+    fn bold(&self, t: &str) -> String {
+        self.paint("1", t)
+    }
+    fn dim(&self, t: &str) -> String {
+        self.paint("2", t)
+    }
+}
+
+/// A number with three significant digits: plain between 1e-3 and 1e5, else in e-notation.
+pub fn sig3(x: f64) -> String {
+    if !x.is_finite() {
+        return "-".into();
+    }
+    if x == 0.0 {
+        return "0".into();
+    }
+    let a = x.abs();
+    if (1e-3..1e5).contains(&a) {
+        // Trailing zeros are kept, so a column of one coefficient reads evenly.
+        let decimals = (2 - a.log10().floor() as i32).max(0) as usize;
+        format!("{x:.decimals$}")
+    } else {
+        format!("{x:.2e}")
+    }
+}
+
+/// A duration in s for the headings: `300 s`, `2.5 min`, `3.0 h`.
+fn duration_text(s: f64) -> String {
+    if s >= 2.0 * 3600.0 {
+        format!("{:.1} h", s / 3600.0)
+    } else if s >= 120.0 {
+        format!("{:.1} min", s / 60.0)
+    } else {
+        format!("{} s", sig3(s))
+    }
+}
+
+/// A tau in s: `16 ms`, `16.4 s`.
+fn tau_text(s: f64) -> String {
+    if s < 1.0 {
+        format!("{} ms", sig3(s * 1e3))
+    } else {
+        format!("{} s", sig3(s))
+    }
+}
+
+/// The name of each term for a kind of sensor (IEEE 952's names for a gyro; the velocity and
+/// acceleration names for an accelerometer).
+fn term_names(kind: Option<SensorKind>) -> [&'static str; 5] {
+    match kind {
+        Some(SensorKind::Accel) => [
+            "quantization",
+            "velocity random walk",
+            "bias instability",
+            "accel. random walk",
+            "accel. ramp",
+        ],
+        _ => [
+            "quantization",
+            "angle random walk",
+            "bias instability",
+            "rate random walk",
+            "rate ramp",
+        ],
+    }
+}
+
+/// One coefficient as shown: value and interval in the shown unit.
+struct Shown {
+    value: Option<f64>,
+    lo: Option<f64>,
+    hi: Option<f64>,
+    unit: String,
+}
+
+/// A fit's coefficient `i` in datasheet units when the record has them, else native.
+fn coef_shown(f: &FitRecord, i: usize) -> Shown {
+    let k = TERM_NAMES[i];
+    let c = &f.coef[k];
+    let determined = c["determined"].as_bool() != Some(false);
+    if let Some(d) = f.datasheet.as_ref().and_then(|d| d.get(k)) {
+        if let Some(unit) = d["unit"].as_str() {
+            return Shown {
+                value: d["value"].as_f64().filter(|_| determined),
+                lo: d["lo"].as_f64(),
+                hi: d["hi"].as_f64(),
+                unit: unit.to_string(),
+            };
+        }
+    }
+    Shown {
+        value: c["value"].as_f64().filter(|_| determined),
+        lo: c["lo"].as_f64(),
+        hi: c["hi"].as_f64(),
+        unit: native_units(&f.unit)[i].clone(),
+    }
+}
+
+fn interval(lo: Option<f64>, hi: Option<f64>) -> String {
+    match (lo, hi) {
+        (Some(l), Some(h)) => format!("[{}, {}]", sig3(l), sig3(h)),
+        _ => String::new(),
+    }
+}
+
+/// A fit cell: `0.00420 [0.00416, 0.00424]`, or `not determined (< 3.42)`.
+fn fit_cell(s: &Shown) -> String {
+    match s.value {
+        Some(v) => format!("{} {}", sig3(v), interval(s.lo, s.hi)),
+        None => match s.hi.filter(|h| *h > 0.0) {
+            Some(h) => format!("not determined (< {})", sig3(h)),
+            None => "not determined".into(),
+        },
+    }
+}
+
+/// A read-out cell in the fit's shown unit (datasheet when the read-out has it).
+fn readout_cell(r: Option<&ReadoutRecord>, which: usize) -> String {
+    let Some(r) = r else {
+        return match which {
+            1 => "no -1/2 slope".into(),
+            2 => "no minimum inside the curve".into(),
+            _ => "no +1/2 slope".into(),
+        };
+    };
+    let (v, lo, hi) = match &r.datasheet {
+        Some(d) => (d.value.unwrap_or(f64::NAN), d.lo, d.hi),
+        None => (r.value, r.lo, r.hi),
+    };
+    let at = if which == 2 {
+        format!("min at {}", tau_text(r.tau))
+    } else {
+        format!("at {}", tau_text(r.tau))
+    };
+    format!("{} {} {at}", sig3(v), interval(Some(lo), Some(hi)))
+}
+
+/// Columns padded to their widest cell (the last column is not padded).
+fn aligned(rows: &[Vec<String>], indent: &str) -> String {
+    let n = rows.iter().map(Vec::len).max().unwrap_or(0);
+    let widths: Vec<usize> = (0..n)
+        .map(|j| {
+            rows.iter()
+                .filter_map(|r| r.get(j))
+                .map(|c| c.chars().count())
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    let mut out = String::new();
+    for r in rows {
+        let mut line = indent.to_string();
+        for (j, c) in r.iter().enumerate() {
+            line.push_str(c);
+            if j + 1 < r.len() {
+                let pad = widths[j] - c.chars().count() + 2;
+                line.extend(std::iter::repeat_n(' ', pad));
+            }
+        }
+        out.push_str(line.trim_end());
+        out.push('\n');
+    }
+    out
+}
+
+/// A run: its file and its `run` index inside the file.
+type RunKey = (usize, Option<usize>);
+
+fn runs_in_order(res: &Results) -> Vec<RunKey> {
+    let mut keys: Vec<RunKey> = Vec::new();
+    let mut add = |k: RunKey| {
+        if !keys.contains(&k) {
+            keys.push(k);
+        }
+    };
+    for f in &res.fits {
+        add((f.file, f.run));
+    }
+    for d in &res.diagnoses {
+        add((d.file, d.run));
+    }
+    for s in &res.summaries {
+        // The closing summary of several runs (run-to-run limits) has no channels.
+        if s.rec
+            .get("channels")
+            .and_then(Value::as_array)
+            .is_some_and(|c| !c.is_empty())
+        {
+            add((s.file, s.run));
+        }
+    }
+    keys
+}
+
+fn summary_of(res: &Results, k: RunKey) -> Option<&Value> {
+    res.summaries
+        .iter()
+        .rev()
+        .find(|s| (s.file, s.run) == k)
+        .map(|s| &s.rec)
+}
+
+/// The heading of a run: what was read, how much, whether to its end, and the decoder's health.
+fn run_heading(h: &mut String, res: &Results, k: RunKey, style: &TableStyle) {
+    let summary = summary_of(res, k);
+    let label = res
+        .fits
+        .iter()
+        .find(|f| (f.file, f.run) == k)
+        .map(|f| f.label.clone())
+        .or_else(|| {
+            res.diagnoses
+                .iter()
+                .find(|d| (d.file, d.run) == k)
+                .map(|d| d.label.clone())
+        })
+        .unwrap_or_default();
+    let input = summary
+        .and_then(|s| s["input"].as_str())
+        .map(String::from)
+        .unwrap_or(label);
+    let run = k.1.map(|r| format!("run {}: ", r + 1)).unwrap_or_default();
+    let mut line = style.bold(&format!("{run}{input}"));
+    if let Some(s) = summary {
+        let t = s["t_data"].as_f64().unwrap_or(0.0);
+        let tau0 = s["tau0"].as_f64().unwrap_or(0.0);
+        let nch = s["channels"].as_array().map_or(0, Vec::len);
+        let _ = write!(
+            line,
+            ": {} of data at tau0 = {}, {nch} channel{}",
+            duration_text(t),
+            tau_text(tau0),
+            if nch == 1 { "" } else { "s" }
+        );
+        let c = Completion::of_summary(s);
+        let phrase = c.phrase();
+        let _ = write!(
+            line,
+            ", {}",
+            if c.is_warning() {
+                style.red(&phrase)
+            } else {
+                phrase
+            }
+        );
+        let gaps: u64 = s["segments"].as_array().map_or(0, |v| {
+            v.iter()
+                .filter_map(Value::as_u64)
+                .map(|n| n.saturating_sub(1))
+                .max()
+                .unwrap_or(0)
+        });
+        let bad = s["bad_rows"].as_u64().unwrap_or(0);
+        let mut notes = Vec::new();
+        if gaps > 0 {
+            notes.push(format!("{gaps} gap{}", if gaps == 1 { "" } else { "s" }));
+        }
+        if bad > 0 {
+            notes.push(format!(
+                "{bad} unreadable row{}",
+                if bad == 1 { "" } else { "s" }
+            ));
+        }
+        if let Some(n) = s["invalid_values"].as_u64().filter(|n| *n > 0) {
+            notes.push(format!("{n} implausible values read as gaps"));
+        }
+        if let Some(e) = s["capture_error"].as_str() {
+            notes.push(style.red(&format!("capture stopped: {e}")));
+        }
+        if !notes.is_empty() {
+            let _ = write!(line, " ({})", notes.join(", "));
+        }
+    }
+    h.push_str(&line);
+    h.push('\n');
+    if let Some(hl) = res.health.iter().rev().find(|x| (x.file, x.run) == k) {
+        let n = |key: &str| hl.rec[key].as_u64().unwrap_or(0);
+        let mut parts = vec![format!("{} frames", n("frames"))];
+        let lost = n("missing");
+        parts.push(if lost > 0 {
+            style.yellow(&format!("{lost} lost"))
+        } else {
+            "none lost".into()
+        });
+        for (key, name) in [
+            ("crc_errors", "checksum errors"),
+            ("resyncs", "resyncs"),
+            ("duplicates", "duplicates"),
+            ("bytes_skipped", "bytes skipped"),
+        ] {
+            if n(key) > 0 {
+                parts.push(format!("{} {name}", n(key)));
+            }
+        }
+        let _ = writeln!(h, "  decoder: {}", parts.join(", "));
+    }
+}
+
+/// The final fit of each channel of a run (the last one written when none is final).
+fn fits_of(res: &Results, k: RunKey) -> Vec<&Labelled<FitRecord>> {
+    let mut out: Vec<&Labelled<FitRecord>> = Vec::new();
+    for f in res.fits.iter().filter(|f| (f.file, f.run) == k) {
+        match out.iter_mut().find(|g| g.rec.channel == f.rec.channel) {
+            Some(g) => {
+                if f.rec.r#final || !g.rec.r#final {
+                    *g = f;
+                }
+            }
+            None => out.push(f),
+        }
+    }
+    out
+}
+
+fn diagnosis_of<'a>(res: &'a Results, k: RunKey, channel: &str) -> Option<&'a DiagnosisRecord> {
+    let mine: Vec<&Labelled<DiagnosisRecord>> = res
+        .diagnoses
+        .iter()
+        .filter(|d| (d.file, d.run) == k && d.rec.channel == channel)
+        .collect();
+    mine.iter()
+        .rev()
+        .find(|d| d.rec.is_final)
+        .or(mine.last())
+        .map(|d| &d.rec)
+}
+
+/// An effect in a few words with its parameters in units (docs/records.md's parameter names:
+/// rates in u/s, times in s, frequencies in Hz).
+pub fn effect_brief(kind: &str, params: &Value, unit: &str) -> String {
+    let p = |k: &str| params[k].as_f64().map_or("?".into(), sig3);
+    match kind {
+        "gauss_markov" => format!(
+            "Gauss-Markov noise (sigma {} {unit}/s, correlation time {} s)",
+            p("sigma"),
+            p("tau_c")
+        ),
+        "sinusoid" => format!(
+            "a sinusoid ({} {unit}/s at {} Hz)",
+            p("amplitude"),
+            p("frequency")
+        ),
+        "output_filter" => format!("an output filter (time constant {} s)", p("time_constant")),
+        "warmup" => format!(
+            "a warm-up drift ({} {unit}/s, time constant {} s)",
+            p("amplitude"),
+            p("time_constant")
+        ),
+        "bias_jumps" => format!(
+            "bias jumps ({} of rms {} {unit}/s)",
+            params["count"]
+                .as_u64()
+                .map_or("?".into(), |n| n.to_string()),
+            p("rms_size")
+        ),
+        "temperature" => format!("temperature ({} {unit}/s per deg C)", p("coefficient")),
+        other => {
+            let kv: Vec<String> = params
+                .as_object()
+                .map(|o| {
+                    o.iter()
+                        .map(|(k, v)| format!("{k} {}", v.as_f64().map_or(v.to_string(), sig3)))
+                        .collect()
+                })
+                .unwrap_or_default();
+            format!("{other} ({})", kv.join(", "))
+        }
+    }
+}
+
+/// The diagnosis in one line: the verdict, what explains the gap, and the gap before and after.
+pub fn diagnosis_line(d: &DiagnosisRecord, unit: &str, style: &TableStyle) -> String {
+    let gap = if d.effects.is_empty() {
+        format!("gap {}", sig3(d.gap_before))
+    } else {
+        format!("gap {} -> {}", sig3(d.gap_before), sig3(d.gap_after))
+    };
+    let effects: Vec<String> = d
+        .effects
+        .iter()
+        .map(|e| effect_brief(&e.kind, &e.params, unit))
+        .collect();
+    let misses = || -> String {
+        d.regions
+            .iter()
+            .map(|r| {
+                format!(
+                    "tau {} to {} ({} the model, up to {}x)",
+                    tau_text(r.tau_lo),
+                    tau_text(r.tau_hi),
+                    if r.sign > 0 { "above" } else { "below" },
+                    sig3(r.worst_ratio)
+                )
+            })
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
+    let mut line = match d.verdict {
+        crate::gap::diagnose::Verdict::Consistent => {
+            format!("consistent: the five-term model explains the curve ({gap})")
+        }
+        crate::gap::diagnose::Verdict::Explained => {
+            format!("explained by {} ({gap})", effects.join(" + "))
+        }
+        crate::gap::diagnose::Verdict::Unexplained => {
+            let mut s = style.yellow("UNEXPLAINED");
+            let m = misses();
+            if !m.is_empty() {
+                let _ = write!(s, ": the model misses at {m}");
+            }
+            if !effects.is_empty() {
+                let _ = write!(s, "; best try {}", effects.join(" + "));
+            }
+            let _ = write!(s, " ({gap})");
+            s
+        }
+    };
+    if let Some(ho) = &d.holdout {
+        let _ = write!(
+            line,
+            "; on the held-out run gap {} -> {}{}",
+            sig3(ho.gap_before),
+            sig3(ho.gap_after),
+            if ho.carried { "" } else { " (did not carry)" }
+        );
+    }
+    line
+}
+
+/// The limits judged on one channel of a run, one cell each: `N max 0.005 deg/sqrt(h): PASS`.
+fn limit_cells(limits: &[&Value], style: &TableStyle) -> Vec<String> {
+    limits
+        .iter()
+        .map(|l| {
+            let coef = l["coef"].as_str().unwrap_or("?");
+            let bound = l["bound"].as_str().unwrap_or("?");
+            let op = if bound == "min" { ">=" } else { "<=" };
+            let unit = l["unit"].as_str().unwrap_or("");
+            let verdict = l["verdict"].as_str().unwrap_or("?");
+            let v = match verdict {
+                "pass" => style.green("PASS"),
+                "fail" => style.red("FAIL"),
+                "undecided" => style.yellow("UNDECIDED"),
+                _ => style.yellow("NOT JUDGED"),
+            };
+            let over = match l["over"].as_str() {
+                Some("runs_sd") => "sd over runs of ",
+                Some("runs_mean") => "mean over runs of ",
+                _ => "",
+            };
+            let value = match (l["value"].as_f64(), l["lo"].as_f64(), l["hi"].as_f64()) {
+                (Some(v), lo, hi) => format!(" (fit {} {})", sig3(v), interval(lo, hi)),
+                (None, _, Some(hi)) => format!(" (not determined, < {})", sig3(hi)),
+                _ => String::new(),
+            };
+            let note = l["note"]
+                .as_str()
+                .map(|n| format!(": {n}"))
+                .unwrap_or_default();
+            format!(
+                "{v} {over}{coef} {op} {} {unit}{value}{note}",
+                sig3(l["limit"].as_f64().unwrap_or(f64::NAN))
+            )
+        })
+        .collect()
+}
+
+fn channel_block(h: &mut String, res: &Results, k: RunKey, f: &FitRecord, style: &TableStyle) {
+    let kind = IncrementUnit::parse(&f.unit).map(|u| u.kind);
+    let what = match kind {
+        Some(SensorKind::Gyro) => "gyro",
+        Some(SensorKind::Accel) => "accelerometer",
+        None => "unit not known, native units",
+    };
+    let gof = f.gof.map_or("-".into(), sig3);
+    let stage = if f.r#final {
+        String::new()
+    } else {
+        format!(", interim at {}", duration_text(f.t_data))
+    };
+    let _ = writeln!(
+        h,
+        "\n{} [{}, {what}]   five-term fit ({}), gof {gof}{stage}",
+        style.bold(&f.channel),
+        f.unit,
+        f.method
+    );
+    let names = term_names(kind);
+    // A record without read-outs (an older writer) leaves the column empty.
+    let ro: Option<&ReadoutsRecord> = f.readouts.as_deref();
+    let mut rows = vec![vec![
+        String::new(),
+        "term".into(),
+        "unit".into(),
+        "fit: value [95% interval]".into(),
+        "IEEE 952 read-out [95%]".into(),
+    ]];
+    for i in 0..5 {
+        let s = coef_shown(f, i);
+        let readout = match (ro, i) {
+            (Some(ro), 1) => readout_cell(ro.arw.as_ref(), 1),
+            (Some(ro), 2) => readout_cell(ro.bias_instability.as_ref(), 2),
+            (Some(ro), 3) => readout_cell(ro.rrw.as_ref(), 3),
+            _ => String::new(),
+        };
+        rows.push(vec![
+            TERM_NAMES[i].to_string(),
+            names[i].to_string(),
+            s.unit.clone(),
+            fit_cell(&s),
+            readout,
+        ]);
+    }
+    h.push_str(&aligned(&rows, "  "));
+    if let Some(q) = f.q_over_lsb {
+        let _ = writeln!(
+            h,
+            "  Q is {} x the quantization of the LSB alone (LSB/sqrt(12))",
+            sig3(q)
+        );
+    }
+    let limits: Vec<&Value> = res
+        .limits
+        .iter()
+        .filter(|l| (l.file, l.run) == k && l.rec["channel"].as_str() == Some(f.channel.as_str()))
+        .filter(|l| matches!(l.rec["over"].as_str(), None | Some("run")))
+        .map(|l| &l.rec)
+        .collect();
+    for (j, c) in limit_cells(&limits, style).iter().enumerate() {
+        let _ = writeln!(
+            h,
+            "  {} {c}",
+            if j == 0 { "limits:   " } else { "          " }
+        );
+    }
+    if let Some(d) = diagnosis_of(res, k, &f.channel) {
+        let _ = writeln!(h, "  diagnosis: {}", diagnosis_line(d, &f.unit, style));
+    }
+}
+
+/// Diagnoses of channels that have no fit (the `diagnose` command writes only diagnoses).
+fn diagnosis_only(h: &mut String, res: &Results, k: RunKey, fitted: &[&str], style: &TableStyle) {
+    let mut seen: Vec<&str> = Vec::new();
+    for d in res.diagnoses.iter().filter(|d| (d.file, d.run) == k) {
+        let ch = d.rec.channel.as_str();
+        if fitted.contains(&ch) || seen.contains(&ch) {
+            continue;
+        }
+        seen.push(ch);
+        let d = diagnosis_of(res, k, ch).unwrap_or(&d.rec);
+        let c = &d.final_coef;
+        let _ = writeln!(
+            h,
+            "\n{}  diagnosis: {}",
+            style.bold(ch),
+            diagnosis_line(d, "u", style)
+        );
+        let _ = writeln!(
+            h,
+            "  {}",
+            style.dim(&format!(
+                "five terms with the effects (native units): Q {} N {} B {} K {} R {}; taus {} to {}",
+                sig3(c[0]),
+                sig3(c[1]),
+                sig3(c[2]),
+                sig3(c[3]),
+                sig3(c[4]),
+                tau_text(d.tau_span[0]),
+                tau_text(d.tau_span[1])
+            ))
+        );
+    }
+}
+
+/// The run-to-run statistics (the seed paper's table 2 quantities) of every channel, in
+/// datasheet units where the channel's unit is known.
+fn aggregates(h: &mut String, res: &Results, style: &TableStyle) {
+    if res.aggregates.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        h,
+        "\n{}",
+        style.bold("Run to run (mean, 95% interval of the mean as mean +- 1.96 sd/sqrt(n), sd)")
+    );
+    let mut channels: Vec<(String, String)> = Vec::new();
+    for a in &res.aggregates {
+        let k = (
+            a.rec["channel"].as_str().unwrap_or("").to_string(),
+            a.rec["unit"].as_str().unwrap_or("").to_string(),
+        );
+        if !channels.contains(&k) {
+            channels.push(k);
+        }
+    }
+    for (ch, unit) in channels {
+        let inc = IncrementUnit::parse(&unit);
+        let names = term_names(inc.map(|u| u.kind));
+        let mut rows = vec![vec![
+            String::new(),
+            "term".into(),
+            "unit".into(),
+            "n".into(),
+            "mean [95% interval]".into(),
+            "sd".into(),
+        ]];
+        for a in res
+            .aggregates
+            .iter()
+            .filter(|a| a.rec["channel"].as_str() == Some(ch.as_str()))
+        {
+            let coef = a.rec["coef"].as_str().unwrap_or("?");
+            let Some(i) = TERM_NAMES.iter().position(|t| *t == coef) else {
+                continue;
+            };
+            let (f, u) = match inc {
+                Some(u) => (
+                    datasheet_factors(&u)[i],
+                    datasheet_units(u.kind)[i].to_string(),
+                ),
+                None => (1.0, native_units(&unit)[i].clone()),
+            };
+            let n = a.rec["n"].as_u64().unwrap_or(0);
+            let mean = a.rec["mean"].as_f64().map(|v| v * f);
+            let ci = a.rec["ci_z"]
+                .as_array()
+                .and_then(|p| Some((p.first()?.as_f64()? * f, p.get(1)?.as_f64()? * f)));
+            let sd = a.rec["sd"].as_f64().map(|v| v * f);
+            rows.push(vec![
+                coef.to_string(),
+                names[i].to_string(),
+                u,
+                n.to_string(),
+                match mean {
+                    Some(m) => format!(
+                        "{} {}",
+                        sig3(m),
+                        ci.map_or(String::new(), |(l, h)| interval(Some(l), Some(h)))
+                    ),
+                    None => "not determined in any run".into(),
+                },
+                sd.map_or("-".into(), sig3),
+            ]);
+        }
+        let _ = writeln!(h, "\n{} [{unit}]", style.bold(&ch));
+        h.push_str(&aligned(&rows, "  "));
+    }
+    let run_limits: Vec<&Value> = res
+        .limits
+        .iter()
+        .filter(|l| matches!(l.rec["over"].as_str(), Some("runs_sd") | Some("runs_mean")))
+        .map(|l| &l.rec)
+        .collect();
+    for c in limit_cells(&run_limits, style) {
+        let _ = writeln!(h, "  limit: {c}");
+    }
+}
+
+/// The overall verdict of the datasheet limits: every judged bound, and the runs' `pass`.
+fn verdict_line(res: &Results, style: &TableStyle) -> Option<String> {
+    let verdicts: Vec<&str> = res
+        .limits
+        .iter()
+        .filter_map(|l| l.rec["verdict"].as_str())
+        .collect();
+    let pass: Vec<Option<bool>> = res
+        .summaries
+        .iter()
+        .map(|s| s.rec["pass"].as_bool())
+        .collect();
+    if verdicts.is_empty() && pass.iter().all(Option::is_none) {
+        return None;
+    }
+    let judged = verdicts.len();
+    let failed = verdicts.iter().filter(|v| **v == "fail").count();
+    Some(if failed > 0 || pass.contains(&Some(false)) {
+        format!(
+            "{}: {failed} of {judged} datasheet limits exceeded",
+            style.red("FAIL")
+        )
+    } else if verdicts.iter().all(|v| *v == "pass") {
+        format!(
+            "{}: all {judged} datasheet limits met (97.5% one-sided confidence)",
+            style.green("PASS")
+        )
+    } else {
+        format!(
+            "{}: no limit exceeded, but {} cannot be decided from these intervals (a longer run \
+             narrows them)",
+            style.yellow("UNDECIDED"),
+            judged - verdicts.iter().filter(|v| **v == "pass").count()
+        )
+    })
+}
+
+/// The whole table of `res` (every run in it, then the run-to-run statistics and the verdict).
+pub fn render(res: &Results, style: &TableStyle) -> String {
+    let mut h = String::new();
+    for k in runs_in_order(res) {
+        if !h.is_empty() {
+            h.push('\n');
+        }
+        run_heading(&mut h, res, k, style);
+        let fits = fits_of(res, k);
+        for f in &fits {
+            channel_block(&mut h, res, k, &f.rec, style);
+        }
+        let fitted: Vec<&str> = fits.iter().map(|f| f.rec.channel.as_str()).collect();
+        diagnosis_only(&mut h, res, k, &fitted, style);
+    }
+    aggregates(&mut h, res, style);
+    if let Some(v) = verdict_line(res, style) {
+        let _ = writeln!(h, "\n{v}");
+    }
+    h
+}
+
+/// Whether a [`TableWriter`] keeps a record: everything typed but the curves, which a table
+/// does not show.
+fn kept(v: &Value) -> bool {
+    v.get("type")
+        .and_then(Value::as_str)
+        .is_some_and(|t| t != "curve")
+}
+
+/// A `Write` that takes JSON lines and prints tables ([`render`]) to `out`: a run's table when its
+/// `summary` arrives, and whatever is left (run-to-run statistics, the `diagnose` command's
+/// diagnoses) when it is dropped or [`TableWriter::finish`]ed.
+pub struct TableWriter<W: Write> {
+    out: W,
+    style: TableStyle,
+    line: Vec<u8>,
+    pending: Vec<Value>,
+    /// A hint under the first table: where the JSON lines are.
+    hint: Option<String>,
+    printed: bool,
+}
+
+impl<W: Write> TableWriter<W> {
+    /// `hint` is printed once, dimmed, after the first table.
+    pub fn new(out: W, style: TableStyle, hint: Option<String>) -> TableWriter<W> {
+        TableWriter {
+            out,
+            style,
+            line: Vec::new(),
+            pending: Vec::new(),
+            hint,
+            printed: false,
+        }
+    }
+
+    fn take_line(&mut self, line: &[u8]) -> std::io::Result<()> {
+        let Ok(v) = serde_json::from_slice::<Value>(line) else {
+            // Not a record: shown as it came.
+            self.out.write_all(line)?;
+            return self.out.write_all(b"\n");
+        };
+        let summary = v.get("type").and_then(Value::as_str) == Some("summary");
+        if kept(&v) {
+            // Only the newest interim fit or diagnosis of a channel is kept.
+            if v.get("final").and_then(Value::as_bool) == Some(false) {
+                let same = |w: &Value| {
+                    w.get("type") == v.get("type")
+                        && w.get("channel") == v.get("channel")
+                        && w.get("run") == v.get("run")
+                        && w.get("final").and_then(Value::as_bool) == Some(false)
+                };
+                self.pending.retain(|w| !same(w));
+            }
+            self.pending.push(v);
+        }
+        if summary {
+            self.print_pending()?;
+        }
+        Ok(())
+    }
+
+    fn print_pending(&mut self) -> std::io::Result<()> {
+        if self.pending.is_empty() {
+            return Ok(());
+        }
+        let records = std::mem::take(&mut self.pending);
+        let res = Results::from_files(&[ResultFile {
+            name: String::new(),
+            records,
+        }]);
+        let text = render(&res, &self.style);
+        if text.trim().is_empty() {
+            return Ok(());
+        }
+        if self.printed {
+            self.out.write_all(b"\n")?;
+        }
+        self.out.write_all(text.as_bytes())?;
+        if !self.printed {
+            if let Some(hint) = &self.hint {
+                let t = self.style.dim(hint);
+                writeln!(self.out, "{t}")?;
+            }
+        }
+        self.printed = true;
+        self.out.flush()
+    }
+
+    /// Prints what is left and flushes.
+    pub fn finish(&mut self) -> std::io::Result<()> {
+        if !self.line.is_empty() {
+            let line = std::mem::take(&mut self.line);
+            self.take_line(&line)?;
+        }
+        self.print_pending()?;
+        self.out.flush()
+    }
+}
+
+impl<W: Write> Write for TableWriter<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let mut rest = buf;
+        while let Some(i) = rest.iter().position(|&b| b == b'\n') {
+            self.line.extend_from_slice(&rest[..i]);
+            let line = std::mem::take(&mut self.line);
+            if !line.iter().all(u8::is_ascii_whitespace) {
+                self.take_line(&line)?;
+            }
+            rest = &rest[i + 1..];
+        }
+        self.line.extend_from_slice(rest);
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.out.flush()
+    }
+}
+
+impl<W: Write> Drop for TableWriter<W> {
+    fn drop(&mut self) {
+        // The end of the records: a terminal has nowhere to report a failure to but itself.
+        let _ = self.finish();
+    }
+}

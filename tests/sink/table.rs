@@ -1,0 +1,259 @@
+//! The terminal table (src/sink/table.rs) through its formatter, no terminal needed: a gyro and an
+//! accelerometer fit with known coefficients, their read-outs, two datasheet limits and a
+//! diagnosis, written as JSON lines into a `TableWriter`. Every number checked below is the
+//! hand conversion of the record's native value into datasheet units (docs/theory.md section 2):
+//! for a gyro in arcsec N/60 is deg/sqrt(h), B in arcsec/s is deg/h, K*60 is deg/h/sqrt(h); for
+//! an accelerometer in m/s, N*60 is m/s/sqrt(h) and B/(9.80665e-6) is micro-g.
+
+use allanscope::model::readout::{Readout, Readouts};
+use allanscope::model::units::{DatasheetRecord, IncrementUnit};
+use allanscope::sink::records::FitRecord;
+use allanscope::sink::table::{sig3, TableStyle, TableWriter};
+use serde_json::json;
+use std::io::Write;
+
+/// A fit record of `channel` in `unit` with native coefficients `(value, lo, hi)`, Q..R.
+fn fit(channel: &str, unit: &str, native: [(Option<f64>, f64, f64); 5]) -> FitRecord {
+    let names = ["Q", "N", "B", "K", "R"];
+    let mut coef = serde_json::Map::new();
+    for (i, n) in names.iter().enumerate() {
+        let (v, lo, hi) = native[i];
+        coef.insert(
+            (*n).into(),
+            json!({"value": v, "lo": lo, "hi": hi, "determined": v.is_some()}),
+        );
+    }
+    let inc = IncrementUnit::parse(unit).unwrap();
+    FitRecord {
+        kind: "fit".into(),
+        channel: channel.into(),
+        unit: unit.into(),
+        r#final: true,
+        t_data: 3600.0,
+        coef: coef.into(),
+        gof: Some(1.04),
+        method: "model".into(),
+        model_c: vec![],
+        datasheet: Some(serde_json::to_value(DatasheetRecord::new(native, &inc)).unwrap()),
+        readouts: None,
+        q_over_lsb: None,
+        run: None,
+    }
+}
+
+fn gyro() -> FitRecord {
+    let mut f = fit(
+        "gx",
+        "arcsec",
+        [
+            (None, 0.0, 0.002),
+            (Some(0.25), 0.2, 0.3125),
+            (Some(0.125), 0.0625, 0.5),
+            (None, 0.0, 1.0),
+            (None, 0.0, 0.01),
+        ],
+    );
+    // ARW read at tau = 1 s itself; bias instability from a minimum of 0.0664 arcsec/s at 100 s.
+    let r = Readouts {
+        arw: Some(Readout {
+            value: 0.24,
+            lo: 0.18,
+            hi: 0.30,
+            tau: 1.0,
+            sigma: 0.24,
+            slope: -0.5,
+        }),
+        bias_instability: Some(Readout {
+            value: 0.1,
+            lo: 0.08,
+            hi: 0.13,
+            tau: 100.0,
+            sigma: 0.0664,
+            slope: 0.0,
+        }),
+        rrw: None,
+    };
+    f.readouts = Some(Box::new(r.record("arcsec")));
+    f
+}
+
+fn accel() -> FitRecord {
+    fit(
+        "ax",
+        "m/s",
+        [
+            (Some(1e-4), 0.9e-4, 1.1e-4),
+            (Some(0.01), 0.009, 0.011),
+            (Some(9.80665e-6), 4.903325e-6, 1.96133e-5),
+            (None, 0.0, 1e-5),
+            (None, 0.0, 1e-7),
+        ],
+    )
+}
+
+fn lines() -> Vec<String> {
+    let limits = json!([
+        {"channel": "gx", "coef": "N", "over": "run", "bound": "max", "limit": 0.005,
+         "unit": "deg/sqrt(h)", "value": 0.25 / 60.0, "lo": 0.2 / 60.0, "hi": 0.3125 / 60.0,
+         "verdict": "pass"},
+        {"channel": "ax", "coef": "B", "over": "run", "bound": "max", "limit": 0.5,
+         "unit": "micro-g", "value": 1.0, "lo": 0.5, "hi": 2.0, "verdict": "fail"},
+    ]);
+    let diagnosis = json!({"type": "diagnosis", "channel": "gx", "gap_before": 3.0,
+        "gap_after": 1.1, "verdict": "explained", "regions": [{"tau_lo": 10.0, "tau_hi": 100.0,
+        "sign": 1, "worst_ratio": 1.8}], "effects": [{"kind": "gauss_markov",
+        "params": {"sigma": 0.1, "tau_c": 20.0}, "gap_after": 1.1}], "final": true});
+    let summary = json!({"type": "summary", "input": "runs/unit7.csv", "channels": ["gx", "ax"],
+        "tau0": 0.01, "t_data": 3600.0, "samples": [360000, 360000], "segments": [1, 3],
+        "bad_rows": 0, "overlap": "16", "elapsed_s": 1.0, "limits": limits, "pass": false,
+        "read_to_end": true});
+    vec![
+        // Curves are not shown; an interim fit is replaced by the final one.
+        json!({"type": "curve", "channel": "gx"}).to_string(),
+        {
+            let mut f = gyro();
+            f.r#final = false;
+            f.coef["N"]["value"] = json!(9.0);
+            serde_json::to_string(&f).unwrap()
+        },
+        serde_json::to_string(&gyro()).unwrap(),
+        serde_json::to_string(&accel()).unwrap(),
+        diagnosis.to_string(),
+        summary.to_string(),
+    ]
+}
+
+/// The line of `text` that starts (after its indent) with `start`.
+fn row<'a>(text: &'a str, start: &str) -> &'a str {
+    text.lines()
+        .find(|l| l.trim_start().starts_with(start))
+        .unwrap_or_else(|| panic!("no line starting with `{start}` in\n{text}"))
+}
+
+#[test]
+fn the_table_shows_datasheet_units_intervals_readouts_limits_and_the_diagnosis() {
+    let out = Shared::default();
+    let mut w = TableWriter::new(out.clone(), TableStyle::default(), None);
+    let all = lines();
+    for l in &all[..all.len() - 1] {
+        writeln!(w, "{l}").unwrap();
+    }
+    w.flush().unwrap();
+    // Nothing is printed before the run's summary arrives.
+    assert!(out.text().is_empty(), "{}", out.text());
+    // The summary may arrive cut across writes, as a buffered writer hands it on.
+    let last = all.last().unwrap();
+    let (a, b) = last.split_at(last.len() / 2);
+    write!(w, "{a}").unwrap();
+    assert!(out.text().is_empty());
+    writeln!(w, "{b}").unwrap();
+    let t = out.text();
+    assert!(!t.is_empty());
+    drop(w);
+    // Dropping the writer adds nothing more: the run was printed whole.
+    assert_eq!(out.text(), t);
+    println!("{t}");
+    assert!(!t.contains('{'), "no JSON on a terminal:\n{t}");
+    // Heading: the input, the data length, how it ended, the gaps (3 segments: 2 gaps).
+    let head = t.lines().next().unwrap();
+    assert!(head.starts_with("runs/unit7.csv: 60.0 min of data at tau0 = 10.0 ms, 2 channels, read to its end (2 gaps)"), "{head}");
+    // Gyro: N = 0.25 arcsec/sqrt(s) = 0.25/60 deg/sqrt(h) = 0.00417 [0.00333, 0.00521].
+    let n = row(&t, "N  angle random walk");
+    assert!(n.contains("deg/sqrt(h)"), "{n}");
+    assert!(n.contains("0.00417 [0.00333, 0.00521]"), "{n}");
+    // Its IEEE 952 read-out: 0.24 arcsec/sqrt(s) at 1 s = 0.00400 deg/sqrt(h) [0.00300, 0.00500].
+    assert!(n.contains("0.00400 [0.00300, 0.00500] at 1.00 s"), "{n}");
+    // B = 0.125 arcsec/s = 0.125 deg/h; read-out 0.1 deg/h with the tau of the minimum.
+    let b = row(&t, "B  bias instability");
+    assert!(
+        b.contains("deg/h ") && b.contains("0.125 [0.0625, 0.500]"),
+        "{b}"
+    );
+    assert!(b.contains("0.100 [0.0800, 0.130] min at 100 s"), "{b}");
+    // K not determined: its 95% upper bound, 1.0 arcsec/s/sqrt(s) = 60 deg/h/sqrt(h).
+    let k = row(&t, "K  rate random walk");
+    assert!(
+        k.contains("deg/h/sqrt(h)") && k.contains("not determined (< 60.0)"),
+        "{k}"
+    );
+    assert!(k.contains("no +1/2 slope"), "{k}");
+    assert!(row(&t, "Q  quantization").contains("not determined (< 0.00200)"));
+    // The final fit replaced the interim one (whose N was 9).
+    assert!(!t.contains("0.150 "), "{t}");
+    assert_eq!(t.matches("gx [arcsec, gyro]").count(), 1, "{t}");
+    // Accelerometer: N = 0.01 m/s/sqrt(s) = 0.6 m/s/sqrt(h); B = 1 micro-g.
+    let an = row(&t, "N  velocity random walk");
+    assert!(
+        an.contains("m/s/sqrt(h)") && an.contains("0.600 [0.540, 0.660]"),
+        "{an}"
+    );
+    let ab = t
+        .lines()
+        .find(|l| l.trim_start().starts_with("B  bias instability") && l.contains("micro-g"))
+        .unwrap();
+    assert!(ab.contains("1.00 [0.500, 2.00]"), "{ab}");
+    // Limits per channel, and the overall verdict.
+    assert!(
+        row(&t, "limits:").contains("PASS N <= 0.00500 deg/sqrt(h)"),
+        "{t}"
+    );
+    assert!(
+        t.contains("FAIL B <= 0.500 micro-g (fit 1.00 [0.500, 2.00])"),
+        "{t}"
+    );
+    assert!(t.contains("FAIL: 1 of 2 datasheet limits exceeded"), "{t}");
+    // The diagnosis in one line, with the effect's parameters in units.
+    let d = row(&t, "diagnosis:");
+    assert!(
+        d.contains("explained by Gauss-Markov noise (sigma 0.100 arcsec/s, correlation time 20.0 s) (gap 3.00 -> 1.10)"),
+        "{d}"
+    );
+}
+
+/// An output buffer the test can read while the writer holds it.
+#[derive(Clone, Default)]
+struct Shared(std::sync::Arc<std::sync::Mutex<Vec<u8>>>);
+
+impl Shared {
+    fn text(&self) -> String {
+        String::from_utf8(self.0.lock().unwrap().clone()).unwrap()
+    }
+}
+
+impl Write for Shared {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.lock().unwrap().extend_from_slice(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+#[test]
+fn records_without_a_summary_are_printed_when_the_writer_is_dropped() {
+    // The `diagnose` command writes diagnoses only: they are shown at the end.
+    let out = Shared::default();
+    let mut w = TableWriter::new(out.clone(), TableStyle::default(), Some("hint".into()));
+    writeln!(w, "{}", lines()[4]).unwrap();
+    assert!(out.text().is_empty());
+    drop(w);
+    let t = out.text();
+    assert!(
+        t.contains("gx  diagnosis: explained by Gauss-Markov noise"),
+        "{t}"
+    );
+    assert!(t.trim_end().ends_with("hint"), "{t}");
+}
+
+#[test]
+fn three_significant_digits() {
+    assert_eq!(sig3(0.0041666), "0.00417");
+    assert_eq!(sig3(0.125), "0.125");
+    assert_eq!(sig3(60.0), "60.0");
+    assert_eq!(sig3(1125.4), "1125");
+    assert_eq!(sig3(6.86e-4), "6.86e-4");
+    assert_eq!(sig3(2.5e6), "2.50e6");
+    assert_eq!(sig3(-0.5), "-0.500");
+    assert_eq!(sig3(0.0), "0");
+}
