@@ -68,6 +68,7 @@ mod common;
 use allanscope::gap::effects::effect_column;
 use allanscope::gap::oracle::{self, BlockGls};
 use allanscope::gap::problem::{GapProblem, ModelSpec};
+use allanscope::gap::warmup::fit_warmup;
 use allanscope::gap::{
     diagnose, DiagnoseOptions, EffectKind, EffectParams, EvidenceSnapshot, GapConfig, GapEvidence,
     Verdict,
@@ -424,6 +425,10 @@ struct Outcome {
     unit: Unit,
     /// The diagnosis said the unit is quantization-limited (`Diagnosis::quantization_limited`).
     qlim: bool,
+    /// The warm-up test's `B` on the base five-term fit (`gap::warmup::fit_warmup`): above
+    /// `warmup_bf` the test finds a warm-up, which the bookkeeping keeps only if its exact AVAR
+    /// lowers the curve's gap.
+    warm_b: f64,
 }
 
 fn run_one(
@@ -456,6 +461,20 @@ fn run_one(
         rho *= real / nom;
     }
     let oracle = truth.and_then(|t| oracle_z(t, &jumps, &unit, &snap));
+    let warm_b = GapProblem::new(&snap, &DiagnoseOptions::default())
+        .ok()
+        .and_then(|p| p.gls(&ModelSpec::default()))
+        .and_then(|b| {
+            let c5: [f64; 5] = std::array::from_fn(|i| b.coef[i]);
+            fit_warmup(
+                &snap.block_means,
+                snap.block_len as f64 * unit.tau0,
+                snap.n_increments as f64 * unit.tau0,
+                &c5,
+                &[],
+            )
+        })
+        .map_or(f64::NAN, |w| w.log_bf);
     let mut null_z = [f64::NAN; 5];
     if kind.is_none() {
         let mut nrng = Xoshiro256PlusPlus::seed_from_u64(stream ^ 0x6a_c1e5);
@@ -497,6 +516,7 @@ fn run_one(
         secs,
         unit,
         qlim,
+        warm_b,
     }
 }
 
@@ -646,6 +666,19 @@ fn report(fam: &str, res: &[&Outcome], kinds: &[Option<EffectKind>]) {
                 ea.push(a);
             }
         }
+        if k == Some(EffectKind::Warmup) {
+            let dropped = r
+                .iter()
+                .filter(|o| {
+                    o.warm_b > DiagnoseOptions::default().thresholds.warmup_bf
+                        && !o.named.iter().any(|p| p.kind() == EffectKind::Warmup)
+                })
+                .count();
+            eprintln!(
+                "{fam}: warm-ups found in time (B > warmup_bf) but not kept: {dropped}/{}",
+                r.len()
+            );
+        }
         let deltas: Vec<f64> = r.iter().filter_map(|o| o.oracle.map(|x| x.1)).collect();
         let pow = |zc: f64| {
             deltas.iter().map(|d| std_normal_cdf(d - zc)).sum::<f64>() / deltas.len().max(1) as f64
@@ -731,7 +764,7 @@ fn main() {
     }
     if !csv.is_empty() {
         let mut text = String::from(
-            "family,effect,draw,tau0,t_run,q,n,b,k,r,lsb,rate_lsb,rho,verdict,gap_before,gap_after,named,shape_true,amp_true,oracle_z,oracle_delta,null_z_gm,null_z_sin,null_z_filter,null_z_warmup,null_z_jumps,secs,qlim\n",
+            "family,effect,draw,tau0,t_run,q,n,b,k,r,lsb,rate_lsb,rho,verdict,gap_before,gap_after,named,shape_true,amp_true,oracle_z,oracle_delta,null_z_gm,null_z_sin,null_z_filter,null_z_warmup,null_z_jumps,secs,qlim,warm_b\n",
         );
         for (o, (_, _, i)) in res.iter().zip(&items) {
             let u = &o.unit;
@@ -741,7 +774,7 @@ fn main() {
             });
             let nz: Vec<String> = o.null_z.iter().map(|z| format!("{z:.4}")).collect();
             text += &format!(
-                "{},{},{},{},{:.0},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:.3},{:?},{:.4},{:.4},{},{:e},{:e},{:.4},{:.4},{},{:.3},{}\n",
+                "{},{},{},{},{:.0},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:.3},{:?},{:.4},{:.4},{},{:e},{:e},{:.4},{:.4},{},{:.3},{},{:.3}\n",
                 u.family,
                 kind_name(o.truth_kind),
                 i,
@@ -769,7 +802,8 @@ fn main() {
                 o.oracle.map_or(f64::NAN, |x| x.1),
                 nz.join(","),
                 o.secs,
-                o.qlim
+                o.qlim,
+                o.warm_b
             );
         }
         std::fs::write(&csv, text).expect("csv");

@@ -227,26 +227,39 @@ pub fn diagnose_with_temperature(
     Ok(d)
 }
 
-/// The quantization check of [`diagnose_with_temperature`]: the five-term fit of the whole
-/// curve gives a first `Q` and `N`; when they say the quantization is not white, the fit of the
-/// taus from its `tau_white_s` on (where it is white, so `N` is not biased by the short taus)
-/// decides.
+/// The quantization check of [`diagnose_with_temperature`]. The five-term fit of the whole
+/// curve gives a first `Q` and `N`; when they say the quantization is white, it is. Otherwise
+/// the shortest taus may only have biased that fit (an output filter lowers them too), so the
+/// curve is refitted from cluster sizes 8, 16, 32, ... on, and the first fit whose own
+/// `tau_white` lies at or below its cut decides (white: `None`); when none does, the last one.
 fn check_quantization(
     snap: &EvidenceSnapshot,
     opts: &DiagnoseOptions,
 ) -> Option<QuantizationLimit> {
     let lsb = snap.lsb?;
-    let judge = |o: &DiagnoseOptions| {
-        let fit = GapProblem::new(snap, o).ok()?.gls(&ModelSpec::default())?;
+    let judge = |min_m: u64| {
+        let o = DiagnoseOptions {
+            min_m,
+            ..opts.clone()
+        };
+        let fit = GapProblem::new(snap, &o).ok()?.gls(&ModelSpec::default())?;
         let c = |i: usize| fit.coef.get(i).copied().unwrap_or(0.0);
         Some(quantization_limit(lsb, c(0), c(1), snap.tau0_s))
     };
-    let first = judge(opts)??;
-    let restricted = DiagnoseOptions {
-        min_m: opts.min_m.max(first.m_white),
-        ..opts.clone()
-    };
-    judge(&restricted).unwrap_or(Some(first))
+    let mut last = judge(opts.min_m)??;
+    let mut cut = opts.min_m.max(8);
+    // At most ~40 doublings: the fit fails once fewer than 8 taus are left.
+    while let Some(j) = judge(cut) {
+        let Some(l) = j else {
+            return None;
+        };
+        last = l;
+        if l.m_white <= cut {
+            break;
+        }
+        cut = cut.saturating_mul(2);
+    }
+    Some(last)
 }
 
 /// The diagnosis of the curve (from `opts.min_m` on) and of the block means.

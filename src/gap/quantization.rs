@@ -76,18 +76,24 @@ pub fn quantization_limit(lsb: f64, q2: f64, n2: f64, tau0_s: f64) -> Option<Qua
 
 /// The quantization error's autocovariance at a phase change of variance `v` (u^2):
 /// `sum_n LSB^2 / (2 pi^2 n^2) exp(-2 pi^2 n^2 v / LSB^2)` (module doc), summed until the
-/// terms are below 1e-12 of the first.
+/// terms are below 1e-12 of the first (the tail past 10 000 terms, left only near `v = 0`,
+/// added in closed form).
 pub fn error_autocovariance(lsb: f64, v: f64) -> f64 {
-    let a = 2.0 * PI * PI * v / (lsb * lsb);
+    let a = 2.0 * PI * PI * v.max(0.0) / (lsb * lsb);
     let mut s = 0.0;
-    for n in 1..10_000u32 {
+    let terms = 10_000u32;
+    for n in 1..=terms {
         let nf = n as f64;
         let t = (-a * nf * nf).exp() / (nf * nf);
         s += t;
         if t < 1e-12 {
-            break;
+            return s * lsb * lsb / (2.0 * PI * PI);
         }
     }
+    // The tail beyond `terms` (only reached for `v` near 0): at most `sum_{n > M} 1 / n^2`,
+    // about `1 / M` times its decay.
+    let m = terms as f64;
+    s += (-a * m * m).exp() / m;
     s * lsb * lsb / (2.0 * PI * PI)
 }
 
