@@ -2,6 +2,8 @@
 //! and turned into records. Plain synchronous code: the pipeline runs it on a worker thread and
 //! tests and benchmarks call it directly. It never knows where the samples came from.
 
+mod block;
+
 use std::time::Instant;
 
 use crate::allan::accum::{AccumConfig, ChannelAccumulator, Overlap};
@@ -394,6 +396,7 @@ impl RunAnalysis {
                     self.emit_if_due(out);
                 }
             }
+            Chunk::Block(b) => self.push_block(b, out),
             // The pipeline saves the state at this mark; nothing to accumulate.
             Chunk::Checkpoint(_) => {}
         }
@@ -488,7 +491,8 @@ impl RunAnalysis {
                 // short for it gives no record yet.
                 match diagnose(&g.snapshot(), &DiagnoseOptions::default()) {
                     Ok(d) => {
-                        let rec = DiagnosisRecord::new(&ch.setup.name, &d, None, final_);
+                        let mut rec = DiagnosisRecord::new(&ch.setup.name, &d, None, final_);
+                        rec.run = run;
                         out.push(Record::Diagnosis(Box::new(rec)));
                     }
                     Err(e) => tracing::debug!("{}: {e}", ch.setup.name),

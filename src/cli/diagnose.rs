@@ -129,7 +129,7 @@ fn gather(
             // The temperature column (docs/records.md's `temperature_c`), read here only.
             let temp_col = reader.names().iter().position(|n| n == "temperature_c");
             if temp_col.is_some() {
-                g.temperature = Some(GapEvidence::new(cfg.clone()));
+                g.temperature = Some(GapEvidence::new(cfg.clone()).without_outlier_filter());
             }
             let width = reader.names().len();
             let mut first_row = true;
@@ -179,7 +179,7 @@ fn gather(
         }
         Some(desc) => {
             if desc.frame().temperature.is_some() {
-                g.temperature = Some(GapEvidence::new(cfg.clone()));
+                g.temperature = Some(GapEvidence::new(cfg.clone()).without_outlier_filter());
             }
             let chans = desc.channels();
             for (i, c) in chans.iter().enumerate() {

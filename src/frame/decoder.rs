@@ -49,13 +49,12 @@
 //! a loss of `L` or more is undercounted by a multiple of `L` slots. Messages before the first
 //! frame are only checked and skipped.
 
-use std::collections::VecDeque;
-
 use serde::{Deserialize, Serialize};
 
+use super::block::{BlockEvent, FrameBlock, FrameSink};
 use super::descriptor::{BitMeaning, FrameDescriptor, MessageSpec};
 use super::field::{read, read_bits, RawValue};
-use super::{ChannelValue, DecodedFrame, FrameEvent};
+use super::{ChannelValue, FrameEvent};
 
 /// Decoder health: the docs/records.md `health` fields first, then extra detail.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -240,7 +239,10 @@ pub struct Decoder {
     buf: Vec<u8>,
     /// First unconsumed byte of `buf`.
     pos: usize,
-    events: VecDeque<FrameEvent>,
+    /// Decoded events not yet taken, flat (no allocation per frame).
+    out: FrameBlock,
+    /// Events and values of `out` already taken one at a time by [`Decoder::next_event`].
+    taken: (usize, usize),
     health: Health,
     /// Bytes were skipped since the last good message.
     skipping: bool,
@@ -259,11 +261,13 @@ impl Decoder {
     pub fn new(desc: FrameDescriptor) -> Self {
         let cycle = desc.interleave.as_ref().map_or(1, |i| i.count + 1);
         let modulus = desc.frame().counter.as_ref().map_or(1, |c| c.modulus);
+        let width = desc.frame().channels.len();
         Decoder {
             desc,
             buf: Vec::new(),
             pos: 0,
-            events: VecDeque::new(),
+            out: FrameBlock::with_capacity(width, 0),
+            taken: (0, 0),
             health: Health::default(),
             skipping: false,
             tracker: SeqTracker {
@@ -285,7 +289,7 @@ impl Decoder {
 
     /// The decoder's state, or `None` while decoded events are still waiting to be taken.
     pub fn state(&self) -> Option<DecoderState> {
-        self.events.is_empty().then(|| DecoderState {
+        (self.taken.0 == self.out.len()).then(|| DecoderState {
             pending: self.buf[self.pos..].to_vec(),
             health: self.health.clone(),
             skipping: self.skipping,
@@ -349,12 +353,66 @@ impl Decoder {
 
     /// The next decoded event, if any.
     pub fn next_event(&mut self) -> Option<FrameEvent> {
-        self.events.pop_front()
+        let (e, v) = self.taken;
+        let ev = *self.out.event_list().get(e)?;
+        let w = match ev {
+            BlockEvent::Frame { .. } => self.out.width(),
+            BlockEvent::Gap { .. } => 0,
+        };
+        let event = super::block::to_event(ev, &self.out.values()[v..v + w]);
+        self.taken = (e + 1, v + w);
+        if self.taken.0 == self.out.len() {
+            self.clear_events();
+        }
+        Some(event)
     }
 
     /// All events decoded so far.
     pub fn drain(&mut self) -> impl Iterator<Item = FrameEvent> + '_ {
-        self.events.drain(..)
+        std::iter::from_fn(move || self.next_event())
+    }
+
+    /// The events decoded and not yet taken, flat, with each frame's values (then call
+    /// [`Decoder::clear_events`]).
+    pub fn events(&self) -> impl Iterator<Item = (BlockEvent, &[Option<ChannelValue>])> + '_ {
+        let (e, v) = self.taken;
+        let w = self.out.width();
+        let mut at = v;
+        self.out.event_list()[e..].iter().map(move |ev| match ev {
+            BlockEvent::Frame { .. } => {
+                let vals = &self.out.values()[at..at + w];
+                at += w;
+                (*ev, vals)
+            }
+            BlockEvent::Gap { .. } => (*ev, &self.out.values()[0..0]),
+        })
+    }
+
+    /// The events decoded so far as one block, when none has been taken one at a time.
+    pub fn block(&self) -> Option<&FrameBlock> {
+        (self.taken == (0, 0)).then_some(&self.out)
+    }
+
+    /// Hands every event decoded so far to `sink` at once (an empty [`FrameBlock`] takes the
+    /// decoder's block whole and gives its own storage back).
+    pub fn take_events(&mut self, sink: &mut impl FrameSink) {
+        if self.taken == (0, 0) {
+            sink.take_all(&mut self.out);
+        } else {
+            for (e, v) in self.events() {
+                match e {
+                    BlockEvent::Gap { missing } => sink.push_gap(missing),
+                    frame => sink.push_frame(frame, v),
+                }
+            }
+            self.clear_events();
+        }
+    }
+
+    /// Drops the events decoded so far (after [`Decoder::events`]).
+    pub fn clear_events(&mut self) {
+        self.out.clear();
+        self.taken = (0, 0);
     }
 
     fn skip(&mut self, n: usize) {
@@ -463,7 +521,7 @@ impl Decoder {
             Placement::Advanced { missing, seq } => {
                 if missing > 0 {
                     self.health.missing += missing;
-                    self.events.push_back(FrameEvent::Gap { missing });
+                    self.out.push_gap(missing);
                 }
                 seq
             }
@@ -474,9 +532,15 @@ impl Decoder {
             return;
         }
         self.next_index = seq + 1;
-        let frame = decode_frame(&self.desc, spec, msg, seq, &mut self.health.invalid_values);
+        decode_frame(
+            &self.desc,
+            spec,
+            msg,
+            seq,
+            &mut self.health.invalid_values,
+            &mut self.out,
+        );
         self.health.frames += 1;
-        self.events.push_back(FrameEvent::Frame(frame));
     }
 }
 
@@ -529,7 +593,7 @@ impl Decoder {
                 &self.desc,
                 &mut self.tracker,
                 &mut self.health,
-                &mut self.events,
+                &mut self.out,
                 &mut self.next_index,
                 msg,
             );
@@ -542,7 +606,7 @@ impl Decoder {
             &self.desc,
             &mut self.tracker,
             &mut self.health,
-            &mut self.events,
+            &mut self.out,
             &mut self.next_index,
             msg,
         );
@@ -555,7 +619,7 @@ fn commit(
     desc: &FrameDescriptor,
     tracker: &mut SeqTracker,
     health: &mut Health,
-    events: &mut VecDeque<FrameEvent>,
+    out: &mut FrameBlock,
     next_index: &mut u64,
     msg: &[u8],
 ) {
@@ -565,13 +629,12 @@ fn commit(
         Placement::Advanced { missing, seq } => {
             if missing > 0 {
                 health.missing += missing;
-                events.push_back(FrameEvent::Gap { missing });
+                out.push_gap(missing);
             }
             *next_index = seq + 1;
             let spec = &desc.messages[desc.frame_kind];
-            let frame = decode_frame(desc, spec, msg, seq, &mut health.invalid_values);
+            decode_frame(desc, spec, msg, seq, &mut health.invalid_values, out);
             health.frames += 1;
-            events.push_back(FrameEvent::Frame(frame));
         }
         Placement::Untracked => {}
     }
@@ -617,14 +680,15 @@ pub(crate) fn width_type(width: usize) -> super::field::FieldType {
     }
 }
 
-/// Reads the channels, validity and temperature of a good frame.
+/// Reads the channels, validity and temperature of a good frame into `out`.
 fn decode_frame(
     desc: &FrameDescriptor,
     spec: &MessageSpec,
     msg: &[u8],
     seq: u64,
     invalid: &mut u64,
-) -> DecodedFrame {
+    out: &mut FrameBlock,
+) {
     let status = spec
         .status
         .as_ref()
@@ -641,42 +705,40 @@ fn decode_frame(
             _ => true,
         }
     };
-    let values = spec
-        .channels
-        .iter()
-        .map(|c| {
-            if !valid(c.status_bit) {
-                *invalid += 1;
-                return None;
-            }
-            let raw = read(msg, c.offset, c.ty, c.order)?;
-            Some(match raw {
-                RawValue::Int(n) if c.is_count() => ChannelValue::Count(n),
-                r => {
-                    // NaN, infinite or absurd values (a float field's NaN, a damaged exponent)
-                    // are invalid: a gap, counted, never summed into the channel.
-                    let v = r.as_f64() * c.scale * desc.kind_factor(c.kind);
-                    if !v.is_finite() || v.abs() > crate::input::MAX_ABS_VALUE {
-                        *invalid += 1;
-                        return None;
-                    }
-                    ChannelValue::Real(v)
+    let values = spec.channels.iter().map(|c| {
+        if !valid(c.status_bit) {
+            *invalid += 1;
+            return None;
+        }
+        let raw = read(msg, c.offset, c.ty, c.order)?;
+        Some(match raw {
+            RawValue::Int(n) if c.is_count() => ChannelValue::Count(n),
+            r => {
+                // NaN, infinite or absurd values (a float field's NaN, a damaged exponent)
+                // are invalid: a gap, counted, never summed into the channel.
+                let v = r.as_f64() * c.scale * desc.kind_factor(c.kind);
+                if !v.is_finite() || v.abs() > crate::input::MAX_ABS_VALUE {
+                    *invalid += 1;
+                    return None;
                 }
-            })
+                ChannelValue::Real(v)
+            }
         })
-        .collect();
+    });
     let temperature_c = spec.temperature.as_ref().and_then(|t| {
         if !valid(t.status_bit) {
             return None;
         }
         read(msg, t.offset, t.ty, t.order).map(|r| r.as_f64() * t.scale)
     });
-    DecodedFrame {
-        seq,
+    out.push_frame_with(
+        BlockEvent::Frame {
+            seq,
+            temperature_c,
+            status,
+        },
         values,
-        temperature_c,
-        status,
-    }
+    );
 }
 
 #[cfg(test)]

@@ -119,10 +119,21 @@ impl RawValue {
 /// The field's bytes as an unsigned bit pattern, or None when the field runs past `bytes`.
 pub fn read_bits(bytes: &[u8], offset: usize, ty: FieldType, order: ByteOrder) -> Option<u64> {
     let s = bytes.get(offset..offset.checked_add(ty.size())?)?;
-    let fold = |v: u64, b: &u8| (v << 8) | u64::from(*b);
-    Some(match order {
-        ByteOrder::Big => s.iter().fold(0, fold),
-        ByteOrder::Little => s.iter().rev().fold(0, fold),
+    // One fixed-width load per size (a byte-by-byte fold was a fifth of the decode thread).
+    Some(match (s.len(), order) {
+        (1, _) => u64::from(s[0]),
+        (2, ByteOrder::Little) => u64::from(u16::from_le_bytes([s[0], s[1]])),
+        (2, ByteOrder::Big) => u64::from(u16::from_be_bytes([s[0], s[1]])),
+        (4, ByteOrder::Little) => u64::from(u32::from_le_bytes([s[0], s[1], s[2], s[3]])),
+        (4, ByteOrder::Big) => u64::from(u32::from_be_bytes([s[0], s[1], s[2], s[3]])),
+        (_, order) => {
+            let mut b = [0u8; 8];
+            b.copy_from_slice(s);
+            match order {
+                ByteOrder::Little => u64::from_le_bytes(b),
+                ByteOrder::Big => u64::from_be_bytes(b),
+            }
+        }
     })
 }
 

@@ -5,17 +5,21 @@
 //!   and checksum, resynchronises after garbage, follows the frame counter (gaps, duplicates)
 //!   and keeps the [`Health`] counters of docs/records.md.
 //! - [`encoder`]: builds valid frames of a descriptor (for the simulator and tests).
+//! - [`block`]: [`FrameBlock`], decoded frames flat (no allocation per frame), as the decoder
+//!   hands them on.
 //! - [`checksum`], [`field`]: the checksum algorithms and wire types they share.
 //!
 //! Sources (serial, UDP, files) own the bytes and hand them to a [`Decoder`]; the accumulators
 //! downstream receive [`DecodedFrame`]s and [`FrameEvent::Gap`]s and never see bytes.
 
+pub mod block;
 pub mod checksum;
 pub mod decoder;
 pub mod descriptor;
 pub mod encoder;
 pub mod field;
 
+pub use block::{BlockEvent, FrameBlock, FrameSink};
 pub use decoder::{Decoder, DecoderState, Health};
 pub use descriptor::{DescriptorErrors, FrameDescriptor};
 pub use encoder::{encode, encode_frame, EncodeError, FrameInput};

@@ -43,8 +43,10 @@
 
 use super::effects::{effect_column, EffectKind, EffectParams};
 use super::evidence::EvidenceSnapshot;
+use super::outliers::OutlierCount;
 use super::problem::{GapProblem, GlsFit, ModelSpec};
-use super::quantization::{quantization_limit, QuantizationLimit};
+use super::quant_limit::{quantization_limit, QuantizationLimit};
+use super::quantization::{judge_quantization, QuantizationFinding};
 use super::segments::{segment_tests, SegmentTest};
 use super::steps::{detect_steps, JumpFinding};
 use super::temperature::{enter_temperature, TEMPERATURE_Z};
@@ -63,7 +65,7 @@ pub struct DiagnoseOptions {
     pub candidates: Vec<EffectKind>,
     pub thresholds: Thresholds,
     /// Cluster sizes below this are left out of the curve (1: none); the diagnosis raises it
-    /// for a quantization-limited unit ([`super::quantization`]).
+    /// for a quantization-limited unit ([`super::quant_limit`]).
     pub min_m: u64,
 }
 
@@ -151,8 +153,14 @@ pub struct Diagnosis {
     pub model_final_avar: Vec<f64>,
     /// Set when the unit's quantization is not white at the shortest taus (its LSB is coarse
     /// against the per-sample noise): the curve is then diagnosed from `tau_white_s` on only
-    /// ([`super::quantization`]; docs/gap.md, "Quantization-limited units").
+    /// ([`super::quant_limit`]; docs/gap.md, "Quantization-limited units").
     pub quantization_limited: Option<QuantizationLimit>,
+    /// Outliers found and replaced in the stream before the curve was computed
+    /// ([`super::outliers`]).
+    pub outliers: OutlierCount,
+    /// What the values' step does to the curve, when they are whole multiples of one
+    /// ([`super::quantization`]).
+    pub quantization: Option<QuantizationFinding>,
 }
 
 /// Five-term `(Q, N, B, K, R)` from `c`.
@@ -452,7 +460,7 @@ fn diagnose_curve(
     }
     // 4. The bookkeeping: the effects found, in order, each kept only if it lowers the gap of
     // the model with the effects kept before it; its `gap_after` is that model's gap.
-    let (effects, cur) = settle(&prob, &effects, &time_offsets, &base);
+    let (effects, cur, final_spec) = settle(&prob, &effects, &time_offsets, &base);
     let mut jumps = jumps;
     if !effects
         .iter()
@@ -468,9 +476,13 @@ fn diagnose_curve(
     let gap_after = cur.gap();
     // Flagged: by `G` on the base model, or by an effect that was kept (the likelihood-ratio
     // candidates and the time-domain tests flag only through the effect they bring).
+    // Outliers found in the stream are an effect of their own (docs/gap.md, "Outliers"): a
+    // curve that needs nothing else is then `explained` by them, not `consistent`.
     let verdict = if effects.is_empty() {
         if gap_before > th.gap_crit {
             Verdict::Unexplained
+        } else if snap.outliers.count > 0 {
+            Verdict::Explained
         } else {
             Verdict::Consistent
         }
@@ -500,6 +512,10 @@ fn diagnose_curve(
         model_base_avar: base.model.clone(),
         model_final_avar: cur.model.clone(),
         quantization_limited: None,
+        outliers: snap.outliers,
+        quantization: snap
+            .lsb
+            .and_then(|l| judge_quantization(&prob, &final_spec, &cur, l)),
     })
 }
 
@@ -514,10 +530,11 @@ fn settle(
     effects: &[AddedEffect],
     time_offsets: &[(EffectKind, Vec<f64>)],
     base: &GlsFit,
-) -> (Vec<AddedEffect>, GlsFit) {
+) -> (Vec<AddedEffect>, GlsFit, ModelSpec) {
     let mut kept: Vec<AddedEffect> = Vec::new();
     let mut offset = vec![0.0; prob.len()];
     let mut cur = base.clone();
+    let mut spec = ModelSpec::default();
     for e in effects {
         let mut trial_offset = offset.clone();
         if let Some((_, o)) = time_offsets.iter().find(|(k, _)| *k == e.params.kind()) {
@@ -527,10 +544,12 @@ fn settle(
         }
         let mut trial = kept.clone();
         trial.push(*e);
-        let Some(fit) = prob.gls(&spec_from(prob, &trial, &trial_offset)) else {
+        let trial_spec = spec_from(prob, &trial, &trial_offset);
+        let Some(fit) = prob.gls(&trial_spec) else {
             continue;
         };
         if fit.gap().is_finite() && fit.gap() < cur.gap() {
+            spec = trial_spec;
             kept.push(AddedEffect {
                 params: e.params,
                 gap_after: fit.gap(),
@@ -540,7 +559,7 @@ fn settle(
             cur = fit;
         }
     }
-    (kept, cur)
+    (kept, cur, spec)
 }
 
 /// The stationary effects of `effects` still needed once `offset` (a warm-up's or jumps' exact

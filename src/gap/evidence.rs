@@ -17,6 +17,7 @@
 //! kept (they merge with the segments), the time series on which warm-ups and bias jumps show.
 
 use super::lsb::LsbEstimator;
+use super::outliers::{Despiker, OutlierCount, CHUNK};
 use crate::allan::accum::{AccumConfig, Engine, FloatRepr, Overlap, StatSet, TauSpec};
 
 /// Segment length (increments) of the doubling scheme before the first merge.
@@ -148,9 +149,10 @@ pub struct EvidenceSnapshot {
     /// no data), in time order.
     pub block_len: u64,
     pub block_means: Vec<f64>,
-    /// The increments' quantization step (u) when they are whole multiples of one
-    /// ([`super::lsb`]): the diagnosis checks whether quantization is white at this step
-    /// ([`super::quantization`]).
+    /// Outliers found and replaced before the evidence saw them ([`super::outliers`]).
+    pub outliers: OutlierCount,
+    /// The step of the increments as received (u), when they are whole multiples of one
+    /// ([`super::lsb`]; None for floating values, or for evidence restored from a checkpoint).
     pub lsb: Option<f64>,
 }
 
@@ -171,9 +173,15 @@ pub struct GapEvidence {
     block_pos: u64,
     n_increments: u64,
     n_received: u64,
-    /// The increments' LSB, read off the values (not checkpointed: after a resume it is read
-    /// off the increments that follow).
-    #[serde(skip, default = "LsbEstimator::new")]
+    /// The outlier filter in front of everything above (None: off, as for a temperature, or
+    /// evidence restored from a checkpoint written before it existed).
+    #[serde(default)]
+    despike: Option<Despiker>,
+    /// Cleaned increments released by the filter, waiting to be fed.
+    #[serde(skip)]
+    released: Vec<f64>,
+    /// The step of the raw increments (not kept in a checkpoint: a restored run has none).
+    #[serde(skip)]
     lsb: LsbEstimator,
 }
 
@@ -208,6 +216,7 @@ impl GapEvidence {
         ));
         let seg_engine = Engine::new(accum_cfg(cfg.tau0_s, TauSpec::List(segment_ms(seg_len))));
         let block_len = (seg_len / BLOCKS_PER_SEGMENT).max(1);
+        let cfg_tau0 = cfg.tau0_s;
         Self {
             cfg,
             main,
@@ -222,8 +231,17 @@ impl GapEvidence {
             block_pos: 0,
             n_increments: 0,
             n_received: 0,
+            despike: Some(Despiker::new(cfg_tau0)),
+            released: Vec::new(),
             lsb: LsbEstimator::new(),
         }
+    }
+
+    /// The same evidence without the outlier filter (for a smooth signal such as the unit's
+    /// temperature, whose printed rounding is all it has of noise).
+    pub fn without_outlier_filter(mut self) -> Self {
+        self.despike = None;
+        self
     }
 
     /// Evidence from a whole run of increments (u), batch convenience; non-finite values count
@@ -265,7 +283,8 @@ impl GapEvidence {
             && self.block_len <= self.seg_len
             && self.seg_pos < self.seg_len
             && self.block_pos < self.block_len
-            && self.done.len() as u64 <= 2 * self.cfg.segments.max(2) + 1;
+            && self.done.len() as u64 <= 2 * self.cfg.segments.max(2) + 1
+            && self.despike.as_ref().is_none_or(|d| d.pending() < CHUNK);
         if !clocks_ok {
             return Err(format!(
                 "evidence clocks out of range (segment {} of {}, block {} of {}, {} segments done)",
@@ -287,10 +306,42 @@ impl GapEvidence {
             .map_err(|e| format!("evidence: {e}"))
     }
 
-    /// Feeds one increment `d_k` in u.
+    /// Feeds one increment `d_k` in u (through the outlier filter: it reaches the
+    /// accumulators when its chunk is judged, or at the next gap or snapshot).
     #[inline]
     pub fn push_increment(&mut self, d: f64) {
         self.lsb.push(d);
+        match self.despike.as_mut() {
+            None => self.feed(d),
+            Some(ds) => {
+                if ds.push_ready(d) {
+                    self.release(false, false);
+                }
+            }
+        }
+    }
+
+    /// Judges what the outlier filter holds and feeds what it releases (`all`: everything, as
+    /// before a gap (`gap`) or at a snapshot).
+    fn release(&mut self, all: bool, gap: bool) {
+        let mut out = std::mem::take(&mut self.released);
+        if let Some(ds) = self.despike.as_mut() {
+            if all {
+                ds.flush(gap, &mut |v| out.push(v));
+            } else {
+                ds.judge_chunk(&mut |v| out.push(v));
+            }
+        }
+        for &v in &out {
+            self.feed(v);
+        }
+        out.clear();
+        self.released = out;
+    }
+
+    /// One cleaned increment into the accumulators.
+    #[inline]
+    fn feed(&mut self, d: f64) {
         self.main.push_increment(d);
         self.seg_engine.push_increment(d);
         self.cur_block.0 += d;
@@ -304,6 +355,7 @@ impl GapEvidence {
         if missing == 0 {
             return;
         }
+        self.release(true, true);
         self.lsb.push(f64::NAN);
         self.main.push_gap(missing);
         // Walk the gap through segment and block boundaries.
@@ -379,6 +431,7 @@ impl GapEvidence {
 
     /// Everything gathered so far (the accumulators are read, not reset).
     pub fn snapshot(&mut self) -> EvidenceSnapshot {
+        self.release(true, false);
         let tau0 = self.cfg.tau0_s;
         let curve = self
             .main
@@ -432,6 +485,7 @@ impl GapEvidence {
             segments,
             block_len: self.block_len,
             block_means,
+            outliers: self.despike.as_ref().map(|d| d.found).unwrap_or_default(),
             lsb: self.lsb.estimate(),
         }
     }

@@ -1,153 +1,131 @@
-//! Quantization-limited units (docs/gap.md, "Quantization-limited units"): when is the
-//! quantization of a unit's increments the white phase noise `Q^2 = LSB^2 / 12` that the
-//! five-term model assumes, and where on the tau axis is it not.
+//! Which quantization the channel's values show: an angle (or velocity) counter that carries
+//! its remainder, or a rate sample rounded on its own (docs/gap.md, "Rate-sample
+//! quantization").
 //!
-//! A counter that quantizes the integrated angle (with carry) leaves the error
-//! `e_k = Quant(theta_k) - theta_k`. Written as the Fourier series of the sawtooth,
-//! `e = sum_n (-1)^n LSB / (pi n) sin(2 pi n theta / LSB)`, and with the change of `theta`
-//! between samples `k` apart Gaussian of variance `v_k`, its autocovariance is
-//! `c_k = sum_{n >= 1} LSB^2 / (2 pi^2 n^2) exp(-2 pi^2 n^2 v_k / LSB^2)` (Gray and Neuhoff,
-//! "Quantization", IEEE Trans. IT 44 (1998), section on dithered and noisy quantizers;
-//! Widrow's characteristic-function condition). `c_0 = LSB^2 / 12`; the error is white when
-//! `c_1` is negligible, i.e. when the per-sample change is not small against the LSB.
+//! Both deliver values that are whole multiples of one step `delta` (u per increment; read off
+//! the values by [`super::lsb`]), but they leave different noise on the curve:
+//! - a counter with carry errs on the integrated signal by at most half a step: white *phase*
+//!   noise of variance `delta^2 / 12`, `Q_q = delta / sqrt(12)`, AVAR `3 Q_q^2 / tau^2`;
+//! - a rate sample rounded without carry errs on each increment independently: white *rate*
+//!   noise of variance `delta^2 / 12` per step, `N_q^2 = delta^2 / (12 tau0)`, AVAR
+//!   `N_q^2 / tau` (the rounding error is uniform and independent of the signal when the
+//!   sample's own noise is above about half a step: Widrow and Kollar, "Quantization Noise",
+//!   2008, ch. 4-5, the quantization theorem; a finer-grained noise makes it a slow wander
+//!   that neither term describes).
 //!
-//! With white rate noise `N` and white phase noise of variance `Q_x^2` (beyond the
-//! quantization's) the change is `v_k = k N^2 tau0 + 2 Q_x^2`. The ratio
-//! `r = sqrt(v_1) / LSB` decides: at `r >= R_WHITE` the lag-one correlation
-//! `exp(-2 pi^2 r^2)` is below 0.7% and the quantization is white. Below it the error
-//! decorrelates only after `k_q` samples, where `exp(-2 pi^2 v_k / LSB^2) <= e^-8`; at
-//! shorter taus the curve lies below the model's `3 Q^2 / tau^2` and the five-term model cannot
-//! describe it (a slow wander, not white phase noise). The diagnosis then says so plainly and
-//! uses only the taus from `k_q tau0` on, where the quantization is white again.
-//!
-//! Rate samples rounded each on its own (no carry) leave an error that follows the slow part
-//! of the rate when the rate noise is small against the LSB; it does not decorrelate with the
-//! lag, so only the plain statement holds there (the restricted taus may still misfit).
+//! The test puts each one into the final model as a floor the fit must keep (a fixed offset,
+//! the free Q or N above it) and compares `r' S^-1 r` with the free fit: the hypothesis the
+//! curve cannot carry raises it by more than [`QUANT_CHI2`]. The rounding of rate samples is
+//! then its own white-rate contribution: its share of the fitted `N^2`, and the unit's own `N`
+//! is what is left (`sqrt(N^2 - N_q^2)`).
 
-use std::f64::consts::PI;
+use super::problem::{GapProblem, GlsFit, ModelSpec};
+use serde::Serialize;
 
-/// `r` at and above which the quantization counts as white (lag-one correlation
-/// `exp(-2 pi^2 r^2)` below 0.7%).
-pub const R_WHITE: f64 = 0.5;
-/// Log of the correlation left at the first tau used (`e^-8`).
-const DECORRELATED_LN: f64 = 8.0;
+/// Rise of `r' S^-1 r` (one constraint) beyond which a hypothesis is rejected: 3 standard
+/// deviations of a chi-square with one degree of freedom at the boundary.
+pub const QUANT_CHI2: f64 = 9.0;
 
-/// A unit whose quantization is not white at the shortest taus.
+/// The verdict on the values' step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum QuantKind {
+    /// A counter with carry: white phase `Q_q`.
+    Angle,
+    /// Rate samples rounded: white rate `N_q`.
+    Rate,
+    /// The curve cannot tell (the step is fine against the noise).
+    Either,
+    /// Neither floor fits (the step is coarse against the noise, or the values were rounded
+    /// after some other processing).
+    Neither,
+}
+
+/// What the values' step does to the curve.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct QuantizationLimit {
-    /// The increments' LSB (u).
+pub struct QuantizationFinding {
+    pub kind: QuantKind,
+    /// The step of the increments, u.
     pub lsb: f64,
-    /// `r`: the per-sample rms change of the unquantized phase over the LSB.
-    pub ratio: f64,
-    /// The shortest tau (s) where the quantization error is white again (`k_q tau0`).
-    pub tau_white_s: f64,
-    /// `k_q`: cluster size (samples) of `tau_white_s`.
-    pub m_white: u64,
+    /// The same step as a rate, `lsb / tau0` (u/s).
+    pub rate_lsb: f64,
+    /// White phase of a counter with carry, `lsb / sqrt(12)` (u).
+    pub q_q: f64,
+    /// White rate of rounded rate samples, `lsb / sqrt(12 tau0)` (u/sqrt(s)).
+    pub n_q: f64,
+    /// Rise of `r' S^-1 r` with each floor forced in.
+    pub delta_chi2_angle: f64,
+    pub delta_chi2_rate: f64,
+    /// `N_q^2 / N^2` of the final fit (the share of the white rate that is rounding).
+    pub share_of_n2: f64,
+    /// The unit's own white rate when the kind is `rate`: `sqrt(N^2 - N_q^2)` (u/sqrt(s)).
+    pub n_unit: f64,
 }
 
-/// The check, from the increments' `lsb` (u), the fitted white phase noise `q2` (`Q^2`,
-/// quantization included, u^2) and white rate noise `n2` (`N^2`, u^2/s) at `tau0_s`: `None`
-/// when the quantization is white (or there is no LSB or no noise to judge by).
-pub fn quantization_limit(lsb: f64, q2: f64, n2: f64, tau0_s: f64) -> Option<QuantizationLimit> {
-    if !(lsb.is_finite() && lsb > 0.0 && tau0_s > 0.0) {
+impl QuantizationFinding {
+    /// docs/records.md's `quantization` object.
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "kind": self.kind,
+            "lsb": self.lsb,
+            "rate_lsb": self.rate_lsb,
+            "q_q": self.q_q,
+            "n_q": self.n_q,
+            "delta_chi2_angle": self.delta_chi2_angle,
+            "delta_chi2_rate": self.delta_chi2_rate,
+            "share_of_n2": self.share_of_n2,
+            "n_unit": self.n_unit,
+        })
+    }
+}
+
+/// Judges the step `lsb` (u) against the final model (`spec`, fitted as `fit`).
+pub fn judge_quantization(
+    prob: &GapProblem,
+    spec: &ModelSpec,
+    fit: &GlsFit,
+    lsb: f64,
+) -> Option<QuantizationFinding> {
+    if !(lsb > 0.0 && lsb.is_finite()) {
         return None;
     }
-    let qx2 = (q2 - lsb * lsb / 12.0).max(0.0);
-    let step = n2.max(0.0) * tau0_s;
-    let v1 = step + 2.0 * qx2;
-    let ratio = v1.sqrt() / lsb;
-    if !ratio.is_finite() || ratio >= R_WHITE {
-        return None;
-    }
-    // exp(-2 pi^2 (k step + 2 qx2) / lsb^2) <= e^-8.
-    let need = DECORRELATED_LN * lsb * lsb / (2.0 * PI * PI) - 2.0 * qx2;
-    let m_white = if step > 0.0 {
-        (need / step).ceil().clamp(1.0, 1e15) as u64
-    } else {
-        u64::MAX
+    let tau0 = prob.tau0_s;
+    let q_q = lsb / 12f64.sqrt();
+    let n_q = lsb / (12.0 * tau0).sqrt();
+    let with_floor = |col: &dyn Fn(f64) -> f64| -> Option<f64> {
+        let mut s = spec.clone();
+        let base = s.offset.clone().unwrap_or_else(|| vec![0.0; prob.len()]);
+        s.offset = Some(
+            base.iter()
+                .zip(&prob.tau)
+                .map(|(o, &t)| o + col(t))
+                .collect(),
+        );
+        prob.gls(&s).map(|f| f.chi2 - fit.chi2)
     };
-    Some(QuantizationLimit {
+    let d_angle = with_floor(&|t| 3.0 * q_q * q_q / (t * t))?.max(0.0);
+    let d_rate = with_floor(&|t| n_q * n_q / t)?.max(0.0);
+    let kind = match (d_angle > QUANT_CHI2, d_rate > QUANT_CHI2) {
+        (false, false) => QuantKind::Either,
+        (true, false) => QuantKind::Rate,
+        (false, true) => QuantKind::Angle,
+        (true, true) => QuantKind::Neither,
+    };
+    let n2 = fit.coef.get(1).copied().unwrap_or(0.0).max(0.0);
+    let share = if n2 > 0.0 {
+        n_q * n_q / n2
+    } else {
+        f64::INFINITY
+    };
+    Some(QuantizationFinding {
+        kind,
         lsb,
-        ratio,
-        tau_white_s: m_white as f64 * tau0_s,
-        m_white,
+        rate_lsb: lsb / tau0,
+        q_q,
+        n_q,
+        delta_chi2_angle: d_angle,
+        delta_chi2_rate: d_rate,
+        share_of_n2: share,
+        n_unit: (n2 - n_q * n_q).max(0.0).sqrt(),
     })
-}
-
-/// The quantization error's autocovariance at a phase change of variance `v` (u^2):
-/// `sum_n LSB^2 / (2 pi^2 n^2) exp(-2 pi^2 n^2 v / LSB^2)` (module doc), summed until the
-/// terms are below 1e-12 of the first (the tail past 10 000 terms, left only near `v = 0`,
-/// added in closed form).
-pub fn error_autocovariance(lsb: f64, v: f64) -> f64 {
-    let a = 2.0 * PI * PI * v.max(0.0) / (lsb * lsb);
-    let mut s = 0.0;
-    let terms = 10_000u32;
-    for n in 1..=terms {
-        let nf = n as f64;
-        let t = (-a * nf * nf).exp() / (nf * nf);
-        s += t;
-        if t < 1e-12 {
-            return s * lsb * lsb / (2.0 * PI * PI);
-        }
-    }
-    // The tail beyond `terms` (only reached for `v` near 0): at most `sum_{n > M} 1 / n^2`,
-    // about `1 / M` times its decay.
-    let m = terms as f64;
-    s += (-a * m * m).exp() / m;
-    s * lsb * lsb / (2.0 * PI * PI)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use rand::{RngExt, SeedableRng};
-
-    /// The closed form: `c_0 = LSB^2 / 12` (the sum of `1 / n^2` is `pi^2 / 6`).
-    #[test]
-    fn zero_lag_is_the_uniform_variance() {
-        let c0 = error_autocovariance(0.3, 0.0);
-        assert!((c0 - 0.09 / 12.0).abs() < 1e-6 * c0, "{c0}");
-    }
-
-    /// Simulation: a random-walk phase quantized with carry, `r = 0.1`; the error's lag-k
-    /// covariance matches the closed form within 4 standard errors.
-    #[test]
-    fn error_covariance_matches_simulation() {
-        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(3);
-        let (lsb, sd) = (1.0, 0.1);
-        let n = 400_000;
-        let mut theta = 0.0;
-        let e: Vec<f64> = (0..n)
-            .map(|_| {
-                let (u1, u2) = (rng.random::<f64>().max(1e-300), rng.random::<f64>());
-                theta += sd * (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
-                (theta / lsb).round() * lsb - theta
-            })
-            .collect();
-        for k in [1usize, 10, 50] {
-            let c: f64 = (0..n - k).map(|i| e[i] * e[i + k]).sum::<f64>() / (n - k) as f64;
-            let want = error_autocovariance(lsb, k as f64 * sd * sd);
-            // Samples decorrelate after ~1 / (2 pi^2 sd^2) = 5 steps: ~n / 10 independent.
-            let se = lsb * lsb / 12.0 / ((n / 10) as f64).sqrt();
-            assert!((c - want).abs() < 4.0 * se, "lag {k}: {c} vs {want}");
-        }
-    }
-
-    /// The decision: a fine LSB (rate noise 2 LSB per sample) is white; a coarse one (0.05
-    /// LSB) is limited and white again from `k_q = 8 / (2 pi^2 0.05^2) = 163` samples; white
-    /// phase noise of 1 LSB beyond the quantization dithers it white.
-    #[test]
-    fn decides_by_the_per_sample_change() {
-        let lsb = 1.0;
-        let tau0 = 0.01;
-        let q2q = lsb * lsb / 12.0;
-        let n_for = |r: f64| (r * lsb) * (r * lsb) / tau0;
-        assert_eq!(quantization_limit(lsb, q2q, n_for(2.0), tau0), None);
-        let l = quantization_limit(lsb, q2q, n_for(0.05), tau0).expect("limited");
-        assert!((l.ratio - 0.05).abs() < 1e-12);
-        assert_eq!(l.m_white, 163);
-        assert!((l.tau_white_s - 1.63).abs() < 1e-9);
-        assert_eq!(quantization_limit(lsb, q2q + 1.0, n_for(0.05), tau0), None);
-        assert_eq!(quantization_limit(0.0, q2q, 1.0, tau0), None);
-    }
 }

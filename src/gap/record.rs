@@ -1,7 +1,8 @@
 //! docs/records.md's `diagnosis` record: `type`, `channel`, `gap_before`, `gap_after`, `verdict`,
 //! `regions`, `effects`, optional `holdout`, plus extra fields (`final`, `t_data`, `tau_span`,
 //! `base_coef`, `final_coef`, `segments`, `jumps`, `residual_shape`, `model_tau`, `model_base`,
-//! `model_effects`, `quantization_limited`).
+//! `model_effects`, `outliers`, `quantization`, `quantization_limited`, and `run` when
+//! several inputs are analyzed).
 
 use super::diagnose::{Diagnosis, Verdict};
 use super::holdout::HoldoutGap;
@@ -99,6 +100,16 @@ pub struct DiagnosisRecord {
     pub model_base: Vec<f64>,
     #[serde(default)]
     pub model_effects: Vec<f64>,
+    /// Outliers found and replaced before the curve was computed (docs/gap.md, "Outliers").
+    #[serde(default)]
+    pub outliers: OutliersRecord,
+    /// What the values' step does to the curve (docs/gap.md, "Rate-sample quantization"):
+    /// absent when the values are not whole multiples of one step.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub quantization: Option<serde_json::Value>,
+    /// Run index (0-based) when several inputs are analyzed, as in the other records.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub run: Option<usize>,
     /// Present when the unit's quantization is not white phase noise at the shortest taus
     /// (its LSB is coarse against the per-sample noise; docs/gap.md, "Quantization-limited
     /// units"): the curve was diagnosed from `tau_white` on.
@@ -114,6 +125,16 @@ pub struct QuantizationRecord {
     pub lsb: f64,
     pub ratio: f64,
     pub tau_white: f64,
+}
+
+/// The `outliers` object: how many, how often (per second of data), their rms and largest size
+/// (u/s).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct OutliersRecord {
+    pub count: u64,
+    pub rate: f64,
+    pub rms_size: f64,
+    pub max_size: f64,
 }
 
 impl DiagnosisRecord {
@@ -186,6 +207,18 @@ impl DiagnosisRecord {
                 .iter()
                 .map(|v| v.max(0.0).sqrt())
                 .collect(),
+            outliers: OutliersRecord {
+                count: d.outliers.count,
+                rate: if d.t_data_s > 0.0 {
+                    d.outliers.count as f64 / d.t_data_s
+                } else {
+                    0.0
+                },
+                rms_size: d.outliers.rms_size(),
+                max_size: d.outliers.max_size,
+            },
+            quantization: d.quantization.map(|q| q.to_json()),
+            run: None,
             quantization_limited: d.quantization_limited.map(|q| QuantizationRecord {
                 lsb: q.lsb,
                 ratio: q.ratio,

@@ -5,19 +5,22 @@
 //!
 //! What the record's parameters do not fix is chosen plainly: a sinusoid's phase is 0, bias
 //! jumps become a Poisson process with the run's mean interval (`t_run / count`) and the
-//! record's rms size, the flicker band is the simulator's default (six decades from `tau0`).
+//! record's rms size, outliers a spike process with the run's rate and the simulator's size law
+//! fitted to the record's rms size, rounded rate samples (`rate_lsb`) in place of a counter when
+//! the curve says so (the rounding's white rate taken out of N), the flicker band is the simulator's default (six decades from `tau0`).
 
 use crate::model::terms;
 use crate::model::units::IncrementUnit;
 use crate::sim::effects::TemperatureProfile;
 use crate::sim::model_file::{
-    BiasJumps, ChannelModel, GaussMarkov, OutputFilterSpec, SimModel, Sinusoid, Warmup,
+    BiasJumps, ChannelModel, GaussMarkov, Outliers, OutputFilterSpec, SimModel, Sinusoid, Warmup,
     FLICKER_BAND_DECADES_DEFAULT,
 };
 use crate::sim::noise::FlickerBank;
 
 use super::diagnose::Diagnosis;
 use super::effects::EffectParams;
+use super::quantization::QuantKind;
 
 /// What is known of one channel besides its diagnosis.
 #[derive(Debug, Clone)]
@@ -35,9 +38,22 @@ pub struct ChannelFacts {
 /// The channel model of a diagnosed channel.
 pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> ChannelModel {
     let [q, n, b, k, r] = d.final_coef;
+    // Rate samples rounded on their own (gap::quantization): the fitted N holds the rounding's
+    // white rate `N_q`, which the model file adds back from `rate_lsb`; there is no counter.
+    let rate_q = d
+        .quantization
+        .filter(|f| f.kind == QuantKind::Rate && facts.lsb.is_some());
+    let (lsb, rate_lsb, n) = match rate_q {
+        Some(f) => (
+            None,
+            Some(f.rate_lsb),
+            (n * n - f.n_q * f.n_q).max(0.0).sqrt(),
+        ),
+        None => (facts.lsb, None, n),
+    };
     // The fitted Q holds the quantization's white phase (LSB / sqrt(12)); the model file adds
     // it back from `lsb`, so only the excess is written.
-    let q_model = match facts.lsb {
+    let q_model = match lsb {
         Some(l) => (q * q - terms::quantization_q(l).powi(2)).max(0.0).sqrt(),
         None => q,
     };
@@ -45,7 +61,7 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
     let mut ch = ChannelModel {
         name: facts.name.clone(),
         unit: facts.unit.clone(),
-        lsb: facts.lsb,
+        lsb,
         bias: facts.bias,
         q: q_model,
         n,
@@ -62,6 +78,12 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
         output_filter: None,
         warmup: None,
         bias_jumps: None,
+        rate_lsb,
+        // The simulator's spikes are `size (1 + E)`, rms `sqrt(5) size`.
+        outliers: (d.outliers.count > 0 && d.t_data_s > 0.0).then(|| Outliers {
+            rate_per_s: d.outliers.count as f64 / d.t_data_s,
+            size: d.outliers.rms_size() / 5f64.sqrt(),
+        }),
     };
     for e in &d.effects {
         match e.params {

@@ -4,7 +4,7 @@
 
 pub mod text;
 
-use crate::frame::FrameEvent;
+use crate::frame::{FrameBlock, FrameEvent};
 
 /// Largest magnitude accepted for a sample (an increment, rate or phase, in the channel's
 /// unit); anything larger, and any infinite value, is invalid: counted (`invalid_values`) and
@@ -28,6 +28,8 @@ pub enum Chunk {
     Rows { values: Vec<f64>, width: usize },
     /// Decoded frames and the gaps between them.
     Frames(Vec<FrameEvent>),
+    /// The same, flat (what the pipeline's decode thread sends: no allocation per frame).
+    Block(FrameBlock),
     /// A checkpoint mark (its sequence number): every step before it has been sent, none after
     /// it; the analysis saves its state here (`crate::checkpoint`).
     Checkpoint(u64),

@@ -1,4 +1,5 @@
-//! The decode stage: [`SourceEvent`]s -> [`FrameEvent`]s, on its own thread (plain sync code).
+//! The decode stage: [`SourceEvent`]s -> decoded frames (a [`crate::frame::FrameBlock`], or
+//! [`crate::frame::FrameEvent`]s), on its own thread (plain sync code).
 //!
 //! It owns the [`Decoder`] and adds what only a live stream has:
 //!
@@ -23,7 +24,7 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 use bytes::Bytes;
 
 use super::reorder::{Reorder, ReorderStats};
-use crate::frame::{Decoder, DecoderState, FrameDescriptor, FrameEvent, Health};
+use crate::frame::{BlockEvent, Decoder, DecoderState, FrameDescriptor, FrameSink, Health};
 use crate::source::SourceEvent;
 
 /// Frames lost in an outage: the advance of the frame counter from the last frame before the
@@ -139,7 +140,7 @@ impl DecodeStage {
 
     /// Takes one source event; decoded events are appended to `out`. Returns the good frames
     /// added.
-    pub fn push(&mut self, ev: SourceEvent, out: &mut Vec<FrameEvent>) -> u64 {
+    pub fn push(&mut self, ev: SourceEvent, out: &mut impl FrameSink) -> u64 {
         match ev {
             SourceEvent::Data { bytes, at } => {
                 let n = self.check_silence(at, out);
@@ -173,7 +174,7 @@ impl DecodeStage {
     }
 
     /// End of input: frames held for reordering and a frame cut off by the end.
-    pub fn finish(&mut self, out: &mut Vec<FrameEvent>) -> u64 {
+    pub fn finish(&mut self, out: &mut impl FrameSink) -> u64 {
         let mut n = 0;
         if let Some(r) = &mut self.reorder {
             r.flush(&mut self.pieces);
@@ -188,7 +189,7 @@ impl DecodeStage {
 
     /// A live stream silent for longer than half the counter period is an outage.
     /// Returns the good frames released by the restart, if there was one.
-    fn check_silence(&mut self, at: Instant, out: &mut Vec<FrameEvent>) -> u64 {
+    fn check_silence(&mut self, at: Instant, out: &mut impl FrameSink) -> u64 {
         match self.last_frame.filter(|_| self.live) {
             Some((_, t))
                 if self.pending.is_none()
@@ -201,7 +202,7 @@ impl DecodeStage {
     }
 
     /// Ends the current stretch of the stream; the next frame is placed by counter and time.
-    fn restart(&mut self, out: &mut Vec<FrameEvent>) -> u64 {
+    fn restart(&mut self, out: &mut impl FrameSink) -> u64 {
         if let Some(r) = &mut self.reorder {
             r.reset(&mut self.pieces);
             for p in self.pieces.drain(..) {
@@ -224,14 +225,27 @@ impl DecodeStage {
         n
     }
 
-    fn collect(&mut self, at: Instant, out: &mut Vec<FrameEvent>) -> u64 {
+    fn collect(&mut self, at: Instant, out: &mut impl FrameSink) -> u64 {
         let mut frames = 0;
         let m = self.modulus;
         let rate = self.desc.rate_hz;
-        while let Some(ev) = self.decoder.next_event() {
+        if let (None, Some(block)) = (&self.pending, self.decoder.block()) {
+            // No outage to place: the decoder's block goes on whole (one copy, not per frame).
+            let last = block.event_list().iter().rev().find_map(|e| match e {
+                BlockEvent::Frame { seq, .. } => Some(*seq),
+                BlockEvent::Gap { .. } => None,
+            });
+            if let Some(seq) = last {
+                self.last_frame = Some(((m > 1).then_some(seq % m), at));
+            }
+            let frames = block.frames() as u64;
+            self.decoder.take_events(out);
+            return frames;
+        }
+        for (ev, values) in self.decoder.events() {
             match ev {
-                FrameEvent::Frame(f) => {
-                    let counter = (m > 1).then_some(f.seq % m);
+                BlockEvent::Frame { seq, .. } => {
+                    let counter = (m > 1).then_some(seq % m);
                     if let Some(p) = self.pending.take() {
                         let silence = at.saturating_duration_since(p.since).as_secs_f64();
                         let adv = outage_advance(p.prev_counter, counter, m, silence, rate);
@@ -242,16 +256,17 @@ impl DecodeStage {
                         }
                         if adv > 1 {
                             self.outage.missing += adv - 1;
-                            out.push(FrameEvent::Gap { missing: adv - 1 });
+                            out.push_gap(adv - 1);
                         }
                     }
                     self.last_frame = Some((counter, at));
                     frames += 1;
-                    out.push(FrameEvent::Frame(f));
+                    out.push_frame(ev, values);
                 }
-                gap => out.push(gap),
+                BlockEvent::Gap { missing } => out.push_gap(missing),
             }
         }
+        self.decoder.clear_events();
         frames
     }
 

@@ -42,7 +42,7 @@ use tokio_util::sync::CancellationToken;
 use crate::analysis::RunAnalysis;
 use crate::checkpoint::{Checkpoint, CheckpointPlan, Position};
 use crate::error::UsageError;
-use crate::frame::{FrameDescriptor, Health};
+use crate::frame::{FrameBlock, FrameDescriptor, Health};
 use crate::input::text::{TextReader, BATCH_ROWS};
 use crate::input::Chunk;
 use crate::sink::metrics::MetricsTap;
@@ -197,17 +197,18 @@ pub async fn run_frames_async(
         .map(|c| (c.sender(), c.in_flight.clone(), c.written.clone()));
     let abort_after = plan.as_ref().and_then(|p| p.abort_after_frames);
     let metrics = ctl.metrics.clone();
+    let width = desc.frame().channels.len();
     let hook = ctl.crash_hook.clone();
     let decode = std::thread::Builder::new()
         .name("allanscope-decode".into())
         .spawn(move || {
             let mut offset = start_offset;
             let fresh = || match recycle_rx.try_recv() {
-                Ok(Chunk::Frames(mut v)) => {
-                    v.clear();
-                    v
+                Ok(Chunk::Block(mut b)) => {
+                    b.reset(width);
+                    b
                 }
-                _ => Vec::with_capacity(CHUNK_EVENTS_RESERVE),
+                _ => FrameBlock::with_capacity(width, CHUNK_EVENTS_RESERVE),
             };
             let mut events = fresh();
             let mut open = true;
@@ -224,7 +225,7 @@ pub async fn run_frames_async(
                 }
                 let due = match (&mut schedule, &ck) {
                     (Some(s), Some((_, in_flight, _))) => {
-                        s.add_steps(events[before..].iter().map(steps_of).sum());
+                        s.add_steps(events.steps_from(before));
                         s.due(in_flight)
                     }
                     _ => false,
@@ -232,7 +233,7 @@ pub async fn run_frames_async(
                 if !events.is_empty()
                     && (due || events.len() >= MAX_CHUNK_EVENTS || src_rx.is_empty())
                 {
-                    let chunk = Chunk::Frames(std::mem::replace(&mut events, fresh()));
+                    let chunk = Chunk::Block(std::mem::replace(&mut events, fresh()));
                     if !chunk_tx.send(chunk) {
                         open = false;
                         break;
@@ -268,7 +269,7 @@ pub async fn run_frames_async(
             let n = stage.finish(&mut events);
             progress.frames.fetch_add(n, Ordering::Relaxed);
             if open && !events.is_empty() {
-                chunk_tx.send(Chunk::Frames(events));
+                chunk_tx.send(Chunk::Block(events));
             }
             (stage, offset)
         })
@@ -638,14 +639,6 @@ fn spawn_analysis(
         handles.push(h);
     }
     Ok((ChunkSender(txs), handles, collector))
-}
-
-/// Steps of the data an event stands for (a frame, or the frames lost in a gap).
-fn steps_of(ev: &crate::frame::FrameEvent) -> u64 {
-    match ev {
-        crate::frame::FrameEvent::Frame(_) => 1,
-        crate::frame::FrameEvent::Gap { missing } => *missing,
-    }
 }
 
 /// The crash point of [`RunControl::crash_hook`]: once a checkpoint is on disk (waiting up to a

@@ -90,7 +90,7 @@ fn key(r: &Record) -> Option<(&'static str, &str, Option<Stat>, Option<usize>)> 
     match r {
         Record::Curve(c) => Some(("curve", c.channel.as_str(), Some(c.stat), c.run)),
         Record::Fit(f) => Some(("fit", f.channel.as_str(), None, f.run)),
-        Record::Diagnosis(d) => Some(("diagnosis", d.channel.as_str(), None, None)),
+        Record::Diagnosis(d) => Some(("diagnosis", d.channel.as_str(), None, d.run)),
         _ => None,
     }
 }

@@ -8,8 +8,9 @@
 //!
 //! Per channel and step the signal is built in this order: rate-domain terms integrated over
 //! the step (bias, stand, N, K, R, B, Gauss-Markov, sinusoids, warm-up, bias jumps, temperature
-//! bias) -> the unit's output filter -> white phase Q -> quantization with the remainder carried
-//! (integer counts when `lsb` is set). Each channel draws from its own Xoshiro256++ stream
+//! bias) -> the unit's output filter -> outliers (spikes on single rate samples) -> white phase Q
+//! -> rounding of the rate sample (`rate_lsb`, no carry) -> quantization with the remainder
+//! carried (integer counts when `lsb` is set). Each channel draws from its own Xoshiro256++ stream
 //! (seeded with `seed`, then jumped 2^128 steps per channel index), so adding a channel does not
 //! change the others.
 //!
@@ -27,8 +28,9 @@ pub mod model_write;
 pub mod noise;
 pub mod writer;
 
+use rand::RngExt;
 use rand::SeedableRng;
-use rand_distr::{Distribution, StandardNormal};
+use rand_distr::{Distribution, Exp1, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
 use effects::{BiasJumpsGen, OutputFilter, SinusoidGen, TemperatureState, WarmupGen};
@@ -162,6 +164,10 @@ struct ChannelSim {
     temp_coeff: f64,
     filter: Option<OutputFilter>,
     white_phase: Option<WhitePhase>,
+    /// Outliers: (probability per step, size in u per step).
+    outliers: Option<(f64, f64)>,
+    /// Rate-sample rounding: (step of the increment in u, its inverse).
+    rate_round: Option<(f64, f64)>,
     /// (lsb, 1/lsb, remainder in u)
     quant: Option<(f64, f64, f64)>,
 }
@@ -223,6 +229,11 @@ impl ChannelSim {
                 .output_filter
                 .map(|f| OutputFilter::new(f.time_constant_s, tau0_s)),
             white_phase,
+            outliers: c
+                .outliers
+                .filter(|o| o.rate_per_s > 0.0)
+                .map(|o| (o.rate_per_s * tau0_s, o.size * tau0_s)),
+            rate_round: c.rate_lsb.map(|l| (l * tau0_s, 1.0 / (l * tau0_s))),
             quant: c.lsb.map(|l| (l, 1.0 / l, 0.0)),
             rng,
         }
@@ -265,8 +276,21 @@ impl ChannelSim {
         if let Some(f) = &mut self.filter {
             d = f.step(d);
         }
+        if let Some((p, size)) = self.outliers {
+            let u: f64 = rng.random();
+            if u < p {
+                let e: f64 = Exp1.sample(rng);
+                let sign = if rng.random::<bool>() { 1.0 } else { -1.0 };
+                d += sign * size * (1.0 + e);
+            }
+        }
         if let Some(q) = &mut self.white_phase {
             d += q.step(normal(rng));
+        }
+        if let Some((step, inv)) = self.rate_round {
+            // round half away from zero, as the quantizer below
+            let x = d * inv;
+            d = (x + 0.5f64.copysign(x)).trunc() * step;
         }
         self.rng = local;
         match &mut self.quant {

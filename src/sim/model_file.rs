@@ -36,6 +36,8 @@
 //! output_filter = { time_constant = 0.01 }                          # s
 //! warmup = { amplitude = 0.5, time_constant = 600.0 }               # u/s, s
 //! bias_jumps = { mean_interval = 1800.0, rms_size = 0.01 }          # s, u/s
+//! rate_lsb = 0.01                 # optional: each rate sample rounded to this step (u/s), no carry
+//! outliers = { rate = 1.0e-3, size = 5.0 }                          # 1/s, u/s
 //! ```
 
 use std::path::Path;
@@ -106,6 +108,20 @@ pub struct ChannelModel {
     pub output_filter: Option<OutputFilterSpec>,
     pub warmup: Option<Warmup>,
     pub bias_jumps: Option<BiasJumps>,
+    /// Each rate sample rounded to this step (u/s), no remainder carried (MEMS parts): a white
+    /// rate noise of `rate_lsb^2 tau0 / 12` (docs/gap.md, "Rate-sample quantization").
+    pub rate_lsb: Option<f64>,
+    /// Isolated spikes on single rate samples.
+    pub outliers: Option<Outliers>,
+}
+
+/// Isolated outliers: on each step, with probability `rate_per_s * tau0`, the rate sample gets
+/// a spike of random sign and magnitude `size (1 + E)`, `E` exponential of mean 1 (at least
+/// `size`, rms `sqrt(5) size`): u/s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Outliers {
+    pub rate_per_s: f64,
+    pub size: f64,
 }
 
 /// First-order Gauss-Markov rate noise: stationary sd `sigma` (u/s), correlation time `tau_c_s`.
@@ -650,6 +666,22 @@ fn parse_channel(
             rms_size,
         }
     });
+    let rate_lsb = k.num_pos("rate_lsb", true, errs);
+    let outliers = k.table("outliers", errs).map(|(p, tt)| {
+        let mut e = Keys::new(tt, &p);
+        let r = e.num_pos("rate", false, errs);
+        let rate_per_s = e.required("rate", r, errs);
+        if rate_per_s * tau0_s > 0.5 {
+            errs.push(
+                &e.path("rate"),
+                format!("{rate_per_s} per second is more than one outlier every two samples"),
+            );
+        }
+        let sz = e.num_pos("size", true, errs);
+        let size = e.required("size", sz, errs);
+        e.finish(errs);
+        Outliers { rate_per_s, size }
+    });
     k.finish(errs);
     if errs.list.len() > n_before {
         return None;
@@ -675,5 +707,7 @@ fn parse_channel(
         output_filter,
         warmup,
         bias_jumps,
+        rate_lsb,
+        outliers,
     })
 }

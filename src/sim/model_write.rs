@@ -98,6 +98,9 @@ fn channel_toml(s: &mut String, c: &ChannelModel) {
             num(c.temperature_coefficient)
         );
     }
+    if let Some(l) = c.rate_lsb {
+        let _ = writeln!(s, "rate_lsb = {}", num(l));
+    }
     for g in &c.gauss_markov {
         let _ = writeln!(
             s,
@@ -136,6 +139,14 @@ fn channel_toml(s: &mut String, c: &ChannelModel) {
             "[channel.bias_jumps]\nmean_interval = {}\nrms_size = {}",
             num(j.mean_interval_s),
             num(j.rms_size)
+        );
+    }
+    if let Some(o) = c.outliers {
+        let _ = writeln!(
+            s,
+            "[channel.outliers]\nrate = {}\nsize = {}",
+            num(o.rate_per_s),
+            num(o.size)
         );
     }
 }
@@ -185,6 +196,8 @@ sinusoid = [{ amplitude = 0.05, frequency = 1.3, phase = 0.25 }]
 output_filter = { time_constant = 0.01 }
 warmup = { amplitude = -0.5, time_constant = 600.0 }
 bias_jumps = { mean_interval = 1800.0, rms_size = 0.01 }
+rate_lsb = 0.02
+outliers = { rate = 0.001, size = 3.5 }
 "#;
         let m = read(text);
         assert_eq!(m.channels[0].gauss_markov.len(), 2);

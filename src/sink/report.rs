@@ -2,10 +2,11 @@
 //! datasheet limits, the runs and whether each input was read to its end, the limits with their
 //! units, the Allan-deviation figures (one panel per channel unit, runs labelled by file), the
 //! noise model (the seed paper's table 2 layout per channel when there are several runs: runs
-//! as rows, the five coefficients as columns, then mean, 95% interval of the mean and sd), the
-//! final diagnosis in words with each effect's parameters named and in units (interim diagnoses
-//! in a small time table), the dynamic Allan view where interim curves exist, the decoder's
-//! health, and a signature block. Print CSS keeps tables and figures whole on A4.
+//! as rows, the five coefficients as columns, then mean, 95% interval of the mean and sd) and
+//! the IEEE 952 read-outs beside it, the final diagnosis in words with each effect's parameters
+//! named and in units (interim diagnoses in a small time table), the dynamic Allan view where
+//! interim curves exist, the decoder's health, and a signature block. Print CSS keeps tables and
+//! figures whole on A4.
 
 use std::fmt::Write;
 
@@ -13,6 +14,7 @@ use serde_json::Value;
 
 use crate::gap::DiagnosisRecord;
 use crate::model::aggregate::{aggregate_channels, RunCoefs};
+use crate::model::readout::ReadoutRecord;
 use crate::model::terms::TERM_NAMES;
 use crate::sink::dynamic::render_dynamic_svg;
 use crate::sink::plot::{
@@ -365,6 +367,7 @@ fn noise_model(h: &mut String, res: &Results) {
     let several = res.several_runs();
     if !several {
         single_run_fits(h, &finals);
+        readouts_table(h, &finals, false);
         return;
     }
     // The aggregate records written with the runs; computed here as `aggregate` would when the
@@ -491,6 +494,81 @@ fn noise_model(h: &mut String, res: &Results) {
         });
         h.push_str("</table>\n");
     }
+    readouts_table(h, &finals, true);
+}
+
+/// The IEEE 952 read-outs of each final fit (model::readout): ARW, bias instability and RRW, each
+/// with its 95% interval, unit (datasheet where the channel's unit is known) and the tau read.
+fn readouts_table(h: &mut String, finals: &[&Labelled<FitRecord>], several: bool) {
+    if finals.iter().all(|f| f.rec.readouts.is_none()) {
+        return;
+    }
+    h.push_str("<h3>IEEE 952 read-outs</h3>\n<p>Read from the Allan-deviation curve itself (IEEE Std 952-1997 annex C), to compare with the fit: angle (velocity) random walk on the &minus;1/2 slope at &tau; = 1 s, bias instability = the curve's minimum / 0.664 (with the &tau; of the minimum), rate (acceleration) random walk on the +1/2 slope at &tau; = 3 s; the 95% interval is that of the point read.</p>\n<table class=\"readouts\"><tr>");
+    if several {
+        h.push_str("<th class=\"l\">run</th>");
+    }
+    h.push_str("<th class=\"l\">channel</th><th class=\"l\">read-out</th><th>value</th><th>95% interval</th><th class=\"l\">unit</th><th>read at &tau; (s)</th></tr>\n");
+    for f in finals {
+        let Some(ro) = f.rec.readouts.as_deref() else {
+            continue;
+        };
+        let rows: [(&str, &str, Option<&ReadoutRecord>, &str); 3] = [
+            (
+                "arw",
+                "random walk (ARW/VRW)",
+                ro.arw.as_ref(),
+                "no &minus;1/2 slope on the curve",
+            ),
+            (
+                "bias_instability",
+                "bias instability",
+                ro.bias_instability.as_ref(),
+                "no minimum inside the curve",
+            ),
+            (
+                "rrw",
+                "rate random walk (RRW)",
+                ro.rrw.as_ref(),
+                "no +1/2 slope on the curve",
+            ),
+        ];
+        for (key, name, r, absent) in rows {
+            let _ = write!(
+                h,
+                "<tr data-channel=\"{}\" data-readout=\"{key}\">",
+                esc(&f.rec.channel)
+            );
+            if several {
+                let _ = write!(h, "<td class=\"l\">{}</td>", esc(&f.label));
+            }
+            let _ = write!(
+                h,
+                "<td class=\"l\">{}</td><td class=\"l\">{name}</td>",
+                esc(&f.rec.channel)
+            );
+            match r {
+                Some(r) => {
+                    let (v, lo, hi, unit) = match &r.datasheet {
+                        Some(d) => (d.value.unwrap_or(f64::NAN), d.lo, d.hi, d.unit.clone()),
+                        None => (r.value, r.lo, r.hi, r.unit.clone()),
+                    };
+                    let _ = writeln!(
+                        h,
+                        "<td>{}</td><td>[{}, {}]</td><td class=\"l\">{}</td><td>{}</td></tr>",
+                        tick(v),
+                        tick(lo),
+                        tick(hi),
+                        esc(&unit),
+                        tick(r.tau)
+                    );
+                }
+                None => {
+                    let _ = writeln!(h, "<td colspan=\"4\" class=\"l\">{absent}</td></tr>");
+                }
+            }
+        }
+    }
+    h.push_str("</table>\n");
 }
 
 fn single_run_fits(h: &mut String, fits: &[&Labelled<FitRecord>]) {

@@ -435,3 +435,38 @@ fn every_upper_bound_respects_what_the_curve_allows() {
     }
     assert!(checked >= 16, "{checked}");
 }
+
+#[test]
+fn diagnoses_of_several_runs_carry_their_run_index() {
+    let a = write_csv("diag-run0.csv", &[("g", &white_increments(20_000, 21))]);
+    let b = write_csv("diag-run1.csv", &[("g", &white_increments(20_000, 22))]);
+    let args = |inputs: &[&PathBuf]| {
+        let mut v: Vec<String> = inputs.iter().map(|p| p.display().to_string()).collect();
+        v.extend(["--tau0", "0.01", "--diagnose"].map(String::from));
+        let out = exe().arg("analyze").args(&v).output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout)
+            .unwrap()
+            .lines()
+            .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+            .collect::<Vec<_>>()
+    };
+    let recs = args(&[&a, &b]);
+    let diag: Vec<&serde_json::Value> = recs.iter().filter(|r| r["type"] == "diagnosis").collect();
+    assert_eq!(diag.len(), 2, "one final diagnosis per run");
+    // Each run's diagnosis carries its index, like the run's curves and its summary.
+    for (i, d) in diag.iter().enumerate() {
+        assert_eq!(d["run"], i, "{d}");
+    }
+    let summaries: Vec<&serde_json::Value> =
+        recs.iter().filter(|r| r["type"] == "summary").collect();
+    assert_eq!(summaries[1]["run"], 1);
+    // One run: no index, as in the other records.
+    let one = args(&[&a]);
+    let d = one.iter().find(|r| r["type"] == "diagnosis").unwrap();
+    assert!(d.get("run").is_none(), "{d}");
+}

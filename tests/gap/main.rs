@@ -6,6 +6,8 @@ mod diagnosis;
 mod families;
 mod mixture;
 mod oracle;
+mod outliers;
+mod quantization;
 mod real_slice;
 mod reference;
 mod temperature;

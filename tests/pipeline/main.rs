@@ -7,6 +7,7 @@ mod common;
 
 mod arbitrary_checkpoint;
 mod backpressure;
+mod block_feed;
 mod checkpoint;
 mod config;
 mod corruption;

@@ -264,3 +264,75 @@ fn effects_are_named_with_units_and_only_the_final_diagnosis_is_in_the_main_tabl
     let interim = &html[html.find("<table class=\"interim").expect("interim table")..];
     assert!(interim[..interim.find("</table>").unwrap()].contains("<td>1800</td>"));
 }
+
+/// The value cells of the read-out row `key` of `channel` in the read-outs table.
+fn readout_cells(html: &str, channel: &str, key: &str) -> Vec<String> {
+    let tag = format!("<tr data-channel=\"{channel}\" data-readout=\"{key}\">");
+    let i = html
+        .find(&tag)
+        .unwrap_or_else(|| panic!("no {tag} in\n{html}"));
+    let row = html[i..].split("</tr>").next().unwrap();
+    row.split("<td")
+        .skip(1)
+        .map(|c| {
+            let c = &c[c.find('>').unwrap() + 1..];
+            c.split("</td>").next().unwrap().to_string()
+        })
+        .collect()
+}
+
+#[test]
+fn the_ieee_952_readouts_are_shown_with_units_intervals_and_taus() {
+    use allanscope::allan::CurvePoint;
+    use allanscope::model::readout::readouts;
+    // The exact curve of N = 0.254 arcsec/sqrt(s), B = 0.225 arcsec/s (the seed paper's VOG4)
+    // from 4 ms to 8 s: white rate noise dominates at the shortest tau (N^2/tau = 16 against
+    // 0.664^2 B^2 = 0.022), so the -1/2 line through it reads N at 1 s within 0.2%, i.e.
+    // ARW = 0.254/60 = 0.004233 deg/sqrt(h); the curve still falls at 8 s, so there is no
+    // minimum inside it (no bias-instability read-out) and no +1/2 slope.
+    let c = model_curve("g4", "arcsec", [0.0, 0.254, 0.225, 0.0, 0.0], 12);
+    let points: Vec<CurvePoint> = (0..c.tau.len())
+        .map(|i| CurvePoint {
+            m: c.m[i],
+            tau_s: c.tau[i],
+            var: c.sigma[i] * c.sigma[i],
+            count: c.count[i],
+            edf: 100.0,
+            alpha: 0,
+            sigma_lo: c.lo[i].unwrap(),
+            sigma_hi: c.hi[i].unwrap(),
+        })
+        .collect();
+    let mut f = fit_of("g4", "arcsec", [0.0, 0.254, 0.225, 0.0, 0.0]);
+    f.readouts = Some(Box::new(readouts(&points).record("arcsec")));
+    let files = vec![ResultFile {
+        name: "vog4.jsonl".into(),
+        records: vec![
+            serde_json::to_value(&c).unwrap(),
+            serde_json::to_value(&f).unwrap(),
+            summary("vog4.csv", None, json!([]), None),
+        ],
+    }];
+    let html = render_html(&files, "t", "now");
+    assert!(html.contains("<h3>IEEE 952 read-outs</h3>"), "{html}");
+    let arw = readout_cells(&html, "g4", "arw");
+    // channel, name, value, interval, unit, tau
+    assert_eq!(arw[4], "deg/sqrt(h)", "{arw:?}");
+    let v: f64 = arw[2].parse().unwrap();
+    assert!((v / (0.254 / 60.0) - 1.0).abs() < 0.002, "{arw:?}");
+    // The interval is the point's (0.9 and 1.1 of sigma in model_curve), carried to 1 s.
+    let iv: Vec<f64> = arw[3]
+        .trim_matches(|c| c == '[' || c == ']')
+        .split(", ")
+        .map(|x| x.parse().unwrap())
+        .collect();
+    assert!(
+        (iv[0] / v - 0.9).abs() < 1e-3 && (iv[1] / v - 1.1).abs() < 1e-3,
+        "{arw:?}"
+    );
+    assert_eq!(arw[5], "0.004", "read at the shortest tau: {arw:?}");
+    let bi = readout_cells(&html, "g4", "bias_instability");
+    assert!(bi[2].contains("no minimum inside the curve"), "{bi:?}");
+    let rrw = readout_cells(&html, "g4", "rrw");
+    assert!(rrw[2].contains("no +1/2 slope"), "{rrw:?}");
+}

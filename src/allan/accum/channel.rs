@@ -10,6 +10,7 @@ pub(super) trait ChannelEngine {
     fn break_seg(&mut self);
     fn points(&self) -> u64;
     fn seconds(&self) -> f64;
+    fn step_count(&self) -> u64;
     fn segment_count(&self) -> u64;
     fn cfg(&self) -> &AccumConfig;
     fn bytes(&self) -> usize;
@@ -27,6 +28,9 @@ impl<R: Repr> ChannelEngine for Engine<R> {
     }
     fn seconds(&self) -> f64 {
         self.t_data_s()
+    }
+    fn step_count(&self) -> u64 {
+        self.steps()
     }
     fn segment_count(&self) -> u64 {
         self.segments()
@@ -91,6 +95,11 @@ impl ChannelAccumulator {
 
     pub fn t_data_s(&self) -> f64 {
         self.engine().seconds()
+    }
+
+    /// Steps of data accounted for, gaps included (`t_data_s` is this times tau0).
+    pub fn steps(&self) -> u64 {
+        self.engine().step_count()
     }
 
     pub fn segments(&self) -> u64 {

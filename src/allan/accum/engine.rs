@@ -279,6 +279,11 @@ impl<R: Repr> Engine<R> {
         self.n_points
     }
 
+    /// Steps of data accounted for (increments and lost ones), gaps included.
+    pub fn steps(&self) -> u64 {
+        self.n_steps
+    }
+
     /// Seconds of data accounted for, gaps included.
     pub fn t_data_s(&self) -> f64 {
         self.n_steps as f64 * self.cfg.tau0_s

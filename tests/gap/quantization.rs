@@ -1,0 +1,78 @@
+//! Rate-sample quantization (docs/gap.md, "Rate-sample quantization"): a MEMS gyro that rounds
+//! each rate sample has a white-rate contribution `N_q = rate_lsb sqrt(tau0 / 12)` the
+//! diagnosis names as such (kind `rate`, the step read off the values), with the unit's own N
+//! left once it is taken out, and no false effect; a counter with carry (the seed's MA4) is
+//! told apart (kind `angle`).
+
+use allanscope::gap::quantization::QuantKind;
+use allanscope::gap::unit_model::{fitted_channel, ChannelFacts};
+use allanscope::gap::{diagnose, DiagnoseOptions, Diagnosis, GapConfig, GapEvidence, Verdict};
+use allanscope::sim::{SimModel, Simulator};
+use std::path::Path;
+
+fn run(text: &str, seconds: f64, seed: u64) -> Diagnosis {
+    let m = SimModel::from_toml_str(text, Path::new("<test>")).expect("model");
+    let mut sim = Simulator::new(&m, seed);
+    let mut inc = vec![0.0; (seconds / m.tau0_s) as usize];
+    sim.fill_channel(0, &mut inc);
+    // the values as the CSV writer prints them and a reader reads them back
+    for v in inc.iter_mut() {
+        *v = format!("{v}").parse().expect("number");
+    }
+    let mut ev = GapEvidence::from_increments(GapConfig::new(m.tau0_s), &inc);
+    diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis")
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    ((a - b) / b).abs()
+}
+
+/// A MEMS gyro at 200 Hz: N 0.005 deg/sqrt(s) (rate-sample noise 0.0707 deg/s), rate samples
+/// rounded to 0.05 deg/s (0.71 of the noise; `N_q` = 0.00177, a 12.5% share of `N^2`), one
+/// hour. Named `rate` with the step exact, the unit's own N within 3% of 0.005, the fitted N
+/// within 3% of `sqrt(N^2 + N_q^2)` (so no N excess is left unexplained) and no effect.
+#[test]
+fn mems_rate_rounding_is_named() {
+    let text = "tau0_s = 0.005\n[[channel]]\nname = \"gx\"\nunit = \"deg\"\nN = 0.005\nB = 2.0e-4\nK = 1.0e-5\nrate_lsb = 0.05\n";
+    for seed in [1, 2] {
+        let d = run(text, 3600.0, seed);
+        let q = d.quantization.expect("values on a grid");
+        assert_eq!(q.kind, QuantKind::Rate, "seed {seed}: {q:?}");
+        assert!(rel(q.rate_lsb, 0.05) < 1e-9, "{q:?}");
+        let n_q = 0.05 * (0.005f64 / 12.0).sqrt();
+        assert!(rel(q.n_q, n_q) < 1e-9);
+        assert!(rel(q.n_unit, 0.005) < 0.03, "n_unit {}", q.n_unit);
+        let n_all = (0.005f64.powi(2) + n_q * n_q).sqrt();
+        assert!(rel(d.final_coef[1], n_all) < 0.03, "N {:?}", d.final_coef);
+        assert!(q.delta_chi2_angle > 100.0, "{q:?}");
+        assert!(q.delta_chi2_rate < 9.0, "{q:?}");
+        assert_eq!(d.verdict, Verdict::Consistent, "{d:?}");
+        // The twin rounds its rate samples too, with the unit's own N.
+        let facts = ChannelFacts {
+            name: "gx".into(),
+            unit: "deg".into(),
+            lsb: Some(q.lsb),
+            bias: 0.0,
+            temperature_coefficient: 0.0,
+        };
+        let ch = fitted_channel(&facts, &d, 0.005);
+        assert_eq!(ch.lsb, None);
+        assert!(rel(ch.rate_lsb.expect("rate_lsb"), 0.05) < 1e-9);
+        assert!(rel(ch.n, 0.005) < 0.03, "twin N {}", ch.n);
+    }
+}
+
+/// The seed's MA4 (config/models/ma4.toml: a counter with carry, Q-dominated), 30 minutes:
+/// named `angle`; the rate hypothesis would need an N about 20 times the fitted one.
+#[test]
+fn a_counter_with_carry_is_angle_quantization() {
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("config/models/ma4.toml"),
+    )
+    .expect("ma4.toml");
+    let d = run(&text, 1800.0, 3);
+    let q = d.quantization.expect("values on a grid");
+    assert_eq!(q.kind, QuantKind::Angle, "{q:?}");
+    assert!(rel(q.lsb, 2.104e-4) < 1e-9);
+    assert!(q.delta_chi2_rate > 100.0, "{q:?}");
+}
