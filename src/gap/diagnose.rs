@@ -258,9 +258,8 @@ fn check_quantization(
     let mut cut = opts.min_m.max(8);
     // At most ~40 doublings: the fit fails once fewer than 8 taus are left.
     while let Some(j) = judge(cut) {
-        let Some(l) = j else {
-            return None;
-        };
+        // `None`: the fit from this cut on says the quantization is white.
+        let l = j?;
         last = l;
         if l.m_white <= cut {
             break;
