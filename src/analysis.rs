@@ -29,6 +29,30 @@ pub enum InputKind {
     Phase,
 }
 
+impl InputKind {
+    /// The increment (u) one text value `v` stands for: the rule every reader of text columns
+    /// shares (the analysis's gap evidence and `diagnose`). `None`: the value gives no step (the
+    /// first phase value, or the first after a missing one: there is no previous phase to
+    /// difference); a non-finite result is a missing step (a gap). `last_phase` carries the
+    /// previous finite phase value of the channel.
+    #[inline]
+    pub fn step(self, v: f64, tau0_s: f64, last_phase: &mut Option<f64>) -> Option<f64> {
+        match self {
+            InputKind::Phase => {
+                let d = last_phase.map(|p| v - p);
+                *last_phase = v.is_finite().then_some(v);
+                d
+            }
+            InputKind::Increments => Some(v),
+            InputKind::Rate => Some(v * tau0_s),
+        }
+    }
+}
+
+/// Text columns that are not channels: the simulator's temperature column (degC), which
+/// `diagnose` reads as the unit's temperature.
+pub const AUXILIARY_COLUMNS: [&str; 1] = ["temperature_c"];
+
 /// One channel as the input describes it.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ChannelSetup {
@@ -53,6 +77,22 @@ impl ChannelSetup {
                 unit: c.unit,
                 column: i,
                 counts_lsb: c.scale,
+            })
+            .collect()
+    }
+
+    /// The channels of text columns with header `names` ([`AUXILIARY_COLUMNS`] left out), each
+    /// in `unit`.
+    pub fn for_text(names: &[String], unit: &str) -> Vec<ChannelSetup> {
+        names
+            .iter()
+            .enumerate()
+            .filter(|(_, n)| !AUXILIARY_COLUMNS.contains(&n.as_str()))
+            .map(|(i, n)| ChannelSetup {
+                name: n.clone(),
+                unit: unit.to_string(),
+                column: i,
+                counts_lsb: None,
             })
             .collect()
     }
@@ -408,16 +448,7 @@ impl RunAnalysis {
         for ch in &mut self.channels {
             let v = row[ch.setup.column];
             if let Some(g) = &mut ch.gap {
-                let inc = match kind {
-                    InputKind::Phase => {
-                        let d = ch.last_phase.map(|p| v - p);
-                        ch.last_phase = v.is_finite().then_some(v);
-                        d
-                    }
-                    InputKind::Increments => Some(v),
-                    InputKind::Rate => Some(v * tau0),
-                };
-                match inc {
+                match kind.step(v, tau0, &mut ch.last_phase) {
                     Some(d) if d.is_finite() => g.push_increment(d),
                     Some(_) => g.push_gap(1),
                     None => {}

@@ -12,8 +12,8 @@ use std::sync::Arc;
 
 use super::process::SignalWatch;
 use super::{
-    analysis_options, checkpoint_header, finish_records, format_and_tau0, interrupted, open_input,
-    records_output, select_channels, start_analysis, usage, AnalyzeArgs, DataArgs,
+    analysis_options, finish_records, format_and_tau0, interrupted, open_input, records_output,
+    usage, AnalyzeArgs, DataArgs,
 };
 use allanscope::analysis::{AnalysisOptions, ChannelSetup};
 use allanscope::checkpoint::Position;
@@ -21,12 +21,10 @@ use allanscope::frame::FrameDescriptor;
 use allanscope::input::text::TextReader;
 use allanscope::model::aggregate::{aggregate_channels, RunCoefs};
 use allanscope::pipeline::{RecordQueue, RecordWriter, RunControl, RunOutcome};
+use allanscope::plan::unit::{InputPlan, UnitPlan};
 use allanscope::sink::output::OutputMode;
 use allanscope::sink::records::Record;
 use allanscope::source::{Pace, SourceSpec};
-
-/// Text columns the analysis does not treat as channels (the simulator's temperature column).
-const AUXILIARY_COLUMNS: [&str; 1] = ["temperature_c"];
 
 pub fn run(a: &AnalyzeArgs) -> Result<()> {
     let d = &a.data;
@@ -202,25 +200,22 @@ fn analyze_text(
         &d.text_options(),
     )
     .map_err(anyhow::Error::new)?;
-    let setups: Vec<ChannelSetup> = reader
-        .names()
-        .iter()
-        .enumerate()
-        .filter(|(_, n)| !AUXILIARY_COLUMNS.contains(&n.as_str()))
-        .map(|(i, n)| ChannelSetup {
-            name: n.clone(),
-            unit: allanscope::model::units::increment_unit_label(&d.unit, d.rate),
-            column: i,
-            counts_lsb: None,
-        })
-        .collect();
-    let setups = select_channels(setups, &d.channels, input)?;
-    let header = checkpoint_header(input, "csv", &opts, &setups);
+    let unit = allanscope::model::units::increment_unit_label(&d.unit, d.rate);
+    let plan = UnitPlan::with_options(
+        InputPlan::Text {
+            input: input.into(),
+            options: d.text_options(),
+        },
+        "csv",
+        ChannelSetup::for_text(reader.names(), &unit),
+        &d.channels,
+        opts,
+        &d.unit_request(false),
+    )?;
     let replay = input != "-";
-    let ckpt = d.checkpoint_setup(header, true, replay)?;
-    let saved = ckpt.as_ref().and_then(|c| c.1.as_ref());
-    let ck_path = ckpt.as_ref().map(|c| c.0.path.clone());
-    let mut analysis = start_analysis(input, setups, opts, saved, ck_path.as_deref())?;
+    let mut analysis = plan.start_analysis()?;
+    let saved = plan.checkpoint.as_ref().and_then(|c| c.1.as_ref());
+    let ck_path = plan.checkpoint_path().map(PathBuf::from);
     let reader = match saved.map(|c| &c.position) {
         Some(Position::Text(pos)) if replay => {
             // Continue the file where the saved run stood.
@@ -247,7 +242,7 @@ fn analyze_text(
         None => reader,
     };
     let mut ctl = ctl.clone();
-    ctl.checkpoint = ckpt.map(|c| Arc::new(c.0));
+    ctl.checkpoint = plan.checkpoint.map(|c| Arc::new(c.0));
     let rows_per_s = realtime.then_some(1.0 / tau0);
     allanscope::pipeline::run_text(reader, path, rows_per_s, analysis, queue, &ctl)
 }
@@ -263,17 +258,6 @@ fn analyze_frames(
     ctl: &RunControl,
 ) -> Result<RunOutcome> {
     sniff(input, Some(desc))?;
-    let setups = select_channels(ChannelSetup::for_frames(desc), &d.channels, input)?;
-    let header = checkpoint_header(input, &d.format, &opts, &setups);
-    let ckpt = d.checkpoint_setup(header, true, input != "-")?;
-    let saved = ckpt.as_ref().and_then(|c| c.1.as_ref());
-    let ck_path = ckpt.as_ref().map(|c| c.0.path.clone());
-    let analysis = start_analysis(input, setups, opts, saved, ck_path.as_deref())?;
-    let mut ctl = ctl.clone();
-    ctl.checkpoint = ckpt.map(|c| Arc::new(c.0));
-    let _bar = (input != "-" && std::io::stderr().is_terminal())
-        .then(|| super::process::ProgressBar::start(ctl.progress.clone()));
-    let ctl = &ctl;
     let pace = if realtime {
         Pace::Realtime {
             bytes_per_s: desc.frame_len() as f64 * desc.rate_hz,
@@ -289,6 +273,23 @@ fn analyze_frames(
             pace,
         }
     };
+    let plan = UnitPlan::with_options(
+        InputPlan::Frames {
+            spec: spec.clone(),
+            desc: Box::new(desc.clone()),
+        },
+        &d.format,
+        ChannelSetup::for_frames(desc),
+        &d.channels,
+        opts,
+        &d.unit_request(false),
+    )?;
+    let analysis = plan.start_analysis()?;
+    let mut ctl = ctl.clone();
+    ctl.checkpoint = plan.checkpoint.map(|c| Arc::new(c.0));
+    let _bar = (input != "-" && std::io::stderr().is_terminal())
+        .then(|| super::process::ProgressBar::start(ctl.progress.clone()));
+    let ctl = &ctl;
     let outcome = allanscope::pipeline::run_frames(spec, desc, analysis, queue, ctl)?;
     if let Some(h) = &outcome.health {
         if h.frames == 0 && h.bytes_in > 0 && !d.resume {

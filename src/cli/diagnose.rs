@@ -8,8 +8,8 @@ use std::path::Path;
 use anyhow::{Context, Result};
 
 use super::{format_and_tau0, open_input, usage, DiagnoseArgs};
-use allanscope::analysis::InputKind;
-use allanscope::frame::{Decoder, FrameDescriptor, FrameEvent};
+use allanscope::analysis::ChannelSetup;
+use allanscope::frame::{FrameDescriptor, FrameEvent};
 use allanscope::gap::diagnose::diagnose_with_temperature;
 use allanscope::gap::lsb::LsbEstimator;
 use allanscope::gap::temperature::settling_profile;
@@ -17,7 +17,10 @@ use allanscope::gap::unit_model::{fitted_channel, fitted_unit, ChannelFacts};
 use allanscope::gap::EffectParams;
 use allanscope::gap::{holdout_gap, DiagnoseOptions, DiagnosisRecord, GapConfig, GapEvidence};
 use allanscope::input::text::{TextReader, BATCH_ROWS};
+use allanscope::pipeline::decode::DecodeStage;
+use allanscope::plan::unit::{InputPlan, UnitPlan, UnitRequest};
 use allanscope::sim::model_write::model_toml;
+use allanscope::source::{Pace, SourceEvent, SourceSpec};
 
 /// One channel's evidence, gathered from a whole input.
 struct Gathered {
@@ -72,7 +75,10 @@ impl Gathered {
     }
 }
 
-/// Reads a run and feeds every selected channel's increments to its evidence.
+/// Reads a run and feeds every selected channel's increments to its evidence. The input is
+/// planned as `analyze` plans it ([`UnitPlan`]: the same format, channels, and channel choice,
+/// `--channel` or `--channels`), read by the same readers (the text reader, the replay's decode
+/// stage), and its values become increments by the same rule ([`InputKind::step`]).
 fn gather(
     input: &str,
     a: &DiagnoseArgs,
@@ -90,49 +96,43 @@ fn gather(
         temperature_sum: 0.0,
         temperature_n: 0,
     };
-    let mut columns = Vec::new();
-    let wanted = |n: &str| a.channel.as_ref().is_none_or(|c| c.iter().any(|w| w == n));
+    let mut settings = a.data.settings()?;
+    if a.channel.is_some() {
+        settings.channels = a.channel.clone();
+    }
+    // Diagnose reads the input once: no checkpoints (refused in `run`).
+    let req = UnitRequest::default();
     match desc {
         None => {
-            let kind = if a.data.rate {
-                InputKind::Rate
-            } else if a.data.phase {
-                InputKind::Phase
-            } else {
-                InputKind::Increments
-            };
+            let kind = settings.kind;
             let path = Path::new(input);
             let mut reader = TextReader::with_options(
                 BufReader::with_capacity(1 << 16, open_input(input)?),
                 path,
-                &a.data.text_options(),
+                &settings.text,
             )
             .map_err(anyhow::Error::new)?;
-            let chosen = reader
-                .names()
-                .iter()
-                .filter(|n| *n != "temperature_c" && wanted(n))
-                .count();
-            if chosen > allanscope::ranges::MAX_CHANNELS {
-                return Err(super::usage(format!(
-                    "{input}: {chosen} channels; at most {} are diagnosed in one run (choose \
-                     some with --channel)",
-                    allanscope::ranges::MAX_CHANNELS
-                )));
+            let plan = UnitPlan::new(
+                InputPlan::Text {
+                    input: input.into(),
+                    options: settings.text.clone(),
+                },
+                "csv",
+                ChannelSetup::for_text(reader.names(), &settings.unit),
+                &settings,
+                tau0,
+                &req,
+            )?;
+            for c in &plan.channels {
+                g.add_channel(&c.name, &c.unit, &cfg);
             }
-            for (i, n) in reader.names().iter().enumerate() {
-                if n != "temperature_c" && wanted(n) {
-                    g.add_channel(n, &a.data.unit, &cfg);
-                    columns.push(i);
-                }
-            }
+            let columns: Vec<usize> = plan.channels.iter().map(|c| c.column).collect();
             // The temperature column (docs/records.md's `temperature_c`), read here only.
             let temp_col = reader.names().iter().position(|n| n == "temperature_c");
             if temp_col.is_some() {
                 g.temperature = Some(GapEvidence::new(cfg.clone()).without_outlier_filter());
             }
             let width = reader.names().len();
-            let mut first_row = true;
             let mut last_phase: Vec<Option<f64>> = vec![None; columns.len()];
             let mut rows = Vec::with_capacity(BATCH_ROWS * width);
             loop {
@@ -145,27 +145,19 @@ fn gather(
                     break;
                 }
                 for row in rows.chunks_exact(width) {
-                    // Phase gives no increment on its first row: the temperature starts with
-                    // the first increment too, so both evidences see the same steps.
-                    if !(first_row && kind == InputKind::Phase) {
-                        g.push_temperature(temp_col.map(|c| row[c]), tau0);
-                    }
-                    first_row = false;
+                    let mut stepped = false;
                     for (k, &col) in columns.iter().enumerate() {
-                        let v = row[col];
-                        match kind {
-                            InputKind::Phase => {
-                                match (last_phase[k], v.is_finite()) {
-                                    (Some(p), true) => g.push(k, v - p),
-                                    (_, false) => g.gap(k, 1),
-                                    (None, true) => {}
-                                }
-                                last_phase[k] = v.is_finite().then_some(v);
-                            }
-                            _ if v.is_nan() => g.gap(k, 1),
-                            InputKind::Increments => g.push(k, v),
-                            InputKind::Rate => g.push(k, v * tau0),
+                        match kind.step(row[col], tau0, &mut last_phase[k]) {
+                            Some(d) if d.is_finite() => g.push(k, d),
+                            Some(_) => g.gap(k, 1),
+                            None => continue,
                         }
+                        stepped = true;
+                    }
+                    // The temperature follows the steps of the channels (a first phase row
+                    // gives none), so both evidences see the same steps.
+                    if stepped || columns.is_empty() {
+                        g.push_temperature(temp_col.map(|c| row[c]), tau0);
                     }
                 }
             }
@@ -178,36 +170,61 @@ fn gather(
             }
         }
         Some(desc) => {
+            let spec = if input == "-" {
+                SourceSpec::Stdin { pace: Pace::Max }
+            } else {
+                SourceSpec::File {
+                    path: input.into(),
+                    pace: Pace::Max,
+                }
+            };
+            let plan = UnitPlan::new(
+                InputPlan::Frames {
+                    spec,
+                    desc: Box::new(desc.clone()),
+                },
+                &a.data.format,
+                ChannelSetup::for_frames(desc),
+                &settings,
+                tau0,
+                &req,
+            )?;
             if desc.frame().temperature.is_some() {
                 g.temperature = Some(GapEvidence::new(cfg.clone()).without_outlier_filter());
             }
-            let chans = desc.channels();
-            for (i, c) in chans.iter().enumerate() {
-                if wanted(&c.name) {
-                    g.add_channel(&c.name, &c.unit, &cfg);
-                    columns.push(i);
-                }
+            for c in &plan.channels {
+                g.add_channel(&c.name, &c.unit, &cfg);
             }
-            let scales: Vec<Option<f64>> = chans.iter().map(|c| c.scale).collect();
+            let columns: Vec<(usize, Option<f64>)> = plan
+                .channels
+                .iter()
+                .map(|c| (c.column, c.counts_lsb))
+                .collect();
             let mut src = open_input(input)?;
-            let mut decoder = Decoder::new(desc.clone());
+            // The decode stage of a replay, as `analyze` runs it.
+            let mut stage = DecodeStage::new(desc.clone(), false);
+            let mut events = Vec::new();
             let mut buf = vec![0u8; 1 << 16];
             loop {
                 let n = src
                     .read(&mut buf)
                     .with_context(|| format!("reading {input}"))?;
                 if n == 0 {
-                    decoder.finish();
+                    stage.finish(&mut events);
                 } else {
-                    decoder.push(&buf[..n]);
+                    let ev = SourceEvent::Data {
+                        bytes: bytes::Bytes::copy_from_slice(&buf[..n]),
+                        at: std::time::Instant::now(),
+                    };
+                    stage.push(ev, &mut events);
                 }
-                for ev in decoder.drain() {
+                for ev in events.drain(..) {
                     match ev {
                         FrameEvent::Frame(f) => {
                             g.push_temperature(f.temperature_c, tau0);
-                            for (k, &col) in columns.iter().enumerate() {
+                            for (k, &(col, lsb)) in columns.iter().enumerate() {
                                 match f.values.get(col).copied().flatten() {
-                                    Some(v) => g.push(k, v.physical(scales[col])),
+                                    Some(v) => g.push(k, v.physical(lsb)),
                                     None => g.gap(k, 1),
                                 }
                             }
@@ -223,15 +240,6 @@ fn gather(
                 if n == 0 {
                     break;
                 }
-            }
-        }
-    }
-    if let Some(c) = &a.channel {
-        for w in c {
-            if !g.names.contains(w) {
-                return Err(usage(format!(
-                    "--channel: `{w}` is not a channel of {input}"
-                )));
             }
         }
     }

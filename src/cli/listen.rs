@@ -9,10 +9,11 @@ use clap::{ArgGroup, Args};
 
 use super::process::SignalWatch;
 use super::{
-    analysis_options, capture_output, finish_records, parse_duration_s, records_output,
-    select_channels, usage, DataArgs,
+    analysis_options, capture_output, finish_records, parse_duration_s, records_output, usage,
+    DataArgs,
 };
 use allanscope::pipeline::{RecordWriter, RunControl};
+use allanscope::plan::unit::{InputPlan, UnitPlan};
 use allanscope::sink::output::OutputMode;
 use allanscope::source::{Pace, SourceSpec};
 
@@ -75,21 +76,25 @@ pub fn run(l: &ListenArgs) -> Result<()> {
     }
     let desc = super::load_descriptor(&d.format).map_err(anyhow::Error::new)?;
     let spec = source_spec(l)?;
-    let mut opts = analysis_options(d, d.tau0.unwrap_or_else(|| desc.tau0_s()))?;
-    // Live: --every is wall-seconds, kept by the pipeline, not data-seconds.
-    opts.every_s = None;
-    let setups = select_channels(
+    // Live: --every is wall-seconds, kept by the pipeline, not data-seconds (the plan's
+    // wall clock).
+    let opts = analysis_options(d, d.tau0.unwrap_or_else(|| desc.tau0_s()))?;
+    let plan = UnitPlan::with_options(
+        InputPlan::Frames {
+            spec: spec.clone(),
+            desc: Box::new(desc.clone()),
+        },
+        &d.format,
         allanscope::analysis::ChannelSetup::for_frames(&desc),
         &d.channels,
-        &spec.name(),
+        opts,
+        &d.unit_request(true),
     )?;
-    let header = super::checkpoint_header(&spec.name(), &d.format, &opts, &setups);
-    let ckpt = d.checkpoint_setup(header, false, false)?;
-    let saved = ckpt.as_ref().and_then(|c| c.1.as_ref());
-    let ck_path = ckpt.as_ref().map(|c| c.0.path.clone());
     let server = super::metrics::start_option(d.metrics.as_deref())?;
-    let metrics = server.as_ref().map(|s| s.tap(&spec.name(), &opts.limits));
-    let analysis = super::start_analysis(&spec.name(), setups, opts, saved, ck_path.as_deref())?;
+    let metrics = server
+        .as_ref()
+        .map(|s| s.tap(&spec.name(), &plan.analysis.limits));
+    let analysis = plan.start_analysis()?;
     let duration = match &l.duration {
         Some(s) => Some(Duration::from_secs_f64(parse_duration_s(s)?)),
         None => None,
@@ -101,7 +106,7 @@ pub fn run(l: &ListenArgs) -> Result<()> {
     let (out, dest) = records_output(d.out.as_deref(), mode, "--out", d.json)?;
     let ctl = RunControl {
         metrics,
-        checkpoint: ckpt.map(|c| std::sync::Arc::new(c.0)),
+        checkpoint: plan.checkpoint.map(|c| std::sync::Arc::new(c.0)),
         capture,
         every_wall: d.every.map(Duration::from_secs_f64),
         crash_hook: super::process::abort_hook(d.abort_after_frames),

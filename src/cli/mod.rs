@@ -22,12 +22,15 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 
-use allanscope::allan::accum::{AccumConfig, Overlap, StatSet, TauSpec, DEFAULT_L};
-use allanscope::analysis::{AnalysisOptions, ChannelSetup, InputKind};
+use allanscope::allan::accum::{Overlap, StatSet, TauSpec, DEFAULT_L};
+use allanscope::analysis::{AnalysisOptions, InputKind};
 use allanscope::error::UsageError;
 use allanscope::frame::FrameDescriptor;
 use allanscope::input::text::{ColumnPick, TextOptions};
-use allanscope::model::fit::{FitMethod, FitOptions};
+use allanscope::model::fit::FitMethod;
+use allanscope::plan::checkpoint_setup::CheckpointRequest;
+use allanscope::plan::settings::DataSettings;
+use allanscope::plan::unit::UnitRequest;
 
 #[derive(Debug, Parser)]
 #[command(
@@ -167,8 +170,9 @@ pub struct DataArgs {
     /// Only these channels (comma-separated names).
     #[arg(long, value_delimiter = ',')]
     pub channels: Option<Vec<String>>,
-    /// Text columns: the header name of the time column, skipped (by default a column named
-    /// time, t, timestamp or time_s, in any case).
+    /// Text columns: the header name of the time column (by default a column named time, t,
+    /// timestamp or time_s, in any case): not a channel; a jump of more than 1.5 tau0 in it is
+    /// a gap of the missing samples (seconds, or ms, us, ns when its first step says so).
     #[arg(long, value_name = "NAME")]
     pub time_column: Option<String>,
     /// Text columns: only these, in this order, renamed with `=`: `gx=g1,gy` reads column
@@ -267,6 +271,8 @@ impl DataArgs {
         TextOptions {
             time_column: self.time_column.clone(),
             columns: self.columns.clone(),
+            // Text columns need --tau0; with it, jumps of the time column are gaps.
+            tau0_s: self.tau0,
         }
     }
 }
@@ -447,203 +453,60 @@ pub(crate) fn format_and_tau0(d: &DataArgs) -> Result<(Option<FrameDescriptor>, 
 /// The analysis options common to every run of a command.
 pub(crate) fn analysis_options(d: &DataArgs, tau0_s: f64) -> Result<AnalysisOptions> {
     allanscope::ranges::check_tau0(tau0_s).map_err(|e| usage(format!("tau0 {e}")))?;
-    let mut accum = AccumConfig::new(tau0_s);
-    accum.taus = parse_taus(&d.taus)?;
-    accum.overlap = parse_overlap(&d.overlap)?;
-    accum.stats = parse_stats(&d.stats)?;
-    let fit = match d.fit.as_str() {
-        "none" => None,
-        m => Some(FitOptions {
-            method: m.parse::<FitMethod>().map_err(usage)?,
-            ..FitOptions::default()
-        }),
-    };
-    if let Some(e) = d.every {
-        allanscope::ranges::check_interval(e).map_err(|p| usage(format!("--every {p}")))?;
-    }
-    Ok(AnalysisOptions {
-        accum,
-        kind: if d.rate {
-            InputKind::Rate
-        } else if d.phase {
-            InputKind::Phase
-        } else {
-            InputKind::Increments
-        },
-        every_s: d.every,
-        fit,
-        run: None,
-        limits: match &d.limits {
-            Some(p) => allanscope::model::limits::load_file(p)?,
-            None => Vec::new(),
-        },
-        diagnose: d.diagnose,
-    })
+    Ok(d.settings()?.analysis_options(tau0_s))
 }
-
-/// The checkpoint header of a run: the options its accumulated state depends on.
-pub(crate) fn checkpoint_header(
-    input: &str,
-    format: &str,
-    opts: &AnalysisOptions,
-    channels: &[ChannelSetup],
-) -> allanscope::checkpoint::Header {
-    use allanscope::allan::accum::Overlap;
-    let s = opts.accum.stats;
-    let stats = [("avar", s.avar), ("hvar", s.hvar), ("mvar", s.mvar)]
-        .iter()
-        .filter(|x| x.1)
-        .map(|x| x.0.to_string())
-        .collect();
-    let file = Path::new(input);
-    allanscope::checkpoint::Header {
-        input: input.into(),
-        input_fingerprint: (input != "-" && file.is_file())
-            .then(|| allanscope::checkpoint::fingerprint(file))
-            .flatten(),
-        format: format.into(),
-        kind: match opts.kind {
-            InputKind::Increments => "increments",
-            InputKind::Rate => "rate",
-            InputKind::Phase => "phase",
-        }
-        .into(),
-        tau0_s: opts.accum.tau0_s,
-        taus: opts.accum.taus.cluster_sizes(),
-        overlap: match opts.accum.overlap {
-            Overlap::Full => "full".into(),
-            Overlap::Bounded(l) => l.to_string(),
-        },
-        stats,
-        channels: channels.iter().map(|c| c.name.clone()).collect(),
-        diagnose: opts.diagnose,
-    }
-}
-
-/// A run's checkpoint plan for the pipeline and, when resuming, the saved checkpoint.
-pub(crate) type CheckpointSetup = (
-    allanscope::checkpoint::CheckpointPlan,
-    Option<allanscope::checkpoint::Checkpoint>,
-);
 
 impl DataArgs {
-    /// [`checkpoint_setup`] with this command's `--checkpoint-every`, `--resume`,
-    /// `--abort-after-frames` and `--out`.
-    pub(crate) fn checkpoint_setup(
-        &self,
-        header: allanscope::checkpoint::Header,
-        data_seconds: bool,
-        replay: bool,
-    ) -> Result<Option<CheckpointSetup>> {
-        checkpoint_setup(
-            self.checkpoint_every,
-            self.resume,
-            self.abort_after_frames,
-            self.out.as_deref(),
-            header,
-            data_seconds,
-            replay,
-        )
-    }
-}
-
-/// A run's checkpointing, from `--checkpoint-every`, `--resume` and the output path: the plan
-/// for the pipeline and, when resuming, the saved checkpoint (checked against `header`).
-pub(crate) fn checkpoint_setup(
-    every: Option<f64>,
-    resume: bool,
-    abort_after_frames: Option<u64>,
-    out: Option<&Path>,
-    header: allanscope::checkpoint::Header,
-    data_seconds: bool,
-    replay: bool,
-) -> Result<Option<CheckpointSetup>> {
-    use allanscope::checkpoint::{
-        check_fresh_start, check_resume, path_for, Checkpoint, CheckpointPlan,
-    };
-    if every.is_none() && !resume {
-        if abort_after_frames.is_some() {
-            return Err(usage("--abort-after-frames needs --checkpoint-every"));
+    /// The data and analysis settings of these options, each parsed and checked (the plan's
+    /// [`DataSettings`], as a stand config also gives them).
+    pub(crate) fn settings(&self) -> Result<DataSettings> {
+        let taus = parse_taus(&self.taus)?;
+        let overlap = parse_overlap(&self.overlap)?;
+        let stats = parse_stats(&self.stats)?;
+        let fit = match self.fit.as_str() {
+            "none" => None,
+            m => Some(m.parse::<FitMethod>().map_err(usage)?),
+        };
+        if let Some(e) = self.every {
+            allanscope::ranges::check_interval(e).map_err(|p| usage(format!("--every {p}")))?;
         }
-        return Ok(None);
+        Ok(DataSettings {
+            kind: if self.rate {
+                InputKind::Rate
+            } else if self.phase {
+                InputKind::Phase
+            } else {
+                InputKind::Increments
+            },
+            unit: self.unit.clone(),
+            taus,
+            overlap,
+            stats,
+            every_s: self.every,
+            fit,
+            limits: match &self.limits {
+                Some(p) => allanscope::model::limits::load_file(p)?,
+                None => Vec::new(),
+            },
+            diagnose: self.diagnose,
+            channels: self.channels.clone(),
+            text: self.text_options(),
+        })
     }
-    let Some(out) = out else {
-        return Err(usage(concat!(
-            "--checkpoint-every and --resume need an output file (--out FILE, or [output] path ",
-            "in a stand config): the checkpoint is kept beside it, as FILE.ckpt"
-        )));
-    };
-    if let Some(e) = every {
-        allanscope::ranges::check_interval(e)
-            .map_err(|p| usage(format!("--checkpoint-every {p}")))?;
-    }
-    let path = path_for(out);
-    let mut plan = CheckpointPlan {
-        path: path.clone(),
-        every_s: every.unwrap_or(0.0),
-        data_seconds,
-        header,
-        resume: None,
-        abort_after_frames,
-    };
-    if !resume {
-        check_fresh_start(&path)?;
-        return Ok(Some((plan, None)));
-    }
-    let ck = Checkpoint::load(&path)?;
-    check_resume(&path, &ck, &plan.header, replay)?;
-    if every.is_none() {
-        plan.every_s = ck.every_s;
-    }
-    plan.resume = Some((ck.position.clone(), ck.sequence));
-    tracing::info!(
-        "resuming from {} (checkpoint {}, {:.1} s of data, {} bytes of input)",
-        path.display(),
-        ck.sequence,
-        ck.analysis
-            .channels
-            .iter()
-            .map(|c| c.acc.t_data_s())
-            .fold(0.0, f64::max),
-        ck.position.offset()
-    );
-    Ok(Some((plan, Some(ck))))
-}
 
-/// The analysis of a run: fresh, or continued from a checkpoint's state.
-pub(crate) fn start_analysis(
-    input: &str,
-    setups: Vec<ChannelSetup>,
-    opts: AnalysisOptions,
-    resume: Option<&allanscope::checkpoint::Checkpoint>,
-    path: Option<&Path>,
-) -> Result<allanscope::analysis::RunAnalysis> {
-    // A limit that no channel matches would never be judged: a misspelt name, refused here.
-    for l in &opts.limits {
-        if !setups
-            .iter()
-            .any(|c| allanscope::model::limits::channel_matches(&l.channel, &c.name))
-        {
-            return Err(usage(format!(
-                "datasheet limit on channel `{}`: {input} has no such channel (it has: {})",
-                l.channel,
-                setups
-                    .iter()
-                    .map(|c| c.name.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )));
+    /// What the unit's checkpoints are checked against: `--checkpoint-every`, `--resume`,
+    /// `--abort-after-frames` and `--out`; `wall_clock` for `listen`.
+    pub(crate) fn unit_request(&self, wall_clock: bool) -> UnitRequest {
+        UnitRequest {
+            checkpoint: CheckpointRequest {
+                every_s: self.checkpoint_every,
+                resume: self.resume,
+                abort_after_frames: self.abort_after_frames,
+            },
+            out: self.out.clone(),
+            config: None,
+            wall_clock,
         }
-    }
-    match resume {
-        None => Ok(allanscope::analysis::RunAnalysis::new(input, setups, opts)),
-        Some(ck) => allanscope::analysis::RunAnalysis::restore(ck.analysis.clone(), &setups, opts)
-            .map_err(|p| {
-                anyhow::Error::new(UsageError::Checkpoint {
-                    file: path.map(Path::to_path_buf).unwrap_or_default(),
-                    problem: p,
-                })
-            }),
     }
 }
 
@@ -659,41 +522,6 @@ pub(crate) fn open_input(input: &str) -> Result<Box<dyn Read + Send>> {
             std::fs::File::open(path).map_err(|e| usage(format!("{input}: cannot open: {e}")))?;
         Ok(Box::new(f))
     }
-}
-
-pub(crate) fn select_channels(
-    all: Vec<ChannelSetup>,
-    wanted: &Option<Vec<String>>,
-    input: &str,
-) -> Result<Vec<ChannelSetup>> {
-    let too_many = |n: usize| {
-        usage(format!(
-            "{input}: {n} channels; at most {} are analysed in one run (choose some with \
-             --channels, or check the column separator)",
-            allanscope::ranges::MAX_CHANNELS
-        ))
-    };
-    let Some(w) = wanted else {
-        if all.len() > allanscope::ranges::MAX_CHANNELS {
-            return Err(too_many(all.len()));
-        }
-        return Ok(all);
-    };
-    if w.len() > allanscope::ranges::MAX_CHANNELS {
-        return Err(too_many(w.len()));
-    }
-    for name in w {
-        if !all.iter().any(|c| &c.name == name) {
-            return Err(usage(format!(
-                "--channels: `{name}` is not a channel of {input} (it has: {})",
-                all.iter()
-                    .map(|c| c.name.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )));
-        }
-    }
-    Ok(all.into_iter().filter(|c| w.contains(&c.name)).collect())
 }
 
 /// Reads a whole text file of JSON lines into values (for `aggregate`, `plot`, tests).

@@ -8,14 +8,11 @@ use anyhow::Result;
 use clap::Args;
 
 use super::process::SignalWatch;
-use super::select_channels;
-use allanscope::allan::accum::AccumConfig;
-use allanscope::analysis::{AnalysisOptions, InputKind};
-use allanscope::error::UsageError;
-use allanscope::model::fit::FitOptions;
 use allanscope::pipeline::{RecordWriter, RunControl};
+use allanscope::plan::run::{RunFlags, RunPlan};
+use allanscope::plan::unit::InputPlan;
 use allanscope::sink::output::OutputMode;
-use allanscope::source::{Pace, SourceSpec};
+use allanscope::source::SourceSpec;
 use allanscope::stand::StandConfig;
 
 #[derive(Debug, Args)]
@@ -46,96 +43,39 @@ pub struct RunArgs {
 
 pub fn run(r: &RunArgs) -> Result<()> {
     let cfg = StandConfig::load(&r.config).map_err(anyhow::Error::new)?;
-    let desc = super::load_descriptor(&cfg.format).map_err(|e| {
-        anyhow::Error::new(UsageError::Config {
-            file: cfg.file.clone(),
-            line: None,
-            key: "source.format".into(),
-            problem: e.to_string(),
-        })
-    })?;
-    let limits =
-        allanscope::model::limits::from_tables(&cfg.limits_raw, &cfg.file).map_err(|errs| {
-            let all = errs
-                .iter()
-                .map(|e| e.to_string())
-                .collect::<Vec<_>>()
-                .join("\n");
-            anyhow::Error::new(UsageError::Option(all))
-        })?;
-    let mut spec = cfg.source.clone();
-    let live = spec.is_live();
-    if let SourceSpec::File { pace, .. } | SourceSpec::Stdin { pace } = &mut spec {
-        if let Pace::Realtime { bytes_per_s } = pace {
-            *bytes_per_s = desc.frame_len() as f64 * desc.rate_hz;
-        }
-    }
-    let mut accum = AccumConfig::new(desc.tau0_s());
-    accum.stats = cfg.stats;
-    accum.taus = cfg.taus.clone();
-    accum.overlap = cfg.overlap;
-    let opts = AnalysisOptions {
-        accum,
-        kind: InputKind::Increments,
-        // Live: interim records on wall time (the pipeline); replay: on data time.
-        every_s: if live { None } else { cfg.every_s },
-        fit: cfg.fit.map(|method| FitOptions {
-            method,
-            ..FitOptions::default()
-        }),
-        run: None,
-        limits,
-        diagnose: cfg.diagnose,
+    let flags = RunFlags {
+        resume: r.resume,
+        abort_after_frames: r.abort_after_frames,
     };
-    let setups = select_channels(
-        allanscope::analysis::ChannelSetup::for_frames(&desc),
-        &cfg.channels,
-        &spec.name(),
-    )
-    .map_err(|e| {
-        anyhow::Error::new(UsageError::Config {
-            file: cfg.file.clone(),
-            line: None,
-            key: "channels.include".into(),
-            problem: e.to_string(),
-        })
-    })?;
-    let header = super::checkpoint_header(&spec.name(), &cfg.format, &opts, &setups);
+    let mut plan = RunPlan::from_stand(&cfg, &super::descriptor_dirs(), &flags)?;
+    // A stand config describes one unit today (the plan holds a list).
+    let unit = plan.units.remove(0);
+    let InputPlan::Frames { spec, desc } = &unit.input else {
+        anyhow::bail!("a stand config's source gives frames of a descriptor");
+    };
+    let (spec, desc) = (spec.clone(), desc.clone());
+    let live = spec.is_live();
     let replay = matches!(spec, SourceSpec::File { .. });
-    let ckpt = super::checkpoint_setup(
-        cfg.checkpoint_every_s,
-        r.resume,
-        r.abort_after_frames,
-        cfg.output.as_deref(),
-        header,
-        !live,
-        replay,
-    )
-    .map_err(|e| e.context(format!("stand config {}", cfg.file.display())))?;
-    let saved = ckpt.as_ref().and_then(|c| c.1.as_ref());
-    let ck_path = ckpt.as_ref().map(|c| c.0.path.clone());
-    let server = match (&r.metrics, cfg.metrics) {
+    let server = match (&r.metrics, plan.metrics) {
         (Some(_), _) => super::metrics::start_option(r.metrics.as_deref())?,
         (None, Some(addr)) => Some(super::metrics::MetricsServer::start(addr)?),
         (None, None) => None,
     };
-    let metrics = server.as_ref().map(|s| s.tap(&spec.name(), &opts.limits));
-    let analysis = super::start_analysis(&spec.name(), setups, opts, saved, ck_path.as_deref())?;
+    let metrics = server
+        .as_ref()
+        .map(|s| s.tap(&spec.name(), &unit.analysis.limits));
+    let analysis = unit.start_analysis()?;
     // Outputs last: every option has been accepted; they are only emptied once the source
     // is open and delivers (allanscope::sink::output).
     let mode = OutputMode::new(r.force, r.resume);
-    let capture = super::capture_output(cfg.capture.as_deref(), mode, "[run] capture")
+    let capture = super::capture_output(plan.capture.as_deref(), mode, "[run] capture")
         .map_err(|e| e.context(format!("stand config {}", cfg.file.display())))?;
-    let (out, dest) = super::records_output(cfg.output.as_deref(), mode, "[output] path", r.json)
+    let (out, dest) = super::records_output(plan.output.as_deref(), mode, "[output] path", r.json)
         .map_err(|e| e.context(format!("stand config {}", cfg.file.display())))?;
     let ctl = RunControl {
-        checkpoint: ckpt.map(|c| std::sync::Arc::new(c.0)),
+        checkpoint: unit.checkpoint.map(|c| std::sync::Arc::new(c.0)),
         capture,
-        every_wall: if live {
-            cfg.every_s.map(Duration::from_secs_f64)
-        } else {
-            None
-        },
+        every_wall: plan.every_wall_s.map(Duration::from_secs_f64),
         metrics,
         crash_hook: super::process::abort_hook(r.abort_after_frames),
         ..RunControl::default()
@@ -150,7 +90,7 @@ pub fn run(r: &RunArgs) -> Result<()> {
         ctl.shutdown.clone(),
         writer.queue().clone(),
         ctl.progress.clone(),
-        cfg.duration_s.map(Duration::from_secs_f64),
+        plan.duration_s.map(Duration::from_secs_f64),
     );
     let _bar = (replay && std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .then(|| super::process::ProgressBar::start(ctl.progress.clone()));

@@ -149,3 +149,47 @@ fn the_stream_carries_diagnosis_records_refreshed_with_the_fits() {
     );
     assert!((a - b).abs() <= 1e-9 * b, "stream {a} vs diagnose {b}");
 }
+
+/// `analyze --diagnose` and `diagnose` plan and read their input the same way: on one file with
+/// `inf`, `-inf` and `nan` among its values (each a missing step, `inf` counted invalid), both
+/// see the same samples and gaps, so their final diagnoses of the channel are the same record.
+#[test]
+fn analyze_and_diagnose_read_the_same_gaps() {
+    let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures/captures/vog4_2min_seed7.csv");
+    let text = std::fs::read_to_string(src).unwrap();
+    let mut lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 30_001, "a header and 30,000 rows");
+    lines[1_000] = "inf";
+    lines[5_000] = "nan";
+    lines[20_000] = "-inf";
+    let file = tmp("with_inf.csv");
+    std::fs::write(&file, lines.join("\n") + "\n").unwrap();
+    let path = file.to_str().unwrap();
+
+    let out = exe()
+        .args(["analyze", path, "--tau0", "0.004", "--diagnose"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let recs: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let summary = recs.iter().rfind(|r| r["type"] == "summary").unwrap();
+    // The three missing steps cut the run into four stretches; `inf` and `-inf` are counted.
+    assert_eq!(summary["segments"], serde_json::json!([4]));
+    assert_eq!(summary["invalid_values"], 2);
+    let from_analyze = recs
+        .iter()
+        .rfind(|r| r["type"] == "diagnosis" && r["final"] == true)
+        .expect("a final diagnosis from analyze");
+
+    let from_diagnose = diagnosis(&[path]);
+    assert_eq!(from_diagnose["channel"], "g4");
+    assert_eq!(&from_diagnose, from_analyze);
+}
