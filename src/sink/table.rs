@@ -270,6 +270,10 @@ fn run_heading(h: &mut String, res: &Results, k: RunKey, style: &TableStyle) {
         Some(i) => i.to_string(),
         None => label,
     };
+    if summary.is_none() && input.is_empty() && k.1.is_none() {
+        // Records of no named run (the `diagnose` command's): no heading to show.
+        return;
+    }
     let run = k.1.map(|r| format!("run {}: ", r + 1)).unwrap_or_default();
     let mut line = style.bold(&format!("{run}{input}"));
     if let Some(s) = summary {

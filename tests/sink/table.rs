@@ -240,7 +240,7 @@ fn records_without_a_summary_are_printed_when_the_writer_is_dropped() {
     drop(w);
     let t = out.text();
     assert!(
-        t.contains("gx  diagnosis: explained by Gauss-Markov noise"),
+        t.starts_with("\ngx  diagnosis: explained by Gauss-Markov noise"),
         "{t}"
     );
     assert!(t.trim_end().ends_with("hint"), "{t}");
