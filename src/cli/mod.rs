@@ -170,8 +170,9 @@ pub struct DataArgs {
     /// Only these channels (comma-separated names).
     #[arg(long, value_delimiter = ',')]
     pub channels: Option<Vec<String>>,
-    /// Text columns: the header name of the time column, skipped (by default a column named
-    /// time, t, timestamp or time_s, in any case).
+    /// Text columns: the header name of the time column (by default a column named time, t,
+    /// timestamp or time_s, in any case): not a channel; a jump of more than 1.5 tau0 in it is
+    /// a gap of the missing samples (seconds, or ms, us, ns when its first step says so).
     #[arg(long, value_name = "NAME")]
     pub time_column: Option<String>,
     /// Text columns: only these, in this order, renamed with `=`: `gx=g1,gy` reads column
@@ -270,6 +271,8 @@ impl DataArgs {
         TextOptions {
             time_column: self.time_column.clone(),
             columns: self.columns.clone(),
+            // Text columns need --tau0; with it, jumps of the time column are gaps.
+            tau0_s: self.tau0,
         }
     }
 }

@@ -693,18 +693,16 @@ fn decode_frame(
         .status
         .as_ref()
         .and_then(|s| read_bits(msg, s.offset, s.ty, s.order));
-    let valid = |bit: Option<u32>| -> bool {
-        match (bit, status, spec.status.as_ref()) {
-            (Some(b), Some(st), Some(s)) => {
-                let set = (st >> b) & 1 == 1;
-                match s.bit_set_means {
-                    BitMeaning::Fault => !set,
-                    BitMeaning::Valid => set,
-                }
-            }
-            _ => true,
-        }
+    // The status bits that mark a value invalid: set bits of a fault status, clear bits of a
+    // valid status (flipped so that a set bit means invalid here).
+    let bad_bits = match (status, spec.status.as_ref()) {
+        (Some(st), Some(s)) => match s.bit_set_means {
+            BitMeaning::Fault => st,
+            BitMeaning::Valid => !st,
+        },
+        _ => 0,
     };
+    let valid = |bit: Option<u32>| -> bool { bit.is_none_or(|b| (bad_bits >> b) & 1 == 0) };
     let values = spec.channels.iter().map(|c| {
         if !valid(c.status_bit) {
             *invalid += 1;

@@ -117,6 +117,7 @@ impl RawValue {
 }
 
 /// The field's bytes as an unsigned bit pattern, or None when the field runs past `bytes`.
+#[inline]
 pub fn read_bits(bytes: &[u8], offset: usize, ty: FieldType, order: ByteOrder) -> Option<u64> {
     let s = bytes.get(offset..offset.checked_add(ty.size())?)?;
     // One fixed-width load per size (a byte-by-byte fold was a fifth of the decode thread).
@@ -138,6 +139,7 @@ pub fn read_bits(bytes: &[u8], offset: usize, ty: FieldType, order: ByteOrder) -
 }
 
 /// Reads one typed value, or None when the field runs past `bytes`.
+#[inline]
 pub fn read(bytes: &[u8], offset: usize, ty: FieldType, order: ByteOrder) -> Option<RawValue> {
     let v = read_bits(bytes, offset, ty, order)?;
     Some(match ty {

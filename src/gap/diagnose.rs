@@ -41,6 +41,7 @@
 //! block-mean covariance of [`super::block_cov`]; [`super::segments`] tests homogeneity across
 //! segments and [`super::holdout`] judges a held-out run. This file orchestrates them.
 
+use super::alternatives::{alternatives, Alternative, CandidateScore, FirstScan};
 use super::effects::{effect_column, EffectKind, EffectParams};
 use super::evidence::EvidenceSnapshot;
 use super::outliers::OutlierCount;
@@ -152,6 +153,8 @@ pub struct Diagnosis {
     /// What the values' step does to the curve, when they are whole multiples of one
     /// ([`super::quantization`]).
     pub quantization: Option<QuantizationFinding>,
+    /// Other explanations that fit about as well as the one chosen ([`super::alternatives`]).
+    pub alternatives: Vec<Alternative>,
 }
 
 /// Five-term `(Q, N, B, K, R)` from `c`.
@@ -247,7 +250,7 @@ pub fn diagnose_with_temperature(
 
     // 1. Stationary effects on the curve, while the gap stays significant.
     // Flagged by `G`, or by the best candidate's likelihood ratio (add_stationary).
-    let (mut spec, mut cur) =
+    let (mut spec, mut cur, first_scan) =
         add_stationary(&prob, &stationary, &offset, &mut effects, start, opts, true);
 
     // 2. A warm-up, in time: the block means against the model found so far.
@@ -297,7 +300,7 @@ pub fn diagnose_with_temperature(
             });
             cur = f;
             if cur.gap() > th.gap_crit {
-                let (sp, c2) = add_stationary(
+                let (sp, c2, _) = add_stationary(
                     &prob,
                     &stationary,
                     &offset,
@@ -421,6 +424,9 @@ pub fn diagnose_with_temperature(
     } else {
         Verdict::Unexplained
     };
+    let alternatives = first_scan
+        .map(|fs| alternatives(&prob, opts, &fs, &effects, &final_spec, &cur))
+        .unwrap_or_default();
     let regions_after = prob.regions(&cur.model, th.band_z);
     let residual_shape = (verdict == Verdict::Unexplained).then(|| describe(&regions_after));
     Ok(Diagnosis {
@@ -445,6 +451,7 @@ pub fn diagnose_with_temperature(
         quantization: snap
             .lsb
             .and_then(|l| judge_quantization(&prob, &final_spec, &cur, l)),
+        alternatives,
     })
 }
 
@@ -527,7 +534,7 @@ fn still_needed(
 
 /// The model spec of the stationary effects in `effects` (warm-ups and jumps are in `offset`
 /// or nowhere), their shapes fixed and amplitudes free.
-fn spec_from(prob: &GapProblem, effects: &[AddedEffect], offset: &[f64]) -> ModelSpec {
+pub(crate) fn spec_from(prob: &GapProblem, effects: &[AddedEffect], offset: &[f64]) -> ModelSpec {
     let mut spec = ModelSpec {
         offset: Some(offset.to_vec()),
         ..ModelSpec::default()
@@ -551,16 +558,18 @@ fn add_stationary(
     start: GlsFit,
     opts: &DiagnoseOptions,
     lr_first: bool,
-) -> (ModelSpec, GlsFit) {
+) -> (ModelSpec, GlsFit, Option<FirstScan>) {
     let th = opts.thresholds;
     let mut spec = spec_from(prob, effects, offset);
     let mut cur = start;
     let mut added = 0;
+    let mut first: Option<FirstScan> = None;
     while added < opts.max_effects && (cur.gap() > th.gap_crit || (lr_first && added == 0)) {
         // Below gap_crit only a candidate's own likelihood-ratio threshold can add (the
         // first) effect; among those that pass, the largest drop per parameter wins.
         let flagged_g = cur.gap() > th.gap_crit;
         let mut best: Option<(EffectKind, f64, GlsFit, f64)> = None;
+        let mut scores: Vec<CandidateScore> = Vec::new();
         for &kind in kinds {
             if effects.iter().any(|e| e.params.kind() == kind) {
                 continue;
@@ -572,10 +581,25 @@ fn add_stationary(
                 } else {
                     th.lr_crit_of(kind)
                 };
+                if added == 0 {
+                    scores.push(CandidateScore {
+                        kind,
+                        shape: sh,
+                        score,
+                        crit,
+                    });
+                }
                 if score >= crit && best.as_ref().is_none_or(|b| score > b.3) {
                     best = Some((kind, sh, f, score));
                 }
             }
+        }
+        if added == 0 {
+            first = Some(FirstScan {
+                flagged_g,
+                scores: std::mem::take(&mut scores),
+                chosen: best.as_ref().map(|b| b.0),
+            });
         }
         let Some((kind, sh, f, _)) = best else {
             break;
@@ -589,7 +613,7 @@ fn add_stationary(
         cur = f;
         added += 1;
     }
-    (spec, cur)
+    (spec, cur, first)
 }
 
 /// A few words on the shape of what the model leaves.

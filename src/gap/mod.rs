@@ -18,6 +18,7 @@
 //! `snapshot()`, then [`diagnose::diagnose`], and [`record::DiagnosisRecord::new`]; with a
 //! held-out run, [`holdout::holdout_gap`] on its snapshot.
 
+pub mod alternatives;
 pub mod block_cov;
 pub mod diagnose;
 pub mod effects;

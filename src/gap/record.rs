@@ -1,7 +1,8 @@
 //! docs/records.md's `diagnosis` record: `type`, `channel`, `gap_before`, `gap_after`, `verdict`,
 //! `regions`, `effects`, optional `holdout`, plus extra fields (`final`, `t_data`, `tau_span`,
 //! `base_coef`, `final_coef`, `segments`, `jumps`, `residual_shape`, `model_tau`, `model_base`,
-//! `model_effects`, `outliers`, `quantization`, and `run` when several inputs are analyzed).
+//! `model_effects`, `outliers`, `quantization`, `alternatives`, and `run` when several inputs
+//! are analyzed).
 
 use super::diagnose::{Diagnosis, Verdict};
 use super::holdout::HoldoutGap;
@@ -106,6 +107,11 @@ pub struct DiagnosisRecord {
     /// absent when the values are not whole multiples of one step.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub quantization: Option<serde_json::Value>,
+    /// Other explanations that fit about as well as the one chosen (docs/gap.md,
+    /// "Alternatives"): `[{effects: [{kind, params}], gap, delta_chi2, coef}]`, empty when the
+    /// choice is clear.
+    #[serde(default)]
+    pub alternatives: Vec<serde_json::Value>,
     /// Run index (0-based) when several inputs are analyzed, as in the other records.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub run: Option<usize>,
@@ -202,6 +208,7 @@ impl DiagnosisRecord {
                 max_size: d.outliers.max_size,
             },
             quantization: d.quantization.map(|q| q.to_json()),
+            alternatives: d.alternatives.iter().map(|a| a.to_json()).collect(),
             run: None,
         }
     }

@@ -3,6 +3,7 @@
 //! A reader turns bytes into [`Chunk`]s of rows; it knows nothing of statistics.
 
 pub mod text;
+pub mod time_column;
 
 use crate::frame::{FrameBlock, FrameEvent};
 

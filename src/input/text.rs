@@ -2,8 +2,9 @@
 //! an optional first row of channel names (otherwise `c1`, `c2`, ...; a UTF-8 byte-order mark
 //! before it is dropped, duplicate names are refused), `#` lines skipped (docs/records.md). A column
 //! named `time`, `t`, `timestamp` or `time_s` (or the one [`TextOptions::time_column`] names) is
-//! a time stamp, not a channel, and is skipped; [`TextOptions::columns`] picks and renames
-//! channels.
+//! a time stamp, not a channel: with the sampling step ([`TextOptions::tau0_s`]) its jumps
+//! become gaps of the missing samples ([`super::time_column`]), else it is skipped;
+//! [`TextOptions::columns`] picks and renames channels.
 //!
 //! Streams: rows are read line by line and handed on in batches; the file is never held in
 //! memory. An empty row, or a row whose every field is empty or `nan`, is a gap for every
@@ -16,6 +17,7 @@ use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
 use crate::error::UsageError;
+use crate::input::time_column::{TimeColumn, TimeState};
 
 /// Rows per batch handed to the analysis.
 pub const BATCH_ROWS: usize = 8192;
@@ -56,6 +58,9 @@ pub struct TextOptions {
     pub time_column: Option<String>,
     /// Only these columns, in this order, renamed; `None` keeps every column but the time one.
     pub columns: Option<Vec<ColumnPick>>,
+    /// The sampling step (s): with it, jumps of the time column become gaps
+    /// ([`super::time_column`]); without it the time column is only skipped.
+    pub tau0_s: Option<f64>,
 }
 
 /// Which input columns are read, and under which names.
@@ -69,6 +74,8 @@ struct Layout {
     source_names: Vec<String>,
     /// Channel names.
     names: Vec<String>,
+    /// Input column (0-based) of the time stamps, if any.
+    time: Option<usize>,
 }
 
 fn input_error(path: &Path, line: u64, problem: String) -> UsageError {
@@ -151,11 +158,13 @@ impl Layout {
             keep,
             source_names,
             names,
+            time,
         })
     }
 
-    /// The channel values of a row, or what is wrong with it.
-    fn parse(&self, t: &str) -> Result<Vec<f64>, String> {
+    /// The channel values of a row and its time stamp (NaN without a time column or where the
+    /// stamp is not a number), or what is wrong with the row.
+    fn parse(&self, t: &str) -> Result<(Vec<f64>, f64), String> {
         let fields = split(t);
         if fields.len() != self.width_in {
             return Err(format!(
@@ -164,7 +173,8 @@ impl Layout {
                 self.width_in
             ));
         }
-        self.keep
+        let values = self
+            .keep
             .iter()
             .map(|&i| {
                 parse_field(fields[i]).map_err(|()| {
@@ -176,9 +186,17 @@ impl Layout {
                     )
                 })
             })
-            .collect()
+            .collect::<Result<Vec<f64>, String>>()?;
+        let time = self
+            .time
+            .and_then(|i| parse_field(fields[i]).ok())
+            .unwrap_or(f64::NAN);
+        Ok((values, time))
     }
 }
+
+/// A row as read: its values or what is wrong with it, and its time stamp (NaN if none).
+type Row = (Result<Vec<f64>, String>, f64);
 
 pub struct TextReader<R> {
     src: R,
@@ -186,8 +204,14 @@ pub struct TextReader<R> {
     line_no: u64,
     layout: Layout,
     names: Vec<String>,
-    /// The first data row, read while looking for a header.
-    pending: Option<Result<Vec<f64>, String>>,
+    /// The next row to hand out: the first data row, read while looking for a header, or the
+    /// row after a jump of the time column, held while the gap steps before it go out.
+    pending: Option<Row>,
+    /// The time column used to find gaps, and the gap steps still to hand out.
+    time: Option<TimeColumn>,
+    gap_left: u64,
+    /// The time column's account was logged (at the end of the input).
+    time_reported: bool,
     line: Vec<u8>,
     bad_rows: u64,
     /// Values infinite or beyond `MAX_ABS_VALUE`, read as gaps.
@@ -201,7 +225,7 @@ pub struct TextReader<R> {
 
 /// Where a [`TextReader`] stands, for a checkpoint: continuing from `offset` with these counts
 /// reads the rest of the input as the reader would have.
-#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TextPosition {
     /// Bytes consumed (the next row starts here).
     pub offset: u64,
@@ -214,6 +238,9 @@ pub struct TextPosition {
     /// Values infinite or beyond [`super::MAX_ABS_VALUE`], read as gaps.
     #[serde(default)]
     pub invalid_values: u64,
+    /// The time column's clock, when it is used to find gaps.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time: Option<TimeState>,
 }
 
 fn parse_field(t: &str) -> Result<f64, ()> {
@@ -272,9 +299,9 @@ impl<R: BufRead> TextReader<R> {
             }
             let (values, layout) = match layout.take() {
                 Some(l) => match l.parse(t) {
-                    Ok(v) => (Ok(v), l),
+                    Ok((v, time)) => ((Ok(v), time), l),
                     // A row of the wrong width is a bad row, as later ones are.
-                    Err(problem) if split(t).len() != l.width_in => (Err(problem), l),
+                    Err(problem) if split(t).len() != l.width_in => ((Err(problem), f64::NAN), l),
                     Err(problem) => {
                         return Err(input_error(
                             path,
@@ -288,8 +315,8 @@ impl<R: BufRead> TextReader<R> {
                     if fields.iter().all(|f| parse_field(f).is_ok()) {
                         let names = (1..=fields.len()).map(|i| format!("c{i}")).collect();
                         let l = Layout::new(names, false, opts, path, line_no)?;
-                        let v = l.parse(t).map_err(|p| input_error(path, line_no, p))?;
-                        (Ok(v), l)
+                        let (v, time) = l.parse(t).map_err(|p| input_error(path, line_no, p))?;
+                        ((Ok(v), time), l)
                     } else {
                         let names = fields
                             .iter()
@@ -300,6 +327,14 @@ impl<R: BufRead> TextReader<R> {
                     }
                 }
             };
+            let mut time = match (layout.time, opts.tau0_s) {
+                (Some(i), Some(tau0)) => Some(TimeColumn::new(&layout.source_names[i], tau0)),
+                _ => None,
+            };
+            if let Some(c) = &mut time {
+                // The first stamp starts the clock.
+                c.missing_before(values.1, path, line_no);
+            }
             return Ok(TextReader {
                 src,
                 path: path.into(),
@@ -307,6 +342,9 @@ impl<R: BufRead> TextReader<R> {
                 names: layout.names.clone(),
                 layout,
                 pending: Some(values),
+                time,
+                gap_left: 0,
+                time_reported: false,
                 line: line.into_bytes(),
                 bad_rows: 0,
                 invalid_values: 0,
@@ -320,6 +358,10 @@ impl<R: BufRead> TextReader<R> {
     /// Continues reading `src`, positioned at `pos.offset` of the same input, with this
     /// reader's columns, as a reader that had stopped at `pos` (no header is looked for).
     pub fn resume<S: BufRead>(self, src: S, pos: &TextPosition) -> TextReader<S> {
+        let mut time = self.time;
+        if let (Some(c), Some(st)) = (&mut time, pos.time) {
+            c.restore(st);
+        }
         TextReader {
             src,
             path: self.path,
@@ -327,6 +369,9 @@ impl<R: BufRead> TextReader<R> {
             names: self.names,
             layout: self.layout,
             pending: None,
+            time,
+            gap_left: 0,
+            time_reported: false,
             line: Vec::new(),
             bad_rows: pos.bad_rows,
             invalid_values: pos.invalid_values,
@@ -346,6 +391,7 @@ impl<R: BufRead> TextReader<R> {
             bad_rows: self.bad_rows,
             samples: self.samples,
             invalid_values: self.invalid_values,
+            time: self.time.as_ref().map(TimeColumn::state),
         }
     }
 
@@ -373,39 +419,85 @@ impl<R: BufRead> TextReader<R> {
     pub fn read_rows(&mut self, out: &mut Vec<f64>, max_rows: usize) -> std::io::Result<usize> {
         let width = self.names.len();
         let mut n = 0;
-        if let Some(first) = self.pending.take() {
-            self.push_row(out, first);
+        while n < max_rows {
+            if self.gap_left > 0 {
+                // Steps the time column says are missing: gaps in every channel.
+                let k = self.gap_left.min((max_rows - n) as u64);
+                out.extend(std::iter::repeat_n(f64::NAN, k as usize * width));
+                if let Some(c) = &mut self.time {
+                    for _ in 0..k {
+                        c.step_inserted();
+                    }
+                }
+                self.gap_left -= k;
+                n += k as usize;
+                continue;
+            }
+            let row = match self.pending.take() {
+                Some((row, t)) => {
+                    // The first row, or the row after a gap: the clock is set to its stamp.
+                    if let Some(c) = &mut self.time {
+                        c.handed_out(t);
+                    }
+                    row
+                }
+                None => {
+                    let Some(p) = self.next_row()? else {
+                        break;
+                    };
+                    let gap = match &mut self.time {
+                        Some(c) => c.missing_before(p.1, &self.path, self.line_no),
+                        None => 0,
+                    };
+                    if gap > 0 {
+                        self.gap_left = gap;
+                        self.pending = Some(p);
+                        continue;
+                    }
+                    p.0
+                }
+            };
+            self.push_row(out, row);
             n += 1;
         }
-        while n < max_rows {
+        if n == 0 && !self.time_reported {
+            self.time_reported = true;
+            if let Some(c) = &self.time {
+                c.report(&self.path);
+            }
+        }
+        Ok(n)
+    }
+
+    /// The next row of the input, `None` at its end (comment lines skipped).
+    fn next_row(&mut self) -> std::io::Result<Option<Row>> {
+        let width = self.names.len();
+        loop {
             self.line.clear();
             let got = self.src.read_until(b'\n', &mut self.line)?;
             if got == 0 {
-                break;
+                return Ok(None);
             }
             self.offset += got as u64;
             self.line_no += 1;
             // A line that is not UTF-8 (a damaged stretch of the file) is a bad row, not the
             // end of the run.
             let Ok(text) = std::str::from_utf8(&self.line) else {
-                let row = Err("not UTF-8 text".to_string());
-                self.push_row(out, row);
-                n += 1;
-                continue;
+                return Ok(Some((Err("not UTF-8 text".to_string()), f64::NAN)));
             };
             let t = text.trim();
             if t.starts_with('#') {
                 continue;
             }
-            let row = if t.is_empty() {
-                Ok(vec![f64::NAN; width])
+            return Ok(Some(if t.is_empty() {
+                (Ok(vec![f64::NAN; width]), f64::NAN)
             } else {
-                self.layout.parse(t)
-            };
-            self.push_row(out, row);
-            n += 1;
+                match self.layout.parse(t) {
+                    Ok((v, time)) => (Ok(v), time),
+                    Err(e) => (Err(e), f64::NAN),
+                }
+            }));
         }
-        Ok(n)
     }
 
     fn push_row(&mut self, out: &mut Vec<f64>, row: Result<Vec<f64>, String>) {

@@ -195,3 +195,89 @@ fn a_text_column_and_an_input_without_samples_are_usage_errors() {
     let p = write("header_only.csv", b"gx,gy\n");
     usage_error(&analyze(&p, &[]), &["header_only.csv", "no data rows"]);
 }
+
+/// The two columns with a time column (`scale` units per second), rows `skip` left out.
+fn stamped(header: &str, scale: f64, skip: std::ops::Range<usize>) -> String {
+    let (a, b) = columns();
+    let mut s = format!("{header},gx,gy\n");
+    for i in (0..a.len()).filter(|i| !skip.contains(i)) {
+        s += &format!("{},{:e},{:e}\n", i as f64 * 0.01 * scale, a[i], b[i]);
+    }
+    s
+}
+
+#[test]
+fn a_jump_of_the_time_column_is_a_gap_of_the_missing_samples() {
+    // The same 400 rows with rows 200..210 marked missing (NaN) and no time column...
+    let (a, b) = columns();
+    let mut marked = String::from("gx,gy\n");
+    for i in 0..a.len() {
+        marked += &if (200..210).contains(&i) {
+            "nan,nan\n".to_string()
+        } else {
+            format!("{:e},{:e}\n", a[i], b[i])
+        };
+    }
+    let (mc, ms) = parsed(&analyze(&write("marked.csv", marked.as_bytes()), &[]));
+    // ... and with those rows left out, the time column jumping from 1.99 s to 2.10 s: a jump
+    // of 11 steps, 10 missing samples.
+    for (name, header, scale) in [
+        ("jump_s.csv", "time", 1.0),
+        ("jump_ms.csv", "timestamp", 1e3),
+    ] {
+        let p = write(name, stamped(header, scale, 200..210).as_bytes());
+        let (c, s) = parsed(&analyze(&p, &["--stats", "avar"]));
+        // 400 steps of 0.01 s: the 10 missing samples are counted in the data's span.
+        assert_eq!(s.t_data, 4.0, "{name}");
+        assert_eq!(s.t_data, ms.t_data);
+        assert_eq!(s.segments, [2, 2], "one gap in each channel: {name}");
+        assert_eq!(s.samples, ms.samples);
+        assert_eq!(c.len(), mc.len());
+        for (x, y) in c.iter().zip(&mc) {
+            assert_eq!((&x.channel, &x.tau), (&y.channel, &y.tau));
+            assert_eq!(
+                x.count, y.count,
+                "differences across the gap left out: {name}"
+            );
+            assert_eq!(x.sigma, y.sigma, "{name}");
+        }
+    }
+    // Without the jump the same file is uniform and has no gap.
+    let (_, s) = parsed(&analyze(
+        &write("nojump.csv", stamped("time", 1.0, 0..0).as_bytes()),
+        &[],
+    ));
+    assert_eq!(s.segments, [1, 1]);
+}
+
+#[test]
+fn a_time_column_that_goes_backwards_or_is_not_uniform_is_reported() {
+    let mut text = stamped("time", 1.0, 0..0);
+    // Row 100 stamped 0.5 s (backwards from 0.99 s), row 300 at 3.004 s (0.4 step off).
+    text = text
+        .replacen("\n1,", "\n0.5,", 1)
+        .replacen("\n3,", "\n3.004,", 1);
+    let p = write("backwards.csv", text.as_bytes());
+    let out = analyze(&p, &[]);
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    let (_, s) = parsed(&out);
+    assert!(
+        err.contains("the time column `time` goes backwards (0.99 -> 0.5)"),
+        "{err}"
+    );
+    assert!(err.contains("not a whole number of steps"), "{err}");
+    assert!(err.contains("1 steps backwards or repeated"), "{err}");
+    // Nothing inserted: 400 rows, 4 s.
+    assert_eq!(s.t_data, 4.0);
+    // A time column that is not in steps of tau0 (here --tau0 is 0.01, the column steps 0.02)
+    // is reported and only skipped.
+    let p = write("wrong_tau0.csv", stamped("time", 2.0, 0..0).as_bytes());
+    let out = analyze(&p, &[]);
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    let (_, s) = parsed(&out);
+    assert!(
+        err.contains("steps by 0.02 where --tau0 is 0.01 s"),
+        "{err}"
+    );
+    assert_eq!(s.segments, [1, 1]);
+}

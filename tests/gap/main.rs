@@ -2,6 +2,7 @@
 //! oracle bounds, a real recording, and the temperature effect.
 //! One test binary per stage; each topic is a module of it.
 
+mod alternatives;
 mod diagnosis;
 mod families;
 mod mixture;

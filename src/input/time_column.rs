@@ -1,0 +1,274 @@
+//! The time column of text input used to find gaps: rows are one sampling step `tau0` apart, so a
+//! jump of the time stamps by `k` steps (`k = round(dt / tau0) >= 2`, i.e. a jump of more than
+//! about 1.5 tau0) means `k - 1` samples are missing: they become gap steps (NaN rows), exactly
+//! as a counter jump of frames does, so the differences that span them are left out of the
+//! variances (docs/theory.md section 1) and `t_data` counts them.
+//!
+//! The column's unit is decided at its first step: seconds, or ms, us or ns when the step is
+//! `tau0` in one of those (logged). A first step that is none of these (a wrong `--tau0`, or a
+//! column that is not a time) is reported and the column is only skipped, never used. Later
+//! steps that go backwards or repeat (`dt <= 0`) and steps that are not whole multiples of
+//! `tau0` (more than a quarter step off) are counted and reported with their line numbers; a
+//! row stamped backwards is taken as the next sample (the clock moves on one step from where it
+//! was) and inserts nothing.
+
+/// Seconds per unit tried for the column, in order: s, ms, us, ns.
+const SCALES: [(f64, &str); 4] = [(1.0, "s"), (1e-3, "ms"), (1e-6, "us"), (1e-9, "ns")];
+
+/// How far a step may be from a whole number of `tau0` before it is counted irregular.
+const STEP_TOLERANCE: f64 = 0.25;
+
+/// The largest jump taken as a gap (steps); a larger one (a clock reset, a stamp far in the
+/// future) is reported as a discontinuity and inserts nothing: 1e9 steps is 11.6 days at 1 kHz.
+pub const MAX_GAP_STEPS: u64 = 1_000_000_000;
+
+/// How many problems are logged one by one before the rest are only counted.
+const LOGGED: u64 = 10;
+
+/// The state of one time column (see the module doc).
+#[derive(Debug, Clone)]
+pub struct TimeColumn {
+    /// The column's header name, for messages.
+    pub name: String,
+    tau0_s: f64,
+    /// Seconds per unit of the column, once decided; `Some(0.0)` when the column is not used.
+    scale: Option<f64>,
+    /// The time of the last step handed out, in the column's units.
+    last: Option<f64>,
+    /// Jumps that became gaps, and the steps they inserted.
+    pub jumps: u64,
+    pub missing: u64,
+    /// Steps backwards or repeated; steps not a whole number of tau0; jumps too large to fill.
+    pub backwards: u64,
+    pub irregular: u64,
+    pub discontinuities: u64,
+}
+
+/// Where a time column stands, for a checkpoint (`TextPosition`).
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub struct TimeState {
+    pub scale: Option<f64>,
+    pub last: Option<f64>,
+}
+
+impl TimeColumn {
+    pub fn new(name: &str, tau0_s: f64) -> TimeColumn {
+        TimeColumn {
+            name: name.into(),
+            tau0_s,
+            scale: None,
+            last: None,
+            jumps: 0,
+            missing: 0,
+            backwards: 0,
+            irregular: 0,
+            discontinuities: 0,
+        }
+    }
+
+    /// The state a resumed reader continues from.
+    pub fn state(&self) -> TimeState {
+        TimeState {
+            scale: self.scale,
+            last: self.last,
+        }
+    }
+
+    pub fn restore(&mut self, s: TimeState) {
+        self.scale = s.scale;
+        self.last = s.last;
+    }
+
+    /// Whether the column is used to find gaps (false once its first step ruled it out).
+    pub fn in_use(&self) -> bool {
+        self.scale != Some(0.0)
+    }
+
+    /// One gap step was handed out: the clock moves on by one step.
+    pub fn step_inserted(&mut self) {
+        if let (Some(s), Some(l)) = (self.scale, self.last.as_mut()) {
+            if s > 0.0 {
+                *l += self.tau0_s / s;
+            }
+        }
+    }
+
+    /// The row stamped `t` (column units) was handed out after the gap steps before it.
+    pub fn handed_out(&mut self, t: f64) {
+        if t.is_finite() && self.in_use() && self.last.is_some() {
+            self.last = Some(t);
+        }
+    }
+
+    /// The missing steps before a row stamped `t` (column units) at `line` of `file`; problems
+    /// are logged. A NaN stamp (an empty cell) inserts nothing and leaves the clock as it was.
+    pub fn missing_before(&mut self, t: f64, file: &std::path::Path, line: u64) -> u64 {
+        if !t.is_finite() || !self.in_use() {
+            return 0;
+        }
+        let Some(last) = self.last.replace(t) else {
+            return 0;
+        };
+        let dt = t - last;
+        let scale = match self.scale {
+            Some(s) => s,
+            None => {
+                let found = SCALES
+                    .iter()
+                    .find(|(s, _)| (dt * s / self.tau0_s - 1.0).abs() <= STEP_TOLERANCE);
+                match found {
+                    Some((s, unit)) => {
+                        if *s != 1.0 {
+                            tracing::info!(
+                                "{}: time column `{}` read in {unit} (its first step is {dt} {unit} = tau0)",
+                                file.display(),
+                                self.name
+                            );
+                        }
+                        self.scale = Some(*s);
+                        *s
+                    }
+                    None => {
+                        tracing::warn!(
+                            "{}: line {line}: the time column `{}` steps by {dt} where --tau0 is {} s \
+                             (nor that in ms, us or ns): it is not used to find gaps; check --tau0, or \
+                             name the time column with --time-column",
+                            file.display(),
+                            self.name,
+                            self.tau0_s
+                        );
+                        self.scale = Some(0.0);
+                        return 0;
+                    }
+                }
+            }
+        };
+        let steps = dt * scale / self.tau0_s;
+        if dt <= 0.0 {
+            self.backwards += 1;
+            if self.backwards <= LOGGED {
+                tracing::warn!(
+                    "{}: line {line}: the time column `{}` goes {} ({last} -> {t}); no gap inserted",
+                    file.display(),
+                    self.name,
+                    if dt < 0.0 { "backwards" } else { "nowhere (a repeated stamp)" }
+                );
+            }
+            // The row is taken as the next sample: the clock moves on one step from where it
+            // was, so one bad stamp makes no gap (and after a clock reset every row is counted
+            // here, none inserts anything).
+            self.last = Some(last + self.tau0_s / scale);
+            return 0;
+        }
+        let k = steps.round();
+        if (steps - k).abs() > STEP_TOLERANCE || k < 1.0 {
+            self.irregular += 1;
+            if self.irregular <= LOGGED {
+                tracing::warn!(
+                    "{}: line {line}: the time column `{}` steps by {:.3} tau0, not a whole number \
+                     of steps (the data are not uniformly sampled there)",
+                    file.display(),
+                    self.name,
+                    steps
+                );
+            }
+        }
+        if k < 2.0 {
+            return 0;
+        }
+        let missing = k as u64 - 1;
+        if missing > MAX_GAP_STEPS {
+            self.discontinuities += 1;
+            tracing::warn!(
+                "{}: line {line}: the time column `{}` jumps by {:.3e} steps; taken as a \
+                 discontinuity, no gap inserted",
+                file.display(),
+                self.name,
+                steps
+            );
+            return 0;
+        }
+        self.jumps += 1;
+        self.missing += missing;
+        // The clock is at the last step handed out: the gap steps move it on one by one.
+        self.last = Some(last);
+        missing
+    }
+
+    /// The account logged at the end of the input.
+    pub fn report(&self, file: &std::path::Path) {
+        if !self.in_use() {
+            return;
+        }
+        if self.jumps + self.backwards + self.irregular + self.discontinuities == 0 {
+            tracing::debug!("{}: time column `{}`: uniform", file.display(), self.name);
+            return;
+        }
+        tracing::warn!(
+            "{}: time column `{}`: {} jumps, {} missing samples counted as gaps; {} steps \
+             backwards or repeated, {} not a whole number of tau0, {} discontinuities",
+            file.display(),
+            self.name,
+            self.jumps,
+            self.missing,
+            self.backwards,
+            self.irregular,
+            self.discontinuities
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    #[test]
+    fn jumps_become_missing_steps_and_the_unit_is_found() {
+        let p = Path::new("x.csv");
+        // Stamps in ms at tau0 = 4 ms: a jump of 12 ms is 3 steps, 2 missing.
+        let mut c = TimeColumn::new("t", 0.004);
+        assert_eq!(c.missing_before(1000.0, p, 2), 0);
+        assert_eq!(c.missing_before(1004.0, p, 3), 0);
+        assert_eq!(c.missing_before(1016.0, p, 4), 2);
+        c.step_inserted();
+        c.step_inserted();
+        c.handed_out(1016.0);
+        assert_eq!(c.missing_before(1020.0, p, 5), 0);
+        assert_eq!((c.jumps, c.missing), (1, 2));
+        // Backwards: counted, nothing inserted, taken as the next sample (1024).
+        assert_eq!(c.missing_before(1010.0, p, 6), 0);
+        assert_eq!(c.missing_before(1028.0, p, 7), 0);
+        assert_eq!(c.backwards, 1);
+        // 1.4 steps: irregular, no gap; 1.6 steps: irregular, one missing.
+        assert_eq!(c.missing_before(1033.6, p, 8), 0);
+        assert_eq!(c.missing_before(1040.0, p, 9), 1);
+        assert_eq!(c.irregular, 2);
+    }
+
+    #[test]
+    fn a_first_step_that_is_not_tau0_rules_the_column_out() {
+        let p = Path::new("x.csv");
+        let mut c = TimeColumn::new("t", 0.004);
+        c.missing_before(0.0, p, 2);
+        assert_eq!(c.missing_before(0.5, p, 3), 0);
+        assert!(!c.in_use());
+        assert_eq!(c.missing_before(100.0, p, 4), 0);
+    }
+
+    #[test]
+    fn a_resumed_column_inserts_only_the_steps_not_yet_handed_out() {
+        let p = Path::new("x.csv");
+        let mut c = TimeColumn::new("t", 0.01);
+        c.missing_before(0.0, p, 2);
+        c.missing_before(0.01, p, 3);
+        assert_eq!(c.missing_before(0.11, p, 4), 9);
+        // Four gap steps handed out, then a checkpoint: the row at 0.11 is read again.
+        for _ in 0..4 {
+            c.step_inserted();
+        }
+        let mut r = TimeColumn::new("t", 0.01);
+        r.restore(c.state());
+        assert_eq!(r.missing_before(0.11, p, 4), 5);
+    }
+}
