@@ -4,6 +4,8 @@
 
 mod block;
 
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::Instant;
 
 use crate::allan::accum::{AccumConfig, ChannelAccumulator, Overlap};
@@ -190,6 +192,9 @@ pub struct RunAnalysis {
     /// Text values infinite or out of range, read as gaps (from the reader, like `bad_rows`).
     invalid_values: u64,
     started: Instant,
+    /// Set when the run is being stopped ([`RunAnalysis::stop_interim_when`]): interim records
+    /// fall due as before but are not made.
+    stopping: Arc<AtomicBool>,
 }
 
 /// The power-law exponent of S_y for the term that dominates the model at a tau: Q is white
@@ -223,6 +228,7 @@ impl RunAnalysis {
             bad_rows: 0,
             invalid_values: 0,
             started: Instant::now(),
+            stopping: Arc::default(),
         }
     }
 
@@ -339,7 +345,17 @@ impl RunAnalysis {
             bad_rows: state.bad_rows,
             invalid_values: 0,
             started,
+            stopping: Arc::default(),
         })
+    }
+
+    /// Once `flag` is set (the run is being stopped: SIGINT/SIGTERM), the data already read is
+    /// still analysed, to the last frame, but no interim record is made any more (their
+    /// schedule still advances, so a checkpoint is as without the stop). A replay held by a
+    /// stalled consumer would otherwise spend seconds on interim records nobody reads before
+    /// its final ones.
+    pub fn stop_interim_when(&mut self, flag: Arc<AtomicBool>) {
+        self.stopping = flag;
     }
 
     /// Ends every channel's phase segment without accounting for time: what follows is not
@@ -480,7 +496,9 @@ impl RunAnalysis {
             return;
         }
         if self.t_data_s() >= self.next_emit_s {
-            out.extend(self.records(false));
+            if !self.stopping.load(Ordering::Relaxed) {
+                out.extend(self.records(false));
+            }
             let every = self.opts.every_s.unwrap_or(f64::INFINITY);
             self.next_emit_s = next_after(self.next_emit_s, every, self.t_data_s());
         }
@@ -604,6 +622,7 @@ impl RunAnalysis {
                 bad_rows: if i == 0 { self.bad_rows } else { 0 },
                 invalid_values: if i == 0 { self.invalid_values } else { 0 },
                 started: self.started,
+                stopping: self.stopping.clone(),
             });
         }
         out

@@ -9,7 +9,9 @@ use std::path::PathBuf;
 pub enum UsageError {
     #[error("{0}")]
     Option(String),
-    #[error("{file}: line {line}: {problem}")]
+    /// A problem with an input file, at `line` (1-based; 0: the file as a whole, e.g. it cannot
+    /// be opened, printed without a line).
+    #[error("{}{}: {problem}", file.display(), line_part(*line))]
     Input {
         file: PathBuf,
         line: u64,
@@ -27,6 +29,15 @@ pub enum UsageError {
     /// A checkpoint that cannot be used: missing, damaged, or saved with other options.
     #[error("checkpoint {file}: {problem}")]
     Checkpoint { file: PathBuf, problem: String },
+}
+
+/// `: line N` for an input's line, nothing for the file as a whole (line 0).
+fn line_part(line: u64) -> String {
+    if line == 0 {
+        String::new()
+    } else {
+        format!(": line {line}")
+    }
 }
 
 /// The exit status for an error chain: 2 when a [`UsageError`] is anywhere in it, else 1.

@@ -35,8 +35,8 @@
 //! [output]
 //! path = "stand.jsonl"        # optional: JSON lines here instead of standard output
 //!
-//! [[limits]]                  # datasheet limits: kept raw here (`limits_raw`), judged by
-//! channel = "g4"              # the model's limit checker
+//! [[limits]]                  # datasheet limits (crate::model::limits), checked here with
+//! channel = "g4"              # the rest; a channel that the source lacks is refused at start
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -79,8 +79,8 @@ pub struct StandConfig {
     pub channels: Option<Vec<String>>,
     /// `output.path`; `None`: standard output.
     pub output: Option<PathBuf>,
-    /// The `[[limits]]` tables as written, for the limit checker.
-    pub limits_raw: Vec<toml::Value>,
+    /// The `[[limits]]` tables, checked (each knows its line, for [`crate::model::limits::check_channels`]).
+    pub limits: Vec<crate::model::limits::LimitSpec>,
 }
 
 /// All problems found in one stand config, each a [`UsageError::Config`] with its line and key
@@ -186,15 +186,33 @@ fn show(v: &toml::Value) -> String {
 }
 
 impl StandConfig {
-    /// Reads and checks a stand config file.
+    /// Reads and checks a stand config file (its frame descriptor a built-in or a path).
     pub fn load(path: &Path) -> Result<StandConfig, StandConfigErrors> {
+        Self::load_in(path, &[])
+    }
+
+    /// Reads and checks a stand config file; a descriptor named in `source.format` is also
+    /// searched for in `descriptor_dirs` (`FrameDescriptor::load_in`).
+    pub fn load_in(
+        path: &Path,
+        descriptor_dirs: &[PathBuf],
+    ) -> Result<StandConfig, StandConfigErrors> {
         let text = std::fs::read_to_string(path)
             .map_err(|e| crate::toml_check::Collector::unreadable(path, &e).into_errors(WHAT))?;
-        Self::from_toml_str(&text, path)
+        Self::from_toml_str_in(&text, path, descriptor_dirs)
     }
 
     /// Parses and checks config text; `file` names it in errors.
     pub fn from_toml_str(text: &str, file: &Path) -> Result<StandConfig, StandConfigErrors> {
+        Self::from_toml_str_in(text, file, &[])
+    }
+
+    /// [`StandConfig::from_toml_str`], the descriptor also searched for in `descriptor_dirs`.
+    pub fn from_toml_str_in(
+        text: &str,
+        file: &Path,
+        descriptor_dirs: &[PathBuf],
+    ) -> Result<StandConfig, StandConfigErrors> {
         let mut ck = Check {
             c: crate::toml_check::Collector::new(file, text),
         };
@@ -231,7 +249,20 @@ impl StandConfig {
                         "source.format",
                         "\"csv\": run reads frames; give a frame descriptor (siu8, kvh1750, ...)",
                     ),
-                    Some(f) => format = f,
+                    Some(f) => {
+                        // The descriptor is read now, so a bad one is refused with the rest:
+                        // an unknown name at this key, a bad file by its own lines.
+                        if let Err(e) = crate::frame::FrameDescriptor::load_in(&f, descriptor_dirs)
+                        {
+                            for p in e.problems {
+                                match p {
+                                    UsageError::Option(m) => ck.bad("source.format", m),
+                                    other => ck.c.extend([other]),
+                                }
+                            }
+                        }
+                        format = f;
+                    }
                     None if !s.contains_key("format") => ck.bad(
                         "source.format",
                         "missing: a frame descriptor name (siu8, kvh1750, hg4930) or path",
@@ -506,36 +537,20 @@ impl StandConfig {
             output = ck.string(o, "output", "path").map(PathBuf::from);
         }
 
-        // [[limits]]: raw tables for the limit checker.
-        let mut limits_raw = Vec::new();
-        match root.get("limits") {
-            None => {}
+        // [[limits]]: checked here, so their problems come with the others, with lines.
+        let limits = match root.get("limits") {
+            None => Vec::new(),
             Some(toml::Value::Array(a)) => {
-                for (i, v) in a.iter().enumerate() {
-                    if v.is_table() {
-                        limits_raw.push(v.clone());
-                    } else {
-                        ck.bad(
-                            &format!("limits[{i}]"),
-                            format!("must be a table ([[limits]]), not {}", show(v)),
-                        );
-                    }
-                }
+                crate::model::limits::from_tables(a, "limits", &mut ck.c, WHAT)
             }
-            Some(v) => ck.bad(
-                "limits",
-                format!("must be an array of tables ([[limits]]), not {}", show(v)),
-            ),
-        }
-
-        // The limits are checked here, so their problems come with the others, with lines.
-        if let Err(errs) = crate::model::limits::from_tables(&limits_raw, file) {
-            for e in errs {
-                if let UsageError::Config { key, problem, .. } = e {
-                    ck.bad(&key, problem);
-                }
+            Some(v) => {
+                ck.bad(
+                    "limits",
+                    format!("must be an array of tables ([[limits]]), not {}", show(v)),
+                );
+                Vec::new()
             }
-        }
+        };
 
         match (ck.c.is_empty(), source) {
             (true, Some(source)) => Ok(StandConfig {
@@ -554,7 +569,7 @@ impl StandConfig {
                 fit,
                 channels,
                 output,
-                limits_raw,
+                limits,
             }),
             _ => Err(ck.c.into_errors(WHAT)),
         }
@@ -565,7 +580,7 @@ impl StandConfig {
 mod tests {
     use super::*;
 
-    /// Three problems in one file are reported together, each with its key.
+    /// Three problems in one file are reported together, each with its key, in line order.
     #[test]
     fn problems_collected() {
         let text = r#"
@@ -588,7 +603,7 @@ colour = "red"
             .collect();
         assert_eq!(
             keys,
-            ["source.address", "statistics.colour", "statistics.stats"]
+            ["source.address", "statistics.stats", "statistics.colour"]
         );
     }
 }

@@ -2,7 +2,7 @@
 //! configs, model files, limits files): each checker walks its tables and reports a problem by
 //! its key path (`channels[1].offset`, `run.duration`); the [`Collector`] adds the file and the
 //! line the key stands on (from the parser's spans), and [`ConfigErrors`] gives every problem
-//! once, in the order found, with exit status 2.
+//! once, in the order of the file's lines, with exit status 2.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -139,12 +139,18 @@ impl Collector {
         self.problems.extend(more);
     }
 
-    /// The problems as one error.
+    /// The problems as one error, in the order of their lines in the file (the ones of the
+    /// whole file first; problems on one line in the order found; those of another file that
+    /// this one names, such as a stand config's descriptor, last).
     pub fn into_errors(self, what: &'static str) -> ConfigErrors {
-        ConfigErrors {
-            what,
-            problems: self.problems,
-        }
+        let own = self.file;
+        let mut problems = self.problems;
+        // Problems of another file (a descriptor a stand config names) after this file's.
+        problems.sort_by_key(|p| match p {
+            UsageError::Config { file, line, .. } => (*file != own, *line),
+            _ => (false, None),
+        });
+        ConfigErrors { what, problems }
     }
 }
 

@@ -422,6 +422,8 @@ pub(crate) fn descriptor_dirs() -> Vec<PathBuf> {
         }
     }
     dirs.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("config/frames"));
+    // A binary run from its build tree finds the crate's folder twice.
+    dirs.dedup();
     dirs
 }
 

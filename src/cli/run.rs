@@ -42,7 +42,9 @@ pub struct RunArgs {
 }
 
 pub fn run(r: &RunArgs) -> Result<()> {
-    let cfg = StandConfig::load(&r.config).map_err(anyhow::Error::new)?;
+    // The descriptor is checked with the config, searched in the binary's folders.
+    let cfg =
+        StandConfig::load_in(&r.config, &super::descriptor_dirs()).map_err(anyhow::Error::new)?;
     let flags = RunFlags {
         resume: r.resume,
         abort_after_frames: r.abort_after_frames,

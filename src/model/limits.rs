@@ -106,6 +106,9 @@ pub struct LimitSpec {
     pub unit: Option<String>,
     #[serde(default)]
     pub over: Scope,
+    /// Where the limit was written, for errors about it; `None` for a limit built in code.
+    #[serde(skip)]
+    pub origin: Option<LimitOrigin>,
 }
 
 /// The outcome of one bound.
@@ -412,39 +415,186 @@ pub fn judge_runs(specs: &[LimitSpec], aggregates: &[CoefAggregate]) -> Judgemen
     Judgement::from_results(out)
 }
 
-/// Reads `[[limits]]` tables (a stand config's, or a limits file's) into specs, checking each:
-/// every problem is reported with the file and its key (`limits[i].key`), together.
+/// The keys a `[[limits]]` table may have.
+const LIMIT_KEYS: [&str; 6] = ["channel", "coef", "max", "min", "unit", "over"];
+
+/// Reads `[[limits]]` tables (a stand config's, or a limits file's; `prefix` is their key,
+/// `limits`) into specs: every unknown key, mistyped or unknown value and inconsistent limit is
+/// recorded in the file's one collector, with its key (`limits[i].key`) and line. Each spec
+/// read remembers where it was written ([`LimitOrigin`], `what` names the file's kind), so a
+/// limit that no channel matches is reported there too ([`check_channels`]).
 pub fn from_tables(
     tables: &[toml::Value],
-    file: &std::path::Path,
-) -> Result<Vec<LimitSpec>, Vec<crate::error::UsageError>> {
+    prefix: &str,
+    c: &mut crate::toml_check::Collector,
+    what: &'static str,
+) -> Vec<LimitSpec> {
     let mut specs = Vec::new();
-    let mut errors = Vec::new();
-    for (i, t) in tables.iter().enumerate() {
-        match t.clone().try_into::<LimitSpec>() {
-            Ok(spec) => {
-                for (key, problem) in spec.problems() {
-                    errors.push(crate::error::UsageError::Config {
-                        file: file.into(),
-                        line: None,
-                        key: format!("limits[{i}].{key}"),
-                        problem,
-                    });
-                }
-                specs.push(spec);
+    for (i, v) in tables.iter().enumerate() {
+        let at = format!("{prefix}[{i}]");
+        let Some(t) = v.as_table() else {
+            c.bad(
+                at,
+                format!("must be a table ([[{prefix}]]), not {}", v.type_str()),
+            );
+            continue;
+        };
+        let before = c.problems().len();
+        for k in t.keys().filter(|k| !LIMIT_KEYS.contains(&k.as_str())) {
+            c.bad(
+                format!("{at}.{k}"),
+                format!("unknown key (allowed here: {})", LIMIT_KEYS.join(", ")),
+            );
+        }
+        let text = |c: &mut crate::toml_check::Collector, k: &str| match t.get(k) {
+            None => None,
+            Some(toml::Value::String(s)) => Some(s.clone()),
+            Some(v) => {
+                c.bad(
+                    format!("{at}.{k}"),
+                    format!("expected a string, found {}", v.type_str()),
+                );
+                None
             }
-            Err(e) => errors.push(crate::error::UsageError::Config {
-                file: file.into(),
-                line: None,
-                key: format!("limits[{i}]"),
-                problem: e.message().to_string(),
+        };
+        let number = |c: &mut crate::toml_check::Collector, k: &str| match t.get(k) {
+            None => None,
+            Some(toml::Value::Float(x)) => Some(*x),
+            Some(toml::Value::Integer(n)) => Some(*n as f64),
+            Some(v) => {
+                c.bad(
+                    format!("{at}.{k}"),
+                    format!("expected a number, found {}", v.type_str()),
+                );
+                None
+            }
+        };
+        let channel = text(c, "channel");
+        if channel.is_none() && !t.contains_key("channel") {
+            c.bad(
+                format!("{at}.channel"),
+                "missing: a channel name or pattern",
+            );
+        }
+        let coef = match text(c, "coef").as_deref() {
+            None => {
+                if !t.contains_key("coef") {
+                    c.bad(format!("{at}.coef"), "missing: Q, N, B, K or R");
+                }
+                None
+            }
+            Some("Q") => Some(Coef::Q),
+            Some("N") => Some(Coef::N),
+            Some("B") => Some(Coef::B),
+            Some("K") => Some(Coef::K),
+            Some("R") => Some(Coef::R),
+            Some(other) => {
+                c.bad(
+                    format!("{at}.coef"),
+                    format!("unknown coefficient `{other}` (allowed: Q, N, B, K, R)"),
+                );
+                None
+            }
+        };
+        let over = match text(c, "over").as_deref() {
+            None | Some("run") => Scope::Run,
+            Some("runs_sd") => Scope::RunsSd,
+            Some("runs_mean") => Scope::RunsMean,
+            Some(other) => {
+                c.bad(
+                    format!("{at}.over"),
+                    format!("unknown scope `{other}` (allowed: run, runs_sd, runs_mean)"),
+                );
+                Scope::Run
+            }
+        };
+        let (max, min) = (number(c, "max"), number(c, "min"));
+        let unit = text(c, "unit");
+        let complete = channel.is_some() && coef.is_some();
+        let spec = LimitSpec {
+            origin: Some(LimitOrigin {
+                what,
+                file: c.file().to_path_buf(),
+                line: c.line_of(&format!("{at}.channel")),
+                key: format!("{at}.channel"),
             }),
+            // Placeholders where a problem is already recorded (the spec is then not kept).
+            channel: channel.unwrap_or_else(|| "?".into()),
+            coef: coef.unwrap_or(Coef::N),
+            max,
+            min,
+            unit,
+            over,
+        };
+        // The consistency of the limit (a bound given, finite, a known unit), for the keys
+        // not already refused above.
+        let refused: Vec<String> = c.problems()[before..]
+            .iter()
+            .filter_map(|p| match p {
+                crate::error::UsageError::Config { key, .. } => Some(key.clone()),
+                _ => None,
+            })
+            .collect();
+        for (key, problem) in spec.problems() {
+            let key = format!("{at}.{key}");
+            if !refused.contains(&key) {
+                c.bad(key, problem);
+            }
+        }
+        if complete {
+            specs.push(spec);
         }
     }
-    if errors.is_empty() {
-        Ok(specs)
+    specs
+}
+
+/// Where a limit was written: the kind of file, the file, and the key and line of its
+/// `channel`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LimitOrigin {
+    /// "stand config" or "limits file".
+    pub what: &'static str,
+    pub file: std::path::PathBuf,
+    pub key: String,
+    pub line: Option<usize>,
+}
+
+/// Every limit must match at least one of `channels` (the run's, read from `input`): a
+/// misspelt name would never be judged. The ones that match none are reported together, each at
+/// the file and line it was written on (a limit built in code, without an origin, by its name).
+pub fn check_channels(
+    specs: &[LimitSpec],
+    input: &str,
+    channels: &[&str],
+) -> Result<(), crate::toml_check::ConfigErrors> {
+    let mut what = "limits";
+    let mut problems = Vec::new();
+    for l in specs {
+        if channels.iter().any(|c| channel_matches(&l.channel, c)) {
+            continue;
+        }
+        let problem = format!(
+            "`{}` matches no channel of {input} (it has: {})",
+            l.channel,
+            channels.join(", ")
+        );
+        problems.push(match &l.origin {
+            Some(o) => {
+                what = o.what;
+                crate::error::UsageError::Config {
+                    file: o.file.clone(),
+                    line: o.line,
+                    key: o.key.clone(),
+                    problem,
+                }
+            }
+            None => crate::error::UsageError::Option(format!("datasheet limit: {problem}")),
+        });
+    }
+    if problems.is_empty() {
+        Ok(())
     } else {
-        Err(errors)
+        Err(crate::toml_check::ConfigErrors { what, problems })
     }
 }
 
@@ -465,23 +615,16 @@ pub fn load_file(path: &std::path::Path) -> anyhow::Result<Vec<LimitSpec>> {
             "unknown key (a limits file holds [[limits]] tables)",
         );
     }
-    let tables = match root.get("limits") {
-        Some(toml::Value::Array(a)) => a.clone(),
+    let specs = match root.get("limits") {
+        Some(toml::Value::Array(a)) => from_tables(a, "limits", &mut c, WHAT),
         _ => {
             c.bad("limits", "expected an array of tables ([[limits]])");
-            return Err(c.into_errors(WHAT).into());
+            Vec::new()
         }
     };
-    match from_tables(&tables, path) {
-        Ok(specs) if c.is_empty() => Ok(specs),
-        Ok(_) => Err(c.into_errors(WHAT).into()),
-        Err(errs) => {
-            for e in errs {
-                if let crate::error::UsageError::Config { key, problem, .. } = e {
-                    c.bad(key, problem);
-                }
-            }
-            Err(c.into_errors(WHAT).into())
-        }
+    if c.is_empty() {
+        Ok(specs)
+    } else {
+        Err(c.into_errors(WHAT).into())
     }
 }

@@ -603,6 +603,10 @@ fn spawn_analysis(
         let h = std::thread::Builder::new()
             .name("allanscope-analysis".into())
             .spawn(move || {
+                // Stopped by a signal: the frames read still count, their interim records are
+                // not made (RunAnalysis::stop_interim_when).
+                let stopping = queue.stopping();
+                part.stop_interim_when(stopping.clone());
                 let mut out = Vec::new();
                 let tick =
                     every_wall.map_or_else(crossbeam_channel::never, crossbeam_channel::tick);
@@ -624,7 +628,9 @@ fn spawn_analysis(
                             }
                             Err(_) => break,
                         },
-                        recv(tick) -> _ => out.extend(part.records(false)),
+                        recv(tick) -> _ => if !stopping.load(Ordering::Relaxed) {
+                            out.extend(part.records(false));
+                        },
                     }
                     for r in out.drain(..) {
                         if let Some(m) = &metrics {

@@ -20,7 +20,7 @@
 
 use std::collections::VecDeque;
 use std::io::Write;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
@@ -73,6 +73,9 @@ struct Shared {
     room: Condvar,
     /// Records written so far (the writer's progress, watched by [`RecordWriter::finish_within`]).
     written: AtomicU64,
+    /// Set with `QueueState::released`, for the analysis to read without the lock
+    /// ([`RecordQueue::stopping`]).
+    stopping: Arc<AtomicBool>,
 }
 
 /// The sending side of the record queue; cheap to clone.
@@ -148,7 +151,14 @@ impl RecordQueue {
     /// that may never read again. Full queues coalesce from then on.
     pub fn release(&self) {
         self.lock().released = true;
+        self.inner.stopping.store(true, Ordering::SeqCst);
         self.inner.room.notify_all();
+    }
+
+    /// Set once [`RecordQueue::release`] was called (the run is being stopped); the analysis
+    /// watches it (`RunAnalysis::stop_interim_when`).
+    pub fn stopping(&self) -> Arc<AtomicBool> {
+        self.inner.stopping.clone()
     }
 
     /// Records waiting to be written.
@@ -195,6 +205,7 @@ impl RecordWriter {
                 items: Condvar::new(),
                 room: Condvar::new(),
                 written: AtomicU64::new(0),
+                stopping: Arc::new(AtomicBool::new(false)),
             }),
             capacity: capacity.max(1),
             delivery,

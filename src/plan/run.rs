@@ -11,7 +11,6 @@ use super::checkpoint_setup::CheckpointRequest;
 use super::settings::DataSettings;
 use super::unit::{InputPlan, UnitPlan, UnitRequest};
 use crate::analysis::{ChannelSetup, InputKind};
-use crate::error::UsageError;
 use crate::frame::FrameDescriptor;
 use crate::input::text::TextOptions;
 use crate::source::{Pace, SourceSpec};
@@ -46,25 +45,10 @@ impl RunPlan {
     /// The plan of a stand config (`run --config`); descriptors by name are searched in `dirs`
     /// (the binary's search path), then the built-in ones. Errors name the config's file and key.
     pub fn from_stand(cfg: &StandConfig, dirs: &[PathBuf], flags: &RunFlags) -> Result<RunPlan> {
-        let config_error = |key: &str, problem: String| {
-            anyhow::Error::new(UsageError::Config {
-                file: cfg.file.clone(),
-                line: None,
-                key: key.into(),
-                problem,
-            })
-        };
-        let desc = FrameDescriptor::load_in(&cfg.format, dirs)
-            .map_err(|e| config_error("source.format", e.to_string()))?;
-        let limits =
-            crate::model::limits::from_tables(&cfg.limits_raw, &cfg.file).map_err(|errs| {
-                let all = errs
-                    .iter()
-                    .map(|e| e.to_string())
-                    .collect::<Vec<_>>()
-                    .join("\n");
-                anyhow::Error::new(UsageError::Option(all))
-            })?;
+        // Checked with the config (StandConfig::load_in): a descriptor that fails now changed
+        // since, and names its own file.
+        let desc = FrameDescriptor::load_in(&cfg.format, dirs)?;
+        let limits = cfg.limits.clone();
         let mut spec = cfg.source.clone();
         let live = spec.is_live();
         if let SourceSpec::File { pace, .. } | SourceSpec::Stdin { pace } = &mut spec {

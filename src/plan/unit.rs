@@ -163,23 +163,10 @@ pub fn start_analysis(
     resume: Option<&crate::checkpoint::Checkpoint>,
     path: Option<&Path>,
 ) -> Result<RunAnalysis> {
-    // A limit that no channel matches would never be judged: a misspelt name, refused here.
-    for l in &opts.limits {
-        if !setups
-            .iter()
-            .any(|c| crate::model::limits::channel_matches(&l.channel, &c.name))
-        {
-            return Err(anyhow::Error::new(UsageError::Option(format!(
-                "datasheet limit on channel `{}`: {input} has no such channel (it has: {})",
-                l.channel,
-                setups
-                    .iter()
-                    .map(|c| c.name.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ))));
-        }
-    }
+    // A limit that no channel matches would never be judged: a misspelt name, refused here,
+    // at the file and line it was written on.
+    let names: Vec<&str> = setups.iter().map(|c| c.name.as_str()).collect();
+    crate::model::limits::check_channels(&opts.limits, input, &names)?;
     match resume {
         None => Ok(RunAnalysis::new(input, setups, opts)),
         Some(ck) => RunAnalysis::restore(ck.analysis.clone(), &setups, opts).map_err(|p| {

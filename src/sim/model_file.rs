@@ -174,16 +174,12 @@ impl SimModel {
         let Some(table) = c.parse(text) else {
             return Err(c.into_errors(WHAT));
         };
-        let mut errs = Problems::default();
-        let model = parse_model(&table, &mut errs);
-        match (errs.list.is_empty(), model) {
+        let model = parse_model(&table, &mut c);
+        match (c.is_empty(), model) {
             (true, Some(m)) => Ok(m),
             _ => {
-                if errs.list.is_empty() {
+                if c.is_empty() {
                     c.bad("(model)", "invalid model");
-                }
-                for (key, problem) in errs.list {
-                    c.bad(key, problem);
                 }
                 Err(c.into_errors(WHAT))
             }
@@ -225,22 +221,11 @@ pub fn normal_gravity_m_s2(latitude_deg: f64) -> f64 {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Parsing: a small key walker that records every problem with its key path; the problems are
-// handed to the one collector (`crate::toml_check`) that adds the file and line.
+// Parsing: a small key walker that records every problem with its key path in the file's one
+// collector (`crate::toml_check`), which adds the file and the line.
 
 /// What a model file's errors are called.
 const WHAT: &str = "model file";
-
-#[derive(Default)]
-struct Problems {
-    list: Vec<(String, String)>,
-}
-
-impl Problems {
-    fn push(&mut self, key: &str, problem: impl Into<String>) {
-        self.list.push((key.to_string(), problem.into()));
-    }
-}
 
 /// One table being read: remembers which keys were taken, so the rest can be rejected.
 struct Keys<'a> {
@@ -272,51 +257,51 @@ impl<'a> Keys<'a> {
     }
 
     /// A finite number (integer or float), if present.
-    fn num(&mut self, key: &'static str, errs: &mut Problems) -> Option<f64> {
+    fn num(&mut self, key: &'static str, errs: &mut Collector) -> Option<f64> {
         let v = self.get(key)?;
         let x = match v {
             toml::Value::Float(f) => *f,
             toml::Value::Integer(i) => *i as f64,
             other => {
-                errs.push(
-                    &self.path(key),
+                errs.bad(
+                    self.path(key),
                     format!("expected a number, found {}", other.type_str()),
                 );
                 return None;
             }
         };
         if !x.is_finite() {
-            errs.push(&self.path(key), "must be finite");
+            errs.bad(self.path(key), "must be finite");
             return None;
         }
         Some(x)
     }
 
     /// A number that must be > 0 (`strict`) or >= 0.
-    fn num_pos(&mut self, key: &'static str, strict: bool, errs: &mut Problems) -> Option<f64> {
+    fn num_pos(&mut self, key: &'static str, strict: bool, errs: &mut Collector) -> Option<f64> {
         let x = self.num(key, errs)?;
         if (strict && x <= 0.0) || x < 0.0 {
             let what = if strict { "> 0" } else { ">= 0" };
-            errs.push(&self.path(key), format!("must be {what}, got {x}"));
+            errs.bad(self.path(key), format!("must be {what}, got {x}"));
             return None;
         }
         Some(x)
     }
 
-    fn required(&mut self, key: &'static str, x: Option<f64>, errs: &mut Problems) -> f64 {
+    fn required(&mut self, key: &'static str, x: Option<f64>, errs: &mut Collector) -> f64 {
         if x.is_none() && !self.table.contains_key(key) {
-            errs.push(&self.path(key), "missing");
+            errs.bad(self.path(key), "missing");
         }
         x.unwrap_or(f64::NAN)
     }
 
-    fn string(&mut self, key: &'static str, errs: &mut Problems) -> Option<&'a str> {
+    fn string(&mut self, key: &'static str, errs: &mut Collector) -> Option<&'a str> {
         let v = self.get(key)?;
         match v.as_str() {
             Some(s) => Some(s),
             None => {
-                errs.push(
-                    &self.path(key),
+                errs.bad(
+                    self.path(key),
                     format!("expected a string, found {}", v.type_str()),
                 );
                 None
@@ -325,7 +310,11 @@ impl<'a> Keys<'a> {
     }
 
     /// A table, or a list of tables; each with its key path.
-    fn tables(&mut self, key: &'static str, errs: &mut Problems) -> Vec<(String, &'a toml::Table)> {
+    fn tables(
+        &mut self,
+        key: &'static str,
+        errs: &mut Collector,
+    ) -> Vec<(String, &'a toml::Table)> {
         let path = self.path(key);
         match self.get(key) {
             None => Vec::new(),
@@ -335,8 +324,8 @@ impl<'a> Keys<'a> {
                 for (i, v) in a.iter().enumerate() {
                     match v.as_table() {
                         Some(t) => out.push((format!("{path}[{i}]"), t)),
-                        None => errs.push(
-                            &format!("{path}[{i}]"),
+                        None => errs.bad(
+                            format!("{path}[{i}]"),
                             format!("expected a table, found {}", v.type_str()),
                         ),
                     }
@@ -344,7 +333,7 @@ impl<'a> Keys<'a> {
                 out
             }
             Some(other) => {
-                errs.push(
+                errs.bad(
                     &path,
                     format!(
                         "expected a table or a list of tables, found {}",
@@ -360,21 +349,21 @@ impl<'a> Keys<'a> {
     fn table(
         &mut self,
         key: &'static str,
-        errs: &mut Problems,
+        errs: &mut Collector,
     ) -> Option<(String, &'a toml::Table)> {
         let v = self.tables(key, errs);
         if v.len() > 1 {
-            errs.push(&self.path(key), "expected one table, found a list");
+            errs.bad(self.path(key), "expected one table, found a list");
         }
         v.into_iter().next()
     }
 
     /// Reject every key not taken, listing the allowed ones.
-    fn finish(self, errs: &mut Problems) {
+    fn finish(self, errs: &mut Collector) {
         for k in self.table.keys() {
             if !self.taken.contains(&k.as_str()) {
-                errs.push(
-                    &self.path(k),
+                errs.bad(
+                    self.path(k),
                     format!("unknown key (allowed: {})", self.taken.join(", ")),
                 );
             }
@@ -382,7 +371,7 @@ impl<'a> Keys<'a> {
     }
 }
 
-fn parse_model(table: &toml::Table, errs: &mut Problems) -> Option<SimModel> {
+fn parse_model(table: &toml::Table, errs: &mut Collector) -> Option<SimModel> {
     let mut top = Keys::new(table, "");
     let _ = top.string("description", errs);
     let rate = top.num_pos("rate_hz", true, errs);
@@ -391,12 +380,12 @@ fn parse_model(table: &toml::Table, errs: &mut Problems) -> Option<SimModel> {
         (Some(r), None) => 1.0 / r,
         (None, Some(t)) => t,
         (Some(_), Some(_)) => {
-            errs.push("tau0_s", "give either rate_hz or tau0_s, not both");
+            errs.bad("tau0_s", "give either rate_hz or tau0_s, not both");
             f64::NAN
         }
         (None, None) => {
             if !table.contains_key("rate_hz") && !table.contains_key("tau0_s") {
-                errs.push("rate_hz", "missing (or give tau0_s)");
+                errs.bad("rate_hz", "missing (or give tau0_s)");
             }
             f64::NAN
         }
@@ -409,8 +398,8 @@ fn parse_model(table: &toml::Table, errs: &mut Problems) -> Option<SimModel> {
         .map(|(p, t)| parse_temperature(t, &p, errs));
     let channel_tables = top.tables("channel", errs);
     top.finish(errs);
-    if channel_tables.is_empty() {
-        errs.push("channel", "at least one [[channel]] is needed");
+    if channel_tables.is_empty() && !table.contains_key("channel") {
+        errs.bad("channel", "at least one [[channel]] is needed");
     }
     let mut channels = Vec::new();
     for (path, t) in channel_tables {
@@ -423,15 +412,15 @@ fn parse_model(table: &toml::Table, errs: &mut Problems) -> Option<SimModel> {
             errs,
         ) {
             if channels.iter().any(|o: &ChannelModel| o.name == c.name) {
-                errs.push(
-                    &format!("{path}.name"),
+                errs.bad(
+                    format!("{path}.name"),
                     format!("duplicate channel name `{}`", c.name),
                 );
             }
             channels.push(c);
         }
     }
-    errs.list.is_empty().then_some(SimModel {
+    errs.is_empty().then_some(SimModel {
         tau0_s,
         stand,
         temperature,
@@ -439,13 +428,13 @@ fn parse_model(table: &toml::Table, errs: &mut Problems) -> Option<SimModel> {
     })
 }
 
-fn parse_stand(t: &toml::Table, path: &str, errs: &mut Problems) -> Stand {
+fn parse_stand(t: &toml::Table, path: &str, errs: &mut Collector) -> Stand {
     let mut k = Keys::new(t, path);
     let lat = k.num("latitude_deg", errs);
     let latitude_deg = k.required("latitude_deg", lat, errs);
     if latitude_deg.abs() > 90.0 {
-        errs.push(
-            &k.path("latitude_deg"),
+        errs.bad(
+            k.path("latitude_deg"),
             format!("must be within [-90, 90], got {latitude_deg}"),
         );
     }
@@ -459,7 +448,7 @@ fn parse_stand(t: &toml::Table, path: &str, errs: &mut Problems) -> Stand {
     }
 }
 
-fn parse_temperature(t: &toml::Table, path: &str, errs: &mut Problems) -> TemperatureProfile {
+fn parse_temperature(t: &toml::Table, path: &str, errs: &mut Collector) -> TemperatureProfile {
     let mut k = Keys::new(t, path);
     let s = k.num("start_c", errs);
     let start_c = k.required("start_c", s, errs);
@@ -486,7 +475,7 @@ fn parse_temperature(t: &toml::Table, path: &str, errs: &mut Problems) -> Temper
     }
 }
 
-fn parse_axis(v: &toml::Value, path: &str, errs: &mut Problems) -> Option<[f64; 3]> {
+fn parse_axis(v: &toml::Value, path: &str, errs: &mut Collector) -> Option<[f64; 3]> {
     let raw = match v {
         toml::Value::String(s) => match s.as_str() {
             "east" => [1.0, 0.0, 0.0],
@@ -496,7 +485,7 @@ fn parse_axis(v: &toml::Value, path: &str, errs: &mut Problems) -> Option<[f64; 
             "up" => [0.0, 0.0, 1.0],
             "down" => [0.0, 0.0, -1.0],
             other => {
-                errs.push(
+                errs.bad(
                     path,
                     format!("unknown direction `{other}` (allowed: up, down, north, south, east, west, or [east, north, up])"),
                 );
@@ -509,13 +498,13 @@ fn parse_axis(v: &toml::Value, path: &str, errs: &mut Problems) -> Option<[f64; 
                 .filter_map(|x| x.as_float().or(x.as_integer().map(|i| i as f64)))
                 .collect();
             if a.len() != 3 || nums.len() != 3 || nums.iter().any(|x| !x.is_finite()) {
-                errs.push(path, "expected three numbers [east, north, up]");
+                errs.bad(path, "expected three numbers [east, north, up]");
                 return None;
             }
             [nums[0], nums[1], nums[2]]
         }
         other => {
-            errs.push(
+            errs.bad(
                 path,
                 format!(
                     "expected a direction name or [east, north, up], found {}",
@@ -527,7 +516,7 @@ fn parse_axis(v: &toml::Value, path: &str, errs: &mut Problems) -> Option<[f64; 
     };
     let norm = (raw[0] * raw[0] + raw[1] * raw[1] + raw[2] * raw[2]).sqrt();
     if norm == 0.0 {
-        errs.push(path, "must not be the zero vector");
+        errs.bad(path, "must not be the zero vector");
         return None;
     }
     Some([raw[0] / norm, raw[1] / norm, raw[2] / norm])
@@ -539,22 +528,22 @@ fn parse_channel(
     tau0_s: f64,
     has_temperature: bool,
     has_stand: bool,
-    errs: &mut Problems,
+    errs: &mut Collector,
 ) -> Option<ChannelModel> {
-    let n_before = errs.list.len();
+    let n_before = errs.problems().len();
     let mut k = Keys::new(t, path);
     let name = k.string("name", errs).unwrap_or("").to_string();
     if !t.contains_key("name") {
-        errs.push(&k.path("name"), "missing");
+        errs.bad(k.path("name"), "missing");
     } else if name.is_empty() || name.contains([',', '"', '\n', '\r']) {
-        errs.push(
-            &k.path("name"),
+        errs.bad(
+            k.path("name"),
             "must be non-empty, without commas, quotes or line breaks",
         );
     }
     let unit = k.string("unit", errs).unwrap_or("").to_string();
     if !t.contains_key("unit") {
-        errs.push(&k.path("unit"), "missing");
+        errs.bad(k.path("unit"), "missing");
     }
     let kind = IncrementUnit::parse(&unit);
     let lsb = k.num_pos("lsb", true, errs);
@@ -577,7 +566,7 @@ fn parse_channel(
                 })
                 .unwrap_or_default();
             if nums.len() != 2 || !(nums[0] > 0.0 && nums[1] > nums[0] && nums[1].is_finite()) {
-                errs.push(
+                errs.bad(
                     &band_path,
                     "expected [tau_lo_s, tau_hi_s] with 0 < tau_lo_s < tau_hi_s",
                 );
@@ -590,7 +579,7 @@ fn parse_channel(
     let axis_path = k.path("axis");
     let axis_enu = k.get("axis").and_then(|v| parse_axis(v, &axis_path, errs));
     if axis_enu.is_some() && kind.is_none() {
-        errs.push(
+        errs.bad(
             &axis_path,
             format!(
                 "an axis needs a unit of angle (arcsec, deg, rad, mrad) or velocity (m/s, ft/s, g, mg), not `{unit}`"
@@ -598,15 +587,15 @@ fn parse_channel(
         );
     }
     if axis_enu.is_some() && !has_stand {
-        errs.push(
+        errs.bad(
             &axis_path,
             "an axis needs a [stand] table (latitude) to project on",
         );
     }
     let temperature_coefficient = k.num("temperature_coefficient", errs).unwrap_or(0.0);
     if temperature_coefficient != 0.0 && !has_temperature {
-        errs.push(
-            &k.path("temperature_coefficient"),
+        errs.bad(
+            k.path("temperature_coefficient"),
             "needs a top-level [temperature] profile",
         );
     }
@@ -672,8 +661,8 @@ fn parse_channel(
         let r = e.num_pos("rate", false, errs);
         let rate_per_s = e.required("rate", r, errs);
         if rate_per_s * tau0_s > 0.5 {
-            errs.push(
-                &e.path("rate"),
+            errs.bad(
+                e.path("rate"),
                 format!("{rate_per_s} per second is more than one outlier every two samples"),
             );
         }
@@ -683,7 +672,7 @@ fn parse_channel(
         Outliers { rate_per_s, size }
     });
     k.finish(errs);
-    if errs.list.len() > n_before {
+    if errs.problems().len() > n_before {
         return None;
     }
     let flicker = (b > 0.0).then(|| FlickerBank::design(b, flicker_band_s.0, flicker_band_s.1));

@@ -429,6 +429,7 @@ mod tests {
             min: None,
             unit: None,
             over: Scope::Run,
+            origin: None,
         }
     }
 

@@ -44,6 +44,7 @@ pub async fn run(path: &Path, baud: u32, ctx: &mut SourceContext) -> Result<()> 
             }))
         }
     };
+    tracing::info!("reading serial port {} at {baud} baud", path.display());
     loop {
         // Read until the port fails or reports its end.
         let lost_at = loop {

@@ -8,6 +8,11 @@
 //! - A live run whose standard output is no longer read ends within a bounded time after SIGINT
 //!   (the writer's grace, 3 s), at once after a second SIGINT, with an error naming standard
 //!   output; with `--out FILE` the final records are in the file.
+//! - A replay held by back-pressure (its standard output not read) ends the same way after
+//!   SIGINT; a consumer that reads again after the signal gets the final records at once.
+//! - A listener on a UDP port that never receives anything ends at once on SIGINT or SIGTERM,
+//!   exit 0, with its (empty) final records, health and summary; so does a serial listener on a
+//!   pseudo-terminal whose line went quiet, with the final records of the frames it received.
 
 use std::io::{BufRead, BufReader, Read};
 use std::process::{Child, Stdio};
@@ -273,4 +278,201 @@ fn sigint_ends_a_run_whose_output_is_not_read() {
     let s = recs.last().unwrap();
     assert_eq!(s["stopped_by"], "SIGINT");
     assert_eq!(s["t_data"], 2500.0 * TAU0_S);
+}
+
+/// A replay (`analyze` at full speed, an interim set every 50 ms of data) whose standard output
+/// is piped and not read: back-pressure holds the analysis once the pipe is full.
+fn stalled_replay() -> (Child, mpsc::Receiver<String>) {
+    let mut child = exe()
+        .args([
+            "analyze",
+            &siu8_path(),
+            "--format",
+            "siu8",
+            "--every",
+            "0.05",
+        ])
+        .env("ALLANSCOPE_LOG", "info")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let rx = stderr_lines(&mut child);
+    // 32 records of ~1 KB per interim set: the 64 KiB pipe is full after a few sets, long
+    // before this (the whole replay at full speed takes about a second).
+    std::thread::sleep(Duration::from_millis(1000));
+    (child, rx)
+}
+
+#[test]
+fn sigint_ends_a_replay_held_by_back_pressure() {
+    // Never read: the grace (3 s without progress), then exit 1 naming standard output.
+    let (mut child, rx) = stalled_replay();
+    assert!(child.try_wait().expect("try_wait").is_none(), "ended early");
+    signal(&child, "-INT");
+    let (code, took) = wait_at_most(&mut child, Duration::from_secs(15));
+    assert_eq!(code, Some(1));
+    assert!(
+        took >= Duration::from_millis(2900) && took < Duration::from_secs(6),
+        "{took:?}"
+    );
+    std::thread::sleep(Duration::from_millis(100));
+    let err: Vec<String> = rx.try_iter().collect();
+    assert!(
+        err.iter()
+            .any(|l| l.contains("standard output") && l.contains("not being read")),
+        "{err:?}"
+    );
+
+    // Read again after the signal: the back-pressure is lifted, the final records of the data
+    // read so far follow at once, and the summary says the replay did not reach its end.
+    let (mut child, _rx) = stalled_replay();
+    signal(&child, "-INT");
+    let t0 = Instant::now();
+    let mut text = String::new();
+    child
+        .stdout
+        .take()
+        .expect("stdout")
+        .read_to_string(&mut text)
+        .expect("read");
+    let (code, _) = wait_at_most(&mut child, Duration::from_secs(10));
+    assert!(t0.elapsed() < Duration::from_secs(2), "{:?}", t0.elapsed());
+    assert_eq!(code, Some(1));
+    let recs: Vec<serde_json::Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("JSON line"))
+        .collect();
+    let s = recs.last().expect("records");
+    assert_eq!(s["type"], "summary");
+    assert_eq!(s["read_to_end"], false);
+    assert_eq!(s["stopped_by"], "SIGINT");
+    let t = s["t_data"].as_f64().expect("t_data");
+    assert!(t > 0.0 && t < 300.0, "t_data {t}");
+    // The finals describe every frame the analysis took: health frames x tau0 = t_data (to
+    // the rounding of t_data's own sum).
+    let h = recs.iter().rev().find(|r| r["type"] == "health").unwrap();
+    let frames_s = h["frames"].as_f64().unwrap() * TAU0_S;
+    assert!(
+        (frames_s - t).abs() <= 1e-9 * t,
+        "{frames_s} s of frames, t_data {t}"
+    );
+    let finals: Vec<&serde_json::Value> = recs
+        .iter()
+        .filter(|r| r["type"] == "curve" && r["final"] == true)
+        .collect();
+    assert_eq!(finals.len(), 24);
+    assert!(finals.iter().all(|r| r["t_data"].as_f64() == Some(t)));
+}
+
+/// The records of `--out`, parsed.
+fn records_of(out: &std::path::Path) -> Vec<serde_json::Value> {
+    std::fs::read_to_string(out)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
+#[test]
+fn a_signal_ends_a_listener_on_a_quiet_udp_port_at_once() {
+    for sig in ["-INT", "-TERM"] {
+        let port = std::net::UdpSocket::bind("127.0.0.1:0")
+            .unwrap()
+            .local_addr()
+            .unwrap()
+            .port();
+        let out = tmp_in("stop-quiet-udp", "out.jsonl");
+        let _ = std::fs::remove_file(&out);
+        let mut child = exe()
+            .args(["listen", "--udp", &format!("127.0.0.1:{port}")])
+            .args(["--format", "siu8", "--every", "1", "--out"])
+            .arg(&out)
+            .env("ALLANSCOPE_LOG", "info")
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("spawn");
+        let rx = stderr_lines(&mut child);
+        wait_for_line(&rx, "listening on udp");
+        // Nothing is ever sent.
+        std::thread::sleep(Duration::from_millis(300));
+        signal(&child, sig);
+        let (code, took) = wait_at_most(&mut child, Duration::from_secs(10));
+        assert_eq!(code, Some(0), "{sig}");
+        assert!(took < Duration::from_secs(2), "{sig}: {took:?}");
+        // The final records (empty curves: no data), health with nothing received, summary.
+        let recs = records_of(&out);
+        let finals = recs
+            .iter()
+            .filter(|r| r["type"] == "curve" && r["final"] == true)
+            .count();
+        assert_eq!(finals, 24, "{sig}");
+        let h = recs.iter().rev().find(|r| r["type"] == "health").unwrap();
+        assert_eq!(h["frames"], 0);
+        assert_eq!(h["bytes_in"], 0);
+        let s = recs.last().unwrap();
+        assert_eq!(s["type"], "summary");
+        assert_eq!(
+            s["stopped_by"],
+            if sig == "-INT" { "SIGINT" } else { "SIGTERM" }
+        );
+        assert_eq!(s["t_data"], 0.0);
+    }
+}
+
+#[test]
+fn sigint_ends_a_serial_listener_on_a_pseudo_terminal() {
+    use tokio::io::AsyncWriteExt;
+    use tokio_serial::SerialPort;
+    const FRAMES: usize = 2500;
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .expect("runtime");
+    let (mut master, slave) = rt
+        .block_on(async { tokio_serial::SerialStream::pair() })
+        .expect("pseudo-terminal pair");
+    let port = slave.name().expect("pty name");
+    let out = tmp_in("stop-serial", "out.jsonl");
+    let _ = std::fs::remove_file(&out);
+    let mut child = exe()
+        .args([
+            "listen", "--serial", &port, "--format", "siu8", "--every", "1",
+        ])
+        .arg("--out")
+        .arg(&out)
+        .env("ALLANSCOPE_LOG", "info")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let rx = stderr_lines(&mut child);
+    wait_for_line(&rx, "reading serial port");
+    // 10 s of frames, then the line stays quiet (a unit that stopped sending).
+    let bytes = std::fs::read(siu8_path()).unwrap();
+    rt.block_on(async {
+        for chunk in bytes[..FRAMES * FRAME_LEN].chunks(4096) {
+            master.write_all(chunk).await.expect("write pty");
+        }
+        master.flush().await.expect("flush pty");
+    });
+    std::thread::sleep(Duration::from_millis(500));
+    signal(&child, "-INT");
+    let (code, took) = wait_at_most(&mut child, Duration::from_secs(10));
+    assert_eq!(code, Some(0));
+    assert!(took < Duration::from_secs(2), "{took:?}");
+    drop(slave);
+    let recs = records_of(&out);
+    let h = recs.iter().rev().find(|r| r["type"] == "health").unwrap();
+    assert_eq!(h["frames"], FRAMES as u64);
+    assert_eq!(h["missing"], 0);
+    let finals = recs
+        .iter()
+        .filter(|r| (r["type"] == "curve" || r["type"] == "fit") && r["final"] == true)
+        .count();
+    assert_eq!(finals, 32);
+    let s = recs.last().unwrap();
+    assert_eq!(s["stopped_by"], "SIGINT");
+    assert_eq!(s["t_data"], FRAMES as f64 * TAU0_S);
 }

@@ -136,6 +136,7 @@ fn vog4_arw_against_its_datasheet() {
         min: None,
         unit: Some(unit.into()),
         over: Scope::Run,
+        origin: None,
     };
     let fits = [ChannelFit {
         channel: "g4",

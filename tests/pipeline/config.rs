@@ -31,12 +31,17 @@ fn shipped_example_parses() {
     assert_eq!(cfg.duration_s, Some(10_800.0));
     assert_eq!(cfg.every_s, Some(60.0));
     assert_eq!(cfg.checkpoint_every_s, Some(300.0));
-    // The four [[limits]] tables, and each is a valid limit spec.
-    assert_eq!(cfg.limits_raw.len(), 4);
-    assert_eq!(cfg.limits_raw[0]["channel"].as_str(), Some("g4"));
-    let specs =
-        allanscope::model::limits::from_tables(&cfg.limits_raw, &cfg.file).expect("valid limits");
-    assert_eq!(specs.len(), 4);
+    // The four [[limits]] tables, each a valid limit spec that knows the line of its channel.
+    assert_eq!(cfg.limits.len(), 4);
+    assert_eq!(cfg.limits[0].channel, "g4");
+    assert_eq!(cfg.limits[3].channel, "g*");
+    assert_eq!(cfg.limits[3].unit.as_deref(), Some("deg/sqrt(h)"));
+    let lines: Vec<Option<usize>> = cfg
+        .limits
+        .iter()
+        .map(|l| l.origin.as_ref().and_then(|o| o.line))
+        .collect();
+    assert_eq!(lines, [Some(52), Some(57), Some(62), Some(67)]);
 }
 
 #[test]

@@ -100,6 +100,7 @@ fn every_dashboard_query_names_metrics_the_exporter_emits() {
         min: None,
         unit: None,
         over: Scope::Run,
+        origin: None,
     }];
     let ctl = RunControl {
         metrics: Some(metrics.tap("dut1", &limits)),

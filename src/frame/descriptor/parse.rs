@@ -967,7 +967,8 @@ mod tests {
             .collect()
     }
 
-    /// Four independent mistakes are all reported, each with the file and its key.
+    /// Four independent mistakes are all reported, each with the file and its key, in the
+    /// order of their lines.
     #[test]
     fn several_problems_reported_together() {
         let text = r#"
@@ -1000,18 +1001,18 @@ kind = "increment"
         assert_eq!(
             keys,
             vec![
+                "colour",
                 "checksum.algorithm",
                 "channels[0].type",
-                "channels[1].offset",
-                "colour"
+                "channels[1].offset"
             ],
             "{p:?}"
         );
         assert!(p.iter().all(|(f, _, _)| f == "bad.toml"));
-        assert!(p[0].2.contains("unknown checksum `CRC-16/FOO`"));
-        assert!(p[1].2.contains("unknown type `i33`"));
-        assert!(p[2].2.contains("runs past the message length 42"));
-        assert!(p[3].2.contains("unknown key"));
+        assert!(p[0].2.contains("unknown key"));
+        assert!(p[1].2.contains("unknown checksum `CRC-16/FOO`"));
+        assert!(p[2].2.contains("unknown type `i33`"));
+        assert!(p[3].2.contains("runs past the message length 42"));
     }
 
     /// Key paths inside [[messages]]; a bad [interleave] name; the error maps to exit status 2.
@@ -1062,7 +1063,7 @@ kind = "velocity"
         let keys: Vec<&str> = p.iter().map(|(_, k, _)| k.as_str()).collect();
         assert_eq!(
             keys,
-            vec!["messages[0].checksum.range", "interleave.message"],
+            vec!["interleave.message", "messages[0].checksum.range"],
             "{p:?}"
         );
     }
