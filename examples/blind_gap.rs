@@ -18,6 +18,8 @@
 //! `--null-seed`, and prints the oracle bounds of docs/gap.md ("Oracle bounds"): the power of
 //! tests told the true effect, and Cramér-Rao bounds on its parameters (`allanscope::gap::oracle`).
 
+mod common;
+
 use allanscope::gap::jump_mixture::{
     jump_forward_mixture_log_bf, jump_forward_mixture_stat, jump_mixture_log_bf, jump_mixture_stat,
     JUMP_FWD_Z_MIN,
@@ -31,6 +33,7 @@ use allanscope::gap::{
 };
 use allanscope::model::terms;
 use allanscope::sim::{SimModel, Simulator};
+use common::{add_jumps, draw_jumps, jumps_rms, log_uniform, par_map, quantile, std_normal_cdf};
 use rand::{RngExt, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use std::path::Path;
@@ -57,10 +60,6 @@ struct Draw {
     effect: Option<EffectParams>,
     /// Peak effect ADEV over base ADEV at that tau, as drawn.
     rho: f64,
-}
-
-fn log_uniform(rng: &mut Xoshiro256PlusPlus, lo: f64, hi: f64) -> f64 {
-    (lo.ln() + rng.random::<f64>() * (hi.ln() - lo.ln())).exp()
 }
 
 fn draw(rng: &mut Xoshiro256PlusPlus, kind: Option<EffectKind>, t_run: f64, tau0: f64) -> Draw {
@@ -196,43 +195,14 @@ fn simulate(
     let mut jumps = Vec::new();
     if let Some(EffectParams::BiasJumps { count, rms_size }) = d.effect {
         jumps = draw_jumps(count, rms_size, t_run, seed ^ 0x0005_eed1_u64);
-        let mut level = 0.0;
-        let mut next = 0;
-        for (k, o) in out.iter_mut().enumerate() {
-            let (t0, t1) = (k as f64 * tau0, (k + 1) as f64 * tau0);
-            let mut add = level * tau0;
-            while next < jumps.len() && jumps[next].0 < t1 {
-                let (tj, s) = jumps[next];
-                add += s * (t1 - tj.max(t0));
-                level += s;
-                next += 1;
-            }
-            *o += add;
-        }
-        let rms = (jumps.iter().map(|j| j.1 * j.1).sum::<f64>() / count as f64).sqrt();
+        add_jumps(&mut out, tau0, &jumps);
+        let rms = jumps_rms(&jumps);
         truth = Some(EffectParams::BiasJumps {
             count,
             rms_size: rms,
         });
     }
     (out, truth, jumps)
-}
-
-/// `count` jumps `(time s, size u/s)` at uniform times in `[0, t_run)`, Gaussian sizes of rms
-/// `rms_size`, sorted by time.
-fn draw_jumps(count: u64, rms_size: f64, t_run: f64, seed: u64) -> Vec<(f64, f64)> {
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
-    let mut jumps: Vec<(f64, f64)> = (0..count)
-        .map(|_| {
-            let t = rng.random::<f64>() * t_run;
-            // Box-Muller normal.
-            let (u1, u2) = (rng.random::<f64>().max(1e-300), rng.random::<f64>());
-            let z = (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
-            (t, rms_size * z)
-        })
-        .collect();
-    jumps.sort_by(|a, b| a.0.total_cmp(&b.0));
-    jumps
 }
 
 struct Outcome {
@@ -523,7 +493,7 @@ fn calibrate(i: u64, seed: u64, tau0: f64, t_run: f64) -> Null {
                 t_run,
                 seed.wrapping_add(7919 * i) ^ 0x6a_c1e5,
             );
-            let rms = (js.iter().map(|j| j.1 * j.1).sum::<f64>() / count as f64).sqrt();
+            let rms = jumps_rms(&js);
             Some((count as f64, rms))
         }
         _ => None,
@@ -764,46 +734,6 @@ fn oracle_null(i: u64, seed: u64, tau0: f64, t_run: f64) -> ([OracleStat; 3], [f
     (stats, own)
 }
 
-/// `f(i)` for each `i` in `items` on `threads` threads, in the order of `items`.
-fn par_map<T: Send>(items: &[u64], threads: u64, f: impl Fn(u64) -> T + Sync) -> Vec<T> {
-    let threads = threads.max(1) as usize;
-    let f = &f;
-    let mut out: Vec<(usize, T)> = std::thread::scope(|s| {
-        let hs: Vec<_> = (0..threads)
-            .map(|t| {
-                s.spawn(move || {
-                    items
-                        .iter()
-                        .enumerate()
-                        .filter(|(k, _)| k % threads == t)
-                        .map(|(k, &i)| (k, f(i)))
-                        .collect::<Vec<_>>()
-                })
-            })
-            .collect();
-        hs.into_iter()
-            .flat_map(|h| h.join().expect("thread"))
-            .collect()
-    });
-    out.sort_by_key(|r| r.0);
-    out.into_iter().map(|r| r.1).collect()
-}
-
-/// Empirical quantile `p` (nearest rank) of the finite values.
-fn quantile(v: &[f64], p: f64) -> f64 {
-    let mut v: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(|a, b| a.total_cmp(b));
-    v[((v.len() as f64 - 1.0) * p).round() as usize]
-}
-
-fn std_normal_cdf(x: f64) -> f64 {
-    use statrs::distribution::{ContinuousCDF, Normal};
-    Normal::new(0.0, 1.0).map_or(f64::NAN, |n| n.cdf(x))
-}
-
 /// `--mode oracle`: oracle power and Cramér-Rao bounds (docs/gap.md, "Oracle bounds").
 /// What `--mode oracle` runs: the benchmark's draws (`draws`, `seed`) and the clean runs
 /// (`null_draws`, `null_seed`).
@@ -844,13 +774,13 @@ fn oracle_mode(a: &OracleArgs) {
     ];
     let t0 = Instant::now();
     let null_idx: Vec<u64> = (0..null_draws).collect();
-    let nulls = par_map(&null_idx, threads, |i| {
+    let nulls = par_map(&null_idx, threads as usize, |i| {
         oracle_null(i, null_seed, tau0, t_run)
     });
     let eff_idx: Vec<u64> = (0..draws)
         .filter(|&i| kinds[(i as usize) % kinds.len()].is_some_and(|k| targets.contains(&k)))
         .collect();
-    let effs = par_map(&eff_idx, threads, |i| {
+    let effs = par_map(&eff_idx, threads as usize, |i| {
         oracle_effect(i, seed, tau0, t_run, &kinds)
     });
     println!(
@@ -1272,7 +1202,7 @@ fn main() {
 
     if mode == "calibrate" {
         let idx: Vec<u64> = (0..draws).collect();
-        let res: Vec<Null> = par_map(&idx, threads, |i| calibrate(i, seed, tau0, t_run));
+        let res: Vec<Null> = par_map(&idx, threads as usize, |i| calibrate(i, seed, tau0, t_run));
         if !csv.is_empty() {
             let mut text = String::from(
                 "g,zmax,best,gm,sin,filter,w,flagged,effects,jump_z1,jump_z2,jump_z3,w_bf,jmix,jmix_max,jmix_b,jceil,jfwd,jfwd_ceil,jmarg\n",
@@ -1354,7 +1284,7 @@ fn main() {
     ];
     let t0 = Instant::now();
     let idx: Vec<u64> = (0..draws).collect();
-    let res: Vec<(u64, Outcome)> = par_map(&idx, threads, |i| {
+    let res: Vec<(u64, Outcome)> = par_map(&idx, threads as usize, |i| {
         (i, run_one(i, seed, tau0, t_run, &kinds, with_scores))
     });
     let elapsed = t0.elapsed().as_secs_f64();

@@ -91,9 +91,14 @@ pub fn run(l: &ListenArgs) -> Result<()> {
         &d.unit_request(true),
     )?;
     let server = super::metrics::start_option(d.metrics.as_deref())?;
-    let metrics = server
+    // The status line on a terminal reads the same figures the metrics endpoint serves.
+    let watched = server.as_ref().map(|s| s.metrics.clone()).or_else(|| {
+        super::status::wanted()
+            .then(|| std::sync::Arc::new(allanscope::sink::metrics::Metrics::new()))
+    });
+    let metrics = watched
         .as_ref()
-        .map(|s| s.tap(&spec.name(), &plan.analysis.limits));
+        .map(|m| m.tap(&spec.name(), &plan.analysis.limits));
     let analysis = plan.start_analysis()?;
     let duration = match &l.duration {
         Some(s) => Some(Duration::from_secs_f64(parse_duration_s(s)?)),
@@ -121,7 +126,12 @@ pub fn run(l: &ListenArgs) -> Result<()> {
         ctl.progress.clone(),
         duration,
     );
+    let status = super::status::wanted()
+        .then_some(watched)
+        .flatten()
+        .map(|m| super::status::StatusLine::start(ctl.progress.clone(), ctl.shutdown.clone(), m));
     let result = allanscope::pipeline::run_frames(spec, &desc, analysis, writer.queue(), &ctl);
+    drop(status);
     let written = finish_records(writer, &dest, &signals);
     result?;
     written

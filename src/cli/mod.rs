@@ -14,6 +14,7 @@ mod process;
 mod report;
 mod run;
 mod simulate;
+mod status;
 mod terminal;
 
 use std::io::{BufRead, BufReader, Read};

@@ -63,9 +63,14 @@ pub fn run(r: &RunArgs) -> Result<()> {
         (None, Some(addr)) => Some(super::metrics::MetricsServer::start(addr)?),
         (None, None) => None,
     };
-    let metrics = server
+    // A live run on a terminal: the status line reads the figures the metrics endpoint serves.
+    let watched = server.as_ref().map(|s| s.metrics.clone()).or_else(|| {
+        (live && super::status::wanted())
+            .then(|| std::sync::Arc::new(allanscope::sink::metrics::Metrics::new()))
+    });
+    let metrics = watched
         .as_ref()
-        .map(|s| s.tap(&spec.name(), &unit.analysis.limits));
+        .map(|m| m.tap(&spec.name(), &unit.analysis.limits));
     let analysis = unit.start_analysis()?;
     // Outputs last: every option has been accepted; they are only emptied once the source
     // is open and delivers (allanscope::sink::output).
@@ -96,8 +101,13 @@ pub fn run(r: &RunArgs) -> Result<()> {
     );
     let _bar = (replay && std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .then(|| super::process::ProgressBar::start(ctl.progress.clone()));
+    let status = (live && super::status::wanted())
+        .then_some(watched)
+        .flatten()
+        .map(|m| super::status::StatusLine::start(ctl.progress.clone(), ctl.shutdown.clone(), m));
     let name = spec.name();
     let result = allanscope::pipeline::run_frames(spec, &desc, analysis, writer.queue(), &ctl);
+    drop(status);
     let written = super::finish_records(writer, &dest, &signals);
     let outcome = result?;
     written?;

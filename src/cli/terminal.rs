@@ -24,11 +24,14 @@ fn style() -> TableStyle {
 /// lines through a buffer.
 pub(crate) fn stdout_records(json: bool) -> Box<dyn Write + Send> {
     if table_on_stdout(json) {
-        Box::new(TableWriter::new(
-            std::io::stdout(),
-            style(),
-            Some("(a table because standard output is a terminal: --json, --out FILE or a pipe give the JSON lines)".into()),
-        ))
+        Box::new(
+            TableWriter::new(
+                std::io::stdout(),
+                style(),
+                Some("(a table because standard output is a terminal: --json, --out FILE or a pipe give the JSON lines)".into()),
+            )
+            .before_print(Box::new(super::status::suspend)),
+        )
     } else {
         Box::new(std::io::BufWriter::new(std::io::stdout()))
     }

@@ -46,6 +46,7 @@ use super::effects::{effect_column, EffectKind, EffectParams};
 use super::evidence::EvidenceSnapshot;
 use super::outliers::OutlierCount;
 use super::problem::{GapProblem, GlsFit, ModelSpec};
+use super::quant_limit::{quantization_limit, QuantizationLimit};
 use super::quantization::{judge_quantization, QuantizationFinding};
 use super::segments::{segment_tests, SegmentTest};
 use super::steps::{detect_steps, JumpFinding};
@@ -64,6 +65,9 @@ pub struct DiagnoseOptions {
     pub max_effects: usize,
     pub candidates: Vec<EffectKind>,
     pub thresholds: Thresholds,
+    /// Cluster sizes below this are left out of the curve (1: none); the diagnosis raises it
+    /// for a quantization-limited unit ([`super::quant_limit`]).
+    pub min_m: u64,
 }
 
 impl Default for DiagnoseOptions {
@@ -74,6 +78,7 @@ impl Default for DiagnoseOptions {
             candidates: EffectKind::ALL.to_vec(),
 
             thresholds: Thresholds::default(),
+            min_m: 1,
         }
     }
 }
@@ -147,6 +152,10 @@ pub struct Diagnosis {
     pub model_tau_s: Vec<f64>,
     pub model_base_avar: Vec<f64>,
     pub model_final_avar: Vec<f64>,
+    /// Set when the unit's quantization is not white at the shortest taus (its LSB is coarse
+    /// against the per-sample noise): the curve is then diagnosed from `tau_white_s` on only
+    /// ([`super::quant_limit`]; docs/gap.md, "Quantization-limited units").
+    pub quantization_limited: Option<QuantizationLimit>,
     /// Outliers found and replaced in the stream before the curve was computed
     /// ([`super::outliers`]).
     pub outliers: OutlierCount,
@@ -204,7 +213,67 @@ pub fn diagnose(
 /// Diagnoses one channel's evidence with, when the input has one, the unit's temperature
 /// gathered beside it (the same [`GapConfig`](super::evidence::GapConfig), fed `T tau0` per step:
 /// [`super::temperature`]).
+///
+/// When the increments are quantized with an LSB so coarse against the per-sample noise that
+/// the quantization error is not white ([`quantization_limit`]), the diagnosis says so
+/// (`quantization_limited`) and reads the curve only from the tau where the error is white
+/// again (when enough of it is left; otherwise the whole curve, still flagged).
 pub fn diagnose_with_temperature(
+    snap: &EvidenceSnapshot,
+    temperature: Option<&EvidenceSnapshot>,
+    opts: &DiagnoseOptions,
+) -> Result<Diagnosis, DiagnoseError> {
+    let Some(limit) = check_quantization(snap, opts) else {
+        return diagnose_curve(snap, temperature, opts);
+    };
+    let restricted = DiagnoseOptions {
+        min_m: opts.min_m.max(limit.m_white),
+        ..opts.clone()
+    };
+    let mut d = match diagnose_curve(snap, temperature, &restricted) {
+        Ok(d) => d,
+        Err(_) => diagnose_curve(snap, temperature, opts)?,
+    };
+    d.quantization_limited = Some(limit);
+    Ok(d)
+}
+
+/// The quantization check of [`diagnose_with_temperature`]. The five-term fit of the whole
+/// curve gives a first `Q` and `N`; when they say the quantization is white, it is. Otherwise
+/// the shortest taus may only have biased that fit (an output filter lowers them too), so the
+/// curve is refitted from cluster sizes 8, 16, 32, ... on, and the first fit whose own
+/// `tau_white` lies at or below its cut decides (white: `None`); when none does, the last one.
+fn check_quantization(
+    snap: &EvidenceSnapshot,
+    opts: &DiagnoseOptions,
+) -> Option<QuantizationLimit> {
+    let lsb = snap.lsb?;
+    let judge = |min_m: u64| {
+        let o = DiagnoseOptions {
+            min_m,
+            ..opts.clone()
+        };
+        let fit = GapProblem::new(snap, &o).ok()?.gls(&ModelSpec::default())?;
+        let c = |i: usize| fit.coef.get(i).copied().unwrap_or(0.0);
+        Some(quantization_limit(lsb, c(0), c(1), snap.tau0_s))
+    };
+    let mut last = judge(opts.min_m)??;
+    let mut cut = opts.min_m.max(8);
+    // At most ~40 doublings: the fit fails once fewer than 8 taus are left.
+    while let Some(j) = judge(cut) {
+        // `None`: the fit from this cut on says the quantization is white.
+        let l = j?;
+        last = l;
+        if l.m_white <= cut {
+            break;
+        }
+        cut = cut.saturating_mul(2);
+    }
+    Some(last)
+}
+
+/// The diagnosis of the curve (from `opts.min_m` on) and of the block means.
+fn diagnose_curve(
     snap: &EvidenceSnapshot,
     temperature: Option<&EvidenceSnapshot>,
     opts: &DiagnoseOptions,
@@ -447,6 +516,7 @@ pub fn diagnose_with_temperature(
         model_tau_s: prob.tau[..j].to_vec(),
         model_base_avar: base.model.clone(),
         model_final_avar: cur.model.clone(),
+        quantization_limited: None,
         outliers: snap.outliers,
         quantization: snap
             .lsb

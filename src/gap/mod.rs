@@ -8,7 +8,8 @@
 //! of the time-domain tests [`warmup`] and [`steps`] ([`jump_mixture`]: statistics measured and
 //! not adopted); [`segments`] tests homogeneity in time; [`diagnose`](mod@diagnose) orchestrates
 //! them and decides ([`Diagnosis`]) by [`thresholds`]; [`holdout`] judges a held-out run;
-//! [`oracle`] bounds what any test could do; [`record`] writes docs/records.md's `diagnosis` record;
+//! [`oracle`] bounds what any test could do; [`quant_limit`] tells a unit whose coarse LSB
+//! is not white phase noise; [`record`] writes docs/records.md's `diagnosis` record;
 //! [`unit_model`] turns a diagnosis into the simulator model of the fitted unit (with the LSB
 //! that [`lsb`] reads off the values).
 //! Everything is pure and synchronous.
@@ -29,6 +30,7 @@ pub mod lsb;
 pub mod oracle;
 pub mod outliers;
 pub mod problem;
+pub mod quant_limit;
 pub mod quantization;
 pub mod record;
 pub mod segments;

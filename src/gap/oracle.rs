@@ -92,6 +92,26 @@ pub fn gm_oracle(prob: &GapProblem, sigma: f64, tau_c_s: f64) -> Option<GmOracle
         offset: Some(col.iter().map(|g| s2 * g).collect()),
         ..ModelSpec::default()
     })?;
+    let signal: Vec<f64> = col.iter().map(|g| s2 * g).collect();
+    let (z_known, delta) = curve_known_z(prob, &signal)?;
+    Some(GmOracle {
+        drop_fitted: base.chi2 - fitted.chi2,
+        drop_fixed: base.chi2 - fixed.chi2,
+        z_known,
+        delta,
+    })
+}
+
+/// The known-signal test on the curve for any fully known effect: `signal_avar` is the AVAR
+/// (u^2/s^2) the effect adds at each of `prob`'s cluster sizes (for an effect that replaces a
+/// term, such as an output filter on the white rate, the difference it makes). Returns
+/// `(z, delta)`: the score statistic `u' r_w / |u|` of the base five-term fit's whitened
+/// residual `r_w` along the whitened signature `signal / AVAR` projected off the active
+/// five-term columns (`ln AVAR` linearised at the base fit), about `N(0, 1)` on clean runs, and
+/// its noncentrality `|u|` (the most powerful invariant test at a known shape and amplitude,
+/// to first order; module doc). `None` when the base fit fails.
+pub fn curve_known_z(prob: &GapProblem, signal_avar: &[f64]) -> Option<(f64, f64)> {
+    let base = prob.gls(&ModelSpec::default())?;
     let j = prob.len();
     let a = &base.model;
     let r = DVector::from_fn(j, |i, _| prob.ln_avar()[i] - a[i].max(1e-300).ln());
@@ -101,15 +121,12 @@ pub fn gm_oracle(prob: &GapProblem, sigma: f64, tau_c_s: f64) -> Option<GmOracle
         .map(|c| prob.whiten(&DVector::from_fn(j, |i, _| basis(prob.tau[i])[c] / a[i])))
         .collect();
     let q = orthonormal(&nuis);
-    let sig = prob.whiten(&DVector::from_fn(j, |i, _| s2 * col[i] / a[i]));
+    let sig = prob.whiten(&DVector::from_fn(j, |i, _| {
+        signal_avar.get(i).copied().unwrap_or(0.0) / a[i]
+    }));
     let u = project_off(&sig, &q);
     let delta = u.norm();
-    Some(GmOracle {
-        drop_fitted: base.chi2 - fitted.chi2,
-        drop_fixed: base.chi2 - fixed.chi2,
-        z_known: if delta > 0.0 { u.dot(&rw) / delta } else { 0.0 },
-        delta,
-    })
+    Some((if delta > 0.0 { u.dot(&rw) / delta } else { 0.0 }, delta))
 }
 
 /// Cramér-Rao bound of the Gauss-Markov parameters on the curve.

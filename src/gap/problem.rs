@@ -80,7 +80,13 @@ impl GapProblem {
         let pts: Vec<_> = snap
             .curve
             .iter()
-            .filter(|p| p.m <= m_max && p.avar.is_finite() && p.avar > 0.0 && p.count > 0)
+            .filter(|p| {
+                p.m <= m_max
+                    && p.m >= opts.min_m
+                    && p.avar.is_finite()
+                    && p.avar > 0.0
+                    && p.count > 0
+            })
             .collect();
         let need = 8;
         if pts.len() < need {

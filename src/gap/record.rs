@@ -1,8 +1,8 @@
 //! docs/records.md's `diagnosis` record: `type`, `channel`, `gap_before`, `gap_after`, `verdict`,
 //! `regions`, `effects`, optional `holdout`, plus extra fields (`final`, `t_data`, `tau_span`,
 //! `base_coef`, `final_coef`, `segments`, `jumps`, `residual_shape`, `model_tau`, `model_base`,
-//! `model_effects`, `outliers`, `quantization`, `alternatives`, and `run` when several inputs
-//! are analyzed).
+//! `model_effects`, `outliers`, `quantization`, `quantization_limited`, `alternatives`, and
+//! `run` when several inputs are analyzed).
 
 use super::diagnose::{Diagnosis, Verdict};
 use super::holdout::HoldoutGap;
@@ -115,6 +115,21 @@ pub struct DiagnosisRecord {
     /// Run index (0-based) when several inputs are analyzed, as in the other records.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub run: Option<usize>,
+    /// Present when the unit's quantization is not white phase noise at the shortest taus
+    /// (its LSB is coarse against the per-sample noise; docs/gap.md, "Quantization-limited
+    /// units"): the curve was diagnosed from `tau_white` on.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub quantization_limited: Option<QuantizationRecord>,
+}
+
+/// The extra field `quantization_limited`: the increments' LSB (u), the per-sample rms change
+/// of the phase over it (`ratio`, below 0.5), and the shortest tau (s) where the quantization
+/// error is white again.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct QuantizationRecord {
+    pub lsb: f64,
+    pub ratio: f64,
+    pub tau_white: f64,
 }
 
 /// The `outliers` object: how many, how often (per second of data), their rms and largest size
@@ -210,6 +225,11 @@ impl DiagnosisRecord {
             quantization: d.quantization.map(|q| q.to_json()),
             alternatives: d.alternatives.iter().map(|a| a.to_json()).collect(),
             run: None,
+            quantization_limited: d.quantization_limited.map(|q| QuantizationRecord {
+                lsb: q.lsb,
+                ratio: q.ratio,
+                tau_white: q.tau_white_s,
+            }),
         }
     }
 

@@ -72,6 +72,19 @@ pub struct Metrics {
     /// Each unit's latest decoder health and its time, written by its decode thread as often as
     /// it likes and read into the counters at each [`Metrics::encode`].
     health_slots: Mutex<Vec<(String, HealthSlot)>>,
+    /// The newest figures read back for a person watching (the binary's status line).
+    latest: Mutex<Latest>,
+}
+
+/// The newest figures of every unit, for a status line: lost frames and the latest white-noise
+/// coefficient N of each channel.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Latest {
+    /// Frames lost by the counter, per unit (the newest health totals).
+    pub missing: Vec<(String, u64)>,
+    /// `(channel, N, unit)` of the newest fit of each channel where N is determined: in
+    /// datasheet units where the channel's unit is known, else native.
+    pub n: Vec<(String, f64, String)>,
 }
 
 /// One unit's latest decoder health (totals) and the Unix time it was taken.
@@ -218,6 +231,7 @@ impl Metrics {
             duplicates,
             health_time,
             health_slots: Mutex::new(Vec::new()),
+            latest: Mutex::new(Latest::default()),
         }
     }
 
@@ -244,6 +258,38 @@ impl Metrics {
         // Writing to a String cannot fail.
         let _ = encode(&mut s, &self.registry);
         s
+    }
+
+    /// The newest figures for a status line.
+    pub fn latest(&self) -> Latest {
+        lock(&self.latest).clone()
+    }
+
+    fn note_fit(&self, f: &FitRecord) {
+        let ds = f.datasheet.as_ref().and_then(|d| d.get("N"));
+        let determined = f.coef["N"]["determined"].as_bool() == Some(true);
+        let value = match ds {
+            Some(d) => d["value"]
+                .as_f64()
+                .zip(d["unit"].as_str().map(String::from)),
+            None => f.coef["N"]["value"]
+                .as_f64()
+                .map(|v| (v, format!("{}/sqrt(s)", f.unit))),
+        }
+        .filter(|_| determined);
+        let mut l = lock(&self.latest);
+        l.n.retain(|(c, _, _)| *c != f.channel);
+        if let Some((v, u)) = value {
+            l.n.push((f.channel.clone(), v, u));
+        }
+    }
+
+    fn note_health(&self, unit: &str, h: &Health) {
+        let mut l = lock(&self.latest);
+        match l.missing.iter_mut().find(|(u, _)| u == unit) {
+            Some(x) => x.1 = h.missing,
+            None => l.missing.push((unit.to_string(), h.missing)),
+        }
     }
 
     /// Takes a `fit` record of `unit` (other records are ignored): its coefficients, intervals,
@@ -376,12 +422,14 @@ impl MetricsTap {
         if let Record::Fit(f) = r {
             self.metrics
                 .observe_fit(&self.unit, &self.limits, f, unix_now_s());
+            self.metrics.note_fit(f);
         }
     }
 
     /// The decoder's health totals as of now (cheap: stored for the next scrape).
     pub fn health(&self, h: &Health) {
         *lock(&self.health) = Some((h.clone(), unix_now_s()));
+        self.metrics.note_health(&self.unit, h);
     }
 }
 

@@ -265,10 +265,11 @@ fn run_heading(h: &mut String, res: &Results, k: RunKey, style: &TableStyle) {
                 .map(|d| d.label.clone())
         })
         .unwrap_or_default();
-    let input = summary
-        .and_then(|s| s["input"].as_str())
-        .map(String::from)
-        .unwrap_or(label);
+    let input = match summary.and_then(|s| s["input"].as_str()) {
+        Some("-") => "standard input".to_string(),
+        Some(i) => i.to_string(),
+        None => label,
+    };
     let run = k.1.map(|r| format!("run {}: ", r + 1)).unwrap_or_default();
     let mut line = style.bold(&format!("{run}{input}"));
     if let Some(s) = summary {
@@ -765,6 +766,47 @@ pub fn render(res: &Results, style: &TableStyle) -> String {
     h
 }
 
+/// The status line of a live run: time running, frames per second, frames lost and the newest
+/// N of each channel (`latest`: `(channel, N, unit)`), the unit written once when all share it.
+pub fn status_line(
+    elapsed_s: f64,
+    frames: u64,
+    frames_per_s: f64,
+    lost: Option<u64>,
+    latest: &[(String, f64, String)],
+) -> String {
+    let running = if elapsed_s < 120.0 {
+        format!("{elapsed_s:.0} s")
+    } else {
+        duration_text(elapsed_s)
+    };
+    let mut s = format!(
+        "{running} running, {frames} frames, {} frames/s",
+        sig3(frames_per_s.round())
+    );
+    if let Some(l) = lost {
+        let _ = write!(s, ", {l} lost");
+    }
+    if !latest.is_empty() {
+        let same = latest.iter().all(|x| x.2 == latest[0].2);
+        let parts: Vec<String> = latest
+            .iter()
+            .map(|(c, v, u)| {
+                if same {
+                    format!("{c} {}", sig3(*v))
+                } else {
+                    format!("{c} {} {u}", sig3(*v))
+                }
+            })
+            .collect();
+        let _ = write!(s, " | N: {}", parts.join("  "));
+        if same {
+            let _ = write!(s, " {}", latest[0].2);
+        }
+    }
+    s
+}
+
 /// Whether a [`TableWriter`] keeps a record: everything typed but the curves, which a table
 /// does not show.
 fn kept(v: &Value) -> bool {
@@ -784,6 +826,8 @@ pub struct TableWriter<W: Write> {
     /// A hint under the first table: where the JSON lines are.
     hint: Option<String>,
     printed: bool,
+    /// Called before a table is printed (the binary clears and stops its status line there).
+    before_print: Option<Box<dyn FnMut() + Send>>,
 }
 
 impl<W: Write> TableWriter<W> {
@@ -796,7 +840,14 @@ impl<W: Write> TableWriter<W> {
             pending: Vec::new(),
             hint,
             printed: false,
+            before_print: None,
         }
+    }
+
+    /// Calls `f` before each table is printed.
+    pub fn before_print(mut self, f: Box<dyn FnMut() + Send>) -> Self {
+        self.before_print = Some(f);
+        self
     }
 
     fn take_line(&mut self, line: &[u8]) -> std::io::Result<()> {
@@ -837,6 +888,9 @@ impl<W: Write> TableWriter<W> {
         let text = render(&res, &self.style);
         if text.trim().is_empty() {
             return Ok(());
+        }
+        if let Some(f) = &mut self.before_print {
+            f();
         }
         if self.printed {
             self.out.write_all(b"\n")?;

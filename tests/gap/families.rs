@@ -60,3 +60,121 @@ fn ma4_clean_runs_are_consistent() {
         assert!(d.gap_before < 1.6, "seed {seed}: G {}", d.gap_before);
     }
 }
+
+/// One unit of each family of examples/family_gap.rs at the middle of its ranges (docs/gap.md,
+/// "Families of units"): `(name, [Q, N, B, K, R], angle LSB (u, with carry; 0: none), rate
+/// LSB as a fraction of the rate sample's noise `N / sqrt(tau0)` (0: none))`, at 250 Hz.
+const TAU0: f64 = 0.004;
+fn family_units() -> Vec<(&'static str, [f64; 5], f64, f64)> {
+    let arw = 1.0 / 60.0;
+    let deg_h = 1.0 / 3600.0;
+    let rrw = 1.0 / (3600.0 * 60.0);
+    let fine = |n: f64| 0.5 * n * TAU0.sqrt();
+    vec![
+        (
+            "navfog",
+            [0.0, 0.002 * arw, 0.003 * deg_h, 3e-4 * rrw, 0.0],
+            fine(0.002 * arw),
+            0.0,
+        ),
+        (
+            "tacfog",
+            [0.0, 0.03 * arw, 0.15 * deg_h, 0.03 * rrw, 0.0],
+            fine(0.03 * arw),
+            0.0,
+        ),
+        ("vog4", [0.0, 0.254, 0.225, 1.826e-2, 0.0], 0.004, 0.0),
+        (
+            "memsgyro",
+            [0.0, 0.3 * arw, 6.0 * deg_h, 3.0 * rrw, 0.0],
+            0.0,
+            0.5,
+        ),
+        (
+            "ma4",
+            [6.84e-4, 2.811e-4, 0.403e-4, 2.228e-6, 6.02e-8],
+            2.104e-4,
+            0.0,
+        ),
+        (
+            "memsacc",
+            [0.0, 0.06 / 60.0, 60.0 * 9.81e-6, 3e-5, 0.0],
+            0.0,
+            0.5,
+        ),
+    ]
+}
+
+/// A clean one-hour run of a unit (`lsb`: angle quantization with carry; `rate_frac`: each
+/// rate sample rounded to that fraction of its noise).
+fn unit_run(c: [f64; 5], lsb: f64, rate_frac: f64, seed: u64) -> Diagnosis {
+    let mut text = format!(
+        "tau0_s = {TAU0}\n[[channel]]\nname = \"x\"\nunit = \"u\"\nQ = {:e}\nN = {:e}\nB = {:e}\nK = {:e}\nR = {:e}\nflicker_band_s = [{TAU0}, 36000.0]\n",
+        c[0], c[1], c[2], c[3], c[4]
+    );
+    if lsb > 0.0 {
+        text += &format!("lsb = {lsb:e}\n");
+    }
+    let m = SimModel::from_toml_str(&text, Path::new("<families>")).expect("model");
+    let mut sim = Simulator::new(&m, seed);
+    let mut inc = vec![0.0; (3600.0 / TAU0) as usize];
+    sim.fill_channel(0, &mut inc);
+    if rate_frac > 0.0 {
+        let step = rate_frac * c[1] / TAU0.sqrt() * TAU0;
+        for v in inc.iter_mut() {
+            *v = (*v / step).round() * step;
+        }
+    }
+    let mut ev = GapEvidence::from_increments(GapConfig::new(TAU0), &inc);
+    diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis")
+}
+
+/// Clean runs of every family: 12 runs (two seeds per family), at most one not `consistent`.
+/// The tolerance: at the 5% false-alarm rate per family, two or more alarms in 12
+/// runs happen with probability 12%, and these seeds are fixed; before the strided covariance
+/// MA4 alone was flagged in 10 of 10, and the coarse-LSB FOG (below) in about 70%. No run is
+/// quantization-limited (their LSBs are fine), and the bookkeeping holds on each.
+#[test]
+fn clean_runs_of_every_family_raise_at_most_one_alarm() {
+    let mut alarms = Vec::new();
+    for (name, c, lsb, rate) in family_units() {
+        for seed in [71, 72] {
+            let d = unit_run(c, lsb, rate, seed);
+            assert_honest(&d);
+            assert_eq!(d.quantization_limited, None, "{name} seed {seed}");
+            if d.verdict != Verdict::Consistent {
+                alarms.push(format!(
+                    "{name} seed {seed}: {:?} G {:.2} -> {:.2} {:?}",
+                    d.verdict, d.gap_before, d.gap_after, d.effects
+                ));
+            }
+        }
+    }
+    assert!(alarms.len() <= 1, "{alarms:#?}");
+}
+
+/// A tactical FOG whose angle LSB is ten times the per-sample noise `N sqrt(tau0)`: the
+/// quantization error wanders instead of being white phase noise (docs/gap.md,
+/// "Quantization-limited units"; the five-term model on the whole curve gave G ~200 on such
+/// units). The diagnosis says so, with the ratio `N sqrt(tau0) / LSB` = 0.1 within 15% (its N
+/// is fitted), the curve read from `tau_white = 0.405 / r^2 tau0` (about 0.16 s) on, and the
+/// model is consistent there.
+#[test]
+fn a_coarse_lsb_unit_is_said_quantization_limited_and_consistent_beyond() {
+    let n = 0.03 / 60.0;
+    let lsb = 10.0 * n * TAU0.sqrt();
+    for seed in [81, 82] {
+        let d = unit_run([0.0, n, 0.15 / 3600.0, 0.0, 0.0], lsb, 0.0, seed);
+        let q = d.quantization_limited.expect("quantization-limited");
+        assert!((q.lsb - lsb).abs() < 1e-6 * lsb, "lsb {} vs {lsb}", q.lsb);
+        assert!((q.ratio - 0.1).abs() < 0.015, "ratio {}", q.ratio);
+        assert!(
+            q.tau_white_s > 0.1 && q.tau_white_s < 0.25,
+            "tau_white {}",
+            q.tau_white_s
+        );
+        assert!(d.tau_span_s.0 >= q.tau_white_s, "{:?}", d.tau_span_s);
+        assert_honest(&d);
+        assert_eq!(d.verdict, Verdict::Consistent, "seed {seed}: {d:?}");
+    }
+}

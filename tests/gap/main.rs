@@ -9,5 +9,6 @@ mod mixture;
 mod oracle;
 mod outliers;
 mod quantization;
+mod real_slice;
 mod reference;
 mod temperature;

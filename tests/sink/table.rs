@@ -257,3 +257,51 @@ fn three_significant_digits() {
     assert_eq!(sig3(-0.5), "-0.500");
     assert_eq!(sig3(0.0), "0");
 }
+
+#[test]
+fn the_status_line_of_a_live_run() {
+    use allanscope::sink::table::status_line;
+    let n = vec![
+        ("gx".to_string(), 0.25 / 60.0, "deg/sqrt(h)".to_string()),
+        ("gy".to_string(), 0.255 / 60.0, "deg/sqrt(h)".to_string()),
+    ];
+    assert_eq!(
+        status_line(12.4, 3000, 249.6, Some(2), &n),
+        "12 s running, 3000 frames, 250 frames/s, 2 lost | N: gx 0.00417  gy 0.00425 deg/sqrt(h)"
+    );
+    // Channels of different units each carry theirs.
+    let mixed = vec![
+        n[0].clone(),
+        ("ax".to_string(), 0.6, "m/s/sqrt(h)".to_string()),
+    ];
+    assert!(status_line(1.0, 1, 1.0, None, &mixed)
+        .ends_with("N: gx 0.00417 deg/sqrt(h)  ax 0.600 m/s/sqrt(h)"));
+}
+
+#[test]
+fn the_metrics_tap_keeps_the_newest_n_and_lost_frames_for_the_status_line() {
+    use allanscope::sink::metrics::Metrics;
+    use allanscope::sink::records::Record;
+    let m = std::sync::Arc::new(Metrics::new());
+    let tap = m.tap("dut", &[]);
+    tap.observe(&Record::Fit(gyro()));
+    // Not determined in a later fit: no longer shown.
+    let mut acc = accel();
+    tap.observe(&Record::Fit(acc.clone()));
+    let latest = m.latest();
+    // N = 0.25 arcsec/sqrt(s) = 0.25/60 deg/sqrt(h); 0.01 m/s/sqrt(s) = 0.6 m/s/sqrt(h).
+    assert_eq!(latest.n.len(), 2);
+    assert_eq!(latest.n[0].0, "gx");
+    assert!((latest.n[0].1 - 0.25 / 60.0).abs() < 1e-15);
+    assert_eq!(latest.n[0].2, "deg/sqrt(h)");
+    assert!((latest.n[1].1 - 0.6).abs() < 1e-12);
+    acc.coef["N"]["determined"] = json!(false);
+    tap.observe(&Record::Fit(acc));
+    assert_eq!(m.latest().n.len(), 1);
+    let h = allanscope::frame::Health {
+        missing: 3,
+        ..Default::default()
+    };
+    tap.health(&h);
+    assert_eq!(m.latest().missing, vec![("dut".to_string(), 3)]);
+}
