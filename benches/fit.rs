@@ -48,6 +48,8 @@ fn curve(n_incr: u64) -> Vec<CurvePoint> {
                 alpha: 0,
                 sigma_lo: f64::NAN,
                 sigma_hi: f64::NAN,
+                stride: 1,
+                n_phase: n_incr + 1,
             }
         })
         .collect()

@@ -596,7 +596,7 @@ impl RunAnalysis {
                 Overlap::Bounded(l) => l.to_string(),
             },
             elapsed_s: self.started.elapsed().as_secs_f64(),
-            limits: judgement.limits_json(),
+            limits: judgement.results.clone(),
             pass: judgement.pass,
             // Filled in by the pipeline, which knows how the input ended.
             read_to_end: false,

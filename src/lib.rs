@@ -12,18 +12,26 @@
 //!        allan (accumulators, batch reference, edf, noise id)   samples -> Curve
 //!        model (terms, covariance, fit, aggregate, limits)      Curve -> FitResult
 //!        gap (evidence, effects, diagnosis)                     increments -> Diagnosis
-//!   -> sink (JSON-lines records, SVG plot, HTML report)    records -> bytes (writer thread)
-//! pipeline: the threads and bounded channels between those stages, shutdown, back-pressure
+//!   -> sink (typed JSON-lines records, plot, report, table, metrics, export)  records -> bytes
+//! pipeline: the threads and bounded channels between those stages, checkpointing, back-pressure;
+//!   run_frames_async / run_text_async in the caller's tokio runtime, stopped by its token
+//! checkpoint: the checkpoint file (header, atomic write, fingerprint, resume checks)
 //! sim (model files, generators, capture writer)           model file -> capture
-//! stand (the stand config of `run`)                       TOML -> sources, options, limits
-//! plan (option values shared by the command line and the stand config)   text -> checked options
+//! stand (the stand config of `run`)                       TOML -> StandConfig
+//! plan: the checked plan of a run (RunPlan of UnitPlans: input, channels, analysis options,
+//!   checkpoint setup), from a stand config or the command line; option values (`FromStr`)
 //! stats: the chi-squared quantile behind every interval
 //! toml_check: the one error collector of every TOML file read (file, line, key, problem)
 //! ranges: the bounds every user-given number is checked against where it is parsed
 //! ```
 //!
 //! The command line is not part of the library: `src/cli/` (one file per subcommand, clap) is a
-//! module of the `allanscope` binary (`src/main.rs`), which also maps errors to exit statuses.
+//! module of the `allanscope` binary (`src/main.rs`), which also owns the process: signals and
+//! `--duration` (`cli/process.rs`), the progress bar, the crash test hook, the descriptor search
+//! path and the exit statuses. Cargo features `cli`, `serial` and `plot` (default on) pull in
+//! clap, indicatif, tokio-serial and plotters; the library builds without them
+//! (`--no-default-features`), and `examples/embed.rs` runs the pipeline in a program's own
+//! runtime.
 //!
 //! Numerical stages (`allan`, `model`, `gap`, `sim`) are plain synchronous code: they never know
 //! where samples came from and never await. I/O lives at the edges (`source`, `input`, `sink`,

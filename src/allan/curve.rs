@@ -89,5 +89,7 @@ fn point(
         alpha: a,
         sigma_lo: lo,
         sigma_hi: hi,
+        stride: r.stride,
+        n_phase,
     }
 }

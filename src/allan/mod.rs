@@ -65,6 +65,12 @@ pub struct CurvePoint {
     /// 95% interval of the deviation (u/s).
     pub sigma_lo: f64,
     pub sigma_hi: f64,
+    /// Step between the differences averaged: 1 at full overlap; with `--overlap L` the
+    /// accumulator takes every `stride`-th difference for `m >= 2L` (docs/theory.md section 1).
+    pub stride: u64,
+    /// Phase points of the run the estimate was read from (Greenhall's `N`: increments + 1 per
+    /// contiguous segment), for the edf and the covariance between taus.
+    pub n_phase: u64,
 }
 
 impl CurvePoint {

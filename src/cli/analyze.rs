@@ -171,7 +171,7 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue, ctl: &RunControl) -> Result
                 invalid_values: 0,
                 overlap: d.overlap.clone(),
                 elapsed_s: 0.0,
-                limits: j.limits_json(),
+                limits: j.results.clone(),
                 pass: j.pass,
                 read_to_end: unfinished.is_none(),
                 stopped_by: None,

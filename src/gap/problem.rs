@@ -103,6 +103,9 @@ impl GapProblem {
                 alpha: 0,
                 sigma_lo: f64::NAN,
                 sigma_hi: f64::NAN,
+                // Full-overlap block estimates: their own count is the span.
+                stride: 1,
+                n_phase: p.count + 2 * p.m,
             })
             .collect();
         let base =

@@ -620,25 +620,10 @@ pub struct CovPoint {
     pub count: u64,
 }
 
-/// Increments `n` of the run an AVAR curve was read from: `max(count + 2m - 1)` over its points
-/// (exact at every stride-1 point of one contiguous segment).
-fn increments_of(points: &[CurvePoint]) -> u64 {
-    points
-        .iter()
-        .filter(|p| p.m >= 1 && p.count >= 1)
-        .map(|p| p.count.saturating_add(2 * p.m - 1))
-        .max()
-        .unwrap_or(0)
-}
-
-/// Is a point strided: its count at most half the full count `n - 2m + 1` (a stride `s >= 2`
-/// gives `floor((n - 2m)/s) + 1 <= (n - 2m + 2)/2`)? Returns the full count.
-fn full_count(p: &CurvePoint, n: u64) -> (u64, bool) {
-    let full = (n + 1).saturating_sub(2 * p.m).max(1);
-    (
-        full,
-        p.count < full && p.count.saturating_mul(2) <= full + 1,
-    )
+/// The full-overlap count of a point: the number of stride-1 second differences its span holds,
+/// `n - 2m + 1` with `n = n_phase - 1` increments.
+fn full_count(p: &CurvePoint) -> u64 {
+    p.n_phase.saturating_sub(2 * p.m).max(1)
 }
 
 /// The covariance points of an AVAR curve, in the order of `points`, with their strides
@@ -647,60 +632,23 @@ fn full_count(p: &CurvePoint, n: u64) -> (u64, bool) {
 /// The lag sums are those of the full-overlap estimate (stride 1). A bounded-memory estimate
 /// (`--overlap L`) takes differences at a stride `s >= 2` for `m >= 2L`, and its `count` is the
 /// number of strided differences; such a point gets the full count `n - 2m + 1` (the span it
-/// covers) and its stride, and [`AvarCovariance::matrix_strided`] corrects the sums for the
-/// stride. `n` is read off the curve itself; a point counts as strided when its own count is at
-/// most half the full one, otherwise its own count is used (full overlap, gaps included).
+/// covers, from the point's phase count) and its stride, and
+/// [`AvarCovariance::matrix_strided`] corrects the sums for the stride. A stride-1 point keeps
+/// its own count (full overlap, gaps included). The stride and the phase count are the
+/// accumulator's own ([`CurvePoint::stride`], [`CurvePoint::n_phase`]), not inferred.
 pub fn cov_points(points: &[CurvePoint]) -> Vec<CovPoint> {
-    let n = increments_of(points);
     points
         .iter()
-        .map(|p| {
-            let (full, strided) = full_count(p, n);
-            CovPoint {
-                m: p.m,
-                count: if strided { full } else { p.count },
-            }
+        .map(|p| CovPoint {
+            m: p.m,
+            count: if p.stride > 1 { full_count(p) } else { p.count },
         })
         .collect()
 }
 
-/// The stride of each point of an AVAR curve: 1 at full overlap; for a strided point (see
-/// [`cov_points`]) the divisor of `m` nearest to `(full - 1) / (count - 1)`.
+/// The stride of each point of an AVAR curve (1 at full overlap).
 pub fn strides(points: &[CurvePoint]) -> Vec<u64> {
-    let n = increments_of(points);
-    points
-        .iter()
-        .map(|p| {
-            let (full, strided) = full_count(p, n);
-            if !strided {
-                return 1;
-            }
-            let est = if p.count >= 2 {
-                (full - 1) as f64 / (p.count - 1) as f64
-            } else {
-                full as f64
-            };
-            nearest_divisor(p.m, est)
-        })
-        .collect()
-}
-
-/// The divisor of `m` nearest to `x` on a log scale.
-fn nearest_divisor(m: u64, x: f64) -> u64 {
-    let mut best = (f64::INFINITY, 1);
-    let mut d = 1u64;
-    while d.saturating_mul(d) <= m {
-        if m.is_multiple_of(d) {
-            for c in [d, m / d] {
-                let dist = ((c as f64) / x).ln().abs();
-                if dist < best.0 {
-                    best = (dist, c);
-                }
-            }
-        }
-        d += 1;
-    }
-    best.1
+    points.iter().map(|p| p.stride.max(1)).collect()
 }
 
 /// Removes repeats from a sorted slice in place; returns the number of distinct values (now at

@@ -123,22 +123,23 @@ pub enum Verdict {
 }
 
 /// One judged bound, as the `summary` record's `limits` field lists it. `limit`, `value`, `lo`
-/// and `hi` are in `unit`, the unit the bound was stated in.
+/// and `hi` are in `unit`, the unit the bound was stated in. The fields are declared in
+/// alphabetical order: the order the records have always written them in.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LimitResult {
-    pub channel: String,
-    pub coef: Coef,
-    pub over: Scope,
     /// "max" or "min".
     pub bound: String,
-    pub limit: f64,
-    pub unit: String,
-    pub value: Option<f64>,
-    pub lo: Option<f64>,
+    pub channel: String,
+    pub coef: Coef,
     pub hi: Option<f64>,
-    pub verdict: Verdict,
+    pub limit: f64,
+    pub lo: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub note: Option<String>,
+    pub over: Scope,
+    pub unit: String,
+    pub value: Option<f64>,
+    pub verdict: Verdict,
 }
 
 /// All judged bounds and the overall outcome.

@@ -217,6 +217,8 @@ mod tests {
             alpha: 0,
             sigma_lo: sigma * 0.9,
             sigma_hi: sigma * 1.1,
+            stride: 1,
+            n_phase: 102,
         }
     }
 

@@ -148,7 +148,7 @@ pub struct SummaryRecord {
     pub elapsed_s: f64,
     /// Datasheet limits judged, when a stand config gives them.
     #[serde(skip_serializing_if = "Vec::is_empty", default)]
-    pub limits: Vec<serde_json::Value>,
+    pub limits: Vec<crate::model::limits::LimitResult>,
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub pass: Option<bool>,
     /// True when the input was read to its end (docs/records.md); false for a replay stopped early

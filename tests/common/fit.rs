@@ -141,6 +141,8 @@ pub fn octave_curve(x: &[f64], tau0: f64, m_max: usize) -> Vec<CurvePoint> {
                 alpha: 0,
                 sigma_lo: f64::NAN,
                 sigma_hi: f64::NAN,
+                stride: 1,
+                n_phase: x.len() as u64,
             });
         }
         m *= 2;
@@ -163,6 +165,8 @@ pub fn model_curve(coef: [f64; 5], tau0: f64, n_incr: usize, m_max: usize) -> Ve
             alpha: 0,
             sigma_lo: f64::NAN,
             sigma_hi: f64::NAN,
+            stride: 1,
+            n_phase: n_incr as u64 + 1,
         });
         m *= 2;
     }

@@ -369,7 +369,7 @@ fn strided_levels_get_their_full_span() {
     // Bounded overlap L = 16 on 10_000 increments: m = 64 has stride 4, so
     // floor((10000 - 128)/4) + 1 = 2469 differences spanning the full count 10000 - 128 + 1 = 9873;
     // m = 8 has stride 1 and keeps its own count (9985).
-    let pt = |m: u64, count: u64| CurvePoint {
+    let pt = |m: u64, count: u64, stride: u64| CurvePoint {
         m,
         tau_s: m as f64 * 0.01,
         var: 1.0,
@@ -378,8 +378,10 @@ fn strided_levels_get_their_full_span() {
         alpha: 0,
         sigma_lo: f64::NAN,
         sigma_hi: f64::NAN,
+        stride,
+        n_phase: 10_001,
     };
-    let pts = [pt(1, 9999), pt(8, 9985), pt(64, 2469)];
+    let pts = [pt(1, 9999, 1), pt(8, 9985, 1), pt(64, 2469, 4)];
     let cp = cov_points(&pts);
     assert_eq!(cp[0].count, 9999);
     assert_eq!(cp[1].count, 9985);

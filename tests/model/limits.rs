@@ -166,6 +166,18 @@ fn vog4_arw_against_its_datasheet() {
         assert!(v.get(key).is_some(), "missing {key}");
     }
     assert_eq!(v["verdict"], "pass");
+    // The summary's typed `limits` write the bytes the untyped records wrote (each result a
+    // JSON map, keys in alphabetical order, `note` only when there is one), for a pass and
+    // for an invalid limit with its note.
+    let mut s = spec(0.3, "arcsec/sqrt(s)");
+    s.channel = "x*".into();
+    let both = judge(&[spec(0.3, "arcsec/sqrt(s)"), s], &fits);
+    assert!(both.results.iter().any(|r| r.note.is_some()));
+    for r in &both.results {
+        let typed = serde_json::to_string(r).unwrap();
+        let untyped = serde_json::to_string(&serde_json::to_value(r).unwrap()).unwrap();
+        assert_eq!(typed, untyped);
+    }
 }
 
 #[test]

@@ -108,7 +108,7 @@ fn cached_curve(st: &Study, seed: u64) -> Vec<CurvePoint> {
             .lines()
             .map(|l| {
                 let f: Vec<&str> = l.split_whitespace().collect();
-                (f.len() == 8).then_some(())?;
+                (f.len() == 10).then_some(())?;
                 Some(CurvePoint {
                     m: f[0].parse().ok()?,
                     tau_s: f[1].parse().ok()?,
@@ -118,6 +118,8 @@ fn cached_curve(st: &Study, seed: u64) -> Vec<CurvePoint> {
                     alpha: f[5].parse().ok()?,
                     sigma_lo: f[6].parse().ok()?,
                     sigma_hi: f[7].parse().ok()?,
+                    stride: f[8].parse().ok()?,
+                    n_phase: f[9].parse().ok()?,
                 })
             })
             .collect();
@@ -130,8 +132,17 @@ fn cached_curve(st: &Study, seed: u64) -> Vec<CurvePoint> {
         .iter()
         .map(|p| {
             format!(
-                "{} {} {} {} {} {} {} {}\n",
-                p.m, p.tau_s, p.var, p.count, p.edf, p.alpha, p.sigma_lo, p.sigma_hi
+                "{} {} {} {} {} {} {} {} {} {}\n",
+                p.m,
+                p.tau_s,
+                p.var,
+                p.count,
+                p.edf,
+                p.alpha,
+                p.sigma_lo,
+                p.sigma_hi,
+                p.stride,
+                p.n_phase
             )
         })
         .collect();

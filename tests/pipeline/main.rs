@@ -12,6 +12,7 @@ mod checkpoint;
 mod config;
 mod corruption;
 mod embed;
+mod fuzz_regressions;
 mod live_bench;
 mod serial_outage;
 mod signal;

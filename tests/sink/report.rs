@@ -301,6 +301,8 @@ fn the_ieee_952_readouts_are_shown_with_units_intervals_and_taus() {
             alpha: 0,
             sigma_lo: c.lo[i].unwrap(),
             sigma_hi: c.hi[i].unwrap(),
+            stride: 1,
+            n_phase: c.count[i] + 2 * c.m[i],
         })
         .collect();
     let mut f = fit_of("g4", "arcsec", [0.0, 0.254, 0.225, 0.0, 0.0]);
