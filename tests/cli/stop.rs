@@ -55,6 +55,25 @@ fn wait_at_most(child: &mut Child, limit: Duration) -> (Option<i32>, Duration) {
     }
 }
 
+/// One SIGINT to a run whose standard output is not read: it waits out the writer's grace
+/// (3 s without progress), then exits 1 with a message naming `what` and "not being read".
+fn ends_after_the_grace(child: &mut Child, rx: &mpsc::Receiver<String>, what: &str) {
+    signal(child, "-INT");
+    let (code, took) = wait_at_most(child, Duration::from_secs(15));
+    assert_eq!(code, Some(1));
+    assert!(
+        took >= Duration::from_millis(2900) && took < Duration::from_secs(6),
+        "{took:?}"
+    );
+    std::thread::sleep(Duration::from_millis(100));
+    let err: Vec<String> = rx.try_iter().collect();
+    assert!(
+        err.iter()
+            .any(|l| l.contains(what) && l.contains("not being read")),
+        "{err:?}"
+    );
+}
+
 /// Standard error lines, forwarded to a channel.
 fn stderr_lines(child: &mut Child) -> mpsc::Receiver<String> {
     let err = BufReader::new(child.stderr.take().expect("stderr"));
@@ -229,21 +248,7 @@ fn stalled_listener(out: Option<&str>) -> (Child, mpsc::Receiver<String>) {
 fn sigint_ends_a_run_whose_output_is_not_read() {
     // One SIGINT: the writer's grace (3 s without progress), then exit 1 naming standard output.
     let (mut child, rx) = stalled_listener(None);
-    signal(&child, "-INT");
-    let (code, took) = wait_at_most(&mut child, Duration::from_secs(15));
-    assert_eq!(code, Some(1));
-    assert!(
-        took >= Duration::from_millis(2900) && took < Duration::from_secs(6),
-        "{took:?}"
-    );
-    std::thread::sleep(Duration::from_millis(100));
-    let err: Vec<String> = rx.try_iter().collect();
-    assert!(
-        err.iter()
-            .any(|l| l.contains("writing the JSON lines to standard output")
-                && l.contains("not being read")),
-        "{err:?}"
-    );
+    ends_after_the_grace(&mut child, &rx, "writing the JSON lines to standard output");
     drop(child);
 
     // Two SIGINTs: no grace after the second.
@@ -309,20 +314,7 @@ fn sigint_ends_a_replay_held_by_back_pressure() {
     // Never read: the grace (3 s without progress), then exit 1 naming standard output.
     let (mut child, rx) = stalled_replay();
     assert!(child.try_wait().expect("try_wait").is_none(), "ended early");
-    signal(&child, "-INT");
-    let (code, took) = wait_at_most(&mut child, Duration::from_secs(15));
-    assert_eq!(code, Some(1));
-    assert!(
-        took >= Duration::from_millis(2900) && took < Duration::from_secs(6),
-        "{took:?}"
-    );
-    std::thread::sleep(Duration::from_millis(100));
-    let err: Vec<String> = rx.try_iter().collect();
-    assert!(
-        err.iter()
-            .any(|l| l.contains("standard output") && l.contains("not being read")),
-        "{err:?}"
-    );
+    ends_after_the_grace(&mut child, &rx, "standard output");
 
     // Read again after the signal: the back-pressure is lifted, the final records of the data
     // read so far follow at once, and the summary says the replay did not reach its end.
