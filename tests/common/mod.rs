@@ -16,11 +16,24 @@ pub fn exe() -> std::process::Command {
     std::process::Command::new(env!("CARGO_BIN_EXE_allanscope"))
 }
 
+/// A scratch folder of this test process for `tag`, emptied the first time this process asks
+/// for it: folders are named by process id, and a pid reused from an earlier run must not hand a
+/// test that earlier run's outputs (which the commands then refuse to overwrite).
+pub fn fresh_dir(tag: &str) -> PathBuf {
+    static SEEN: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+    let d = std::env::temp_dir().join(format!("allanscope-{tag}-{}", std::process::id()));
+    let mut seen = SEEN.lock().unwrap_or_else(|e| e.into_inner());
+    if !seen.iter().any(|t| t == tag) {
+        let _ = std::fs::remove_dir_all(&d);
+        seen.push(tag.to_string());
+    }
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
 /// `name` in a scratch folder of this test process, `tag` telling the test files apart.
 pub fn tmp_in(tag: &str, name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("allanscope-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
+    fresh_dir(tag).join(name)
 }
 
 /// The crate's own fixtures folder.

@@ -10,9 +10,7 @@ use allanscope::source::SourceSpec;
 use allanscope::stand::StandConfig;
 
 fn tmp(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("allanscope-config-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("tmp dir");
-    dir.join(name)
+    crate::common::fresh_dir("config").join(name)
 }
 
 #[test]
