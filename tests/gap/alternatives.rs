@@ -14,7 +14,9 @@ use allanscope::sim::{SimModel, Simulator};
 use std::path::Path;
 
 fn run(sigma: f64, seed: u64) -> Diagnosis {
-    let text = format!("tau0_s = 0.004\n[[channel]]\nname = \"g4\"\nunit = \"arcsec\"\nlsb = 0.004\nN = 0.254\nB = 0.225\nK = 1.826e-2\nflicker_band_s = [0.004, 1.0e5]\ngauss_markov = {{ sigma = {sigma}, tau_c = 30.0 }}\n");
+    let text = crate::diagnosis::model(&format!(
+        "gauss_markov = {{ sigma = {sigma}, tau_c = 30.0 }}"
+    ));
     let m = SimModel::from_toml_str(&text, Path::new("<test>")).expect("model");
     let mut sim = Simulator::new(&m, seed);
     let mut inc = vec![0.0; (1200.0 / 0.004) as usize];

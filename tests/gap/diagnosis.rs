@@ -25,16 +25,19 @@ const TOL_TIME_LOOSE: f64 = 0.25;
 /// (docs/gap.md).
 const TOL_WARMUP_T: f64 = 0.5;
 
-const TAU0: f64 = 0.004;
-const DURATION_S: f64 = 3600.0;
+pub(crate) const TAU0: f64 = 0.004;
+pub(crate) const DURATION_S: f64 = 3600.0;
 
-fn model(extra: &str) -> String {
+/// The VOG4-like base model (config/models/vog4.toml's N, B, K and LSB) with `extra` effects:
+/// shared by the gap tests that simulate one gyro channel.
+pub(crate) fn model(extra: &str) -> String {
     format!(
         "tau0_s = {TAU0}\n[[channel]]\nname = \"g4\"\nunit = \"arcsec\"\nlsb = 0.004\nN = 0.254\nB = 0.225\nK = 1.826e-2\nflicker_band_s = [0.004, 1.0e5]\n{extra}\n"
     )
 }
 
-fn simulate(extra: &str, seed: u64) -> Vec<f64> {
+/// [`DURATION_S`] of increments of [`model`]`(extra)`.
+pub(crate) fn simulate(extra: &str, seed: u64) -> Vec<f64> {
     let m = SimModel::from_toml_str(&model(extra), Path::new("<test>")).expect("model");
     let mut sim = Simulator::new(&m, seed);
     let mut out = vec![0.0; (DURATION_S / TAU0) as usize];

@@ -6,28 +6,10 @@
 //! Runs of one hour at tau0 = 4 ms of a VOG4-like base (config/models/vog4.toml's N, B, K, LSB):
 //! the rate sample's noise is `N / sqrt(tau0)` = 4.0 arcsec/s.
 
+use crate::diagnosis::{simulate, DURATION_S, TAU0};
 use allanscope::gap::{diagnose, DiagnoseOptions, Diagnosis, GapConfig, GapEvidence, Verdict};
-use allanscope::sim::{SimModel, Simulator};
 use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, Exp1};
-use std::path::Path;
-
-const TAU0: f64 = 0.004;
-const DURATION_S: f64 = 3600.0;
-
-fn model(extra: &str) -> String {
-    format!(
-        "tau0_s = {TAU0}\n[[channel]]\nname = \"g4\"\nunit = \"arcsec\"\nlsb = 0.004\nN = 0.254\nB = 0.225\nK = 1.826e-2\nflicker_band_s = [0.004, 1.0e5]\n{extra}\n"
-    )
-}
-
-fn simulate(extra: &str, seed: u64) -> Vec<f64> {
-    let m = SimModel::from_toml_str(&model(extra), Path::new("<test>")).expect("model");
-    let mut sim = Simulator::new(&m, seed);
-    let mut out = vec![0.0; (DURATION_S / TAU0) as usize];
-    sim.fill_channel(0, &mut out);
-    out
-}
 
 fn diag(inc: &[f64], filter: bool) -> Diagnosis {
     let mut cfg = GapConfig::new(TAU0);
