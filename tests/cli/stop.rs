@@ -19,6 +19,7 @@ use std::process::{Child, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
+use crate::common::pipeline::free_udp_port;
 use crate::common::{exe, fixtures, tmp_in};
 
 const FRAME_LEN: usize = 42;
@@ -207,11 +208,7 @@ fn a_replay_stopped_by_sigint_says_so_and_exits_1() {
 /// A live listener with `--every 0.05` fed 10 s of frames over UDP; standard output piped and
 /// never read, `--out` when given.
 fn stalled_listener(out: Option<&str>) -> (Child, mpsc::Receiver<String>) {
-    let port = std::net::UdpSocket::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
+    let port = free_udp_port();
     let mut args = vec![
         "listen".to_string(),
         "--udp".into(),
@@ -369,11 +366,7 @@ fn records_of(out: &std::path::Path) -> Vec<serde_json::Value> {
 #[test]
 fn a_signal_ends_a_listener_on_a_quiet_udp_port_at_once() {
     for sig in ["-INT", "-TERM"] {
-        let port = std::net::UdpSocket::bind("127.0.0.1:0")
-            .unwrap()
-            .local_addr()
-            .unwrap()
-            .port();
+        let port = free_udp_port();
         let out = tmp_in("stop-quiet-udp", "out.jsonl");
         let _ = std::fs::remove_file(&out);
         let mut child = exe()
