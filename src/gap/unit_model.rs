@@ -76,6 +76,7 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
         gauss_markov: Vec::new(),
         sinusoids: Vec::new(),
         output_filter: None,
+        lowpass: None,
         warmup: None,
         bias_jumps: None,
         rate_lsb,
