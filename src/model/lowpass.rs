@@ -299,7 +299,10 @@ mod tests {
         let tau0 = 0.004;
         for lp in [
             LowPass::MovingAverage { taps: 7, stages: 1 },
-            LowPass::MovingAverage { taps: 16, stages: 2 },
+            LowPass::MovingAverage {
+                taps: 16,
+                stages: 2,
+            },
             LowPass::SecondOrder {
                 natural_frequency_hz: 5.0,
                 damping: 0.3,

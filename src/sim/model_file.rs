@@ -48,8 +48,8 @@ use std::path::Path;
 use crate::toml_check::{Collector, ConfigErrors};
 
 use super::effects::TemperatureProfile;
-use crate::model::lowpass::LowPass;
 use super::noise::FlickerBank;
+use crate::model::lowpass::LowPass;
 
 /// Earth rotation rate (WGS-84), rad/s.
 pub const EARTH_RATE_RAD_S: f64 = 7.292_115e-5;
@@ -729,7 +729,10 @@ fn parse_lowpass(
         e.finish(errs);
         for (key, v) in [("taps", taps), ("stages", stages)] {
             if v.is_finite() && v.fract() != 0.0 {
-                errs.bad(format!("{p}.{key}"), format!("must be a whole number, got {v}"));
+                errs.bad(
+                    format!("{p}.{key}"),
+                    format!("must be a whole number, got {v}"),
+                );
             }
         }
         found.push((
