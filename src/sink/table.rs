@@ -380,47 +380,18 @@ fn diagnosis_of<'a>(res: &'a Results, k: RunKey, channel: &str) -> Option<&'a Di
         .map(|d| &d.rec)
 }
 
-/// An effect in a few words with its parameters in units (docs/records.md's parameter names:
-/// rates in u/s, times in s, frequencies in Hz).
+/// An effect in a few words with its parameters named and in units, rates in datasheet units
+/// beside the record's u/s (sink::effect_text).
 pub fn effect_brief(kind: &str, params: &Value, unit: &str) -> String {
-    let p = |k: &str| params[k].as_f64().map_or("?".into(), sig3);
-    match kind {
-        "gauss_markov" => format!(
-            "Gauss-Markov noise (sigma {} {unit}/s, correlation time {} s)",
-            p("sigma"),
-            p("tau_c")
-        ),
-        "sinusoid" => format!(
-            "a sinusoid ({} {unit}/s at {} Hz)",
-            p("amplitude"),
-            p("frequency")
-        ),
-        "output_filter" => format!("an output filter (time constant {} s)", p("time_constant")),
-        "warmup" => format!(
-            "a warm-up drift ({} {unit}/s, time constant {} s)",
-            p("amplitude"),
-            p("time_constant")
-        ),
-        "bias_jumps" => format!(
-            "bias jumps ({} of rms {} {unit}/s)",
-            params["count"]
-                .as_u64()
-                .map_or("?".into(), |n| n.to_string()),
-            p("rms_size")
-        ),
-        "temperature" => format!("temperature ({} {unit}/s per deg C)", p("coefficient")),
-        other => {
-            let kv: Vec<String> = params
-                .as_object()
-                .map(|o| {
-                    o.iter()
-                        .map(|(k, v)| format!("{k} {}", v.as_f64().map_or(v.to_string(), sig3)))
-                        .collect()
-                })
-                .unwrap_or_default();
-            format!("{other} ({})", kv.join(", "))
-        }
+    let (name, ps) = crate::sink::effect_text::effect_parts(kind, params, unit, &sig3);
+    if ps.is_empty() {
+        return name;
     }
+    let list: Vec<String> = ps
+        .iter()
+        .map(|p| format!("{} {}", p.name, p.value))
+        .collect();
+    format!("{name} [{}]", list.join(", "))
 }
 
 /// The diagnosis in one line: the verdict, what explains the gap, and the gap before and after.
@@ -603,23 +574,47 @@ fn diagnosis_only(h: &mut String, res: &Results, k: RunKey, fitted: &[&str], sty
         }
         seen.push(ch);
         let d = diagnosis_of(res, k, ch).unwrap_or(&d.rec);
-        let c = &d.final_coef;
+        let unit = d.unit.as_deref().unwrap_or("u");
         let _ = writeln!(
             h,
-            "\n{}  diagnosis: {}",
+            "\n{}{}  diagnosis: {}",
             style.bold(ch),
-            diagnosis_line(d, "u", style)
+            d.unit
+                .as_deref()
+                .map(|u| format!(" [{u}]"))
+                .unwrap_or_default(),
+            diagnosis_line(d, unit, style)
         );
+        // The five terms refitted with the effects in, in datasheet units when the unit is known
+        // (terms the fit set to zero are left out).
+        let (factors, units) = match IncrementUnit::parse(unit) {
+            Some(iu) => (
+                datasheet_factors(&iu),
+                datasheet_units(iu.kind).map(String::from),
+            ),
+            None => ([1.0; 5], native_units(unit)),
+        };
+        let terms: Vec<String> = (0..5)
+            .filter(|&i| d.final_coef[i] > 0.0)
+            .map(|i| {
+                format!(
+                    "{} {} {}",
+                    TERM_NAMES[i],
+                    sig3(d.final_coef[i] * factors[i]),
+                    units[i]
+                )
+            })
+            .collect();
         let _ = writeln!(
             h,
             "  {}",
             style.dim(&format!(
-                "five terms with the effects (native units): Q {} N {} B {} K {} R {}; taus {} to {}",
-                sig3(c[0]),
-                sig3(c[1]),
-                sig3(c[2]),
-                sig3(c[3]),
-                sig3(c[4]),
+                "five-term model with the effects: {}; taus {} to {}",
+                if terms.is_empty() {
+                    "-".to_string()
+                } else {
+                    terms.join(", ")
+                },
                 tau_text(d.tau_span[0]),
                 tau_text(d.tau_span[1])
             ))

@@ -205,7 +205,7 @@ fn the_table_shows_datasheet_units_intervals_readouts_limits_and_the_diagnosis()
     // The diagnosis in one line, with the effect's parameters in units.
     let d = row(&t, "diagnosis:");
     assert!(
-        d.contains("explained by Gauss-Markov noise (sigma 0.100 arcsec/s, correlation time 20.0 s) (gap 3.00 -> 1.10)"),
+        d.contains("explained by correlated (Gauss-Markov) noise [sigma 0.100 deg/h (0.100 arcsec/s), correlation time 20.0 s] (gap 3.00 -> 1.10)"),
         "{d}"
     );
 }
@@ -240,7 +240,7 @@ fn records_without_a_summary_are_printed_when_the_writer_is_dropped() {
     drop(w);
     let t = out.text();
     assert!(
-        t.starts_with("\ngx  diagnosis: explained by Gauss-Markov noise"),
+        t.starts_with("\ngx  diagnosis: explained by correlated (Gauss-Markov) noise"),
         "{t}"
     );
     assert!(t.trim_end().ends_with("hint"), "{t}");
@@ -304,4 +304,54 @@ fn the_metrics_tap_keeps_the_newest_n_and_lost_frames_for_the_status_line() {
     };
     tap.health(&h);
     assert_eq!(m.latest().missing, vec![("dut".to_string(), 3)]);
+}
+
+/// A `diagnose` record (no fit beside it) names its unit: the effects' rates and the refitted
+/// terms are shown in datasheet units, converted by hand here. Accelerometer in m/s: a rate of
+/// 9.80665e-5 m/s/s is 10 micro-g, 4.903325e-6 m/s/s per deg C is 0.5 micro-g per deg C. Gyro in
+/// deg: 0.001 deg/s is 3.6 deg/h; N = 0.01 deg/sqrt(s) is 0.6 deg/sqrt(h) (x 60).
+#[test]
+fn the_diagnose_table_gives_effect_parameters_in_datasheet_units() {
+    let rec = |ch: &str, unit: &str, effects: serde_json::Value| {
+        json!({"type": "diagnosis", "channel": ch, "unit": unit, "gap_before": 4.0,
+            "gap_after": 1.0, "verdict": "explained", "regions": [], "effects": effects,
+            "final": true, "t_data": 600.0, "tau_span": [0.01, 60.0],
+            "base_coef": [0.0, 0.01, 0.0, 0.0, 0.0], "final_coef": [0.0, 0.01, 0.0, 0.0, 0.0]})
+    };
+    let out = Shared::default();
+    let mut w = TableWriter::new(out.clone(), TableStyle::default(), None);
+    let a1 = rec(
+        "a1",
+        "m/s",
+        json!([{"kind": "gauss_markov", "params": {"sigma": 9.80665e-5, "tau_c": 20.0}, "gap_after": 2.0},
+               {"kind": "temperature", "params": {"coefficient": 4.903325e-6}, "gap_after": 1.0}]),
+    );
+    let g1 = rec(
+        "g1",
+        "deg",
+        json!([{"kind": "sinusoid", "params": {"amplitude": 0.001, "frequency": 0.5}, "gap_after": 1.0}]),
+    );
+    writeln!(w, "{a1}\n{g1}").unwrap();
+    drop(w);
+    let t = out.text();
+    let a = row(&t, "a1 [m/s]  diagnosis:");
+    assert!(
+        a.contains("correlated (Gauss-Markov) noise [sigma 10.0 micro-g (9.81e-5 m/s/s), correlation time 20.0 s]"),
+        "{a}"
+    );
+    assert!(
+        a.contains("temperature sensitivity [coefficient 0.500 micro-g per deg C (4.90e-6 m/s/s per deg C)]"),
+        "{a}"
+    );
+    let g = row(&t, "g1 [deg]  diagnosis:");
+    assert!(
+        g.contains(
+            "sinusoid [amplitude 3.60 deg/h (0.00100 deg/s), frequency 0.500 Hz (period 2.00 s)]"
+        ),
+        "{g}"
+    );
+    assert!(
+        t.contains("five-term model with the effects: N 0.600 deg/sqrt(h);"),
+        "{t}"
+    );
 }
