@@ -355,3 +355,113 @@ fn the_diagnose_table_gives_effect_parameters_in_datasheet_units() {
         "{t}"
     );
 }
+
+/// Three runs of one gyro in arcsec, N = 0.24, 0.25, 0.26 arcsec/sqrt(s) and B determined in
+/// the first two only, then their `aggregate` records: the terminal shows the seed paper's table
+/// 2 layout, runs as rows named by their inputs, R K B N Q as columns in datasheet units, then
+/// mean, 95% interval, sd and n. By hand: N/60 is deg/sqrt(h): 0.00400, 0.00417, 0.00433; the
+/// mean 0.25 is 0.00417, sd 0.01 is 1.67e-4, and mean +- 1.96 sd/sqrt(3) = [0.238684, 0.261316]
+/// is [0.00398, 0.00436]; B in arcsec/s is deg/h.
+fn three_runs() -> Vec<String> {
+    let mut out = Vec::new();
+    for (r, (n, b)) in [(0.24, Some(0.1)), (0.25, Some(0.12)), (0.26, None)]
+        .into_iter()
+        .enumerate()
+    {
+        let mut f = fit(
+            "gx",
+            "arcsec",
+            [
+                (None, 0.0, 0.002),
+                (Some(n), 0.9 * n, 1.1 * n),
+                (b, 0.05, 0.2),
+                (None, 0.0, 1.0),
+                (None, 0.0, 0.01),
+            ],
+        );
+        f.run = Some(r);
+        out.push(serde_json::to_string(&f).unwrap());
+        out.push(
+            json!({"type": "summary", "run": r, "input": format!("/data/stand/run{}.csv", r + 1),
+                "channels": ["gx"], "tau0": 0.01, "t_data": 3600.0, "samples": [360000],
+                "segments": [1], "bad_rows": 0, "overlap": "16", "elapsed_s": 1.0,
+                "read_to_end": true})
+            .to_string(),
+        );
+    }
+    let half = 1.96 * 0.01 / 3f64.sqrt();
+    for (coef, n, mean, sd, ci) in [
+        ("Q", 0, None, None, None),
+        (
+            "N",
+            3,
+            Some(0.25),
+            Some(0.01),
+            Some([0.25 - half, 0.25 + half]),
+        ),
+        ("B", 2, Some(0.11), Some(0.0141421), Some([0.0904, 0.1296])),
+        ("K", 0, None, None, None),
+        ("R", 0, None, None, None),
+    ] {
+        out.push(
+            json!({"type": "aggregate", "channel": "gx", "unit": "arcsec", "coef": coef, "n": n,
+                "mean": mean, "sd": sd, "ci_t": null, "ci_z": ci})
+            .to_string(),
+        );
+    }
+    out
+}
+
+#[test]
+fn several_runs_are_shown_in_the_table_2_layout() {
+    let out = Shared::default();
+    let mut w = TableWriter::new(out.clone(), TableStyle::default(), None);
+    for l in three_runs() {
+        writeln!(w, "{l}").unwrap();
+    }
+    drop(w);
+    let t = out.text();
+    let table = &t[t.find("Run to run").expect("a run-to-run table")..];
+    let cells = |start: &str| -> Vec<String> {
+        row(table, start)
+            .split("  ")
+            .map(|c| c.trim().to_string())
+            .filter(|c| !c.is_empty())
+            .collect()
+    };
+    assert_eq!(cells("run "), ["run", "R", "K", "B", "N", "Q"], "{table}");
+    assert_eq!(
+        cells("deg/h^2"),
+        ["deg/h^2", "deg/h/sqrt(h)", "deg/h", "deg/sqrt(h)", "arcsec"],
+        "{table}"
+    );
+    assert_eq!(
+        cells("run1.csv"),
+        ["run1.csv", "-", "-", "0.100", "0.00400", "-"]
+    );
+    assert_eq!(
+        cells("run2.csv"),
+        ["run2.csv", "-", "-", "0.120", "0.00417", "-"]
+    );
+    assert_eq!(
+        cells("run3.csv"),
+        ["run3.csv", "-", "-", "-", "0.00433", "-"]
+    );
+    assert_eq!(cells("mean"), ["mean", "-", "-", "0.110", "0.00417", "-"]);
+    assert_eq!(
+        cells("95% interval"),
+        [
+            "95% interval",
+            "-",
+            "-",
+            "[0.0904, 0.130]",
+            "[0.00398, 0.00436]",
+            "-"
+        ]
+    );
+    assert_eq!(cells("sd"), ["sd", "-", "-", "0.0141", "1.67e-4", "-"]);
+    assert_eq!(
+        cells("runs determined"),
+        ["runs determined", "0", "0", "2", "3", "0"]
+    );
+}
