@@ -27,8 +27,11 @@ enum Dim {
     Count,
 }
 
-/// The kinds the diagnosis writes: person's name and `(record key, person's name, dimension)`.
-fn known(kind: &str) -> Option<(&'static str, &'static [(&'static str, &'static str, Dim)])> {
+/// A parameter: its record key, its name for a person, and what it measures.
+type ParamSpec = (&'static str, &'static str, Dim);
+
+/// The kinds the diagnosis writes: a person's name for the kind, and its parameters.
+fn known(kind: &str) -> Option<(&'static str, &'static [ParamSpec])> {
     Some(match kind {
         "gauss_markov" => (
             "correlated (Gauss-Markov) noise",

@@ -707,7 +707,8 @@ fn diagnosis(h: &mut String, res: &Results) {
         };
         // Interim diagnoses, less one written at the same data time as the final (its copy).
         interim.extend(mine.iter().filter(|d| {
-            !std::ptr::eq(**d, last) && !(last.rec.is_final && d.rec.t_data == last.rec.t_data)
+            let copy_of_final = last.rec.is_final && d.rec.t_data == last.rec.t_data;
+            !std::ptr::eq(**d, last) && !copy_of_final
         }));
         let d = &last.rec;
         let unit = unit_of(last);
