@@ -11,6 +11,9 @@ use allanscope::gap::{diagnose, DiagnoseOptions, DiagnosisRecord, GapConfig, Gap
 use allanscope::sim::{SimModel, Simulator};
 use std::path::Path;
 
+/// A case: the effect's record kind, its model-file line, and its true parameters by name.
+type Case = (&'static str, &'static str, &'static [(&'static str, f64)]);
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let get = |k: &str, d: &str| {
@@ -22,7 +25,7 @@ fn main() {
     let seeds: u64 = get("--seeds", "50").parse().expect("--seeds");
     let minutes: f64 = get("--minutes", "30").parse().expect("--minutes");
     let tau0 = 0.004;
-    let cases: [(&str, &str, &[(&str, f64)]); 4] = [
+    let cases: [Case; 4] = [
         (
             "gauss_markov",
             "gauss_markov = { sigma = 0.6, tau_c = 1.5 }",

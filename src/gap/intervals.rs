@@ -4,9 +4,9 @@
 //! parameter, `J = d ln AVAR_model / d theta` (shapes by central differences), the covariance
 //! of `theta_hat` is `(J' S^-1 J)^-1`, scaled up (never down) by the final gap `G` as a
 //! residual variance. Each interval is `p exp(+-1.96 sd(ln p))`, so it stays positive.
-//! A moving average's taps are whole: their interval is the profile of `r' S^-1 r` over whole
-//! taps (the range where it rises by at most `3.84 max(1, G)`). The temperature's interval is
-//! its own (gap::temperature); warm-ups and jumps get none here.
+//! The temperature's interval is its own (gap::temperature); warm-ups, jumps and the output
+//! filters get none yet (the filters' were measured miscalibrated; [`taps_profile`] is kept for
+//! when their covariance is right).
 
 use super::diagnose::AddedEffect;
 use super::effects::{EffectKind, EffectParams};
@@ -90,7 +90,7 @@ pub fn effect_intervals(
     let j = prob.len();
     let scale = fit.gap().max(1.0);
     let m0: Vec<f64> = prob.model_of(spec, &fit.coef);
-    if m0.iter().any(|v| !(*v > 0.0)) {
+    if m0.iter().any(|v| v.is_nan() || *v <= 0.0) {
         return vec![Vec::new(); effects.len()];
     }
     // Columns of J: active coefficients, then the shapes.
@@ -118,7 +118,7 @@ pub fn effect_intervals(
                 prob.model_of(&spec_of(prob, &ps, &spec.offset), &fit.coef)
             };
             let (up, dn) = (curve(H.exp()), curve((-H).exp()));
-            if up.iter().chain(&dn).any(|v| !(*v > 0.0)) {
+            if up.iter().chain(&dn).any(|v| v.is_nan() || *v <= 0.0) {
                 continue;
             }
             shape_col[e].push(cols.len());
@@ -150,6 +150,12 @@ pub fn effect_intervals(
         .map(|(e, p)| {
             let mut out: Intervals = Vec::new();
             let kind = p.kind();
+            // Filters: none yet. Their Fisher intervals were measured too narrow (zero-phase
+            // time constant: 0 of 50 runs covered, half-width 2.4% against a 6% bias from the
+            // approximate covariance below the filter's memory; docs/gap.md).
+            if kind.is_filter() {
+                return out;
+            }
             if kind.is_stationary() && !kind.is_filter() {
                 let amp_name = if kind == EffectKind::GaussMarkov {
                     "sigma"
@@ -178,6 +184,7 @@ pub fn effect_intervals(
         .collect()
 }
 
+#[allow(dead_code)]
 /// Whole taps whose fit's `r' S^-1 r` is within `3.84 scale` of the best, around `taps`.
 fn taps_profile(
     prob: &GapProblem,
