@@ -6,7 +6,8 @@
 //! and labelled by run, for [`plot`] (Allan-deviation panels), [`dynamic`] (the time x tau
 //! view) and [`report`] (the HTML page); [`page_file`] writes those without overwriting;
 //! [`output`] opens result files, [`export`] writes the noise model for other tools, [`metrics`]
-//! serves live figures.
+//! serves live figures. [`unit_record`] tags the records of a run of several units with
+//! their unit's name and takes the tag off again for the readers.
 
 #[cfg(feature = "plot")]
 pub mod dynamic;
@@ -22,3 +23,4 @@ pub mod records;
 pub mod report;
 pub mod results;
 pub mod table;
+pub mod unit_record;
