@@ -126,13 +126,6 @@ pub fn run(r: &RunArgs) -> Result<()> {
 fn run_units(r: &RunArgs, cfg: &StandConfig, plan: RunPlan) -> Result<()> {
     use allanscope::pipeline::units::{UnitRun, UnitsControl};
     let at = |e: anyhow::Error| e.context(format!("stand config {}", cfg.file.display()));
-    if let Some(u) = plan.units.iter().find(|u| u.checkpoint.is_some()) {
-        return Err(at(super::usage(format!(
-            "[run] checkpoint_every and --resume are not available with [[unit]] tables yet \
-             (unit `{}`): checkpoints are kept for one-unit configs",
-            u.label()
-        ))));
-    }
     let server = match (&r.metrics, plan.metrics) {
         (Some(_), _) => super::metrics::start_option(r.metrics.as_deref())?,
         (None, Some(addr)) => Some(super::metrics::MetricsServer::start(addr)?),
@@ -142,7 +135,8 @@ fn run_units(r: &RunArgs, cfg: &StandConfig, plan: RunPlan) -> Result<()> {
     let live = plan.units.iter().any(|u| u.is_live());
     let mode = OutputMode::new(r.force, r.resume);
     let mut units = Vec::new();
-    for u in &plan.units {
+    let mut captures = Vec::new();
+    for u in plan.units {
         let InputPlan::Frames { spec, desc } = &u.input else {
             anyhow::bail!("a stand config's source gives frames of a descriptor");
         };
@@ -155,12 +149,14 @@ fn run_units(r: &RunArgs, cfg: &StandConfig, plan: RunPlan) -> Result<()> {
             capture: None,
             metrics: metrics.as_ref().map(|m| m.tap(&name, &u.analysis.limits)),
             progress: std::sync::Arc::new(allanscope::source::Progress::default()),
+            checkpoint: u.checkpoint.map(|c| std::sync::Arc::new(c.0)),
         });
+        captures.push((name, u.capture));
     }
     // Outputs last: every unit was accepted; each is only emptied once its source delivers.
-    for (run, u) in units.iter_mut().zip(&plan.units) {
-        let what = format!("unit `{}` capture", u.label());
-        run.capture = super::capture_output(u.capture.as_deref(), mode, &what).map_err(at)?;
+    for (run, (name, capture)) in units.iter_mut().zip(&captures) {
+        let what = format!("unit `{name}` capture");
+        run.capture = super::capture_output(capture.as_deref(), mode, &what).map_err(at)?;
     }
     let (out, dest) =
         super::records_output(plan.output.as_deref(), mode, "[output] path", r.json).map_err(at)?;

@@ -22,6 +22,10 @@
 //!   ([`crate::sink::unit_record`]).
 //! - Interim records of live units come every `every_wall` of wall time (one timer for all);
 //!   replayed units keep their data-second schedule.
+//! - Checkpoints are per unit (`OUTPUT.NAME.ckpt`, [`crate::plan::run::RunPlan::from_stand`]):
+//!   the worker that owns a unit writes its decoder state, byte offset and analysis state
+//!   together (one thread holds all three, so no marks travel between threads as in the one-unit
+//!   pipeline), every `every_s` of data (a file) or wall time (live), and once more at the end.
 
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
@@ -34,6 +38,7 @@ use tokio_util::sync::CancellationToken;
 use super::decode::DecodeStage;
 use super::{stage_health_record, RecordQueue, SourceFlags};
 use crate::analysis::RunAnalysis;
+use crate::checkpoint::{Checkpoint, CheckpointPlan, Position};
 use crate::frame::{FrameBlock, FrameDescriptor};
 use crate::input::Chunk;
 use crate::sink::metrics::MetricsTap;
@@ -66,6 +71,8 @@ pub struct UnitRun {
     pub metrics: Option<MetricsTap>,
     /// Counters of this unit (frames, bytes, input read to its end).
     pub progress: Arc<Progress>,
+    /// The unit's checkpoints, and the position to resume from.
+    pub checkpoint: Option<Arc<CheckpointPlan>>,
 }
 
 /// How a run of several units is driven and stopped.
@@ -123,14 +130,44 @@ struct UnitState {
     quiet: u64,
     ended: bool,
     failed: Option<String>,
+    /// Bytes of the input consumed (from its start: a resumed replay starts at its offset).
+    offset: u64,
+    /// Checkpoints written (the resumed one's sequence included).
+    sequence: u64,
+    /// When the next checkpoint is due: data-seconds (a file) or wall time (live).
+    next_data_s: f64,
+    next_wall: Instant,
 }
 
 impl UnitState {
-    fn new(run: UnitRun) -> UnitState {
+    fn new(mut run: UnitRun) -> UnitState {
         let live = run.spec.is_live();
+        let replay = matches!(run.spec, SourceSpec::File { .. });
         let width = run.desc.frame().channels.len();
+        let (mut offset, mut sequence) = (0, 0);
+        let resume = run.checkpoint.as_ref().and_then(|p| p.resume.clone());
+        let stage = match resume {
+            Some((Position::Frames { offset: o, stage }, seq)) => {
+                sequence = seq;
+                if replay {
+                    offset = o;
+                    DecodeStage::restore_replay(run.desc.clone(), &stage)
+                } else {
+                    // A stream that cannot be rewound: the time it was down is a gap that no
+                    // difference spans (as in the one-unit pipeline).
+                    run.analysis.break_segments();
+                    DecodeStage::restore_live(run.desc.clone(), live, &stage)
+                }
+            }
+            _ => DecodeStage::new(run.desc.clone(), live),
+        };
+        let every = run.checkpoint.as_ref().map_or(0.0, |p| p.every_s);
         UnitState {
-            stage: DecodeStage::new(run.desc.clone(), live),
+            offset,
+            sequence,
+            next_data_s: run.analysis.t_data_s() + every,
+            next_wall: Instant::now() + Duration::from_secs_f64(every),
+            stage,
             block: FrameBlock::with_capacity(width, 64),
             width,
             flags: SourceFlags {
@@ -168,6 +205,51 @@ impl UnitState {
             self.block = b;
         }
         self.push_records(out, queue);
+    }
+
+    /// Writes a checkpoint now if one is due (`force`: at the end, `complete` as given).
+    fn checkpoint(&mut self, out: &mut Vec<Record>, queue: &RecordQueue, end: Option<bool>) {
+        let Some(plan) = self.run.checkpoint.clone() else {
+            return;
+        };
+        if plan.every_s <= 0.0 && end.is_none() {
+            return;
+        }
+        let due = if plan.data_seconds {
+            self.run.analysis.t_data_s() + self.block.frames() as f64 * self.run.desc.tau0_s()
+                >= self.next_data_s
+        } else {
+            Instant::now() >= self.next_wall
+        };
+        if !due && end.is_none() {
+            return;
+        }
+        self.flush(out, queue);
+        let Some(stage) = self.stage.state() else {
+            return;
+        };
+        self.next_data_s = self.run.analysis.t_data_s() + plan.every_s;
+        self.next_wall = Instant::now() + Duration::from_secs_f64(plan.every_s);
+        self.sequence += 1;
+        let ck = Checkpoint {
+            header: plan.header.clone(),
+            every_s: plan.every_s,
+            sequence: self.sequence,
+            complete: end.unwrap_or(false),
+            saved_unix_s: crate::checkpoint::unix_now_s(),
+            position: Position::Frames {
+                offset: self.offset,
+                stage: Box::new(stage),
+            },
+            analysis: self.run.analysis.snapshot(),
+        };
+        if let Err(e) = ck.write_atomic(&plan.path) {
+            tracing::warn!(
+                "unit {}: checkpoint {} not written: {e:#}",
+                self.run.name,
+                plan.path.display()
+            );
+        }
     }
 
     fn outage(&self, event: &str, silent: Duration, error: Option<String>) -> Record {
@@ -214,6 +296,7 @@ pub async fn run_units_async(
             u.spec.clone(),
             u.capture.clone(),
             u.progress.clone(),
+            start_offset(&u),
         ));
         u.progress.input_ended.store(false, Ordering::SeqCst);
         shares[i % n_workers].push(UnitState::new(u));
@@ -264,7 +347,7 @@ pub async fn run_units_async(
         })
     };
     let mut tasks = Vec::new();
-    for (w, index, spec, capture, progress) in sources {
+    for (w, index, spec, capture, progress, start_offset) in sources {
         let wtx = txs[w].clone();
         let shutdown = ctl.shutdown.clone();
         tasks.push(tokio::spawn(async move {
@@ -274,7 +357,7 @@ pub async fn run_units_async(
                 .and_then(CaptureSlot::take)
                 .map(|f| Capture::new(f, progress.capture.clone()));
             let ctx = SourceContext {
-                start_offset: 0,
+                start_offset,
                 tx,
                 shutdown,
                 capture,
@@ -339,7 +422,8 @@ fn work(
         match w {
             Work::Event(i, ev) => {
                 let u = &mut units[i];
-                if let SourceEvent::Data { at, .. } | SourceEvent::Datagram { at, .. } = &ev {
+                if let SourceEvent::Data { bytes, at } | SourceEvent::Datagram { bytes, at } = &ev {
+                    u.offset += bytes.len() as u64;
                     if let Some(since) = u.quiet_since.take() {
                         let r = u.outage("resumed", at.saturating_duration_since(since), None);
                         queue.push_final_of(Some(&u.run.name), r);
@@ -358,6 +442,7 @@ fn work(
                 if u.block.len() >= MAX_BLOCK_EVENTS {
                     u.flush(&mut out, queue);
                 }
+                u.checkpoint(&mut out, queue, None);
             }
             Work::Ended(i, error) => {
                 let u = &mut units[i];
@@ -384,6 +469,10 @@ fn work(
             Work::Watch => {
                 let now = Instant::now();
                 for u in units.iter_mut() {
+                    if !u.ended {
+                        // A quiet live unit still gets its checkpoints on wall time.
+                        u.checkpoint(&mut out, queue, None);
+                    }
                     let silent = now.saturating_duration_since(u.last_data);
                     if u.flags.live && !u.ended && u.quiet_since.is_none() && silent >= quiet_after
                     {
@@ -412,9 +501,24 @@ fn work(
     units
 }
 
-/// A unit's end: its final records, its health and its summary.
+/// Where a unit's source starts reading: a resumed replay at its checkpoint's offset.
+fn start_offset(u: &UnitRun) -> u64 {
+    match (
+        &u.spec,
+        u.checkpoint.as_ref().and_then(|p| p.resume.as_ref()),
+    ) {
+        (SourceSpec::File { .. }, Some((Position::Frames { offset, .. }, _))) => *offset,
+        _ => 0,
+    }
+}
+
+/// A unit's end: its last checkpoint, its final records, its health and its summary.
 fn finish_unit(mut s: UnitState, queue: &RecordQueue, ctl: &UnitsControl) -> UnitOutcome {
     let name = s.run.name.clone();
+    // A replay stopped before its end can be resumed; a live unit's last checkpoint too.
+    let complete = !(s.flags.replay && !s.run.progress.input_ended());
+    let mut out = Vec::new();
+    s.checkpoint(&mut out, queue, Some(complete));
     let tag = Some(&name);
     for r in s.run.analysis.records(true) {
         if let Some(m) = &s.run.metrics {

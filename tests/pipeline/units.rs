@@ -71,6 +71,7 @@ fn unit(name: &str, spec: SourceSpec) -> UnitRun {
         capture: None,
         metrics: None,
         progress: Arc::new(Progress::default()),
+        checkpoint: None,
     }
 }
 
@@ -128,6 +129,11 @@ fn each_unit_equals_its_frames_alone_and_outages_are_recorded() {
         },
     ));
     let progress: Vec<Arc<Progress>> = units.iter().map(|u| u.progress.clone()).collect();
+    // Metrics per unit, labelled with the unit's name.
+    let metrics = Arc::new(allanscope::sink::metrics::Metrics::new());
+    for u in &mut units {
+        u.metrics = Some(metrics.tap(&u.name, &[]));
+    }
 
     let buf = SharedBuf::default();
     let writer = RecordWriter::spawn_coalescing(Box::new(buf.clone()));
@@ -218,6 +224,12 @@ fn each_unit_equals_its_frames_alone_and_outages_are_recorded() {
         assert_eq!(outcomes[k].quiet, 0, "unit {name}");
         assert_eq!(outcomes[k].failed, None, "unit {name}");
     }
+    let exposition = metrics.encode();
+    for name in ["udp0", "udp1", "udp2", "tty", "file"] {
+        let line = format!("allanscope_frames_total{{unit=\"{name}\"}} {UNIT_FRAMES}");
+        assert!(exposition.contains(&line), "no {line} in\n{exposition}");
+    }
+    assert!(exposition.contains("allanscope_frames_total{unit=\"quiet\"} 200"));
     // The replayed unit read its file to the end; the live ones were stopped.
     assert_eq!(
         last_of(&of_unit(&recs, "file"), "summary")["read_to_end"],
@@ -445,4 +457,71 @@ fn shipped_lab_example_parses() {
     let limits: Vec<usize> = cfg.units.iter().map(|u| u.limits.len()).collect();
     assert_eq!(limits, [1, 1, 2]);
     assert_eq!(cfg.quiet_after_s, Some(5.0));
+}
+
+/// Per-unit checkpoints through the binary: two live UDP units with `checkpoint_every`, stopped
+/// by SIGINT, then `run --resume`: each unit continues from its own checkpoint
+/// (`OUTPUT.NAME.ckpt`), its counts go on (6000 frames and samples over both runs), and the time
+/// the program was down is a break in its phase segments.
+#[test]
+fn each_unit_resumes_from_its_own_checkpoint() {
+    let dir = crate::common::fresh_dir("units-resume");
+    let all = siu8_capture();
+    let ports = [free_udp_port(), free_udp_port()];
+    let mut config = "[run]\ncheckpoint_every = 1.0\n[output]\npath = \"lab.jsonl\"\n".to_string();
+    for (k, p) in ports.iter().enumerate() {
+        config += &format!(
+            "[[unit]]\nname = \"imu{k}\"\nsource = {{ kind = \"udp\", address = \"127.0.0.1:{p}\", format = \"siu8\" }}\n"
+        );
+    }
+    std::fs::write(dir.join("lab.toml"), config).expect("config");
+    let sock = std::net::UdpSocket::bind("127.0.0.1:0").expect("sender");
+    let play = |args: &[&str], from: usize| {
+        let mut child = crate::common::exe()
+            .current_dir(&dir)
+            .args(args)
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .expect("run");
+        std::thread::sleep(Duration::from_millis(700));
+        for (k, p) in ports.iter().enumerate() {
+            let bytes = frames(&all, k * 10_000 + from, 3000);
+            for (i, d) in bytes.chunks(PER_DATAGRAM * FRAME_LEN).enumerate() {
+                sock.send_to(d, ("127.0.0.1", *p)).expect("send");
+                if i % 20 == 0 {
+                    std::thread::sleep(Duration::from_millis(2));
+                }
+            }
+        }
+        std::thread::sleep(Duration::from_millis(1500));
+        let _ = std::process::Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status();
+        child.wait().expect("wait").code()
+    };
+    assert_eq!(play(&["run", "--config", "lab.toml"], 0), Some(0));
+    for k in 0..2 {
+        assert!(
+            dir.join(format!("lab.jsonl.imu{k}.ckpt")).is_file(),
+            "imu{k}'s checkpoint"
+        );
+    }
+    assert_eq!(
+        play(&["run", "--config", "lab.toml", "--resume"], 3000),
+        Some(0)
+    );
+    let recs = parse_lines(&std::fs::read(dir.join("lab.jsonl")).expect("output"));
+    for k in 0..2 {
+        let mine = of_unit(&recs, &format!("imu{k}"));
+        let sums: Vec<&serde_json::Value> =
+            mine.iter().filter(|r| r["type"] == "summary").collect();
+        assert_eq!(sums.len(), 2, "a summary per run");
+        assert_eq!(sums[0]["samples"][0], 3000);
+        assert_eq!(sums[1]["samples"][0], 6000, "imu{k}: the counts go on");
+        assert_eq!(
+            sums[1]["segments"][0], 2,
+            "imu{k}: the outage breaks the segment"
+        );
+        assert_eq!(last_of(&mine, "health")["frames"], 6000);
+    }
 }
