@@ -69,6 +69,9 @@ fn thread_cpu(pid: u32, tick_hz: f64) -> Vec<(String, f64)> {
     out
 }
 
+/// The start of the steady window: when, allanscope's CPU per thread, this program's CPU.
+type Steady = (Instant, Vec<(String, f64)>, f64);
+
 fn total(v: &[(String, f64)]) -> f64 {
     v.iter().map(|x| x.1).sum()
 }
@@ -187,7 +190,7 @@ fn main() {
     let start = Instant::now();
     let mut sent_frames = 0u64;
     let mut at = 0usize;
-    let mut steady: Option<(Instant, Vec<(String, f64)>, f64)> = None;
+    let mut steady: Option<Steady> = None;
     let own0 = process_cpu("self", tick_hz);
     for r in 0..rounds {
         let due = start + period * r as u32;

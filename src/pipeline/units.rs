@@ -516,7 +516,7 @@ fn start_offset(u: &UnitRun) -> u64 {
 fn finish_unit(mut s: UnitState, queue: &RecordQueue, ctl: &UnitsControl) -> UnitOutcome {
     let name = s.run.name.clone();
     // A replay stopped before its end can be resumed; a live unit's last checkpoint too.
-    let complete = !(s.flags.replay && !s.run.progress.input_ended());
+    let complete = !s.flags.replay || s.run.progress.input_ended();
     let mut out = Vec::new();
     s.checkpoint(&mut out, queue, Some(complete));
     let tag = Some(&name);
