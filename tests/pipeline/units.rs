@@ -461,7 +461,7 @@ fn shipped_lab_example_parses() {
 
 /// Per-unit checkpoints through the binary: two live UDP units with `checkpoint_every`, stopped
 /// by SIGINT, then `run --resume`: each unit continues from its own checkpoint
-/// (`OUTPUT.NAME.ckpt`), its counts go on (6000 frames and samples over both runs), and the time
+/// (`OUTPUT.NAME.ckpt`), its counts go on (6000 frames over both runs), and the time
 /// the program was down is a break in its phase segments.
 #[test]
 fn each_unit_resumes_from_its_own_checkpoint() {
@@ -516,8 +516,9 @@ fn each_unit_resumes_from_its_own_checkpoint() {
         let sums: Vec<&serde_json::Value> =
             mine.iter().filter(|r| r["type"] == "summary").collect();
         assert_eq!(sums.len(), 2, "a summary per run");
-        assert_eq!(sums[0]["samples"][0], 3000);
-        assert_eq!(sums[1]["samples"][0], 6000, "imu{k}: the counts go on");
+        // Phase points: the frames' increments plus one start point per segment.
+        assert_eq!(sums[0]["samples"][0], 3001);
+        assert_eq!(sums[1]["samples"][0], 6002, "imu{k}: the counts go on");
         assert_eq!(
             sums[1]["segments"][0], 2,
             "imu{k}: the outage breaks the segment"
