@@ -667,7 +667,8 @@ fn find(buf: &[u8], from: usize, pat: &[u8]) -> Option<usize> {
         if i + pat.len() > hay.len() {
             return None;
         }
-        if &hay[i..i + pat.len()] == pat {
+        // Compared byte by byte: sync patterns are 1 to 4 bytes, shorter than a call to memcmp.
+        if hay[i..i + pat.len()].iter().zip(pat).all(|(a, b)| a == b) {
             return Some(from + i);
         }
         i += 1;
