@@ -54,16 +54,19 @@ use decode::DecodeStage;
 pub use writer::{Delivery, RecordQueue, RecordWriter, WriterStats, RECORD_QUEUE};
 
 /// Capacity of the channel from the decode (or text reader) thread to the analysis, in
-/// chunks. A replayed chunk is one 64 KiB read (about 1560 siu8 frames, 300 KB decoded), so
-/// reading runs ahead of the analysis by about a megabyte at most; live chunks are a few frames.
+/// chunks. A replayed chunk is one 256 KiB read (about 6240 siu8 frames, 700 KB decoded), so
+/// reading runs ahead of the analysis by a few megabytes at most; live chunks are a few frames.
 pub const CHUNK_QUEUE: usize = 4;
 
-/// Largest number of events in one chunk: bounds a chunk's memory when many small reads are
-/// gathered while the analysis is busy.
-const MAX_CHUNK_EVENTS: usize = 4096;
+/// A chunk this large goes to the analysis at once, even while more input waits: this bounds a
+/// chunk's memory when many small reads are gathered while the analysis is busy, and a
+/// replay's next read then goes into a fresh block (swapped in whole) instead of being copied
+/// behind these frames (profiled: that copy was 8% of a replay's decode thread).
+const SEND_CHUNK_EVENTS: usize = 1024;
 
-/// Events a new chunk has room for: a 64 KiB read of siu8 is 1560 frames; reserving room for
-/// them avoids regrowing the vector (profiled: 3% of the decode thread).
+/// Events a new chunk has room for at first (a 64 KiB read of siu8 is 1560 frames); blocks are
+/// recycled, so a replay's blocks grow to a whole read once and keep that room (profiled:
+/// regrowing was 3% of the decode thread).
 const CHUNK_EVENTS_RESERVE: usize = 1600;
 
 /// How a run is driven and stopped. The caller owns the process: it cancels `shutdown` (the
@@ -232,7 +235,7 @@ pub async fn run_frames_async(
                     _ => false,
                 };
                 if !events.is_empty()
-                    && (due || events.len() >= MAX_CHUNK_EVENTS || src_rx.is_empty())
+                    && (due || events.len() >= SEND_CHUNK_EVENTS || src_rx.is_empty())
                 {
                     let chunk = Chunk::Block(std::mem::replace(&mut events, fresh()));
                     if !chunk_tx.send(chunk) {
