@@ -465,3 +465,42 @@ fn several_runs_are_shown_in_the_table_2_layout() {
         ["runs determined", "0", "0", "2", "3", "0"]
     );
 }
+
+/// The status line and log lines on one terminal (sink::status_area): a log line erases the
+/// status line, is written, and the status line is drawn again under it; the line is cut to the
+/// terminal's width less one column; once suspended (a table is coming) nothing is drawn again.
+#[test]
+fn log_lines_are_written_above_the_status_line_never_through_it() {
+    use allanscope::sink::status_area::{StatusArea, CLEAR};
+    let mut area = StatusArea::new();
+    let mut out: Vec<u8> = Vec::new();
+    let text = |o: &mut Vec<u8>| String::from_utf8(std::mem::take(o)).unwrap();
+    // No status line yet: a log line goes out as it is.
+    area.log(&mut out, b"INFO first\n").unwrap();
+    assert_eq!(text(&mut out), "INFO first\n");
+    // A 30-character line on a 21-column terminal keeps 20 characters.
+    let line = "12 s running | N: g1 0.254 arcsec/sqrt(s)";
+    area.draw(&mut out, line, 21).unwrap();
+    assert_eq!(text(&mut out), format!("{CLEAR}{}", &line[..20]));
+    // A log line: erase, the message, the status line again on the fresh line.
+    area.log(&mut out, b"WARN frame 17: checksum\n").unwrap();
+    assert_eq!(
+        text(&mut out),
+        format!("{CLEAR}WARN frame 17: checksum\n{}", &line[..20])
+    );
+    // A message that does not end its line leaves the cursor there: no redraw until the next
+    // draw, and the next log line does not erase the message.
+    area.log(&mut out, b"partial").unwrap();
+    assert_eq!(text(&mut out), format!("{CLEAR}partial"));
+    area.log(&mut out, b" rest\n").unwrap();
+    assert_eq!(text(&mut out), " rest\n");
+    area.draw(&mut out, "13 s running", 80).unwrap();
+    assert_eq!(text(&mut out), format!("{CLEAR}13 s running"));
+    // Suspended: erased once, then never drawn again; log lines plain.
+    area.suspend(&mut out).unwrap();
+    assert_eq!(text(&mut out), CLEAR);
+    area.draw(&mut out, "14 s running", 80).unwrap();
+    area.log(&mut out, b"INFO done\n").unwrap();
+    assert_eq!(text(&mut out), "INFO done\n");
+    assert!(area.is_suspended());
+}
