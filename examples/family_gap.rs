@@ -215,6 +215,14 @@ const KINDS: [(&str, Option<EffectKind>); 6] = [
     ("bias_jumps", Some(EffectKind::BiasJumps)),
 ];
 
+/// Kinds drawn only when asked (`--effects moving_average,...`): the filters beyond first order
+/// (docs/gap.md, "Low-pass filters beyond first order"), memory 1-10 tau0 as the first order's.
+const EXTRA_KINDS: [(&str, Option<EffectKind>); 3] = [
+    ("moving_average", Some(EffectKind::MovingAverage)),
+    ("second_order_filter", Some(EffectKind::SecondOrderFilter)),
+    ("zero_phase_filter", Some(EffectKind::ZeroPhaseFilter)),
+];
+
 fn kind_name(k: Option<EffectKind>) -> &'static str {
     k.map_or("none", |k| k.name())
 }
@@ -264,6 +272,18 @@ fn draw_effect(rng: &mut Xoshiro256PlusPlus, u: &Unit, kind: EffectKind) -> (Eff
             let s = rho * u.adev(tau) / (tau / (3.0 * u.t_run / count as f64)).sqrt();
             EffectParams::BiasJumps { count, rms_size: s }
         }
+        EffectKind::MovingAverage => EffectParams::MovingAverage {
+            taps: log_uniform(rng, 2.0, 10.0).round() as u32,
+            stages: rng.random_range(1..=2u32),
+        },
+        EffectKind::SecondOrderFilter => EffectParams::SecondOrderFilter {
+            natural_frequency_hz: 1.0
+                / (2.0 * std::f64::consts::PI * log_uniform(rng, u.tau0, 10.0 * u.tau0)),
+            damping: log_uniform(rng, 0.2, 2.0),
+        },
+        EffectKind::ZeroPhaseFilter => EffectParams::ZeroPhaseFilter {
+            time_constant_s: log_uniform(rng, u.tau0, 10.0 * u.tau0),
+        },
         other => panic!("{}: not drawn by this benchmark", other.name()),
     };
     (p, rho)
@@ -306,6 +326,20 @@ fn model_toml(u: &Unit, effect: Option<EffectParams>) -> String {
             s += &format!(
                 "warmup = {{ amplitude = {amplitude:e}, time_constant = {time_constant_s:e} }}\n"
             )
+        }
+        Some(EffectParams::MovingAverage { taps, stages }) => {
+            s += &format!("moving_average = {{ taps = {taps}, stages = {stages} }}\n")
+        }
+        Some(EffectParams::SecondOrderFilter {
+            natural_frequency_hz,
+            damping,
+        }) => {
+            s += &format!(
+                "second_order_filter = {{ natural_frequency = {natural_frequency_hz:e}, damping = {damping:e} }}\n"
+            )
+        }
+        Some(EffectParams::ZeroPhaseFilter { time_constant_s }) => {
+            s += &format!("zero_phase_filter = {{ time_constant = {time_constant_s:e} }}\n")
         }
         // Jumps are added by `simulate` (the truth is the realised jumps).
         _ => {}
@@ -390,6 +424,19 @@ fn oracle_z(
                 .collect();
             oracle::curve_known_z(&prob, &sig)
         }
+        EffectParams::MovingAverage { .. }
+        | EffectParams::SecondOrderFilter { .. }
+        | EffectParams::ZeroPhaseFilter { .. } => {
+            let n2 = u.c[1] * u.c[1];
+            let lp = truth.lowpass()?;
+            let sig: Vec<f64> = lp
+                .white_rate_avar(u.tau0, &prob.ms)
+                .iter()
+                .zip(&prob.tau)
+                .map(|(g, t)| n2 * (g - 1.0 / t))
+                .collect();
+            oracle::curve_known_z(&prob, &sig)
+        }
         EffectParams::Warmup {
             amplitude,
             time_constant_s,
@@ -439,7 +486,11 @@ fn run_one(
     hours: Option<(f64, f64)>,
 ) -> Outcome {
     let fam_ix = FAMILIES.iter().position(|f| *f == family).unwrap_or(0) as u64;
-    let kind_ix = KINDS.iter().position(|k| k.1 == kind).unwrap_or(0) as u64;
+    let kind_ix = KINDS
+        .iter()
+        .chain(EXTRA_KINDS.iter())
+        .position(|k| k.1 == kind)
+        .unwrap_or(0) as u64;
     let stream = seed
         .wrapping_mul(1_000_003)
         .wrapping_add(fam_ix * 100_003 + kind_ix * 10_007 + i);
@@ -717,6 +768,7 @@ fn main() {
         .map(|e| {
             KINDS
                 .iter()
+                .chain(EXTRA_KINDS.iter())
                 .find(|k| k.0 == e)
                 .unwrap_or_else(|| panic!("--effects: unknown {e} (one of {default_kinds:?})"))
                 .1
