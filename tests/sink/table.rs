@@ -308,7 +308,8 @@ fn the_metrics_tap_keeps_the_newest_n_and_lost_frames_for_the_status_line() {
 
 /// A `diagnose` record (no fit beside it) names its unit: the effects' rates and the refitted
 /// terms are shown in datasheet units, converted by hand here. Accelerometer in m/s: a rate of
-/// 9.80665e-5 m/s/s is 10 micro-g, 4.903325e-6 m/s/s per deg C is 0.5 micro-g per deg C. Gyro in
+/// 9.80665e-5 m/s/s is 10 micro-g, 4.903325e-6 m/s/s per deg C is 0.5 micro-g per deg C (its
+/// interval [2.4516625e-6, 9.80665e-6] is [0.25, 1]). Gyro in
 /// deg: 0.001 deg/s is 3.6 deg/h; N = 0.01 deg/sqrt(s) is 0.6 deg/sqrt(h) (x 60).
 #[test]
 fn the_diagnose_table_gives_effect_parameters_in_datasheet_units() {
@@ -324,7 +325,8 @@ fn the_diagnose_table_gives_effect_parameters_in_datasheet_units() {
         "a1",
         "m/s",
         json!([{"kind": "gauss_markov", "params": {"sigma": 9.80665e-5, "tau_c": 20.0}, "gap_after": 2.0},
-               {"kind": "temperature", "params": {"coefficient": 4.903325e-6}, "gap_after": 1.0}]),
+               {"kind": "temperature", "params": {"coefficient": 4.903325e-6, "lo": 2.4516625e-6,
+                "hi": 9.80665e-6}, "gap_after": 1.0}]),
     );
     let g1 = rec(
         "g1",
@@ -340,7 +342,7 @@ fn the_diagnose_table_gives_effect_parameters_in_datasheet_units() {
         "{a}"
     );
     assert!(
-        a.contains("temperature sensitivity [coefficient 0.500 micro-g per deg C (4.90e-6 m/s/s per deg C)]"),
+        a.contains("temperature sensitivity [coefficient 0.500 [0.250, 1.00] micro-g per deg C (4.90e-6 [2.45e-6, 9.81e-6] m/s/s per deg C)]"),
         "{a}"
     );
     let g = row(&t, "g1 [deg]  diagnosis:");
