@@ -235,7 +235,7 @@ fn runs_table(h: &mut String, res: &Results) {
             .unwrap_or_default();
         let _ = writeln!(
             h,
-            "<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td>{}</td><td>{}</td><td class=\"l\">{}</td><td>{}</td><td class=\"l{}\">{}</td></tr>",
+            "<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td>{}</td><td>{}</td><td class=\"l\">{}</td><td>{}</td><td class=\"l{}\">{}{}</td></tr>",
             esc(&s.label),
             esc(v["input"].as_str().unwrap_or("")),
             num(&v["t_data"]),
@@ -243,7 +243,8 @@ fn runs_table(h: &mut String, res: &Results) {
             esc(&chans),
             v["bad_rows"].as_u64().unwrap_or(0),
             if c.is_warning() { " warn" } else { "" },
-            format!("{}{}", esc(&c.phrase()), time_column_note(&v["time_column"]))
+            esc(&c.phrase()),
+            time_column_note(&v["time_column"])
         );
     }
     h.push_str("</table>\n");
