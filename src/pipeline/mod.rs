@@ -28,6 +28,7 @@
 pub mod checkpointing;
 pub mod decode;
 pub mod reorder;
+pub mod units;
 pub mod writer;
 
 use std::io::BufRead;
@@ -53,16 +54,19 @@ use decode::DecodeStage;
 pub use writer::{Delivery, RecordQueue, RecordWriter, WriterStats, RECORD_QUEUE};
 
 /// Capacity of the channel from the decode (or text reader) thread to the analysis, in
-/// chunks. A replayed chunk is one 64 KiB read (about 1560 siu8 frames, 300 KB decoded), so
-/// reading runs ahead of the analysis by about a megabyte at most; live chunks are a few frames.
+/// chunks. A replayed chunk is one 256 KiB read (about 6240 siu8 frames, 700 KB decoded), so
+/// reading runs ahead of the analysis by a few megabytes at most; live chunks are a few frames.
 pub const CHUNK_QUEUE: usize = 4;
 
-/// Largest number of events in one chunk: bounds a chunk's memory when many small reads are
-/// gathered while the analysis is busy.
-const MAX_CHUNK_EVENTS: usize = 4096;
+/// A chunk this large goes to the analysis at once, even while more input waits: this bounds a
+/// chunk's memory when many small reads are gathered while the analysis is busy, and a
+/// replay's next read then goes into a fresh block (swapped in whole) instead of being copied
+/// behind these frames (profiled: that copy was 8% of a replay's decode thread).
+const SEND_CHUNK_EVENTS: usize = 1024;
 
-/// Events a new chunk has room for: a 64 KiB read of siu8 is 1560 frames; reserving room for
-/// them avoids regrowing the vector (profiled: 3% of the decode thread).
+/// Events a new chunk has room for at first (a 64 KiB read of siu8 is 1560 frames); blocks are
+/// recycled, so a replay's blocks grow to a whole read once and keep that room (profiled:
+/// regrowing was 3% of the decode thread).
 const CHUNK_EVENTS_RESERVE: usize = 1600;
 
 /// How a run is driven and stopped. The caller owns the process: it cancels `shutdown` (the
@@ -231,7 +235,7 @@ pub async fn run_frames_async(
                     _ => false,
                 };
                 if !events.is_empty()
-                    && (due || events.len() >= MAX_CHUNK_EVENTS || src_rx.is_empty())
+                    && (due || events.len() >= SEND_CHUNK_EVENTS || src_rx.is_empty())
                 {
                     let chunk = Chunk::Block(std::mem::replace(&mut events, fresh()));
                     if !chunk_tx.send(chunk) {
@@ -338,7 +342,7 @@ fn finish_frames(
     queue: &RecordQueue,
     ctl: &RunControl,
 ) -> Result<RunOutcome> {
-    let SourceFlags { live, udp, replay } = flags;
+    let replay = flags.replay;
     let FramesEnd {
         stage,
         offset,
@@ -354,33 +358,8 @@ fn finish_frames(
         final_checkpoint(plan, written, complete, position, &analysis);
     }
     let health = stage.health();
-    let mut record = health_record(&health, analysis.summary().run);
-    if let Some(r) = stage.reorder_stats().filter(|_| udp) {
-        record
-            .extra
-            .insert("udp_reordered".into(), r.reordered.into());
-        record
-            .extra
-            .insert("udp_duplicates".into(), r.duplicates.into());
-        record.extra.insert("udp_late".into(), r.late.into());
-    }
-    if live {
-        record
-            .extra
-            .insert("outages".into(), stage.outage.outages.into());
-        record
-            .extra
-            .insert("outage_missing".into(), stage.outage.missing.into());
-    }
-    if ctl.capture.is_some() {
-        let c = &ctl.progress.capture;
-        record
-            .extra
-            .insert("capture_bytes".into(), c.bytes().into());
-        if let Some(e) = c.error() {
-            record.extra.insert("capture_error".into(), e.into());
-        }
-    }
+    let capture = ctl.capture.is_some().then_some(&*ctl.progress.capture);
+    let record = stage_health_record(&stage, analysis.summary().run, flags, capture);
     if let Some(m) = &ctl.metrics {
         m.health(&health);
     }
@@ -708,7 +687,7 @@ fn join_analysis(handles: Vec<std::thread::JoinHandle<RunAnalysis>>) -> Result<R
 
 /// Runs a run's future on a current-thread tokio runtime built here, for callers outside any
 /// runtime; inside one it refuses (blocking there would stall the caller's runtime).
-fn block_on<F, T>(fut: F) -> Result<T>
+pub(crate) fn block_on<F, T>(fut: F) -> Result<T>
 where
     F: std::future::Future<Output = Result<T>>,
 {
@@ -755,6 +734,34 @@ fn finish_records(
         summary.capture_error = p.capture.error();
     }
     queue.push_final(Record::Summary(summary));
+}
+
+/// The `health` record of a decode stage at the end of a run: [`health_record`], the UDP
+/// reorder window's and the live outages' counters, and the capture's bytes and error.
+fn stage_health_record(
+    stage: &DecodeStage,
+    run: Option<usize>,
+    flags: SourceFlags,
+    capture: Option<&crate::source::CaptureStatus>,
+) -> HealthRecord {
+    let mut record = health_record(&stage.health(), run);
+    let extra = &mut record.extra;
+    if let Some(r) = stage.reorder_stats().filter(|_| flags.udp) {
+        extra.insert("udp_reordered".into(), r.reordered.into());
+        extra.insert("udp_duplicates".into(), r.duplicates.into());
+        extra.insert("udp_late".into(), r.late.into());
+    }
+    if flags.live {
+        extra.insert("outages".into(), stage.outage.outages.into());
+        extra.insert("outage_missing".into(), stage.outage.missing.into());
+    }
+    if let Some(c) = capture {
+        extra.insert("capture_bytes".into(), c.bytes().into());
+        if let Some(e) = c.error() {
+            extra.insert("capture_error".into(), e.into());
+        }
+    }
+    record
 }
 
 /// The `health` record: the docs/records.md fields, then the decoder's extra detail.
