@@ -155,12 +155,33 @@ pub struct SummaryRecord {
     /// (SIGINT) and for a live source, which has no end (`stopped_by` says what ended it).
     #[serde(default)]
     pub read_to_end: bool,
+    /// Text input with a time column: what it found (docs/records.md, `time_column`).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub time_column: Option<TimeColumnRecord>,
     /// What stopped the run before its input ended: `SIGINT`, `SIGTERM` or `--duration`.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub stopped_by: Option<String>,
     /// The `--capture` file's write error, when the capture stopped early (the analysis went on).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub capture_error: Option<String>,
+}
+
+/// The `summary`'s account of a text input's time column (src/input/time_column.rs): its name,
+/// whether it was used to find gaps (`false`: its first step was not tau0 in s, ms, us or ns,
+/// and it was only skipped), its unit, the jumps taken as gaps and the samples they stood for
+/// (rows absent from the file, read as gaps), and the steps that went backwards or repeated, were
+/// not a whole number of tau0, or were too large to fill (each row then read as the next sample).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TimeColumnRecord {
+    pub name: String,
+    pub used: bool,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub unit: Option<String>,
+    pub gaps: u64,
+    pub missing_samples: u64,
+    pub backwards: u64,
+    pub irregular: u64,
+    pub discontinuities: u64,
 }
 
 /// `aggregate`: run-to-run statistics of one coefficient of one channel (the seed paper's
@@ -184,6 +205,26 @@ pub struct AggregateRecord {
     pub ci_z: Option<[f64; 2]>,
 }
 
+/// `outage`: a unit of a run of several (`[[unit]]`) that went quiet, came back, or whose
+/// source failed, while the other units went on (docs/records.md, "Several units").
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct OutageRecord {
+    #[serde(rename = "type")]
+    pub kind: String,
+    /// `quiet` (no byte for `run.quiet_after` wall-seconds), `resumed` (bytes again) or
+    /// `failed` (the source stopped with an error; the unit's final records follow at the end).
+    pub event: String,
+    /// When, in seconds since the Unix epoch.
+    pub at_unix_s: f64,
+    /// Seconds of the unit's data analysed by then.
+    pub t_data: f64,
+    /// Wall-seconds since the unit's last byte (for `resumed`: the whole silence).
+    pub silent_s: f64,
+    /// The source's error, for `failed`.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub error: Option<String>,
+}
+
 /// Any record, written as its own JSON object.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(untagged)]
@@ -193,6 +234,7 @@ pub enum Record {
     Health(HealthRecord),
     Aggregate(AggregateRecord),
     Summary(SummaryRecord),
+    Outage(OutageRecord),
     /// `diagnosis`: the sim-to-real gap of one channel (`crate::gap::record`).
     Diagnosis(Box<crate::gap::DiagnosisRecord>),
     /// Records of other stages, already as JSON.

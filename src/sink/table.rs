@@ -319,6 +319,23 @@ fn run_heading(h: &mut String, res: &Results, k: RunKey, style: &TableStyle) {
         if let Some(n) = s["invalid_values"].as_u64().filter(|n| *n > 0) {
             notes.push(format!("{n} implausible values read as gaps"));
         }
+        let tc = &s["time_column"];
+        if let Some(name) = tc["name"].as_str() {
+            let n = |k: &str| tc[k].as_u64().unwrap_or(0);
+            if tc["used"].as_bool() == Some(false) {
+                notes.push(style.yellow(&format!(
+                    "time column `{name}` not used: its step is not tau0"
+                )));
+            } else if n("gaps") + n("backwards") + n("irregular") + n("discontinuities") > 0 {
+                notes.push(format!(
+                    "time column `{name}`: {} jumps = {} missing samples, {} backwards, {} off-step",
+                    n("gaps"),
+                    n("missing_samples"),
+                    n("backwards"),
+                    n("irregular") + n("discontinuities")
+                ));
+            }
+        }
         if let Some(e) = s["capture_error"].as_str() {
             notes.push(style.red(&format!("capture stopped: {e}")));
         }
@@ -936,6 +953,7 @@ impl<W: Write> TableWriter<W> {
                     w.get("type") == v.get("type")
                         && w.get("channel") == v.get("channel")
                         && w.get("run") == v.get("run")
+                        && w.get("unit") == v.get("unit")
                         && w.get("final").and_then(Value::as_bool) == Some(false)
                 };
                 self.pending.retain(|w| !same(w));
@@ -953,6 +971,10 @@ impl<W: Write> TableWriter<W> {
             return Ok(());
         }
         let records = std::mem::take(&mut self.pending);
+        // A run of several units prints each unit's table as its summary comes, under its name.
+        let unit = records
+            .iter()
+            .find_map(|r| crate::sink::unit_record::untag(&mut r.clone()));
         let res = Results::from_files(&[ResultFile {
             name: String::new(),
             records: records.clone(),
@@ -986,6 +1008,9 @@ impl<W: Write> TableWriter<W> {
         }
         if self.printed {
             self.out.write_all(b"\n")?;
+        }
+        if let Some(u) = unit {
+            writeln!(self.out, "unit {u}")?;
         }
         self.out.write_all(text.as_bytes())?;
         if !self.printed {

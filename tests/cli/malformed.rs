@@ -111,7 +111,8 @@ fn checkpoint_bytes() -> Vec<u8> {
 }
 
 fn scratch(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("allanscope-malformed-{}-{tag}", std::process::id()));
+    // Emptied at each call (a case writes exactly its own files).
+    let d = crate::common::fresh_dir(&format!("malformed-{tag}"));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).expect("scratch");
     d
@@ -181,7 +182,7 @@ fn cases() -> Vec<Case> {
         case("stand every tiny", vec![capture(), stand("[run]\nevery_s = 1e-300\n")], &["run", "--config", "stand.toml"], "allanscope: stand config: 1 problem\n  stand.toml:6: key `run.every_s`: 1e-300: must be a number of seconds from 0.001 to 1e9"),
         case("stand checkpoint negative", vec![capture(), stand("[run]\ncheckpoint_every = -1\n")], &["run", "--config", "stand.toml"], "allanscope: stand config: 1 problem\n  stand.toml:6: key `run.checkpoint_every`: -1: must be a number of seconds from 0.001 to 1e9"),
         case("stand two problems", vec![capture(), stand("[statistics]\nstats = [\"adev\"]\noverlap = 0\n")], &["run", "--config", "stand.toml"], "allanscope: stand config: 2 problems\n  stand.toml:6: key `statistics.stats`: unknown statistic \"adev\" (allowed: avar, hvar, mvar)\n  stand.toml:7: key `statistics.overlap`: 0: expected \"full\" or an integer L >= 1"),
-        case("stand no source", vec![text("stand.toml", "[run]\nevery_s = 10\n")], &["run", "--config", "stand.toml"], "allanscope: stand config: 1 problem\n  stand.toml: key `source`: missing: the [source] table"),
+        case("stand no source", vec![text("stand.toml", "[run]\nevery_s = 10\n")], &["run", "--config", "stand.toml"], "allanscope: stand config: 1 problem\n  stand.toml: key `source`: missing: the [source] table (or [[unit]] tables)"),
         case("stand syntax", vec![text("stand.toml", "[source]\nkind = \"file\"\npath = \n")], &["run", "--config", "stand.toml"], "allanscope: stand config: 1 problem\n  stand.toml:3: key `(syntax)`: not valid TOML: string values must be quoted, expected literal string"),
         case("stand limit key", vec![capture(), stand("[[limits]]\nchannel = \"g4\"\ncoef = \"N\"\nmax = 1\ncolour = 1\n")], &["run", "--config", "stand.toml"], "allanscope: stand config: 1 problem\n  stand.toml:9: key `limits[0].colour`: unknown key (allowed here: channel, coef, max, min, unit, over)"),
         case("stand limit no channel", vec![capture(), stand("[[limits]]\nchannel = \"g9\"\ncoef = \"N\"\nmax = 1\n")], &["run", "--config", "stand.toml"], "allanscope: stand config: 1 problem\n  stand.toml:6: key `limits[0].channel`: `g9` matches no channel of cap.siu8 (it has: g1, g2, g3, g4, a1, a2, a3, a4)"),
