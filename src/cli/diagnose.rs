@@ -289,8 +289,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
         });
         let mut rec = DiagnosisRecord::new(name, &diag, holdout.as_ref(), true);
         rec.unit = Some(main.units[i].clone());
-        sink.write(&rec)?;
-        if a.model_out.is_some() {
+        let twin = (a.model_out.is_some() || a.ensemble.is_some()).then(|| {
             let t_run = snap.n_increments as f64 * tau0;
             let mut facts = ChannelFacts {
                 name: name.clone(),
@@ -315,7 +314,20 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
                 facts.temperature_coefficient = c;
                 facts.bias -= c * (mean_t - p.reference_c);
             }
-            fitted.push(fitted_channel(&facts, &diag, tau0));
+            fitted_channel(&facts, &diag, tau0)
+        });
+        if let (Some(runs), Some(ch)) = (a.ensemble, twin.as_ref()) {
+            rec.ensemble = Some(ensemble_record(
+                ch,
+                &snap,
+                &rec.model_tau,
+                tau0,
+                runs as usize,
+            ));
+        }
+        sink.write(&rec)?;
+        if a.model_out.is_some() {
+            fitted.extend(twin);
         }
     }
     sink.flush()?;
@@ -336,6 +348,42 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
         write_new(p, &text)?;
     }
     Ok(())
+}
+
+/// `--ensemble N`: the measured ADEV at the record's taus against the bands of `runs` simulated
+/// runs of the fitted channel, base and twin (gap::ensemble), on the machine's threads.
+fn ensemble_record(
+    ch: &allanscope::sim::model_file::ChannelModel,
+    snap: &allanscope::gap::EvidenceSnapshot,
+    taus: &[f64],
+    tau0: f64,
+    runs: usize,
+) -> allanscope::gap::record::EnsembleRecord {
+    use allanscope::gap::ensemble::{band, base_of};
+    let ms: Vec<u64> = taus.iter().map(|t| (t / tau0).round() as u64).collect();
+    let measured: Vec<f64> = ms
+        .iter()
+        .map(|m| {
+            snap.curve
+                .iter()
+                .find(|p| p.m == *m)
+                .map_or(f64::NAN, |p| p.avar.max(0.0).sqrt())
+        })
+        .collect();
+    let n_inc = snap.n_increments as usize;
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let base = band(&base_of(ch), tau0, n_inc, &ms, runs, threads, 1);
+    let twin = band(ch, tau0, n_inc, &ms, runs, threads, 1);
+    allanscope::gap::record::EnsembleRecord {
+        runs,
+        outside_base: base.outside_share(&measured),
+        outside_twin: twin.outside_share(&measured),
+        measured,
+        base_lo: base.lo,
+        base_hi: base.hi,
+        twin_lo: twin.lo,
+        twin_hi: twin.hi,
+    }
 }
 
 /// `--model-out` never replaces a file: refused before any input is read (exit 2).

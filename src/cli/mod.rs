@@ -101,6 +101,11 @@ pub struct DiagnoseArgs {
     /// `simulate --model` reads. An existing file is never overwritten.
     #[arg(long, value_name = "FILE")]
     pub model_out: Option<PathBuf>,
+    /// Simulate the fitted unit N times (its five terms alone and with the effects, as long as
+    /// the input) and record the measured curve against the 2.5-97.5% band of each (the
+    /// record's `ensemble`).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(2..=10000))]
+    pub ensemble: Option<u32>,
     #[command(flatten)]
     pub data: DataArgs,
 }

@@ -23,6 +23,7 @@ pub mod alternatives;
 pub mod block_cov;
 pub mod diagnose;
 pub mod effects;
+pub mod ensemble;
 pub mod evidence;
 pub mod filter_scan;
 pub mod holdout;

@@ -128,6 +128,25 @@ pub struct DiagnosisRecord {
     /// units"): the curve was diagnosed from `tau_white` on.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub quantization_limited: Option<QuantizationRecord>,
+    /// With `diagnose --ensemble N` only.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub ensemble: Option<EnsembleRecord>,
+}
+
+/// The extra field `ensemble` (`diagnose --ensemble N`; docs/gap.md, "The ensemble band"): at
+/// the record's `model_tau`, the measured ADEV and the 2.5-97.5% band of `runs` simulated runs
+/// of the fitted unit, base (five terms) and twin (with the effects), and the share of those
+/// taus where the measured curve lies outside each band.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EnsembleRecord {
+    pub runs: usize,
+    pub measured: Vec<f64>,
+    pub base_lo: Vec<f64>,
+    pub base_hi: Vec<f64>,
+    pub twin_lo: Vec<f64>,
+    pub twin_hi: Vec<f64>,
+    pub outside_base: f64,
+    pub outside_twin: f64,
 }
 
 /// The extra field `quantization_limited`: the increments' LSB (u), the per-sample rms change
@@ -250,6 +269,7 @@ impl DiagnosisRecord {
                 ratio: q.ratio,
                 tau_white: q.tau_white_s,
             }),
+            ensemble: None,
         }
     }
 
