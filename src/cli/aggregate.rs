@@ -85,9 +85,10 @@ pub fn record(a: &CoefAggregate) -> AggregateRecord {
 /// One run's channels as read so far: (is the record final, its coefficients).
 type RunSoFar = (Option<u64>, Vec<(bool, RunCoefs)>);
 
-/// The runs in one file: per run index (absent: one run), each channel's final fit.
+/// The runs in one file: per run index (absent: one run), each channel's final fit. A file of
+/// a run of several units (`[[unit]]`) holds one run per unit: the unit-to-unit statistics.
 fn runs_of_file(path: &Path) -> Result<Vec<Vec<RunCoefs>>> {
-    let records = read_json_lines(path)?;
+    let (records, _) = allanscope::sink::results::units_as_runs(&read_json_lines(path)?);
     // (run index, channel) -> (is final, coefficients), the latest record winning among equals.
     let mut runs: Vec<RunSoFar> = Vec::new();
     for rec in &records {

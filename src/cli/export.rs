@@ -28,6 +28,10 @@ pub struct ExportArgs {
     /// Accelerometer channels (default: every channel in a velocity unit).
     #[arg(long, value_delimiter = ',')]
     pub accel: Option<Vec<String>>,
+    /// The unit to export from the results of a stand config with several units (`[[unit]]`
+    /// tables; records carrying `"unit": NAME`). Needed when the file holds more than one.
+    #[arg(long, value_name = "NAME")]
+    pub stand_unit: Option<String>,
     /// Replace an existing output file.
     #[arg(long)]
     pub force: bool,
@@ -82,7 +86,17 @@ pub fn run(a: &ExportArgs) -> Result<()> {
     let mut curves: Vec<CurveRecord> = Vec::new();
     let mut tau0: Option<f64> = None;
     let tag = a.input.display().to_string();
-    for v in read_json_lines(&a.input)? {
+    // A run of several units: one unit is exported (--stand-unit), by its name.
+    let mut units: Vec<String> = Vec::new();
+    for mut v in read_json_lines(&a.input)? {
+        if let Some(u) = allanscope::sink::unit_record::untag(&mut v) {
+            if !units.contains(&u) {
+                units.push(u.clone());
+            }
+            if a.stand_unit.as_deref().is_some_and(|w| w != u) {
+                continue;
+            }
+        }
         match v.get("type").and_then(|t| t.as_str()) {
             Some("fit") if v["final"] == true => {
                 let f: FitRecord =
@@ -100,6 +114,25 @@ pub fn run(a: &ExportArgs) -> Result<()> {
             Some("summary") => tau0 = v.get("tau0").and_then(|t| t.as_f64()).or(tau0),
             _ => {}
         }
+    }
+    match (&a.stand_unit, units.len()) {
+        (None, n) if n > 1 => {
+            return Err(usage(format!(
+                "{tag} holds {n} units ({}): choose one with --stand-unit NAME",
+                units.join(", ")
+            )))
+        }
+        (Some(w), _) if !units.contains(w) => {
+            return Err(usage(format!(
+                "--stand-unit {w}: {tag} has no unit of that name ({})",
+                if units.is_empty() {
+                    "it holds the records of one unnamed unit".to_string()
+                } else {
+                    format!("it has: {}", units.join(", "))
+                }
+            )))
+        }
+        _ => {}
     }
     let text = match format {
         ExportFormat::Csv | ExportFormat::Stable32 => {

@@ -564,21 +564,38 @@ fn settle(
         let mut trial = kept.clone();
         trial.push(*e);
         let trial_spec = spec_from(prob, &trial, &trial_offset);
-        let Some(fit) = prob.gls(&trial_spec) else {
-            continue;
-        };
-        if fit.gap().is_finite() && fit.gap() < cur.gap() {
-            spec = trial_spec;
-            kept.push(AddedEffect {
+        let fit = prob.gls(&trial_spec);
+        match fit {
+            Some(fit) if fit.gap().is_finite() && fit.gap() < cur.gap() => {
+                spec = trial_spec;
+                kept.push(AddedEffect {
+                    params: e.params,
+                    gap_after: fit.gap(),
+                    delta_chi2: cur.chi2 - fit.chi2,
+                });
+                offset = trial_offset;
+                cur = fit;
+            }
+            // Found in time, by its own calibrated test on the block means: kept on that
+            // evidence even where the curve does not show it (a short warm-up, a few jumps
+            // that the five terms absorb), with its curve offset left out, so the model and
+            // the gap stay those before it (docs/gap.md, "Bookkeeping").
+            _ if kept_in_time(e.params.kind()) => kept.push(AddedEffect {
                 params: e.params,
-                gap_after: fit.gap(),
-                delta_chi2: cur.chi2 - fit.chi2,
-            });
-            offset = trial_offset;
-            cur = fit;
+                gap_after: cur.gap(),
+                delta_chi2: 0.0,
+            }),
+            _ => {}
         }
     }
     (kept, cur, spec)
+}
+
+/// The effects found in time by a test of their own (the warm-up's `B`, the jump rule on the
+/// block means), which the bookkeeping keeps on that evidence when the curve does not show
+/// them; their false-alarm shares are calibrated as such (docs/gap.md, "Calibration").
+fn kept_in_time(kind: EffectKind) -> bool {
+    matches!(kind, EffectKind::Warmup | EffectKind::BiasJumps)
 }
 
 /// The stationary effects of `effects` still needed once `offset` (a warm-up's or jumps' exact

@@ -28,6 +28,7 @@
 pub mod checkpointing;
 pub mod decode;
 pub mod reorder;
+pub mod units;
 pub mod writer;
 
 use std::io::BufRead;
@@ -341,7 +342,7 @@ fn finish_frames(
     queue: &RecordQueue,
     ctl: &RunControl,
 ) -> Result<RunOutcome> {
-    let SourceFlags { live, udp, replay } = flags;
+    let replay = flags.replay;
     let FramesEnd {
         stage,
         offset,
@@ -357,33 +358,8 @@ fn finish_frames(
         final_checkpoint(plan, written, complete, position, &analysis);
     }
     let health = stage.health();
-    let mut record = health_record(&health, analysis.summary().run);
-    if let Some(r) = stage.reorder_stats().filter(|_| udp) {
-        record
-            .extra
-            .insert("udp_reordered".into(), r.reordered.into());
-        record
-            .extra
-            .insert("udp_duplicates".into(), r.duplicates.into());
-        record.extra.insert("udp_late".into(), r.late.into());
-    }
-    if live {
-        record
-            .extra
-            .insert("outages".into(), stage.outage.outages.into());
-        record
-            .extra
-            .insert("outage_missing".into(), stage.outage.missing.into());
-    }
-    if ctl.capture.is_some() {
-        let c = &ctl.progress.capture;
-        record
-            .extra
-            .insert("capture_bytes".into(), c.bytes().into());
-        if let Some(e) = c.error() {
-            record.extra.insert("capture_error".into(), e.into());
-        }
-    }
+    let capture = ctl.capture.is_some().then_some(&*ctl.progress.capture);
+    let record = stage_health_record(&stage, analysis.summary().run, flags, capture);
     if let Some(m) = &ctl.metrics {
         m.health(&health);
     }
@@ -710,7 +686,7 @@ fn join_analysis(handles: Vec<std::thread::JoinHandle<RunAnalysis>>) -> Result<R
 
 /// Runs a run's future on a current-thread tokio runtime built here, for callers outside any
 /// runtime; inside one it refuses (blocking there would stall the caller's runtime).
-fn block_on<F, T>(fut: F) -> Result<T>
+pub(crate) fn block_on<F, T>(fut: F) -> Result<T>
 where
     F: std::future::Future<Output = Result<T>>,
 {
@@ -757,6 +733,34 @@ fn finish_records(
         summary.capture_error = p.capture.error();
     }
     queue.push_final(Record::Summary(summary));
+}
+
+/// The `health` record of a decode stage at the end of a run: [`health_record`], the UDP
+/// reorder window's and the live outages' counters, and the capture's bytes and error.
+fn stage_health_record(
+    stage: &DecodeStage,
+    run: Option<usize>,
+    flags: SourceFlags,
+    capture: Option<&crate::source::CaptureStatus>,
+) -> HealthRecord {
+    let mut record = health_record(&stage.health(), run);
+    let extra = &mut record.extra;
+    if let Some(r) = stage.reorder_stats().filter(|_| flags.udp) {
+        extra.insert("udp_reordered".into(), r.reordered.into());
+        extra.insert("udp_duplicates".into(), r.duplicates.into());
+        extra.insert("udp_late".into(), r.late.into());
+    }
+    if flags.live {
+        extra.insert("outages".into(), stage.outage.outages.into());
+        extra.insert("outage_missing".into(), stage.outage.missing.into());
+    }
+    if let Some(c) = capture {
+        extra.insert("capture_bytes".into(), c.bytes().into());
+        if let Some(e) = c.error() {
+            extra.insert("capture_error".into(), e.into());
+        }
+    }
+    record
 }
 
 /// The `health` record: the docs/records.md fields, then the decoder's extra detail.

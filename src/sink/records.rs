@@ -184,6 +184,26 @@ pub struct AggregateRecord {
     pub ci_z: Option<[f64; 2]>,
 }
 
+/// `outage`: a unit of a run of several (`[[unit]]`) that went quiet, came back, or whose
+/// source failed, while the other units went on (docs/records.md, "Several units").
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct OutageRecord {
+    #[serde(rename = "type")]
+    pub kind: String,
+    /// `quiet` (no byte for `run.quiet_after` wall-seconds), `resumed` (bytes again) or
+    /// `failed` (the source stopped with an error; the unit's final records follow at the end).
+    pub event: String,
+    /// When, in seconds since the Unix epoch.
+    pub at_unix_s: f64,
+    /// Seconds of the unit's data analysed by then.
+    pub t_data: f64,
+    /// Wall-seconds since the unit's last byte (for `resumed`: the whole silence).
+    pub silent_s: f64,
+    /// The source's error, for `failed`.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub error: Option<String>,
+}
+
 /// Any record, written as its own JSON object.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(untagged)]
@@ -193,6 +213,7 @@ pub enum Record {
     Health(HealthRecord),
     Aggregate(AggregateRecord),
     Summary(SummaryRecord),
+    Outage(OutageRecord),
     /// `diagnosis`: the sim-to-real gap of one channel (`crate::gap::record`).
     Diagnosis(Box<crate::gap::DiagnosisRecord>),
     /// Records of other stages, already as JSON.
