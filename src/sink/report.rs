@@ -235,7 +235,7 @@ fn runs_table(h: &mut String, res: &Results) {
             .unwrap_or_default();
         let _ = writeln!(
             h,
-            "<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td>{}</td><td>{}</td><td class=\"l\">{}</td><td>{}</td><td class=\"l{}\">{}</td></tr>",
+            "<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td>{}</td><td>{}</td><td class=\"l\">{}</td><td>{}</td><td class=\"l{}\">{}{}</td></tr>",
             esc(&s.label),
             esc(v["input"].as_str().unwrap_or("")),
             num(&v["t_data"]),
@@ -243,10 +243,34 @@ fn runs_table(h: &mut String, res: &Results) {
             esc(&chans),
             v["bad_rows"].as_u64().unwrap_or(0),
             if c.is_warning() { " warn" } else { "" },
-            esc(&c.phrase())
+            esc(&c.phrase()),
+            time_column_note(&v["time_column"])
         );
     }
     h.push_str("</table>\n");
+}
+
+/// What a text input's time column found (summary `time_column`), under the run's "input read".
+fn time_column_note(tc: &Value) -> String {
+    let Some(name) = tc["name"].as_str().map(esc) else {
+        return String::new();
+    };
+    let n = |k: &str| tc[k].as_u64().unwrap_or(0);
+    let text = if tc["used"].as_bool() == Some(false) {
+        format!("time column `{name}` not used: its step is not &tau;0")
+    } else {
+        format!(
+            "time column `{name}`: {} jumps = {} missing samples (gaps), {} steps backwards, {} off-step",
+            n("gaps"),
+            n("missing_samples"),
+            n("backwards"),
+            n("irregular") + n("discontinuities")
+        )
+    };
+    format!(
+        "<br><span class=\"small\">{}</span>",
+        text.replace('`', "&quot;")
+    )
 }
 
 fn limits_table(h: &mut String, res: &Results) {

@@ -360,3 +360,32 @@ fn the_ieee_952_readouts_are_shown_with_units_intervals_and_taus() {
     let rrw = readout_cell(&html, "g4", "rrw");
     assert!(rrw["text"].contains("no +1/2 slope"), "{rrw:?}");
 }
+
+/// The runs table says what a time column found, and a file of `diagnose` records (no summary
+/// by design) is not called a run cut short.
+#[test]
+fn the_runs_table_shows_the_time_column_and_diagnose_output_is_not_called_cut_short() {
+    let mut files = one_run(json!([]), None);
+    let s = files[0].records.last_mut().unwrap();
+    s["time_column"] = json!({"name": "time", "used": true, "unit": "s", "gaps": 2,
+        "missing_samples": 10, "backwards": 1, "irregular": 0, "discontinuities": 0});
+    let html = render_html(&files, "t", "now");
+    let runs = &html[html.find("<h2>Runs</h2>").unwrap()..];
+    let runs = &runs[..runs.find("</table>").unwrap()];
+    assert!(
+        runs.contains("time column &quot;time&quot;: 2 jumps = 10 missing samples (gaps), 1 steps backwards, 0 off-step"),
+        "{runs}"
+    );
+    let diag = vec![ResultFile {
+        name: "g4_diagnosis.jsonl".into(),
+        records: vec![
+            json!({"type": "diagnosis", "channel": "g4", "unit": "arcsec",
+            "gap_before": 1.1, "gap_after": 1.1, "verdict": "consistent", "regions": [],
+            "effects": [], "final": true}),
+        ],
+    }];
+    let html = render_html(&diag, "t", "now");
+    assert!(!html.contains("cut short"), "{html}");
+    assert!(html.contains("Diagnosis records only"), "{html}");
+    assert!(html.contains("<table class=\"diagnosis\">"));
+}
