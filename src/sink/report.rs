@@ -541,6 +541,37 @@ fn noise_model(h: &mut String, res: &Results) {
         stat_row(h, "runs determined (n)", "n", &|a, _| {
             a["n"].as_u64().map_or("&ndash;".into(), |n| n.to_string())
         });
+        // The mean and its interval again in datasheet units, as a lead quotes them.
+        if let Some(iu) = crate::model::units::IncrementUnit::parse(&unit) {
+            let f = crate::model::units::datasheet_factors(&iu);
+            let du = crate::model::units::datasheet_units(iu.kind);
+            let _ = write!(
+                h,
+                "<tr class=\"stat\" data-row=\"datasheet\"><td class=\"l\">mean [95%] in datasheet units</td>"
+            );
+            for &i in &PAPER_ORDER {
+                let cell = agg_of(TERM_NAMES[i])
+                    .and_then(|a| {
+                        let m = a["mean"].as_f64()? * f[i];
+                        let ci = a["ci_z"].as_array().and_then(|p| {
+                            Some(format!(
+                                " [{}, {}]",
+                                tick(p.first()?.as_f64()? * f[i]),
+                                tick(p.get(1)?.as_f64()? * f[i])
+                            ))
+                        });
+                        Some(format!(
+                            "<span data-value=\"{m:e}\">{}</span>{}<br><span class=\"small\">{}</span>",
+                            tick(m),
+                            ci.unwrap_or_default(),
+                            esc(du[i])
+                        ))
+                    })
+                    .unwrap_or_else(|| "&ndash;".into());
+                let _ = write!(h, "<td>{cell}</td>");
+            }
+            h.push_str("</tr>\n");
+        }
         h.push_str("</table>\n");
     }
     readouts_table(h, &finals, true);

@@ -234,6 +234,20 @@ fn several_runs_give_table_2_with_the_aggregate_records_values() {
         "{row}"
     );
     assert!(row.contains(&format!("data-value=\"{:e}\"", ci[1])));
+    // The means again in datasheet units (arcsec: N/60 is deg/sqrt(h), B in arcsec/s is deg/h).
+    let ds = row_values(table, "data-row=\"datasheet\"");
+    let near = |a: Option<f64>, b: Option<f64>| (a.unwrap() / b.unwrap() - 1.0).abs() < 1e-12;
+    assert!(
+        near(ds[3], agg("N", "mean").map(|m| m / 60.0)),
+        "N in deg/sqrt(h): {ds:?}"
+    );
+    assert!(near(ds[2], agg("B", "mean")), "B in deg/h: {ds:?}");
+    let i = table.find("data-row=\"datasheet\"").unwrap();
+    let row = &table[i..i + table[i..].find("</tr>").unwrap()];
+    assert!(
+        row.contains("deg/sqrt(h)") && row.contains("deg/h"),
+        "{row}"
+    );
 }
 
 fn agg_pair(aggs: &[Value], k: &str, f: &str) -> [f64; 2] {
