@@ -10,10 +10,10 @@ use std::path::Path;
 
 use anyhow::Result;
 
-use super::{read_json_lines, usage, AggregateArgs};
+use super::{read_records, usage, AggregateArgs};
 use allanscope::model::aggregate::{aggregate_channels, CoefAggregate, RunCoefs};
 use allanscope::sink::json::JsonLines;
-use allanscope::sink::records::AggregateRecord;
+use allanscope::sink::records::{AggregateRecord, Record};
 
 pub fn run(a: &AggregateArgs) -> Result<()> {
     let mut runs: Vec<Vec<RunCoefs>> = Vec::new();
@@ -43,7 +43,7 @@ pub fn run(a: &AggregateArgs) -> Result<()> {
         None => JsonLines::new(super::terminal::stdout_records(a.json)),
     };
     for agg in aggregate_channels(&runs) {
-        sink.write(&record(&agg))?;
+        sink.write(&Record::from(record(&agg)))?;
     }
     sink.flush()?;
     Ok(())
@@ -53,7 +53,6 @@ pub fn run(a: &AggregateArgs) -> Result<()> {
 pub fn record(a: &CoefAggregate) -> AggregateRecord {
     let s = a.stats.as_ref();
     AggregateRecord {
-        kind: "aggregate".into(),
         channel: a.channel.clone(),
         unit: a.unit.clone(),
         coef: a.coef.into(),
@@ -66,19 +65,19 @@ pub fn record(a: &CoefAggregate) -> AggregateRecord {
 }
 
 /// One run's channels as read so far: (is the record final, its coefficients).
-type RunSoFar = (Option<u64>, Vec<(bool, RunCoefs)>);
+type RunSoFar = (Option<usize>, Vec<(bool, RunCoefs)>);
 
 /// The runs in one file: per run index (absent: one run), each channel's final fit.
 fn runs_of_file(path: &Path) -> Result<Vec<Vec<RunCoefs>>> {
-    let records = read_json_lines(path)?;
+    let records = read_records(path)?;
     // (run index, channel) -> (is final, coefficients), the latest record winning among equals.
     let mut runs: Vec<RunSoFar> = Vec::new();
     for rec in &records {
-        let Some(coefs) = RunCoefs::from_fit_record(rec) else {
+        let Record::Fit(fit) = rec else {
             continue;
         };
-        let run = rec.get("run").and_then(|r| r.as_u64());
-        let is_final = rec.get("final").and_then(|f| f.as_bool()).unwrap_or(false);
+        let coefs = fit.run_coefs();
+        let (run, is_final) = (fit.run, fit.r#final);
         let idx = match runs.iter().position(|(r, _)| *r == run) {
             Some(i) => i,
             None => {

@@ -159,7 +159,6 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue, ctl: &RunControl) -> Result
         let j = allanscope::model::limits::judge_runs(&base.limits, &aggregates);
         if !j.results.is_empty() {
             queue.push_final(Record::Summary(allanscope::sink::records::SummaryRecord {
-                kind: "summary".into(),
                 input: a.inputs.join(" "),
                 run: None,
                 channels: Vec::new(),

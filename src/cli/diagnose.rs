@@ -20,6 +20,7 @@ use allanscope::input::text::{TextReader, BATCH_ROWS};
 use allanscope::pipeline::decode::DecodeStage;
 use allanscope::plan::unit::{InputPlan, UnitPlan, UnitRequest};
 use allanscope::sim::model_write::model_toml;
+use allanscope::sink::records::Record;
 use allanscope::source::{Pace, SourceEvent, SourceSpec};
 
 /// One channel's evidence, gathered from a whole input.
@@ -288,7 +289,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
                 .ok()
         });
         let rec = DiagnosisRecord::new(name, &diag, holdout.as_ref(), true);
-        sink.write(&rec)?;
+        sink.write(&Record::from(rec))?;
         if a.model_out.is_some() {
             let t_run = snap.n_increments as f64 * tau0;
             let mut facts = ChannelFacts {

@@ -7,10 +7,10 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 
-use super::{read_json_lines, usage};
+use super::{read_records, usage};
 use allanscope::model::units::{IncrementUnit, SensorKind};
 use allanscope::sink::export::{self, ExportFormat, ImuNoise};
-use allanscope::sink::records::{CurveRecord, FitRecord};
+use allanscope::sink::records::{CurveRecord, FitRecord, Record};
 
 #[derive(Debug, Args)]
 pub struct ExportArgs {
@@ -82,22 +82,18 @@ pub fn run(a: &ExportArgs) -> Result<()> {
     let mut curves: Vec<CurveRecord> = Vec::new();
     let mut tau0: Option<f64> = None;
     let tag = a.input.display().to_string();
-    for v in read_json_lines(&a.input)? {
-        match v.get("type").and_then(|t| t.as_str()) {
-            Some("fit") if v["final"] == true => {
-                let f: FitRecord =
-                    serde_json::from_value(v).with_context(|| format!("{tag}: a fit record"))?;
+    for r in read_records(&a.input)? {
+        match r {
+            Record::Fit(f) if f.r#final => {
                 // A later final fit of the same channel and run replaces an earlier one.
                 fits.retain(|g| !(g.channel == f.channel && g.run == f.run));
                 fits.push(f);
             }
-            Some("curve") if v["final"] == true => {
-                let c: CurveRecord =
-                    serde_json::from_value(v).with_context(|| format!("{tag}: a curve record"))?;
+            Record::Curve(c) if c.r#final => {
                 curves.retain(|g| !(g.channel == c.channel && g.run == c.run && g.stat == c.stat));
                 curves.push(c);
             }
-            Some("summary") => tau0 = v.get("tau0").and_then(|t| t.as_f64()).or(tau0),
+            Record::Summary(s) => tau0 = Some(s.tau0),
             _ => {}
         }
     }

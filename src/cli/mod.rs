@@ -32,6 +32,7 @@ use allanscope::model::fit::FitMethod;
 use allanscope::plan::checkpoint_setup::CheckpointRequest;
 use allanscope::plan::settings::DataSettings;
 use allanscope::plan::unit::UnitRequest;
+use allanscope::sink::records::Record;
 
 #[derive(Debug, Parser)]
 #[command(
@@ -527,8 +528,41 @@ pub(crate) fn open_input(input: &str) -> Result<Box<dyn Read + Send>> {
     }
 }
 
-/// Reads a whole text file of JSON lines into values (for `aggregate`, `plot`, tests).
+/// Reads a whole file of records (for `aggregate` and `export`): a line that is not JSON, or a
+/// record of a known `type` that does not parse as one, is an error naming the file and line; a
+/// record of a type this version does not know (a newer version's) is skipped.
+pub fn read_records(path: &Path) -> Result<Vec<Record>> {
+    let mut out = Vec::new();
+    for (line, v) in numbered_json_lines(path)? {
+        let ty = v.get("type").and_then(|t| t.as_str()).map(String::from);
+        match Record::from_value(v) {
+            Ok(Some(r)) => out.push(r),
+            Ok(None) => {}
+            Err(e) => {
+                return Err(anyhow::Error::new(UsageError::Input {
+                    file: path.into(),
+                    line,
+                    problem: match ty {
+                        Some(t) => format!("not a well-formed `{t}` record: {e}"),
+                        None => format!("not a record (no `type`): {e}"),
+                    },
+                }))
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Reads a whole text file of JSON lines into values (for `plot`, `report`, tests).
 pub fn read_json_lines(path: &Path) -> Result<Vec<serde_json::Value>> {
+    Ok(numbered_json_lines(path)?
+        .into_iter()
+        .map(|(_, v)| v)
+        .collect())
+}
+
+/// The JSON lines of a file with their line numbers (1-based), blank lines skipped.
+fn numbered_json_lines(path: &Path) -> Result<Vec<(u64, serde_json::Value)>> {
     if path.is_dir() {
         return Err(usage(format!(
             "{}: is a directory, not a file of JSON lines",
@@ -549,13 +583,14 @@ pub fn read_json_lines(path: &Path) -> Result<Vec<serde_json::Value>> {
         if line.trim().is_empty() {
             continue;
         }
-        out.push(serde_json::from_str(&line).map_err(|e| {
+        let v = serde_json::from_str(&line).map_err(|e| {
             anyhow::Error::new(UsageError::Input {
                 file: path.into(),
                 line: i as u64 + 1,
                 problem: format!("not a JSON record: {e}"),
             })
-        })?);
+        })?;
+        out.push((i as u64 + 1, v));
     }
     Ok(out)
 }

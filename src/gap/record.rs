@@ -64,8 +64,6 @@ pub struct SegmentRecord {
 /// The `diagnosis` JSON line.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DiagnosisRecord {
-    #[serde(rename = "type")]
-    pub kind: String,
     pub channel: String,
     pub gap_before: f64,
     pub gap_after: f64,
@@ -146,7 +144,6 @@ impl DiagnosisRecord {
     /// The record of a diagnosis; `holdout` from [`super::holdout::holdout_gap`].
     pub fn new(channel: &str, d: &Diagnosis, holdout: Option<&HoldoutGap>, is_final: bool) -> Self {
         Self {
-            kind: "diagnosis".into(),
             channel: channel.into(),
             gap_before: d.gap_before,
             gap_after: d.gap_after,
@@ -231,15 +228,5 @@ impl DiagnosisRecord {
                 tau_white: q.tau_white_s,
             }),
         }
-    }
-
-    /// The JSON line (no trailing newline).
-    pub fn to_json_line(&self) -> String {
-        serde_json::to_string(self).unwrap_or_else(|e| {
-            format!(
-                "{{\"type\":\"diagnosis\",\"channel\":\"{}\",\"error\":\"{e}\"}}",
-                self.channel
-            )
-        })
     }
 }

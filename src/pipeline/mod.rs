@@ -354,32 +354,20 @@ fn finish_frames(
         final_checkpoint(plan, written, complete, position, &analysis);
     }
     let health = stage.health();
-    let mut record = health_record(&health, analysis.summary().run);
+    let mut record = HealthRecord::new(&health, analysis.summary().run);
     if let Some(r) = stage.reorder_stats().filter(|_| udp) {
-        record
-            .extra
-            .insert("udp_reordered".into(), r.reordered.into());
-        record
-            .extra
-            .insert("udp_duplicates".into(), r.duplicates.into());
-        record.extra.insert("udp_late".into(), r.late.into());
+        record.udp_reordered = Some(r.reordered);
+        record.udp_duplicates = Some(r.duplicates);
+        record.udp_late = Some(r.late);
     }
     if live {
-        record
-            .extra
-            .insert("outages".into(), stage.outage.outages.into());
-        record
-            .extra
-            .insert("outage_missing".into(), stage.outage.missing.into());
+        record.outages = Some(stage.outage.outages);
+        record.outage_missing = Some(stage.outage.missing);
     }
     if ctl.capture.is_some() {
         let c = &ctl.progress.capture;
-        record
-            .extra
-            .insert("capture_bytes".into(), c.bytes().into());
-        if let Some(e) = c.error() {
-            record.extra.insert("capture_error".into(), e.into());
-        }
+        record.capture_bytes = Some(c.bytes());
+        record.capture_error = c.error();
     }
     if let Some(m) = &ctl.metrics {
         m.health(&health);
@@ -754,30 +742,4 @@ fn finish_records(
         summary.capture_error = p.capture.error();
     }
     queue.push_final(Record::Summary(summary));
-}
-
-/// The `health` record: the docs/records.md fields, then the decoder's extra detail.
-pub fn health_record(h: &Health, run: Option<usize>) -> HealthRecord {
-    let mut rec = HealthRecord {
-        kind: "health".into(),
-        frames: h.frames,
-        crc_errors: h.crc_errors,
-        resyncs: h.resyncs,
-        missing: h.missing,
-        duplicates: h.duplicates,
-        bytes_skipped: h.bytes_skipped,
-        extra: serde_json::Map::new(),
-        run,
-    };
-    if let Ok(serde_json::Value::Object(all)) = serde_json::to_value(h) {
-        for (k, v) in all {
-            if !matches!(
-                k.as_str(),
-                "frames" | "crc_errors" | "resyncs" | "missing" | "duplicates" | "bytes_skipped"
-            ) {
-                rec.extra.insert(k, v);
-            }
-        }
-    }
-    rec
 }
