@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 use allanscope::allan::accum::AccumConfig;
 use allanscope::analysis::{AnalysisOptions, ChannelSetup, InputKind, RunAnalysis};
-use allanscope::checkpoint::{Checkpoint, Position, FORMAT_VERSION};
+use allanscope::pipeline::checkpoint::{Checkpoint, Position, FORMAT_VERSION};
 use allanscope::frame::descriptor::BUILTIN;
 use allanscope::frame::{Decoder, FrameDescriptor, FrameEvent};
 use allanscope::input::text::{TextOptions, TextReader};

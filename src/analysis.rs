@@ -139,7 +139,7 @@ pub struct ChannelSnapshot {
     pub last_phase: Option<f64>,
 }
 
-/// A run's saved state (a checkpoint, `crate::checkpoint`): everything the final records
+/// A run's saved state (a checkpoint, `crate::pipeline::checkpoint`): everything the final records
 /// depend on. The fits are not saved: the final fit starts from a fresh covariance cache
 /// anyway (see [`RunAnalysis::records`]), and interim fits are recomputed from the curves.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
@@ -534,7 +534,7 @@ impl RunAnalysis {
                     .map(|c| Box::new(ReadoutsRecord::new(&readouts(&c.points), &ch.setup.unit)));
                 let mut rec = fit_record(&ch.setup, &f, final_, ch.acc.t_data_s(), run);
                 rec.readouts = readouts;
-                out.push(Record::Fit(rec));
+                out.push(Record::from(rec));
                 ch.last_fit = Some(f);
             }
             if let Some(g) = &mut ch.gap {

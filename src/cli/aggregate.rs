@@ -69,7 +69,7 @@ type RunSoFar = (Option<usize>, Vec<(bool, RunCoefs)>);
 
 /// The runs in one file: per run index (absent: one run), each channel's final fit.
 fn runs_of_file(path: &Path) -> Result<Vec<Vec<RunCoefs>>> {
-    let records = read_records(path)?;
+    let records = read_records(path, &["fit"])?;
     // (run index, channel) -> (is final, coefficients), the latest record winning among equals.
     let mut runs: Vec<RunSoFar> = Vec::new();
     for rec in &records {

@@ -16,10 +16,10 @@ use super::{
     usage, AnalyzeArgs, DataArgs,
 };
 use allanscope::analysis::{AnalysisOptions, ChannelSetup};
-use allanscope::checkpoint::Position;
 use allanscope::frame::FrameDescriptor;
 use allanscope::input::text::TextReader;
 use allanscope::model::aggregate::{aggregate_channels, RunCoefs};
+use allanscope::pipeline::checkpoint::Position;
 use allanscope::pipeline::{RecordQueue, RecordWriter, RunControl, RunOutcome};
 use allanscope::plan::unit::{InputPlan, UnitPlan};
 use allanscope::sink::output::OutputMode;

@@ -82,12 +82,12 @@ pub fn run(a: &ExportArgs) -> Result<()> {
     let mut curves: Vec<CurveRecord> = Vec::new();
     let mut tau0: Option<f64> = None;
     let tag = a.input.display().to_string();
-    for r in read_records(&a.input)? {
+    for r in read_records(&a.input, &["fit", "curve", "summary"])? {
         match r {
             Record::Fit(f) if f.r#final => {
                 // A later final fit of the same channel and run replaces an earlier one.
                 fits.retain(|g| !(g.channel == f.channel && g.run == f.run));
-                fits.push(f);
+                fits.push(*f);
             }
             Record::Curve(c) if c.r#final => {
                 curves.retain(|g| !(g.channel == c.channel && g.run == c.run && g.stat == c.stat));

@@ -528,13 +528,17 @@ pub(crate) fn open_input(input: &str) -> Result<Box<dyn Read + Send>> {
     }
 }
 
-/// Reads a whole file of records (for `aggregate` and `export`): a line that is not JSON, or a
-/// record of a known `type` that does not parse as one, is an error naming the file and line; a
-/// record of a type this version does not know (a newer version's) is skipped.
-pub fn read_records(path: &Path) -> Result<Vec<Record>> {
+/// Reads the records of the types `wanted` from a whole file (for `aggregate` and `export`): a
+/// line that is not JSON, or a record of a wanted `type` that does not parse as one, is an error
+/// naming the file and line; records of other types, known or not (a newer version's), are
+/// skipped unread.
+pub fn read_records(path: &Path, wanted: &[&str]) -> Result<Vec<Record>> {
     let mut out = Vec::new();
     for (line, v) in numbered_json_lines(path)? {
         let ty = v.get("type").and_then(|t| t.as_str()).map(String::from);
+        if !ty.as_deref().is_some_and(|t| wanted.contains(&t)) {
+            continue;
+        }
         match Record::from_value(v) {
             Ok(Some(r)) => out.push(r),
             Ok(None) => {}
@@ -542,10 +546,7 @@ pub fn read_records(path: &Path) -> Result<Vec<Record>> {
                 return Err(anyhow::Error::new(UsageError::Input {
                     file: path.into(),
                     line,
-                    problem: match ty {
-                        Some(t) => format!("not a well-formed `{t}` record: {e}"),
-                        None => format!("not a record (no `type`): {e}"),
-                    },
+                    problem: format!("not a well-formed `{}` record: {e}", ty.unwrap_or_default()),
                 }))
             }
         }

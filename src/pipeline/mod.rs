@@ -25,6 +25,7 @@
 //! Text columns (`--format csv`) enter the same analysis and writer stages from a reader
 //! thread instead of the source task and decode thread.
 
+pub mod checkpoint;
 pub mod checkpointing;
 pub mod decode;
 pub mod reorder;
@@ -40,7 +41,6 @@ use anyhow::{Context, Result};
 use tokio_util::sync::CancellationToken;
 
 use crate::analysis::RunAnalysis;
-use crate::checkpoint::{Checkpoint, CheckpointPlan, Position};
 use crate::error::UsageError;
 use crate::frame::{FrameBlock, FrameDescriptor, Health};
 use crate::input::text::{TextReader, BATCH_ROWS};
@@ -48,6 +48,7 @@ use crate::input::Chunk;
 use crate::sink::metrics::MetricsTap;
 use crate::sink::records::{HealthRecord, Record};
 use crate::source::{Capture, CaptureSlot, Progress, SourceContext, SourceEvent, SourceSpec};
+use checkpoint::{Checkpoint, CheckpointPlan, Position};
 use checkpointing::{Collector, Piece, Schedule};
 use decode::DecodeStage;
 pub use writer::{Delivery, RecordQueue, RecordWriter, WriterStats, RECORD_QUEUE};
@@ -660,7 +661,7 @@ fn final_checkpoint(
         every_s: plan.every_s,
         sequence: plan.resume.as_ref().map_or(0, |r| r.1).max(written) + 1,
         complete,
-        saved_unix_s: crate::checkpoint::unix_now_s(),
+        saved_unix_s: checkpoint::unix_now_s(),
         position,
         analysis: analysis.snapshot(),
     };

@@ -480,7 +480,7 @@ impl ReadoutsRecord {
 #[serde(tag = "type", rename_all = "lowercase")]
 pub enum Record {
     Curve(CurveRecord),
-    Fit(FitRecord),
+    Fit(Box<FitRecord>),
     Health(HealthRecord),
     Aggregate(AggregateRecord),
     Summary(SummaryRecord),
@@ -611,7 +611,7 @@ mod tests {
         assert_eq!(ds.get("B"), Some(&ds.B));
         assert_eq!(f.coef.get("K"), Some(&f.coef.K));
         assert_eq!(f.coef.get("X"), None);
-        assert_eq!(back, Record::Fit(fit()));
+        assert_eq!(back, Record::from(fit()));
         assert_eq!(
             f.run_coefs().values,
             [None, Some(0.25), Some(0.125), None, None]
@@ -672,7 +672,7 @@ mod tests {
         // Extra fields (a newer version's additions to a known record) are ignored.
         let mut v = serde_json::to_value(Record::from(fit())).unwrap();
         v["added_later"] = serde_json::json!([1, 2]);
-        assert_eq!(Record::from_value(v).unwrap(), Some(Record::Fit(fit())));
+        assert_eq!(Record::from_value(v).unwrap(), Some(Record::from(fit())));
     }
 
     #[test]

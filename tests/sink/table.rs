@@ -292,10 +292,10 @@ fn the_metrics_tap_keeps_the_newest_n_and_lost_frames_for_the_status_line() {
     use allanscope::sink::records::Record;
     let m = std::sync::Arc::new(Metrics::new());
     let tap = m.tap("dut", &[]);
-    tap.observe(&Record::Fit(gyro()));
+    tap.observe(&Record::from(gyro()));
     // Not determined in a later fit: no longer shown.
     let mut acc = accel();
-    tap.observe(&Record::Fit(acc.clone()));
+    tap.observe(&Record::from(acc.clone()));
     let latest = m.latest();
     // N = 0.25 arcsec/sqrt(s) = 0.25/60 deg/sqrt(h); 0.01 m/s/sqrt(s) = 0.6 m/s/sqrt(h).
     assert_eq!(latest.n.len(), 2);
@@ -304,7 +304,7 @@ fn the_metrics_tap_keeps_the_newest_n_and_lost_frames_for_the_status_line() {
     assert_eq!(latest.n[0].2, "deg/sqrt(h)");
     assert!((latest.n[1].1 - 0.6).abs() < 1e-12);
     acc.coef.N.determined = false;
-    tap.observe(&Record::Fit(acc));
+    tap.observe(&Record::from(acc));
     assert_eq!(m.latest().n.len(), 1);
     let h = allanscope::frame::Health {
         missing: 3,
