@@ -544,6 +544,7 @@ impl RunAnalysis {
                     Ok(d) => {
                         let mut rec = DiagnosisRecord::new(&ch.setup.name, &d, None, final_);
                         rec.run = run;
+                        rec.unit = Some(ch.setup.unit.clone());
                         out.push(Record::Diagnosis(Box::new(rec)));
                     }
                     Err(e) => tracing::debug!("{}: {e}", ch.setup.name),

@@ -10,10 +10,11 @@ use std::path::Path;
 
 use anyhow::Result;
 
-use super::{read_records, usage, AggregateArgs};
+use super::{read_json_lines, read_records, usage, AggregateArgs};
 use allanscope::model::aggregate::{aggregate_channels, CoefAggregate, RunCoefs};
 use allanscope::sink::json::JsonLines;
 use allanscope::sink::records::{AggregateRecord, Record};
+use allanscope::sink::results::ResultFile;
 
 pub fn run(a: &AggregateArgs) -> Result<()> {
     let mut runs: Vec<Vec<RunCoefs>> = Vec::new();
@@ -40,7 +41,23 @@ pub fn run(a: &AggregateArgs) -> Result<()> {
                 .map_err(|e| anyhow::anyhow!("cannot create output {}: {e}", p.display()))?;
             JsonLines::new(Box::new(std::io::BufWriter::new(f)))
         }
-        None => JsonLines::new(super::terminal::stdout_records(a.json)),
+        // On a terminal the table shows each run's fit as a row above the statistics.
+        None => JsonLines::new(super::terminal::stdout_records_with_runs(a.json, || {
+            a.inputs
+                .iter()
+                .filter_map(|p| {
+                    Some(ResultFile {
+                        name: p.file_name()?.to_string_lossy().into_owned(),
+                        // Only what the rows need: fits, and summaries that name the inputs.
+                        records: read_json_lines(p)
+                            .ok()?
+                            .into_iter()
+                            .filter(|v| matches!(v["type"].as_str(), Some("fit" | "summary")))
+                            .collect(),
+                    })
+                })
+                .collect()
+        })),
     };
     for agg in aggregate_channels(&runs) {
         sink.write(&Record::from(record(&agg)))?;

@@ -288,7 +288,8 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
                 .map_err(|e| tracing::warn!("{}: holdout channel {name}: {e}", a.input))
                 .ok()
         });
-        let rec = DiagnosisRecord::new(name, &diag, holdout.as_ref(), true);
+        let mut rec = DiagnosisRecord::new(name, &diag, holdout.as_ref(), true);
+        rec.unit = Some(main.units[i].clone());
         sink.write(&Record::from(rec))?;
         if a.model_out.is_some() {
             let t_run = snap.n_increments as f64 * tau0;

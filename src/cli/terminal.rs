@@ -4,6 +4,7 @@
 
 use std::io::{IsTerminal, Write};
 
+use allanscope::sink::results::ResultFile;
 use allanscope::sink::table::{TableStyle, TableWriter};
 
 /// Whether standard output gets the table: a terminal, and no `--json`.
@@ -23,6 +24,15 @@ fn style() -> TableStyle {
 /// Standard output for a command's records: the table on a terminal (module doc), else JSON
 /// lines through a buffer.
 pub(crate) fn stdout_records(json: bool) -> Box<dyn Write + Send> {
+    stdout_records_with_runs(json, Vec::new)
+}
+
+/// As [`stdout_records`], the table's run-to-run rows taken from `runs()` (read only when a
+/// table is printed): the `aggregate` command's input files.
+pub(crate) fn stdout_records_with_runs(
+    json: bool,
+    runs: impl FnOnce() -> Vec<ResultFile>,
+) -> Box<dyn Write + Send> {
     if table_on_stdout(json) {
         Box::new(
             TableWriter::new(
@@ -30,7 +40,8 @@ pub(crate) fn stdout_records(json: bool) -> Box<dyn Write + Send> {
                 style(),
                 Some("(a table because standard output is a terminal: --json, --out FILE or a pipe give the JSON lines)".into()),
             )
-            .before_print(Box::new(super::status::suspend)),
+            .before_print(Box::new(super::status::suspend))
+            .with_runs(runs()),
         )
     } else {
         Box::new(std::io::BufWriter::new(std::io::stdout()))

@@ -2,19 +2,25 @@
 //! allocation per frame.
 //!
 //! A [`FrameBlock`] holds the events of a stretch of stream in order ([`BlockEvent`]: a frame's
-//! counter, temperature and status, or a gap) and the channel values of its frames in one
-//! frame-major vector, `width` values per frame. The decoder appends to one block that lives as
-//! long as it does; the pipeline hands whole blocks to the analysis and gets them back to reuse,
-//! so a replay allocates per chunk of 64 KiB, not per frame (profiled: a `Vec` per decoded
-//! frame and its `free` on the analysis thread were a third of a replay's instructions,
-//! BENCHMARKS.md "Decoding at the speed of the statistics").
+//! counter, temperature and status, or a gap) and the channel values of its frames **column by
+//! column**: one vector per channel, one entry per frame. A column holds one kind of value
+//! ([`ColumnKind`]: exact counts, or real increments as their f64 bit patterns), so a run of a
+//! channel's counts is a plain `&[i64]` the accumulators take as it is. A value that is missing,
+//! or of the other kind (a real value handed to a counts column), is a [`Hole`]: the column
+//! keeps a placeholder and the block lists the hole, in frame order. Clean data has none.
+//!
+//! The decoder appends to one block that lives as long as it does; the pipeline hands whole
+//! blocks to the analysis and gets them back to reuse, so a replay allocates per chunk of
+//! 64 KiB, not per frame (profiled: a `Vec` per decoded frame and its `free` on the analysis
+//! thread were a third of a replay's instructions; frame-major `Option` values cost the
+//! analysis a tag test per value; BENCHMARKS.md "Decoding at the speed of the statistics").
 //!
 //! [`FrameEvent`] and [`DecodedFrame`] remain the one-frame-at-a-time view of the same data
 //! ([`FrameBlock::events`], [`crate::frame::Decoder::next_event`]).
 
 use super::{ChannelValue, DecodedFrame, FrameEvent};
 
-/// One event of a block. A `Frame`'s channel values are the block's next `width` values.
+/// One event of a block. A `Frame`'s values are the next entry of every column.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum BlockEvent {
     /// A good frame (see [`DecodedFrame`] for the fields).
@@ -27,13 +33,45 @@ pub enum BlockEvent {
     Gap { missing: u64 },
 }
 
+/// What a column's entries are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ColumnKind {
+    /// [`ChannelValue::Count`]s, as they are.
+    #[default]
+    Count,
+    /// [`ChannelValue::Real`]s, as `f64::to_bits` (reinterpreted as `i64`).
+    Real,
+}
+
+/// A value a column cannot hold as it is: missing, or of the other [`ColumnKind`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hole {
+    /// Index of the frame in the block (0 = the block's first frame).
+    pub frame: usize,
+    pub channel: usize,
+    pub value: Option<ChannelValue>,
+}
+
+/// A gap's place among the frames: before the block's `frame`-th frame, as its `event`-th event.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct GapAt {
+    pub event: usize,
+    pub frame: usize,
+    pub missing: u64,
+}
+
 /// Decoded frames and the gaps between them, flat (see the module documentation).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct FrameBlock {
-    width: usize,
     events: Vec<BlockEvent>,
-    /// Frame-major: the values of the `i`-th frame are `values[i * width..(i + 1) * width]`.
-    values: Vec<Option<ChannelValue>>,
+    /// One per channel; `columns[c][i]` is channel `c` of the `i`-th frame.
+    columns: Vec<Vec<i64>>,
+    kinds: Vec<ColumnKind>,
+    /// In frame order, then channel order.
+    holes: Vec<Hole>,
+    /// The gaps, in event order.
+    gaps: Vec<GapAt>,
+    frames: usize,
 }
 
 /// Where decoded frames go: a [`FrameBlock`], or (tests, one-frame-at-a-time callers) a
@@ -44,10 +82,16 @@ pub trait FrameSink {
     fn push_frame(&mut self, frame: BlockEvent, values: &[Option<ChannelValue>]);
     /// Every event of `block`, in order; `block` is left empty.
     fn take_all(&mut self, block: &mut FrameBlock) {
-        for (e, v) in block.iter() {
-            match e {
+        let mut values = Vec::with_capacity(block.width());
+        let mut frame = 0;
+        for e in &block.events {
+            match *e {
                 BlockEvent::Gap { missing } => self.push_gap(missing),
-                frame => self.push_frame(frame, v),
+                ev => {
+                    block.frame_values(frame, &mut values);
+                    self.push_frame(ev, &values);
+                    frame += 1;
+                }
             }
         }
         block.clear();
@@ -55,29 +99,59 @@ pub trait FrameSink {
 }
 
 impl FrameBlock {
-    /// An empty block for frames of `width` channels, with room for `frames` frames.
+    /// An empty block for frames of `width` count channels, with room for `frames` frames.
     pub fn with_capacity(width: usize, frames: usize) -> FrameBlock {
+        Self::with_kinds(&vec![ColumnKind::Count; width], frames)
+    }
+
+    /// An empty block whose columns hold `kinds`, with room for `frames` frames.
+    pub fn with_kinds(kinds: &[ColumnKind], frames: usize) -> FrameBlock {
         FrameBlock {
-            width,
             events: Vec::with_capacity(frames),
-            values: Vec::with_capacity(frames * width),
+            columns: kinds.iter().map(|_| Vec::with_capacity(frames)).collect(),
+            kinds: kinds.to_vec(),
+            holes: Vec::new(),
+            gaps: Vec::new(),
+            frames: 0,
         }
     }
 
     /// Channels per frame.
     pub fn width(&self) -> usize {
-        self.width
+        self.columns.len()
     }
 
-    /// Sets the width of an empty block (a recycled block given to another format).
+    /// The kind of every column.
+    pub fn kinds(&self) -> &[ColumnKind] {
+        &self.kinds
+    }
+
+    /// Empties the block and gives its columns `kinds` (and so its width).
+    pub fn reset_kinds(&mut self, kinds: &[ColumnKind]) {
+        self.clear();
+        self.columns.resize_with(kinds.len(), Vec::new);
+        self.kinds.clear();
+        self.kinds.extend_from_slice(kinds);
+    }
+
+    /// Sets the width of an empty block (a recycled block given to another format); the
+    /// columns keep their kinds when the width is unchanged, and hold counts otherwise.
     pub fn reset(&mut self, width: usize) {
         self.clear();
-        self.width = width;
+        if width != self.width() {
+            self.columns.resize_with(width, Vec::new);
+            self.kinds = vec![ColumnKind::Count; width];
+        }
     }
 
     pub fn clear(&mut self) {
         self.events.clear();
-        self.values.clear();
+        for c in &mut self.columns {
+            c.clear();
+        }
+        self.holes.clear();
+        self.gaps.clear();
+        self.frames = 0;
     }
 
     /// Events (frames and gaps) held.
@@ -91,7 +165,7 @@ impl FrameBlock {
 
     /// Frames held.
     pub fn frames(&self) -> usize {
-        self.values.len().checked_div(self.width).unwrap_or(0)
+        self.frames
     }
 
     /// The events in order.
@@ -99,9 +173,41 @@ impl FrameBlock {
         &self.events
     }
 
-    /// All values, frame-major.
-    pub fn values(&self) -> &[Option<ChannelValue>] {
-        &self.values
+    /// Channel `channel` of every frame, as its column's kind says (holes hold 0).
+    pub fn column(&self, channel: usize) -> &[i64] {
+        &self.columns[channel]
+    }
+
+    /// The values the columns cannot hold, in frame order.
+    pub fn holes(&self) -> &[Hole] {
+        &self.holes
+    }
+
+    /// The gaps and where they fall, in order.
+    pub fn gaps(&self) -> &[GapAt] {
+        &self.gaps
+    }
+
+    /// Channel `channel` of frame `frame`.
+    pub fn value(&self, frame: usize, channel: usize) -> Option<ChannelValue> {
+        let key = (frame, channel);
+        if let Ok(i) = self
+            .holes
+            .binary_search_by(|h| (h.frame, h.channel).cmp(&key))
+        {
+            return self.holes[i].value;
+        }
+        let raw = self.columns[channel][frame];
+        Some(match self.kinds[channel] {
+            ColumnKind::Count => ChannelValue::Count(raw),
+            ColumnKind::Real => ChannelValue::Real(f64::from_bits(raw as u64)),
+        })
+    }
+
+    /// The values of frame `frame` into `out` (cleared first), in channel order.
+    pub fn frame_values(&self, frame: usize, out: &mut Vec<Option<ChannelValue>>) {
+        out.clear();
+        out.extend((0..self.width()).map(|c| self.value(frame, c)));
     }
 
     /// Steps of the data the events from `from` on stand for (a frame is one, a gap its
@@ -116,29 +222,84 @@ impl FrameBlock {
             .sum()
     }
 
+    /// Starts a frame: its values follow, one [`FrameBlock::push_count`],
+    /// [`FrameBlock::push_real`] or [`FrameBlock::push_missing`] per channel in channel order.
+    #[inline]
+    pub fn begin_frame(&mut self, frame: BlockEvent) {
+        self.events.push(frame);
+        self.frames += 1;
+    }
+
+    /// Channel `channel` of the frame begun last is the count `c`.
+    #[inline]
+    pub fn push_count(&mut self, channel: usize, c: i64) {
+        match self.kinds[channel] {
+            ColumnKind::Count => self.columns[channel].push(c),
+            ColumnKind::Real => self.push_hole(channel, Some(ChannelValue::Count(c))),
+        }
+    }
+
+    /// Channel `channel` of the frame begun last is the real increment `x`.
+    #[inline]
+    pub fn push_real(&mut self, channel: usize, x: f64) {
+        match self.kinds[channel] {
+            ColumnKind::Real => self.columns[channel].push(x.to_bits() as i64),
+            ColumnKind::Count => self.push_hole(channel, Some(ChannelValue::Real(x))),
+        }
+    }
+
+    /// Channel `channel` of the frame begun last has no value.
+    #[inline]
+    pub fn push_missing(&mut self, channel: usize) {
+        self.push_hole(channel, None);
+    }
+
+    /// Channel `channel` of the frame begun last is `v`.
+    #[inline]
+    pub fn push_value(&mut self, channel: usize, v: Option<ChannelValue>) {
+        match v {
+            Some(ChannelValue::Count(c)) => self.push_count(channel, c),
+            Some(ChannelValue::Real(x)) => self.push_real(channel, x),
+            None => self.push_missing(channel),
+        }
+    }
+
+    #[cold]
+    fn push_hole(&mut self, channel: usize, value: Option<ChannelValue>) {
+        self.columns[channel].push(0);
+        self.holes.push(Hole {
+            frame: self.frames - 1,
+            channel,
+            value,
+        });
+    }
+
     /// Appends a frame whose values the iterator gives (exactly `width` of them).
     pub fn push_frame_with(
         &mut self,
         frame: BlockEvent,
         values: impl IntoIterator<Item = Option<ChannelValue>>,
     ) {
-        let before = self.values.len();
-        self.values.extend(values);
-        debug_assert_eq!(self.values.len() - before, self.width);
-        self.events.push(frame);
+        self.begin_frame(frame);
+        let mut n = 0;
+        for (c, v) in values.into_iter().enumerate() {
+            self.push_value(c, v);
+            n += 1;
+        }
+        debug_assert_eq!(n, self.width());
     }
 
     /// The events and the values of each frame, in order.
-    pub fn iter(&self) -> impl Iterator<Item = (BlockEvent, &[Option<ChannelValue>])> + '_ {
-        let mut at = 0;
-        let w = self.width;
+    pub fn iter(&self) -> impl Iterator<Item = (BlockEvent, Vec<Option<ChannelValue>>)> + '_ {
+        let mut frame = 0;
         self.events.iter().map(move |e| match e {
             BlockEvent::Frame { .. } => {
-                let v = &self.values[at..at + w];
-                at += w;
+                let mut v = Vec::with_capacity(self.width());
+                self.frame_values(frame, &mut v);
+                frame += 1;
                 (*e, v)
             }
-            BlockEvent::Gap { .. } => (*e, &self.values[0..0]),
+            BlockEvent::Gap { .. } => (*e, Vec::new()),
         })
     }
 
@@ -148,8 +309,8 @@ impl FrameBlock {
     }
 }
 
-/// One event of a block as a [`FrameEvent`] (its values copied into the frame's own vector).
-pub fn to_event(e: BlockEvent, values: &[Option<ChannelValue>]) -> FrameEvent {
+/// One event of a block as a [`FrameEvent`] (`values`: the frame's own).
+pub fn to_event(e: BlockEvent, values: Vec<Option<ChannelValue>>) -> FrameEvent {
     match e {
         BlockEvent::Frame {
             seq,
@@ -157,7 +318,7 @@ pub fn to_event(e: BlockEvent, values: &[Option<ChannelValue>]) -> FrameEvent {
             status,
         } => FrameEvent::Frame(DecodedFrame {
             seq,
-            values: values.to_vec(),
+            values,
             temperature_c,
             status,
         }),
@@ -167,23 +328,58 @@ pub fn to_event(e: BlockEvent, values: &[Option<ChannelValue>]) -> FrameEvent {
 
 impl FrameSink for FrameBlock {
     fn push_gap(&mut self, missing: u64) {
+        self.gaps.push(GapAt {
+            event: self.events.len(),
+            frame: self.frames,
+            missing,
+        });
         self.events.push(BlockEvent::Gap { missing });
     }
 
     fn push_frame(&mut self, frame: BlockEvent, values: &[Option<ChannelValue>]) {
-        self.values.extend_from_slice(values);
-        self.events.push(frame);
+        self.push_frame_with(frame, values.iter().copied());
     }
 
-    /// An empty block trades places with `block` (no copy); otherwise the events are copied.
+    /// An empty block trades places with `block` (no copy); otherwise the events are appended,
+    /// column by column when the kinds agree.
     fn take_all(&mut self, block: &mut FrameBlock) {
-        if self.is_empty() && self.width == block.width {
+        if self.is_empty() && self.width() == block.width() {
             std::mem::swap(self, block);
-        } else {
-            self.events.extend_from_slice(&block.events);
-            self.values.extend_from_slice(&block.values);
             block.clear();
+            return;
         }
+        if self.kinds != block.kinds {
+            let mut values = Vec::with_capacity(block.width());
+            let mut frame = 0;
+            for e in &block.events {
+                match *e {
+                    BlockEvent::Gap { missing } => self.push_gap(missing),
+                    ev => {
+                        block.frame_values(frame, &mut values);
+                        self.push_frame(ev, &values);
+                        frame += 1;
+                    }
+                }
+            }
+            block.clear();
+            return;
+        }
+        let (e0, f0) = (self.events.len(), self.frames);
+        self.events.extend_from_slice(&block.events);
+        for (to, from) in self.columns.iter_mut().zip(&block.columns) {
+            to.extend_from_slice(from);
+        }
+        self.holes.extend(block.holes.iter().map(|h| Hole {
+            frame: h.frame + f0,
+            ..*h
+        }));
+        self.gaps.extend(block.gaps.iter().map(|g| GapAt {
+            event: g.event + e0,
+            frame: g.frame + f0,
+            missing: g.missing,
+        }));
+        self.frames += block.frames;
+        block.clear();
     }
 }
 
@@ -193,10 +389,9 @@ impl FrameSink for Vec<FrameEvent> {
     }
 
     fn push_frame(&mut self, frame: BlockEvent, values: &[Option<ChannelValue>]) {
-        self.push(to_event(frame, values));
+        self.push(to_event(frame, values.to_vec()));
     }
 }
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -237,7 +432,7 @@ mod tests {
         for (e, vals) in b.iter() {
             match e {
                 BlockEvent::Gap { missing } => v.push_gap(missing),
-                frame => v.push_frame(frame, vals),
+                frame => v.push_frame(frame, &vals),
             }
         }
         assert_eq!(v, ev);

@@ -52,8 +52,9 @@
 use serde::{Deserialize, Serialize};
 
 use super::block::{BlockEvent, FrameBlock, FrameSink};
-use super::descriptor::{BitMeaning, FrameDescriptor, MessageSpec};
-use super::field::{read, read_bits, RawValue};
+use super::descriptor::{FrameDescriptor, MessageSpec};
+use super::field::read_bits;
+use super::plan::FramePlan;
 use super::{ChannelValue, FrameEvent};
 
 /// Decoder health: the docs/records.md `health` fields first, then extra detail.
@@ -236,12 +237,14 @@ pub struct DecoderState {
 /// [`Decoder::next_event`] (or [`Decoder::drain`]), call [`Decoder::finish`] at end of input.
 pub struct Decoder {
     desc: FrameDescriptor,
+    /// The frame message's reads, compiled once.
+    plan: FramePlan,
     buf: Vec<u8>,
     /// First unconsumed byte of `buf`.
     pos: usize,
     /// Decoded events not yet taken, flat (no allocation per frame).
     out: FrameBlock,
-    /// Events and values of `out` already taken one at a time by [`Decoder::next_event`].
+    /// Events and frames of `out` already taken one at a time by [`Decoder::next_event`].
     taken: (usize, usize),
     health: Health,
     /// Bytes were skipped since the last good message.
@@ -261,12 +264,13 @@ impl Decoder {
     pub fn new(desc: FrameDescriptor) -> Self {
         let cycle = desc.interleave.as_ref().map_or(1, |i| i.count + 1);
         let modulus = desc.frame().counter.as_ref().map_or(1, |c| c.modulus);
-        let width = desc.frame().channels.len();
+        let plan = FramePlan::new(&desc);
         Decoder {
+            out: FrameBlock::with_kinds(&plan.kinds, 0),
+            plan,
             desc,
             buf: Vec::new(),
             pos: 0,
-            out: FrameBlock::with_capacity(width, 0),
             taken: (0, 0),
             health: Health::default(),
             skipping: false,
@@ -353,14 +357,18 @@ impl Decoder {
 
     /// The next decoded event, if any.
     pub fn next_event(&mut self) -> Option<FrameEvent> {
-        let (e, v) = self.taken;
+        let (e, f) = self.taken;
         let ev = *self.out.event_list().get(e)?;
-        let w = match ev {
-            BlockEvent::Frame { .. } => self.out.width(),
-            BlockEvent::Gap { .. } => 0,
+        let (values, n) = match ev {
+            BlockEvent::Frame { .. } => {
+                let mut v = Vec::with_capacity(self.out.width());
+                self.out.frame_values(f, &mut v);
+                (v, 1)
+            }
+            BlockEvent::Gap { .. } => (Vec::new(), 0),
         };
-        let event = super::block::to_event(ev, &self.out.values()[v..v + w]);
-        self.taken = (e + 1, v + w);
+        let event = super::block::to_event(ev, values);
+        self.taken = (e + 1, f + n);
         if self.taken.0 == self.out.len() {
             self.clear_events();
         }
@@ -372,19 +380,19 @@ impl Decoder {
         std::iter::from_fn(move || self.next_event())
     }
 
-    /// The events decoded and not yet taken, flat, with each frame's values (then call
+    /// The events decoded and not yet taken, with each frame's values (then call
     /// [`Decoder::clear_events`]).
-    pub fn events(&self) -> impl Iterator<Item = (BlockEvent, &[Option<ChannelValue>])> + '_ {
-        let (e, v) = self.taken;
-        let w = self.out.width();
-        let mut at = v;
+    pub fn events(&self) -> impl Iterator<Item = (BlockEvent, Vec<Option<ChannelValue>>)> + '_ {
+        let (e, f) = self.taken;
+        let mut frame = f;
         self.out.event_list()[e..].iter().map(move |ev| match ev {
             BlockEvent::Frame { .. } => {
-                let vals = &self.out.values()[at..at + w];
-                at += w;
-                (*ev, vals)
+                let mut v = Vec::with_capacity(self.out.width());
+                self.out.frame_values(frame, &mut v);
+                frame += 1;
+                (*ev, v)
             }
-            BlockEvent::Gap { .. } => (*ev, &self.out.values()[0..0]),
+            BlockEvent::Gap { .. } => (*ev, Vec::new()),
         })
     }
 
@@ -398,11 +406,15 @@ impl Decoder {
     pub fn take_events(&mut self, sink: &mut impl FrameSink) {
         if self.taken == (0, 0) {
             sink.take_all(&mut self.out);
+            if self.out.kinds() != self.plan.kinds.as_slice() {
+                // The storage given back was made for other columns.
+                self.out.reset_kinds(&self.plan.kinds);
+            }
         } else {
             for (e, v) in self.events() {
                 match e {
                     BlockEvent::Gap { missing } => sink.push_gap(missing),
-                    frame => sink.push_frame(frame, v),
+                    frame => sink.push_frame(frame, &v),
                 }
             }
             self.clear_events();
@@ -532,25 +544,10 @@ impl Decoder {
             return;
         }
         self.next_index = seq + 1;
-        decode_frame(
-            &self.desc,
-            spec,
-            msg,
-            seq,
-            &mut self.health.invalid_values,
-            &mut self.out,
-        );
+        self.plan
+            .decode(msg, seq, &mut self.health.invalid_values, &mut self.out);
         self.health.frames += 1;
     }
-}
-
-/// The counter of a frame message (formats with a counter; 0 without).
-fn frame_counter(desc: &FrameDescriptor, msg: &[u8]) -> u64 {
-    let spec = &desc.messages[desc.frame_kind];
-    spec.counter.as_ref().map_or(0, |c| {
-        let raw = read_bits(msg, c.offset, c.ty, c.order).unwrap_or(0);
-        (raw >> c.shift) % c.modulus
-    })
 }
 
 impl Decoder {
@@ -558,9 +555,27 @@ impl Decoder {
     /// interleave): the counter rules with the plausibility check of the module documentation.
     fn accept_counted_frame(&mut self, start: usize, len: usize) {
         let m = self.tracker.modulus;
-        let c = frame_counter(&self.desc, &self.buf[start..start + len]);
+        let c = self.plan.counter(&self.buf[start..start + len]);
+        if self.held.is_none() {
+            if let Some((slot, prev, true)) = self.tracker.last {
+                // Clean data: the counter advanced by one. What `commit` does for an advance
+                // of 1 without interleave (no gap, the next slot), without its search.
+                let next = if prev % m + 1 == m { 0 } else { prev % m + 1 };
+                if c == next {
+                    let seq = slot + 1;
+                    self.tracker.last = Some((seq, c, true));
+                    self.tracker.last_seq = Some(seq);
+                    self.next_index = seq + 1;
+                    let msg = &self.buf[start..start + len];
+                    self.plan
+                        .decode(msg, seq, &mut self.health.invalid_values, &mut self.out);
+                    self.health.frames += 1;
+                    return;
+                }
+            }
+        }
         if let Some(held) = self.held.take() {
-            let h = frame_counter(&self.desc, &held);
+            let h = self.plan.counter(&held);
             let prev = self.tracker.last.map_or(h, |l| l.1);
             if c == prev % m {
                 // A repeat of the last frame delivered: the held frame waits on.
@@ -590,7 +605,7 @@ impl Decoder {
         } else {
             let msg = &self.buf[start..start + len];
             commit(
-                &self.desc,
+                &self.plan,
                 &mut self.tracker,
                 &mut self.health,
                 &mut self.out,
@@ -603,7 +618,7 @@ impl Decoder {
     /// Delivers a held frame (see [`commit`]).
     fn commit_frame(&mut self, msg: &[u8]) {
         commit(
-            &self.desc,
+            &self.plan,
             &mut self.tracker,
             &mut self.health,
             &mut self.out,
@@ -616,14 +631,14 @@ impl Decoder {
 /// Places a frame message by its counter and delivers it (with the gap before it), or counts it
 /// as a duplicate.
 fn commit(
-    desc: &FrameDescriptor,
+    plan: &FramePlan,
     tracker: &mut SeqTracker,
     health: &mut Health,
     out: &mut FrameBlock,
     next_index: &mut u64,
     msg: &[u8],
 ) {
-    let c = frame_counter(desc, msg);
+    let c = plan.counter(msg);
     match tracker.observe(true, c, &mut health.counter_breaks) {
         Placement::Duplicate => health.duplicates += 1,
         Placement::Advanced { missing, seq } => {
@@ -632,8 +647,7 @@ fn commit(
                 out.push_gap(missing);
             }
             *next_index = seq + 1;
-            let spec = &desc.messages[desc.frame_kind];
-            decode_frame(desc, spec, msg, seq, &mut health.invalid_values, out);
+            plan.decode(msg, seq, &mut health.invalid_values, out);
             health.frames += 1;
         }
         Placement::Untracked => {}
@@ -678,65 +692,6 @@ pub(crate) fn width_type(width: usize) -> super::field::FieldType {
         2 => FieldType::U16,
         _ => FieldType::U32,
     }
-}
-
-/// Reads the channels, validity and temperature of a good frame into `out`.
-fn decode_frame(
-    desc: &FrameDescriptor,
-    spec: &MessageSpec,
-    msg: &[u8],
-    seq: u64,
-    invalid: &mut u64,
-    out: &mut FrameBlock,
-) {
-    let status = spec
-        .status
-        .as_ref()
-        .and_then(|s| read_bits(msg, s.offset, s.ty, s.order));
-    // The status bits that mark a value invalid: set bits of a fault status, clear bits of a
-    // valid status (flipped so that a set bit means invalid here).
-    let bad_bits = match (status, spec.status.as_ref()) {
-        (Some(st), Some(s)) => match s.bit_set_means {
-            BitMeaning::Fault => st,
-            BitMeaning::Valid => !st,
-        },
-        _ => 0,
-    };
-    let valid = |bit: Option<u32>| -> bool { bit.is_none_or(|b| (bad_bits >> b) & 1 == 0) };
-    let values = spec.channels.iter().map(|c| {
-        if !valid(c.status_bit) {
-            *invalid += 1;
-            return None;
-        }
-        let raw = read(msg, c.offset, c.ty, c.order)?;
-        Some(match raw {
-            RawValue::Int(n) if c.is_count() => ChannelValue::Count(n),
-            r => {
-                // NaN, infinite or absurd values (a float field's NaN, a damaged exponent)
-                // are invalid: a gap, counted, never summed into the channel.
-                let v = r.as_f64() * c.scale * desc.kind_factor(c.kind);
-                if !v.is_finite() || v.abs() > crate::ranges::MAX_ABS_VALUE {
-                    *invalid += 1;
-                    return None;
-                }
-                ChannelValue::Real(v)
-            }
-        })
-    });
-    let temperature_c = spec.temperature.as_ref().and_then(|t| {
-        if !valid(t.status_bit) {
-            return None;
-        }
-        read(msg, t.offset, t.ty, t.order).map(|r| r.as_f64() * t.scale)
-    });
-    out.push_frame_with(
-        BlockEvent::Frame {
-            seq,
-            temperature_c,
-            status,
-        },
-        values,
-    );
 }
 
 #[cfg(test)]

@@ -18,8 +18,9 @@ pub mod decoder;
 pub mod descriptor;
 pub mod encoder;
 pub mod field;
+pub(crate) mod plan;
 
-pub use block::{BlockEvent, FrameBlock, FrameSink};
+pub use block::{BlockEvent, ColumnKind, FrameBlock, FrameSink, GapAt, Hole};
 pub use decoder::{Decoder, DecoderState, Health};
 pub use descriptor::{DescriptorErrors, FrameDescriptor};
 pub use encoder::{encode, encode_frame, EncodeError, FrameInput};

@@ -113,6 +113,10 @@ pub struct DiagnosisRecord {
     /// Run index (0-based) when several inputs are analyzed, as in the other records.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub run: Option<usize>,
+    /// The channel's unit `u` (as in the curve and fit records), so the parameters in u/s can be
+    /// shown in datasheet units by a reader that has only this record (`diagnose`'s output).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub unit: Option<String>,
     /// Present when the unit's quantization is not white phase noise at the shortest taus
     /// (its LSB is coarse against the per-sample noise; docs/gap.md, "Quantization-limited
     /// units"): the curve was diagnosed from `tau_white` on.
@@ -222,6 +226,7 @@ impl DiagnosisRecord {
             quantization: d.quantization.map(|q| q.to_json()),
             alternatives: d.alternatives.iter().map(|a| a.to_json()).collect(),
             run: None,
+            unit: None,
             quantization_limited: d.quantization_limited.map(|q| QuantizationRecord {
                 lsb: q.lsb,
                 ratio: q.ratio,

@@ -261,7 +261,7 @@ impl DecodeStage {
                     }
                     self.last_frame = Some((counter, at));
                     frames += 1;
-                    out.push_frame(ev, values);
+                    out.push_frame(ev, &values);
                 }
                 BlockEvent::Gap { missing } => out.push_gap(missing),
             }

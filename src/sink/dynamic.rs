@@ -151,18 +151,38 @@ pub fn render_dynamic_svg(curves: &[&CurveRecord], label: &str) -> String {
         svg,
         r#"<rect x="{L}" y="{T}" width="{pw}" height="{PH}" fill="none" stroke="black"/>"#
     );
-    // Tau labels at decades, time labels at the window ends.
-    for (j, t) in taus.iter().enumerate() {
-        let l = t.log10();
-        if (l - l.round()).abs() < 0.16 || j == 0 || j == n - 1 {
-            let _ = writeln!(
-                svg,
-                r#"<text x="{}" y="{:.1}" text-anchor="end" dominant-baseline="middle" font-size="11">{}</text>"#,
-                L - 6.0,
-                T + PH - (j as f64 + 0.5) * row_h,
-                crate::sink::plot::tick(*t)
-            );
-        }
+    // Tau labels at the decades inside the taus, placed by log-interpolating between the rows
+    // (rows are one per tau, not uniform in log tau when the taus are not), with a tick mark;
+    // time labels at the window ends.
+    let centre = |j: usize| T + PH - (j as f64 + 0.5) * row_h;
+    let y_of = |v: f64| -> Option<f64> {
+        let j = taus.windows(2).position(|w| w[0] <= v && v <= w[1])?;
+        let (a, b) = (taus[j].ln(), taus[j + 1].ln());
+        let f = if b > a { (v.ln() - a) / (b - a) } else { 0.0 };
+        Some(centre(j) - f * row_h)
+    };
+    let (lo, hi) = (
+        taus[0].log10().ceil() as i32,
+        taus[n - 1].log10().floor() as i32,
+    );
+    let mut decades: Vec<(f64, f64)> = (lo..=hi)
+        .filter_map(|k| {
+            let v = 10f64.powi(k);
+            y_of(v).or((n == 1).then(|| centre(0))).map(|y| (v, y))
+        })
+        .collect();
+    if decades.is_empty() {
+        // Less than a decade of taus: its two ends.
+        decades = vec![(taus[0], centre(0)), (taus[n - 1], centre(n - 1))];
+    }
+    for (v, y) in decades {
+        let _ = writeln!(
+            svg,
+            r#"<line x1="{}" y1="{y:.1}" x2="{L}" y2="{y:.1}" stroke="black"/><text class="tau-label" x="{}" y="{y:.1}" text-anchor="end" dominant-baseline="middle" font-size="11">{}</text>"#,
+            L - 4.0,
+            L - 6.0,
+            crate::sink::plot::tick(v)
+        );
     }
     for win in &ws {
         let _ = writeln!(

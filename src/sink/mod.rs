@@ -5,11 +5,12 @@
 //! their doc comments); [`json`] writes them one per line. [`results`] reads them back, typed
 //! and labelled by run, for [`plot`] (Allan-deviation panels), [`dynamic`] (the time x tau
 //! view) and [`report`] (the HTML page); [`page_file`] writes those without overwriting;
-//! [`output`] opens result files, [`export`] writes the noise model for other tools, [`metrics`]
+//! [`output`] opens result files, [`effect_text`] words a diagnosis's effects, [`export`] writes the noise model for other tools, [`metrics`]
 //! serves live figures.
 
 #[cfg(feature = "plot")]
 pub mod dynamic;
+pub mod effect_text;
 pub mod export;
 pub mod json;
 pub mod metrics;

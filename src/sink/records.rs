@@ -234,7 +234,7 @@ pub struct SummaryRecord {
     pub segments: Vec<u64>,
     /// Input rows or frames that could not be read and were skipped as gaps.
     pub bad_rows: u64,
-    /// Text values that were infinite or beyond `input::MAX_ABS_VALUE`, read as gaps (frames
+    /// Text values that were infinite or beyond `ranges::MAX_ABS_VALUE`, read as gaps (frames
     /// count theirs in `health`'s `invalid_values`).
     #[serde(skip_serializing_if = "is_zero", default)]
     pub invalid_values: u64,

@@ -159,33 +159,52 @@ fn banner(h: &mut String, res: &Results) {
         h,
         "<div class=\"banner {class}\" data-verdict=\"{word}\">{word}<small>{note}</small>"
     );
-    let failed: Vec<String> = res
-        .limits
-        .iter()
-        .filter(|l| l.rec["verdict"].as_str() == Some("fail"))
-        .map(|l| {
-            format!(
-                "{} {} {} {} {} (measured {}{})",
-                l.rec["channel"].as_str().unwrap_or(""),
-                l.rec["coef"].as_str().unwrap_or(""),
-                if l.rec["bound"].as_str() == Some("min") {
-                    "&ge;"
-                } else {
-                    "&le;"
-                },
-                num(&l.rec["limit"]),
-                esc(&limit_unit(res, &l.rec)),
-                num(&l.rec["value"]),
-                if res.summaries.len() > 1 {
-                    format!(", {}", esc(&l.label))
-                } else {
-                    String::new()
-                }
-            )
-        })
-        .collect();
+    // The limits that decided the banner, named: those exceeded, and those left undecided.
+    let named = |verdict: &str| -> Vec<String> {
+        res.limits
+            .iter()
+            .filter(|l| l.rec["verdict"].as_str() == Some(verdict))
+            .map(|l| {
+                let interval = match (l.rec["lo"].as_f64(), l.rec["hi"].as_f64()) {
+                    (Some(lo), Some(hi)) => format!(" [{}, {}]", tick(lo), tick(hi)),
+                    _ => String::new(),
+                };
+                format!(
+                    "{} {} {} {} {} (measured {}{interval}{})",
+                    esc(l.rec["channel"].as_str().unwrap_or("")),
+                    esc(l.rec["coef"].as_str().unwrap_or("")),
+                    if l.rec["bound"].as_str() == Some("min") {
+                        "&ge;"
+                    } else {
+                        "&le;"
+                    },
+                    num(&l.rec["limit"]),
+                    esc(&limit_unit(res, &l.rec)),
+                    if l.rec["value"].is_f64() {
+                        num(&l.rec["value"])
+                    } else {
+                        "not determined".into()
+                    },
+                    if res.summaries.len() > 1 {
+                        format!(", {}", esc(&l.label))
+                    } else {
+                        String::new()
+                    }
+                )
+            })
+            .collect()
+    };
+    let failed = named("fail");
     if !failed.is_empty() {
         let _ = write!(h, "<small>failed: {}</small>", failed.join("; "));
+    }
+    let undecided = named("undecided");
+    if !undecided.is_empty() {
+        let _ = write!(
+            h,
+            "<small>not decided (the interval straddles the limit): {}</small>",
+            undecided.join("; ")
+        );
     }
     for w in &warn {
         let _ = write!(h, "<small class=\"warn\">{}</small>", esc(w));
@@ -195,7 +214,13 @@ fn banner(h: &mut String, res: &Results) {
 
 fn runs_table(h: &mut String, res: &Results) {
     if res.summaries.is_empty() {
-        h.push_str("<p class=\"warn\">No summary record: the run may have been cut short before its end.</p>\n");
+        // The `diagnose` command writes diagnoses only, by design; other records without a
+        // summary are a run that stopped before writing its last record.
+        if !(res.curves.is_empty() && res.fits.is_empty()) {
+            h.push_str("<p class=\"warn\">No summary record: the run may have been cut short before its end.</p>\n");
+        } else if !res.diagnoses.is_empty() {
+            h.push_str("<p class=\"meta\">Diagnosis records only (the output of <code>allanscope diagnose</code>): no curves, fit or summary to show.</p>\n");
+        }
         return;
     }
     h.push_str("<h2>Runs</h2>\n<table><tr><th class=\"l\">run</th><th class=\"l\">input</th><th>data (s)</th><th>&#964;0 (s)</th><th class=\"l\">channels</th><th>unreadable rows</th><th class=\"l\">input read</th></tr>\n");
@@ -494,75 +519,86 @@ fn noise_model(h: &mut String, res: &Results) {
     readouts_table(h, &finals, true);
 }
 
-/// The IEEE 952 read-outs of each final fit (model::readout): ARW, bias instability and RRW, each
-/// with its 95% interval, unit (datasheet where the channel's unit is known) and the tau read.
+/// The IEEE 952 read-outs of each final fit (model::readout): one row per channel (and run, runs
+/// of a channel together), ARW, bias instability and RRW as columns, each cell the value with its
+/// 95% interval, its unit (datasheet where the channel's unit is known) and the curve point the
+/// read-out went through. The numbers are also in `data-` attributes for a program to read.
 fn readouts_table(h: &mut String, finals: &[&Labelled<FitRecord>], several: bool) {
     if finals.iter().all(|f| f.rec.readouts.is_none()) {
         return;
     }
-    h.push_str("<h3>IEEE 952 read-outs</h3>\n<p>Read from the Allan-deviation curve itself (IEEE Std 952-1997 annex C), to compare with the fit: angle (velocity) random walk on the &minus;1/2 slope at &tau; = 1 s, bias instability = the curve's minimum / 0.664 (with the &tau; of the minimum), rate (acceleration) random walk on the +1/2 slope at &tau; = 3 s; the 95% interval is that of the point read.</p>\n<table class=\"readouts\"><tr>");
+    h.push_str("<h3>IEEE 952 read-outs</h3>\n<p>Read from the Allan-deviation curve itself (IEEE Std 952-1997 annex C), to compare with the fit: the line of slope &minus;1/2 through the curve point where the curve runs closest to that slope, read at &tau; = 1 s (angle or velocity random walk); the curve's minimum / 0.664 (bias instability; the minimum's &tau; given); the line of slope +1/2 through its closest point, read at &tau; = 3 s (rate random walk). Under each value: its unit and the curve point used; the 95% interval is that point's, carried along the line.</p>\n<table class=\"readouts\"><tr><th class=\"l\">channel</th>");
     if several {
         h.push_str("<th class=\"l\">run</th>");
     }
-    h.push_str("<th class=\"l\">channel</th><th class=\"l\">read-out</th><th>value</th><th>95% interval</th><th class=\"l\">unit</th><th>read at &tau; (s)</th></tr>\n");
+    h.push_str("<th>random walk (ARW / VRW)<br><span class=\"small\">&minus;1/2 line at &tau; = 1 s</span></th><th>bias instability<br><span class=\"small\">minimum / 0.664</span></th><th>rate random walk (RRW)<br><span class=\"small\">+1/2 line at &tau; = 3 s</span></th></tr>\n");
+    // Runs of one channel together, channels in the order first seen.
+    let mut order: Vec<&str> = Vec::new();
     for f in finals {
-        let Some(ro) = f.rec.readouts.as_deref() else {
-            continue;
-        };
-        let rows: [(&str, &str, Option<&ReadoutRecord>, &str); 3] = [
-            (
-                "arw",
-                "random walk (ARW/VRW)",
-                ro.arw.as_ref(),
-                "no &minus;1/2 slope on the curve",
-            ),
-            (
-                "bias_instability",
-                "bias instability",
-                ro.bias_instability.as_ref(),
-                "no minimum inside the curve",
-            ),
-            (
-                "rrw",
-                "rate random walk (RRW)",
-                ro.rrw.as_ref(),
-                "no +1/2 slope on the curve",
-            ),
-        ];
-        for (key, name, r, absent) in rows {
+        if !order.contains(&f.rec.channel.as_str()) {
+            order.push(&f.rec.channel);
+        }
+    }
+    for ch in order {
+        for f in finals.iter().filter(|f| f.rec.channel == ch) {
+            let Some(ro) = f.rec.readouts.as_deref() else {
+                continue;
+            };
             let _ = write!(
                 h,
-                "<tr data-channel=\"{}\" data-readout=\"{key}\">",
-                esc(&f.rec.channel)
+                "<tr data-channel=\"{c}\"><td class=\"l\"><b>{c}</b></td>",
+                c = esc(&f.rec.channel)
             );
             if several {
                 let _ = write!(h, "<td class=\"l\">{}</td>", esc(&f.label));
             }
-            let _ = write!(
-                h,
-                "<td class=\"l\">{}</td><td class=\"l\">{name}</td>",
-                esc(&f.rec.channel)
-            );
-            match r {
-                Some(r) => {
-                    let (v, lo, hi, unit) = match &r.datasheet {
-                        Some(d) => (d.value.unwrap_or(f64::NAN), d.lo, d.hi, d.unit.clone()),
-                        None => (r.value, r.lo, r.hi, r.unit.clone()),
-                    };
-                    let _ = writeln!(
-                        h,
-                        "<td>{}</td><td>[{}, {}]</td><td class=\"l\">{}</td><td>{}</td></tr>",
-                        tick(v),
-                        tick(lo),
-                        tick(hi),
-                        esc(&unit),
-                        tick(r.tau)
-                    );
-                }
-                None => {
-                    let _ = writeln!(h, "<td colspan=\"4\" class=\"l\">{absent}</td></tr>");
+            let cells: [(&str, Option<&ReadoutRecord>, &str, &str); 3] = [
+                (
+                    "arw",
+                    ro.arw.as_ref(),
+                    "no &minus;1/2 slope on the curve",
+                    "point",
+                ),
+                (
+                    "bias_instability",
+                    ro.bias_instability.as_ref(),
+                    "no minimum inside the curve",
+                    "minimum",
+                ),
+                (
+                    "rrw",
+                    ro.rrw.as_ref(),
+                    "no +1/2 slope on the curve",
+                    "point",
+                ),
+            ];
+            for (key, r, absent, point) in cells {
+                match r {
+                    Some(r) => {
+                        let (v, lo, hi, unit) = match &r.datasheet {
+                            Some(d) => (d.value.unwrap_or(f64::NAN), d.lo, d.hi, d.unit.clone()),
+                            None => (r.value, r.lo, r.hi, r.unit.clone()),
+                        };
+                        let _ = write!(
+                            h,
+                            "<td data-readout=\"{key}\" data-value=\"{v:e}\" data-lo=\"{lo:e}\" data-hi=\"{hi:e}\" data-unit=\"{u}\" data-tau=\"{t:e}\">{} [{}, {}]<br><span class=\"small\">{u}; {point} at &tau; = {} s</span></td>",
+                            tick(v),
+                            tick(lo),
+                            tick(hi),
+                            tick(r.tau),
+                            u = esc(&unit),
+                            t = r.tau
+                        );
+                    }
+                    None => {
+                        let _ = write!(
+                            h,
+                            "<td data-readout=\"{key}\" class=\"l small\">{absent}</td>"
+                        );
+                    }
                 }
             }
+            h.push_str("</tr>\n");
         }
     }
     h.push_str("</table>\n");
@@ -612,55 +648,22 @@ fn single_run_fits(h: &mut String, fits: &[&Labelled<FitRecord>]) {
     h.push_str("</table>\n");
 }
 
-/// An effect's name and parameters in words and units (CONTRACT.md's parameter names).
+/// An effect's name and parameters in words and units, rates in datasheet units beside the
+/// record's u/s (sink::effect_text).
 pub fn effect_words(kind: &str, params: &Value, unit: &str) -> String {
-    let p = |k: &str| num(&params[k]);
-    match kind {
-        "gauss_markov" => format!(
-            "correlated (Gauss-Markov) noise: sigma = {} {unit}/s, correlation time = {} s",
-            p("sigma"),
-            p("tau_c")
-        ),
-        "sinusoid" => format!(
-            "sinusoid: amplitude = {} {unit}/s, frequency = {} Hz",
-            p("amplitude"),
-            p("frequency")
-        ),
-        "output_filter" => format!(
-            "output low-pass filter: time constant = {} s",
-            p("time_constant")
-        ),
-        "warmup" => format!(
-            "warm-up drift: amplitude = {} {unit}/s, time constant = {} s",
-            p("amplitude"),
-            p("time_constant")
-        ),
-        "bias_jumps" => format!(
-            "bias jumps: {} jumps, rms size = {} {unit}/s",
-            params["count"]
-                .as_u64()
-                .map_or("?".into(), |n| n.to_string()),
-            p("rms_size")
-        ),
-        "temperature" => format!(
-            "temperature sensitivity: {} {unit}/s per deg C",
-            p("coefficient")
-        ),
-        other => {
-            let kv: Vec<String> = params
-                .as_object()
-                .map(|o| o.iter().map(|(k, v)| format!("{k} = {}", num(v))).collect())
-                .unwrap_or_default();
-            format!("{other}: {}", kv.join(", "))
-        }
-    }
+    crate::sink::effect_text::effect_line(kind, params, unit, &tick)
 }
 
 fn diagnosis(h: &mut String, res: &Results) {
     if res.diagnoses.is_empty() {
         return;
     }
-    h.push_str("<h2>Sim-to-real gap (diagnosis)</h2>\n<p>The gap statistic is near 1 when the model explains the curve. Final diagnosis of each channel:</p>\n<table class=\"diagnosis\"><tr><th class=\"l\">run</th><th class=\"l\">channel</th><th class=\"l\">verdict</th><th>gap before</th><th>gap after</th><th class=\"l\">effects (in the order added; gap after each)</th><th class=\"l\">where the base model misses</th></tr>\n");
+    let several = res.several_runs();
+    h.push_str("<h2>Sim-to-real gap (diagnosis)</h2>\n<p>The gap statistic is near 1 when the model explains the curve. Final diagnosis of each channel; effect parameters named, rates in datasheet units with the channel's own unit in brackets:</p>\n<table class=\"diagnosis\"><tr>");
+    if several {
+        h.push_str("<th class=\"l\">run</th>");
+    }
+    h.push_str("<th class=\"l\">channel</th><th class=\"l\">verdict</th><th>gap before</th><th>gap after</th><th class=\"l\">effects (in the order added; gap after each)</th><th class=\"l\">where the base model misses</th></tr>\n");
     // The final (or last) diagnosis per run and channel.
     let mut keys: Vec<(usize, Option<usize>, String)> = Vec::new();
     for d in &res.diagnoses {
@@ -669,11 +672,14 @@ fn diagnosis(h: &mut String, res: &Results) {
             keys.push(k);
         }
     }
+    // The channel's unit: its curve's, else the one the record names (`diagnose` writes no curve).
     let unit_of = |d: &Labelled<DiagnosisRecord>| {
         res.curves
             .iter()
             .find(|c| c.file == d.file && c.rec.channel == d.rec.channel)
-            .map_or("u".to_string(), |c| c.rec.unit.clone())
+            .map(|c| c.rec.unit.clone())
+            .or_else(|| d.rec.unit.clone())
+            .unwrap_or_else(|| "u".to_string())
     };
     let mut interim: Vec<&Labelled<DiagnosisRecord>> = Vec::new();
     for (file, run, ch) in &keys {
@@ -691,7 +697,11 @@ fn diagnosis(h: &mut String, res: &Results) {
         else {
             continue;
         };
-        interim.extend(mine.iter().filter(|d| !std::ptr::eq(**d, last)));
+        // Interim diagnoses, less one written at the same data time as the final (its copy).
+        interim.extend(mine.iter().filter(|d| {
+            let copy_of_final = last.rec.is_final && d.rec.t_data == last.rec.t_data;
+            !std::ptr::eq(**d, last) && !copy_of_final
+        }));
         let d = &last.rec;
         let unit = unit_of(last);
         let effects: Vec<String> = d
@@ -750,8 +760,12 @@ fn diagnosis(h: &mut String, res: &Results) {
             .unwrap_or_default();
         let _ = writeln!(
             h,
-            "<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td class=\"l\"><b>{}</b>{shape}</td><td>{:.2}</td><td>{:.2}</td><td class=\"l\">{}</td><td class=\"l\">{}</td></tr>",
-            esc(&last.label),
+            "<tr>{}<td class=\"l\">{}</td><td class=\"l\"><b>{}</b>{shape}</td><td>{:.2}</td><td>{:.2}</td><td class=\"l\">{}</td><td class=\"l\">{}</td></tr>",
+            if several {
+                format!("<td class=\"l\">{}</td>", esc(&last.label))
+            } else {
+                String::new()
+            },
             esc(ch),
             esc(&verdict),
             d.gap_before,
@@ -761,29 +775,99 @@ fn diagnosis(h: &mut String, res: &Results) {
         );
     }
     h.push_str("</table>\n");
-    if !interim.is_empty() {
-        h.push_str("<h3>Interim diagnoses</h3>\n<table class=\"interim small\"><tr><th class=\"l\">run</th><th class=\"l\">channel</th><th>data (s)</th><th class=\"l\">verdict</th><th>gap before</th><th>gap after</th><th class=\"l\">effects</th></tr>\n");
-        for d in interim {
-            let verdict = serde_json::to_value(d.rec.verdict)
-                .ok()
-                .and_then(|v| v.as_str().map(String::from))
-                .unwrap_or_default();
-            let kinds: Vec<&str> = d.rec.effects.iter().map(|e| effect_name(&e.kind)).collect();
-            let _ = writeln!(
-                h,
-                "<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td>{}</td><td class=\"l\">{}</td><td>{:.2}</td><td>{:.2}</td><td class=\"l\">{}</td></tr>",
-                esc(&d.label),
-                esc(&d.rec.channel),
-                tick(d.rec.t_data),
-                esc(&verdict),
-                d.rec.gap_before,
-                d.rec.gap_after,
-                esc(&if kinds.is_empty() { "none".to_string() } else { kinds.join(", ") })
-            );
+    interim_table(h, &interim, several);
+}
+
+/// The interim diagnoses as a small time table: one row per data time (per run), one column
+/// per channel, each cell the verdict, the gap before and after and the effects' names. At
+/// most [`INTERIM_ROWS`] rows per run: a long run shows every k-th time, and says so.
+fn interim_table(h: &mut String, interim: &[&Labelled<DiagnosisRecord>], several: bool) {
+    if interim.is_empty() {
+        return;
+    }
+    let mut channels: Vec<&str> = Vec::new();
+    let mut runs: Vec<(usize, Option<usize>)> = Vec::new();
+    for d in interim {
+        if !channels.contains(&d.rec.channel.as_str()) {
+            channels.push(&d.rec.channel);
         }
-        h.push_str("</table>\n");
+        if !runs.contains(&(d.file, d.run)) {
+            runs.push((d.file, d.run));
+        }
+    }
+    h.push_str("<h3>Interim diagnoses</h3>\n<p class=\"small\">Each cell: the verdict, the gap before &rarr; after the effects, and the effects added.</p>\n<table class=\"interim small\"><tr>");
+    if several {
+        h.push_str("<th class=\"l\">run</th>");
+    }
+    h.push_str("<th>data (s)</th>");
+    for c in &channels {
+        let _ = write!(h, "<th class=\"l\">{}</th>", esc(c));
+    }
+    h.push_str("</tr>\n");
+    let mut thinned = 0usize;
+    for key in runs {
+        let mine: Vec<&&Labelled<DiagnosisRecord>> =
+            interim.iter().filter(|d| (d.file, d.run) == key).collect();
+        let mut times: Vec<f64> = mine.iter().map(|d| d.rec.t_data).collect();
+        times.sort_by(f64::total_cmp);
+        times.dedup();
+        let step = times.len().div_ceil(INTERIM_ROWS).max(1);
+        if step > 1 {
+            thinned = thinned.max(step);
+        }
+        let label = mine.first().map(|d| d.label.clone()).unwrap_or_default();
+        for (n, t) in times.iter().enumerate() {
+            // Every step-th time, and always the last.
+            if n % step != 0 && n + 1 != times.len() {
+                continue;
+            }
+            h.push_str("<tr>");
+            if several {
+                let _ = write!(h, "<td class=\"l\">{}</td>", esc(&label));
+            }
+            let _ = write!(h, "<td>{}</td>", tick(*t));
+            for c in &channels {
+                match mine
+                    .iter()
+                    .find(|d| d.rec.t_data == *t && d.rec.channel == *c)
+                {
+                    Some(d) => {
+                        let verdict = serde_json::to_value(d.rec.verdict)
+                            .ok()
+                            .and_then(|v| v.as_str().map(String::from))
+                            .unwrap_or_default();
+                        let kinds: Vec<&str> =
+                            d.rec.effects.iter().map(|e| effect_name(&e.kind)).collect();
+                        let _ = write!(
+                            h,
+                            "<td class=\"l\">{} {:.2}&rarr;{:.2}{}</td>",
+                            esc(&verdict),
+                            d.rec.gap_before,
+                            d.rec.gap_after,
+                            if kinds.is_empty() {
+                                String::new()
+                            } else {
+                                format!("<br>{}", esc(&kinds.join(", ")))
+                            }
+                        );
+                    }
+                    None => h.push_str("<td>&ndash;</td>"),
+                }
+            }
+            h.push_str("</tr>\n");
+        }
+    }
+    h.push_str("</table>\n");
+    if thinned > 1 {
+        let _ = writeln!(
+            h,
+            "<p class=\"small\">Every {thinned}th interim time shown (and the last); the JSON lines hold them all.</p>"
+        );
     }
 }
+
+/// Rows of the interim-diagnosis table per run.
+const INTERIM_ROWS: usize = 24;
 
 fn dynamic_view(h: &mut String, res: &Results) {
     let finals: Vec<_> = res

@@ -376,47 +376,18 @@ fn diagnosis_of<'a>(res: &'a Results, k: RunKey, channel: &str) -> Option<&'a Di
         .map(|d| &d.rec)
 }
 
-/// An effect in a few words with its parameters in units (docs/records.md's parameter names:
-/// rates in u/s, times in s, frequencies in Hz).
+/// An effect in a few words with its parameters named and in units, rates in datasheet units
+/// beside the record's u/s (sink::effect_text).
 pub fn effect_brief(kind: &str, params: &Value, unit: &str) -> String {
-    let p = |k: &str| params[k].as_f64().map_or("?".into(), sig3);
-    match kind {
-        "gauss_markov" => format!(
-            "Gauss-Markov noise (sigma {} {unit}/s, correlation time {} s)",
-            p("sigma"),
-            p("tau_c")
-        ),
-        "sinusoid" => format!(
-            "a sinusoid ({} {unit}/s at {} Hz)",
-            p("amplitude"),
-            p("frequency")
-        ),
-        "output_filter" => format!("an output filter (time constant {} s)", p("time_constant")),
-        "warmup" => format!(
-            "a warm-up drift ({} {unit}/s, time constant {} s)",
-            p("amplitude"),
-            p("time_constant")
-        ),
-        "bias_jumps" => format!(
-            "bias jumps ({} of rms {} {unit}/s)",
-            params["count"]
-                .as_u64()
-                .map_or("?".into(), |n| n.to_string()),
-            p("rms_size")
-        ),
-        "temperature" => format!("temperature ({} {unit}/s per deg C)", p("coefficient")),
-        other => {
-            let kv: Vec<String> = params
-                .as_object()
-                .map(|o| {
-                    o.iter()
-                        .map(|(k, v)| format!("{k} {}", v.as_f64().map_or(v.to_string(), sig3)))
-                        .collect()
-                })
-                .unwrap_or_default();
-            format!("{other} ({})", kv.join(", "))
-        }
+    let (name, ps) = crate::sink::effect_text::effect_parts(kind, params, unit, &sig3);
+    if ps.is_empty() {
+        return name;
     }
+    let list: Vec<String> = ps
+        .iter()
+        .map(|p| format!("{} {}", p.name, p.value))
+        .collect();
+    format!("{name} [{}]", list.join(", "))
 }
 
 /// The diagnosis in one line: the verdict, what explains the gap, and the gap before and after.
@@ -599,23 +570,47 @@ fn diagnosis_only(h: &mut String, res: &Results, k: RunKey, fitted: &[&str], sty
         }
         seen.push(ch);
         let d = diagnosis_of(res, k, ch).unwrap_or(&d.rec);
-        let c = &d.final_coef;
+        let unit = d.unit.as_deref().unwrap_or("u");
         let _ = writeln!(
             h,
-            "\n{}  diagnosis: {}",
+            "\n{}{}  diagnosis: {}",
             style.bold(ch),
-            diagnosis_line(d, "u", style)
+            d.unit
+                .as_deref()
+                .map(|u| format!(" [{u}]"))
+                .unwrap_or_default(),
+            diagnosis_line(d, unit, style)
         );
+        // The five terms refitted with the effects in, in datasheet units when the unit is known
+        // (terms the fit set to zero are left out).
+        let (factors, units) = match IncrementUnit::parse(unit) {
+            Some(iu) => (
+                datasheet_factors(&iu),
+                datasheet_units(iu.kind).map(String::from),
+            ),
+            None => ([1.0; 5], native_units(unit)),
+        };
+        let terms: Vec<String> = (0..5)
+            .filter(|&i| d.final_coef[i] > 0.0)
+            .map(|i| {
+                format!(
+                    "{} {} {}",
+                    TERM_NAMES[i],
+                    sig3(d.final_coef[i] * factors[i]),
+                    units[i]
+                )
+            })
+            .collect();
         let _ = writeln!(
             h,
             "  {}",
             style.dim(&format!(
-                "five terms with the effects (native units): Q {} N {} B {} K {} R {}; taus {} to {}",
-                sig3(c[0]),
-                sig3(c[1]),
-                sig3(c[2]),
-                sig3(c[3]),
-                sig3(c[4]),
+                "five-term model with the effects: {}; taus {} to {}",
+                if terms.is_empty() {
+                    "-".to_string()
+                } else {
+                    terms.join(", ")
+                },
                 tau_text(d.tau_span[0]),
                 tau_text(d.tau_span[1])
             ))
@@ -623,16 +618,23 @@ fn diagnosis_only(h: &mut String, res: &Results, k: RunKey, fitted: &[&str], sty
     }
 }
 
-/// The run-to-run statistics (the seed paper's table 2 quantities) of every channel, in
-/// datasheet units where the channel's unit is known.
-fn aggregates(h: &mut String, res: &Results, style: &TableStyle) {
+/// The seed paper's column order in table 2 (R, K, B, N, Q), as the report has it.
+const PAPER_ORDER: [usize; 5] = [4, 3, 2, 1, 0];
+
+/// The run-to-run statistics of every channel in the seed paper's table 2 layout, as the
+/// report shows it: one table per channel, one row per run labelled by its input (values from
+/// `runs`' final fits), the coefficients as columns (R, K, B, N, Q) in datasheet units where the
+/// channel's unit is known, then the mean, the 95% interval of the mean (mean +- 1.96 sd/sqrt(n),
+/// as the paper), the sd and the number of runs that determined each coefficient (from `res`'s
+/// `aggregate` records). `-` = not determined.
+fn aggregates(h: &mut String, res: &Results, runs: &Results, style: &TableStyle) {
     if res.aggregates.is_empty() {
         return;
     }
     let _ = writeln!(
         h,
         "\n{}",
-        style.bold("Run to run (mean, 95% interval of the mean as mean +- 1.96 sd/sqrt(n), sd)")
+        style.bold("Run to run, the seed paper's table 2 (95% interval of the mean: mean +- 1.96 sd/sqrt(n))")
     );
     let mut channels: Vec<(String, String)> = Vec::new();
     for a in &res.aggregates {
@@ -646,55 +648,65 @@ fn aggregates(h: &mut String, res: &Results, style: &TableStyle) {
     }
     for (ch, unit) in channels {
         let inc = IncrementUnit::parse(&unit);
-        let names = term_names(inc.map(|u| u.kind));
-        let mut rows = vec![vec![
-            String::new(),
-            "term".into(),
-            "unit".into(),
-            "n".into(),
-            "mean [95% interval]".into(),
-            "sd".into(),
-        ]];
-        for a in res
-            .aggregates
-            .iter()
-            .filter(|a| a.rec["channel"].as_str() == Some(ch.as_str()))
-        {
-            let coef = a.rec["coef"].as_str().unwrap_or("?");
-            let Some(i) = TERM_NAMES.iter().position(|t| *t == coef) else {
+        let (factors, units): ([f64; 5], [String; 5]) = match inc {
+            Some(u) => (
+                datasheet_factors(&u),
+                datasheet_units(u.kind).map(String::from),
+            ),
+            None => ([1.0; 5], native_units(&unit)),
+        };
+        let agg = |i: usize| {
+            res.aggregates.iter().find(|a| {
+                a.rec["channel"].as_str() == Some(ch.as_str())
+                    && a.rec["coef"].as_str() == Some(TERM_NAMES[i])
+            })
+        };
+        let mut rows = vec![
+            std::iter::once("run".to_string())
+                .chain(PAPER_ORDER.iter().map(|&i| TERM_NAMES[i].to_string()))
+                .collect::<Vec<_>>(),
+            std::iter::once(String::new())
+                .chain(PAPER_ORDER.iter().map(|&i| units[i].clone()))
+                .collect(),
+        ];
+        // One row per run: its final fit of this channel.
+        for k in runs_in_order(runs) {
+            let Some(f) = fits_of(runs, k).into_iter().find(|f| f.rec.channel == ch) else {
                 continue;
             };
-            let (f, u) = match inc {
-                Some(u) => (
-                    datasheet_factors(&u)[i],
-                    datasheet_units(u.kind)[i].to_string(),
-                ),
-                None => (1.0, native_units(&unit)[i].clone()),
-            };
-            let n = a.rec["n"].as_u64().unwrap_or(0);
-            let mean = a.rec["mean"].as_f64().map(|v| v * f);
-            let ci = a.rec["ci_z"]
-                .as_array()
-                .and_then(|p| Some((p.first()?.as_f64()? * f, p.get(1)?.as_f64()? * f)));
-            let sd = a.rec["sd"].as_f64().map(|v| v * f);
-            rows.push(vec![
-                coef.to_string(),
-                names[i].to_string(),
-                u,
-                n.to_string(),
-                match mean {
-                    Some(m) => format!(
-                        "{} {}",
-                        sig3(m),
-                        ci.map_or(String::new(), |(l, h)| interval(Some(l), Some(h)))
-                    ),
-                    None => "not determined in any run".into(),
-                },
-                sd.map_or("-".into(), sig3),
-            ]);
+            let mut row = vec![f.label.clone()];
+            for &i in &PAPER_ORDER {
+                let c = f.rec.coef.by_index(i);
+                let v = c.value.filter(|_| c.determined);
+                row.push(v.map_or("-".into(), |v| sig3(v * factors[i])));
+            }
+            rows.push(row);
         }
+        let stat = |name: &str, cell: &dyn Fn(&Value, f64) -> Option<String>| -> Vec<String> {
+            std::iter::once(name.to_string())
+                .chain(PAPER_ORDER.iter().map(|&i| {
+                    agg(i)
+                        .and_then(|a| cell(&a.rec, factors[i]))
+                        .unwrap_or_else(|| "-".into())
+                }))
+                .collect()
+        };
+        rows.push(stat("mean", &|a, f| {
+            a["mean"].as_f64().map(|m| sig3(m * f))
+        }));
+        rows.push(stat("95% interval", &|a, f| {
+            let p = a["ci_z"].as_array()?;
+            Some(interval(
+                p.first()?.as_f64().map(|x| x * f),
+                p.get(1)?.as_f64().map(|x| x * f),
+            ))
+        }));
+        rows.push(stat("sd", &|a, f| a["sd"].as_f64().map(|m| sig3(m * f))));
+        rows.push(stat("runs determined", &|a, _| {
+            a["n"].as_u64().map(|n| n.to_string())
+        }));
         let _ = writeln!(h, "\n{} [{unit}]", style.bold(&ch));
-        h.push_str(&aligned(&rows, "  "));
+        h.push_str(&aligned_right(&rows, "  "));
     }
     let run_limits: Vec<&Value> = res
         .limits
@@ -705,6 +717,39 @@ fn aggregates(h: &mut String, res: &Results, style: &TableStyle) {
     for c in limit_cells(&run_limits, style) {
         let _ = writeln!(h, "  limit: {c}");
     }
+}
+
+/// Columns padded to their widest cell, the first left-aligned and the others right-aligned
+/// (numbers line up on their last digit).
+fn aligned_right(rows: &[Vec<String>], indent: &str) -> String {
+    let n = rows.iter().map(Vec::len).max().unwrap_or(0);
+    let widths: Vec<usize> = (0..n)
+        .map(|j| {
+            rows.iter()
+                .filter_map(|r| r.get(j))
+                .map(|c| c.chars().count())
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    let mut out = String::new();
+    for r in rows {
+        let mut line = indent.to_string();
+        for (j, c) in r.iter().enumerate() {
+            let pad = widths[j] - c.chars().count();
+            if j == 0 {
+                line.push_str(c);
+                line.extend(std::iter::repeat_n(' ', pad));
+            } else {
+                line.push_str("  ");
+                line.extend(std::iter::repeat_n(' ', pad));
+                line.push_str(c);
+            }
+        }
+        out.push_str(line.trim_end());
+        out.push('\n');
+    }
+    out
 }
 
 /// The overall verdict of the datasheet limits: every judged bound, and the runs' `pass`.
@@ -746,6 +791,12 @@ fn verdict_line(res: &Results, style: &TableStyle) -> Option<String> {
 
 /// The whole table of `res` (every run in it, then the run-to-run statistics and the verdict).
 pub fn render(res: &Results, style: &TableStyle) -> String {
+    render_with_runs(res, res, style)
+}
+
+/// As [`render`], with the rows of the run-to-run table taken from `runs`' final fits (records
+/// printed earlier, or the `aggregate` command's input files).
+pub fn render_with_runs(res: &Results, runs: &Results, style: &TableStyle) -> String {
     let mut h = String::new();
     for k in runs_in_order(res) {
         if !h.is_empty() {
@@ -759,7 +810,7 @@ pub fn render(res: &Results, style: &TableStyle) -> String {
         let fitted: Vec<&str> = fits.iter().map(|f| f.rec.channel.as_str()).collect();
         diagnosis_only(&mut h, res, k, &fitted, style);
     }
-    aggregates(&mut h, res, style);
+    aggregates(&mut h, res, runs, style);
     if let Some(v) = verdict_line(res, style) {
         let _ = writeln!(h, "\n{v}");
     }
@@ -828,6 +879,12 @@ pub struct TableWriter<W: Write> {
     printed: bool,
     /// Called before a table is printed (the binary clears and stops its status line there).
     before_print: Option<Box<dyn FnMut() + Send>>,
+    /// The final fits and summaries of the runs printed so far, for the rows of the run-to-run
+    /// table when the `aggregate` records come.
+    seen: Vec<Value>,
+    /// Result files given by [`TableWriter::with_runs`] (the `aggregate` command's inputs): the
+    /// rows of the run-to-run table instead of `seen`.
+    run_files: Vec<ResultFile>,
 }
 
 impl<W: Write> TableWriter<W> {
@@ -841,7 +898,16 @@ impl<W: Write> TableWriter<W> {
             hint,
             printed: false,
             before_print: None,
+            seen: Vec::new(),
+            run_files: Vec::new(),
         }
+    }
+
+    /// The runs whose final fits fill the rows of the run-to-run table (one file each, named
+    /// by its file name), when the records written are `aggregate` records only.
+    pub fn with_runs(mut self, files: Vec<ResultFile>) -> Self {
+        self.run_files = files;
+        self
     }
 
     /// Calls `f` before each table is printed.
@@ -883,9 +949,29 @@ impl<W: Write> TableWriter<W> {
         let records = std::mem::take(&mut self.pending);
         let res = Results::from_files(&[ResultFile {
             name: String::new(),
-            records,
+            records: records.clone(),
         }]);
-        let text = render(&res, &self.style);
+        let is = |v: &Value, t: &str| v.get("type").and_then(Value::as_str) == Some(t);
+        let text = if res.aggregates.is_empty() {
+            render(&res, &self.style)
+        } else {
+            let runs = if self.run_files.is_empty() {
+                let mut all = self.seen.clone();
+                all.extend(records.iter().cloned());
+                Results::from_files(&[ResultFile {
+                    name: String::new(),
+                    records: all,
+                }])
+            } else {
+                Results::from_files(&self.run_files)
+            };
+            render_with_runs(&res, &runs, &self.style)
+        };
+        // Final fits and summaries are kept for a run-to-run table printed later.
+        self.seen.extend(records.into_iter().filter(|v| {
+            is(v, "summary")
+                || (is(v, "fit") && v.get("final").and_then(Value::as_bool) == Some(true))
+        }));
         if text.trim().is_empty() {
             return Ok(());
         }

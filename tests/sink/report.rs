@@ -60,7 +60,7 @@ fn the_banner_says_fail_for_a_failing_limit_and_pass_for_a_passing_one() {
     assert_eq!(banner(&html), "FAIL");
     // The failed limit named in the banner, with its unit spelt out (native -> arcsec/sqrt(s)).
     assert!(
-        html.contains("failed: g4 N &le; 0.3 arcsec/sqrt(s) (measured 0.35)"),
+        html.contains("failed: g4 N &le; 0.3 arcsec/sqrt(s) (measured 0.35 [0.3325, 0.3675])"),
         "{html}"
     );
     assert!(
@@ -76,6 +76,11 @@ fn the_banner_says_fail_for_a_failing_limit_and_pass_for_a_passing_one() {
     assert!(!html.contains("failed:"));
     let html = render_html(&one_run(json!([limit("undecided", 0.3)]), None), "t", "now");
     assert_eq!(banner(&html), "NOT DECIDED");
+    // The undecided limit named, with the interval that straddles it.
+    assert!(
+        html.contains("not decided (the interval straddles the limit): g4 N &le; 0.3 arcsec/sqrt(s) (measured 0.3 [0.285, 0.315])"),
+        "{html}"
+    );
     let html = render_html(&one_run(json!([]), None), "t", "now");
     assert_eq!(banner(&html), "NO LIMITS JUDGED");
 }
@@ -252,11 +257,14 @@ fn effects_are_named_with_units_and_only_the_final_diagnosis_is_in_the_main_tabl
     let main = &html[html.find("<table class=\"diagnosis\"").unwrap()..];
     let main = &main[..main.find("</table>").unwrap()];
     assert!(
-        main.contains("sinusoid: amplitude = 0.3 arcsec/s, frequency = 0.8 Hz"),
+        main.contains(
+            "sinusoid: amplitude = 0.3 deg/h (0.3 arcsec/s), frequency = 0.8 Hz (period 1.25 s)"
+        ),
         "{main}"
     );
-    assert!(main
-        .contains("correlated (Gauss-Markov) noise: sigma = 0.5 arcsec/s, correlation time = 2 s"));
+    assert!(main.contains(
+        "correlated (Gauss-Markov) noise: sigma = 0.5 deg/h (0.5 arcsec/s), correlation time = 2 s"
+    ));
     assert!(
         !main.contains("0.7 Hz"),
         "the interim diagnosis is not in the main table"
@@ -266,20 +274,34 @@ fn effects_are_named_with_units_and_only_the_final_diagnosis_is_in_the_main_tabl
     assert!(interim[..interim.find("</table>").unwrap()].contains("<td>1800</td>"));
 }
 
-/// The value cells of the read-out row `key` of `channel` in the read-outs table.
-fn readout_cells(html: &str, channel: &str, key: &str) -> Vec<String> {
-    let tag = format!("<tr data-channel=\"{channel}\" data-readout=\"{key}\">");
-    let i = html
-        .find(&tag)
-        .unwrap_or_else(|| panic!("no {tag} in\n{html}"));
-    let row = html[i..].split("</tr>").next().unwrap();
-    row.split("<td")
+/// The read-out cell `key` of `channel`'s row in the read-outs table: its `data-` attributes
+/// (value, lo, hi, unit, tau) by name, and its text under `text`.
+fn readout_cell(html: &str, channel: &str, key: &str) -> std::collections::HashMap<String, String> {
+    let t = &html[html
+        .find("<table class=\"readouts\"")
+        .expect("a read-outs table")..];
+    let t = &t[..t.find("</table>").unwrap()];
+    let tag = format!("<tr data-channel=\"{channel}\">");
+    let row = t[t.find(&tag).unwrap_or_else(|| panic!("no {tag} in\n{t}"))..]
+        .split("</tr>")
+        .next()
+        .unwrap();
+    let at = format!("<td data-readout=\"{key}\"");
+    let cell = &row[row.find(&at).unwrap_or_else(|| panic!("no {at} in {row}"))..];
+    let (open, rest) = cell.split_once('>').unwrap();
+    let mut out: std::collections::HashMap<String, String> = open
+        .split(" data-")
         .skip(1)
-        .map(|c| {
-            let c = &c[c.find('>').unwrap() + 1..];
-            c.split("</td>").next().unwrap().to_string()
+        .filter_map(|kv| {
+            let (k, v) = kv.split_once("=\"")?;
+            Some((k.to_string(), v.trim_end_matches('"').to_string()))
         })
-        .collect()
+        .collect();
+    out.insert(
+        "text".into(),
+        rest.split("</td>").next().unwrap().to_string(),
+    );
+    out
 }
 
 #[test]
@@ -318,24 +340,24 @@ fn the_ieee_952_readouts_are_shown_with_units_intervals_and_taus() {
     }];
     let html = render_html(&files, "t", "now");
     assert!(html.contains("<h3>IEEE 952 read-outs</h3>"), "{html}");
-    let arw = readout_cells(&html, "g4", "arw");
-    // channel, name, value, interval, unit, tau
-    assert_eq!(arw[4], "deg/sqrt(h)", "{arw:?}");
-    let v: f64 = arw[2].parse().unwrap();
+    let arw = readout_cell(&html, "g4", "arw");
+    assert_eq!(arw["unit"], "deg/sqrt(h)", "{arw:?}");
+    let num = |k: &str| arw[k].parse::<f64>().unwrap();
+    let v = num("value");
     assert!((v / (0.254 / 60.0) - 1.0).abs() < 0.002, "{arw:?}");
     // The interval is the point's (0.9 and 1.1 of sigma in model_curve), carried to 1 s.
-    let iv: Vec<f64> = arw[3]
-        .trim_matches(|c| c == '[' || c == ']')
-        .split(", ")
-        .map(|x| x.parse().unwrap())
-        .collect();
     assert!(
-        (iv[0] / v - 0.9).abs() < 1e-3 && (iv[1] / v - 1.1).abs() < 1e-3,
+        (num("lo") / v - 0.9).abs() < 1e-3 && (num("hi") / v - 1.1).abs() < 1e-3,
         "{arw:?}"
     );
-    assert_eq!(arw[5], "0.004", "read at the shortest tau: {arw:?}");
-    let bi = readout_cells(&html, "g4", "bias_instability");
-    assert!(bi[2].contains("no minimum inside the curve"), "{bi:?}");
-    let rrw = readout_cells(&html, "g4", "rrw");
-    assert!(rrw[2].contains("no +1/2 slope"), "{rrw:?}");
+    assert_eq!(num("tau"), 0.004, "read at the shortest tau: {arw:?}");
+    // What a person reads: the value, its interval, the unit and the point used.
+    assert!(
+        arw["text"].contains("deg/sqrt(h); point at &tau; = 0.004 s"),
+        "{arw:?}"
+    );
+    let bi = readout_cell(&html, "g4", "bias_instability");
+    assert!(bi["text"].contains("no minimum inside the curve"), "{bi:?}");
+    let rrw = readout_cell(&html, "g4", "rrw");
+    assert!(rrw["text"].contains("no +1/2 slope"), "{rrw:?}");
 }

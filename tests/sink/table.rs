@@ -213,7 +213,7 @@ fn the_table_shows_datasheet_units_intervals_readouts_limits_and_the_diagnosis()
     // The diagnosis in one line, with the effect's parameters in units.
     let d = row(&t, "diagnosis:");
     assert!(
-        d.contains("explained by Gauss-Markov noise (sigma 0.100 arcsec/s, correlation time 20.0 s) (gap 3.00 -> 1.10)"),
+        d.contains("explained by correlated (Gauss-Markov) noise [sigma 0.100 deg/h (0.100 arcsec/s), correlation time 20.0 s] (gap 3.00 -> 1.10)"),
         "{d}"
     );
 }
@@ -248,7 +248,7 @@ fn records_without_a_summary_are_printed_when_the_writer_is_dropped() {
     drop(w);
     let t = out.text();
     assert!(
-        t.starts_with("\ngx  diagnosis: explained by Gauss-Markov noise"),
+        t.starts_with("\ngx  diagnosis: explained by correlated (Gauss-Markov) noise"),
         "{t}"
     );
     assert!(t.trim_end().ends_with("hint"), "{t}");
@@ -312,4 +312,164 @@ fn the_metrics_tap_keeps_the_newest_n_and_lost_frames_for_the_status_line() {
     };
     tap.health(&h);
     assert_eq!(m.latest().missing, vec![("dut".to_string(), 3)]);
+}
+
+/// A `diagnose` record (no fit beside it) names its unit: the effects' rates and the refitted
+/// terms are shown in datasheet units, converted by hand here. Accelerometer in m/s: a rate of
+/// 9.80665e-5 m/s/s is 10 micro-g, 4.903325e-6 m/s/s per deg C is 0.5 micro-g per deg C. Gyro in
+/// deg: 0.001 deg/s is 3.6 deg/h; N = 0.01 deg/sqrt(s) is 0.6 deg/sqrt(h) (x 60).
+#[test]
+fn the_diagnose_table_gives_effect_parameters_in_datasheet_units() {
+    let rec = |ch: &str, unit: &str, effects: serde_json::Value| {
+        json!({"type": "diagnosis", "channel": ch, "unit": unit, "gap_before": 4.0,
+            "gap_after": 1.0, "verdict": "explained", "regions": [], "effects": effects,
+            "final": true, "t_data": 600.0, "tau_span": [0.01, 60.0],
+            "base_coef": [0.0, 0.01, 0.0, 0.0, 0.0], "final_coef": [0.0, 0.01, 0.0, 0.0, 0.0]})
+    };
+    let out = Shared::default();
+    let mut w = TableWriter::new(out.clone(), TableStyle::default(), None);
+    let a1 = rec(
+        "a1",
+        "m/s",
+        json!([{"kind": "gauss_markov", "params": {"sigma": 9.80665e-5, "tau_c": 20.0}, "gap_after": 2.0},
+               {"kind": "temperature", "params": {"coefficient": 4.903325e-6}, "gap_after": 1.0}]),
+    );
+    let g1 = rec(
+        "g1",
+        "deg",
+        json!([{"kind": "sinusoid", "params": {"amplitude": 0.001, "frequency": 0.5}, "gap_after": 1.0}]),
+    );
+    writeln!(w, "{a1}\n{g1}").unwrap();
+    drop(w);
+    let t = out.text();
+    let a = row(&t, "a1 [m/s]  diagnosis:");
+    assert!(
+        a.contains("correlated (Gauss-Markov) noise [sigma 10.0 micro-g (9.81e-5 m/s/s), correlation time 20.0 s]"),
+        "{a}"
+    );
+    assert!(
+        a.contains("temperature sensitivity [coefficient 0.500 micro-g per deg C (4.90e-6 m/s/s per deg C)]"),
+        "{a}"
+    );
+    let g = row(&t, "g1 [deg]  diagnosis:");
+    assert!(
+        g.contains(
+            "sinusoid [amplitude 3.60 deg/h (0.00100 deg/s), frequency 0.500 Hz (period 2.00 s)]"
+        ),
+        "{g}"
+    );
+    assert!(
+        t.contains("five-term model with the effects: N 0.600 deg/sqrt(h);"),
+        "{t}"
+    );
+}
+
+/// Three runs of one gyro in arcsec, N = 0.24, 0.25, 0.26 arcsec/sqrt(s) and B determined in
+/// the first two only, then their `aggregate` records: the terminal shows the seed paper's table
+/// 2 layout, runs as rows named by their inputs, R K B N Q as columns in datasheet units, then
+/// mean, 95% interval, sd and n. By hand: N/60 is deg/sqrt(h): 0.00400, 0.00417, 0.00433; the
+/// mean 0.25 is 0.00417, sd 0.01 is 1.67e-4, and mean +- 1.96 sd/sqrt(3) = [0.238684, 0.261316]
+/// is [0.00398, 0.00436]; B in arcsec/s is deg/h.
+fn three_runs() -> Vec<String> {
+    let mut out = Vec::new();
+    for (r, (n, b)) in [(0.24, Some(0.1)), (0.25, Some(0.12)), (0.26, None)]
+        .into_iter()
+        .enumerate()
+    {
+        let mut f = fit(
+            "gx",
+            "arcsec",
+            [
+                (None, 0.0, 0.002),
+                (Some(n), 0.9 * n, 1.1 * n),
+                (b, 0.05, 0.2),
+                (None, 0.0, 1.0),
+                (None, 0.0, 0.01),
+            ],
+        );
+        f.run = Some(r);
+        out.push(serde_json::to_string(&f).unwrap());
+        out.push(
+            json!({"type": "summary", "run": r, "input": format!("/data/stand/run{}.csv", r + 1),
+                "channels": ["gx"], "tau0": 0.01, "t_data": 3600.0, "samples": [360000],
+                "segments": [1], "bad_rows": 0, "overlap": "16", "elapsed_s": 1.0,
+                "read_to_end": true})
+            .to_string(),
+        );
+    }
+    let half = 1.96 * 0.01 / 3f64.sqrt();
+    for (coef, n, mean, sd, ci) in [
+        ("Q", 0, None, None, None),
+        (
+            "N",
+            3,
+            Some(0.25),
+            Some(0.01),
+            Some([0.25 - half, 0.25 + half]),
+        ),
+        ("B", 2, Some(0.11), Some(0.0141421), Some([0.0904, 0.1296])),
+        ("K", 0, None, None, None),
+        ("R", 0, None, None, None),
+    ] {
+        out.push(
+            json!({"type": "aggregate", "channel": "gx", "unit": "arcsec", "coef": coef, "n": n,
+                "mean": mean, "sd": sd, "ci_t": null, "ci_z": ci})
+            .to_string(),
+        );
+    }
+    out
+}
+
+#[test]
+fn several_runs_are_shown_in_the_table_2_layout() {
+    let out = Shared::default();
+    let mut w = TableWriter::new(out.clone(), TableStyle::default(), None);
+    for l in three_runs() {
+        writeln!(w, "{l}").unwrap();
+    }
+    drop(w);
+    let t = out.text();
+    let table = &t[t.find("Run to run").expect("a run-to-run table")..];
+    let cells = |start: &str| -> Vec<String> {
+        row(table, start)
+            .split("  ")
+            .map(|c| c.trim().to_string())
+            .filter(|c| !c.is_empty())
+            .collect()
+    };
+    assert_eq!(cells("run "), ["run", "R", "K", "B", "N", "Q"], "{table}");
+    assert_eq!(
+        cells("deg/h^2"),
+        ["deg/h^2", "deg/h/sqrt(h)", "deg/h", "deg/sqrt(h)", "arcsec"],
+        "{table}"
+    );
+    assert_eq!(
+        cells("run1.csv"),
+        ["run1.csv", "-", "-", "0.100", "0.00400", "-"]
+    );
+    assert_eq!(
+        cells("run2.csv"),
+        ["run2.csv", "-", "-", "0.120", "0.00417", "-"]
+    );
+    assert_eq!(
+        cells("run3.csv"),
+        ["run3.csv", "-", "-", "-", "0.00433", "-"]
+    );
+    assert_eq!(cells("mean"), ["mean", "-", "-", "0.110", "0.00417", "-"]);
+    assert_eq!(
+        cells("95% interval"),
+        [
+            "95% interval",
+            "-",
+            "-",
+            "[0.0904, 0.130]",
+            "[0.00398, 0.00436]",
+            "-"
+        ]
+    );
+    assert_eq!(cells("sd"), ["sd", "-", "-", "0.0141", "1.67e-4", "-"]);
+    assert_eq!(
+        cells("runs determined"),
+        ["runs determined", "0", "0", "2", "3", "0"]
+    );
 }

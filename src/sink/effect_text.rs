@@ -1,0 +1,164 @@
+//! An effect of a diagnosis (docs/records.md, `effects`: `{kind, params}`) as a person reads it:
+//! its name, and each parameter named, with its unit, rates in the channel's datasheet unit
+//! (deg/h for a gyro, micro-g for an accelerometer; model::units) beside the native u/s the record
+//! holds. The terminal table (sink::table) and the report (sink::report) both word effects
+//! through [`effect_parts`], so the two never disagree.
+//!
+//! The record's parameters (docs/records.md): rates (`sigma`, `amplitude`, `rms_size`) in u/s,
+//! times (`tau_c`, `time_constant`) in s, `frequency` in Hz, `coefficient` in u/s per deg C, and
+//! `count`. A kind or parameter this module does not know is shown by its record name and value.
+
+use serde_json::Value;
+
+use crate::model::units::{datasheet_factors, datasheet_units, IncrementUnit};
+
+/// What a parameter measures, which decides its unit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Dim {
+    /// u/s.
+    Rate,
+    /// u/s per deg C.
+    RatePerC,
+    /// s.
+    Time,
+    /// Hz.
+    Freq,
+    /// A count.
+    Count,
+}
+
+/// A parameter: its record key, its name for a person, and what it measures.
+type ParamSpec = (&'static str, &'static str, Dim);
+
+/// The kinds the diagnosis writes: a person's name for the kind, and its parameters.
+fn known(kind: &str) -> Option<(&'static str, &'static [ParamSpec])> {
+    Some(match kind {
+        "gauss_markov" => (
+            "correlated (Gauss-Markov) noise",
+            &[
+                ("sigma", "sigma", Dim::Rate),
+                ("tau_c", "correlation time", Dim::Time),
+            ],
+        ),
+        "sinusoid" => (
+            "sinusoid",
+            &[
+                ("amplitude", "amplitude", Dim::Rate),
+                ("frequency", "frequency", Dim::Freq),
+            ],
+        ),
+        "output_filter" => (
+            "output low-pass filter",
+            &[("time_constant", "time constant", Dim::Time)],
+        ),
+        "warmup" => (
+            "warm-up drift",
+            &[
+                ("amplitude", "amplitude", Dim::Rate),
+                ("time_constant", "time constant", Dim::Time),
+            ],
+        ),
+        "bias_jumps" => (
+            "bias jumps",
+            &[
+                ("count", "count", Dim::Count),
+                ("rms_size", "rms size", Dim::Rate),
+            ],
+        ),
+        "temperature" => (
+            "temperature sensitivity",
+            &[("coefficient", "coefficient", Dim::RatePerC)],
+        ),
+        _ => return None,
+    })
+}
+
+/// One parameter as shown: `name`, and its value with unit(s) (`0.541 deg/h (0.541 arcsec/s)`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamText {
+    pub name: String,
+    pub value: String,
+}
+
+/// The effect's name and its parameters; `unit` is the channel's unit (`u` or empty when not
+/// known: rates are then in `u/s` only), `number` formats a value.
+pub fn effect_parts(
+    kind: &str,
+    params: &Value,
+    unit: &str,
+    number: &dyn Fn(f64) -> String,
+) -> (String, Vec<ParamText>) {
+    let u = if unit.is_empty() { "u" } else { unit };
+    // A rate in datasheet units: the factor and unit of the bias-instability coefficient (u/s).
+    let ds =
+        IncrementUnit::parse(u).map(|iu| (datasheet_factors(&iu)[2], datasheet_units(iu.kind)[2]));
+    let rate = |v: f64, per: &str| -> String {
+        match ds {
+            Some((f, du)) => format!("{} {du}{per} ({} {u}/s{per})", number(v * f), number(v)),
+            None => format!("{} {u}/s{per}", number(v)),
+        }
+    };
+    let Some((name, keys)) = known(kind) else {
+        let kv = params
+            .as_object()
+            .map(|o| {
+                o.iter()
+                    .map(|(k, v)| ParamText {
+                        name: k.clone(),
+                        value: v.as_f64().map_or_else(|| v.to_string(), number),
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        return (kind.replace('_', " "), kv);
+    };
+    let mut out = Vec::new();
+    for (key, pname, dim) in keys {
+        let v = &params[*key];
+        let text = match (dim, v.as_f64()) {
+            (_, None) => "?".to_string(),
+            (Dim::Count, Some(x)) => v.as_u64().map_or_else(|| number(x), |n| n.to_string()),
+            (Dim::Rate, Some(x)) => rate(x, ""),
+            (Dim::RatePerC, Some(x)) => rate(x, " per deg C"),
+            (Dim::Time, Some(x)) => format!("{} s", number(x)),
+            (Dim::Freq, Some(x)) if x > 0.0 => {
+                format!("{} Hz (period {} s)", number(x), number(1.0 / x))
+            }
+            (Dim::Freq, Some(x)) => format!("{} Hz", number(x)),
+        };
+        out.push(ParamText {
+            name: pname.to_string(),
+            value: text,
+        });
+    }
+    // Parameters a later writer added (an interval, a filter order) are kept, by record name.
+    if let Some(o) = params.as_object() {
+        for (k, v) in o {
+            if !keys.iter().any(|(key, _, _)| key == k) {
+                out.push(ParamText {
+                    name: k.replace('_', " "),
+                    value: v.as_f64().map_or_else(|| v.to_string(), number),
+                });
+            }
+        }
+    }
+    (name.to_string(), out)
+}
+
+/// `name: p1 = v1, p2 = v2` in one line.
+pub fn effect_line(
+    kind: &str,
+    params: &Value,
+    unit: &str,
+    number: &dyn Fn(f64) -> String,
+) -> String {
+    let (name, ps) = effect_parts(kind, params, unit, number);
+    if ps.is_empty() {
+        return name;
+    }
+    let list: Vec<String> = ps
+        .iter()
+        .map(|p| format!("{} = {}", p.name, p.value))
+        .collect();
+    format!("{name}: {}", list.join(", "))
+}
