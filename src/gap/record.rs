@@ -63,6 +63,7 @@ pub struct SegmentRecord {
 
 /// The `diagnosis` JSON line.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename = "diagnosis")]
 pub struct DiagnosisRecord {
     pub channel: String,
     pub gap_before: f64,
@@ -233,5 +234,15 @@ impl DiagnosisRecord {
                 tau_white: q.tau_white_s,
             }),
         }
+    }
+
+    /// The JSON line (no trailing newline).
+    pub fn to_json_line(&self) -> String {
+        serde_json::to_string(self).unwrap_or_else(|e| {
+            format!(
+                "{{\"type\":\"diagnosis\",\"channel\":\"{}\",\"error\":\"{e}\"}}",
+                self.channel
+            )
+        })
     }
 }

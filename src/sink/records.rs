@@ -33,6 +33,7 @@ fn nullable_f64<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
 
 /// `curve`: one statistic of one channel. Arrays are parallel, one entry per tau.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(tag = "type", rename = "curve")]
 pub struct CurveRecord {
     pub channel: String,
     pub unit: String,
@@ -85,6 +86,7 @@ impl CurveRecord {
 
 /// `fit`: the five-term model of one channel.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(tag = "type", rename = "fit")]
 pub struct FitRecord {
     pub channel: String,
     pub unit: String,
@@ -134,7 +136,7 @@ impl FitRecord {
 /// decoder's extra detail (`crate::frame::Health`) and what the run adds to it, in alphabetical
 /// order as earlier versions wrote them. Counts a file lacks read as 0.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq, Default)]
-#[serde(default)]
+#[serde(tag = "type", rename = "health", default)]
 pub struct HealthRecord {
     pub frames: u64,
     pub crc_errors: u64,
@@ -219,6 +221,7 @@ impl HealthRecord {
 
 /// `summary`: one at the end of each run.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(tag = "type", rename = "summary")]
 pub struct SummaryRecord {
     pub input: String,
     #[serde(skip_serializing_if = "Option::is_none", default)]
@@ -261,6 +264,7 @@ pub struct SummaryRecord {
 /// `aggregate`: run-to-run statistics of one coefficient of one channel (the seed paper's
 /// table 2).
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(tag = "type", rename = "aggregate")]
 pub struct AggregateRecord {
     pub channel: String,
     pub unit: String,
@@ -476,8 +480,13 @@ impl ReadoutsRecord {
 
 /// Any record, written as one JSON object whose `type` names the variant (`curve`, `fit`,
 /// `health`, `aggregate`, `summary`, `diagnosis`), first in the object.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(tag = "type", rename_all = "lowercase")]
+///
+/// The tag belongs to each record struct (`#[serde(tag = "type", rename = "fit")]` and so on), so
+/// a struct serialized on its own is a whole record too; `Record` writes its variant as it is and
+/// reads a record by its `type` ([`Record::from_line`] for a line that may be of a type this
+/// version does not know).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+#[serde(untagged)]
 pub enum Record {
     Curve(CurveRecord),
     Fit(Box<FitRecord>),
@@ -534,6 +543,30 @@ impl Record {
     }
 }
 
+impl<'de> Deserialize<'de> for Record {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Record, D::Error> {
+        use serde::de::Error;
+        let v = serde_json::Value::deserialize(d)?;
+        let ty = match v.get("type") {
+            Some(serde_json::Value::String(t)) => t.clone(),
+            Some(_) => return Err(D::Error::custom("`type` is not a string")),
+            None => return Err(D::Error::missing_field("type")),
+        };
+        let err = |e: serde_json::Error| D::Error::custom(e);
+        Ok(match ty.as_str() {
+            "curve" => Record::Curve(serde_json::from_value(v).map_err(err)?),
+            "fit" => Record::Fit(serde_json::from_value(v).map_err(err)?),
+            "health" => Record::Health(serde_json::from_value(v).map_err(err)?),
+            "aggregate" => Record::Aggregate(serde_json::from_value(v).map_err(err)?),
+            "summary" => Record::Summary(serde_json::from_value(v).map_err(err)?),
+            "diagnosis" => Record::Diagnosis(serde_json::from_value(v).map_err(err)?),
+            other => {
+                return Err(D::Error::unknown_variant(other, &Record::TYPES));
+            }
+        })
+    }
+}
+
 macro_rules! record_from {
     ($t:ty, $v:ident) => {
         impl From<$t> for Record {
@@ -549,13 +582,6 @@ record_from!(HealthRecord, Health);
 record_from!(AggregateRecord, Aggregate);
 record_from!(SummaryRecord, Summary);
 record_from!(crate::gap::DiagnosisRecord, Diagnosis);
-
-impl crate::gap::DiagnosisRecord {
-    /// The `diagnosis` JSON line (no newline), tagged as the writer tags it.
-    pub fn to_json_line(&self) -> String {
-        Record::from(self.clone()).to_json_line()
-    }
-}
 
 #[cfg(test)]
 mod tests {
