@@ -125,6 +125,20 @@ fn draw_effect(
             let s = rho * base.adev(tau) / (tau / (3.0 * mean_interval)).sqrt();
             EffectParams::BiasJumps { count, rms_size: s }
         }
+        // Filters beyond first order (docs/gap.md, "Low-pass filters beyond first order"):
+        // memory of 1-10 tau0 as the first order's (`rho` is not used).
+        EffectKind::MovingAverage => EffectParams::MovingAverage {
+            taps: log_uniform(rng, 2.0, 32.0).round() as u32,
+            stages: rng.random_range(1..=2u32),
+        },
+        EffectKind::SecondOrderFilter => EffectParams::SecondOrderFilter {
+            natural_frequency_hz: 1.0
+                / (2.0 * std::f64::consts::PI * log_uniform(rng, 1.0 * tau0, 10.0 * tau0)),
+            damping: log_uniform(rng, 0.2, 2.0),
+        },
+        EffectKind::ZeroPhaseFilter => EffectParams::ZeroPhaseFilter {
+            time_constant_s: log_uniform(rng, 1.0 * tau0, 10.0 * tau0),
+        },
         // Not drawn: these runs carry no temperature column (gap::temperature has its own
         // study, examples/temperature_study.rs).
         EffectKind::Temperature => EffectParams::Temperature {
@@ -163,6 +177,20 @@ fn model_toml(d: &Draw, tau0: f64) -> String {
             s += &format!(
                 "warmup = {{ amplitude = {amplitude}, time_constant = {time_constant_s} }}\n"
             )
+        }
+        Some(EffectParams::MovingAverage { taps, stages }) => {
+            s += &format!("moving_average = {{ taps = {taps}, stages = {stages} }}\n")
+        }
+        Some(EffectParams::SecondOrderFilter {
+            natural_frequency_hz,
+            damping,
+        }) => {
+            s += &format!(
+                "second_order_filter = {{ natural_frequency = {natural_frequency_hz}, damping = {damping} }}\n"
+            )
+        }
+        Some(EffectParams::ZeroPhaseFilter { time_constant_s }) => {
+            s += &format!("zero_phase_filter = {{ time_constant = {time_constant_s} }}\n")
         }
         // Bias jumps are added by `simulate` itself.
         Some(EffectParams::BiasJumps { .. }) | None => {}

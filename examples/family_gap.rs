@@ -45,6 +45,17 @@
 //!   per-sample noise, so that the quantization error is a slow wander rather than white phase
 //!   noise (docs/gap.md, "Quantization-limited units").
 //!
+//! Held-out families (`--families heldout`; defined before issue 13's last calibration round
+//! and run only for its final tables, so no threshold was tuned on them):
+//! - `consmems`: consumer MEMS gyro at 100 Hz, ARW 0.3-3 deg/sqrt(h), flicker 10-100 deg/h,
+//!   K 5-50 deg/h/sqrt(h), each rate sample rounded to a very coarse LSB of 0.7-3 times the
+//!   sample's noise (a +-2000 deg/s full scale on 16 bits);
+//! - `fog2k`: a FOG sampled at 2 kHz (the step raised for runs above 8 M samples), ARW
+//!   0.005-0.05 deg/sqrt(h), flicker 0.02-0.2 deg/h, a fine angle LSB;
+//! - `accr`: an accelerometer at 200 Hz whose rate ramp `R` dominates the long taus (its ADEV
+//!   meets the flicker floor at T_run / 100 to T_run / 20), VRW 0.01-0.05 m/s/sqrt(h), flicker
+//!   10-50 ug, rate samples rounded.
+//!
 //! Run lengths are 1-3 h (log-uniform), one draw in ten 6-24 h at a sampling step raised so
 //! that a run has at most 8 M samples (the benchmark's compute stays affordable); `--hours A,B`
 //! draws them log-uniform in [A, B] h instead (no long draws).
@@ -53,10 +64,13 @@
 //! cargo run --release --example family_gap -- [--draws 20] [--seed 1] [--threads 2]
 //!     [--families navfog,tacfog,vog4,memsgyro,ma4,memsacc]
 //!     [--effects none,gauss_markov,sinusoid,output_filter,warmup,bias_jumps] [--hours 1,3]
-//!     [--csv FILE]
+//!     [--csv FILE] [--resid FILE]
 //! ```
 //!
-//! `--draws` is per family and effect. Prints, per family: the false alarms (clean runs whose
+//! `--draws` is per family and effect. Jump draws (and clean draws, for the level) also get the
+//! fair jump ceiling: the most powerful test told the count and rms but not the times
+//! (`oracle::JumpCeiling`), its p-value from 199 draws of the Gaussian null. `--resid FILE`
+//! writes the base fit's standardized residuals per tau of the clean draws. Prints, per family: the false alarms (clean runs whose
 //! verdict is not `consistent`), the confusion matrix (truth against the first effect named),
 //! detection (the true effect named anywhere) against the oracle at 5% and at the family's
 //! measured false-alarm share, the parameter errors, and the count of runs whose final gap is
@@ -66,8 +80,9 @@
 mod common;
 
 use allanscope::gap::effects::effect_column;
-use allanscope::gap::oracle::{self, BlockGls};
+use allanscope::gap::oracle::{self, BlockGls, JumpCeiling};
 use allanscope::gap::problem::{GapProblem, ModelSpec};
+use allanscope::gap::steps::forward_steps;
 use allanscope::gap::warmup::fit_warmup;
 use allanscope::gap::{
     diagnose, DiagnoseOptions, EffectKind, EffectParams, EvidenceSnapshot, GapConfig, GapEvidence,
@@ -85,9 +100,15 @@ use std::path::Path;
 use std::time::Instant;
 
 /// The families; the first six are the default list, `coarse` is drawn on request.
-const FAMILIES: [&str; 7] = [
-    "navfog", "tacfog", "vog4", "memsgyro", "ma4", "memsacc", "coarse",
+const FAMILIES: [&str; 10] = [
+    "navfog", "tacfog", "vog4", "memsgyro", "ma4", "memsacc", "coarse", "consmems", "fog2k", "accr",
 ];
+/// The held-out families (`--families heldout`): defined before the calibration of issue 13's
+/// last round and run only for its final tables, so nothing was tuned on them.
+const HELDOUT: [&str; 3] = ["consmems", "fog2k", "accr"];
+/// Importance samples and null draws of the fair jump ceiling (`oracle::JumpCeiling`).
+const JUMP_CEIL_SAMPLES: usize = 1000;
+const JUMP_CEIL_NULLS: usize = 199;
 /// Most samples in one run (long runs get a coarser sampling step).
 const MAX_SAMPLES: f64 = 8.0e6;
 
@@ -200,6 +221,35 @@ fn draw_unit(
             u.tau0 = rate(rng, 100.0, 1000.0);
             u.rate_lsb = log_uniform(rng, 0.1, 1.0) * u.c[1] / u.tau0.sqrt();
         }
+        "consmems" => {
+            // Consumer MEMS gyro at 100 Hz: large noise and a very coarse rate LSB (a full
+            // scale of +-2000 deg/s on 16 bits), 0.7-3 times the per-sample noise.
+            u.c[1] = log_uniform(rng, 0.3, 3.0) * ARW;
+            u.c[2] = log_uniform(rng, 10.0, 100.0) * DEG_H;
+            u.c[3] = log_uniform(rng, 5.0, 50.0) * RRW;
+            u.tau0 = (0.01f64).max(t_run / MAX_SAMPLES);
+            u.rate_lsb = log_uniform(rng, 0.7, 3.0) * u.c[1] / u.tau0.sqrt();
+        }
+        "fog2k" => {
+            // A FOG sampled at 2 kHz (the step raised for the longest runs to keep at most
+            // MAX_SAMPLES), tactical noise, a fine angle LSB.
+            u.c[1] = log_uniform(rng, 0.005, 0.05) * ARW;
+            u.c[2] = log_uniform(rng, 0.02, 0.2) * DEG_H;
+            u.c[3] = log_uniform(rng, 0.005, 0.05) * RRW;
+            u.tau0 = (0.0005f64).max(t_run / MAX_SAMPLES);
+            u.lsb = log_uniform(rng, 0.1, 1.0) * u.c[1] * u.tau0.sqrt();
+        }
+        "accr" => {
+            // An accelerometer whose rate ramp R dominates the long taus: its ADEV meets the
+            // flicker floor at `tau_x` in [T_run / 100, T_run / 20].
+            u.c[1] = log_uniform(rng, 0.01, 0.05) / 60.0;
+            u.c[2] = log_uniform(rng, 10.0, 50.0) * 9.81e-6;
+            u.c[3] = log_uniform(rng, 1e-6, 1e-5);
+            let tau_x = log_uniform(rng, t_run / 100.0, t_run / 20.0);
+            u.c[4] = 0.664 * u.c[2] * 2f64.sqrt() / tau_x;
+            u.tau0 = rate(rng, 200.0, 200.0);
+            u.rate_lsb = log_uniform(rng, 0.1, 1.0) * u.c[1] / u.tau0.sqrt();
+        }
         _ => unreachable!("family list"),
     }
     u
@@ -213,6 +263,14 @@ const KINDS: [(&str, Option<EffectKind>); 6] = [
     ("output_filter", Some(EffectKind::OutputFilter)),
     ("warmup", Some(EffectKind::Warmup)),
     ("bias_jumps", Some(EffectKind::BiasJumps)),
+];
+
+/// Kinds drawn only when asked (`--effects moving_average,...`): the filters beyond first order
+/// (docs/gap.md, "Low-pass filters beyond first order"), memory 1-10 tau0 as the first order's.
+const EXTRA_KINDS: [(&str, Option<EffectKind>); 3] = [
+    ("moving_average", Some(EffectKind::MovingAverage)),
+    ("second_order_filter", Some(EffectKind::SecondOrderFilter)),
+    ("zero_phase_filter", Some(EffectKind::ZeroPhaseFilter)),
 ];
 
 fn kind_name(k: Option<EffectKind>) -> &'static str {
@@ -264,6 +322,18 @@ fn draw_effect(rng: &mut Xoshiro256PlusPlus, u: &Unit, kind: EffectKind) -> (Eff
             let s = rho * u.adev(tau) / (tau / (3.0 * u.t_run / count as f64)).sqrt();
             EffectParams::BiasJumps { count, rms_size: s }
         }
+        EffectKind::MovingAverage => EffectParams::MovingAverage {
+            taps: log_uniform(rng, 2.0, 10.0).round() as u32,
+            stages: rng.random_range(1..=2u32),
+        },
+        EffectKind::SecondOrderFilter => EffectParams::SecondOrderFilter {
+            natural_frequency_hz: 1.0
+                / (2.0 * std::f64::consts::PI * log_uniform(rng, u.tau0, 10.0 * u.tau0)),
+            damping: log_uniform(rng, 0.2, 2.0),
+        },
+        EffectKind::ZeroPhaseFilter => EffectParams::ZeroPhaseFilter {
+            time_constant_s: log_uniform(rng, u.tau0, 10.0 * u.tau0),
+        },
         other => panic!("{}: not drawn by this benchmark", other.name()),
     };
     (p, rho)
@@ -306,6 +376,20 @@ fn model_toml(u: &Unit, effect: Option<EffectParams>) -> String {
             s += &format!(
                 "warmup = {{ amplitude = {amplitude:e}, time_constant = {time_constant_s:e} }}\n"
             )
+        }
+        Some(EffectParams::MovingAverage { taps, stages }) => {
+            s += &format!("moving_average = {{ taps = {taps}, stages = {stages} }}\n")
+        }
+        Some(EffectParams::SecondOrderFilter {
+            natural_frequency_hz,
+            damping,
+        }) => {
+            s += &format!(
+                "second_order_filter = {{ natural_frequency = {natural_frequency_hz:e}, damping = {damping:e} }}\n"
+            )
+        }
+        Some(EffectParams::ZeroPhaseFilter { time_constant_s }) => {
+            s += &format!("zero_phase_filter = {{ time_constant = {time_constant_s:e} }}\n")
         }
         // Jumps are added by `simulate` (the truth is the realised jumps).
         _ => {}
@@ -390,6 +474,19 @@ fn oracle_z(
                 .collect();
             oracle::curve_known_z(&prob, &sig)
         }
+        EffectParams::MovingAverage { .. }
+        | EffectParams::SecondOrderFilter { .. }
+        | EffectParams::ZeroPhaseFilter { .. } => {
+            let n2 = u.c[1] * u.c[1];
+            let lp = truth.lowpass()?;
+            let sig: Vec<f64> = lp
+                .white_rate_avar(u.tau0, &prob.ms)
+                .iter()
+                .zip(&prob.tau)
+                .map(|(g, t)| n2 * (g - 1.0 / t))
+                .collect();
+            oracle::curve_known_z(&prob, &sig)
+        }
         EffectParams::Warmup {
             amplitude,
             time_constant_s,
@@ -429,6 +526,18 @@ struct Outcome {
     /// `warmup_bf` the test finds a warm-up, which the bookkeeping keeps only if its exact AVAR
     /// lowers the curve's gap.
     warm_b: f64,
+    /// The three largest z scores of the first pass of the step search on the base five-term
+    /// fit (`gap::steps::forward_steps` down to z = 3): the statistics the jump rule acts on.
+    jump_z: [f64; 3],
+    /// Clean draws: per tau of the curve, `(tau / T_run, r_j / sqrt(S_jj), S_jj, share of R in the
+    /// covariance's fit)` of the base
+    /// five-term fit (`--resid`: where on the tau axis a too-tight covariance shows).
+    resid: Vec<(f64, f64, f64, f64)>,
+    /// The fair jump ceiling (`oracle::JumpCeiling`: count and rms told, times unknown): its
+    /// p-value in the Gaussian model of the block means. Jump draws: at the truth; clean
+    /// draws: at the count and rms of the null stream's jump draw (its share below `alpha`
+    /// checks the level on clean runs).
+    jceil_p: f64,
 }
 
 fn run_one(
@@ -439,7 +548,11 @@ fn run_one(
     hours: Option<(f64, f64)>,
 ) -> Outcome {
     let fam_ix = FAMILIES.iter().position(|f| *f == family).unwrap_or(0) as u64;
-    let kind_ix = KINDS.iter().position(|k| k.1 == kind).unwrap_or(0) as u64;
+    let kind_ix = KINDS
+        .iter()
+        .chain(EXTRA_KINDS.iter())
+        .position(|k| k.1 == kind)
+        .unwrap_or(0) as u64;
     let stream = seed
         .wrapping_mul(1_000_003)
         .wrapping_add(fam_ix * 100_003 + kind_ix * 10_007 + i);
@@ -461,20 +574,65 @@ fn run_one(
         rho *= real / nom;
     }
     let oracle = truth.and_then(|t| oracle_z(t, &jumps, &unit, &snap));
-    let warm_b = GapProblem::new(&snap, &DiagnoseOptions::default())
-        .ok()
-        .and_then(|p| p.gls(&ModelSpec::default()))
-        .and_then(|b| {
-            let c5: [f64; 5] = std::array::from_fn(|i| b.coef[i]);
+    let block_s = snap.block_len as f64 * unit.tau0;
+    let ceiling = |count: u64, rms: f64, c5: &[f64; 5], seed: u64| {
+        BlockGls::new(&snap.block_means, block_s, c5)
+            .and_then(|g| {
+                JumpCeiling::new(&g).p_value(
+                    count as usize,
+                    rms,
+                    JUMP_CEIL_SAMPLES,
+                    JUMP_CEIL_NULLS,
+                    seed,
+                )
+            })
+            .map_or(f64::NAN, |p| p.0)
+    };
+    let base_prob = GapProblem::new(&snap, &DiagnoseOptions::default()).ok();
+    let base_fit = base_prob
+        .as_ref()
+        .and_then(|p| p.gls(&ModelSpec::default()));
+    let base_c5: Option<[f64; 5]> = base_fit
+        .as_ref()
+        .map(|b| std::array::from_fn(|i| b.coef[i]));
+    let mut resid = Vec::new();
+    if let (None, Some(p), Some(b)) = (kind, base_prob.as_ref(), base_fit.as_ref()) {
+        let t_run = snap.n_increments as f64 * unit.tau0;
+        for j in 0..p.len() {
+            let r = p.ln_avar()[j] - b.model[j].ln();
+            let r_share = p.c_init[4] * p.tau[j] * p.tau[j] / 2.0 / b.model[j];
+            resid.push((
+                p.tau[j] / t_run,
+                r / p.s_diag[j].sqrt(),
+                p.s_diag[j],
+                r_share,
+            ));
+        }
+    }
+    let warm_b = base_c5
+        .and_then(|c5| {
             fit_warmup(
                 &snap.block_means,
-                snap.block_len as f64 * unit.tau0,
+                block_s,
                 snap.n_increments as f64 * unit.tau0,
                 &c5,
                 &[],
             )
         })
         .map_or(f64::NAN, |w| w.log_bf);
+    let mut jump_z = [0.0; 3];
+    if let Some(f) = base_c5.and_then(|c5| forward_steps(&snap.block_means, block_s, &c5, &[], 3.0))
+    {
+        let mut zs = f.z_scores.clone();
+        zs.sort_by(|a, b| b.total_cmp(a));
+        for (o, z) in jump_z.iter_mut().zip(zs) {
+            *o = z;
+        }
+    }
+    let mut jceil_p = f64::NAN;
+    if let (Some(EffectParams::BiasJumps { count, rms_size }), Some(c5)) = (truth, base_c5) {
+        jceil_p = ceiling(count, rms_size, &c5, stream);
+    }
     let mut null_z = [f64::NAN; 5];
     if kind.is_none() {
         let mut nrng = Xoshiro256PlusPlus::seed_from_u64(stream ^ 0x6a_c1e5);
@@ -487,6 +645,9 @@ fn run_one(
                 _ => Vec::new(),
             };
             null_z[k] = oracle_z(p, &js, &unit, &snap).map_or(f64::NAN, |o| o.0);
+            if let (EffectParams::BiasJumps { count, .. }, Some(c5)) = (p, base_c5) {
+                jceil_p = ceiling(count, jumps_rms(&js), &c5, stream);
+            }
         }
     }
     let (verdict, gap_before, gap_after, named, qlim) = match d {
@@ -517,6 +678,9 @@ fn run_one(
         unit,
         qlim,
         warm_b,
+        jump_z,
+        resid,
+        jceil_p,
     }
 }
 
@@ -698,6 +862,36 @@ fn report(fam: &str, res: &[&Outcome], kinds: &[Option<EffectKind>]) {
             fmt_q(&ea)
         );
     }
+    report_ceiling(res, alpha);
+}
+
+/// The fair jump ceiling's line of the report: jump draws whose ceiling p-value is at most 5%
+/// and at most the family's share (floored at 1%), and the clean runs' share at 5%.
+fn report_ceiling(res: &[&Outcome], alpha: f64) {
+    let jp: Vec<f64> = res
+        .iter()
+        .filter(|o| o.truth_kind == Some(EffectKind::BiasJumps))
+        .map(|o| o.jceil_p)
+        .filter(|p| p.is_finite())
+        .collect();
+    let np: Vec<f64> = res
+        .iter()
+        .filter(|o| o.truth_kind.is_none())
+        .map(|o| o.jceil_p)
+        .filter(|p| p.is_finite())
+        .collect();
+    if jp.is_empty() && np.is_empty() {
+        return;
+    }
+    let below = |v: &[f64], a: f64| v.iter().filter(|&&p| p <= a + 1e-12).count();
+    let a = alpha.max(0.01);
+    println!(
+        "jump ceiling (count and rms told, times unknown): {} at 5%, {} at {:.1}%; clean runs at 5%: {}",
+        share(below(&jp, 0.05), jp.len()),
+        share(below(&jp, a), jp.len()),
+        100.0 * a,
+        share(below(&np, 0.05), np.len())
+    );
 }
 
 fn main() {
@@ -717,6 +911,7 @@ fn main() {
         .map(|e| {
             KINDS
                 .iter()
+                .chain(EXTRA_KINDS.iter())
                 .find(|k| k.0 == e)
                 .unwrap_or_else(|| panic!("--effects: unknown {e} (one of {default_kinds:?})"))
                 .1
@@ -734,6 +929,7 @@ fn main() {
         }
     };
     let fams_arg = get("--families", &FAMILIES[..6].join(","));
+    let fams_arg = fams_arg.replace("heldout", &HELDOUT.join(","));
     let fams: Vec<&'static str> = fams_arg
         .split(',')
         .map(|f| {
@@ -764,7 +960,7 @@ fn main() {
     }
     if !csv.is_empty() {
         let mut text = String::from(
-            "family,effect,draw,tau0,t_run,q,n,b,k,r,lsb,rate_lsb,rho,verdict,gap_before,gap_after,named,shape_true,amp_true,oracle_z,oracle_delta,null_z_gm,null_z_sin,null_z_filter,null_z_warmup,null_z_jumps,secs,qlim,warm_b\n",
+            "family,effect,draw,tau0,t_run,q,n,b,k,r,lsb,rate_lsb,rho,verdict,gap_before,gap_after,named,shape_true,amp_true,oracle_z,oracle_delta,null_z_gm,null_z_sin,null_z_filter,null_z_warmup,null_z_jumps,secs,qlim,warm_b,jump_z1,jump_z2,jump_z3,jceil_p\n",
         );
         for (o, (_, _, i)) in res.iter().zip(&items) {
             let u = &o.unit;
@@ -774,7 +970,7 @@ fn main() {
             });
             let nz: Vec<String> = o.null_z.iter().map(|z| format!("{z:.4}")).collect();
             text += &format!(
-                "{},{},{},{},{:.0},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:.3},{:?},{:.4},{:.4},{},{:e},{:e},{:.4},{:.4},{},{:.3},{},{:.3}\n",
+                "{},{},{},{},{:.0},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:.3},{:?},{:.4},{:.4},{},{:e},{:e},{:.4},{:.4},{},{:.3},{},{:.3},{:.3},{:.3},{:.3},{:.4}\n",
                 u.family,
                 kind_name(o.truth_kind),
                 i,
@@ -803,9 +999,26 @@ fn main() {
                 nz.join(","),
                 o.secs,
                 o.qlim,
-                o.warm_b
+                o.warm_b,
+                o.jump_z[0],
+                o.jump_z[1],
+                o.jump_z[2],
+                o.jceil_p
             );
         }
         std::fs::write(&csv, text).expect("csv");
+    }
+    let resid_csv = get("--resid", "");
+    if !resid_csv.is_empty() {
+        let mut text = String::from("family,draw,t_run,tau_frac,z,s_jj,r_share\n");
+        for (o, (_, _, i)) in res.iter().zip(&items) {
+            for (f, z, sjj, rs) in &o.resid {
+                text += &format!(
+                    "{},{},{:.0},{:.5e},{:.4},{:.4e},{:.4}\n",
+                    o.family, i, o.unit.t_run, f, z, sjj, rs
+                );
+            }
+        }
+        std::fs::write(&resid_csv, text).expect("resid csv");
     }
 }

@@ -18,7 +18,7 @@
 //!   file: header, atomic write, fingerprint, resume checks); run_frames_async /
 //!   run_text_async in the caller's tokio runtime, stopped by its token
 //! sim (model files, generators, capture writer)           model file -> capture
-//! stand (the stand config of `run`)                       TOML -> StandConfig
+//! stand (the stand config of `run`: one unit, or several) TOML -> StandConfig
 //! plan: the checked plan of a run (RunPlan of UnitPlans: input, channels, analysis options,
 //!   checkpoint setup), from a stand config or the command line; option values (`FromStr`)
 //! stats: the chi-squared quantile behind every interval

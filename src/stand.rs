@@ -38,6 +38,12 @@
 //! [[limits]]                  # datasheet limits (crate::model::limits), checked here with
 //! channel = "g4"              # the rest; a channel that the source lacks is refused at start
 //! ```
+//!
+//! Several units in one process: `[[unit]]` tables instead of `[source]`, each with a `name`,
+//! a `source` table (the keys above), and optionally `capture`, `channels` and `[[unit.limits]]`
+//! (`config/lab.toml`); `[run] capture` moves into the units, `[run] quiet_after` (seconds) says
+//! when a silent live unit is recorded as out. Two units may not share a name, a UDP port, a
+//! serial device, standard input or a capture file ([`UnitConfig`]).
 
 use std::path::{Path, PathBuf};
 
@@ -54,9 +60,9 @@ pub const DEFAULT_BAUD: u32 = 230_400;
 pub struct StandConfig {
     /// The file it came from.
     pub file: PathBuf,
-    pub source: SourceSpec,
-    /// Frame descriptor name or path (`source.format`).
-    pub format: String,
+    /// The units: one for a config with `[source]` at the top (no name: its records are as
+    /// they always were), or one per `[[unit]]` table (named: every record carries `unit`).
+    pub units: Vec<UnitConfig>,
     /// Stop after this many seconds (`run.duration`).
     pub duration_s: Option<f64>,
     /// Seconds between checkpoints beside the output (`run.checkpoint_every`): wall-seconds
@@ -64,10 +70,11 @@ pub struct StandConfig {
     pub checkpoint_every_s: Option<f64>,
     /// Seconds between interim records (`run.every_s`).
     pub every_s: Option<f64>,
+    /// Wall-seconds without a byte after which a live unit of a `[[unit]]` config is recorded
+    /// as out (`run.quiet_after`, default [`DEFAULT_QUIET_AFTER_S`]).
+    pub quiet_after_s: Option<f64>,
     /// Write `diagnosis` records (the sim-to-real gap) with the fits (`run.diagnose`).
     pub diagnose: bool,
-    /// `run.capture`.
-    pub capture: Option<PathBuf>,
     /// Serve `/metrics` here (`run.metrics`, ADDR:PORT or a port on 127.0.0.1).
     pub metrics: Option<std::net::SocketAddr>,
     pub stats: StatSet,
@@ -75,12 +82,74 @@ pub struct StandConfig {
     pub overlap: Overlap,
     /// `None`: no fit.
     pub fit: Option<FitMethod>,
-    /// Only these channels (`channels.include`).
-    pub channels: Option<Vec<String>>,
     /// `output.path`; `None`: standard output.
     pub output: Option<PathBuf>,
-    /// The `[[limits]]` tables, checked (each knows its line, for [`crate::model::limits::check_channels`]).
+}
+
+/// One unit of a stand config: its source and what is analysed of it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct UnitConfig {
+    /// `unit[i].name`; `None` for the one-unit shape (`[source]` at the top).
+    pub name: Option<String>,
+    pub source: SourceSpec,
+    /// Frame descriptor name or path (`source.format`).
+    pub format: String,
+    /// Every received byte of a live source written here (`run.capture`, `unit[i].capture`).
+    pub capture: Option<PathBuf>,
+    /// Only these channels (`channels.include`, or the unit's own).
+    pub channels: Option<Vec<String>>,
+    /// The `[[limits]]` tables that apply to this unit, checked (each knows its line, for
+    /// [`crate::model::limits::check_channels`]).
     pub limits: Vec<crate::model::limits::LimitSpec>,
+}
+
+/// Default of `run.quiet_after`: a live unit silent for this many wall-seconds is recorded as
+/// out (an `outage` record). Long enough that a scheduling hiccup or a datagram burst lost on
+/// a busy host is not an outage, short enough that an operator sees an unplugged unit at once.
+pub const DEFAULT_QUIET_AFTER_S: f64 = 5.0;
+
+/// Longest unit name: it names the unit's checkpoint file and labels its metrics.
+pub const MAX_UNIT_NAME: usize = 64;
+
+/// A unit name: letters, digits, `_`, `-`, `.` (it is part of file names and metric labels).
+fn valid_unit_name(n: &str) -> bool {
+    n.len() <= MAX_UNIT_NAME
+        && n.chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
+}
+
+/// What a unit holds that no other unit may hold too.
+#[derive(Debug, Clone, PartialEq)]
+enum Holding {
+    Name(String),
+    Udp(std::net::SocketAddr),
+    Serial(PathBuf),
+    Stdin,
+    Capture(PathBuf),
+}
+
+impl Holding {
+    /// Two units cannot both hold these: the same name, port (a UDP port bound on every
+    /// interface clashes with any address of that port), device, standard input or capture.
+    fn clashes(&self, o: &Holding) -> bool {
+        match (self, o) {
+            (Holding::Udp(a), Holding::Udp(b)) => {
+                a.port() == b.port()
+                    && (a.ip() == b.ip() || a.ip().is_unspecified() || b.ip().is_unspecified())
+            }
+            (a, b) => a == b,
+        }
+    }
+
+    fn clash_phrase(&self) -> String {
+        match self {
+            Holding::Name(n) => format!("unit name \"{n}\" given twice: the same name"),
+            Holding::Udp(a) => format!("UDP {a}: the same port"),
+            Holding::Serial(p) => format!("serial port {}: the same device", p.display()),
+            Holding::Stdin => "standard input: read by one unit only, and already".into(),
+            Holding::Capture(p) => format!("capture {}: the same file", p.display()),
+        }
+    }
 }
 
 /// All problems found in one stand config, each a [`UsageError::Config`] with its line and key
@@ -118,6 +187,26 @@ impl Check {
             Some(toml::Value::Table(t)) => Some(t),
             Some(v) => {
                 self.bad(key, format!("must be a table, not {}", v.type_str()));
+                None
+            }
+        }
+    }
+
+    /// A table under `key` of `t`, itself at `prefix`.
+    fn sub_table<'t>(
+        &mut self,
+        t: &'t toml::Table,
+        prefix: &str,
+        key: &str,
+    ) -> Option<&'t toml::Table> {
+        match t.get(key) {
+            None => None,
+            Some(toml::Value::Table(t)) => Some(t),
+            Some(v) => {
+                self.bad(
+                    &join(prefix, key),
+                    format!("must be a table, not {}", v.type_str()),
+                );
                 None
             }
         }
@@ -165,6 +254,302 @@ impl Check {
                 None
             }
         }
+    }
+    /// A `channels` table (`include = [...]`) at `prefix`.
+    fn channels(&mut self, c: &toml::Table, prefix: &str) -> Option<Vec<String>> {
+        self.known_keys(prefix, c, &["include"]);
+        let v = c.get("include")?;
+        let list: Option<Vec<String>> = v.as_array().and_then(|a| {
+            a.iter()
+                .map(|x| x.as_str().map(String::from))
+                .collect::<Option<Vec<_>>>()
+        });
+        match list {
+            Some(l) if !l.is_empty() => Some(l),
+            _ => {
+                self.bad(
+                    &join(prefix, "include"),
+                    format!(
+                        "must be a non-empty array of channel names, not {}",
+                        show(v)
+                    ),
+                );
+                None
+            }
+        }
+    }
+
+    /// The `[[limits]]` tables under `key` of `t` (`limits`, `unit[i].limits`).
+    fn limits(&mut self, t: &toml::Table, key: &str) -> Vec<crate::model::limits::LimitSpec> {
+        let at = key.rsplit('.').next().unwrap_or(key);
+        match t.get(at) {
+            None => Vec::new(),
+            Some(toml::Value::Array(a)) => {
+                crate::model::limits::from_tables(a, key, &mut self.c, WHAT)
+            }
+            Some(v) => {
+                self.bad(
+                    key,
+                    format!("must be an array of tables ([[{key}]]), not {}", show(v)),
+                );
+                Vec::new()
+            }
+        }
+    }
+
+    /// The `[[unit]]` tables: each unit's name, source, capture, channels and limits; the
+    /// config's `[channels]` and `[[limits]]` are every unit's defaults (a unit's own
+    /// `channels` replace them, its own `limits` are added). Two units may not share a name,
+    /// a UDP port, a serial port, standard input or a capture file.
+    fn units(
+        &mut self,
+        v: &toml::Value,
+        descriptor_dirs: &[PathBuf],
+        channels: &Option<Vec<String>>,
+        limits: &[crate::model::limits::LimitSpec],
+        output: Option<&Path>,
+    ) -> Vec<UnitConfig> {
+        let tables: Vec<Option<&toml::Table>> = match v {
+            toml::Value::Array(a) if !a.is_empty() => a.iter().map(|x| x.as_table()).collect(),
+            other => {
+                self.bad(
+                    "unit",
+                    format!(
+                        "must be one or more [[unit]] tables, not {}",
+                        match other {
+                            toml::Value::Array(_) => "an empty array".to_string(),
+                            o => show(o),
+                        }
+                    ),
+                );
+                return Vec::new();
+            }
+        };
+        let mut units = Vec::new();
+        // What each unit holds, with the key it was given at, to name both of a pair.
+        let mut held: Vec<(Holding, String)> = Vec::new();
+        for (i, t) in tables.into_iter().enumerate() {
+            let at = format!("unit[{i}]");
+            let Some(t) = t else {
+                self.bad(&at, "must be a table ([[unit]])");
+                continue;
+            };
+            self.known_keys(&at, t, &["name", "source", "capture", "channels", "limits"]);
+            let name = self.string(t, &at, "name");
+            match &name {
+                None if !t.contains_key("name") => self.bad(
+                    &join(&at, "name"),
+                    "missing: the unit's name (its records, metrics and files carry it)",
+                ),
+                Some(n) if !valid_unit_name(n) => self.bad(
+                    &join(&at, "name"),
+                    format!(
+                        "\"{n}\": use letters, digits, `_`, `-` and `.` (at most {MAX_UNIT_NAME} \
+                         characters): it names the unit's files and metrics"
+                    ),
+                ),
+                _ => {}
+            }
+            let src_key = join(&at, "source");
+            let (source, format) = match self.sub_table(t, &at, "source") {
+                Some(s) => self.source(s, &src_key, descriptor_dirs),
+                None => {
+                    if !t.contains_key("source") {
+                        self.bad(
+                            &src_key,
+                            "missing: the unit's source, e.g. source = { kind = \"udp\", \
+                             address = \"127.0.0.1:5001\", format = \"siu8\" }",
+                        );
+                    }
+                    (None, String::new())
+                }
+            };
+            let capture = self.string(t, &at, "capture").map(PathBuf::from);
+            let own_channels = match self.sub_table(t, &at, "channels") {
+                Some(c) => self.channels(c, &join(&at, "channels")),
+                None => None,
+            };
+            let mut unit_limits = limits.to_vec();
+            unit_limits.extend(self.limits(t, &join(&at, "limits")));
+            let mut holds = Vec::new();
+            if let Some(n) = &name {
+                holds.push((Holding::Name(n.clone()), join(&at, "name")));
+            }
+            match &source {
+                Some(SourceSpec::Udp { bind }) => {
+                    holds.push((Holding::Udp(*bind), join(&src_key, "address")))
+                }
+                Some(SourceSpec::Serial { path, .. }) => {
+                    holds.push((Holding::Serial(path.clone()), join(&src_key, "path")))
+                }
+                Some(SourceSpec::Stdin { .. }) => {
+                    holds.push((Holding::Stdin, join(&src_key, "kind")))
+                }
+                _ => {}
+            }
+            if let Some(c) = &capture {
+                if output == Some(c.as_path()) {
+                    self.bad(
+                        &join(&at, "capture"),
+                        format!("\"{}\" is also [output] path", c.display()),
+                    );
+                }
+                holds.push((Holding::Capture(c.clone()), join(&at, "capture")));
+            }
+            for (h, key) in holds {
+                if let Some((_, first)) = held.iter().find(|(o, _)| o.clashes(&h)) {
+                    let line = self
+                        .c
+                        .line_of(first)
+                        .map_or(String::new(), |l| format!(" (line {l})"));
+                    self.bad(&key, format!("{} as `{first}`{line}", h.clash_phrase()));
+                } else {
+                    held.push((h, key));
+                }
+            }
+            if let (Some(name), Some(source)) = (name, source) {
+                units.push(UnitConfig {
+                    name: Some(name),
+                    source,
+                    format,
+                    capture,
+                    channels: own_channels.or_else(|| channels.clone()),
+                    limits: unit_limits,
+                });
+            }
+        }
+        units
+    }
+
+    /// A `[source]` table (at `prefix`: `source`, or `unit[i].source`): the source and its
+    /// frame format, every problem recorded at its key.
+    fn source(
+        &mut self,
+        s: &toml::Table,
+        prefix: &str,
+        descriptor_dirs: &[PathBuf],
+    ) -> (Option<SourceSpec>, String) {
+        let mut format = String::new();
+        let mut source = None;
+        self.known_keys(
+            prefix,
+            s,
+            &["kind", "path", "baud", "address", "format", "pace"],
+        );
+        match self.string(s, prefix, "format") {
+            Some(f) if f == "csv" => self.bad(
+                &join(prefix, "format"),
+                "\"csv\": run reads frames; give a frame descriptor (siu8, kvh1750, ...)",
+            ),
+            Some(f) => {
+                // The descriptor is read now, so a bad one is refused with the rest:
+                // an unknown name at this key, a bad file by its own lines.
+                if let Err(e) = crate::frame::FrameDescriptor::load_in(&f, descriptor_dirs) {
+                    for p in e.problems {
+                        match p {
+                            UsageError::Option(m) => self.bad(&join(prefix, "format"), m),
+                            other => self.c.extend([other]),
+                        }
+                    }
+                }
+                format = f;
+            }
+            None if !s.contains_key("format") => self.bad(
+                &join(prefix, "format"),
+                "missing: a frame descriptor name (siu8, kvh1750, hg4930) or path",
+            ),
+            None => {}
+        }
+        let pace = match self.string(s, prefix, "pace").as_deref() {
+            None | Some("max") => Pace::Max,
+            // The byte rate is filled in once the descriptor is loaded.
+            Some("realtime") => Pace::Realtime { bytes_per_s: 0.0 },
+            Some(other) => {
+                self.bad(
+                    &join(prefix, "pace"),
+                    format!("\"{other}\": expected \"max\" or \"realtime\""),
+                );
+                Pace::Max
+            }
+        };
+        let kind = self.string(s, prefix, "kind");
+        let baud = match s.get("baud") {
+            None => Some(DEFAULT_BAUD),
+            Some(toml::Value::Integer(b)) if *b > 0 && *b <= 20_000_000 => Some(*b as u32),
+            Some(v) => {
+                self.bad(
+                    &join(prefix, "baud"),
+                    format!("must be a positive integer baud rate, not {}", show(v)),
+                );
+                None
+            }
+        };
+        let path = self.string(s, prefix, "path");
+        let needs = |ck: &mut Check, key: &str, what: &str| {
+            if !s.contains_key(key) {
+                ck.bad(&join(prefix, key), format!("missing: {what}"));
+            }
+        };
+        let only_for = |ck: &mut Check, key: &str, kinds: &str| {
+            if s.contains_key(key) {
+                ck.bad(&join(prefix, key), format!("only for kind = {kinds}"));
+            }
+        };
+        match kind.as_deref() {
+            Some("serial") => {
+                needs(self, "path", "the serial port, e.g. \"/dev/ttyUSB0\"");
+                only_for(self, "address", "\"udp\"");
+                only_for(self, "pace", "\"file\" or \"stdin\"");
+                if let (Some(p), Some(baud)) = (path, baud) {
+                    source = Some(SourceSpec::Serial {
+                        path: p.into(),
+                        baud,
+                    });
+                }
+            }
+            Some("udp") => {
+                needs(
+                    self,
+                    "address",
+                    "ADDR:PORT to bind, e.g. \"127.0.0.1:5000\"",
+                );
+                only_for(self, "path", "\"serial\" or \"file\"");
+                only_for(self, "baud", "\"serial\"");
+                only_for(self, "pace", "\"file\" or \"stdin\"");
+                if let Some(a) = self.string(s, prefix, "address") {
+                    match crate::source::udp::parse_bind(&a) {
+                        Ok(bind) => source = Some(SourceSpec::Udp { bind }),
+                        Err(e) => self.bad(&join(prefix, "address"), e),
+                    }
+                }
+            }
+            Some("file") => {
+                needs(self, "path", "the capture file");
+                only_for(self, "address", "\"udp\"");
+                only_for(self, "baud", "\"serial\"");
+                if let Some(p) = path {
+                    source = Some(SourceSpec::File {
+                        path: p.into(),
+                        pace,
+                    });
+                }
+            }
+            Some("stdin") => {
+                only_for(self, "path", "\"serial\" or \"file\"");
+                only_for(self, "address", "\"udp\"");
+                only_for(self, "baud", "\"serial\"");
+                source = Some(SourceSpec::Stdin { pace });
+            }
+            Some(other) => self.bad(
+                &join(prefix, "kind"),
+                format!("\"{other}\": expected serial, udp, file or stdin"),
+            ),
+            None if !s.contains_key("kind") => {
+                self.bad(&join(prefix, "kind"), "missing: serial, udp, file or stdin")
+            }
+            None => {}
+        }
+        (source, format)
     }
 }
 
@@ -229,6 +614,7 @@ impl StandConfig {
                 "channels",
                 "output",
                 "limits",
+                "unit",
             ],
         );
 
@@ -236,129 +622,11 @@ impl StandConfig {
         let mut format = String::new();
         let mut source = None;
         match ck.table(&root, "source") {
-            None if !root.contains_key("source") => ck.bad("source", "missing: the [source] table"),
-            None => {}
-            Some(s) => {
-                ck.known_keys(
-                    "source",
-                    s,
-                    &["kind", "path", "baud", "address", "format", "pace"],
-                );
-                match ck.string(s, "source", "format") {
-                    Some(f) if f == "csv" => ck.bad(
-                        "source.format",
-                        "\"csv\": run reads frames; give a frame descriptor (siu8, kvh1750, ...)",
-                    ),
-                    Some(f) => {
-                        // The descriptor is read now, so a bad one is refused with the rest:
-                        // an unknown name at this key, a bad file by its own lines.
-                        if let Err(e) = crate::frame::FrameDescriptor::load_in(&f, descriptor_dirs)
-                        {
-                            for p in e.problems {
-                                match p {
-                                    UsageError::Option(m) => ck.bad("source.format", m),
-                                    other => ck.c.extend([other]),
-                                }
-                            }
-                        }
-                        format = f;
-                    }
-                    None if !s.contains_key("format") => ck.bad(
-                        "source.format",
-                        "missing: a frame descriptor name (siu8, kvh1750, hg4930) or path",
-                    ),
-                    None => {}
-                }
-                let pace = match ck.string(s, "source", "pace").as_deref() {
-                    None | Some("max") => Pace::Max,
-                    // The byte rate is filled in once the descriptor is loaded.
-                    Some("realtime") => Pace::Realtime { bytes_per_s: 0.0 },
-                    Some(other) => {
-                        ck.bad(
-                            "source.pace",
-                            format!("\"{other}\": expected \"max\" or \"realtime\""),
-                        );
-                        Pace::Max
-                    }
-                };
-                let kind = ck.string(s, "source", "kind");
-                let baud = match s.get("baud") {
-                    None => Some(DEFAULT_BAUD),
-                    Some(toml::Value::Integer(b)) if *b > 0 && *b <= 20_000_000 => Some(*b as u32),
-                    Some(v) => {
-                        ck.bad(
-                            "source.baud",
-                            format!("must be a positive integer baud rate, not {}", show(v)),
-                        );
-                        None
-                    }
-                };
-                let path = ck.string(s, "source", "path");
-                let needs = |ck: &mut Check, key: &str, what: &str| {
-                    if !s.contains_key(key) {
-                        ck.bad(&join("source", key), format!("missing: {what}"));
-                    }
-                };
-                let only_for = |ck: &mut Check, key: &str, kinds: &str| {
-                    if s.contains_key(key) {
-                        ck.bad(&join("source", key), format!("only for kind = {kinds}"));
-                    }
-                };
-                match kind.as_deref() {
-                    Some("serial") => {
-                        needs(&mut ck, "path", "the serial port, e.g. \"/dev/ttyUSB0\"");
-                        only_for(&mut ck, "address", "\"udp\"");
-                        only_for(&mut ck, "pace", "\"file\" or \"stdin\"");
-                        if let (Some(p), Some(baud)) = (path, baud) {
-                            source = Some(SourceSpec::Serial {
-                                path: p.into(),
-                                baud,
-                            });
-                        }
-                    }
-                    Some("udp") => {
-                        needs(
-                            &mut ck,
-                            "address",
-                            "ADDR:PORT to bind, e.g. \"127.0.0.1:5000\"",
-                        );
-                        only_for(&mut ck, "path", "\"serial\" or \"file\"");
-                        only_for(&mut ck, "baud", "\"serial\"");
-                        only_for(&mut ck, "pace", "\"file\" or \"stdin\"");
-                        if let Some(a) = ck.string(s, "source", "address") {
-                            match crate::source::udp::parse_bind(&a) {
-                                Ok(bind) => source = Some(SourceSpec::Udp { bind }),
-                                Err(e) => ck.bad("source.address", e),
-                            }
-                        }
-                    }
-                    Some("file") => {
-                        needs(&mut ck, "path", "the capture file");
-                        only_for(&mut ck, "address", "\"udp\"");
-                        only_for(&mut ck, "baud", "\"serial\"");
-                        if let Some(p) = path {
-                            source = Some(SourceSpec::File {
-                                path: p.into(),
-                                pace,
-                            });
-                        }
-                    }
-                    Some("stdin") => {
-                        only_for(&mut ck, "path", "\"serial\" or \"file\"");
-                        only_for(&mut ck, "address", "\"udp\"");
-                        only_for(&mut ck, "baud", "\"serial\"");
-                        source = Some(SourceSpec::Stdin { pace });
-                    }
-                    Some(other) => ck.bad(
-                        "source.kind",
-                        format!("\"{other}\": expected serial, udp, file or stdin"),
-                    ),
-                    None if !s.contains_key("kind") => {
-                        ck.bad("source.kind", "missing: serial, udp, file or stdin")
-                    }
-                    None => {}
-                }
+            None if !root.contains_key("source") && !root.contains_key("unit") => {
+                ck.bad("source", "missing: the [source] table (or [[unit]] tables)")
             }
+            None => {}
+            Some(s) => (source, format) = ck.source(s, "source", descriptor_dirs),
         }
 
         // [run]
@@ -366,6 +634,7 @@ impl StandConfig {
         let mut checkpoint_every_s = None;
         let mut diagnose = false;
         let mut metrics = None;
+        let mut quiet_after_s = None;
         if let Some(r) = ck.table(&root, "run") {
             ck.known_keys(
                 "run",
@@ -377,6 +646,7 @@ impl StandConfig {
                     "diagnose",
                     "checkpoint_every",
                     "metrics",
+                    "quiet_after",
                 ],
             );
             match r.get("metrics") {
@@ -414,6 +684,7 @@ impl StandConfig {
                 Some(_) => duration_s = ck.seconds(r, "run", "duration", 0.0, MAX_SECONDS),
             }
             every_s = ck.seconds(r, "run", "every_s", MIN_INTERVAL_S, MAX_SECONDS);
+            quiet_after_s = ck.seconds(r, "run", "quiet_after", MIN_INTERVAL_S, MAX_SECONDS);
             capture = ck.string(r, "run", "capture").map(PathBuf::from);
         }
 
@@ -508,27 +779,10 @@ impl StandConfig {
         }
 
         // [channels]
-        let mut channels = None;
-        if let Some(c) = ck.table(&root, "channels") {
-            ck.known_keys("channels", c, &["include"]);
-            if let Some(v) = c.get("include") {
-                let list: Option<Vec<String>> = v.as_array().and_then(|a| {
-                    a.iter()
-                        .map(|x| x.as_str().map(String::from))
-                        .collect::<Option<Vec<_>>>()
-                });
-                match list {
-                    Some(l) if !l.is_empty() => channels = Some(l),
-                    _ => ck.bad(
-                        "channels.include",
-                        format!(
-                            "must be a non-empty array of channel names, not {}",
-                            show(v)
-                        ),
-                    ),
-                }
-            }
-        }
+        let channels = match ck.table(&root, "channels") {
+            Some(c) => ck.channels(c, "channels"),
+            None => None,
+        };
 
         // [output]
         let mut output = None;
@@ -538,41 +792,62 @@ impl StandConfig {
         }
 
         // [[limits]]: checked here, so their problems come with the others, with lines.
-        let limits = match root.get("limits") {
-            None => Vec::new(),
-            Some(toml::Value::Array(a)) => {
-                crate::model::limits::from_tables(a, "limits", &mut ck.c, WHAT)
-            }
+        let limits = ck.limits(&root, "limits");
+
+        // [[unit]]: several units in one process, each with its own source.
+        let units = match root.get("unit") {
+            None => match source {
+                Some(source) => vec![UnitConfig {
+                    name: None,
+                    source,
+                    format,
+                    capture,
+                    channels,
+                    limits,
+                }],
+                None => Vec::new(),
+            },
             Some(v) => {
-                ck.bad(
-                    "limits",
-                    format!("must be an array of tables ([[limits]]), not {}", show(v)),
-                );
-                Vec::new()
+                if root.contains_key("source") {
+                    ck.bad(
+                        "source",
+                        "a config with [[unit]] tables gives each unit its own source                          (`source = { kind = ..., format = ... }` in the unit): remove [source]",
+                    );
+                }
+                if capture.is_some() {
+                    ck.bad(
+                        "run.capture",
+                        "a config with [[unit]] tables gives each unit its own capture                          (`capture = \"FILE\"` in the unit)",
+                    );
+                }
+                ck.units(v, descriptor_dirs, &channels, &limits, output.as_deref())
             }
         };
 
-        match (ck.c.is_empty(), source) {
-            (true, Some(source)) => Ok(StandConfig {
+        if ck.c.is_empty() && !units.is_empty() {
+            Ok(StandConfig {
                 file: file.into(),
-                source,
-                format,
+                units,
                 duration_s,
                 checkpoint_every_s,
                 every_s,
-                capture,
+                quiet_after_s,
                 metrics,
                 diagnose,
                 stats,
                 taus,
                 overlap,
                 fit,
-                channels,
                 output,
-                limits,
-            }),
-            _ => Err(ck.c.into_errors(WHAT)),
+            })
+        } else {
+            Err(ck.c.into_errors(WHAT))
         }
+    }
+
+    /// True when the config lists its units in `[[unit]]` tables: records then carry `unit`.
+    pub fn named_units(&self) -> bool {
+        self.units.iter().any(|u| u.name.is_some())
     }
 }
 

@@ -10,7 +10,7 @@ use std::path::Path;
 
 use anyhow::Result;
 
-use super::{read_json_lines, read_records, usage, AggregateArgs};
+use super::{read_json_lines, usage, AggregateArgs};
 use allanscope::model::aggregate::{aggregate_channels, CoefAggregate, RunCoefs};
 use allanscope::sink::json::JsonLines;
 use allanscope::sink::records::{AggregateRecord, Record};
@@ -84,9 +84,22 @@ pub fn record(a: &CoefAggregate) -> AggregateRecord {
 /// One run's channels as read so far: (is the record final, its coefficients).
 type RunSoFar = (Option<usize>, Vec<(bool, RunCoefs)>);
 
-/// The runs in one file: per run index (absent: one run), each channel's final fit.
+/// The runs in one file: per run index (absent: one run), each channel's final fit. A file of
+/// a run of several units (`[[unit]]`) holds one run per unit: the unit-to-unit statistics.
 fn runs_of_file(path: &Path) -> Result<Vec<Vec<RunCoefs>>> {
-    let records = read_records(path, &["fit"])?;
+    // A file of several units holds one run per unit (`units_as_runs`); its fit records are read
+    // typed, and one that does not parse is an error.
+    let (values, _) = allanscope::sink::results::units_as_runs(&read_json_lines(path)?);
+    let mut records = Vec::new();
+    for v in values.into_iter().filter(|v| v["type"] == "fit") {
+        let r = Record::from_value(v).map_err(|e| {
+            usage(format!(
+                "{}: a `fit` record that does not parse: {e}",
+                path.display()
+            ))
+        })?;
+        records.extend(r);
+    }
     // (run index, channel) -> (is final, coefficients), the latest record winning among equals.
     let mut runs: Vec<RunSoFar> = Vec::new();
     for rec in &records {

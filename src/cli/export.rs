@@ -7,10 +7,10 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args;
 
-use super::{read_records, usage};
+use super::{read_json_lines, usage};
 use allanscope::model::units::{IncrementUnit, SensorKind};
 use allanscope::sink::export::{self, ExportFormat, ImuNoise};
-use allanscope::sink::records::{CurveRecord, FitRecord, Record};
+use allanscope::sink::records::{CurveRecord, FitRecord};
 
 #[derive(Debug, Args)]
 pub struct ExportArgs {
@@ -28,6 +28,10 @@ pub struct ExportArgs {
     /// Accelerometer channels (default: every channel in a velocity unit).
     #[arg(long, value_delimiter = ',')]
     pub accel: Option<Vec<String>>,
+    /// The unit to export from the results of a stand config with several units (`[[unit]]`
+    /// tables; records carrying `"unit": NAME`). Needed when the file holds more than one.
+    #[arg(long, value_name = "NAME")]
+    pub stand_unit: Option<String>,
     /// Replace an existing output file.
     #[arg(long)]
     pub force: bool,
@@ -82,20 +86,53 @@ pub fn run(a: &ExportArgs) -> Result<()> {
     let mut curves: Vec<CurveRecord> = Vec::new();
     let mut tau0: Option<f64> = None;
     let tag = a.input.display().to_string();
-    for r in read_records(&a.input, &["fit", "curve", "summary"])? {
-        match r {
-            Record::Fit(f) if f.r#final => {
+    // A run of several units: one unit is exported (--stand-unit), by its name.
+    let mut units: Vec<String> = Vec::new();
+    for mut v in read_json_lines(&a.input)? {
+        if let Some(u) = allanscope::sink::unit_record::untag(&mut v) {
+            if !units.contains(&u) {
+                units.push(u.clone());
+            }
+            if a.stand_unit.as_deref().is_some_and(|w| w != u) {
+                continue;
+            }
+        }
+        match v.get("type").and_then(|t| t.as_str()) {
+            Some("fit") if v["final"] == true => {
+                let f: FitRecord =
+                    serde_json::from_value(v).with_context(|| format!("{tag}: a fit record"))?;
                 // A later final fit of the same channel and run replaces an earlier one.
                 fits.retain(|g| !(g.channel == f.channel && g.run == f.run));
-                fits.push(*f);
+                fits.push(f);
             }
-            Record::Curve(c) if c.r#final => {
+            Some("curve") if v["final"] == true => {
+                let c: CurveRecord =
+                    serde_json::from_value(v).with_context(|| format!("{tag}: a curve record"))?;
                 curves.retain(|g| !(g.channel == c.channel && g.run == c.run && g.stat == c.stat));
                 curves.push(c);
             }
-            Record::Summary(s) => tau0 = Some(s.tau0),
+            Some("summary") => tau0 = v.get("tau0").and_then(|t| t.as_f64()).or(tau0),
             _ => {}
         }
+    }
+    match (&a.stand_unit, units.len()) {
+        (None, n) if n > 1 => {
+            return Err(usage(format!(
+                "{tag} holds {n} units ({}): choose one with --stand-unit NAME",
+                units.join(", ")
+            )))
+        }
+        (Some(w), _) if !units.contains(w) => {
+            return Err(usage(format!(
+                "--stand-unit {w}: {tag} has no unit of that name ({})",
+                if units.is_empty() {
+                    "it holds the records of one unnamed unit".to_string()
+                } else {
+                    format!("it has: {}", units.join(", "))
+                }
+            )))
+        }
+        _ => {}
     }
     let text = match format {
         ExportFormat::Csv | ExportFormat::Stable32 => {

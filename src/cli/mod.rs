@@ -32,7 +32,6 @@ use allanscope::model::fit::FitMethod;
 use allanscope::plan::checkpoint_setup::CheckpointRequest;
 use allanscope::plan::settings::DataSettings;
 use allanscope::plan::unit::UnitRequest;
-use allanscope::sink::records::Record;
 
 #[derive(Debug, Parser)]
 #[command(
@@ -526,32 +525,6 @@ pub(crate) fn open_input(input: &str) -> Result<Box<dyn Read + Send>> {
             std::fs::File::open(path).map_err(|e| usage(format!("{input}: cannot open: {e}")))?;
         Ok(Box::new(f))
     }
-}
-
-/// Reads the records of the types `wanted` from a whole file (for `aggregate` and `export`): a
-/// line that is not JSON, or a record of a wanted `type` that does not parse as one, is an error
-/// naming the file and line; records of other types, known or not (a newer version's), are
-/// skipped unread.
-pub fn read_records(path: &Path, wanted: &[&str]) -> Result<Vec<Record>> {
-    let mut out = Vec::new();
-    for (line, v) in numbered_json_lines(path)? {
-        let ty = v.get("type").and_then(|t| t.as_str()).map(String::from);
-        if !ty.as_deref().is_some_and(|t| wanted.contains(&t)) {
-            continue;
-        }
-        match Record::from_value(v) {
-            Ok(Some(r)) => out.push(r),
-            Ok(None) => {}
-            Err(e) => {
-                return Err(anyhow::Error::new(UsageError::Input {
-                    file: path.into(),
-                    line,
-                    problem: format!("not a well-formed `{}` record: {e}", ty.unwrap_or_default()),
-                }))
-            }
-        }
-    }
-    Ok(out)
 }
 
 /// Reads a whole text file of JSON lines into values (for `plot`, `report`, tests).

@@ -50,7 +50,10 @@ pub fn run(r: &RunArgs) -> Result<()> {
         abort_after_frames: r.abort_after_frames,
     };
     let mut plan = RunPlan::from_stand(&cfg, &super::descriptor_dirs(), &flags)?;
-    // A stand config describes one unit today (the plan holds a list).
+    if plan.named {
+        return run_units(r, &cfg, plan);
+    }
+    // A stand config with [source] at the top: one unit, records as they always were.
     let unit = plan.units.remove(0);
     let InputPlan::Frames { spec, desc } = &unit.input else {
         anyhow::bail!("a stand config's source gives frames of a descriptor");
@@ -75,7 +78,7 @@ pub fn run(r: &RunArgs) -> Result<()> {
     // Outputs last: every option has been accepted; they are only emptied once the source
     // is open and delivers (allanscope::sink::output).
     let mode = OutputMode::new(r.force, r.resume);
-    let capture = super::capture_output(plan.capture.as_deref(), mode, "[run] capture")
+    let capture = super::capture_output(unit.capture.as_deref(), mode, "[run] capture")
         .map_err(|e| e.context(format!("stand config {}", cfg.file.display())))?;
     let (out, dest) = super::records_output(plan.output.as_deref(), mode, "[output] path", r.json)
         .map_err(|e| e.context(format!("stand config {}", cfg.file.display())))?;
@@ -113,6 +116,102 @@ pub fn run(r: &RunArgs) -> Result<()> {
     written?;
     if !live && !outcome.read_to_end {
         return Err(super::interrupted(&name, &ctl.progress));
+    }
+    Ok(())
+}
+
+/// A stand config with `[[unit]]` tables: every unit in this process
+/// (`allanscope::pipeline::units`), every record tagged with its unit's name. Exit status 1
+/// when a unit's source failed or a unit went quiet (after every final record is written).
+fn run_units(r: &RunArgs, cfg: &StandConfig, plan: RunPlan) -> Result<()> {
+    use allanscope::pipeline::units::{UnitRun, UnitsControl};
+    let at = |e: anyhow::Error| e.context(format!("stand config {}", cfg.file.display()));
+    let server = match (&r.metrics, plan.metrics) {
+        (Some(_), _) => super::metrics::start_option(r.metrics.as_deref())?,
+        (None, Some(addr)) => Some(super::metrics::MetricsServer::start(addr)?),
+        (None, None) => None,
+    };
+    let metrics = server.as_ref().map(|s| s.metrics.clone());
+    let live = plan.units.iter().any(|u| u.is_live());
+    let mode = OutputMode::new(r.force, r.resume);
+    let mut units = Vec::new();
+    let mut captures = Vec::new();
+    for u in plan.units {
+        let InputPlan::Frames { spec, desc } = &u.input else {
+            anyhow::bail!("a stand config's source gives frames of a descriptor");
+        };
+        let name = u.label().to_string();
+        units.push(UnitRun {
+            name: name.as_str().into(),
+            spec: spec.clone(),
+            desc: (**desc).clone(),
+            analysis: u.start_analysis()?,
+            capture: None,
+            metrics: metrics.as_ref().map(|m| m.tap(&name, &u.analysis.limits)),
+            progress: std::sync::Arc::new(allanscope::source::Progress::default()),
+            checkpoint: u.checkpoint.map(|c| std::sync::Arc::new(c.0)),
+        });
+        captures.push((name, u.capture));
+    }
+    // Outputs last: every unit was accepted; each is only emptied once its source delivers.
+    for (run, (name, capture)) in units.iter_mut().zip(&captures) {
+        let what = format!("unit `{name}` capture");
+        run.capture = super::capture_output(capture.as_deref(), mode, &what).map_err(at)?;
+    }
+    let (out, dest) =
+        super::records_output(plan.output.as_deref(), mode, "[output] path", r.json).map_err(at)?;
+    let ctl = UnitsControl {
+        shutdown: tokio_util::sync::CancellationToken::new(),
+        progress: std::sync::Arc::new(allanscope::source::Progress::default()),
+        every_wall: plan.every_wall_s.map(Duration::from_secs_f64),
+        quiet_after: Duration::from_secs_f64(plan.quiet_after_s),
+        workers: None,
+    };
+    // Records of many units: room for a full set of interim records of each before a live
+    // run coalesces them (allanscope::pipeline::writer).
+    let capacity = allanscope::pipeline::RECORD_QUEUE.max(32 * units.len());
+    let delivery = if live {
+        allanscope::pipeline::Delivery::Coalesce
+    } else {
+        allanscope::pipeline::Delivery::Backpressure
+    };
+    let writer = RecordWriter::with_capacity(out, capacity, delivery);
+    let signals = SignalWatch::start(
+        ctl.shutdown.clone(),
+        writer.queue().clone(),
+        ctl.progress.clone(),
+        plan.duration_s.map(Duration::from_secs_f64),
+    );
+    let result = allanscope::pipeline::units::run_units(units, writer.queue(), &ctl);
+    let written = super::finish_records(writer, &dest, &signals);
+    let outcomes = result?;
+    written?;
+    let mut bad = Vec::new();
+    for o in &outcomes {
+        if let Some(e) = &o.failed {
+            bad.push(format!("unit `{}`: the source failed: {e}", o.name));
+        } else if o.quiet > 0 {
+            bad.push(format!(
+                "unit `{}` went quiet {} time{} (see its `outage` records)",
+                o.name,
+                o.quiet,
+                if o.quiet == 1 { "" } else { "s" }
+            ));
+        } else if !o.read_to_end && !live {
+            bad.push(format!(
+                "unit `{}`: stopped by {} before the end of its input",
+                o.name,
+                ctl.progress.stopped_by().unwrap_or("a signal")
+            ));
+        }
+    }
+    if !bad.is_empty() {
+        anyhow::bail!(
+            "{} of {} units did not run to the end; their final records are written:\n  {}",
+            bad.len(),
+            outcomes.len(),
+            bad.join("\n  ")
+        );
     }
     Ok(())
 }

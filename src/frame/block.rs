@@ -69,6 +69,8 @@ pub struct FrameBlock {
     kinds: Vec<ColumnKind>,
     /// In frame order, then channel order.
     holes: Vec<Hole>,
+    /// Every column holds counts.
+    all_counts: bool,
     /// The gaps, in event order.
     gaps: Vec<GapAt>,
     frames: usize,
@@ -110,6 +112,7 @@ impl FrameBlock {
             events: Vec::with_capacity(frames),
             columns: kinds.iter().map(|_| Vec::with_capacity(frames)).collect(),
             kinds: kinds.to_vec(),
+            all_counts: kinds.iter().all(|k| *k == ColumnKind::Count),
             holes: Vec::new(),
             gaps: Vec::new(),
             frames: 0,
@@ -132,6 +135,7 @@ impl FrameBlock {
         self.columns.resize_with(kinds.len(), Vec::new);
         self.kinds.clear();
         self.kinds.extend_from_slice(kinds);
+        self.all_counts = kinds.iter().all(|k| *k == ColumnKind::Count);
     }
 
     /// Sets the width of an empty block (a recycled block given to another format); the
@@ -141,6 +145,7 @@ impl FrameBlock {
         if width != self.width() {
             self.columns.resize_with(width, Vec::new);
             self.kinds = vec![ColumnKind::Count; width];
+            self.all_counts = true;
         }
     }
 
@@ -228,6 +233,19 @@ impl FrameBlock {
     pub fn begin_frame(&mut self, frame: BlockEvent) {
         self.events.push(frame);
         self.frames += 1;
+    }
+
+    /// The frame begun last: every channel is the count `value(channel)`. False (and nothing
+    /// pushed) unless every column holds counts.
+    #[inline]
+    pub fn push_counts(&mut self, mut value: impl FnMut(usize) -> i64) -> bool {
+        if !self.all_counts {
+            return false;
+        }
+        for (ch, col) in self.columns.iter_mut().enumerate() {
+            col.push(value(ch));
+        }
+        true
     }
 
     /// Channel `channel` of the frame begun last is the count `c`.

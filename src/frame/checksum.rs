@@ -2,18 +2,17 @@
 //! some units use. Pure functions of the covered bytes; where they sit in a frame is the
 //! descriptor's business.
 
+use super::crc_msb;
 use super::field::ByteOrder;
-use crc::{Crc, Table, CRC_16_IBM_3740, CRC_16_XMODEM, CRC_32_ISO_HDLC, CRC_32_MPEG_2};
+use crc::{Crc, Table, CRC_32_ISO_HDLC};
 
-/// The CRCs are computed slice-by-16 (sixteen 256-entry tables, 16 bytes per step) rather
-/// than the crate's default byte-at-a-time table: the CRC of every candidate frame was 7% of a
-/// replay's instructions at one table lookup per byte (BENCHMARKS.md, "Decoding at the speed of
-/// the statistics"). The tables are built at compile time (8 KiB for a 16-bit CRC).
+/// The MSB-first CRCs (both CRC-16s, CRC-32/MPEG-2) are computed by `crc_msb` (sixteen bytes
+/// per step, the tail in one step); the reflected CRC-32/ISO-HDLC by the crate, slice-by-16
+/// (sixteen 256-entry tables) rather than its default byte-at-a-time table: the CRC of every
+/// candidate frame was 7% of a replay's instructions at one table lookup per byte
+/// (BENCHMARKS.md, "Decoding at the speed of the statistics"). Tables are built at compile time.
 type Slice16 = Table<16>;
 
-static CRC16_IBM_3740: Crc<u16, Slice16> = Crc::<u16, Slice16>::new(&CRC_16_IBM_3740);
-static CRC16_XMODEM: Crc<u16, Slice16> = Crc::<u16, Slice16>::new(&CRC_16_XMODEM);
-static CRC32_MPEG2: Crc<u32, Slice16> = Crc::<u32, Slice16>::new(&CRC_32_MPEG_2);
 static CRC32_ISO_HDLC: Crc<u32, Slice16> = Crc::<u32, Slice16>::new(&CRC_32_ISO_HDLC);
 
 /// A checksum algorithm a descriptor can name.
@@ -65,9 +64,9 @@ impl ChecksumAlgorithm {
     /// An odd trailing byte of a 16-bit sum counts as a word with a zero second byte.
     pub fn compute(self, data: &[u8], order: ByteOrder) -> u64 {
         match self {
-            Self::Crc16Ibm3740 => u64::from(CRC16_IBM_3740.checksum(data)),
-            Self::Crc16Xmodem => u64::from(CRC16_XMODEM.checksum(data)),
-            Self::Crc32Mpeg2 => u64::from(CRC32_MPEG2.checksum(data)),
+            Self::Crc16Ibm3740 => u64::from(crc_msb::CRC16_IBM_3740.checksum(data)),
+            Self::Crc16Xmodem => u64::from(crc_msb::CRC16_XMODEM.checksum(data)),
+            Self::Crc32Mpeg2 => u64::from(crc_msb::CRC32_MPEG2.checksum(data)),
             Self::Crc32IsoHdlc => u64::from(CRC32_ISO_HDLC.checksum(data)),
             Self::Sum16 => {
                 let sum = data.chunks(2).fold(0u16, |acc, w| {

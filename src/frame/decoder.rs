@@ -560,7 +560,9 @@ impl Decoder {
             if let Some((slot, prev, true)) = self.tracker.last {
                 // Clean data: the counter advanced by one. What `commit` does for an advance
                 // of 1 without interleave (no gap, the next slot), without its search.
-                let next = if prev % m + 1 == m { 0 } else { prev % m + 1 };
+                // `prev` is a counter already reduced modulo `m` (no division on this path).
+                let p = if prev < m { prev } else { prev % m };
+                let next = if p + 1 == m { 0 } else { p + 1 };
                 if c == next {
                     let seq = slot + 1;
                     self.tracker.last = Some((seq, c, true));
@@ -665,7 +667,8 @@ fn find(buf: &[u8], from: usize, pat: &[u8]) -> Option<usize> {
         if i + pat.len() > hay.len() {
             return None;
         }
-        if &hay[i..i + pat.len()] == pat {
+        // Compared byte by byte: sync patterns are 1 to 4 bytes, shorter than a call to memcmp.
+        if hay[i..i + pat.len()].iter().zip(pat).all(|(a, b)| a == b) {
             return Some(from + i);
         }
         i += 1;

@@ -14,6 +14,7 @@
 
 pub mod block;
 pub mod checksum;
+mod crc_msb;
 pub mod decoder;
 pub mod descriptor;
 pub mod encoder;

@@ -139,6 +139,15 @@ pub(crate) struct FramePlan {
     counter: Option<(usize, Load, u32, u64)>,
     /// The kind of each channel's column.
     pub kinds: Vec<ColumnKind>,
+    /// Every channel an integer count of this one load, every field inside `min_len` bytes:
+    /// a frame whose status marks none invalid is read in one tight loop.
+    uniform: Option<Load>,
+    /// Channel offsets, in channel order.
+    offsets: Vec<usize>,
+    /// Every channel's status mask together.
+    all_masks: u64,
+    /// Bytes a message needs for every channel field.
+    min_len: usize,
 }
 
 /// A status bit as the mask [`FramePlan`] tests (`bits >> b & 1` as a mask).
@@ -161,7 +170,21 @@ impl FramePlan {
                 factor: desc.kind_factor(c.kind),
             })
             .collect();
+        let uniform = channels
+            .first()
+            .map(|c| c.load)
+            .filter(|l| !matches!(l, Load::F32Le | Load::F32Be | Load::F64Le | Load::F64Be))
+            .filter(|l| channels.iter().all(|c| c.count && c.load == *l));
         FramePlan {
+            uniform,
+            offsets: channels.iter().map(|c| c.at).collect(),
+            all_masks: channels.iter().fold(0, |m, c| m | c.status_mask),
+            min_len: spec
+                .channels
+                .iter()
+                .map(|c| c.offset + c.ty.size())
+                .max()
+                .unwrap_or(0),
             kinds: channels
                 .iter()
                 .map(|c| {
@@ -231,6 +254,14 @@ impl FramePlan {
             temperature_c,
             status,
         });
+        if let Some(load) = self.uniform {
+            if bad & self.all_masks == 0
+                && msg.len() >= self.min_len
+                && self.read_counts(load, msg, out)
+            {
+                return;
+            }
+        }
         for (ch, c) in self.channels.iter().enumerate() {
             if bad & c.status_mask != 0 {
                 *invalid += 1;
@@ -252,6 +283,43 @@ impl FramePlan {
                 }
                 None => out.push_missing(ch),
             }
+        }
+    }
+}
+
+impl FramePlan {
+    /// Every channel's count, all of one integer `load`, in one loop per load (the match out of
+    /// the loop); false when the block's columns are not all counts (nothing pushed then).
+    #[inline]
+    fn read_counts(&self, load: Load, msg: &[u8], out: &mut FrameBlock) -> bool {
+        fn each<const N: usize>(
+            offsets: &[usize],
+            msg: &[u8],
+            out: &mut FrameBlock,
+            conv: impl Fn([u8; N]) -> i64,
+        ) -> bool {
+            // `msg.len() >= min_len` was checked: every field is inside.
+            out.push_counts(|ch| {
+                let at = offsets[ch];
+                let mut b = [0u8; N];
+                b.copy_from_slice(&msg[at..at + N]);
+                conv(b)
+            })
+        }
+        let o = &self.offsets;
+        match load {
+            Load::U8 => each::<1>(o, msg, out, |b| i64::from(b[0])),
+            Load::I8 => each::<1>(o, msg, out, |b| i64::from(b[0] as i8)),
+            Load::U16Le => each::<2>(o, msg, out, |b| i64::from(u16::from_le_bytes(b))),
+            Load::U16Be => each::<2>(o, msg, out, |b| i64::from(u16::from_be_bytes(b))),
+            Load::I16Le => each::<2>(o, msg, out, |b| i64::from(i16::from_le_bytes(b))),
+            Load::I16Be => each::<2>(o, msg, out, |b| i64::from(i16::from_be_bytes(b))),
+            Load::U32Le => each::<4>(o, msg, out, |b| i64::from(u32::from_le_bytes(b))),
+            Load::U32Be => each::<4>(o, msg, out, |b| i64::from(u32::from_be_bytes(b))),
+            Load::I32Le => each::<4>(o, msg, out, |b| i64::from(i32::from_le_bytes(b))),
+            Load::I32Be => each::<4>(o, msg, out, |b| i64::from(i32::from_be_bytes(b))),
+            // Floats are never counts (no uniform plan).
+            Load::F32Le | Load::F32Be | Load::F64Le | Load::F64Be => false,
         }
     }
 }

@@ -32,7 +32,8 @@ pub const ALT_MARGIN: f64 = 2.0;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CandidateScore {
     pub kind: EffectKind,
-    pub shape: f64,
+    /// Its parameters at the best shape.
+    pub params: EffectParams,
     /// Drop of `r' S^-1 r` per parameter against the model before the step.
     pub score: f64,
     /// The threshold it had to pass at that step.
@@ -75,21 +76,10 @@ impl Alternative {
     }
 }
 
-fn params_at(kind: EffectKind, shape: f64, fit: &GlsFit, col: usize) -> EffectParams {
+/// The effect `p` with the amplitude of column `col` of `fit` (filters have none).
+fn params_at(p: &EffectParams, fit: &GlsFit, col: usize) -> EffectParams {
     let amp = fit.coef.get(col).copied().unwrap_or(0.0).max(0.0).sqrt();
-    match kind {
-        EffectKind::GaussMarkov => EffectParams::GaussMarkov {
-            sigma: amp,
-            tau_c_s: shape,
-        },
-        EffectKind::Sinusoid => EffectParams::Sinusoid {
-            amplitude: amp,
-            frequency_hz: shape,
-        },
-        _ => EffectParams::OutputFilter {
-            time_constant_s: shape,
-        },
-    }
+    EffectParams::from_shape(p.kind(), p.shape(), amp)
 }
 
 /// The model of `effects` (the final offset of the time-domain effects kept) refitted.
@@ -107,8 +97,8 @@ fn refit(
         .iter()
         .map(|e| {
             let k = e.params.kind();
-            if k.is_stationary() && k != EffectKind::OutputFilter {
-                let p = params_at(k, e.params.shape(), &fit, col);
+            if k.is_stationary() && !k.is_filter() {
+                let p = params_at(&e.params, &fit, col);
                 col += 1;
                 p
             } else {
@@ -124,20 +114,7 @@ fn refit(
     })
 }
 
-fn placeholder(kind: EffectKind, shape: f64) -> AddedEffect {
-    let params = match kind {
-        EffectKind::GaussMarkov => EffectParams::GaussMarkov {
-            sigma: 0.0,
-            tau_c_s: shape,
-        },
-        EffectKind::Sinusoid => EffectParams::Sinusoid {
-            amplitude: 0.0,
-            frequency_hz: shape,
-        },
-        _ => EffectParams::OutputFilter {
-            time_constant_s: shape,
-        },
-    };
+fn placeholder(params: EffectParams) -> AddedEffect {
     AddedEffect {
         params,
         gap_after: f64::NAN,
@@ -169,7 +146,7 @@ pub fn alternatives(
             for y in first.scores.iter().filter(|c| c.kind != x) {
                 if y.score >= y.crit && y.score >= sx.score - ALT_MARGIN {
                     let mut alt = effects.to_vec();
-                    alt[pos] = placeholder(y.kind, y.shape);
+                    alt[pos] = placeholder(y.params);
                     out.extend(refit(prob, &alt, &offset, fit));
                 }
             }
@@ -183,7 +160,7 @@ pub fn alternatives(
             for y in &first.scores {
                 if y.score >= y.crit - ALT_MARGIN && y.score < y.crit {
                     let mut alt = effects.to_vec();
-                    alt.push(placeholder(y.kind, y.shape));
+                    alt.push(placeholder(y.params));
                     out.extend(refit(prob, &alt, &offset, fit));
                 }
             }

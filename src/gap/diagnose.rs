@@ -68,6 +68,15 @@ pub struct DiagnoseOptions {
     /// Cluster sizes below this are left out of the curve (1: none); the diagnosis raises it
     /// for a quantization-limited unit ([`super::quant_limit`]).
     pub min_m: u64,
+    /// Five-term coefficients `(Q^2, N^2, B^2, K^2, R^2)` whose analytic covariance is taken as
+    /// `S` instead of the plain five-term fit's. The diagnosis sets it for its second pass when
+    /// it found an output filter (docs/gap.md, "Low-pass filters beyond first order"): a curve
+    /// pulled down at short taus by a filter misleads the plain fit (N near 0, B inflated), and
+    /// `S` with it.
+    pub cov_coef: Option<[f64; 5]>,
+    /// The output filter found by the first pass: `S` is widened at the taus it smooths
+    /// ([`super::problem::GapProblem::new`]).
+    pub cov_filter: Option<crate::model::lowpass::LowPass>,
 }
 
 impl Default for DiagnoseOptions {
@@ -79,6 +88,8 @@ impl Default for DiagnoseOptions {
 
             thresholds: Thresholds::default(),
             min_m: 1,
+            cov_coef: None,
+            cov_filter: None,
         }
     }
 }
@@ -171,37 +182,6 @@ fn coef5(c: &[f64]) -> [f64; 5] {
     std::array::from_fn(|i| c.get(i).copied().unwrap_or(0.0).max(0.0).sqrt())
 }
 
-/// The effect parameters from a fit whose last free column (or filter) is the effect.
-fn params_of(kind: EffectKind, shape: f64, fit: &GlsFit) -> EffectParams {
-    let amp = fit.coef.last().copied().unwrap_or(0.0).max(0.0).sqrt();
-    match kind {
-        EffectKind::GaussMarkov => EffectParams::GaussMarkov {
-            sigma: amp,
-            tau_c_s: shape,
-        },
-        EffectKind::Sinusoid => EffectParams::Sinusoid {
-            amplitude: amp,
-            frequency_hz: shape,
-        },
-        EffectKind::OutputFilter => EffectParams::OutputFilter {
-            time_constant_s: shape,
-        },
-        EffectKind::Warmup => EffectParams::Warmup {
-            amplitude: amp,
-            time_constant_s: shape,
-        },
-        EffectKind::BiasJumps => EffectParams::BiasJumps {
-            count: 0,
-            rms_size: 0.0,
-        },
-        EffectKind::Temperature => EffectParams::Temperature {
-            coefficient: amp,
-            lo: f64::NAN,
-            hi: f64::NAN,
-        },
-    }
-}
-
 /// Diagnoses one channel's evidence.
 pub fn diagnose(
     snap: &EvidenceSnapshot,
@@ -272,8 +252,41 @@ fn check_quantization(
     Some(last)
 }
 
-/// The diagnosis of the curve (from `opts.min_m` on) and of the block means.
+/// The diagnosis of the curve (from `opts.min_m` on) and of the block means; when it finds an
+/// output filter, again with the covariance of its five terms ([`DiagnoseOptions::cov_coef`]).
 fn diagnose_curve(
+    snap: &EvidenceSnapshot,
+    temperature: Option<&EvidenceSnapshot>,
+    opts: &DiagnoseOptions,
+) -> Result<Diagnosis, DiagnoseError> {
+    let d = diagnose_curve_once(snap, temperature, opts)?;
+    if opts.cov_coef.is_some() || !d.effects.iter().any(|e| e.params.kind().is_filter()) {
+        return Ok(d);
+    }
+    // The covariance's five terms: the plain fit of the taus beyond ten memories of the
+    // filter, where it no longer shows (on a clean curve that is the plain fit itself).
+    let Some(lp) = d.effects.iter().find_map(|e| e.params.lowpass()) else {
+        return Ok(d);
+    };
+    let m_cut = (10.0 * lp.memory_s(snap.tau0_s) / snap.tau0_s)
+        .ceil()
+        .max(1.0) as u64;
+    let cut = DiagnoseOptions {
+        min_m: opts.min_m.max(m_cut),
+        ..opts.clone()
+    };
+    let Ok(beyond) = GapProblem::new(snap, &cut) else {
+        return Ok(d);
+    };
+    let second = DiagnoseOptions {
+        cov_coef: Some(beyond.c_init),
+        cov_filter: Some(lp),
+        ..opts.clone()
+    };
+    diagnose_curve_once(snap, temperature, &second).or(Ok(d))
+}
+
+fn diagnose_curve_once(
     snap: &EvidenceSnapshot,
     temperature: Option<&EvidenceSnapshot>,
     opts: &DiagnoseOptions,
@@ -551,21 +564,38 @@ fn settle(
         let mut trial = kept.clone();
         trial.push(*e);
         let trial_spec = spec_from(prob, &trial, &trial_offset);
-        let Some(fit) = prob.gls(&trial_spec) else {
-            continue;
-        };
-        if fit.gap().is_finite() && fit.gap() < cur.gap() {
-            spec = trial_spec;
-            kept.push(AddedEffect {
+        let fit = prob.gls(&trial_spec);
+        match fit {
+            Some(fit) if fit.gap().is_finite() && fit.gap() < cur.gap() => {
+                spec = trial_spec;
+                kept.push(AddedEffect {
+                    params: e.params,
+                    gap_after: fit.gap(),
+                    delta_chi2: cur.chi2 - fit.chi2,
+                });
+                offset = trial_offset;
+                cur = fit;
+            }
+            // Found in time, by its own calibrated test on the block means: kept on that
+            // evidence even where the curve does not show it (a short warm-up, a few jumps
+            // that the five terms absorb), with its curve offset left out, so the model and
+            // the gap stay those before it (docs/gap.md, "Bookkeeping").
+            _ if kept_in_time(e.params.kind()) => kept.push(AddedEffect {
                 params: e.params,
-                gap_after: fit.gap(),
-                delta_chi2: cur.chi2 - fit.chi2,
-            });
-            offset = trial_offset;
-            cur = fit;
+                gap_after: cur.gap(),
+                delta_chi2: 0.0,
+            }),
+            _ => {}
         }
     }
     (kept, cur, spec)
+}
+
+/// The effects found in time by a test of their own (the warm-up's `B`, the jump rule on the
+/// block means), which the bookkeeping keeps on that evidence when the curve does not show
+/// them; their false-alarm shares are calibrated as such (docs/gap.md, "Calibration").
+fn kept_in_time(kind: EffectKind) -> bool {
+    matches!(kind, EffectKind::Warmup | EffectKind::BiasJumps)
 }
 
 /// The stationary effects of `effects` still needed once `offset` (a warm-up's or jumps' exact
@@ -612,7 +642,7 @@ pub(crate) fn spec_from(prob: &GapProblem, effects: &[AddedEffect], offset: &[f6
     for e in effects {
         let kind = e.params.kind();
         if kind.is_stationary() {
-            spec = prob.spec_with(&spec, kind, e.params.shape());
+            spec = prob.spec_with_params(&spec, &e.params);
         }
     }
     spec
@@ -638,13 +668,17 @@ fn add_stationary(
         // Below gap_crit only a candidate's own likelihood-ratio threshold can add (the
         // first) effect; among those that pass, the largest drop per parameter wins.
         let flagged_g = cur.gap() > th.gap_crit;
-        let mut best: Option<(EffectKind, f64, GlsFit, f64)> = None;
+        let mut best: Option<(EffectParams, GlsFit, f64)> = None;
         let mut scores: Vec<CandidateScore> = Vec::new();
+        let mut passed: Vec<(EffectParams, GlsFit, f64)> = Vec::new();
         for &kind in kinds {
-            if effects.iter().any(|e| e.params.kind() == kind) {
+            // One output filter at most (it takes the N column).
+            if effects.iter().any(|e| {
+                e.params.kind() == kind || (kind.is_filter() && e.params.kind().is_filter())
+            }) {
                 continue;
             }
-            if let Some((sh, f)) = prob.scan(&spec, kind) {
+            if let Some((params, f)) = prob.scan_params(&spec, kind) {
                 let score = (cur.chi2 - f.chi2) / kind.n_params() as f64;
                 let crit = if flagged_g {
                     th.add_chi2
@@ -654,32 +688,52 @@ fn add_stationary(
                 if added == 0 {
                     scores.push(CandidateScore {
                         kind,
-                        shape: sh,
+                        params,
                         score,
                         crit,
                     });
                 }
-                if score >= crit && best.as_ref().is_none_or(|b| score > b.3) {
-                    best = Some((kind, sh, f, score));
+                if score >= crit {
+                    passed.push((params, f, score));
                 }
+            }
+        }
+        // The filters compete among themselves by the drop less two per parameter (Akaike):
+        // per parameter, a one-parameter filter would beat the second order whatever the
+        // drop; the best of them then competes with the other kinds per parameter.
+        let aic = |p: &(EffectParams, GlsFit, f64)| {
+            (cur.chi2 - p.1.chi2) - 2.0 * p.0.kind().n_params() as f64
+        };
+        let best_filter = passed
+            .iter()
+            .filter(|p| p.0.kind().is_filter())
+            .max_by(|a, b| aic(a).total_cmp(&aic(b)))
+            .map(|p| p.0.kind());
+        for p in passed {
+            let k = p.0.kind();
+            if k.is_filter() && Some(k) != best_filter {
+                continue;
+            }
+            if best.as_ref().is_none_or(|b| p.2 > b.2) {
+                best = Some(p);
             }
         }
         if added == 0 {
             first = Some(FirstScan {
                 flagged_g,
                 scores: std::mem::take(&mut scores),
-                chosen: best.as_ref().map(|b| b.0),
+                chosen: best.as_ref().map(|b| b.0.kind()),
             });
         }
-        let Some((kind, sh, f, _)) = best else {
+        let Some((params, f, _)) = best else {
             break;
         };
         effects.push(AddedEffect {
-            params: params_of(kind, sh, &f),
+            params,
             gap_after: f.gap(),
             delta_chi2: cur.chi2 - f.chi2,
         });
-        spec = prob.spec_with(&spec, kind, sh);
+        spec = prob.spec_with_params(&spec, &params);
         cur = f;
         added += 1;
     }

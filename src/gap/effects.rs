@@ -3,6 +3,7 @@
 //! so a candidate is a column generator `shape -> column` plus the parameter names of
 //! docs/records.md's `diagnosis` record.
 
+use crate::model::lowpass::LowPass;
 use crate::model::terms;
 use serde::{Deserialize, Serialize};
 
@@ -17,24 +18,41 @@ pub enum EffectKind {
     BiasJumps,
     /// A bias following the unit's temperature (only when the input carries one).
     Temperature,
+    /// Low-pass filters beyond first order (docs/gap.md, "Low-pass filters beyond first
+    /// order"): cascaded moving averages (FIR decimation, the Bartlett window), a second-order
+    /// low-pass, a zero-phase (forward-backward) first-order filter.
+    MovingAverage,
+    SecondOrderFilter,
+    ZeroPhaseFilter,
 }
 
 impl EffectKind {
-    pub const ALL: [EffectKind; 6] = [
+    pub const ALL: [EffectKind; 9] = [
         EffectKind::GaussMarkov,
         EffectKind::Sinusoid,
         EffectKind::OutputFilter,
         EffectKind::Warmup,
         EffectKind::BiasJumps,
         EffectKind::Temperature,
+        EffectKind::MovingAverage,
+        EffectKind::SecondOrderFilter,
+        EffectKind::ZeroPhaseFilter,
     ];
 
     /// Stationary effects are fitted on the curve as columns; warm-ups and jumps are found in
     /// time and enter the curve as fixed offsets.
     pub fn is_stationary(self) -> bool {
+        matches!(self, EffectKind::GaussMarkov | EffectKind::Sinusoid) || self.is_filter()
+    }
+
+    /// The unit's output filters: they reshape the N column instead of adding one.
+    pub fn is_filter(self) -> bool {
         matches!(
             self,
-            EffectKind::GaussMarkov | EffectKind::Sinusoid | EffectKind::OutputFilter
+            EffectKind::OutputFilter
+                | EffectKind::MovingAverage
+                | EffectKind::SecondOrderFilter
+                | EffectKind::ZeroPhaseFilter
         )
     }
 
@@ -47,14 +65,21 @@ impl EffectKind {
             EffectKind::Warmup => "warmup",
             EffectKind::BiasJumps => "bias_jumps",
             EffectKind::Temperature => "temperature",
+            EffectKind::MovingAverage => "moving_average",
+            EffectKind::SecondOrderFilter => "second_order_filter",
+            EffectKind::ZeroPhaseFilter => "zero_phase_filter",
         }
     }
 
-    /// Parameters the effect adds to the five-term model (amplitude and shape; the output
-    /// filter only its time constant, since it reshapes the N term).
+    /// Parameters the effect adds to the five-term model (amplitude and shape; a filter only
+    /// its shape, since it reshapes the N term: one, or two for the second order; the moving
+    /// average's stage count is a discrete choice and not counted).
     pub fn n_params(self) -> usize {
         match self {
-            EffectKind::OutputFilter | EffectKind::Temperature => 1,
+            EffectKind::OutputFilter
+            | EffectKind::Temperature
+            | EffectKind::MovingAverage
+            | EffectKind::ZeroPhaseFilter => 1,
             _ => 2,
         }
     }
@@ -88,6 +113,17 @@ pub enum EffectParams {
         lo: f64,
         hi: f64,
     },
+    MovingAverage {
+        taps: u32,
+        stages: u32,
+    },
+    SecondOrderFilter {
+        natural_frequency_hz: f64,
+        damping: f64,
+    },
+    ZeroPhaseFilter {
+        time_constant_s: f64,
+    },
 }
 
 impl EffectParams {
@@ -99,6 +135,87 @@ impl EffectParams {
             EffectParams::Warmup { .. } => EffectKind::Warmup,
             EffectParams::BiasJumps { .. } => EffectKind::BiasJumps,
             EffectParams::Temperature { .. } => EffectKind::Temperature,
+            EffectParams::MovingAverage { .. } => EffectKind::MovingAverage,
+            EffectParams::SecondOrderFilter { .. } => EffectKind::SecondOrderFilter,
+            EffectParams::ZeroPhaseFilter { .. } => EffectKind::ZeroPhaseFilter,
+        }
+    }
+
+    /// The filter of a filter effect (None for the others).
+    pub fn lowpass(&self) -> Option<LowPass> {
+        match *self {
+            EffectParams::OutputFilter { time_constant_s } => {
+                Some(LowPass::FirstOrder { time_constant_s })
+            }
+            EffectParams::MovingAverage { taps, stages } => {
+                Some(LowPass::MovingAverage { taps, stages })
+            }
+            EffectParams::SecondOrderFilter {
+                natural_frequency_hz,
+                damping,
+            } => Some(LowPass::SecondOrder {
+                natural_frequency_hz,
+                damping,
+            }),
+            EffectParams::ZeroPhaseFilter { time_constant_s } => {
+                Some(LowPass::ZeroPhase { time_constant_s })
+            }
+            _ => None,
+        }
+    }
+
+    /// The effect of a filter.
+    pub fn from_lowpass(lp: LowPass) -> Self {
+        match lp {
+            LowPass::FirstOrder { time_constant_s } => {
+                EffectParams::OutputFilter { time_constant_s }
+            }
+            LowPass::MovingAverage { taps, stages } => EffectParams::MovingAverage { taps, stages },
+            LowPass::SecondOrder {
+                natural_frequency_hz,
+                damping,
+            } => EffectParams::SecondOrderFilter {
+                natural_frequency_hz,
+                damping,
+            },
+            LowPass::ZeroPhase { time_constant_s } => {
+                EffectParams::ZeroPhaseFilter { time_constant_s }
+            }
+        }
+    }
+
+    /// The effect of a stationary kind with one shape (s, Hz) and amplitude (u/s) from a
+    /// column fit; filters beyond first order take their canonical form of
+    /// [`effect_column`].
+    pub fn from_shape(kind: EffectKind, shape: f64, amplitude: f64) -> Self {
+        match kind {
+            EffectKind::GaussMarkov => EffectParams::GaussMarkov {
+                sigma: amplitude,
+                tau_c_s: shape,
+            },
+            EffectKind::Sinusoid => EffectParams::Sinusoid {
+                amplitude,
+                frequency_hz: shape,
+            },
+            EffectKind::Warmup => EffectParams::Warmup {
+                amplitude,
+                time_constant_s: shape,
+            },
+            EffectKind::BiasJumps => EffectParams::BiasJumps {
+                count: 0,
+                rms_size: 0.0,
+            },
+            EffectKind::Temperature => EffectParams::Temperature {
+                coefficient: amplitude,
+                lo: f64::NAN,
+                hi: f64::NAN,
+            },
+            EffectKind::OutputFilter
+            | EffectKind::MovingAverage
+            | EffectKind::SecondOrderFilter
+            | EffectKind::ZeroPhaseFilter => {
+                EffectParams::from_lowpass(canonical_lowpass(kind, shape))
+            }
         }
     }
 
@@ -128,12 +245,29 @@ impl EffectParams {
                 lo,
                 hi,
             } => json!({"coefficient": coefficient, "lo": lo, "hi": hi}),
+            EffectParams::MovingAverage { taps, stages } => {
+                json!({"taps": taps, "stages": stages})
+            }
+            EffectParams::SecondOrderFilter {
+                natural_frequency_hz,
+                damping,
+            } => json!({"natural_frequency": natural_frequency_hz, "damping": damping}),
+            EffectParams::ZeroPhaseFilter { time_constant_s } => {
+                json!({"time_constant": time_constant_s})
+            }
         }
     }
 
-    /// The shape parameter (s for times, Hz for the sinusoid), NaN for jumps and temperature.
+    /// The shape parameter (s for times, Hz for the sinusoid and the second order's natural
+    /// frequency, taps for the moving average), NaN for jumps and temperature.
     pub fn shape(&self) -> f64 {
         match *self {
+            EffectParams::MovingAverage { taps, .. } => taps as f64,
+            EffectParams::SecondOrderFilter {
+                natural_frequency_hz,
+                ..
+            } => natural_frequency_hz,
+            EffectParams::ZeroPhaseFilter { time_constant_s } => time_constant_s,
             EffectParams::GaussMarkov { tau_c_s, .. } => tau_c_s,
             EffectParams::Sinusoid { frequency_hz, .. } => frequency_hz,
             EffectParams::OutputFilter { time_constant_s } => time_constant_s,
@@ -150,7 +284,10 @@ impl EffectParams {
         match *self {
             EffectParams::GaussMarkov { sigma, .. } => sigma,
             EffectParams::Sinusoid { amplitude, .. } => amplitude,
-            EffectParams::OutputFilter { .. } => f64::NAN,
+            EffectParams::OutputFilter { .. }
+            | EffectParams::MovingAverage { .. }
+            | EffectParams::SecondOrderFilter { .. }
+            | EffectParams::ZeroPhaseFilter { .. } => f64::NAN,
             EffectParams::Warmup { amplitude, .. } => amplitude,
             EffectParams::BiasJumps { rms_size, .. } => rms_size,
             EffectParams::Temperature { coefficient, .. } => coefficient,
@@ -180,9 +317,32 @@ impl Grid {
     }
 }
 
+/// A filter kind with one shape: the first order and zero phase at time constant `shape` (s),
+/// a one-stage moving average of `shape` taps, a critically damped second order at natural
+/// frequency `shape` (Hz). The full parameters are in [`EffectParams::lowpass`].
+pub fn canonical_lowpass(kind: EffectKind, shape: f64) -> LowPass {
+    match kind {
+        EffectKind::MovingAverage => LowPass::MovingAverage {
+            taps: shape.round().clamp(1.0, u32::MAX as f64) as u32,
+            stages: 1,
+        },
+        EffectKind::SecondOrderFilter => LowPass::SecondOrder {
+            natural_frequency_hz: shape,
+            damping: 1.0,
+        },
+        EffectKind::ZeroPhaseFilter => LowPass::ZeroPhase {
+            time_constant_s: shape,
+        },
+        _ => LowPass::FirstOrder {
+            time_constant_s: shape,
+        },
+    }
+}
+
 /// The column an effect of unit amplitude adds at each cluster size `ms` (AVAR, u^2/s^2 per
-/// (u/s)^2), docs/theory.md section 3 via [`crate::model::terms`]. For the output filter it is the
-/// replacement of the N column: filtered white rate of unit N.
+/// (u/s)^2), docs/theory.md section 3 via [`crate::model::terms`]. For a filter it is the
+/// replacement of the N column: filtered white rate of unit N (filters beyond first order in
+/// their canonical form, [`canonical_lowpass`]; [`LowPass::white_rate_avar`] takes any).
 pub fn effect_column(
     kind: EffectKind,
     shape: f64,
@@ -198,6 +358,11 @@ pub fn effect_column(
                 EffectKind::Sinusoid => terms::sinusoid_avar(1.0, shape, tau),
                 EffectKind::OutputFilter => {
                     terms::filtered_white_rate_avar(1.0, shape, tau0_s, m).max(0.0)
+                }
+                EffectKind::MovingAverage
+                | EffectKind::SecondOrderFilter
+                | EffectKind::ZeroPhaseFilter => {
+                    canonical_lowpass(kind, shape).white_rate_avar(tau0_s, &[m])[0]
                 }
                 EffectKind::Warmup => terms::warmup_avar(1.0, shape, tau0_s, m, n_inc),
                 // Bias jumps have the second-order law of a rate random walk (terms.rs): the

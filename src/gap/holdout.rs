@@ -61,7 +61,7 @@ pub fn holdout_gap(
         let mut trial = spec.clone();
         match kind {
             EffectKind::BiasJumps => continue,
-            EffectKind::OutputFilter => trial.filter_tc_s = Some(e.params.shape()),
+            k if k.is_filter() => trial.filter = e.params.lowpass(),
             _ => {
                 let a = e.params.amplitude();
                 let col = effect_column(kind, e.params.shape(), &prob.ms, prob.tau0_s, prob.n_inc);

@@ -24,6 +24,7 @@ pub mod block_cov;
 pub mod diagnose;
 pub mod effects;
 pub mod evidence;
+pub mod filter_scan;
 pub mod holdout;
 pub mod jump_mixture;
 pub mod lsb;

@@ -452,64 +452,142 @@ pub fn jumps_marginal_oracle(
     samples: usize,
     seed: u64,
 ) -> Option<f64> {
-    use rand::{RngExt, SeedableRng};
-    if count == 0 || rms_size.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) || samples == 0
-    {
-        return None;
-    }
-    let y = project_off(&gls.yw, std::slice::from_ref(&gls.q_drift));
-    let t_run = gls.n_blocks as f64 * gls.block_s;
-    let n_cand = gls.n_blocks * JUMP_SUBBLOCKS;
-    let cols: Vec<DVector<f64>> = (0..n_cand)
-        .map(|i| {
-            let t = (i as f64 + 0.5) / n_cand as f64 * t_run;
-            gls.whitened_perp(&BlockGls::diff(&gls.step_profile(t)))
-        })
-        .collect();
-    let s2 = rms_size * rms_size;
-    // Single-step log Bayes factors, for the proposal.
-    let lb: Vec<f64> = cols
-        .iter()
-        .map(|u| {
-            let g = u.norm_squared();
-            let c = u.dot(&y);
-            -0.5 * (1.0 + s2 * g).ln() + 0.5 * c * c / (g + 1.0 / s2)
-        })
-        .collect();
-    let m = lb.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let wsum: f64 = lb.iter().map(|v| (v - m).exp()).sum();
-    let q: Vec<f64> = lb
-        .iter()
-        .map(|v| 0.5 * (v - m).exp() / wsum + 0.5 / n_cand as f64)
-        .collect();
-    let mut cdf = Vec::with_capacity(n_cand);
-    let mut acc = 0.0;
-    for v in &q {
-        acc += v;
-        cdf.push(acc);
-    }
-    let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
-    let mut logw: Vec<f64> = Vec::with_capacity(samples);
-    for _ in 0..samples {
-        let idx: Vec<usize> = (0..count)
-            .map(|_| {
-                let u = rng.random::<f64>() * acc;
-                cdf.partition_point(|&c| c < u).min(n_cand - 1)
+    let ceil = JumpCeiling::new(gls);
+    ceil.log_lr(&ceil.y, count, rms_size, samples, seed)
+}
+
+/// The candidate step columns of [`jumps_marginal_oracle`] (whitened, off the drift) with their
+/// Gram matrix, so that the ratio can be evaluated on the run and on draws of the null.
+#[derive(Debug, Clone)]
+pub struct JumpCeiling {
+    cols: Vec<DVector<f64>>,
+    gram: DMatrix<f64>,
+    /// The run's whitened differences off the drift.
+    y: DVector<f64>,
+    q_drift: DVector<f64>,
+}
+
+impl JumpCeiling {
+    pub fn new(gls: &BlockGls) -> Self {
+        let y = project_off(&gls.yw, std::slice::from_ref(&gls.q_drift));
+        let t_run = gls.n_blocks as f64 * gls.block_s;
+        let n_cand = gls.n_blocks * JUMP_SUBBLOCKS;
+        let cols: Vec<DVector<f64>> = (0..n_cand)
+            .map(|i| {
+                let t = (i as f64 + 0.5) / n_cand as f64 * t_run;
+                gls.whitened_perp(&BlockGls::diff(&gls.step_profile(t)))
             })
             .collect();
-        let g = DMatrix::from_fn(count, count, |a, b| cols[idx[a]].dot(&cols[idx[b]]));
-        let c = DVector::from_iterator(count, idx.iter().map(|&i| cols[i].dot(&y)));
-        let a = &g * s2 + DMatrix::identity(count, count);
-        let Some(ch_a) = a.cholesky() else { continue };
-        let logdet: f64 = ch_a.l().diagonal().iter().map(|v| 2.0 * v.ln()).sum();
-        let b = &g + DMatrix::identity(count, count) / s2;
-        let Some(ch_b) = b.cholesky() else { continue };
-        let quad = c.dot(&ch_b.solve(&c));
-        let prop: f64 = idx.iter().map(|&i| (q[i] * n_cand as f64).ln()).sum();
-        logw.push(-0.5 * logdet + 0.5 * quad - prop);
+        let mat = DMatrix::from_columns(&cols);
+        let gram = mat.transpose() * &mat;
+        Self {
+            y,
+            cols,
+            gram,
+            q_drift: gls.q_drift.clone(),
+        }
     }
-    if logw.is_empty() {
-        return None;
+
+    /// `ln E_S[LR(S)]` of [`jumps_marginal_oracle`] for the whitened differences `y` (off the
+    /// drift).
+    pub fn log_lr(
+        &self,
+        y: &DVector<f64>,
+        count: usize,
+        rms_size: f64,
+        samples: usize,
+        seed: u64,
+    ) -> Option<f64> {
+        use rand::{RngExt, SeedableRng};
+        if count == 0
+            || rms_size.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+            || samples == 0
+            || self.cols.is_empty()
+        {
+            return None;
+        }
+        let n_cand = self.cols.len();
+        let s2 = rms_size * rms_size;
+        let cy: Vec<f64> = self.cols.iter().map(|u| u.dot(y)).collect();
+        // Single-step log Bayes factors, for the proposal.
+        let lb: Vec<f64> = (0..n_cand)
+            .map(|i| {
+                let g = self.gram[(i, i)];
+                let c = cy[i];
+                -0.5 * (1.0 + s2 * g).ln() + 0.5 * c * c / (g + 1.0 / s2)
+            })
+            .collect();
+        let m = lb.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let wsum: f64 = lb.iter().map(|v| (v - m).exp()).sum();
+        let q: Vec<f64> = lb
+            .iter()
+            .map(|v| 0.5 * (v - m).exp() / wsum + 0.5 / n_cand as f64)
+            .collect();
+        let mut cdf = Vec::with_capacity(n_cand);
+        let mut acc = 0.0;
+        for v in &q {
+            acc += v;
+            cdf.push(acc);
+        }
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
+        let mut logw: Vec<f64> = Vec::with_capacity(samples);
+        for _ in 0..samples {
+            let idx: Vec<usize> = (0..count)
+                .map(|_| {
+                    let u = rng.random::<f64>() * acc;
+                    cdf.partition_point(|&c| c < u).min(n_cand - 1)
+                })
+                .collect();
+            let g = DMatrix::from_fn(count, count, |a, b| self.gram[(idx[a], idx[b])]);
+            let c = DVector::from_iterator(count, idx.iter().map(|&i| cy[i]));
+            let a = &g * s2 + DMatrix::identity(count, count);
+            let Some(ch_a) = a.cholesky() else { continue };
+            let logdet: f64 = ch_a.l().diagonal().iter().map(|v| 2.0 * v.ln()).sum();
+            let b = &g + DMatrix::identity(count, count) / s2;
+            let Some(ch_b) = b.cholesky() else { continue };
+            let quad = c.dot(&ch_b.solve(&c));
+            let prop: f64 = idx.iter().map(|&i| (q[i] * n_cand as f64).ln()).sum();
+            logw.push(-0.5 * logdet + 0.5 * quad - prop);
+        }
+        if logw.is_empty() {
+            return None;
+        }
+        Some(super::warmup::log_mean_exp(&logw))
     }
-    Some(super::warmup::log_mean_exp(&logw))
+
+    /// The p-value of the run's ratio under the null of the same Gaussian model (whitened
+    /// differences `N(0, I)` off the drift), from `n_null` draws: `(1 + #{null >= run}) /
+    /// (1 + n_null)`, with the run's ratio. This is the fair ceiling per run: the most powerful
+    /// test told the count and the rms but not the times, at its exact level in that model
+    /// (docs/gap.md, "Per-family benchmark against the oracle").
+    pub fn p_value(
+        &self,
+        count: usize,
+        rms_size: f64,
+        samples: usize,
+        n_null: usize,
+        seed: u64,
+    ) -> Option<(f64, f64)> {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let obs = self.log_lr(&self.y, count, rms_size, samples, seed)?;
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x0a11_5eed);
+        let n = self.y.len();
+        let mut above = 0usize;
+        for k in 0..n_null {
+            let e = DVector::from_fn(n, |_, _| StandardNormal.sample(&mut rng));
+            let e = project_off(&e, std::slice::from_ref(&self.q_drift));
+            let v = self.log_lr(
+                &e,
+                count,
+                rms_size,
+                samples,
+                seed.wrapping_add(k as u64 + 1),
+            )?;
+            if v >= obs {
+                above += 1;
+            }
+        }
+        Some(((1 + above) as f64 / (1 + n_null) as f64, obs))
+    }
 }

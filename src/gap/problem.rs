@@ -6,11 +6,12 @@
 //! [`super::diagnose`](mod@super::diagnose), [`super::holdout`] and [`super::oracle`].
 
 use super::diagnose::{DiagnoseError, DiagnoseOptions, Region};
-use super::effects::{effect_column, EffectKind, Grid};
+use super::effects::{canonical_lowpass, effect_column, EffectKind, EffectParams, Grid};
 use super::evidence::EvidenceSnapshot;
 use crate::allan::CurvePoint;
 use crate::model::avar_cov::{AvarCovariance, CovPoint};
 use crate::model::fit::{fit, FitOptions};
+use crate::model::lowpass::LowPass;
 use crate::model::nnls::nnls;
 use crate::model::terms::basis;
 use nalgebra::{DMatrix, DVector};
@@ -46,7 +47,8 @@ pub struct GapProblem {
 /// a fixed offset.
 #[derive(Debug, Clone, Default)]
 pub struct ModelSpec {
-    pub filter_tc_s: Option<f64>,
+    /// The unit's output filter, through which the N column is taken.
+    pub filter: Option<LowPass>,
     pub extra: Vec<Vec<f64>>,
     pub offset: Option<Vec<f64>>,
 }
@@ -125,13 +127,32 @@ impl GapProblem {
             })
             .collect();
         let strides: Vec<u64> = pts.iter().map(|p| p.stride.max(1)).collect();
-        let cov = AvarCovariance::new().matrix_strided(tau0, &cov_pts, &strides, &c_init);
+        // The covariance's five terms: the plain fit's, or those given (DiagnoseOptions::cov_coef).
+        let c_cov = opts.cov_coef.unwrap_or(c_init);
+        let cov = AvarCovariance::new().matrix_strided(tau0, &cov_pts, &strides, &c_cov);
         let a: Vec<f64> = pts
             .iter()
-            .map(|p| base.model_avar(p.tau_s).max(1e-300))
+            .map(|p| {
+                let b = basis(p.tau_s);
+                (0..5).map(|i| b[i] * c_cov[i]).sum::<f64>().max(1e-300)
+            })
             .collect();
         let j = pts.len();
-        let mut s = DMatrix::from_fn(j, j, |r, c| cov[(r, c)] / (a[r] * a[c]));
+        // Below a found filter's memory, the filtered increments' second differences stay
+        // correlated over about `1 / rho_0` samples (the filter's equivalent averaging length)
+        // instead of `m`: the relative variance of the AVAR estimate is widened by
+        // `max(1, L / m)` there (an approximation, measured in docs/gap.md, "Low-pass filters
+        // beyond first order").
+        let widen: Vec<f64> = match opts.cov_filter {
+            Some(lp) => {
+                let l = 1.0 / lp.autocorrelation(tau0)[0].max(1e-12);
+                pts.iter().map(|p| (l / p.m as f64).max(1.0)).collect()
+            }
+            None => vec![1.0; pts.len()],
+        };
+        let mut s = DMatrix::from_fn(j, j, |r, c| {
+            cov[(r, c)] / (a[r] * a[c]) * (widen[r] * widen[c]).sqrt()
+        });
         let s_diag: Vec<f64> = (0..j).map(|i| s[(i, i)]).collect();
         if s_diag.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
             return Err(DiagnoseError::Covariance);
@@ -190,14 +211,15 @@ impl GapProblem {
     fn columns(&self, spec: &ModelSpec) -> DMatrix<f64> {
         let j = self.len();
         let k = 5 + spec.extra.len();
-        let filt = spec.filter_tc_s.map(|t| {
-            effect_column(
+        let filt = spec.filter.map(|lp| match lp {
+            LowPass::FirstOrder { time_constant_s } => effect_column(
                 EffectKind::OutputFilter,
-                t,
+                time_constant_s,
                 &self.ms,
                 self.tau0_s,
                 self.n_inc,
-            )
+            ),
+            other => other.white_rate_avar(self.tau0_s, &self.ms),
         });
         DMatrix::from_fn(j, k, |r, c| {
             if c < 5 {
@@ -269,7 +291,7 @@ impl GapProblem {
                 expected -= (inv * xa.transpose() * &self.m_white * &xa).trace();
             }
         }
-        let n_shape = spec.extra.len() + usize::from(spec.filter_tc_s.is_some());
+        let n_shape = spec.extra.len() + spec.filter.map_or(0, |f| f.n_shape());
         expected -= n_shape as f64 * tr_m / j as f64;
         Some(GlsFit {
             coef: coef.iter().copied().collect(),
@@ -342,9 +364,21 @@ impl GapProblem {
                 hi: (0.5 / self.tau0_s).min(0.371 / tmin * 2.0),
                 per_decade: 60.0,
             },
-            EffectKind::OutputFilter => Grid {
+            EffectKind::OutputFilter | EffectKind::ZeroPhaseFilter => Grid {
                 lo: 0.3 * self.tau0_s,
                 hi: 30.0 * self.tau0_s,
+                per_decade: 12.0,
+            },
+            // Taps (the moving average) and Hz (the second order's natural frequency, its
+            // `1 / (2 pi f)` over the first order's range): [`super::filter_scan`] scans them.
+            EffectKind::MovingAverage => Grid {
+                lo: 2.0,
+                hi: super::filter_scan::MAX_TAPS as f64,
+                per_decade: 16.0,
+            },
+            EffectKind::SecondOrderFilter => Grid {
+                lo: 1.0 / (2.0 * std::f64::consts::PI * 30.0 * self.tau0_s),
+                hi: 1.0 / (2.0 * std::f64::consts::PI * 0.4 * self.tau0_s),
                 per_decade: 12.0,
             },
             EffectKind::Warmup => Grid {
@@ -360,12 +394,44 @@ impl GapProblem {
         }
     }
 
-    /// `base` with one candidate effect of shape `shape` added (a filtered N column for the
-    /// output filter, an extra column otherwise).
+    /// `base` with one effect added, with all its parameters (a filter in the N column, an
+    /// extra column otherwise).
+    pub(crate) fn spec_with_params(&self, base: &ModelSpec, p: &EffectParams) -> ModelSpec {
+        match p.lowpass() {
+            Some(lp) => ModelSpec {
+                filter: Some(lp),
+                ..base.clone()
+            },
+            None => self.spec_with(base, p.kind(), p.shape()),
+        }
+    }
+
+    /// Best parameters of one stationary candidate on top of `base` ([`GapProblem::scan`], or
+    /// [`super::filter_scan`] for the filters with two shape parameters). The amplitude is the
+    /// fitted last column's.
+    pub fn scan_params(
+        &self,
+        base: &ModelSpec,
+        kind: EffectKind,
+    ) -> Option<(EffectParams, GlsFit)> {
+        match kind {
+            EffectKind::MovingAverage | EffectKind::SecondOrderFilter => {
+                super::filter_scan::scan(self, base, kind)
+            }
+            _ => {
+                let (sh, f) = self.scan(base, kind)?;
+                let amp = f.coef.last().copied().unwrap_or(0.0).max(0.0).sqrt();
+                Some((EffectParams::from_shape(kind, sh, amp), f))
+            }
+        }
+    }
+
+    /// `base` with one candidate effect of shape `shape` added (a filtered N column for a
+    /// filter, in its canonical form [`canonical_lowpass`], an extra column otherwise).
     pub(crate) fn spec_with(&self, base: &ModelSpec, kind: EffectKind, shape: f64) -> ModelSpec {
         let mut s = base.clone();
-        if kind == EffectKind::OutputFilter {
-            s.filter_tc_s = Some(shape);
+        if kind.is_filter() {
+            s.filter = Some(canonical_lowpass(kind, shape));
         } else {
             s.extra.push(effect_column(
                 kind,

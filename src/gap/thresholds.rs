@@ -22,6 +22,9 @@ pub struct Thresholds {
     /// Gauss-Markov term, 60 for the sinusoid): Gauss-Markov, sinusoid, output filter. Set so
     /// that their union stays within the false-alarm budget (docs/gap.md, "Calibration").
     pub lr_crit: [f64; 3],
+    /// `lr_crit` of the filters beyond first order: moving average, second order, zero phase
+    /// (docs/gap.md, "Low-pass filters beyond first order").
+    pub lr_crit_filters: [f64; 3],
     /// z scores (square roots of the drops of the whitened residual sum of squares at forward
     /// selection) that steps in the block means need to count as bias jumps: at least `k`
     /// steps at `z >= jump_z[k - 1]` ([`detect_steps`](super::steps::detect_steps)).
@@ -42,6 +45,9 @@ impl Thresholds {
             EffectKind::GaussMarkov => self.lr_crit[0],
             EffectKind::Sinusoid => self.lr_crit[1],
             EffectKind::OutputFilter => self.lr_crit[2],
+            EffectKind::MovingAverage => self.lr_crit_filters[0],
+            EffectKind::SecondOrderFilter => self.lr_crit_filters[1],
+            EffectKind::ZeroPhaseFilter => self.lr_crit_filters[2],
             EffectKind::Warmup | EffectKind::BiasJumps | EffectKind::Temperature => f64::INFINITY,
         }
     }
@@ -54,6 +60,7 @@ impl Default for Thresholds {
             band_z: 2.5,
             add_chi2: 3.0,
             lr_crit: [5.5, 7.0, 7.0],
+            lr_crit_filters: [7.0, 7.0, 7.0],
             jump_z: [4.5, 4.0, 3.4],
             // The integrated statistic replaces the maximum (docs/gap.md, "Mixture
             // statistics"): at the same share of clean runs its tail is steadier across seeds.

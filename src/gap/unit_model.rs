@@ -76,6 +76,7 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
         gauss_markov: Vec::new(),
         sinusoids: Vec::new(),
         output_filter: None,
+        lowpass: None,
         warmup: None,
         bias_jumps: None,
         rate_lsb,
@@ -101,6 +102,9 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
             EffectParams::OutputFilter { time_constant_s } => {
                 ch.output_filter = Some(OutputFilterSpec { time_constant_s })
             }
+            EffectParams::MovingAverage { .. }
+            | EffectParams::SecondOrderFilter { .. }
+            | EffectParams::ZeroPhaseFilter { .. } => ch.lowpass = e.params.lowpass(),
             EffectParams::Warmup {
                 amplitude,
                 time_constant_s,

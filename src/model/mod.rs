@@ -5,6 +5,7 @@ pub mod aggregate;
 pub mod avar_cov;
 pub mod fit;
 pub mod limits;
+pub mod lowpass;
 pub mod nnls;
 pub mod readout;
 pub mod terms;

@@ -29,6 +29,7 @@ pub mod checkpoint;
 pub mod checkpointing;
 pub mod decode;
 pub mod reorder;
+pub mod units;
 pub mod writer;
 
 use std::io::BufRead;
@@ -54,16 +55,19 @@ use decode::DecodeStage;
 pub use writer::{Delivery, RecordQueue, RecordWriter, WriterStats, RECORD_QUEUE};
 
 /// Capacity of the channel from the decode (or text reader) thread to the analysis, in
-/// chunks. A replayed chunk is one 64 KiB read (about 1560 siu8 frames, 300 KB decoded), so
-/// reading runs ahead of the analysis by about a megabyte at most; live chunks are a few frames.
+/// chunks. A replayed chunk is one 256 KiB read (about 6240 siu8 frames, 700 KB decoded), so
+/// reading runs ahead of the analysis by a few megabytes at most; live chunks are a few frames.
 pub const CHUNK_QUEUE: usize = 4;
 
-/// Largest number of events in one chunk: bounds a chunk's memory when many small reads are
-/// gathered while the analysis is busy.
-const MAX_CHUNK_EVENTS: usize = 4096;
+/// A chunk this large goes to the analysis at once, even while more input waits: this bounds a
+/// chunk's memory when many small reads are gathered while the analysis is busy, and a
+/// replay's next read then goes into a fresh block (swapped in whole) instead of being copied
+/// behind these frames (profiled: that copy was 8% of a replay's decode thread).
+const SEND_CHUNK_EVENTS: usize = 1024;
 
-/// Events a new chunk has room for: a 64 KiB read of siu8 is 1560 frames; reserving room for
-/// them avoids regrowing the vector (profiled: 3% of the decode thread).
+/// Events a new chunk has room for at first (a 64 KiB read of siu8 is 1560 frames); blocks are
+/// recycled, so a replay's blocks grow to a whole read once and keep that room (profiled:
+/// regrowing was 3% of the decode thread).
 const CHUNK_EVENTS_RESERVE: usize = 1600;
 
 /// How a run is driven and stopped. The caller owns the process: it cancels `shutdown` (the
@@ -232,7 +236,7 @@ pub async fn run_frames_async(
                     _ => false,
                 };
                 if !events.is_empty()
-                    && (due || events.len() >= MAX_CHUNK_EVENTS || src_rx.is_empty())
+                    && (due || events.len() >= SEND_CHUNK_EVENTS || src_rx.is_empty())
                 {
                     let chunk = Chunk::Block(std::mem::replace(&mut events, fresh()));
                     if !chunk_tx.send(chunk) {
@@ -339,7 +343,7 @@ fn finish_frames(
     queue: &RecordQueue,
     ctl: &RunControl,
 ) -> Result<RunOutcome> {
-    let SourceFlags { live, udp, replay } = flags;
+    let replay = flags.replay;
     let FramesEnd {
         stage,
         offset,
@@ -355,21 +359,8 @@ fn finish_frames(
         final_checkpoint(plan, written, complete, position, &analysis);
     }
     let health = stage.health();
-    let mut record = HealthRecord::new(&health, analysis.summary().run);
-    if let Some(r) = stage.reorder_stats().filter(|_| udp) {
-        record.udp_reordered = Some(r.reordered);
-        record.udp_duplicates = Some(r.duplicates);
-        record.udp_late = Some(r.late);
-    }
-    if live {
-        record.outages = Some(stage.outage.outages);
-        record.outage_missing = Some(stage.outage.missing);
-    }
-    if ctl.capture.is_some() {
-        let c = &ctl.progress.capture;
-        record.capture_bytes = Some(c.bytes());
-        record.capture_error = c.error();
-    }
+    let capture = ctl.capture.is_some().then_some(&*ctl.progress.capture);
+    let record = stage_health_record(&stage, analysis.summary().run, flags, capture);
     if let Some(m) = &ctl.metrics {
         m.health(&health);
     }
@@ -696,7 +687,7 @@ fn join_analysis(handles: Vec<std::thread::JoinHandle<RunAnalysis>>) -> Result<R
 
 /// Runs a run's future on a current-thread tokio runtime built here, for callers outside any
 /// runtime; inside one it refuses (blocking there would stall the caller's runtime).
-fn block_on<F, T>(fut: F) -> Result<T>
+pub(crate) fn block_on<F, T>(fut: F) -> Result<T>
 where
     F: std::future::Future<Output = Result<T>>,
 {
@@ -743,4 +734,30 @@ fn finish_records(
         summary.capture_error = p.capture.error();
     }
     queue.push_final(Record::Summary(summary));
+}
+
+/// The `health` record of a decode stage at the end of a run: the decoder's counts
+/// ([`HealthRecord::new`]), the UDP reorder window's and the live outages' counters, and the
+/// capture's bytes and error.
+fn stage_health_record(
+    stage: &DecodeStage,
+    run: Option<usize>,
+    flags: SourceFlags,
+    capture: Option<&crate::source::CaptureStatus>,
+) -> HealthRecord {
+    let mut record = HealthRecord::new(&stage.health(), run);
+    if let Some(r) = stage.reorder_stats().filter(|_| flags.udp) {
+        record.udp_reordered = Some(r.reordered);
+        record.udp_duplicates = Some(r.duplicates);
+        record.udp_late = Some(r.late);
+    }
+    if flags.live {
+        record.outages = Some(stage.outage.outages);
+        record.outage_missing = Some(stage.outage.missing);
+    }
+    if let Some(c) = capture {
+        record.capture_bytes = Some(c.bytes());
+        record.capture_error = c.error();
+    }
+    record
 }

@@ -28,6 +28,7 @@ use std::time::{Duration, Instant};
 use crate::allan::Stat;
 use crate::sink::json::JsonLines;
 use crate::sink::records::Record;
+use crate::sink::unit_record::UnitRecord;
 
 /// Records the queue holds before interim records start to be coalesced (live) or the analysis
 /// waits (replay): a few full sets of interim records (8 channels x 3 statistics + 8 fits = 32
@@ -56,7 +57,9 @@ pub enum Delivery {
 
 #[derive(Default)]
 struct QueueState {
-    items: VecDeque<(Record, bool)>,
+    /// Each record, whether it is final, and the named unit it belongs to (a run of several
+    /// units, [`crate::sink::unit_record`]).
+    items: VecDeque<(Record, bool, Option<Arc<str>>)>,
     closed: bool,
     coalesced: u64,
     /// The writer failed (e.g. the consumer closed the pipe); records are discarded from then on.
@@ -86,14 +89,23 @@ pub struct RecordQueue {
     delivery: Delivery,
 }
 
-/// The coalescing key of an interim record: type, channel, statistic, run. Interim diagnoses
-/// have one too (the newest of a channel is all a monitor needs), so `--diagnose` with a stalled
-/// consumer keeps the queue bounded.
-fn key(r: &Record) -> Option<(&'static str, &str, Option<Stat>, Option<usize>)> {
+/// The coalescing key of an interim record: type, channel, statistic, run, and the named
+/// unit. Interim diagnoses have one too (the newest of a channel is all a monitor needs), so
+/// `--diagnose` with a stalled consumer keeps the queue bounded.
+type Key<'a> = (
+    &'static str,
+    &'a str,
+    Option<Stat>,
+    Option<usize>,
+    Option<&'a str>,
+);
+
+fn key<'a>(r: &'a Record, unit: &'a Option<Arc<str>>) -> Option<Key<'a>> {
+    let u = unit.as_deref();
     match r {
-        Record::Curve(c) => Some(("curve", c.channel.as_str(), Some(c.stat), c.run)),
-        Record::Fit(f) => Some(("fit", f.channel.as_str(), None, f.run)),
-        Record::Diagnosis(d) => Some(("diagnosis", d.channel.as_str(), None, d.run)),
+        Record::Curve(c) => Some(("curve", c.channel.as_str(), Some(c.stat), c.run, u)),
+        Record::Fit(f) => Some(("fit", f.channel.as_str(), None, f.run, u)),
+        Record::Diagnosis(d) => Some(("diagnosis", d.channel.as_str(), None, d.run, u)),
         _ => None,
     }
 }
@@ -108,6 +120,13 @@ impl RecordQueue {
     /// full, older interim records of the same key are removed first. With
     /// [`Delivery::Backpressure`] it waits for room, until [`RecordQueue::release`].
     pub fn push_interim(&self, rec: Record) {
+        self.push_interim_of(None, rec)
+    }
+
+    /// [`RecordQueue::push_interim`] for a record of the named unit `unit` (written with
+    /// `"unit": NAME`, [`crate::sink::unit_record`]); `None`: a one-unit run's record.
+    pub fn push_interim_of(&self, unit: Option<&Arc<str>>, rec: Record) {
+        let unit = unit.cloned();
         let mut st = self.lock();
         if self.delivery == Delivery::Backpressure {
             while st.items.len() >= self.capacity && !st.failed && !st.released && !st.closed {
@@ -123,14 +142,14 @@ impl RecordQueue {
             return;
         }
         if st.items.len() >= self.capacity {
-            if let Some(k) = key(&rec) {
+            if let Some(k) = key(&rec, &unit) {
                 let before = st.items.len();
                 st.items
-                    .retain(|(r, is_final)| *is_final || key(r) != Some(k));
+                    .retain(|(r, is_final, u)| *is_final || key(r, u) != Some(k));
                 st.coalesced += (before - st.items.len()) as u64;
             }
         }
-        st.items.push_back((rec, false));
+        st.items.push_back((rec, false, unit));
         drop(st);
         self.inner.items.notify_one();
     }
@@ -138,11 +157,16 @@ impl RecordQueue {
     /// Queues a final record (final curves and fits, health, summary, aggregate); never
     /// dropped, never blocks.
     pub fn push_final(&self, rec: Record) {
+        self.push_final_of(None, rec)
+    }
+
+    /// [`RecordQueue::push_final`] for a record of the named unit `unit`.
+    pub fn push_final_of(&self, unit: Option<&Arc<str>>, rec: Record) {
         let mut st = self.lock();
         if st.failed {
             return;
         }
-        st.items.push_back((rec, true));
+        st.items.push_back((rec, true, unit.cloned()));
         drop(st);
         self.inner.items.notify_one();
     }
@@ -285,8 +309,14 @@ fn write_loop(q: RecordQueue, mut sink: JsonLines) -> std::io::Result<u64> {
         }
         q.inner.room.notify_all();
         let res = (|| {
-            for (r, _) in batch.drain(..) {
-                sink.write(&r)?;
+            for (r, _, unit) in batch.drain(..) {
+                match unit {
+                    None => sink.write(&r)?,
+                    Some(u) => sink.write(&UnitRecord {
+                        unit: &u,
+                        record: &r,
+                    })?,
+                }
                 written += 1;
                 q.inner.written.store(written, Ordering::SeqCst);
             }

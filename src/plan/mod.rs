@@ -15,10 +15,9 @@
 //! - [`channels`]: the channel choice.
 //! - [`options`]: the option values with `FromStr`, shared by clap and the stand config.
 //!
-//! A run holds a list of units so that one stand config can later describe several units, each
-//! with its own source, format, channels, limits and capture (one [`unit::UnitPlan`] each,
-//! with the run-wide settings staying in [`run::RunPlan`]); today a stand config and every
-//! command plan one unit.
+//! A run holds a list of units: a stand config with `[[unit]]` tables describes several, each
+//! with its own source, format, channels, limits and capture (one [`unit::UnitPlan`] each, named;
+//! the run-wide settings stay in [`run::RunPlan`]); the commands and a one-unit config plan one.
 
 pub mod channels;
 pub mod checkpoint_setup;

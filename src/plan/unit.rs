@@ -40,6 +40,10 @@ pub struct UnitPlan {
     pub analysis: AnalysisOptions,
     /// The checkpoint plan and, when resuming, the saved checkpoint.
     pub checkpoint: Option<CheckpointSetup>,
+    /// The unit's name in a stand config of several (`[[unit]]`): its records carry it.
+    pub unit_name: Option<String>,
+    /// Every received byte of a live source also written here.
+    pub capture: Option<PathBuf>,
 }
 
 /// What the units are checked against while they are planned.
@@ -126,6 +130,8 @@ impl UnitPlan {
             channels,
             analysis,
             checkpoint,
+            unit_name: None,
+            capture: None,
         })
     }
 
@@ -135,6 +141,17 @@ impl UnitPlan {
             InputPlan::Frames { desc, .. } => Some(desc),
             InputPlan::Text { .. } => None,
         }
+    }
+
+    /// True for a serial or UDP source (no end; silences are wall time).
+    pub fn is_live(&self) -> bool {
+        matches!(&self.input, InputPlan::Frames { spec, .. } if spec.is_live())
+    }
+
+    /// The name the unit is known by in messages and metrics: its stand-config name, else its
+    /// input.
+    pub fn label(&self) -> &str {
+        self.unit_name.as_deref().unwrap_or(&self.name)
     }
 
     /// The checkpoint's file, when the unit has one.

@@ -8,7 +8,7 @@
 //!
 //! Per channel and step the signal is built in this order: rate-domain terms integrated over
 //! the step (bias, stand, N, K, R, B, Gauss-Markov, sinusoids, warm-up, bias jumps, temperature
-//! bias) -> the unit's output filter -> outliers (spikes on single rate samples) -> white phase Q
+//! bias) -> the unit's output filter (first order, or one of [`lowpass`]) -> outliers (spikes on single rate samples) -> white phase Q
 //! -> rounding of the rate sample (`rate_lsb`, no carry) -> quantization with the remainder
 //! carried (integer counts when `lsb` is set). Each channel draws from its own Xoshiro256++ stream
 //! (seeded with `seed`, then jumped 2^128 steps per channel index), so adding a channel does not
@@ -22,6 +22,7 @@
 //! (integer counts) hide such differences except with vanishing probability.
 
 pub mod effects;
+pub mod lowpass;
 pub mod model_avar;
 pub mod model_file;
 pub mod model_write;
@@ -163,6 +164,8 @@ struct ChannelSim {
     jumps: Option<BiasJumpsGen>,
     temp_coeff: f64,
     filter: Option<OutputFilter>,
+    /// A low-pass beyond first order, in the output filter's place (the model file allows one).
+    lowpass: Option<lowpass::LowPassGen>,
     white_phase: Option<WhitePhase>,
     /// Outliers: (probability per step, size in u per step).
     outliers: Option<(f64, f64)>,
@@ -228,6 +231,10 @@ impl ChannelSim {
             filter: c
                 .output_filter
                 .map(|f| OutputFilter::new(f.time_constant_s, tau0_s)),
+            lowpass: c
+                .lowpass
+                .as_ref()
+                .and_then(|lp| lowpass::LowPassGen::new(lp, tau0_s)),
             white_phase,
             outliers: c
                 .outliers
@@ -274,6 +281,9 @@ impl ChannelSim {
             d += self.temp_coeff * temp_integral;
         }
         if let Some(f) = &mut self.filter {
+            d = f.step(d);
+        }
+        if let Some(f) = &mut self.lowpass {
             d = f.step(d);
         }
         if let Some((p, size)) = self.outliers {

@@ -28,8 +28,9 @@ impl SimModel {
         let q2 = c.q * c.q + c.lsb.map_or(0.0, |l| terms::quantization_q(l).powi(2));
         let mut v = terms::white_phase_avar(q2.sqrt(), tau);
         let filter = c.output_filter.map(|f| f.time_constant_s);
-        v += match filter {
-            Some(t) if c.n > 0.0 => terms::filtered_white_rate_avar(c.n, t, tau0, m),
+        v += match (filter, &c.lowpass) {
+            (Some(t), _) if c.n > 0.0 => terms::filtered_white_rate_avar(c.n, t, tau0, m),
+            (None, Some(lp)) if c.n > 0.0 => c.n * c.n * lp.white_rate_avar(tau0, &[m])[0],
             _ => terms::white_rate_avar(c.n, tau),
         };
         if let Some(bank) = &c.flicker {
@@ -40,8 +41,11 @@ impl SimModel {
         for g in &c.gauss_markov {
             v += terms::gauss_markov_avar(g.sigma, g.tau_c_s, tau);
         }
-        let gain =
-            |f_hz: f64| filter.map_or(1.0, |t| terms::output_filter_power_gain(t, tau0, f_hz));
+        let gain = |f_hz: f64| match (filter, &c.lowpass) {
+            (Some(t), _) => terms::output_filter_power_gain(t, tau0, f_hz),
+            (None, Some(lp)) => lp.power_gain(tau0, f_hz),
+            _ => 1.0,
+        };
         for s in &c.sinusoids {
             v += gain(s.frequency_hz) * terms::sinusoid_avar(s.amplitude, s.frequency_hz, tau);
         }

@@ -34,6 +34,9 @@
 //! gauss_markov = [{ sigma = 0.1, tau_c = 2.0 }]                     # u/s, s (table or list)
 //! sinusoid = [{ amplitude = 0.05, frequency = 1.3, phase = 0.0 }]   # u/s, Hz, rad (table or list)
 //! output_filter = { time_constant = 0.01 }                          # s
+//! moving_average = { taps = 16, stages = 2 }     # or, in place of output_filter (one filter):
+//! second_order_filter = { natural_frequency = 20.0, damping = 0.7 }  # Hz, 1
+//! zero_phase_filter = { time_constant = 0.01 }   # s, forward-backward first order
 //! warmup = { amplitude = 0.5, time_constant = 600.0 }               # u/s, s
 //! bias_jumps = { mean_interval = 1800.0, rms_size = 0.01 }          # s, u/s
 //! rate_lsb = 0.01                 # optional: each rate sample rounded to this step (u/s), no carry
@@ -46,6 +49,7 @@ use crate::toml_check::{Collector, ConfigErrors};
 
 use super::effects::TemperatureProfile;
 use super::noise::FlickerBank;
+use crate::model::lowpass::LowPass;
 
 /// Earth rotation rate (WGS-84), rad/s.
 pub const EARTH_RATE_RAD_S: f64 = 7.292_115e-5;
@@ -106,6 +110,10 @@ pub struct ChannelModel {
     pub gauss_markov: Vec<GaussMarkov>,
     pub sinusoids: Vec<Sinusoid>,
     pub output_filter: Option<OutputFilterSpec>,
+    /// A low-pass beyond first order (moving average, second order, zero phase), in place of
+    /// `output_filter` ([`crate::model::lowpass`]; docs/gap.md, "Low-pass filters beyond first
+    /// order").
+    pub lowpass: Option<LowPass>,
     pub warmup: Option<Warmup>,
     pub bias_jumps: Option<BiasJumps>,
     /// Each rate sample rounded to this step (u/s), no remainder carried (MEMS parts): a white
@@ -631,6 +639,7 @@ fn parse_channel(
         e.finish(errs);
         OutputFilterSpec { time_constant_s }
     });
+    let lowpass = parse_lowpass(&mut k, tau0_s, output_filter.is_some(), errs);
     let warmup = k.table("warmup", errs).map(|(p, tt)| {
         let mut e = Keys::new(tt, &p);
         let a = e.num("amplitude", errs);
@@ -694,9 +703,94 @@ fn parse_channel(
         gauss_markov,
         sinusoids,
         output_filter,
+        lowpass,
         warmup,
         bias_jumps,
         rate_lsb,
         outliers,
     })
+}
+
+/// The keys `moving_average = {taps, stages}`, `second_order_filter = {natural_frequency,
+/// damping}` and `zero_phase_filter = {time_constant}`: at most one filter per channel
+/// (`output_filter` included).
+fn parse_lowpass(
+    k: &mut Keys<'_>,
+    tau0_s: f64,
+    has_output_filter: bool,
+    errs: &mut Collector,
+) -> Option<LowPass> {
+    let mut found: Vec<(String, LowPass)> = Vec::new();
+    if let Some((p, tt)) = k.table("moving_average", errs) {
+        let mut e = Keys::new(tt, &p);
+        let t = e.num_pos("taps", true, errs);
+        let taps = e.required("taps", t, errs);
+        let stages = e.num_pos("stages", true, errs).unwrap_or(1.0);
+        e.finish(errs);
+        for (key, v) in [("taps", taps), ("stages", stages)] {
+            if v.is_finite() && v.fract() != 0.0 {
+                errs.bad(
+                    format!("{p}.{key}"),
+                    format!("must be a whole number, got {v}"),
+                );
+            }
+        }
+        found.push((
+            p,
+            LowPass::MovingAverage {
+                taps: taps.clamp(0.0, u32::MAX as f64) as u32,
+                stages: stages.clamp(0.0, u32::MAX as f64) as u32,
+            },
+        ));
+    }
+    if let Some((p, tt)) = k.table("second_order_filter", errs) {
+        let mut e = Keys::new(tt, &p);
+        let f = e.num_pos("natural_frequency", true, errs);
+        let natural_frequency_hz = e.required("natural_frequency", f, errs);
+        let z = e.num_pos("damping", true, errs);
+        let damping = e.required("damping", z, errs);
+        e.finish(errs);
+        found.push((
+            p,
+            LowPass::SecondOrder {
+                natural_frequency_hz,
+                damping,
+            },
+        ));
+    }
+    if let Some((p, tt)) = k.table("zero_phase_filter", errs) {
+        let mut e = Keys::new(tt, &p);
+        let tc = e.num_pos("time_constant", true, errs);
+        let time_constant_s = e.required("time_constant", tc, errs);
+        e.finish(errs);
+        found.push((p, LowPass::ZeroPhase { time_constant_s }));
+    }
+    let mut out = None;
+    for (i, (p, lp)) in found.into_iter().enumerate() {
+        if i > 0 || has_output_filter {
+            errs.bad(
+                p,
+                "one filter per channel: output_filter, moving_average, second_order_filter \
+                 and zero_phase_filter exclude each other",
+            );
+            continue;
+        }
+        // Parameters already reported missing or not positive are not judged again.
+        let judged = match lp {
+            LowPass::SecondOrder {
+                natural_frequency_hz,
+                damping,
+            } => natural_frequency_hz.is_finite() && damping.is_finite(),
+            LowPass::ZeroPhase { time_constant_s } => time_constant_s.is_finite(),
+            _ => true,
+        };
+        if judged {
+            if let Some(problem) = lp.check(tau0_s) {
+                errs.bad(p, problem);
+                continue;
+            }
+        }
+        out = Some(lp);
+    }
+    out
 }

@@ -6,6 +6,7 @@
 use std::fmt::Write as _;
 
 use super::model_file::{ChannelModel, SimModel};
+use crate::model::lowpass::LowPass;
 
 /// A number as TOML reads it back to the same `f64` (`{:?}` is the shortest round-trip form and
 /// always has a `.` or an exponent). Non-finite values have no TOML form a model file accepts;
@@ -124,6 +125,40 @@ fn channel_toml(s: &mut String, c: &ChannelModel) {
             "[channel.output_filter]\ntime_constant = {}",
             num(f.time_constant_s)
         );
+    }
+    match c.lowpass {
+        Some(LowPass::MovingAverage { taps, stages }) => {
+            let _ = writeln!(
+                s,
+                "[channel.moving_average]\ntaps = {taps}\nstages = {stages}"
+            );
+        }
+        Some(LowPass::SecondOrder {
+            natural_frequency_hz,
+            damping,
+        }) => {
+            let _ = writeln!(
+                s,
+                "[channel.second_order_filter]\nnatural_frequency = {}\ndamping = {}",
+                num(natural_frequency_hz),
+                num(damping)
+            );
+        }
+        Some(LowPass::ZeroPhase { time_constant_s }) => {
+            let _ = writeln!(
+                s,
+                "[channel.zero_phase_filter]\ntime_constant = {}",
+                num(time_constant_s)
+            );
+        }
+        Some(LowPass::FirstOrder { time_constant_s }) => {
+            let _ = writeln!(
+                s,
+                "[channel.output_filter]\ntime_constant = {}",
+                num(time_constant_s)
+            );
+        }
+        None => {}
     }
     if let Some(w) = c.warmup {
         let _ = writeln!(

@@ -51,6 +51,25 @@ fn known(kind: &str) -> Option<(&'static str, &'static [ParamSpec])> {
             "output low-pass filter",
             &[("time_constant", "time constant", Dim::Time)],
         ),
+        "moving_average" => (
+            "output moving average (FIR)",
+            &[
+                ("taps", "taps", Dim::Count),
+                ("stages", "stages", Dim::Count),
+            ],
+        ),
+        "second_order_filter" => (
+            "output second-order low-pass filter",
+            &[
+                ("natural_frequency", "natural frequency", Dim::Freq),
+                // dimensionless: shown as a plain number
+                ("damping", "damping", Dim::Count),
+            ],
+        ),
+        "zero_phase_filter" => (
+            "zero-phase (forward-backward) low-pass filter",
+            &[("time_constant", "time constant", Dim::Time)],
+        ),
         "warmup" => (
             "warm-up drift",
             &[

@@ -2,7 +2,7 @@
 
 use std::io::Write;
 
-use crate::sink::records::Record;
+use serde::Serialize;
 
 /// A buffered JSON-lines writer. Each record is flushed at the end of a batch so a monitor
 /// reading the stream sees whole lines promptly.
@@ -19,8 +19,7 @@ impl JsonLines {
         JsonLines::new(Box::new(std::io::BufWriter::new(std::io::stdout())))
     }
 
-    /// One record as one line.
-    pub fn write(&mut self, record: &Record) -> std::io::Result<()> {
+    pub fn write<T: Serialize>(&mut self, record: &T) -> std::io::Result<()> {
         serde_json::to_writer(&mut self.out, record)?;
         self.out.write_all(b"\n")
     }

@@ -5,8 +5,10 @@
 //! their doc comments); [`json`] writes them one per line. [`results`] reads them back, typed
 //! and labelled by run, for [`plot`] (Allan-deviation panels), [`dynamic`] (the time x tau
 //! view) and [`report`] (the HTML page); [`page_file`] writes those without overwriting;
-//! [`output`] opens result files, [`effect_text`] words a diagnosis's effects, [`export`] writes the noise model for other tools, [`metrics`]
-//! serves live figures.
+//! [`output`] opens result files, [`effect_text`] words a diagnosis's effects, [`export`]
+//! writes the noise model for other tools, [`metrics`] serves live figures. [`unit_record`] tags
+//! the records of a run of several units with their unit's name and takes the tag off again
+//! for the readers.
 
 #[cfg(feature = "plot")]
 pub mod dynamic;
@@ -23,3 +25,4 @@ pub mod records;
 pub mod report;
 pub mod results;
 pub mod table;
+pub mod unit_record;

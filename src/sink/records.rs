@@ -161,6 +161,12 @@ pub struct HealthRecord {
     pub outage_missing: Option<u64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub outages: Option<u64>,
+    /// A run of several units (`crate::pipeline::units`): the unit's quiet spells (live sources),
+    /// and its source's error when the source failed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub quiet_outages: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub source_error: Option<String>,
     pub stale_frames: u64,
     /// UDP input only: datagrams dropped as repeats, given up on as too late, and put back in
     /// order (`crate::pipeline::reorder`).
@@ -210,6 +216,8 @@ impl HealthRecord {
             other_messages,
             outage_missing: None,
             outages: None,
+            quiet_outages: None,
+            source_error: None,
             stale_frames,
             udp_duplicates: None,
             udp_late: None,
@@ -279,6 +287,25 @@ pub struct AggregateRecord {
     pub ci_t: Option<[f64; 2]>,
     /// The seed paper's `mean +- 1.96 sd / sqrt(n)`.
     pub ci_z: Option<[f64; 2]>,
+}
+
+/// `outage`: a unit of a run of several (`[[unit]]`) that went quiet, came back, or whose
+/// source failed, while the other units went on (docs/records.md, "Several units").
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(tag = "type", rename = "outage")]
+pub struct OutageRecord {
+    /// `quiet` (no byte for `run.quiet_after` wall-seconds), `resumed` (bytes again) or
+    /// `failed` (the source stopped with an error; the unit's final records follow at the end).
+    pub event: String,
+    /// When, in seconds since the Unix epoch.
+    pub at_unix_s: f64,
+    /// Seconds of the unit's data analysed by then.
+    pub t_data: f64,
+    /// Wall-seconds since the unit's last byte (for `resumed`: the whole silence).
+    pub silent_s: f64,
+    /// The source's error, for `failed`.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub error: Option<String>,
 }
 
 // The fields of `coef` and `datasheet` and of their entries are declared in alphabetical order:
@@ -479,7 +506,8 @@ impl ReadoutsRecord {
 }
 
 /// Any record, written as one JSON object whose `type` names the variant (`curve`, `fit`,
-/// `health`, `aggregate`, `summary`, `diagnosis`), first in the object.
+/// `health`, `aggregate`, `summary`, `outage`, `diagnosis`), first in the object. In a run of
+/// several units the writer adds the unit's name (`crate::sink::unit_record`).
 ///
 /// The tag belongs to each record struct (`#[serde(tag = "type", rename = "fit")]` and so on), so
 /// a struct serialized on its own is a whole record too; `Record` writes its variant as it is and
@@ -493,18 +521,20 @@ pub enum Record {
     Health(HealthRecord),
     Aggregate(AggregateRecord),
     Summary(SummaryRecord),
+    Outage(OutageRecord),
     /// `diagnosis`: the sim-to-real gap of one channel (`crate::gap::record`).
     Diagnosis(Box<crate::gap::DiagnosisRecord>),
 }
 
 impl Record {
     /// Every `type` this version writes and reads.
-    pub const TYPES: [&'static str; 6] = [
+    pub const TYPES: [&'static str; 7] = [
         "curve",
         "fit",
         "health",
         "aggregate",
         "summary",
+        "outage",
         "diagnosis",
     ];
 
@@ -516,6 +546,7 @@ impl Record {
             Record::Health(_) => "health",
             Record::Aggregate(_) => "aggregate",
             Record::Summary(_) => "summary",
+            Record::Outage(_) => "outage",
             Record::Diagnosis(_) => "diagnosis",
         }
     }
@@ -559,6 +590,7 @@ impl<'de> Deserialize<'de> for Record {
             "health" => Record::Health(serde_json::from_value(v).map_err(err)?),
             "aggregate" => Record::Aggregate(serde_json::from_value(v).map_err(err)?),
             "summary" => Record::Summary(serde_json::from_value(v).map_err(err)?),
+            "outage" => Record::Outage(serde_json::from_value(v).map_err(err)?),
             "diagnosis" => Record::Diagnosis(serde_json::from_value(v).map_err(err)?),
             other => {
                 return Err(D::Error::unknown_variant(other, &Record::TYPES));
@@ -581,6 +613,7 @@ record_from!(FitRecord, Fit);
 record_from!(HealthRecord, Health);
 record_from!(AggregateRecord, Aggregate);
 record_from!(SummaryRecord, Summary);
+record_from!(OutageRecord, Outage);
 record_from!(crate::gap::DiagnosisRecord, Diagnosis);
 
 #[cfg(test)]

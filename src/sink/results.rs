@@ -69,9 +69,10 @@ impl Results {
     pub fn from_files(files: &[ResultFile]) -> Results {
         let mut out = Results::default();
         for (fi, f) in files.iter().enumerate() {
+            // A run of several units: each unit's records as one run, named by the unit.
+            let (records, units) = units_as_runs(&f.records);
             // Run index -> the input named by its summary (a file holding several runs).
-            let runs_named: Vec<(Option<usize>, String)> = f
-                .records
+            let mut runs_named: Vec<(Option<usize>, String)> = records
                 .iter()
                 .filter_map(|v| of_type(v, "summary"))
                 .filter_map(|s| {
@@ -80,6 +81,13 @@ impl Results {
                     Some((run, base_name(input)))
                 })
                 .collect();
+            if !units.is_empty() {
+                runs_named = units
+                    .into_iter()
+                    .enumerate()
+                    .map(|(i, n)| (Some(i), n))
+                    .collect();
+            }
             let several = files.len() > 1;
             let label = |run: Option<usize>| -> String {
                 match run {
@@ -102,7 +110,7 @@ impl Results {
             // has none) belongs to the run of the indexed record before it: `analyze` writes
             // each run's records together.
             let mut current: Option<usize> = None;
-            for v in &f.records {
+            for v in &records {
                 let t = v.get("type").and_then(Value::as_str).unwrap_or("");
                 let run = match v.get("run").and_then(Value::as_u64) {
                     Some(r) => {
@@ -212,6 +220,29 @@ impl Results {
         runs.dedup();
         runs.len() > 1
     }
+}
+
+/// The records of a run of several units ([`crate::sink::unit_record`]) in their one-unit
+/// shape, each unit's as one run (its `run` index the unit's place in the file), and the units'
+/// names in that order; a file of one unit is returned as it is, with no names.
+pub fn units_as_runs(records: &[Value]) -> (Vec<Value>, Vec<String>) {
+    let mut units: Vec<String> = Vec::new();
+    let mut out = records.to_vec();
+    for v in &mut out {
+        if let Some(name) = crate::sink::unit_record::untag(v) {
+            let i = match units.iter().position(|u| *u == name) {
+                Some(i) => i,
+                None => {
+                    units.push(name);
+                    units.len() - 1
+                }
+            };
+            if let Some(o) = v.as_object_mut() {
+                o.insert("run".into(), i.into());
+            }
+        }
+    }
+    (out, units)
 }
 
 /// How far the input of a run was read, from its `summary` (CONTRACT.md: the summary says

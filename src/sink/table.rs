@@ -930,6 +930,7 @@ impl<W: Write> TableWriter<W> {
                     w.get("type") == v.get("type")
                         && w.get("channel") == v.get("channel")
                         && w.get("run") == v.get("run")
+                        && w.get("unit") == v.get("unit")
                         && w.get("final").and_then(Value::as_bool) == Some(false)
                 };
                 self.pending.retain(|w| !same(w));
@@ -947,6 +948,10 @@ impl<W: Write> TableWriter<W> {
             return Ok(());
         }
         let records = std::mem::take(&mut self.pending);
+        // A run of several units prints each unit's table as its summary comes, under its name.
+        let unit = records
+            .iter()
+            .find_map(|r| crate::sink::unit_record::untag(&mut r.clone()));
         let res = Results::from_files(&[ResultFile {
             name: String::new(),
             records: records.clone(),
@@ -980,6 +985,9 @@ impl<W: Write> TableWriter<W> {
         }
         if self.printed {
             self.out.write_all(b"\n")?;
+        }
+        if let Some(u) = unit {
+            writeln!(self.out, "unit {u}")?;
         }
         self.out.write_all(text.as_bytes())?;
         if !self.printed {

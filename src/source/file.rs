@@ -9,9 +9,11 @@ use tokio::io::{AsyncRead, AsyncReadExt};
 
 use super::{Pace, SourceContext, SourceEvent};
 
-/// Bytes per read: 64 KiB (1560 siu8 frames), large enough that per-read overhead vanishes,
-/// small enough that the decode stage starts at once.
-pub const READ_BLOCK: usize = 1 << 16;
+/// Bytes per read: 256 KiB (6240 siu8 frames), large enough that per-read overhead (a blocking
+/// task per read, wake-ups of the decode and analysis threads per chunk) is small, small enough
+/// that the decode stage starts at once. 64 KiB cost a 3-hour siu8 replay about 0.03-0.05 s more
+/// CPU time, a tenth of the whole (BENCHMARKS.md "Decoding at the speed of the statistics").
+pub const READ_BLOCK: usize = 1 << 18;
 
 /// Reads `r` to its end (or until shutdown), passing each block on.
 pub async fn read_stream<R: AsyncRead + Unpin>(

@@ -100,8 +100,8 @@ pub enum SourceEvent {
 /// dropping any.
 pub const SOURCE_QUEUE_LIVE: usize = 1024;
 
-/// Capacity for file and standard-input sources, in 64 KiB blocks: the file waits (back-pressure),
-/// so a few blocks keep the decoder busy and memory at a quarter of a megabyte.
+/// Capacity for file and standard-input sources, in blocks of `file::READ_BLOCK` (256 KiB): the
+/// file waits (back-pressure), so a few blocks keep the decoder busy and memory at a megabyte.
 pub const SOURCE_QUEUE_FILE: usize = 4;
 
 /// Counters a source and the stages after it share with whoever watches the run (tests, the

@@ -5,6 +5,7 @@
 mod alternatives;
 mod diagnosis;
 mod families;
+mod filters;
 mod mixture;
 mod oracle;
 mod outliers;

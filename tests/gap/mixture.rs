@@ -182,3 +182,48 @@ fn jump_ceiling_matches_exact_enumeration() {
         "importance sampling {est} vs exact {exact}"
     );
 }
+
+/// The fair jump ceiling's p-value (`JumpCeiling::p_value`, count and rms told, times
+/// unknown) is a real p-value: on 60 white block-mean series of 40 blocks (the model's own
+/// covariance, so the Gaussian null holds exactly) the share at or below 0.1 is within the
+/// binomial 99% range of 10% (0-13 of 60), and two steps of 3 block sds (at 112 s and 301 s)
+/// give p <= 0.05 in at least 50 of 60 series.
+#[test]
+fn jump_ceiling_p_value_has_its_level_and_power() {
+    use allanscope::gap::oracle::{BlockGls, JumpCeiling};
+    let (n_blocks, block_s) = (40usize, 10.0);
+    let c = [0.0, 0.01, 0.0, 0.0, 0.0];
+    let sd = (0.01f64 / block_s).sqrt();
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(21);
+    let mut series = |amp: f64| -> Vec<f64> {
+        (0..n_blocks)
+            .map(|i| {
+                let e: f64 = StandardNormal.sample(&mut rng);
+                let mid = |t0: f64| (((i + 1) as f64 * block_s - t0) / block_s).clamp(0.0, 1.0);
+                sd * e + amp * sd * (mid(112.0) - mid(301.0))
+            })
+            .collect()
+    };
+    let p_of = |bm: &[f64], seed: u64| {
+        let g = BlockGls::new(bm, block_s, &c).expect("gls");
+        JumpCeiling::new(&g)
+            .p_value(2, 3.0 * sd, 300, 99, seed)
+            .expect("p")
+            .0
+    };
+    let mut null_low = 0;
+    let mut found = 0;
+    for k in 0..60u64 {
+        if p_of(&series(0.0), k) <= 0.1 {
+            null_low += 1;
+        }
+        if p_of(&series(3.0), 100 + k) <= 0.05 {
+            found += 1;
+        }
+    }
+    assert!(null_low <= 13, "{null_low} of 60 clean series at p <= 0.1");
+    assert!(
+        found >= 50,
+        "{found} of 60 series with two steps at p <= 0.05"
+    );
+}

@@ -8,6 +8,7 @@
 //! deg/sqrt(s)), within 15% ("about"); the bookkeeping rules of docs/gap.md (each effect
 //! lowers the gap, the final gap is the last one and never above `gap_before`).
 
+use super::diagnosis::assert_bookkeeping;
 use allanscope::gap::{diagnose, DiagnoseOptions, GapConfig, GapEvidence};
 use std::io::BufReader;
 use std::path::Path;
@@ -35,15 +36,7 @@ fn adis16405_slice_final_gap_is_never_above_the_base_gap() {
     assert_eq!(inc.len(), 200_000);
     let mut ev = GapEvidence::from_increments(GapConfig::new(TAU0), &inc);
     let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
-    let mut prev = d.gap_before;
-    for e in &d.effects {
-        assert!(
-            e.gap_after < prev,
-            "{e:?} did not lower the gap from {prev}"
-        );
-        prev = e.gap_after;
-    }
-    assert_eq!(d.gap_after, prev);
+    assert_bookkeeping(&d);
     assert!(
         d.gap_after <= d.gap_before,
         "{} -> {}",

@@ -18,23 +18,23 @@ fn shipped_example_parses() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/stand.toml");
     let cfg = StandConfig::load(&path).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(
-        cfg.source,
+        cfg.units[0].source,
         SourceSpec::Serial {
             path: "/dev/ttyUSB0".into(),
             baud: 230_400
         }
     );
-    assert_eq!(cfg.format, "siu8");
+    assert_eq!(cfg.units[0].format, "siu8");
     // 3 h and 60 s as written in the example.
     assert_eq!(cfg.duration_s, Some(10_800.0));
     assert_eq!(cfg.every_s, Some(60.0));
     assert_eq!(cfg.checkpoint_every_s, Some(300.0));
     // The four [[limits]] tables, each a valid limit spec that knows the line of its channel.
-    assert_eq!(cfg.limits.len(), 4);
-    assert_eq!(cfg.limits[0].channel, "g4");
-    assert_eq!(cfg.limits[3].channel, "g*");
-    assert_eq!(cfg.limits[3].unit.as_deref(), Some("deg/sqrt(h)"));
-    let lines: Vec<Option<usize>> = cfg
+    assert_eq!(cfg.units[0].limits.len(), 4);
+    assert_eq!(cfg.units[0].limits[0].channel, "g4");
+    assert_eq!(cfg.units[0].limits[3].channel, "g*");
+    assert_eq!(cfg.units[0].limits[3].unit.as_deref(), Some("deg/sqrt(h)"));
+    let lines: Vec<Option<usize>> = cfg.units[0]
         .limits
         .iter()
         .map(|l| l.origin.as_ref().and_then(|o| o.line))

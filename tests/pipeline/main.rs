@@ -17,3 +17,4 @@ mod live_bench;
 mod serial_outage;
 mod signal;
 mod transports;
+mod units;

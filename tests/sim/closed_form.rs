@@ -241,6 +241,34 @@ fn output_filter_on_white_rate() {
     });
 }
 
+/// The filters beyond first order (src/model/lowpass.rs): a Bartlett (two-stage) moving
+/// average, an underdamped second-order low-pass and a zero-phase filter, each on white rate,
+/// against their exact discrete AVAR; the moving average also with a sinusoid through its gain.
+#[test]
+fn moving_average_on_white_rate() {
+    check_ensemble("moving_average", |_| {
+        channel("N = 0.5\nmoving_average = { taps = 6, stages = 2 }")
+    });
+}
+
+#[test]
+fn second_order_filter_on_white_rate() {
+    check_ensemble("second_order", |_| {
+        channel("N = 0.5\nsecond_order_filter = { natural_frequency = 4.0, damping = 0.3 }")
+    });
+}
+
+#[test]
+fn zero_phase_filter_on_white_rate() {
+    check_ensemble("zero_phase", |s| {
+        let phase = 2.0 * std::f64::consts::PI * s as f64 / SEEDS as f64;
+        channel(&format!(
+            "N = 0.5\nzero_phase_filter = {{ time_constant = 0.04 }}\n\
+             sinusoid = {{ amplitude = 0.5, frequency = 3.1, phase = {phase} }}"
+        ))
+    });
+}
+
 #[test]
 fn bias_jumps() {
     check_ensemble("jumps", |_| {

@@ -1,0 +1,176 @@
+//! The shape scans of the filter candidates with more than one shape parameter (docs/gap.md,
+//! "Low-pass filters beyond first order"): the moving average (taps, whole, and one or two
+//! stages) and the second-order low-pass (natural frequency and damping). Each grid point is the
+//! GLS fit of [`GapProblem::gls`] with the N column taken through the filter; the best point is
+//! then polished (neighbouring whole taps; golden sections in `ln f_n` and `ln zeta` in turn).
+
+use super::effects::{EffectKind, EffectParams};
+use super::problem::{GapProblem, GlsFit, ModelSpec};
+use crate::model::lowpass::LowPass;
+use std::f64::consts::PI;
+
+/// Longest moving average scanned (taps).
+pub const MAX_TAPS: u32 = 256;
+/// Stages of the moving average scanned: one (boxcar) and two (triangular, Bartlett).
+pub const STAGES: [u32; 2] = [1, 2];
+/// Damping range of the second-order scan, and points per decade.
+pub const DAMPING_RANGE: (f64, f64) = (0.1, 5.0);
+const DAMPING_PER_DECADE: f64 = 6.0;
+/// Golden-section steps per coordinate, and rounds over the two coordinates.
+const GOLDEN_STEPS: usize = 16;
+const POLISH_ROUNDS: usize = 3;
+
+/// Best parameters of `kind` (moving average or second order) on top of `base`, with the fit.
+pub fn scan(
+    prob: &GapProblem,
+    base: &ModelSpec,
+    kind: EffectKind,
+) -> Option<(EffectParams, GlsFit)> {
+    let fit = |lp: LowPass| {
+        prob.gls(&ModelSpec {
+            filter: Some(lp),
+            ..base.clone()
+        })
+    };
+    let best = match kind {
+        EffectKind::MovingAverage => scan_moving_average(prob, &fit),
+        EffectKind::SecondOrderFilter => scan_second_order(prob, &fit),
+        _ => None,
+    }?;
+    Some((EffectParams::from_lowpass(best.0), best.1))
+}
+
+fn better(
+    a: Option<(LowPass, GlsFit)>,
+    lp: LowPass,
+    f: Option<GlsFit>,
+) -> Option<(LowPass, GlsFit)> {
+    match (a, f) {
+        (Some(a), Some(f)) if f.chi2 < a.1.chi2 => Some((lp, f)),
+        (None, Some(f)) => Some((lp, f)),
+        (a, _) => a,
+    }
+}
+
+/// Whole taps on a log grid from 2 to [`MAX_TAPS`] (no longer than a tenth of the curve's
+/// longest cluster), for each stage count; then every whole number between the best point's
+/// neighbours on the grid.
+fn scan_moving_average(
+    prob: &GapProblem,
+    fit: &dyn Fn(LowPass) -> Option<GlsFit>,
+) -> Option<(LowPass, GlsFit)> {
+    let m_max = prob.ms.last().copied().unwrap_or(1);
+    let hi = (MAX_TAPS as u64).min(m_max / 10).max(2) as f64;
+    let grid = prob.grid(EffectKind::MovingAverage);
+    let mut taps: Vec<u32> = grid
+        .points()
+        .into_iter()
+        .filter(|&t| t <= hi)
+        .map(|t| t.round() as u32)
+        .collect();
+    taps.dedup();
+    if taps.len() < 2 {
+        return None;
+    }
+    let mut best: Option<(LowPass, GlsFit)> = None;
+    let mut best_i = 0;
+    for &stages in &STAGES {
+        for (i, &t) in taps.iter().enumerate() {
+            let lp = LowPass::MovingAverage { taps: t, stages };
+            let before = best.as_ref().map(|b| b.1.chi2);
+            best = better(best, lp, fit(lp));
+            if best.as_ref().map(|b| b.1.chi2) != before {
+                best_i = i;
+            }
+        }
+    }
+    let (LowPass::MovingAverage { stages, .. }, _) = best.as_ref()? else {
+        return best;
+    };
+    let stages = *stages;
+    let lo = taps[best_i.saturating_sub(1)];
+    let hi = taps[(best_i + 1).min(taps.len() - 1)];
+    for t in lo..=hi {
+        if taps.contains(&t) {
+            continue;
+        }
+        let lp = LowPass::MovingAverage { taps: t, stages };
+        best = better(best, lp, fit(lp));
+    }
+    best
+}
+
+/// A grid in `ln f_n` (the first order's range of time constants, `1 / (2 pi f_n)`) by
+/// `ln zeta` over [`DAMPING_RANGE`]; then golden sections in each coordinate in turn, within one
+/// grid step of the best point.
+fn scan_second_order(
+    prob: &GapProblem,
+    fit: &dyn Fn(LowPass) -> Option<GlsFit>,
+) -> Option<(LowPass, GlsFit)> {
+    let fgrid = prob.grid(EffectKind::SecondOrderFilter).points();
+    let (z_lo, z_hi) = DAMPING_RANGE;
+    let nz = ((z_hi / z_lo).log10() * DAMPING_PER_DECADE).ceil() as usize;
+    let zgrid: Vec<f64> = (0..=nz)
+        .map(|i| z_lo * (z_hi / z_lo).powf(i as f64 / nz as f64))
+        .collect();
+    let f_max = 2.5 / (2.0 * PI * prob.tau0_s);
+    let lp_of = |lf: f64, lz: f64| LowPass::SecondOrder {
+        natural_frequency_hz: lf.exp().min(f_max),
+        damping: lz.exp().clamp(z_lo, z_hi),
+    };
+    let mut best: Option<(LowPass, GlsFit)> = None;
+    for &f in &fgrid {
+        for &z in &zgrid {
+            let lp = lp_of(f.ln(), z.ln());
+            best = better(best, lp, fit(lp));
+        }
+    }
+    let (
+        LowPass::SecondOrder {
+            natural_frequency_hz,
+            damping,
+        },
+        _,
+    ) = best.as_ref()?.clone()
+    else {
+        return best;
+    };
+    let df = (fgrid.get(1).copied().unwrap_or(1.0) / fgrid[0]).ln();
+    let dz = (zgrid[1] / zgrid[0]).ln();
+    let (mut lf, mut lz) = (natural_frequency_hz.ln(), damping.ln());
+    for _ in 0..POLISH_ROUNDS {
+        lf = golden(|x| fit(lp_of(x, lz)), lf - df, lf + df);
+        lz = golden(|x| fit(lp_of(lf, x)), lz - dz, lz + dz);
+    }
+    let lp = lp_of(lf, lz);
+    better(best, lp, fit(lp))
+}
+
+/// The minimiser of `chi2(f(x))` on `[lo, hi]` by golden section.
+fn golden(f: impl Fn(f64) -> Option<GlsFit>, mut lo: f64, mut hi: f64) -> f64 {
+    let g = 0.618_033_988_749_895;
+    let c = |x: f64| f(x).map_or(f64::INFINITY, |r| r.chi2);
+    let mut x1 = hi - g * (hi - lo);
+    let mut x2 = lo + g * (hi - lo);
+    let (mut f1, mut f2) = (c(x1), c(x2));
+    for _ in 0..GOLDEN_STEPS {
+        if f1 < f2 {
+            hi = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = hi - g * (hi - lo);
+            f1 = c(x1);
+        } else {
+            lo = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = lo + g * (hi - lo);
+            f2 = c(x2);
+        }
+    }
+    if f1 < f2 {
+        x1
+    } else {
+        x2
+    }
+}

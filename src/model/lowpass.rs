@@ -1,0 +1,385 @@
+//! The unit's output low-pass filters on its increments, first order and beyond: moving averages
+//! (FIR decimation filters, one stage or cascaded: two stages is the triangular Bartlett window of
+//! the ADIS16405), a second-order low-pass (natural frequency, damping) and a zero-phase
+//! (forward-backward) first-order filter. Each is described by the autocorrelation of its
+//! impulse response, from which the exact discrete AVAR of white rate noise through it follows
+//! (docs/gap.md, "Low-pass filters beyond first order"), and by its power gain `|H(f)|^2`, by
+//! which a sinusoid's AVAR is multiplied.
+//!
+//! All filters have DC gain 1, so the AVAR they give tends to the white rate's `N^2 / tau` once
+//! `tau` is long against their memory.
+
+use std::f64::consts::PI;
+
+/// A low-pass filter on the increments (times in s, frequencies in Hz).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LowPass {
+    /// `y_k = a y_{k-1} + (1 - a) d_k`, `a = e^{-tau0/T}`.
+    FirstOrder { time_constant_s: f64 },
+    /// `stages` cascaded moving averages of `taps` increments each (1: boxcar; 2: triangular,
+    /// the Bartlett window).
+    MovingAverage { taps: u32, stages: u32 },
+    /// `y_k = a1 y_{k-1} + a2 y_{k-2} + (1 - a1 - a2) d_k` with the poles of the continuous
+    /// `w^2 / (s^2 + 2 zeta w s + w^2)`, `w = 2 pi f_n`, mapped by `z = e^{s tau0}`.
+    SecondOrder {
+        natural_frequency_hz: f64,
+        damping: f64,
+    },
+    /// The first-order filter run forward then backward over the record: the symmetric impulse
+    /// response `(1 - a)/(1 + a) a^|k|`, `|H|^2` the first order's squared, no phase.
+    ZeroPhase { time_constant_s: f64 },
+}
+
+/// Autocorrelation terms below this fraction of the first are dropped (IIR filters).
+const TAIL: f64 = 1e-15;
+/// Longest autocorrelation kept (lags), whatever the filter.
+pub const MAX_LAGS: usize = 2_000_000;
+/// Largest moving-average length and number of stages accepted.
+pub const MAX_TAPS: u32 = 100_000;
+pub const MAX_STAGES: u32 = 4;
+
+impl LowPass {
+    /// Shape parameters the diagnosis fits (the moving average's stage count is a discrete
+    /// choice and not counted).
+    pub fn n_shape(&self) -> usize {
+        match self {
+            LowPass::SecondOrder { .. } => 2,
+            _ => 1,
+        }
+    }
+
+    /// A problem with the parameters, for model files and options (None: fine).
+    pub fn check(&self, tau0_s: f64) -> Option<String> {
+        match *self {
+            LowPass::FirstOrder { time_constant_s } | LowPass::ZeroPhase { time_constant_s } => {
+                (!(time_constant_s > 0.0 && time_constant_s.is_finite()))
+                    .then(|| format!("time constant {time_constant_s} must be > 0"))
+            }
+            LowPass::MovingAverage { taps, stages } => {
+                if !(1..=MAX_TAPS).contains(&taps) {
+                    Some(format!("taps {taps} must be 1..={MAX_TAPS}"))
+                } else if !(1..=MAX_STAGES).contains(&stages) {
+                    Some(format!("stages {stages} must be 1..={MAX_STAGES}"))
+                } else {
+                    None
+                }
+            }
+            LowPass::SecondOrder {
+                natural_frequency_hz,
+                damping,
+            } => {
+                if !(natural_frequency_hz > 0.0 && natural_frequency_hz.is_finite()) {
+                    Some(format!(
+                        "natural frequency {natural_frequency_hz} must be > 0"
+                    ))
+                } else if 2.0 * PI * natural_frequency_hz * tau0_s > 2.5 {
+                    Some(format!(
+                        "natural frequency {natural_frequency_hz} Hz is too close to Nyquist \
+                         (2 pi f tau0 must be <= 2.5)"
+                    ))
+                } else if !(damping > 0.0 && damping <= 100.0) {
+                    Some(format!("damping {damping} must be in (0, 100]"))
+                } else {
+                    None
+                }
+            }
+        }
+    }
+
+    /// The AR(2) coefficients `(a1, a2)` of the recursive filters (the zero-phase filter's
+    /// autocorrelation is that of two first-order stages in cascade: its `|H|^2` is theirs).
+    fn ar2(&self, tau0_s: f64) -> Option<(f64, f64)> {
+        match *self {
+            LowPass::SecondOrder {
+                natural_frequency_hz,
+                damping,
+            } => {
+                let w = 2.0 * PI * natural_frequency_hz;
+                if damping < 1.0 {
+                    let r = (-damping * w * tau0_s).exp();
+                    let th = w * tau0_s * (1.0 - damping * damping).sqrt();
+                    Some((2.0 * r * th.cos(), -r * r))
+                } else {
+                    let d = (damping * damping - 1.0).sqrt();
+                    let p1 = (w * (-damping + d) * tau0_s).exp();
+                    let p2 = (w * (-damping - d) * tau0_s).exp();
+                    Some((p1 + p2, -p1 * p2))
+                }
+            }
+            LowPass::ZeroPhase { time_constant_s } => {
+                let a = (-tau0_s / time_constant_s).exp();
+                Some((2.0 * a, -a * a))
+            }
+            _ => None,
+        }
+    }
+
+    /// The impulse response of the causal filters with a finite one (moving averages),
+    /// DC gain 1.
+    fn fir(taps: u32, stages: u32) -> Vec<f64> {
+        let m = taps.max(1) as usize;
+        let box_h = vec![1.0 / m as f64; m];
+        let mut h = vec![1.0];
+        for _ in 0..stages.max(1) {
+            let mut out = vec![0.0; h.len() + m - 1];
+            for (i, &a) in h.iter().enumerate() {
+                for (j, &b) in box_h.iter().enumerate() {
+                    out[i + j] += a * b;
+                }
+            }
+            h = out;
+        }
+        h
+    }
+
+    /// The normalised autocorrelation `rho(k)`, `k = 0, 1, ...` of the filter's impulse
+    /// response: the filtered white increments have autocovariance `N^2 tau0 rho(|k|)`, and
+    /// `rho(0) + 2 sum_{k>0} rho(k) = 1` (DC gain 1).
+    pub fn autocorrelation(&self, tau0_s: f64) -> Vec<f64> {
+        match *self {
+            LowPass::FirstOrder { time_constant_s } => {
+                let a = (-tau0_s / time_constant_s).exp();
+                let r0 = (1.0 - a) / (1.0 + a);
+                let n = lags_for(a.abs());
+                let mut out = Vec::with_capacity(n);
+                let mut v = r0;
+                for _ in 0..n {
+                    out.push(v);
+                    v *= a;
+                }
+                out
+            }
+            LowPass::MovingAverage { taps, stages } => {
+                let h = Self::fir(taps, stages);
+                (0..h.len())
+                    .map(|k| h.iter().zip(&h[k..]).map(|(a, b)| a * b).sum())
+                    .collect()
+            }
+            LowPass::SecondOrder { .. } | LowPass::ZeroPhase { .. } => {
+                let (a1, a2) = self.ar2(tau0_s).unwrap_or((0.0, 0.0));
+                // Yule-Walker: rho_1 = a1 / (1 - a2), rho_k = a1 rho_{k-1} + a2 rho_{k-2};
+                // gamma_0 of y_k = a1 y_{k-1} + a2 y_{k-2} + g e_k (unit-variance e) is
+                // g^2 (1 - a2) / ((1 + a2)((1 - a2)^2 - a1^2)).
+                let g = 1.0 - a1 - a2;
+                let g0 = g * g * (1.0 - a2) / ((1.0 + a2) * ((1.0 - a2).powi(2) - a1 * a1));
+                // the slowest pole sets the decay: the larger root of z^2 - a1 z - a2
+                let disc = a1 * a1 + 4.0 * a2;
+                let slow = if disc < 0.0 {
+                    (-a2).sqrt()
+                } else {
+                    (a1.abs() + disc.sqrt()) / 2.0
+                };
+                let n = lags_for(slow);
+                let mut out = Vec::with_capacity(n);
+                let (mut r_prev, mut r) = (f64::NAN, 1.0);
+                for k in 0..n {
+                    out.push(g0 * r);
+                    let next = if k == 0 {
+                        a1 / (1.0 - a2)
+                    } else {
+                        a1 * r + a2 * r_prev
+                    };
+                    r_prev = r;
+                    r = next;
+                }
+                out
+            }
+        }
+    }
+
+    /// AVAR (u^2/s^2) of white rate noise of unit `N` (u/sqrt(s)) through the filter at each
+    /// cluster size of `ms`: `(4 S(m) - S(2m)) / (2 m^2 tau0^2)` with
+    /// `S(n) = tau0 (n rho_0 + 2 sum_{0<k<n} (n - k) rho_k)` the variance of a sum of `n`
+    /// filtered increments (docs/gap.md, "Low-pass filters beyond first order").
+    pub fn white_rate_avar(&self, tau0_s: f64, ms: &[u64]) -> Vec<f64> {
+        let rho = self.autocorrelation(tau0_s);
+        // prefix sums over k = 1..=K of rho_k and k rho_k
+        let mut p0 = vec![0.0; rho.len()];
+        let mut p1 = vec![0.0; rho.len()];
+        for k in 1..rho.len() {
+            p0[k] = p0[k - 1] + rho[k];
+            p1[k] = p1[k - 1] + k as f64 * rho[k];
+        }
+        let s = |n: u64| -> f64 {
+            let kk = ((n.saturating_sub(1)) as usize).min(rho.len() - 1);
+            let nf = n as f64;
+            tau0_s * (nf * rho[0] + 2.0 * (nf * p0[kk] - p1[kk]))
+        };
+        ms.iter()
+            .map(|&m| {
+                let mf = m as f64;
+                ((4.0 * s(m) - s(2 * m)) / (2.0 * mf * mf * tau0_s * tau0_s)).max(0.0)
+            })
+            .collect()
+    }
+
+    /// Power gain `|H(f)|^2` at `frequency_hz`.
+    pub fn power_gain(&self, tau0_s: f64, frequency_hz: f64) -> f64 {
+        let w = 2.0 * PI * frequency_hz * tau0_s;
+        match *self {
+            LowPass::FirstOrder { time_constant_s } => first_order_gain(time_constant_s, tau0_s, w),
+            LowPass::ZeroPhase { time_constant_s } => {
+                first_order_gain(time_constant_s, tau0_s, w).powi(2)
+            }
+            LowPass::MovingAverage { taps, stages } => {
+                let m = taps.max(1) as f64;
+                let den = m * (w / 2.0).sin();
+                let g = if den.abs() < 1e-300 {
+                    1.0
+                } else {
+                    (m * w / 2.0).sin() / den
+                };
+                (g * g).powi(stages.max(1) as i32)
+            }
+            LowPass::SecondOrder { .. } => {
+                let (a1, a2) = self.ar2(tau0_s).unwrap_or((0.0, 0.0));
+                let g = 1.0 - a1 - a2;
+                // |1 - a1 e^{-iw} - a2 e^{-2iw}|^2
+                let re = 1.0 - a1 * w.cos() - a2 * (2.0 * w).cos();
+                let im = a1 * w.sin() + a2 * (2.0 * w).sin();
+                g * g / (re * re + im * im)
+            }
+        }
+    }
+
+    /// Its memory in s: `sum_k |k| rho_k tau0`-weighted, the delay beyond which the filtered
+    /// white rate is white again (for grids and plots): the time constant, the moving
+    /// average's span, `1 / (zeta w)` for the second order.
+    pub fn memory_s(&self, tau0_s: f64) -> f64 {
+        match *self {
+            LowPass::FirstOrder { time_constant_s } | LowPass::ZeroPhase { time_constant_s } => {
+                time_constant_s
+            }
+            LowPass::MovingAverage { taps, stages } => (taps * stages) as f64 * tau0_s,
+            LowPass::SecondOrder {
+                natural_frequency_hz,
+                damping,
+            } => 1.0 / (damping.max(0.01) * 2.0 * PI * natural_frequency_hz),
+        }
+    }
+}
+
+/// Lags kept for a geometric decay of ratio `r`.
+fn lags_for(r: f64) -> usize {
+    if !(r > 0.0 && r < 1.0) {
+        return 1;
+    }
+    ((TAIL.ln() / r.ln()).ceil() as usize + 2).min(MAX_LAGS)
+}
+
+fn first_order_gain(time_constant_s: f64, tau0_s: f64, w: f64) -> f64 {
+    let a = (-tau0_s / time_constant_s).exp();
+    let s = (w / 2.0).sin();
+    (1.0 - a) * (1.0 - a) / ((1.0 - a) * (1.0 - a) + 4.0 * a * s * s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::terms;
+
+    /// The generic form reproduces the first-order closed form of `terms`.
+    #[test]
+    fn first_order_matches_closed_form() {
+        let tau0 = 0.004;
+        let lp = LowPass::FirstOrder {
+            time_constant_s: 0.02,
+        };
+        let ms = [1u64, 2, 3, 5, 8, 13, 40, 1000, 100_000];
+        for (m, v) in ms.iter().zip(lp.white_rate_avar(tau0, &ms)) {
+            let want = terms::filtered_white_rate_avar(1.0, 0.02, tau0, *m);
+            assert!((v / want - 1.0).abs() < 1e-9, "m {m}: {v} vs {want}");
+        }
+    }
+
+    /// Autocorrelations sum to 1 (DC gain 1), and the zero-phase filter's equals two
+    /// first-order stages in cascade (computed by brute force from the impulse response).
+    #[test]
+    fn autocorrelations_sum_to_one() {
+        let tau0 = 0.004;
+        for lp in [
+            LowPass::MovingAverage { taps: 7, stages: 1 },
+            LowPass::MovingAverage {
+                taps: 16,
+                stages: 2,
+            },
+            LowPass::SecondOrder {
+                natural_frequency_hz: 5.0,
+                damping: 0.3,
+            },
+            LowPass::SecondOrder {
+                natural_frequency_hz: 5.0,
+                damping: 2.0,
+            },
+            LowPass::ZeroPhase {
+                time_constant_s: 0.02,
+            },
+        ] {
+            let r = lp.autocorrelation(tau0);
+            let s = r[0] + 2.0 * r[1..].iter().sum::<f64>();
+            assert!((s - 1.0).abs() < 1e-9, "{lp:?}: {s}");
+        }
+        // brute force: impulse response of two cascaded first-order stages
+        let a: f64 = (-0.004f64 / 0.02).exp();
+        let h: Vec<f64> = (0..600)
+            .map(|k| (1.0 - a).powi(2) * (k as f64 + 1.0) * a.powi(k))
+            .collect();
+        let zp = LowPass::ZeroPhase {
+            time_constant_s: 0.02,
+        }
+        .autocorrelation(tau0);
+        for k in [0usize, 1, 5, 30] {
+            let want: f64 = h.iter().zip(&h[k..]).map(|(x, y)| x * y).sum();
+            assert!((zp[k] / want - 1.0).abs() < 1e-9, "lag {k}");
+        }
+    }
+
+    /// A moving average of M taps on white rate: for m >= M the AVAR is exactly
+    /// `N^2/tau - N^2 (M^2 - 1) / (2 M m^2 tau0)` (sum of k rho_k = (M^2 - 1) / (6 M)), and at
+    /// m = 1 it is `(1 - rho_1) / tau0` with `rho_1 = (M - 1) / M^2`.
+    #[test]
+    fn moving_average_closed_forms() {
+        let tau0 = 0.01;
+        let mm = 9u32;
+        let lp = LowPass::MovingAverage {
+            taps: mm,
+            stages: 1,
+        };
+        let ms = [1u64, 9, 20, 500];
+        let v = lp.white_rate_avar(tau0, &ms);
+        let m2 = (mm * mm) as f64;
+        let rho1 = (mm as f64 - 1.0) / m2;
+        assert!((v[0] / ((1.0 / mm as f64 - rho1) / tau0) - 1.0).abs() < 1e-12);
+        for (i, &m) in ms.iter().enumerate().skip(1) {
+            let mf = m as f64;
+            let want = 1.0 / (mf * tau0) - (m2 - 1.0) / (2.0 * mm as f64 * mf * mf * tau0);
+            assert!((v[i] / want - 1.0).abs() < 1e-12, "m {m}");
+        }
+    }
+
+    /// The power gains integrate to the white-noise variance ratio `rho_0` (Parseval).
+    #[test]
+    fn power_gain_parseval() {
+        let tau0 = 0.004;
+        for lp in [
+            LowPass::MovingAverage { taps: 5, stages: 2 },
+            LowPass::SecondOrder {
+                natural_frequency_hz: 10.0,
+                damping: 0.5,
+            },
+            LowPass::ZeroPhase {
+                time_constant_s: 0.01,
+            },
+        ] {
+            let n = 20_000;
+            let fs = 1.0 / tau0;
+            let mean: f64 = (0..n)
+                .map(|i| lp.power_gain(tau0, (i as f64 + 0.5) / n as f64 * fs / 2.0))
+                .sum::<f64>()
+                / n as f64;
+            let r0 = lp.autocorrelation(tau0)[0];
+            assert!((mean / r0 - 1.0).abs() < 1e-6, "{lp:?}: {mean} vs {r0}");
+            assert!((lp.power_gain(tau0, 0.0) - 1.0).abs() < 1e-12);
+        }
+    }
+}

@@ -1,0 +1,207 @@
+//! The unit's low-pass filters beyond first order as streaming generators on the output
+//! increments ([`LowPassGen`]): cascaded moving averages, a second-order recursive low-pass and
+//! a zero-phase (forward-backward) first-order filter. Their AVAR on white rate is
+//! [`LowPass::white_rate_avar`] (docs/gap.md, "Low-pass filters beyond first order").
+//!
+//! Each filter starts as if its input had always been the first value, so a large constant
+//! (gravity) causes no transient. The zero-phase filter needs the future: it is run as its
+//! symmetric impulse response `(1 - a)/(1 + a) a^|k|` truncated at `a^L < 1e-14` (weights
+//! renormalised to sum 1), so the output is the zero-phase filtered stream delayed by `L`
+//! steps, as a unit filtering in blocks delivers it.
+
+use std::collections::VecDeque;
+
+use crate::model::lowpass::LowPass;
+
+/// A running low-pass filter (DC gain 1).
+#[derive(Debug, Clone)]
+pub enum LowPassGen {
+    /// One ring buffer of the last `taps` inputs per stage, with its exact sum recomputed every
+    /// `taps` steps (the running sum's rounding never accumulates).
+    MovingAverage {
+        taps: usize,
+        stages: Vec<(VecDeque<f64>, f64)>,
+        since_exact: usize,
+        started: bool,
+    },
+    SecondOrder {
+        a1: f64,
+        a2: f64,
+        g: f64,
+        y1: f64,
+        y2: f64,
+        started: bool,
+    },
+    /// Symmetric weights `w[|k|]`, `k = -L..=L`, over a window of `2L + 1` inputs.
+    ZeroPhase {
+        weights: Vec<f64>,
+        window: VecDeque<f64>,
+        started: bool,
+    },
+}
+
+impl LowPassGen {
+    /// The generator of `lp` at step `tau0_s`. A first-order filter is the simulator's
+    /// [`super::effects::OutputFilter`] and has no generator here (None).
+    pub fn new(lp: &LowPass, tau0_s: f64) -> Option<Self> {
+        match *lp {
+            LowPass::FirstOrder { .. } => None,
+            LowPass::MovingAverage { taps, stages } => Some(LowPassGen::MovingAverage {
+                taps: taps.max(1) as usize,
+                stages: (0..stages.max(1)).map(|_| (VecDeque::new(), 0.0)).collect(),
+                since_exact: 0,
+                started: false,
+            }),
+            LowPass::SecondOrder {
+                natural_frequency_hz,
+                damping,
+            } => {
+                // The same poles as the AVAR's (model::lowpass): its autocorrelation is of
+                // this recursion.
+                let w = 2.0 * std::f64::consts::PI * natural_frequency_hz;
+                let (a1, a2) = if damping < 1.0 {
+                    let r = (-damping * w * tau0_s).exp();
+                    let th = w * tau0_s * (1.0 - damping * damping).sqrt();
+                    (2.0 * r * th.cos(), -r * r)
+                } else {
+                    let d = (damping * damping - 1.0).sqrt();
+                    let p1 = (w * (-damping + d) * tau0_s).exp();
+                    let p2 = (w * (-damping - d) * tau0_s).exp();
+                    (p1 + p2, -p1 * p2)
+                };
+                Some(LowPassGen::SecondOrder {
+                    a1,
+                    a2,
+                    g: 1.0 - a1 - a2,
+                    y1: 0.0,
+                    y2: 0.0,
+                    started: false,
+                })
+            }
+            LowPass::ZeroPhase { time_constant_s } => {
+                let a = (-tau0_s / time_constant_s).exp();
+                let l = ((1e-14f64.ln() / a.ln()).ceil() as usize).clamp(1, 1 << 20);
+                let mut w: Vec<f64> = (0..=l).map(|k| a.powi(k as i32)).collect();
+                let total = w[0] + 2.0 * w[1..].iter().sum::<f64>();
+                w.iter_mut().for_each(|x| *x /= total);
+                Some(LowPassGen::ZeroPhase {
+                    weights: w,
+                    window: VecDeque::with_capacity(2 * l + 1),
+                    started: false,
+                })
+            }
+        }
+    }
+
+    /// The filtered increment for input `d`.
+    #[inline]
+    pub fn step(&mut self, d: f64) -> f64 {
+        match self {
+            LowPassGen::MovingAverage {
+                taps,
+                stages,
+                since_exact,
+                started,
+            } => {
+                let m = *taps;
+                if !*started {
+                    *started = true;
+                    for (buf, sum) in stages.iter_mut() {
+                        buf.extend(std::iter::repeat_n(d, m));
+                        *sum = d * m as f64;
+                    }
+                }
+                *since_exact += 1;
+                let exact = *since_exact >= m;
+                if exact {
+                    *since_exact = 0;
+                }
+                let mut x = d;
+                for (buf, sum) in stages.iter_mut() {
+                    let old = buf.pop_front().unwrap_or(x);
+                    buf.push_back(x);
+                    *sum += x - old;
+                    if exact {
+                        *sum = buf.iter().sum();
+                    }
+                    x = *sum / m as f64;
+                }
+                x
+            }
+            LowPassGen::SecondOrder {
+                a1,
+                a2,
+                g,
+                y1,
+                y2,
+                started,
+            } => {
+                if !*started {
+                    *started = true;
+                    *y1 = d;
+                    *y2 = d;
+                }
+                let y = *a1 * *y1 + *a2 * *y2 + *g * d;
+                *y2 = *y1;
+                *y1 = y;
+                y
+            }
+            LowPassGen::ZeroPhase {
+                weights,
+                window,
+                started,
+            } => {
+                let l = weights.len() - 1;
+                if !*started {
+                    *started = true;
+                    window.extend(std::iter::repeat_n(d, 2 * l + 1));
+                }
+                window.pop_front();
+                window.push_back(d);
+                let (a, b) = window.as_slices();
+                // centre at index l; weight w[|i - l|]
+                let mut acc = 0.0;
+                for (i, x) in a.iter().chain(b.iter()).enumerate() {
+                    acc += weights[i.abs_diff(l)] * x;
+                }
+                acc
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each filter passes a constant unchanged and has the impulse response its autocorrelation
+    /// was computed from (checked on lag-0 energy of the response to a unit impulse).
+    #[test]
+    fn dc_gain_and_impulse_energy() {
+        let tau0 = 0.004;
+        for lp in [
+            LowPass::MovingAverage { taps: 6, stages: 2 },
+            LowPass::SecondOrder {
+                natural_frequency_hz: 8.0,
+                damping: 0.4,
+            },
+            LowPass::ZeroPhase {
+                time_constant_s: 0.012,
+            },
+        ] {
+            let mut g = LowPassGen::new(&lp, tau0).unwrap();
+            for _ in 0..5000 {
+                assert!((g.step(3.5) - 3.5).abs() < 1e-9, "{lp:?}");
+            }
+            // impulse on a zero background: the output's energy is rho_0
+            let mut g = LowPassGen::new(&lp, tau0).unwrap();
+            g.step(0.0);
+            let mut e = g.step(1.0).powi(2);
+            for _ in 0..20_000 {
+                e += g.step(0.0).powi(2);
+            }
+            let r0 = lp.autocorrelation(tau0)[0];
+            assert!((e / r0 - 1.0).abs() < 1e-6, "{lp:?}: {e} vs {r0}");
+        }
+    }
+}
