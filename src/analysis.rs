@@ -193,6 +193,8 @@ pub struct RunAnalysis {
     bad_rows: u64,
     /// Text values infinite or out of range, read as gaps (from the reader, like `bad_rows`).
     invalid_values: u64,
+    /// What the text input's time column found (from the reader, like `bad_rows`).
+    time_column: Option<crate::sink::records::TimeColumnRecord>,
     started: Instant,
     /// Set when the run is being stopped ([`RunAnalysis::stop_interim_when`]): interim records
     /// fall due as before but are not made.
@@ -229,6 +231,7 @@ impl RunAnalysis {
             channels,
             bad_rows: 0,
             invalid_values: 0,
+            time_column: None,
             started: Instant::now(),
             stopping: Arc::default(),
         }
@@ -346,6 +349,7 @@ impl RunAnalysis {
             next_emit_s: state.next_emit_s,
             bad_rows: state.bad_rows,
             invalid_values: 0,
+            time_column: None,
             started,
             stopping: Arc::default(),
         })
@@ -388,6 +392,20 @@ impl RunAnalysis {
     }
 
     /// Counts rows the input could not read (they were fed as gaps).
+    /// The text reader's time column at the end of the input, for the summary.
+    pub fn set_time_column(&mut self, t: Option<&crate::input::time_column::TimeState>) {
+        self.time_column = t.map(|t| crate::sink::records::TimeColumnRecord {
+            name: t.name.clone(),
+            used: t.in_use(),
+            unit: t.unit().filter(|_| t.in_use()).map(String::from),
+            gaps: t.jumps,
+            missing_samples: t.missing,
+            backwards: t.backwards,
+            irregular: t.irregular,
+            discontinuities: t.discontinuities,
+        });
+    }
+
     pub fn add_bad_rows(&mut self, n: u64) {
         self.bad_rows += n;
     }
@@ -593,6 +611,7 @@ impl RunAnalysis {
             segments: self.channels.iter().map(|c| c.acc.segments()).collect(),
             bad_rows: self.bad_rows,
             invalid_values: self.invalid_values,
+            time_column: self.time_column.clone(),
             overlap: match self.opts.accum.overlap {
                 Overlap::Full => "full".into(),
                 Overlap::Bounded(l) => l.to_string(),
@@ -623,6 +642,11 @@ impl RunAnalysis {
                 next_emit_s: self.next_emit_s,
                 bad_rows: if i == 0 { self.bad_rows } else { 0 },
                 invalid_values: if i == 0 { self.invalid_values } else { 0 },
+                time_column: if i == 0 {
+                    self.time_column.clone()
+                } else {
+                    None
+                },
                 started: self.started,
                 stopping: self.stopping.clone(),
             });

@@ -5,7 +5,8 @@ mod cli;
 
 fn main() {
     tracing_subscriber::fmt()
-        .with_writer(std::io::stderr)
+        // Log lines above a live run's status line (cli/status.rs), never through it.
+        .with_writer(cli::LogWriter)
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_env("ALLANSCOPE_LOG")

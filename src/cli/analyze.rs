@@ -168,6 +168,7 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue, ctl: &RunControl) -> Result
                 segments: Vec::new(),
                 bad_rows: 0,
                 invalid_values: 0,
+                time_column: None,
                 overlap: d.overlap.clone(),
                 elapsed_s: 0.0,
                 limits: j.results.clone(),

@@ -49,23 +49,29 @@ fn chosen<'a>(
     flag: &str,
 ) -> Result<Vec<&'a FitRecord>> {
     match names {
-        Some(names) => names
-            .iter()
-            .map(|n| {
-                fits.iter()
-                    .copied()
-                    .find(|f| &f.channel == n)
-                    .ok_or_else(|| {
-                        usage(format!(
-                            "--{flag} {n}: no final fit of that channel in the input (it has: {})",
-                            fits.iter()
-                                .map(|f| f.channel.as_str())
-                                .collect::<Vec<_>>()
-                                .join(", ")
-                        ))
-                    })
-            })
-            .collect(),
+        // Every fit of each named channel: a file of several runs gives one per run, and the
+        // largest over them is exported, as without names.
+        Some(names) => {
+            let mut out = Vec::new();
+            for n in names {
+                let mine: Vec<&FitRecord> =
+                    fits.iter().copied().filter(|f| &f.channel == n).collect();
+                if mine.is_empty() {
+                    let mut have: Vec<&str> = Vec::new();
+                    for f in fits {
+                        if !have.contains(&f.channel.as_str()) {
+                            have.push(&f.channel);
+                        }
+                    }
+                    return Err(usage(format!(
+                        "--{flag} {n}: no final fit of that channel in the input (it has: {})",
+                        have.join(", ")
+                    )));
+                }
+                out.extend(mine);
+            }
+            Ok(out)
+        }
         None => Ok(fits
             .iter()
             .copied()
@@ -213,5 +219,12 @@ pub fn run(a: &ExportArgs) -> Result<()> {
     f.write_all(text.as_bytes())
         .with_context(|| format!("cannot write {}", a.out.display()))?;
     tracing::info!("{}: written ({})", a.out.display(), a.to);
+    if format == ExportFormat::KfGins {
+        tracing::warn!(
+            "{}: gsstd and asstd (scale-factor instability, ppm) are written as 0: an Allan \
+             analysis does not measure them; set them from the unit's datasheet",
+            a.out.display()
+        );
+    }
     Ok(())
 }

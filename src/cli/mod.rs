@@ -15,6 +15,7 @@ mod report;
 mod run;
 mod simulate;
 mod status;
+pub use status::LogWriter;
 mod terminal;
 
 use std::io::{BufRead, BufReader, Read};

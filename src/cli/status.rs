@@ -2,32 +2,31 @@
 //! time running, frames per second, frames lost and the newest N of each channel
 //! (`allanscope::sink::table::status_line`), redrawn in place twice a second, never scrolled, and
 //! cleared before the final records are written. A standard error that is not a terminal (a log
-//! file, a pipe) never gets it.
+//! file, a pipe) never gets it. Log lines go through [`LogWriter`], which writes them above the
+//! status line (`allanscope::sink::status_area`), so the two never share a line. The line is cut
+//! to the terminal's width (its size from the `console` crate; `COLUMNS` when that cannot tell).
 
 use std::io::{IsTerminal, Write};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use allanscope::sink::metrics::Metrics;
+use allanscope::sink::status_area::StatusArea;
 use allanscope::source::Progress;
 use tokio_util::sync::CancellationToken;
 
-/// Set once standard output starts printing a table: the line is cleared and not drawn again.
-static SUSPENDED: AtomicBool = AtomicBool::new(false);
-/// Held while the line is drawn or cleared, so a table never lands in the middle of a draw.
-static DRAWING: std::sync::Mutex<bool> = std::sync::Mutex::new(false);
+/// The terminal's last line; held while the line is drawn or cleared and while a log line is
+/// written, so a log line or a table never lands in the middle of a draw.
+static AREA: Mutex<StatusArea> = Mutex::new(StatusArea::new());
+
+fn area() -> std::sync::MutexGuard<'static, StatusArea> {
+    AREA.lock().unwrap_or_else(|p| p.into_inner())
+}
 
 /// Clears the status line for good (before a table is printed on the same terminal).
 pub fn suspend() {
-    let mut drawn = DRAWING.lock().unwrap_or_else(|p| p.into_inner());
-    SUSPENDED.store(true, Ordering::SeqCst);
-    if *drawn {
-        let mut err = std::io::stderr().lock();
-        let _ = write!(err, "\r\x1b[2K");
-        let _ = err.flush();
-        *drawn = false;
-    }
+    let _ = area().suspend(&mut std::io::stderr().lock());
 }
 
 /// Redraws per second.
@@ -44,13 +43,51 @@ pub fn wanted() -> bool {
     std::io::stderr().is_terminal()
 }
 
-/// Terminal width for the line: `COLUMNS`, else 100 (a longer line would wrap and scroll).
+/// Terminal width for the line: the terminal's own, else `COLUMNS`, else 100 (a longer line
+/// would wrap and scroll). Read at each draw, so a resized window is followed.
 fn width() -> usize {
-    std::env::var("COLUMNS")
-        .ok()
-        .and_then(|c| c.parse::<usize>().ok())
+    console::Term::stderr()
+        .size_checked()
+        .map(|(_, cols)| cols as usize)
+        .or_else(|| {
+            std::env::var("COLUMNS")
+                .ok()
+                .and_then(|c| c.parse::<usize>().ok())
+        })
         .filter(|w| *w >= 20)
         .unwrap_or(100)
+}
+
+/// The log writer of the binary (`tracing_subscriber::fmt().with_writer(LogWriter)`): each log
+/// message is written to standard error in one piece, above the status line when one is shown.
+pub struct LogWriter;
+
+/// One log message, written when dropped (the formatter writes a whole event, then drops it).
+pub struct LogMessage(Vec<u8>);
+
+impl Write for LogMessage {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.extend_from_slice(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl Drop for LogMessage {
+    fn drop(&mut self) {
+        if !self.0.is_empty() {
+            let _ = area().log(&mut std::io::stderr().lock(), &self.0);
+        }
+    }
+}
+
+impl<'a> tracing_subscriber::fmt::MakeWriter<'a> for LogWriter {
+    type Writer = LogMessage;
+    fn make_writer(&'a self) -> LogMessage {
+        LogMessage(Vec::new())
+    }
 }
 
 impl StatusLine {
@@ -68,7 +105,6 @@ impl StatusLine {
                 let started = Instant::now();
                 let (mut last_t, mut last_frames) = (started, 0u64);
                 let mut rate = 0.0;
-                let w = width();
                 loop {
                     std::thread::sleep(PERIOD);
                     if stop.load(Ordering::Relaxed)
@@ -94,15 +130,12 @@ impl StatusLine {
                         lost,
                         &latest.n,
                     );
-                    let line: String = line.chars().take(w - 1).collect();
-                    let mut drawn = DRAWING.lock().unwrap_or_else(|p| p.into_inner());
-                    if SUSPENDED.load(Ordering::SeqCst) {
+                    let w = width();
+                    let mut shown = area();
+                    if shown.is_suspended() {
                         break;
                     }
-                    let mut err = std::io::stderr().lock();
-                    let _ = write!(err, "\r\x1b[2K{line}");
-                    let _ = err.flush();
-                    *drawn = true;
+                    let _ = shown.draw(&mut std::io::stderr().lock(), &line, w);
                 }
                 suspend();
             }

@@ -175,6 +175,9 @@ pub struct Diagnosis {
     pub quantization: Option<QuantizationFinding>,
     /// Other explanations that fit about as well as the one chosen ([`super::alternatives`]).
     pub alternatives: Vec<Alternative>,
+    /// 95% intervals of each effect's parameters, in the order of `effects`
+    /// ([`super::intervals`]).
+    pub effect_intervals: Vec<super::intervals::Intervals>,
 }
 
 /// Five-term `(Q, N, B, K, R)` from `c`.
@@ -509,6 +512,7 @@ fn diagnose_curve_once(
     let alternatives = first_scan
         .map(|fs| alternatives(&prob, opts, &fs, &effects, &final_spec, &cur))
         .unwrap_or_default();
+    let effect_intervals = super::intervals::effect_intervals(&prob, &final_spec, &cur, &effects);
     let regions_after = prob.regions(&cur.model, th.band_z);
     let residual_shape = (verdict == Verdict::Unexplained).then(|| describe(&regions_after));
     Ok(Diagnosis {
@@ -535,6 +539,7 @@ fn diagnose_curve_once(
             .lsb
             .and_then(|l| judge_quantization(&prob, &final_spec, &cur, l)),
         alternatives,
+        effect_intervals,
     })
 }
 

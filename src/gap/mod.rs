@@ -26,6 +26,7 @@ pub mod effects;
 pub mod evidence;
 pub mod filter_scan;
 pub mod holdout;
+pub mod intervals;
 pub mod jump_mixture;
 pub mod lsb;
 pub mod oracle;

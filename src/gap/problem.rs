@@ -207,6 +207,20 @@ impl GapProblem {
         self.tau.is_empty()
     }
 
+    /// The model curve `X c + offset` of a spec at coefficients `coef` (five terms, then the
+    /// extra columns' amplitudes squared).
+    pub fn model_of(&self, spec: &ModelSpec, coef: &[f64]) -> Vec<f64> {
+        let x = self.columns(spec);
+        (0..self.len())
+            .map(|r| {
+                let v: f64 = (0..x.ncols())
+                    .map(|c| x[(r, c)] * coef.get(c).copied().unwrap_or(0.0))
+                    .sum();
+                v + spec.offset.as_ref().map_or(0.0, |o| o[r])
+            })
+            .collect()
+    }
+
     /// The design columns of a spec.
     fn columns(&self, spec: &ModelSpec) -> DMatrix<f64> {
         let j = self.len();

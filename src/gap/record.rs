@@ -23,6 +23,10 @@ pub struct EffectRecord {
     pub kind: String,
     pub params: serde_json::Value,
     pub gap_after: f64,
+    /// 95% intervals of the parameters, by their `params` names (`{name: [lo, hi]}`;
+    /// docs/gap.md, "Parameter intervals"); absent when none was computed (warm-ups, jumps).
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub intervals: std::collections::BTreeMap<String, [f64; 2]>,
 }
 
 /// The gap on a held-out run (docs/records.md's `gap_before`, `gap_after`; extra fields `carried`
@@ -166,10 +170,21 @@ impl DiagnosisRecord {
             effects: d
                 .effects
                 .iter()
-                .map(|e| EffectRecord {
+                .enumerate()
+                .map(|(i, e)| EffectRecord {
                     kind: e.params.kind().name().into(),
                     params: e.params.to_json(),
                     gap_after: e.gap_after,
+                    intervals: d
+                        .effect_intervals
+                        .get(i)
+                        .map(|v| {
+                            v.iter()
+                                .filter(|(_, iv)| iv.iter().all(|x| x.is_finite()))
+                                .map(|(k, iv)| (k.to_string(), *iv))
+                                .collect()
+                        })
+                        .unwrap_or_default(),
                 })
                 .collect(),
             holdout: holdout.map(|h| HoldoutRecord {

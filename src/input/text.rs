@@ -359,7 +359,7 @@ impl<R: BufRead> TextReader<R> {
     /// reader's columns, as a reader that had stopped at `pos` (no header is looked for).
     pub fn resume<S: BufRead>(self, src: S, pos: &TextPosition) -> TextReader<S> {
         let mut time = self.time;
-        if let (Some(c), Some(st)) = (&mut time, pos.time) {
+        if let (Some(c), Some(st)) = (&mut time, pos.time.clone()) {
             c.restore(st);
         }
         TextReader {

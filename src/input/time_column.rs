@@ -44,11 +44,41 @@ pub struct TimeColumn {
     pub discontinuities: u64,
 }
 
-/// Where a time column stands, for a checkpoint (`TextPosition`).
-#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+/// Where a time column stands, for a checkpoint (`TextPosition`), and what it found so far (the
+/// `summary` record's `time_column`, docs/records.md): the counts carry over a resumed run.
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct TimeState {
     pub scale: Option<f64>,
     pub last: Option<f64>,
+    /// The column's header name.
+    #[serde(default)]
+    pub name: String,
+    /// Jumps that became gaps, the samples they stood for, steps backwards or repeated, steps
+    /// not a whole number of tau0, and jumps too large to fill (see [`TimeColumn`]).
+    #[serde(default)]
+    pub jumps: u64,
+    #[serde(default)]
+    pub missing: u64,
+    #[serde(default)]
+    pub backwards: u64,
+    #[serde(default)]
+    pub irregular: u64,
+    #[serde(default)]
+    pub discontinuities: u64,
+}
+
+impl TimeState {
+    /// Whether the column was used to find gaps (false: its first step ruled it out and it was
+    /// only skipped).
+    pub fn in_use(&self) -> bool {
+        self.scale != Some(0.0)
+    }
+
+    /// The column's unit once decided (`s`, `ms`, `us`, `ns`).
+    pub fn unit(&self) -> Option<&'static str> {
+        let s = self.scale?;
+        SCALES.iter().find(|(x, _)| *x == s).map(|(_, u)| *u)
+    }
 }
 
 impl TimeColumn {
@@ -71,12 +101,23 @@ impl TimeColumn {
         TimeState {
             scale: self.scale,
             last: self.last,
+            name: self.name.clone(),
+            jumps: self.jumps,
+            missing: self.missing,
+            backwards: self.backwards,
+            irregular: self.irregular,
+            discontinuities: self.discontinuities,
         }
     }
 
     pub fn restore(&mut self, s: TimeState) {
         self.scale = s.scale;
         self.last = s.last;
+        self.jumps = s.jumps;
+        self.missing = s.missing;
+        self.backwards = s.backwards;
+        self.irregular = s.irregular;
+        self.discontinuities = s.discontinuities;
     }
 
     /// Whether the column is used to find gaps (false once its first step ruled it out).

@@ -498,6 +498,7 @@ fn finish_text(
         }
         .into());
     }
+    analysis.set_time_column(position.time.as_ref());
     if let (Some(plan), Some(written)) = (&plan, written) {
         // The analysis state leaves the reader's bad rows out (the position holds them).
         let complete = !(plan.data_seconds && ctl.shutdown.is_cancelled());

@@ -104,10 +104,21 @@ pub struct UnitOutcome {
     pub failed: Option<String>,
 }
 
+/// Events a unit's forwarding task gathers into one message to its worker, when that many
+/// are waiting (fewer channel operations and wake-ups when the worker is behind).
+const FORWARD_BATCH: usize = 64;
+
+/// How long a worker waits after its queue runs dry before it blocks on it again: events
+/// gather meanwhile and are taken in one go, so a worker wakes at most ~500 times a second
+/// instead of once per datagram (the wake-ups, not the statistics, were most of its CPU in the
+/// 100-unit benchmark, BENCHMARKS.md). 2 ms of 100 units' datagrams are well inside
+/// [`WORK_QUEUE`].
+const WORKER_PAUSE: Duration = Duration::from_millis(2);
+
 /// What goes to a worker.
 enum Work {
-    /// An event of unit `.0` (the worker's index of it).
-    Event(usize, SourceEvent),
+    /// Events of unit `.0` (the worker's index of it), in order.
+    Events(usize, Vec<SourceEvent>),
     /// Unit `.0`'s source has ended (with its error, if it failed).
     Ended(usize, Option<String>),
     /// Interim records of the live units are due.
@@ -123,8 +134,10 @@ struct UnitState {
     block: FrameBlock,
     width: usize,
     flags: SourceFlags,
-    /// When the last byte arrived (the start, before the first).
+    /// When the watch last saw the source's byte count move (the start, before the first).
     last_data: Instant,
+    /// The source's byte count then.
+    seen_bytes: u64,
     /// Out since this wall time (recorded as quiet).
     quiet_since: Option<Instant>,
     quiet: u64,
@@ -176,6 +189,7 @@ impl UnitState {
                 replay: matches!(run.spec, SourceSpec::File { .. }),
             },
             last_data: Instant::now(),
+            seen_bytes: 0,
             quiet_since: None,
             quiet: 0,
             ended: false,
@@ -363,8 +377,10 @@ pub async fn run_units_async(
                 progress,
             };
             let forward = async {
-                while let Some(ev) = rx.recv().await {
-                    if wtx.send(Work::Event(index, ev)).await.is_err() {
+                let mut batch = Vec::new();
+                while rx.recv_many(&mut batch, FORWARD_BATCH).await > 0 {
+                    let evs = std::mem::take(&mut batch);
+                    if wtx.send(Work::Events(index, evs)).await.is_err() {
                         break;
                     }
                 }
@@ -419,29 +435,28 @@ fn work(
     let mut dirty: Vec<usize> = Vec::new();
     while let Some(w) = rx.blocking_recv() {
         match w {
-            Work::Event(i, ev) => {
+            Work::Events(i, evs) => {
                 let u = &mut units[i];
-                if let SourceEvent::Data { bytes, at } | SourceEvent::Datagram { bytes, at } = &ev {
-                    u.offset += bytes.len() as u64;
-                    if let Some(since) = u.quiet_since.take() {
-                        let r = u.outage("resumed", at.saturating_duration_since(since), None);
-                        queue.push_final_of(Some(&u.run.name), r);
+                for ev in evs {
+                    if let SourceEvent::Data { bytes, .. } | SourceEvent::Datagram { bytes, .. } =
+                        &ev
+                    {
+                        u.offset += bytes.len() as u64;
                     }
-                    u.last_data = *at;
+                    let before = u.block.len();
+                    let n = u.stage.push(ev, &mut u.block);
+                    u.run.progress.frames.fetch_add(n, Ordering::Relaxed);
+                    if before == 0 && !u.block.is_empty() {
+                        dirty.push(i);
+                    }
+                    if u.block.len() >= MAX_BLOCK_EVENTS {
+                        u.flush(&mut out, queue);
+                    }
+                    u.checkpoint(&mut out, queue, None);
                 }
-                let before = u.block.len();
-                let n = u.stage.push(ev, &mut u.block);
-                u.run.progress.frames.fetch_add(n, Ordering::Relaxed);
                 if let Some(m) = &u.run.metrics {
                     m.health(&u.stage.health());
                 }
-                if before == 0 && !u.block.is_empty() {
-                    dirty.push(i);
-                }
-                if u.block.len() >= MAX_BLOCK_EVENTS {
-                    u.flush(&mut out, queue);
-                }
-                u.checkpoint(&mut out, queue, None);
             }
             Work::Ended(i, error) => {
                 let u = &mut units[i];
@@ -472,6 +487,19 @@ fn work(
                         // A quiet live unit still gets its checkpoints on wall time.
                         u.checkpoint(&mut out, queue, None);
                     }
+                    // Silence is judged where the bytes arrive (the source's byte count), not
+                    // by what this worker has decoded: a worker behind its queue is not a
+                    // quiet unit.
+                    let bytes = u.run.progress.bytes();
+                    if bytes != u.seen_bytes {
+                        u.seen_bytes = bytes;
+                        u.last_data = now;
+                        if let Some(since) = u.quiet_since.take() {
+                            let r = u.outage("resumed", now.saturating_duration_since(since), None);
+                            queue.push_final_of(Some(&u.run.name), r);
+                        }
+                        continue;
+                    }
                     let silent = now.saturating_duration_since(u.last_data);
                     if u.flags.live && !u.ended && u.quiet_since.is_none() && silent >= quiet_after
                     {
@@ -492,6 +520,7 @@ fn work(
             for i in dirty.drain(..) {
                 units[i].flush(&mut out, queue);
             }
+            std::thread::sleep(WORKER_PAUSE);
         }
     }
     for u in &mut units {

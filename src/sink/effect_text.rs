@@ -25,6 +25,8 @@ enum Dim {
     Freq,
     /// A count.
     Count,
+    /// A pure number (a damping ratio).
+    Plain,
 }
 
 /// A parameter: its record key, its name for a person, and what it measures.
@@ -62,8 +64,7 @@ fn known(kind: &str) -> Option<(&'static str, &'static [ParamSpec])> {
             "output second-order low-pass filter",
             &[
                 ("natural_frequency", "natural frequency", Dim::Freq),
-                // dimensionless: shown as a plain number
-                ("damping", "damping", Dim::Count),
+                ("damping", "damping", Dim::Plain),
             ],
         ),
         "zero_phase_filter" => (
@@ -111,10 +112,22 @@ pub fn effect_parts(
     // A rate in datasheet units: the factor and unit of the bias-instability coefficient (u/s).
     let ds =
         IncrementUnit::parse(u).map(|iu| (datasheet_factors(&iu)[2], datasheet_units(iu.kind)[2]));
+    // `lo`, `hi` (a kind with one rate, e.g. temperature): that rate's 95% interval.
+    let bounds = (params["lo"].as_f64(), params["hi"].as_f64());
     let rate = |v: f64, per: &str| -> String {
+        let iv = |f: f64| match bounds {
+            (Some(lo), Some(hi)) => format!(" [{}, {}]", number(lo * f), number(hi * f)),
+            _ => String::new(),
+        };
         match ds {
-            Some((f, du)) => format!("{} {du}{per} ({} {u}/s{per})", number(v * f), number(v)),
-            None => format!("{} {u}/s{per}", number(v)),
+            Some((f, du)) => format!(
+                "{}{} {du}{per} ({}{} {u}/s{per})",
+                number(v * f),
+                iv(f),
+                number(v),
+                iv(1.0)
+            ),
+            None => format!("{}{} {u}/s{per}", number(v), iv(1.0)),
         }
     };
     let Some((name, keys)) = known(kind) else {
@@ -137,6 +150,7 @@ pub fn effect_parts(
         let text = match (dim, v.as_f64()) {
             (_, None) => "?".to_string(),
             (Dim::Count, Some(x)) => v.as_u64().map_or_else(|| number(x), |n| n.to_string()),
+            (Dim::Plain, Some(x)) => number(x),
             (Dim::Rate, Some(x)) => rate(x, ""),
             (Dim::RatePerC, Some(x)) => rate(x, " per deg C"),
             (Dim::Time, Some(x)) => format!("{} s", number(x)),
@@ -150,10 +164,18 @@ pub fn effect_parts(
             value: text,
         });
     }
-    // Parameters a later writer added (an interval, a filter order) are kept, by record name.
+    // Parameters a later writer added are kept, by record name (`lo`, `hi` of a kind with one
+    // rate are shown with it).
+    let one_rate = keys
+        .iter()
+        .filter(|(_, _, d)| matches!(d, Dim::Rate | Dim::RatePerC))
+        .count()
+        == 1;
     if let Some(o) = params.as_object() {
         for (k, v) in o {
-            if !keys.iter().any(|(key, _, _)| key == k) {
+            let shown =
+                (k == "lo" || k == "hi") && one_rate && bounds.0.is_some() && bounds.1.is_some();
+            if !shown && !keys.iter().any(|(key, _, _)| key == k) {
                 out.push(ParamText {
                     name: k.replace('_', " "),
                     value: v.as_f64().map_or_else(|| v.to_string(), number),

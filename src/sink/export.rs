@@ -138,7 +138,13 @@ pub fn kind_noise(fits: &[&FitRecord], kind: SensorKind) -> Result<KindNoise, St
     }
     let per_axis = white.iter().copied().zip(bi.iter().copied()).collect();
     Ok(KindNoise {
-        channels: fits.iter().map(|f| f.channel.clone()).collect(),
+        // Each channel once (a file of several runs has a fit of each per run).
+        channels: fits.iter().fold(Vec::new(), |mut v: Vec<String>, f| {
+            if !v.contains(&f.channel) {
+                v.push(f.channel.clone());
+            }
+            v
+        }),
         white: largest(white.into_iter()).ok_or("no channel")?,
         random_walk: largest(rw.into_iter()).ok_or("no channel")?,
         bias_instability: largest(bi.into_iter()).ok_or("no channel")?,
@@ -216,7 +222,8 @@ pub fn kalibr(imu: &ImuNoise) -> Result<String, String> {
 }
 
 /// OpenVINS's `kalibr_imu_chain.yaml` (OpenCV `%YAML:1.0` file; the same four densities as
-/// Kalibr, continuous time, under `imu0`; OpenVINS docs, "Sensor Calibration").
+/// Kalibr, continuous time, under `imu0`, and the IMU intrinsics its parser requires, as an ideal
+/// IMU; the layout of its configs' `kalibr_imu_chain.yaml`, docs/export.md).
 pub fn openvins(imu: &ImuNoise) -> Result<String, String> {
     let (g, a) = (need(&imu.gyro, "gyro")?, need(&imu.accel, "accel")?);
     let mut o = String::from("%YAML:1.0\n");
@@ -239,10 +246,29 @@ pub fn openvins(imu: &ImuNoise) -> Result<String, String> {
     ] {
         let _ = writeln!(o, "  {k}: {:e}  # {u}{}", t.si, note(&t));
     }
-    let _ = writeln!(o, "  model: calibrated");
     let _ = writeln!(o, "  rostopic: /imu0");
     let _ = writeln!(o, "  time_offset: 0.0");
     let _ = writeln!(o, "  update_rate: {:?}", imu.update_rate_hz);
+    let _ = writeln!(o, "  model: \"kalibr\"");
+    // The IMU intrinsics OpenVINS requires under imu0 (its parser reads them as required keys):
+    // an ideal IMU, since an Allan analysis measures none of them (docs/export.md).
+    let _ = writeln!(
+        o,
+        "  # IMU intrinsics: not measured by an Allan analysis; an ideal IMU (identities, no g-sensitivity)"
+    );
+    let identity = ["[1.0, 0.0, 0.0]", "[0.0, 1.0, 0.0]", "[0.0, 0.0, 1.0]"];
+    for (k, rows) in [
+        ("Tw", identity),
+        ("R_IMUtoGYRO", identity),
+        ("Ta", identity),
+        ("R_IMUtoACC", identity),
+        ("Tg", ["[0.0, 0.0, 0.0]"; 3]),
+    ] {
+        let _ = writeln!(o, "  {k}:");
+        for r in rows {
+            let _ = writeln!(o, "    - {r}");
+        }
+    }
     Ok(o)
 }
 
@@ -277,8 +303,8 @@ fn triad(k: &KindNoise, pick: impl Fn(&(Taken, Taken)) -> Taken, all: Taken) -> 
 /// deg/h, `abstd` mGal, `corrtime` h. KF-GINS models the biases as first-order Gauss-Markov
 /// processes of standard deviation `gbstd`/`abstd` and correlation time `corrtime`: the bias
 /// instability B is taken as that standard deviation and the tau of the Allan minimum as the
-/// correlation time (1 h when no read-out gives it); scale-factor terms are not measured here
-/// and are left out.
+/// correlation time (1 h when no read-out gives it); scale-factor terms (`gsstd`, `asstd`) are
+/// not measured here and are written as zeros, commented, since KF-GINS requires the keys.
 pub fn kf_gins(imu: &ImuNoise) -> Result<String, String> {
     let (g, a) = (need(&imu.gyro, "gyro")?, need(&imu.accel, "accel")?);
     let arw = triad(g, |p| p.0, g.white).map(|t| t.si.to_degrees() * 60.0);
@@ -300,6 +326,15 @@ pub fn kf_gins(imu: &ImuNoise) -> Result<String, String> {
     let _ = writeln!(o, "  vrw: {}  # m/s/sqrt(hr)", v3(vrw));
     let _ = writeln!(o, "  gbstd: {}  # deg/hr", v3(gb));
     let _ = writeln!(o, "  abstd: {}  # mGal", v3(ab));
+    // KF-GINS reads the scale-factor keys with the others and refuses the block without them;
+    // an Allan analysis does not measure them (docs/export.md): zeros, said so here and by the
+    // command's warning.
+    for k in ["gsstd", "asstd"] {
+        let _ = writeln!(
+            o,
+            "  {k}: [0.0, 0.0, 0.0]  # ppm; NOT MEASURED (an Allan analysis cannot): set your unit's scale-factor instability"
+        );
+    }
     let _ = writeln!(o, "  corrtime: {corr_h:e}  # hr");
     Ok(o)
 }

@@ -6,9 +6,9 @@
 //! and labelled by run, for [`plot`] (Allan-deviation panels), [`dynamic`] (the time x tau
 //! view) and [`report`] (the HTML page); [`page_file`] writes those without overwriting;
 //! [`output`] opens result files, [`effect_text`] words a diagnosis's effects, [`export`]
-//! writes the noise model for other tools, [`metrics`] serves live figures. [`unit_record`] tags
-//! the records of a run of several units with their unit's name and takes the tag off again
-//! for the readers.
+//! writes the noise model for other tools, [`metrics`] serves live figures, [`status_area`]
+//! keeps a live run's status line under its log lines. [`unit_record`] tags the records of a
+//! run of several units with their unit's name and takes the tag off again for the readers.
 
 #[cfg(feature = "plot")]
 pub mod dynamic;
@@ -24,5 +24,6 @@ pub mod records;
 #[cfg(feature = "plot")]
 pub mod report;
 pub mod results;
+pub mod status_area;
 pub mod table;
 pub mod unit_record;

@@ -261,12 +261,33 @@ pub struct SummaryRecord {
     /// (SIGINT) and for a live source, which has no end (`stopped_by` says what ended it).
     #[serde(default)]
     pub read_to_end: bool,
+    /// Text input with a time column: what it found (docs/records.md, `time_column`).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub time_column: Option<TimeColumnRecord>,
     /// What stopped the run before its input ended: `SIGINT`, `SIGTERM` or `--duration`.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub stopped_by: Option<String>,
     /// The `--capture` file's write error, when the capture stopped early (the analysis went on).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub capture_error: Option<String>,
+}
+
+/// The `summary`'s account of a text input's time column (src/input/time_column.rs): its name,
+/// whether it was used to find gaps (`false`: its first step was not tau0 in s, ms, us or ns,
+/// and it was only skipped), its unit, the jumps taken as gaps and the samples they stood for
+/// (rows absent from the file, read as gaps), and the steps that went backwards or repeated, were
+/// not a whole number of tau0, or were too large to fill (each row then read as the next sample).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TimeColumnRecord {
+    pub name: String,
+    pub used: bool,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub unit: Option<String>,
+    pub gaps: u64,
+    pub missing_samples: u64,
+    pub backwards: u64,
+    pub irregular: u64,
+    pub discontinuities: u64,
 }
 
 /// `aggregate`: run-to-run statistics of one coefficient of one channel (the seed paper's

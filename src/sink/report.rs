@@ -238,7 +238,7 @@ fn runs_table(h: &mut String, res: &Results) {
             .unwrap_or_default();
         let _ = writeln!(
             h,
-            "<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td>{}</td><td>{}</td><td class=\"l\">{}</td><td>{}</td><td class=\"l{}\">{}</td></tr>",
+            "<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td>{}</td><td>{}</td><td class=\"l\">{}</td><td>{}</td><td class=\"l{}\">{}{}</td></tr>",
             esc(&s.label),
             esc(v["input"].as_str().unwrap_or("")),
             num(&v["t_data"]),
@@ -246,10 +246,34 @@ fn runs_table(h: &mut String, res: &Results) {
             esc(&chans),
             v["bad_rows"].as_u64().unwrap_or(0),
             if c.is_warning() { " warn" } else { "" },
-            esc(&c.phrase())
+            esc(&c.phrase()),
+            time_column_note(&v["time_column"])
         );
     }
     h.push_str("</table>\n");
+}
+
+/// What a text input's time column found (summary `time_column`), under the run's "input read".
+fn time_column_note(tc: &Value) -> String {
+    let Some(name) = tc["name"].as_str().map(esc) else {
+        return String::new();
+    };
+    let n = |k: &str| tc[k].as_u64().unwrap_or(0);
+    let text = if tc["used"].as_bool() == Some(false) {
+        format!("time column `{name}` not used: its step is not &tau;0")
+    } else {
+        format!(
+            "time column `{name}`: {} jumps = {} missing samples (gaps), {} steps backwards, {} off-step",
+            n("gaps"),
+            n("missing_samples"),
+            n("backwards"),
+            n("irregular") + n("discontinuities")
+        )
+    };
+    format!(
+        "<br><span class=\"small\">{}</span>",
+        text.replace('`', "&quot;")
+    )
 }
 
 fn limits_table(h: &mut String, res: &Results) {
@@ -514,6 +538,37 @@ fn noise_model(h: &mut String, res: &Results) {
         stat_row(h, "runs determined (n)", "n", &|a, _| {
             a["n"].as_u64().map_or("&ndash;".into(), |n| n.to_string())
         });
+        // The mean and its interval again in datasheet units, as a lead quotes them.
+        if let Some(iu) = crate::model::units::IncrementUnit::parse(&unit) {
+            let f = crate::model::units::datasheet_factors(&iu);
+            let du = crate::model::units::datasheet_units(iu.kind);
+            let _ = write!(
+                h,
+                "<tr class=\"stat\" data-row=\"datasheet\"><td class=\"l\">mean [95%] in datasheet units</td>"
+            );
+            for &i in &PAPER_ORDER {
+                let cell = agg_of(TERM_NAMES[i])
+                    .and_then(|a| {
+                        let m = a["mean"].as_f64()? * f[i];
+                        let ci = a["ci_z"].as_array().and_then(|p| {
+                            Some(format!(
+                                " [{}, {}]",
+                                tick(p.first()?.as_f64()? * f[i]),
+                                tick(p.get(1)?.as_f64()? * f[i])
+                            ))
+                        });
+                        Some(format!(
+                            "<span data-value=\"{m:e}\">{}</span>{}<br><span class=\"small\">{}</span>",
+                            tick(m),
+                            ci.unwrap_or_default(),
+                            esc(du[i])
+                        ))
+                    })
+                    .unwrap_or_else(|| "&ndash;".into());
+                let _ = write!(h, "<td>{cell}</td>");
+            }
+            h.push_str("</tr>\n");
+        }
         h.push_str("</table>\n");
     }
     readouts_table(h, &finals, true);

@@ -315,6 +315,23 @@ fn run_heading(h: &mut String, res: &Results, k: RunKey, style: &TableStyle) {
         if let Some(n) = s["invalid_values"].as_u64().filter(|n| *n > 0) {
             notes.push(format!("{n} implausible values read as gaps"));
         }
+        let tc = &s["time_column"];
+        if let Some(name) = tc["name"].as_str() {
+            let n = |k: &str| tc[k].as_u64().unwrap_or(0);
+            if tc["used"].as_bool() == Some(false) {
+                notes.push(style.yellow(&format!(
+                    "time column `{name}` not used: its step is not tau0"
+                )));
+            } else if n("gaps") + n("backwards") + n("irregular") + n("discontinuities") > 0 {
+                notes.push(format!(
+                    "time column `{name}`: {} jumps = {} missing samples, {} backwards, {} off-step",
+                    n("gaps"),
+                    n("missing_samples"),
+                    n("backwards"),
+                    n("irregular") + n("discontinuities")
+                ));
+            }
+        }
         if let Some(e) = s["capture_error"].as_str() {
             notes.push(style.red(&format!("capture stopped: {e}")));
         }

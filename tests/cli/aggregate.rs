@@ -62,9 +62,7 @@ fn write_lines(path: &Path, recs: &[serde_json::Value]) {
 }
 
 fn tmp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("allanscope-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
+    crate::common::fresh_dir(name)
 }
 
 fn run_aggregate(args: &[&Path]) -> (i32, Vec<AggregateRecord>, String) {

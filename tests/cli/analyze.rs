@@ -294,7 +294,11 @@ fn plot_draws_each_channel_with_its_intervals_and_model() {
         .arg(&jsonl)
         .output()
         .unwrap();
-    assert!(out.status.success());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let svg = tmp("plot.svg");
     let out = exe()
         .args(["plot", jsonl.to_str().unwrap(), "-o", svg.to_str().unwrap()])
@@ -331,13 +335,19 @@ fn plot_draws_each_channel_with_its_intervals_and_model() {
             "plot",
             jsonl.to_str().unwrap(),
             "-o",
-            "/tmp/x.svg",
+            tmp("nothing.svg").to_str().unwrap(),
             "--channels",
             "zz",
         ])
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("no final `avar` curve records"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!tmp("nothing.svg").exists(), "nothing written");
 }
 
 #[test]

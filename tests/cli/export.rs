@@ -183,6 +183,32 @@ fn openvins_and_vins_by_hand() {
         fit_coef(&res, "ax", "K")
     ));
     assert_eq!(y["T_i_b"].as_vec().unwrap().len(), 4);
+    // The IMU intrinsics OpenVINS (2.7 on) requires under imu0, as an ideal IMU: identity
+    // Tw, R_IMUtoGYRO, Ta, R_IMUtoACC, zero Tg; the model name its configs use.
+    let matrix = |k: &str| -> Vec<Vec<f64>> {
+        y[k].as_vec()
+            .unwrap_or_else(|| panic!("imu0.{k} in\n{text}"))
+            .iter()
+            .map(|r| {
+                r.as_vec()
+                    .unwrap()
+                    .iter()
+                    .map(|x| x.as_f64().unwrap())
+                    .collect()
+            })
+            .collect()
+    };
+    let identity = vec![
+        vec![1.0, 0.0, 0.0],
+        vec![0.0, 1.0, 0.0],
+        vec![0.0, 0.0, 1.0],
+    ];
+    for k in ["Tw", "R_IMUtoGYRO", "Ta", "R_IMUtoACC"] {
+        assert_eq!(matrix(k), identity, "{k}");
+    }
+    assert_eq!(matrix("Tg"), vec![vec![0.0; 3]; 3]);
+    assert_eq!(y["model"].as_str(), Some("kalibr"));
+    assert_eq!(y["update_rate"].as_f64(), Some(100.0));
     let (o, path) = export("vins", "vins.yaml", &[]);
     assert!(o.status.success());
     let text = std::fs::read_to_string(&path).unwrap();
@@ -217,6 +243,22 @@ fn kf_gins_by_hand() {
     assert!((first("abstd") / (fit_coef(&res, "ax", "B") / 1e-5) - 1.0).abs() < REL);
     assert_eq!(y["arw"].as_vec().unwrap().len(), 3);
     assert!(y["corrtime"].as_f64().unwrap() > 0.0);
+    // KF-GINS refuses an imunoise block without the scale-factor keys: present, zero (not
+    // measured), and the user is told.
+    for k in ["gsstd", "asstd"] {
+        let v: Vec<f64> = y[k]
+            .as_vec()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        assert_eq!(v, [0.0; 3], "{k}");
+    }
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("gsstd"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     // A channel that is not in the file is named.
     let (o, _) = export("kf-gins", "kf-bad.yaml", &["--gyro", "gz"]);
     assert_eq!(o.status.code(), Some(2));

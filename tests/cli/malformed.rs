@@ -111,7 +111,8 @@ fn checkpoint_bytes() -> Vec<u8> {
 }
 
 fn scratch(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("allanscope-malformed-{}-{tag}", std::process::id()));
+    // Emptied at each call (a case writes exactly its own files).
+    let d = crate::common::fresh_dir(&format!("malformed-{tag}"));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).expect("scratch");
     d

@@ -232,6 +232,16 @@ fn a_jump_of_the_time_column_is_a_gap_of_the_missing_samples() {
         assert_eq!(s.t_data, ms.t_data);
         assert_eq!(s.segments, [2, 2], "one gap in each channel: {name}");
         assert_eq!(s.samples, ms.samples);
+        // The summary says so: one jump taken as a gap, 10 samples missing, in the column's unit.
+        let t = s.time_column.as_ref().expect("summary.time_column");
+        assert_eq!(
+            (t.name.as_str(), t.used, t.unit.as_deref()),
+            (header, true, Some(if scale == 1.0 { "s" } else { "ms" })),
+            "{name}"
+        );
+        assert_eq!((t.gaps, t.missing_samples), (1, 10), "{name}");
+        assert_eq!((t.backwards, t.irregular, t.discontinuities), (0, 0, 0));
+        assert!(ms.time_column.is_none(), "no time column, no account");
         assert_eq!(c.len(), mc.len());
         for (x, y) in c.iter().zip(&mc) {
             assert_eq!((&x.channel, &x.tau), (&y.channel, &y.tau));
@@ -269,6 +279,12 @@ fn a_time_column_that_goes_backwards_or_is_not_uniform_is_reported() {
     assert!(err.contains("1 steps backwards or repeated"), "{err}");
     // Nothing inserted: 400 rows, 4 s.
     assert_eq!(s.t_data, 4.0);
+    // Row 300 at 3.004 s is 1.4 steps after 2.99 s and 0.6 before 3.01 s: two steps off.
+    let t = s.time_column.as_ref().expect("summary.time_column");
+    assert_eq!(
+        (t.gaps, t.missing_samples, t.backwards, t.irregular),
+        (0, 0, 1, 2)
+    );
     // A time column that is not in steps of tau0 (here --tau0 is 0.01, the column steps 0.02)
     // is reported and only skipped.
     let p = write("wrong_tau0.csv", stamped("time", 2.0, 0..0).as_bytes());
@@ -280,4 +296,6 @@ fn a_time_column_that_goes_backwards_or_is_not_uniform_is_reported() {
         "{err}"
     );
     assert_eq!(s.segments, [1, 1]);
+    let t = s.time_column.as_ref().expect("summary.time_column");
+    assert_eq!((t.used, t.unit.as_deref(), t.gaps), (false, None, 0));
 }

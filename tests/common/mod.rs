@@ -16,12 +16,27 @@ pub fn exe() -> std::process::Command {
     std::process::Command::new(env!("CARGO_BIN_EXE_allanscope"))
 }
 
-/// A scratch folder of this test process for `tag`, emptied the first time this process asks
-/// for it: folders are named by process id, and a pid reused from an earlier run must not hand a
-/// test that earlier run's outputs (which the commands then refuse to overwrite).
+/// A name for this test process: its id and the time it first asked (ns). Process ids alone are
+/// reused (32768 of them here, with several test runs at once), and a reused one used to hand a
+/// test an earlier run's outputs, which the commands then refuse to overwrite: `analyze --out`
+/// failing with exit 2 under load, seen in the plot and report tests.
+pub fn process_token() -> String {
+    static TOKEN: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    TOKEN
+        .get_or_init(|| {
+            let ns = std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_nanos());
+            format!("{}-{ns}", std::process::id())
+        })
+        .clone()
+}
+
+/// A scratch folder of this test process for `tag` (named by [`process_token`]), emptied the
+/// first time this process asks for it.
 pub fn fresh_dir(tag: &str) -> PathBuf {
     static SEEN: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
-    let d = std::env::temp_dir().join(format!("allanscope-{tag}-{}", std::process::id()));
+    let d = std::env::temp_dir().join(format!("allanscope-{tag}-{}", process_token()));
     let mut seen = SEEN.lock().unwrap_or_else(|e| e.into_inner());
     if !seen.iter().any(|t| t == tag) {
         let _ = std::fs::remove_dir_all(&d);

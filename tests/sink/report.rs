@@ -235,6 +235,20 @@ fn several_runs_give_table_2_with_the_aggregate_records_values() {
         "{row}"
     );
     assert!(row.contains(&format!("data-value=\"{:e}\"", ci[1])));
+    // The means again in datasheet units (arcsec: N/60 is deg/sqrt(h), B in arcsec/s is deg/h).
+    let ds = row_values(table, "data-row=\"datasheet\"");
+    let near = |a: Option<f64>, b: Option<f64>| (a.unwrap() / b.unwrap() - 1.0).abs() < 1e-12;
+    assert!(
+        near(ds[3], agg("N", "mean").map(|m| m / 60.0)),
+        "N in deg/sqrt(h): {ds:?}"
+    );
+    assert!(near(ds[2], agg("B", "mean")), "B in deg/h: {ds:?}");
+    let i = table.find("data-row=\"datasheet\"").unwrap();
+    let row = &table[i..i + table[i..].find("</tr>").unwrap()];
+    assert!(
+        row.contains("deg/sqrt(h)") && row.contains("deg/h"),
+        "{row}"
+    );
 }
 
 fn agg_pair(aggs: &[Value], k: &str, f: &str) -> [f64; 2] {
@@ -360,4 +374,33 @@ fn the_ieee_952_readouts_are_shown_with_units_intervals_and_taus() {
     assert!(bi["text"].contains("no minimum inside the curve"), "{bi:?}");
     let rrw = readout_cell(&html, "g4", "rrw");
     assert!(rrw["text"].contains("no +1/2 slope"), "{rrw:?}");
+}
+
+/// The runs table says what a time column found, and a file of `diagnose` records (no summary
+/// by design) is not called a run cut short.
+#[test]
+fn the_runs_table_shows_the_time_column_and_diagnose_output_is_not_called_cut_short() {
+    let mut files = one_run(json!([]), None);
+    let s = files[0].records.last_mut().unwrap();
+    s["time_column"] = json!({"name": "time", "used": true, "unit": "s", "gaps": 2,
+        "missing_samples": 10, "backwards": 1, "irregular": 0, "discontinuities": 0});
+    let html = render_html(&files, "t", "now");
+    let runs = &html[html.find("<h2>Runs</h2>").unwrap()..];
+    let runs = &runs[..runs.find("</table>").unwrap()];
+    assert!(
+        runs.contains("time column &quot;time&quot;: 2 jumps = 10 missing samples (gaps), 1 steps backwards, 0 off-step"),
+        "{runs}"
+    );
+    let diag = vec![ResultFile {
+        name: "g4_diagnosis.jsonl".into(),
+        records: vec![
+            json!({"type": "diagnosis", "channel": "g4", "unit": "arcsec",
+            "gap_before": 1.1, "gap_after": 1.1, "verdict": "consistent", "regions": [],
+            "effects": [], "final": true}),
+        ],
+    }];
+    let html = render_html(&diag, "t", "now");
+    assert!(!html.contains("cut short"), "{html}");
+    assert!(html.contains("Diagnosis records only"), "{html}");
+    assert!(html.contains("<table class=\"diagnosis\">"));
 }

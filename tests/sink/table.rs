@@ -316,7 +316,8 @@ fn the_metrics_tap_keeps_the_newest_n_and_lost_frames_for_the_status_line() {
 
 /// A `diagnose` record (no fit beside it) names its unit: the effects' rates and the refitted
 /// terms are shown in datasheet units, converted by hand here. Accelerometer in m/s: a rate of
-/// 9.80665e-5 m/s/s is 10 micro-g, 4.903325e-6 m/s/s per deg C is 0.5 micro-g per deg C. Gyro in
+/// 9.80665e-5 m/s/s is 10 micro-g, 4.903325e-6 m/s/s per deg C is 0.5 micro-g per deg C (its
+/// interval [2.4516625e-6, 9.80665e-6] is [0.25, 1]). Gyro in
 /// deg: 0.001 deg/s is 3.6 deg/h; N = 0.01 deg/sqrt(s) is 0.6 deg/sqrt(h) (x 60).
 #[test]
 fn the_diagnose_table_gives_effect_parameters_in_datasheet_units() {
@@ -332,7 +333,8 @@ fn the_diagnose_table_gives_effect_parameters_in_datasheet_units() {
         "a1",
         "m/s",
         json!([{"kind": "gauss_markov", "params": {"sigma": 9.80665e-5, "tau_c": 20.0}, "gap_after": 2.0},
-               {"kind": "temperature", "params": {"coefficient": 4.903325e-6}, "gap_after": 1.0}]),
+               {"kind": "temperature", "params": {"coefficient": 4.903325e-6, "lo": 2.4516625e-6,
+                "hi": 9.80665e-6}, "gap_after": 1.0}]),
     );
     let g1 = rec(
         "g1",
@@ -348,7 +350,7 @@ fn the_diagnose_table_gives_effect_parameters_in_datasheet_units() {
         "{a}"
     );
     assert!(
-        a.contains("temperature sensitivity [coefficient 0.500 micro-g per deg C (4.90e-6 m/s/s per deg C)]"),
+        a.contains("temperature sensitivity [coefficient 0.500 [0.250, 1.00] micro-g per deg C (4.90e-6 [2.45e-6, 9.81e-6] m/s/s per deg C)]"),
         "{a}"
     );
     let g = row(&t, "g1 [deg]  diagnosis:");
@@ -472,4 +474,43 @@ fn several_runs_are_shown_in_the_table_2_layout() {
         cells("runs determined"),
         ["runs determined", "0", "0", "2", "3", "0"]
     );
+}
+
+/// The status line and log lines on one terminal (sink::status_area): a log line erases the
+/// status line, is written, and the status line is drawn again under it; the line is cut to the
+/// terminal's width less one column; once suspended (a table is coming) nothing is drawn again.
+#[test]
+fn log_lines_are_written_above_the_status_line_never_through_it() {
+    use allanscope::sink::status_area::{StatusArea, CLEAR};
+    let mut area = StatusArea::new();
+    let mut out: Vec<u8> = Vec::new();
+    let text = |o: &mut Vec<u8>| String::from_utf8(std::mem::take(o)).unwrap();
+    // No status line yet: a log line goes out as it is.
+    area.log(&mut out, b"INFO first\n").unwrap();
+    assert_eq!(text(&mut out), "INFO first\n");
+    // A 30-character line on a 21-column terminal keeps 20 characters.
+    let line = "12 s running | N: g1 0.254 arcsec/sqrt(s)";
+    area.draw(&mut out, line, 21).unwrap();
+    assert_eq!(text(&mut out), format!("{CLEAR}{}", &line[..20]));
+    // A log line: erase, the message, the status line again on the fresh line.
+    area.log(&mut out, b"WARN frame 17: checksum\n").unwrap();
+    assert_eq!(
+        text(&mut out),
+        format!("{CLEAR}WARN frame 17: checksum\n{}", &line[..20])
+    );
+    // A message that does not end its line leaves the cursor there: no redraw until the next
+    // draw, and the next log line does not erase the message.
+    area.log(&mut out, b"partial").unwrap();
+    assert_eq!(text(&mut out), format!("{CLEAR}partial"));
+    area.log(&mut out, b" rest\n").unwrap();
+    assert_eq!(text(&mut out), " rest\n");
+    area.draw(&mut out, "13 s running", 80).unwrap();
+    assert_eq!(text(&mut out), format!("{CLEAR}13 s running"));
+    // Suspended: erased once, then never drawn again; log lines plain.
+    area.suspend(&mut out).unwrap();
+    assert_eq!(text(&mut out), CLEAR);
+    area.draw(&mut out, "14 s running", 80).unwrap();
+    area.log(&mut out, b"INFO done\n").unwrap();
+    assert_eq!(text(&mut out), "INFO done\n");
+    assert!(area.is_suspended());
 }
