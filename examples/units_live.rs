@@ -188,12 +188,15 @@ fn main() {
     let frame_len = block.len() / block_frames;
 
     // The ports, and the stand config of UNITS units.
-    let ports: Vec<u16> = (0..units)
-        .map(|_| {
-            let s = UdpSocket::bind("127.0.0.1:0").expect("bind");
-            s.local_addr().expect("addr").port()
-        })
+    // All held at once while picking, so no port is handed out twice.
+    let held: Vec<UdpSocket> = (0..units)
+        .map(|_| UdpSocket::bind("127.0.0.1:0").expect("bind"))
         .collect();
+    let ports: Vec<u16> = held
+        .iter()
+        .map(|s| s.local_addr().expect("addr").port())
+        .collect();
+    drop(held);
     let mut config = String::from(
         "[run]\nevery_s = 10.0\nquiet_after = 5.0\n[statistics]\noverlap = 16\n[output]\npath = \"units.jsonl\"\n",
     );

@@ -525,51 +525,34 @@ impl RunAnalysis {
     }
 
     /// Curve and fit records of every channel as of now.
+    ///
+    /// The final records of several channels are made on as many threads as the machine has
+    /// cores (channels split in consecutive parts, records put back in channel order): each
+    /// channel's curves, fit and diagnosis depend on that channel alone, so the records are the
+    /// same, and the end of a replay (the fits are most of it) takes a fraction of the wall time.
     pub fn records(&mut self, final_: bool) -> Vec<Record> {
-        let run = self.opts.run;
-        let mut out = Vec::new();
-        for ch in &mut self.channels {
-            if final_ {
-                // The final fit starts from a fresh covariance cache, so it does not depend on
-                // how many interim refits came before (the cache's incremental updates agree
-                // with a fresh computation only to ~1e-11).
-                ch.fitter = Fitter::new();
-            }
-            let (curves, fit) = analyze_channel(ch, &self.opts);
-            for c in &curves {
-                out.push(Record::Curve(CurveRecord::new(
-                    &ch.setup.name,
-                    &ch.setup.unit,
-                    c,
-                    final_,
-                    run,
-                )));
-            }
-            if let Some(f) = fit {
-                let readouts = curves
-                    .iter()
-                    .find(|c| c.stat == Stat::Avar)
-                    .map(|c| Box::new(ReadoutsRecord::new(&readouts(&c.points), &ch.setup.unit)));
-                let mut rec = fit_record(&ch.setup, &f, final_, ch.acc.t_data_s(), run);
-                rec.readouts = readouts;
-                out.push(Record::from(rec));
-                ch.last_fit = Some(f);
-            }
-            if let Some(g) = &mut ch.gap {
-                // The diagnosis refreshed with the fits (docs/theory.md section 5); a run still too
-                // short for it gives no record yet.
-                match diagnose(&g.snapshot(), &DiagnoseOptions::default()) {
-                    Ok(d) => {
-                        let mut rec = DiagnosisRecord::new(&ch.setup.name, &d, None, final_);
-                        rec.run = run;
-                        rec.unit = Some(ch.setup.unit.clone());
-                        out.push(Record::Diagnosis(Box::new(rec)));
-                    }
-                    Err(e) => tracing::debug!("{}: {e}", ch.setup.name),
-                }
-            }
+        let opts = &self.opts;
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let parts = if final_ {
+            cores.min(self.channels.len())
+        } else {
+            1
+        };
+        if parts <= 1 {
+            return channel_records(&mut self.channels, opts, final_);
         }
-        out
+        let per = self.channels.len().div_ceil(parts);
+        std::thread::scope(|s| {
+            let handles: Vec<_> = self
+                .channels
+                .chunks_mut(per)
+                .map(|chs| s.spawn(move || channel_records(chs, opts, final_)))
+                .collect();
+            handles
+                .into_iter()
+                .flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+                .collect()
+        })
     }
 
     /// The final fits, one per channel (`None` where no fit could be made), after [`records`].
@@ -672,6 +655,58 @@ impl RunAnalysis {
         let ch = &mut self.channels[channel];
         analyze_channel(ch, &self.opts).0
     }
+}
+
+/// The records of `channels` (see [`RunAnalysis::records`]), in channel order.
+fn channel_records(
+    channels: &mut [ChannelState],
+    opts: &AnalysisOptions,
+    final_: bool,
+) -> Vec<Record> {
+    let run = opts.run;
+    let mut out = Vec::new();
+    for ch in channels {
+        if final_ {
+            // The final fit starts from a fresh covariance cache, so it does not depend on
+            // how many interim refits came before (the cache's incremental updates agree
+            // with a fresh computation only to ~1e-11).
+            ch.fitter = Fitter::new();
+        }
+        let (curves, fit) = analyze_channel(ch, opts);
+        for c in &curves {
+            out.push(Record::Curve(CurveRecord::new(
+                &ch.setup.name,
+                &ch.setup.unit,
+                c,
+                final_,
+                run,
+            )));
+        }
+        if let Some(f) = fit {
+            let readouts = curves
+                .iter()
+                .find(|c| c.stat == Stat::Avar)
+                .map(|c| Box::new(ReadoutsRecord::new(&readouts(&c.points), &ch.setup.unit)));
+            let mut rec = fit_record(&ch.setup, &f, final_, ch.acc.t_data_s(), run);
+            rec.readouts = readouts;
+            out.push(Record::from(rec));
+            ch.last_fit = Some(f);
+        }
+        if let Some(g) = &mut ch.gap {
+            // The diagnosis refreshed with the fits (docs/theory.md section 5); a run still too
+            // short for it gives no record yet.
+            match diagnose(&g.snapshot(), &DiagnoseOptions::default()) {
+                Ok(d) => {
+                    let mut rec = DiagnosisRecord::new(&ch.setup.name, &d, None, final_);
+                    rec.run = run;
+                    rec.unit = Some(ch.setup.unit.clone());
+                    out.push(Record::Diagnosis(Box::new(rec)));
+                }
+                Err(e) => tracing::debug!("{}: {e}", ch.setup.name),
+            }
+        }
+    }
+    out
 }
 
 /// Reads a channel's accumulator into curves, fits the AVAR curve, and re-derives each tau's

@@ -455,4 +455,56 @@ mod tests {
         }
         assert_eq!(v, ev);
     }
+
+    /// A block appended behind a non-empty one (`take_all` without the swap): its holes and gaps
+    /// move to the right frames and events, in a real column and a count column alike; the
+    /// result reads as the two event lists one after the other.
+    #[test]
+    fn appending_moves_holes_and_gaps() {
+        let kinds = [ColumnKind::Count, ColumnKind::Real];
+        let f = |seq| BlockEvent::Frame {
+            seq,
+            temperature_c: Some(20.5),
+            status: None,
+        };
+        let mut a = FrameBlock::with_kinds(&kinds, 2);
+        a.push_frame(f(0), &[Some(ChannelValue::Count(5)), None]);
+        a.push_gap(2);
+        a.push_frame(
+            f(3),
+            &[Some(ChannelValue::Count(-7)), Some(ChannelValue::Real(1.5))],
+        );
+        let mut b = FrameBlock::with_kinds(&kinds, 2);
+        b.push_gap(1);
+        b.push_frame(f(5), &[None, Some(ChannelValue::Real(-0.25))]);
+        b.push_frame(
+            f(6),
+            &[Some(ChannelValue::Real(2.0)), Some(ChannelValue::Count(3))],
+        );
+        let mut want = a.events();
+        want.extend(b.events());
+        a.take_all(&mut b);
+        assert!(b.is_empty());
+        assert_eq!(a.events(), want);
+        assert_eq!((a.frames(), a.len()), (4, 6));
+        // Holes: frame 0 channel 1 (missing), frame 2 channel 0 (missing), frame 3 channel 0 (a
+        // real value on a count column), frame 3 channel 1 (a count on a real column).
+        let holes: Vec<(usize, usize)> = a.holes().iter().map(|h| (h.frame, h.channel)).collect();
+        assert_eq!(holes, vec![(0, 1), (2, 0), (3, 0), (3, 1)]);
+        let gaps: Vec<(usize, usize, u64)> = a
+            .gaps()
+            .iter()
+            .map(|g| (g.event, g.frame, g.missing))
+            .collect();
+        assert_eq!(gaps, vec![(1, 1, 2), (3, 2, 1)]);
+        assert_eq!(a.column(1)[1], 1.5f64.to_bits() as i64);
+        assert_eq!(a.value(3, 1), Some(ChannelValue::Count(3)));
+        // Into a block of other kinds: value by value, the same events.
+        let mut c = FrameBlock::with_capacity(2, 0);
+        c.push_gap(4);
+        let mut want_c = c.events();
+        want_c.extend(a.events());
+        c.take_all(&mut a);
+        assert_eq!(c.events(), want_c);
+    }
 }

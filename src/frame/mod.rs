@@ -5,9 +5,12 @@
 //!   and checksum, resynchronises after garbage, follows the frame counter (gaps, duplicates)
 //!   and keeps the [`Health`] counters of docs/records.md.
 //! - [`encoder`]: builds valid frames of a descriptor (for the simulator and tests).
-//! - [`block`]: [`FrameBlock`], decoded frames flat (no allocation per frame), as the decoder
-//!   hands them on.
-//! - [`checksum`], [`field`]: the checksum algorithms and wire types they share.
+//! - [`block`]: [`FrameBlock`], decoded frames flat, a column per channel (no allocation per
+//!   frame), as the decoder hands them on.
+//! - [`checksum`], [`field`]: the checksum algorithms and wire types they share (`crc_msb`: the
+//!   MSB-first CRCs, sixteen bytes per step).
+//! - `plan`: the frame message compiled once into a read plan (what [`Decoder`] reads a good
+//!   frame with).
 //!
 //! Sources (serial, UDP, files) own the bytes and hand them to a [`Decoder`]; the accumulators
 //! downstream receive [`DecodedFrame`]s and [`FrameEvent::Gap`]s and never see bytes.
