@@ -582,9 +582,9 @@ fn settle(
                 cur = fit;
             }
             // Found in time, by its own calibrated test on the block means: kept on that
-            // evidence even where the curve does not show it (a short warm-up, a few jumps
-            // that the five terms absorb), with its curve offset left out, so the model and
-            // the gap stay those before it (docs/gap.md, "Bookkeeping").
+            // evidence even where the curve does not show it (a short warm-up that the five
+            // terms absorb), with its curve offset left out, so the model and the gap stay
+            // those before it (docs/gap.md, "Bookkeeping").
             _ if kept_in_time(e.params.kind()) => kept.push(AddedEffect {
                 params: e.params,
                 gap_after: cur.gap(),
@@ -596,11 +596,12 @@ fn settle(
     (kept, cur, spec)
 }
 
-/// The effects found in time by a test of their own (the warm-up's `B`, the jump rule on the
-/// block means), which the bookkeeping keeps on that evidence when the curve does not show
-/// them; their false-alarm shares are calibrated as such (docs/gap.md, "Calibration").
+/// The effects found in time by a test of their own that the bookkeeping keeps on that
+/// evidence when the curve does not show them: the warm-up (its `B`). Jumps kept on the jump
+/// rule alone were measured and left out: with them the shipped MA4 model was `consistent` in
+/// 94 of 100 two-hour runs, below the 95 (docs/gap.md, "Bookkeeping").
 fn kept_in_time(kind: EffectKind) -> bool {
-    matches!(kind, EffectKind::Warmup | EffectKind::BiasJumps)
+    matches!(kind, EffectKind::Warmup)
 }
 
 /// The stationary effects of `effects` still needed once `offset` (a warm-up's or jumps' exact

@@ -54,13 +54,13 @@ fn run(extra: &str, seed: u64) -> Diagnosis {
 }
 
 /// The bookkeeping (docs/gap.md, "Bookkeeping"): each effect's `gap_after` is the gap once it
-/// is added, below the one before, except a warm-up or jumps kept on their time-domain
-/// evidence alone, which leave the gap as it was (and bring no drop of the curve's misfit);
-/// the last is the final gap, never above the base's.
+/// is added, below the one before, except a warm-up kept on its time-domain evidence alone,
+/// which leaves the gap as it was (and brings no drop of the curve's misfit); the last is the
+/// final gap, never above the base's.
 pub(crate) fn assert_bookkeeping(d: &Diagnosis) {
     let mut prev = d.gap_before;
     for e in &d.effects {
-        let in_time = matches!(e.params.kind(), EffectKind::Warmup | EffectKind::BiasJumps);
+        let in_time = e.params.kind() == EffectKind::Warmup;
         assert!(
             e.gap_after < prev || (in_time && e.gap_after == prev && e.delta_chi2 == 0.0),
             "{e:?} did not lower the gap from {prev}"
