@@ -8,7 +8,7 @@
 
 use std::time::Instant;
 
-use allanscope::checkpoint::Checkpoint;
+use allanscope::pipeline::checkpoint::Checkpoint;
 
 fn main() -> anyhow::Result<()> {
     let mut args = std::env::args().skip(1);
@@ -57,7 +57,7 @@ fn main() -> anyhow::Result<()> {
         let b = c.encode()?;
         enc.push(t.elapsed().as_secs_f64() * 1e3);
         let t = Instant::now();
-        allanscope::checkpoint::write_atomic(&out, &b)?;
+        allanscope::pipeline::checkpoint::write_atomic(&out, &b)?;
         wr.push(t.elapsed().as_secs_f64() * 1e3);
     }
     let _ = std::fs::remove_file(&out);

@@ -12,11 +12,11 @@ use std::path::{Path, PathBuf};
 
 use allanscope::allan::accum::AccumConfig;
 use allanscope::analysis::{AnalysisOptions, ChannelSetup, InputKind, RunAnalysis};
-use allanscope::checkpoint::{Checkpoint, Position, FORMAT_VERSION};
 use allanscope::frame::descriptor::BUILTIN;
 use allanscope::frame::{Decoder, FrameDescriptor, FrameEvent};
 use allanscope::input::text::{TextOptions, TextReader};
 use allanscope::input::{Chunk, MAX_ABS_VALUE};
+use allanscope::pipeline::checkpoint::{Checkpoint, Position, FORMAT_VERSION};
 
 /// The crate's root (this file is compiled from `fuzz/` and from the crate's tests).
 fn root() -> PathBuf {

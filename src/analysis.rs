@@ -16,8 +16,10 @@ use crate::gap::{diagnose, DiagnoseOptions, DiagnosisRecord, GapConfig, GapEvide
 use crate::input::Chunk;
 use crate::model::fit::{FitOptions, FitResult, Fitter};
 use crate::model::readout::readouts;
-use crate::model::units::{quantization_ratio, DatasheetRecord, IncrementUnit};
-use crate::sink::records::{CurveRecord, FitRecord, Record, SummaryRecord};
+use crate::model::units::{quantization_ratio, IncrementUnit};
+use crate::sink::records::{
+    CoefRecord, CurveRecord, DatasheetRecord, FitRecord, ReadoutsRecord, Record, SummaryRecord,
+};
 
 /// What the values of a text column are.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -137,7 +139,7 @@ pub struct ChannelSnapshot {
     pub last_phase: Option<f64>,
 }
 
-/// A run's saved state (a checkpoint, `crate::checkpoint`): everything the final records
+/// A run's saved state (a checkpoint, `crate::pipeline::checkpoint`): everything the final records
 /// depend on. The fits are not saved: the final fit starts from a fresh covariance cache
 /// anyway (see [`RunAnalysis::records`]), and interim fits are recomputed from the curves.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
@@ -583,7 +585,6 @@ impl RunAnalysis {
             .collect();
         let judgement = crate::model::limits::judge(&self.opts.limits, &fits);
         SummaryRecord {
-            kind: "summary".into(),
             input: self.input.clone(),
             run: self.opts.run,
             channels: self.channel_names(),
@@ -685,10 +686,10 @@ fn channel_records(
             let readouts = curves
                 .iter()
                 .find(|c| c.stat == Stat::Avar)
-                .map(|c| Box::new(readouts(&c.points).record(&ch.setup.unit)));
+                .map(|c| Box::new(ReadoutsRecord::new(&readouts(&c.points), &ch.setup.unit)));
             let mut rec = fit_record(&ch.setup, &f, final_, ch.acc.t_data_s(), run);
             rec.readouts = readouts;
-            out.push(Record::Fit(rec));
+            out.push(Record::from(rec));
             ch.last_fit = Some(f);
         }
         if let Some(g) = &mut ch.gap {
@@ -766,20 +767,15 @@ fn fit_record(
     t_data_s: f64,
     run: Option<usize>,
 ) -> FitRecord {
-    let native: [(Option<f64>, f64, f64); 5] = std::array::from_fn(|i| {
-        let c = &f.coef[i];
-        (c.determined.then_some(c.value), c.lo, c.hi)
-    });
-    let datasheet = IncrementUnit::parse(&setup.unit)
-        .and_then(|u| serde_json::to_value(DatasheetRecord::new(native, &u)).ok());
+    let coef = CoefRecord::new(f);
+    let datasheet = IncrementUnit::parse(&setup.unit).map(|u| DatasheetRecord::new(&coef, &u));
     let q = &f.coef[0];
     FitRecord {
-        kind: "fit".into(),
         channel: setup.name.clone(),
         unit: setup.unit.clone(),
         r#final: final_,
         t_data: t_data_s,
-        coef: f.coef_json(),
+        coef,
         gof: f.gof.is_finite().then_some(f.gof),
         method: f.method.name().into(),
         model_c: f.c.to_vec(),

@@ -1,6 +1,7 @@
 //! Errors that reach the user, and the exit status each maps to (docs/records.md: 2 for usage or
 //! configuration errors, 1 for anything else).
 
+use std::fmt;
 use std::path::PathBuf;
 
 /// An error in what the user asked for or gave us: a bad option, a bad config or descriptor key,
@@ -18,7 +19,7 @@ pub enum UsageError {
         problem: String,
     },
     /// A problem in a TOML file (descriptor, stand config, model, limits), at `line` when the
-    /// key is written in the file (`crate::toml_check`).
+    /// key is written in the file (collected by `toml_check`).
     #[error("{}{}: key `{key}`: {problem}", file.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
     Config {
         file: PathBuf,
@@ -30,6 +31,34 @@ pub enum UsageError {
     #[error("checkpoint {file}: {problem}")]
     Checkpoint { file: PathBuf, problem: String },
 }
+
+/// Every problem found in one file (or why it could not be read). Each is a
+/// [`UsageError::Config`]; the program exits with status 2. Printed as a count and one line
+/// per problem; it has no `source`, so an error chain never prints a problem twice.
+#[derive(Debug)]
+pub struct ConfigErrors {
+    /// What the file is: "frame descriptor", "stand config", "model file", "limits file".
+    pub what: &'static str,
+    pub problems: Vec<UsageError>,
+}
+
+impl fmt::Display for ConfigErrors {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let n = self.problems.len();
+        write!(
+            f,
+            "{}: {n} problem{}",
+            self.what,
+            if n == 1 { "" } else { "s" }
+        )?;
+        for p in &self.problems {
+            write!(f, "\n  {p}")?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for ConfigErrors {}
 
 /// `: line N` for an input's line, nothing for the file as a whole (line 0).
 fn line_part(line: u64) -> String {
@@ -43,9 +72,7 @@ fn line_part(line: u64) -> String {
 /// The exit status for an error chain: 2 when a [`UsageError`] is anywhere in it, else 1.
 pub fn exit_status(err: &anyhow::Error) -> i32 {
     if err.chain().any(|e| {
-        e.downcast_ref::<UsageError>().is_some()
-            || e.downcast_ref::<crate::toml_check::ConfigErrors>()
-                .is_some()
+        e.downcast_ref::<UsageError>().is_some() || e.downcast_ref::<ConfigErrors>().is_some()
     }) {
         2
     } else {

@@ -1,5 +1,6 @@
 //! The ranges a user's numbers must lie in: durations, intervals, sampling steps, descriptor
-//! rates and scales, sizes. Each is checked where the number is parsed (the command-line option
+//! rates and scales, sizes, and the samples themselves ([`MAX_ABS_VALUE`], for frames and text
+//! alike). Each is checked where the number is parsed (the command-line option
 //! parsers, the stand config, the descriptor checker, a restored checkpoint), so that every
 //! loop, buffer and timer a number drives is bounded and a bad value is a usage error naming
 //! the option or key, never a panic or a hang.
@@ -8,6 +9,21 @@
 //! stays exact and finite: a run of [`MAX_SECONDS`] at [`MAX_RATE_HZ`] still counts its steps
 //! in a u64 with room to spare, and a timer of [`MAX_SECONDS`] fits a `std::time::Duration`
 //! added to `Instant::now()`.
+
+/// Largest magnitude accepted for a sample (an increment, rate or phase, in the channel's
+/// unit); anything larger, and any infinite value, is invalid: counted (`invalid_values`) and
+/// taken as a gap, like a NaN. It is far above any sensor's output (a phase of 1e15 counts is
+/// 30 years of a 1 MHz counter) and keeps every sum the accumulators form finite: a square is
+/// at most 1e30, a run of 1e12 of them 1e42, against f64's 1.8e308. One `inf` or `1e308` would
+/// otherwise turn every sigma of its channel into NaN and drop its fit.
+pub const MAX_ABS_VALUE: f64 = 1e15;
+
+/// `v` when it is a usable sample; `None` when it is infinite or beyond [`MAX_ABS_VALUE`]
+/// (NaN, a marked gap, is passed through).
+#[inline]
+pub fn plausible(v: f64) -> Option<f64> {
+    (v.abs() <= MAX_ABS_VALUE || v.is_nan()).then_some(v)
+}
 
 /// The longest duration or interval accepted anywhere, in seconds (about 31.7 years).
 pub const MAX_SECONDS: f64 = 1.0e9;

@@ -4,41 +4,13 @@
 //! line the key stands on (from the parser's spans), and [`ConfigErrors`] gives every problem
 //! once, in the order of the file's lines, with exit status 2.
 
-use std::fmt;
 use std::path::{Path, PathBuf};
 
 use toml::de::{DeTable, DeValue};
 use toml::Spanned;
 
+pub use crate::error::ConfigErrors;
 use crate::error::UsageError;
-
-/// Every problem found in one file (or why it could not be read). Each is a
-/// [`UsageError::Config`]; the program exits with status 2. Printed as a count and one line
-/// per problem; it has no `source`, so an error chain never prints a problem twice.
-#[derive(Debug)]
-pub struct ConfigErrors {
-    /// What the file is: "frame descriptor", "stand config", "model file", "limits file".
-    pub what: &'static str,
-    pub problems: Vec<UsageError>,
-}
-
-impl fmt::Display for ConfigErrors {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let n = self.problems.len();
-        write!(
-            f,
-            "{}: {n} problem{}",
-            self.what,
-            if n == 1 { "" } else { "s" }
-        )?;
-        for p in &self.problems {
-            write!(f, "\n  {p}")?;
-        }
-        Ok(())
-    }
-}
-
-impl std::error::Error for ConfigErrors {}
 
 /// Collects the problems of one file, each with its key and the key's line.
 pub struct Collector {

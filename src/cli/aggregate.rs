@@ -13,7 +13,7 @@ use anyhow::Result;
 use super::{read_json_lines, usage, AggregateArgs};
 use allanscope::model::aggregate::{aggregate_channels, CoefAggregate, RunCoefs};
 use allanscope::sink::json::JsonLines;
-use allanscope::sink::records::AggregateRecord;
+use allanscope::sink::records::{AggregateRecord, Record};
 use allanscope::sink::results::ResultFile;
 
 pub fn run(a: &AggregateArgs) -> Result<()> {
@@ -60,7 +60,7 @@ pub fn run(a: &AggregateArgs) -> Result<()> {
         })),
     };
     for agg in aggregate_channels(&runs) {
-        sink.write(&record(&agg))?;
+        sink.write(&Record::from(record(&agg)))?;
     }
     sink.flush()?;
     Ok(())
@@ -70,7 +70,6 @@ pub fn run(a: &AggregateArgs) -> Result<()> {
 pub fn record(a: &CoefAggregate) -> AggregateRecord {
     let s = a.stats.as_ref();
     AggregateRecord {
-        kind: "aggregate".into(),
         channel: a.channel.clone(),
         unit: a.unit.clone(),
         coef: a.coef.into(),
@@ -83,20 +82,32 @@ pub fn record(a: &CoefAggregate) -> AggregateRecord {
 }
 
 /// One run's channels as read so far: (is the record final, its coefficients).
-type RunSoFar = (Option<u64>, Vec<(bool, RunCoefs)>);
+type RunSoFar = (Option<usize>, Vec<(bool, RunCoefs)>);
 
 /// The runs in one file: per run index (absent: one run), each channel's final fit. A file of
 /// a run of several units (`[[unit]]`) holds one run per unit: the unit-to-unit statistics.
 fn runs_of_file(path: &Path) -> Result<Vec<Vec<RunCoefs>>> {
-    let (records, _) = allanscope::sink::results::units_as_runs(&read_json_lines(path)?);
+    // A file of several units holds one run per unit (`units_as_runs`); its fit records are read
+    // typed, and one that does not parse is an error.
+    let (values, _) = allanscope::sink::results::units_as_runs(&read_json_lines(path)?);
+    let mut records = Vec::new();
+    for v in values.into_iter().filter(|v| v["type"] == "fit") {
+        let r = Record::from_value(v).map_err(|e| {
+            usage(format!(
+                "{}: a `fit` record that does not parse: {e}",
+                path.display()
+            ))
+        })?;
+        records.extend(r);
+    }
     // (run index, channel) -> (is final, coefficients), the latest record winning among equals.
     let mut runs: Vec<RunSoFar> = Vec::new();
     for rec in &records {
-        let Some(coefs) = RunCoefs::from_fit_record(rec) else {
+        let Record::Fit(fit) = rec else {
             continue;
         };
-        let run = rec.get("run").and_then(|r| r.as_u64());
-        let is_final = rec.get("final").and_then(|f| f.as_bool()).unwrap_or(false);
+        let coefs = fit.run_coefs();
+        let (run, is_final) = (fit.run, fit.r#final);
         let idx = match runs.iter().position(|(r, _)| *r == run) {
             Some(i) => i,
             None => {

@@ -16,10 +16,10 @@ use super::{
     usage, AnalyzeArgs, DataArgs,
 };
 use allanscope::analysis::{AnalysisOptions, ChannelSetup};
-use allanscope::checkpoint::Position;
 use allanscope::frame::FrameDescriptor;
 use allanscope::input::text::TextReader;
 use allanscope::model::aggregate::{aggregate_channels, RunCoefs};
+use allanscope::pipeline::checkpoint::Position;
 use allanscope::pipeline::{RecordQueue, RecordWriter, RunControl, RunOutcome};
 use allanscope::plan::unit::{InputPlan, UnitPlan};
 use allanscope::sink::output::OutputMode;
@@ -159,7 +159,6 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue, ctl: &RunControl) -> Result
         let j = allanscope::model::limits::judge_runs(&base.limits, &aggregates);
         if !j.results.is_empty() {
             queue.push_final(Record::Summary(allanscope::sink::records::SummaryRecord {
-                kind: "summary".into(),
                 input: a.inputs.join(" "),
                 run: None,
                 channels: Vec::new(),

@@ -20,6 +20,7 @@ use allanscope::input::text::{TextReader, BATCH_ROWS};
 use allanscope::pipeline::decode::DecodeStage;
 use allanscope::plan::unit::{InputPlan, UnitPlan, UnitRequest};
 use allanscope::sim::model_write::model_toml;
+use allanscope::sink::records::Record;
 use allanscope::source::{Pace, SourceEvent, SourceSpec};
 
 /// One channel's evidence, gathered from a whole input.
@@ -325,7 +326,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
                 runs as usize,
             ));
         }
-        sink.write(&rec)?;
+        sink.write(&Record::from(rec))?;
         if a.model_out.is_some() {
             fitted.extend(twin);
         }

@@ -533,8 +533,16 @@ pub(crate) fn open_input(input: &str) -> Result<Box<dyn Read + Send>> {
     }
 }
 
-/// Reads a whole text file of JSON lines into values (for `aggregate`, `plot`, tests).
+/// Reads a whole text file of JSON lines into values (for `plot`, `report`, tests).
 pub fn read_json_lines(path: &Path) -> Result<Vec<serde_json::Value>> {
+    Ok(numbered_json_lines(path)?
+        .into_iter()
+        .map(|(_, v)| v)
+        .collect())
+}
+
+/// The JSON lines of a file with their line numbers (1-based), blank lines skipped.
+fn numbered_json_lines(path: &Path) -> Result<Vec<(u64, serde_json::Value)>> {
     if path.is_dir() {
         return Err(usage(format!(
             "{}: is a directory, not a file of JSON lines",
@@ -555,13 +563,14 @@ pub fn read_json_lines(path: &Path) -> Result<Vec<serde_json::Value>> {
         if line.trim().is_empty() {
             continue;
         }
-        out.push(serde_json::from_str(&line).map_err(|e| {
+        let v = serde_json::from_str(&line).map_err(|e| {
             anyhow::Error::new(UsageError::Input {
                 file: path.into(),
                 line: i as u64 + 1,
                 problem: format!("not a JSON record: {e}"),
             })
-        })?);
+        })?;
+        out.push((i as u64 + 1, v));
     }
     Ok(out)
 }

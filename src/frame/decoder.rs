@@ -79,7 +79,7 @@ pub struct Health {
     /// Good messages without increments (e.g. KVH built-in-test, hg4930 control), skipped.
     pub other_messages: u64,
     /// Channel values marked invalid by their status bit, or not finite or beyond
-    /// `input::MAX_ABS_VALUE` (delivered as missing values).
+    /// `ranges::MAX_ABS_VALUE` (delivered as missing values).
     pub invalid_values: u64,
     /// Interleaved formats: counter values inconsistent with the message schedule (the
     /// decoder re-anchored and assumed no loss).
@@ -212,7 +212,7 @@ impl SeqTracker {
     }
 }
 
-/// What a [`Decoder`] holds between two pushes, for a checkpoint (`crate::checkpoint`): the
+/// What a [`Decoder`] holds between two pushes, for a checkpoint (`crate::pipeline::checkpoint`): the
 /// bytes of a message not yet complete, the counters, and where the frame counter stands.
 /// Taken when every decoded event has been collected.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]

@@ -5,7 +5,7 @@
 //!
 //! The plan reads exactly what the descriptor's generic field reads give
 //! ([`crate::frame::field::read`]): the same values, the same validity rules (status bit,
-//! finite and within `input::MAX_ABS_VALUE` for real values), the same arithmetic order for
+//! finite and within `ranges::MAX_ABS_VALUE` for real values), the same arithmetic order for
 //! real increments (`raw x scale x kind factor`), so records stay bit for bit as before
 //! (profiled: the generic reads with their type and byte-order dispatch were 590 instructions
 //! of the decode thread's 1470 per siu8 frame; BENCHMARKS.md "Decoding at the speed of the
@@ -274,7 +274,7 @@ impl FramePlan {
                     // NaN, infinite or absurd values (a float field's NaN, a damaged exponent)
                     // are invalid: a gap, counted, never summed into the channel.
                     let v = r.as_f64() * c.scale * c.factor;
-                    if !v.is_finite() || v.abs() > crate::input::MAX_ABS_VALUE {
+                    if !v.is_finite() || v.abs() > crate::ranges::MAX_ABS_VALUE {
                         *invalid += 1;
                         out.push_missing(ch);
                     } else {

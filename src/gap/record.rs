@@ -67,9 +67,8 @@ pub struct SegmentRecord {
 
 /// The `diagnosis` JSON line.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename = "diagnosis")]
 pub struct DiagnosisRecord {
-    #[serde(rename = "type")]
-    pub kind: String,
     pub channel: String,
     pub gap_before: f64,
     pub gap_after: f64,
@@ -173,7 +172,6 @@ impl DiagnosisRecord {
     /// The record of a diagnosis; `holdout` from [`super::holdout::holdout_gap`].
     pub fn new(channel: &str, d: &Diagnosis, holdout: Option<&HoldoutGap>, is_final: bool) -> Self {
         Self {
-            kind: "diagnosis".into(),
             channel: channel.into(),
             gap_before: d.gap_before,
             gap_after: d.gap_after,

@@ -89,38 +89,6 @@ impl RunCoefs {
             values: determined_values(fit),
         }
     }
-
-    /// From a `fit` record as docs/records.md writes it (`channel`, `unit`, `coef.{Q..R}.value` and
-    /// `.determined`). `None` when the object is not a well-formed `fit` record.
-    pub fn from_fit_record(rec: &serde_json::Value) -> Option<RunCoefs> {
-        if rec.get("type")?.as_str()? != "fit" {
-            return None;
-        }
-        let channel = rec.get("channel")?.as_str()?.to_string();
-        let unit = rec
-            .get("unit")
-            .and_then(|u| u.as_str())
-            .unwrap_or("u")
-            .to_string();
-        let coef = rec.get("coef")?;
-        let mut values = [None; 5];
-        for (i, name) in crate::model::terms::TERM_NAMES.iter().enumerate() {
-            let c = coef.get(*name)?;
-            let determined = c
-                .get("determined")
-                .and_then(|d| d.as_bool())
-                .unwrap_or(true);
-            values[i] = c
-                .get("value")
-                .and_then(|v| v.as_f64())
-                .filter(|v| determined && v.is_finite());
-        }
-        Some(RunCoefs {
-            channel,
-            unit,
-            values,
-        })
-    }
 }
 
 /// Run-to-run statistics of one coefficient of one channel (docs/records.md's `aggregate` record).

@@ -23,9 +23,6 @@
 use serde::{Deserialize, Serialize};
 
 use crate::allan::CurvePoint;
-use crate::model::units::{
-    datasheet_factors, datasheet_units, native_units, DatasheetValue, IncrementUnit,
-};
 
 /// `sqrt(2 ln 2 / pi)` = 0.6643: the flat Allan deviation of flicker rate noise per unit B.
 pub fn flicker_floor_factor() -> f64 {
@@ -138,68 +135,6 @@ pub fn readouts(points: &[CurvePoint]) -> Readouts {
         arw,
         bias_instability,
         rrw,
-    }
-}
-
-/// One read-out as the `fit` record's `readouts` prints it: native value and interval with the
-/// native unit, where it was read, and the same in datasheet units when the channel's unit is
-/// known (model::units).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ReadoutRecord {
-    pub value: f64,
-    pub lo: f64,
-    pub hi: f64,
-    pub unit: String,
-    pub tau: f64,
-    pub sigma: f64,
-    pub slope: f64,
-    #[serde(skip_serializing_if = "Option::is_none", default)]
-    pub datasheet: Option<DatasheetValue>,
-}
-
-/// The `readouts` object of the `fit` record: `arw`, `bias_instability`, `rrw`, each a
-/// [`ReadoutRecord`] or absent.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
-pub struct ReadoutsRecord {
-    #[serde(skip_serializing_if = "Option::is_none", default)]
-    pub arw: Option<ReadoutRecord>,
-    #[serde(skip_serializing_if = "Option::is_none", default)]
-    pub bias_instability: Option<ReadoutRecord>,
-    #[serde(skip_serializing_if = "Option::is_none", default)]
-    pub rrw: Option<ReadoutRecord>,
-}
-
-impl Readouts {
-    /// The record of these read-outs for a channel in `unit`.
-    pub fn record(&self, unit: &str) -> ReadoutsRecord {
-        let inc = IncrementUnit::parse(unit);
-        let native = native_units(unit);
-        // ARW is the N coefficient, bias instability B, RRW K (indices 1, 2, 3).
-        let one = |r: &Option<Readout>, i: usize| {
-            r.map(|r| ReadoutRecord {
-                value: r.value,
-                lo: r.lo,
-                hi: r.hi,
-                unit: native[i].clone(),
-                tau: r.tau,
-                sigma: r.sigma,
-                slope: r.slope,
-                datasheet: inc.map(|u| {
-                    let f = datasheet_factors(&u)[i];
-                    DatasheetValue {
-                        value: Some(r.value * f),
-                        lo: r.lo * f,
-                        hi: r.hi * f,
-                        unit: datasheet_units(u.kind)[i].to_string(),
-                    }
-                }),
-            })
-        };
-        ReadoutsRecord {
-            arw: one(&self.arw, 1),
-            bias_instability: one(&self.bias_instability, 2),
-            rrw: one(&self.rrw, 3),
-        }
     }
 }
 

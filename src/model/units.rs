@@ -165,55 +165,6 @@ pub fn datasheet_factors(unit: &IncrementUnit) -> [f64; 5] {
     }
 }
 
-/// One coefficient in datasheet units.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct DatasheetValue {
-    /// `null` where the coefficient is not determined (as in `coef`).
-    pub value: Option<f64>,
-    /// 95% interval.
-    pub lo: f64,
-    pub hi: f64,
-    pub unit: String,
-}
-
-/// The `datasheet` object of the `fit` record: Q..R, each [`DatasheetValue`].
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[allow(non_snake_case)]
-pub struct DatasheetRecord {
-    pub Q: DatasheetValue,
-    pub N: DatasheetValue,
-    pub B: DatasheetValue,
-    pub K: DatasheetValue,
-    pub R: DatasheetValue,
-}
-
-impl DatasheetRecord {
-    /// The coefficients `(value or None, lo, hi)` in their native units, Q..R, converted for a
-    /// channel in `unit`.
-    pub fn new(native: [(Option<f64>, f64, f64); 5], unit: &IncrementUnit) -> DatasheetRecord {
-        let f = datasheet_factors(unit);
-        let names = datasheet_units(unit.kind);
-        let v = |i: usize| DatasheetValue {
-            value: native[i].0.map(|x| x * f[i]),
-            lo: native[i].1 * f[i],
-            hi: native[i].2 * f[i],
-            unit: names[i].to_string(),
-        };
-        DatasheetRecord {
-            Q: v(0),
-            N: v(1),
-            B: v(2),
-            K: v(3),
-            R: v(4),
-        }
-    }
-
-    /// Q..R in order.
-    pub fn by_index(&self, i: usize) -> &DatasheetValue {
-        [&self.Q, &self.N, &self.B, &self.K, &self.R][i]
-    }
-}
-
 /// Q, N, B, K, R in datasheet units, with their unit labels.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Datasheet {

@@ -1,14 +1,14 @@
 //! The threads of checkpointing: the [`Schedule`] the reading stage keeps (when the next
 //! checkpoint is due) and the [`Collector`] thread that assembles the pieces of a consistent cut
 //! (the reader's position, each analysis thread's snapshot) and writes the file through
-//! [`crate::checkpoint`], which owns the format.
+//! [`super::checkpoint`], which owns the format.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
+use super::checkpoint::{unix_now_s, Checkpoint, CheckpointPlan, Position};
 use crate::analysis::AnalysisState;
-use crate::checkpoint::{unix_now_s, Checkpoint, CheckpointPlan, Position};
 
 /// One piece of a checkpoint on its way to the collector.
 pub enum Piece {

@@ -61,7 +61,7 @@ pub struct OutageStats {
     pub duplicates: u64,
 }
 
-/// What a [`DecodeStage`] holds, for a checkpoint (`crate::checkpoint`).
+/// What a [`DecodeStage`] holds, for a checkpoint (`super::checkpoint`).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DecodeStageState {
     pub decoder: DecoderState,

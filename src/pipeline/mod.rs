@@ -25,6 +25,7 @@
 //! Text columns (`--format csv`) enter the same analysis and writer stages from a reader
 //! thread instead of the source task and decode thread.
 
+pub mod checkpoint;
 pub mod checkpointing;
 pub mod decode;
 pub mod reorder;
@@ -41,7 +42,6 @@ use anyhow::{Context, Result};
 use tokio_util::sync::CancellationToken;
 
 use crate::analysis::RunAnalysis;
-use crate::checkpoint::{Checkpoint, CheckpointPlan, Position};
 use crate::error::UsageError;
 use crate::frame::{FrameBlock, FrameDescriptor, Health};
 use crate::input::text::{TextReader, BATCH_ROWS};
@@ -49,6 +49,7 @@ use crate::input::Chunk;
 use crate::sink::metrics::MetricsTap;
 use crate::sink::records::{HealthRecord, Record};
 use crate::source::{Capture, CaptureSlot, Progress, SourceContext, SourceEvent, SourceSpec};
+use checkpoint::{Checkpoint, CheckpointPlan, Position};
 use checkpointing::{Collector, Piece, Schedule};
 use decode::DecodeStage;
 pub use writer::{Delivery, RecordQueue, RecordWriter, WriterStats, RECORD_QUEUE};
@@ -652,7 +653,7 @@ fn final_checkpoint(
         every_s: plan.every_s,
         sequence: plan.resume.as_ref().map_or(0, |r| r.1).max(written) + 1,
         complete,
-        saved_unix_s: crate::checkpoint::unix_now_s(),
+        saved_unix_s: checkpoint::unix_now_s(),
         position,
         analysis: analysis.snapshot(),
     };
@@ -736,56 +737,28 @@ fn finish_records(
     queue.push_final(Record::Summary(summary));
 }
 
-/// The `health` record of a decode stage at the end of a run: [`health_record`], the UDP
-/// reorder window's and the live outages' counters, and the capture's bytes and error.
+/// The `health` record of a decode stage at the end of a run: the decoder's counts
+/// ([`HealthRecord::new`]), the UDP reorder window's and the live outages' counters, and the
+/// capture's bytes and error.
 fn stage_health_record(
     stage: &DecodeStage,
     run: Option<usize>,
     flags: SourceFlags,
     capture: Option<&crate::source::CaptureStatus>,
 ) -> HealthRecord {
-    let mut record = health_record(&stage.health(), run);
-    let extra = &mut record.extra;
+    let mut record = HealthRecord::new(&stage.health(), run);
     if let Some(r) = stage.reorder_stats().filter(|_| flags.udp) {
-        extra.insert("udp_reordered".into(), r.reordered.into());
-        extra.insert("udp_duplicates".into(), r.duplicates.into());
-        extra.insert("udp_late".into(), r.late.into());
+        record.udp_reordered = Some(r.reordered);
+        record.udp_duplicates = Some(r.duplicates);
+        record.udp_late = Some(r.late);
     }
     if flags.live {
-        extra.insert("outages".into(), stage.outage.outages.into());
-        extra.insert("outage_missing".into(), stage.outage.missing.into());
+        record.outages = Some(stage.outage.outages);
+        record.outage_missing = Some(stage.outage.missing);
     }
     if let Some(c) = capture {
-        extra.insert("capture_bytes".into(), c.bytes().into());
-        if let Some(e) = c.error() {
-            extra.insert("capture_error".into(), e.into());
-        }
+        record.capture_bytes = Some(c.bytes());
+        record.capture_error = c.error();
     }
     record
-}
-
-/// The `health` record: the docs/records.md fields, then the decoder's extra detail.
-pub fn health_record(h: &Health, run: Option<usize>) -> HealthRecord {
-    let mut rec = HealthRecord {
-        kind: "health".into(),
-        frames: h.frames,
-        crc_errors: h.crc_errors,
-        resyncs: h.resyncs,
-        missing: h.missing,
-        duplicates: h.duplicates,
-        bytes_skipped: h.bytes_skipped,
-        extra: serde_json::Map::new(),
-        run,
-    };
-    if let Ok(serde_json::Value::Object(all)) = serde_json::to_value(h) {
-        for (k, v) in all {
-            if !matches!(
-                k.as_str(),
-                "frames" | "crc_errors" | "resyncs" | "missing" | "duplicates" | "bytes_skipped"
-            ) {
-                rec.extra.insert(k, v);
-            }
-        }
-    }
-    rec
 }

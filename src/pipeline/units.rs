@@ -35,10 +35,10 @@ use anyhow::{Context, Result};
 use tokio::sync::mpsc;
 use tokio_util::sync::CancellationToken;
 
+use super::checkpoint::{Checkpoint, CheckpointPlan, Position};
 use super::decode::DecodeStage;
 use super::{stage_health_record, RecordQueue, SourceFlags};
 use crate::analysis::RunAnalysis;
-use crate::checkpoint::{Checkpoint, CheckpointPlan, Position};
 use crate::frame::{FrameBlock, FrameDescriptor};
 use crate::input::Chunk;
 use crate::sink::metrics::MetricsTap;
@@ -250,7 +250,7 @@ impl UnitState {
             every_s: plan.every_s,
             sequence: self.sequence,
             complete: end.unwrap_or(false),
-            saved_unix_s: crate::checkpoint::unix_now_s(),
+            saved_unix_s: super::checkpoint::unix_now_s(),
             position: Position::Frames {
                 offset: self.offset,
                 stage: Box::new(stage),
@@ -268,9 +268,8 @@ impl UnitState {
 
     fn outage(&self, event: &str, silent: Duration, error: Option<String>) -> Record {
         Record::Outage(OutageRecord {
-            kind: "outage".into(),
             event: event.into(),
-            at_unix_s: crate::checkpoint::unix_now_s(),
+            at_unix_s: super::checkpoint::unix_now_s(),
             t_data: self.run.analysis.t_data_s(),
             silent_s: silent.as_secs_f64(),
             error,
@@ -558,10 +557,10 @@ fn finish_unit(mut s: UnitState, queue: &RecordQueue, ctl: &UnitsControl) -> Uni
     let capture = s.run.capture.is_some().then_some(&*s.run.progress.capture);
     let mut health = stage_health_record(&s.stage, None, s.flags, capture);
     if s.flags.live {
-        health.extra.insert("quiet_outages".into(), s.quiet.into());
+        health.quiet_outages = Some(s.quiet);
     }
     if let Some(e) = &s.failed {
-        health.extra.insert("source_error".into(), e.clone().into());
+        health.source_error = Some(e.clone());
     }
     if let Some(m) = &s.run.metrics {
         m.health(&s.stage.health());

@@ -1,6 +1,6 @@
 //! A unit's checkpointing, checked before the run starts: the header of the options its state
 //! depends on, where the checkpoint lives (beside the output), and, when resuming, the saved
-//! checkpoint checked against the header. The file format itself is [`crate::checkpoint`]; the
+//! checkpoint checked against the header. The file format itself is [`crate::pipeline::checkpoint`]; the
 //! threads that write it are [`crate::pipeline::checkpointing`].
 
 use std::path::Path;
@@ -8,10 +8,10 @@ use std::path::Path;
 use anyhow::Result;
 
 use crate::analysis::{AnalysisOptions, ChannelSetup, InputKind};
-use crate::checkpoint::{
+use crate::error::UsageError;
+use crate::pipeline::checkpoint::{
     check_fresh_start, check_resume, fingerprint, path_for, Checkpoint, CheckpointPlan, Header,
 };
-use crate::error::UsageError;
 
 /// What was asked of a unit's checkpoints (`--checkpoint-every`, `--resume`, the hidden
 /// `--abort-after-frames`, or `[run] checkpoint_every` and `run --resume`).

@@ -177,7 +177,7 @@ pub fn start_analysis(
     input: &str,
     setups: Vec<ChannelSetup>,
     opts: AnalysisOptions,
-    resume: Option<&crate::checkpoint::Checkpoint>,
+    resume: Option<&crate::pipeline::checkpoint::Checkpoint>,
     path: Option<&Path>,
 ) -> Result<RunAnalysis> {
     // A limit that no channel matches would never be judged: a misspelt name, refused here,

@@ -78,8 +78,8 @@ pub struct KindNoise {
 /// The coefficient `i` (0..5 = Q..R) of a fit, in SI, estimate or upper bound.
 fn take(fit: &FitRecord, name: &str, si_per_unit: f64) -> Option<Taken> {
     let c = fit.coef.get(name)?;
-    let hi = c.get("hi").and_then(|v| v.as_f64());
-    match c.get("value").and_then(|v| v.as_f64()) {
+    let hi = c.hi;
+    match c.value {
         Some(v) => Some(Taken {
             si: v * si_per_unit,
             bound: false,

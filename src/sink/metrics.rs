@@ -266,15 +266,11 @@ impl Metrics {
     }
 
     fn note_fit(&self, f: &FitRecord) {
-        let ds = f.datasheet.as_ref().and_then(|d| d.get("N"));
-        let determined = f.coef["N"]["determined"].as_bool() == Some(true);
+        let ds = f.datasheet.as_ref().map(|d| &d.N);
+        let determined = f.coef.N.determined;
         let value = match ds {
-            Some(d) => d["value"]
-                .as_f64()
-                .zip(d["unit"].as_str().map(String::from)),
-            None => f.coef["N"]["value"]
-                .as_f64()
-                .map(|v| (v, format!("{}/sqrt(s)", f.unit))),
+            Some(d) => d.value.map(|v| (v, d.unit.clone())),
+            None => f.coef.N.value.map(|v| (v, format!("{}/sqrt(s)", f.unit))),
         }
         .filter(|_| determined);
         let mut l = lock(&self.latest);
@@ -296,11 +292,10 @@ impl Metrics {
     /// datasheet values and the per-run `limits` judged on its intervals, stamped `now_s`.
     pub fn observe_fit(&self, unit: &str, limits: &[LimitSpec], f: &FitRecord, now_s: f64) {
         let ch = f.channel.as_str();
-        for name in TERM_NAMES {
+        for (i, name) in TERM_NAMES.into_iter().enumerate() {
             let l = labels(&[("unit", unit), ("channel", ch), ("coef", name)]);
-            let c = &f.coef[name];
-            let num = |k: &str| c.get(k).and_then(serde_json::Value::as_f64);
-            match num("value") {
+            let c = f.coef.by_index(i);
+            match c.value {
                 Some(v) => {
                     self.coef.get_or_create(&l).set(v);
                 }
@@ -308,34 +303,31 @@ impl Metrics {
                     self.coef.remove(&l);
                 }
             }
-            if let Some(v) = num("lo") {
+            if let Some(v) = c.lo {
                 self.coef_lo.get_or_create(&l).set(v);
             }
-            if let Some(v) = num("hi") {
+            if let Some(v) = c.hi {
                 self.coef_hi.get_or_create(&l).set(v);
             }
-            let det = c.get("determined").and_then(serde_json::Value::as_bool) == Some(true);
+            let det = c.determined;
             self.coef_determined
                 .get_or_create(&l)
                 .set(if det { 1.0 } else { 0.0 });
-            if let Some(d) = f.datasheet.as_ref().and_then(|d| d.get(name)) {
-                let du = d
-                    .get("unit")
-                    .and_then(serde_json::Value::as_str)
-                    .unwrap_or("");
+            if let Some(d) = f.datasheet.as_ref().map(|d| d.by_index(i)) {
+                let du = d.unit.as_str();
                 let dl = labels(&[
                     ("unit", unit),
                     ("channel", ch),
                     ("coef", name),
                     ("datasheet_unit", du),
                 ]);
-                if let Some(v) = d.get("lo").and_then(serde_json::Value::as_f64) {
+                if let Some(v) = d.lo {
                     self.coef_datasheet_lo.get_or_create(&dl).set(v);
                 }
-                if let Some(v) = d.get("hi").and_then(serde_json::Value::as_f64) {
+                if let Some(v) = d.hi {
                     self.coef_datasheet_hi.get_or_create(&dl).set(v);
                 }
-                match d.get("value").and_then(serde_json::Value::as_f64) {
+                match d.value {
                     Some(v) => {
                         self.coef_datasheet.get_or_create(&dl).set(v);
                     }
@@ -361,11 +353,8 @@ impl Metrics {
                 continue;
             }
             let coef = TERM_NAMES[spec.coef.index()];
-            let c = &f.coef[coef];
-            let ends = (
-                c.get("lo").and_then(serde_json::Value::as_f64),
-                c.get("hi").and_then(serde_json::Value::as_f64),
-            );
+            let c = f.coef.by_index(spec.coef.index());
+            let ends = (c.lo, c.hi);
             for (bound, limit) in spec.bounds() {
                 // The same decision as the summary's (model::limits::judge), on this fit.
                 let v = match (conversion(&f.unit, spec.coef, spec.unit.as_deref()), ends) {
@@ -453,16 +442,15 @@ mod tests {
             "R": {"value": null, "unit": "deg/h^2"},
         });
         FitRecord {
-            kind: "fit".into(),
             channel: "g4".into(),
             unit: "arcsec".into(),
             r#final: true,
             t_data: 300.0,
-            coef,
+            coef: serde_json::from_value(coef).unwrap(),
             gof: Some(1.5),
             method: "model".into(),
             model_c: vec![],
-            datasheet: Some(datasheet),
+            datasheet: Some(serde_json::from_value(datasheet).unwrap()),
             readouts: None,
             q_over_lsb: None,
             run: None,

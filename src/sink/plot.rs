@@ -112,7 +112,7 @@ fn fit_coefs(f: &FitRecord) -> [f64; 5] {
     if f.model_c.len() == 5 {
         std::array::from_fn(|i| f.model_c[i].max(0.0).sqrt())
     } else {
-        TERM_NAMES.map(|k| f.coef[k]["value"].as_f64().unwrap_or(0.0))
+        std::array::from_fn(|i| f.coef.by_index(i).value.unwrap_or(0.0))
     }
 }
 
@@ -132,20 +132,20 @@ pub fn determined_terms(f: &FitRecord) -> Vec<TermValue> {
         .iter()
         .enumerate()
         .filter_map(|(i, k)| {
-            let c = &f.coef[*k];
-            let v = c["value"].as_f64()?;
-            if c["determined"].as_bool() == Some(false) {
+            let c = f.coef.get(k)?;
+            let v = c.value?;
+            if !c.determined {
                 return None;
             }
             let ds = f.datasheet.as_ref().and_then(|d| {
-                let e = d.get(*k)?;
-                Some((e["value"].as_f64()?, e["unit"].as_str()?.to_string()))
+                let e = d.get(k)?;
+                Some((e.value?, e.unit.clone()))
             });
             Some(TermValue {
                 index: i,
                 value: v,
-                lo: c["lo"].as_f64(),
-                hi: c["hi"].as_f64(),
+                lo: c.lo,
+                hi: c.hi,
                 datasheet: ds,
             })
         })

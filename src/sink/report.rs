@@ -14,17 +14,20 @@ use serde_json::Value;
 
 use crate::gap::DiagnosisRecord;
 use crate::model::aggregate::{aggregate_channels, RunCoefs};
-use crate::model::readout::ReadoutRecord;
 use crate::model::terms::TERM_NAMES;
 use crate::sink::dynamic::render_dynamic_svg;
 use crate::sink::plot::{
     coef_units, effect_name, escape as esc, ratio_text, render_svg, tick, Series,
 };
-use crate::sink::records::FitRecord;
+use crate::sink::records::{FitRecord, ReadoutRecord};
 use crate::sink::results::{Completion, Labelled, ResultFile, Results};
 
 fn num(v: &Value) -> String {
-    v.as_f64().map_or("&ndash;".into(), tick)
+    opt(v.as_f64())
+}
+
+fn opt(v: Option<f64>) -> String {
+    v.map_or("&ndash;".into(), tick)
 }
 
 /// A run: its file and its `run` index inside the file.
@@ -425,11 +428,7 @@ fn noise_model(h: &mut String, res: &Results) {
     if aggs.is_empty() {
         let mut runs: Vec<(RunKey, Vec<RunCoefs>)> = Vec::new();
         for f in &finals {
-            let Some(rc) =
-                RunCoefs::from_fit_record(&serde_json::to_value(&f.rec).unwrap_or_default())
-            else {
-                continue;
-            };
+            let rc = f.rec.run_coefs();
             match runs.iter_mut().find(|(k, _)| *k == (f.file, f.run)) {
                 Some((_, v)) => v.push(rc),
                 None => runs.push(((f.file, f.run), vec![rc])),
@@ -464,10 +463,8 @@ fn noise_model(h: &mut String, res: &Results) {
         };
         let units = coef_units(&unit);
         let value = |f: &FitRecord, i: usize| -> Option<f64> {
-            let c = &f.coef[TERM_NAMES[i]];
-            (c["determined"].as_bool() != Some(false))
-                .then(|| c["value"].as_f64())
-                .flatten()
+            let c = f.coef.by_index(i);
+            c.value.filter(|_| c.determined)
         };
         let scales: Vec<i32> = PAPER_ORDER
             .iter()
@@ -667,16 +664,11 @@ fn single_run_fits(h: &mut String, fits: &[&Labelled<FitRecord>]) {
     for f in fits {
         let units = coef_units(&f.rec.unit);
         for (i, k) in TERM_NAMES.iter().enumerate() {
-            let c = &f.rec.coef[*k];
-            let determined = c["determined"].as_bool() != Some(false) && c["value"].is_f64();
-            let ds = f.rec.datasheet.as_ref().and_then(|d| d.get(*k));
+            let c = f.rec.coef.by_index(i);
+            let determined = c.determined && c.value.is_some();
+            let ds = f.rec.datasheet.as_ref().map(|d| d.by_index(i));
             let (dv, dlo, dhi, du) = match ds {
-                Some(d) => (
-                    num(&d["value"]),
-                    num(&d["lo"]),
-                    num(&d["hi"]),
-                    esc(d["unit"].as_str().unwrap_or("")),
-                ),
+                Some(d) => (opt(d.value), opt(d.lo), opt(d.hi), esc(&d.unit)),
                 None => (
                     "&ndash;".into(),
                     "&ndash;".into(),
@@ -696,9 +688,9 @@ fn single_run_fits(h: &mut String, fits: &[&Labelled<FitRecord>]) {
             let _ = writeln!(
                 h,
                 "<tr>{first}<td class=\"l\">{k}</td><td>{}</td><td>[{}, {}]</td><td class=\"l\">{}</td><td>{dv}</td><td>{}</td><td class=\"l\">{du}</td></tr>",
-                if determined { num(&c["value"]) } else { "not determined".into() },
-                num(&c["lo"]),
-                num(&c["hi"]),
+                if determined { opt(c.value) } else { "not determined".into() },
+                opt(c.lo),
+                opt(c.hi),
                 esc(&units[i]),
                 if dlo.starts_with('&') && dhi.starts_with('&') {
                     "&ndash;".to_string()

@@ -16,12 +16,11 @@ use std::io::Write;
 use serde_json::Value;
 
 use crate::gap::DiagnosisRecord;
-use crate::model::readout::{ReadoutRecord, ReadoutsRecord};
 use crate::model::terms::TERM_NAMES;
 use crate::model::units::{
     datasheet_factors, datasheet_units, native_units, IncrementUnit, SensorKind,
 };
-use crate::sink::records::FitRecord;
+use crate::sink::records::{FitRecord, ReadoutRecord, ReadoutsRecord};
 use crate::sink::results::{Completion, Labelled, ResultFile, Results};
 
 /// How the text is dressed.
@@ -125,23 +124,20 @@ struct Shown {
 
 /// A fit's coefficient `i` in datasheet units when the record has them, else native.
 fn coef_shown(f: &FitRecord, i: usize) -> Shown {
-    let k = TERM_NAMES[i];
-    let c = &f.coef[k];
-    let determined = c["determined"].as_bool() != Some(false);
-    if let Some(d) = f.datasheet.as_ref().and_then(|d| d.get(k)) {
-        if let Some(unit) = d["unit"].as_str() {
-            return Shown {
-                value: d["value"].as_f64().filter(|_| determined),
-                lo: d["lo"].as_f64(),
-                hi: d["hi"].as_f64(),
-                unit: unit.to_string(),
-            };
-        }
+    let c = f.coef.by_index(i);
+    let determined = c.determined;
+    if let Some(d) = f.datasheet.as_ref().map(|d| d.by_index(i)) {
+        return Shown {
+            value: d.value.filter(|_| determined),
+            lo: d.lo,
+            hi: d.hi,
+            unit: d.unit.clone(),
+        };
     }
     Shown {
-        value: c["value"].as_f64().filter(|_| determined),
-        lo: c["lo"].as_f64(),
-        hi: c["hi"].as_f64(),
+        value: c.value.filter(|_| determined),
+        lo: c.lo,
+        hi: c.hi,
         unit: native_units(&f.unit)[i].clone(),
     }
 }
@@ -697,10 +693,8 @@ fn aggregates(h: &mut String, res: &Results, runs: &Results, style: &TableStyle)
             };
             let mut row = vec![f.label.clone()];
             for &i in &PAPER_ORDER {
-                let c = &f.rec.coef[TERM_NAMES[i]];
-                let v = c["value"]
-                    .as_f64()
-                    .filter(|_| c["determined"].as_bool() != Some(false));
+                let c = f.rec.coef.by_index(i);
+                let v = c.value.filter(|_| c.determined);
                 row.push(v.map_or("-".into(), |v| sig3(v * factors[i])));
             }
             rows.push(row);

@@ -130,7 +130,6 @@ mod tests {
     #[test]
     fn health_round_trip() {
         let h = HealthRecord {
-            kind: "health".into(),
             frames: 7,
             ..HealthRecord::default()
         };

@@ -137,14 +137,11 @@ fn curve_fit_and_summary_records_follow_the_contract() {
             _ => None,
         })
         .unwrap();
-    let n = &fit.coef["N"];
-    assert_eq!(n["determined"], true);
-    let v = n["value"].as_f64().unwrap();
+    let n = &fit.coef.N;
+    assert!(n.determined);
+    let v = n.value.unwrap();
     assert!((v - 0.5).abs() < 0.03, "N = {v}");
-    assert!(n["lo"].as_f64().unwrap() <= v && v <= n["hi"].as_f64().unwrap());
-    for k in ["Q", "N", "B", "K", "R"] {
-        assert!(fit.coef[k].get("determined").is_some(), "{k}");
-    }
+    assert!(n.lo.unwrap() <= v && v <= n.hi.unwrap());
     let Some(Record::Summary(s)) = recs.last() else {
         panic!("summary last")
     };
@@ -422,10 +419,11 @@ fn every_upper_bound_respects_what_the_curve_allows() {
             })
             .unwrap();
         for (i, name) in ["Q", "N", "B", "K", "R"].iter().enumerate() {
-            if f.coef[*name]["determined"] == true {
+            let c = f.coef.by_index(i);
+            if c.determined {
                 continue;
             }
-            let hi = f.coef[*name]["hi"].as_f64().unwrap();
+            let hi = c.hi.unwrap();
             let bound = curve
                 .tau
                 .iter()

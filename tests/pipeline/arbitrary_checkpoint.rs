@@ -8,9 +8,9 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use allanscope::analysis::{AnalysisOptions, InputKind, RunAnalysis};
-use allanscope::checkpoint::{Checkpoint, Position};
 use allanscope::frame::{Decoder, FrameDescriptor};
 use allanscope::input::Chunk;
+use allanscope::pipeline::checkpoint::{Checkpoint, Position};
 use proptest::prelude::*;
 
 const PREFIX_LEN: usize = 16 + 4 + 8 + 4;

@@ -16,7 +16,7 @@ use std::process::{Output, Stdio};
 use std::time::{Duration, Instant};
 
 use allanscope::allan::accum::{AccumConfig, ChannelAccumulator, LevelReading, Overlap};
-use allanscope::checkpoint::{path_for, Checkpoint};
+use allanscope::pipeline::checkpoint::{path_for, Checkpoint};
 
 const SIU8: &str = "fixtures/captures/siu8_stand_5min_seed1.siu8";
 const SIU8_FRAME: usize = 42;

@@ -6,9 +6,10 @@
 use allanscope::allan::Stat;
 use allanscope::gap::DiagnosisRecord;
 use allanscope::model::terms::avar;
+use allanscope::model::units::IncrementUnit;
 use allanscope::sink::dynamic::windows;
 use allanscope::sink::plot::{render_svg, Series};
-use allanscope::sink::records::{CurveRecord, FitRecord};
+use allanscope::sink::records::{CoefRecord, CoefValue, CurveRecord, DatasheetRecord, FitRecord};
 use serde_json::json;
 
 /// Pixel positions are written with one decimal: half a tenth of rounding, plus float noise.
@@ -19,7 +20,6 @@ pub fn model_curve(ch: &str, unit: &str, coef: [f64; 5], n_tau: usize) -> CurveR
     let tau: Vec<f64> = (0..n_tau).map(|k| 0.004 * 2f64.powi(k as i32)).collect();
     let sigma: Vec<f64> = tau.iter().map(|&t| avar(coef, t).sqrt()).collect();
     CurveRecord {
-        kind: "curve".into(),
         channel: ch.into(),
         unit: unit.into(),
         stat: Stat::Avar,
@@ -39,19 +39,30 @@ pub fn model_curve(ch: &str, unit: &str, coef: [f64; 5], n_tau: usize) -> CurveR
 
 /// The fit record of `coef` with N and B determined.
 pub fn fit_of(ch: &str, unit: &str, coef: [f64; 5]) -> FitRecord {
-    let term = |v: f64, det: bool| json!({"value": if det { json!(v) } else { json!(null) }, "lo": 0.98 * v, "hi": 1.02 * v, "determined": det});
+    let term = |v: f64, det: bool| CoefValue {
+        value: det.then_some(v),
+        lo: Some(0.98 * v),
+        hi: Some(1.02 * v),
+        determined: det,
+    };
+    let coef_rec = CoefRecord {
+        Q: term(coef[0], false),
+        N: term(coef[1], true),
+        B: term(coef[2], true),
+        K: term(coef[3], false),
+        R: term(coef[4], false),
+    };
+    let datasheet = IncrementUnit::parse(unit).map(|u| DatasheetRecord::new(&coef_rec, &u));
     FitRecord {
-        kind: "fit".into(),
         channel: ch.into(),
         unit: unit.into(),
         r#final: true,
         t_data: 3600.0,
-        coef: json!({"Q": term(coef[0], false), "N": term(coef[1], true), "B": term(coef[2], true),
-                     "K": term(coef[3], false), "R": term(coef[4], false)}),
+        coef: coef_rec,
         gof: Some(1.02),
         method: "model".into(),
         model_c: coef.iter().map(|c| c * c).collect(),
-        datasheet: Some(json!({"N": {"value": coef[1] / 60.0, "unit": "deg/sqrt(h)"}})),
+        datasheet,
         readouts: None,
         q_over_lsb: None,
         run: None,

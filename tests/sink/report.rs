@@ -4,6 +4,7 @@
 //! end, and the effects in words with their units.
 
 use allanscope::model::aggregate::{aggregate_channels, RunCoefs};
+use allanscope::sink::records::ReadoutsRecord;
 use allanscope::sink::report::render_html;
 use allanscope::sink::results::ResultFile;
 use serde_json::{json, Value};
@@ -342,7 +343,7 @@ fn the_ieee_952_readouts_are_shown_with_units_intervals_and_taus() {
         })
         .collect();
     let mut f = fit_of("g4", "arcsec", [0.0, 0.254, 0.225, 0.0, 0.0]);
-    f.readouts = Some(Box::new(readouts(&points).record("arcsec")));
+    f.readouts = Some(Box::new(ReadoutsRecord::new(&readouts(&points), "arcsec")));
     let files = vec![ResultFile {
         name: "vog4.jsonl".into(),
         records: vec![

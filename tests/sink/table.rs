@@ -6,35 +6,43 @@
 //! an accelerometer in m/s, N*60 is m/s/sqrt(h) and B/(9.80665e-6) is micro-g.
 
 use allanscope::model::readout::{Readout, Readouts};
-use allanscope::model::units::{DatasheetRecord, IncrementUnit};
-use allanscope::sink::records::FitRecord;
+use allanscope::model::units::IncrementUnit;
+use allanscope::sink::records::{
+    CoefRecord, CoefValue, DatasheetRecord, FitRecord, ReadoutsRecord,
+};
 use allanscope::sink::table::{sig3, TableStyle, TableWriter};
 use serde_json::json;
 use std::io::Write;
 
 /// A fit record of `channel` in `unit` with native coefficients `(value, lo, hi)`, Q..R.
 fn fit(channel: &str, unit: &str, native: [(Option<f64>, f64, f64); 5]) -> FitRecord {
-    let names = ["Q", "N", "B", "K", "R"];
-    let mut coef = serde_json::Map::new();
-    for (i, n) in names.iter().enumerate() {
-        let (v, lo, hi) = native[i];
-        coef.insert(
-            (*n).into(),
-            json!({"value": v, "lo": lo, "hi": hi, "determined": v.is_some()}),
-        );
-    }
+    let v = |i: usize| {
+        let (value, lo, hi) = native[i];
+        CoefValue {
+            value,
+            lo: Some(lo),
+            hi: Some(hi),
+            determined: value.is_some(),
+        }
+    };
+    let coef = CoefRecord {
+        Q: v(0),
+        N: v(1),
+        B: v(2),
+        K: v(3),
+        R: v(4),
+    };
     let inc = IncrementUnit::parse(unit).unwrap();
     FitRecord {
-        kind: "fit".into(),
         channel: channel.into(),
         unit: unit.into(),
         r#final: true,
         t_data: 3600.0,
-        coef: coef.into(),
+        coef,
         gof: Some(1.04),
         method: "model".into(),
         model_c: vec![],
-        datasheet: Some(serde_json::to_value(DatasheetRecord::new(native, &inc)).unwrap()),
+        datasheet: Some(DatasheetRecord::new(&coef, &inc)),
         readouts: None,
         q_over_lsb: None,
         run: None,
@@ -73,7 +81,7 @@ fn gyro() -> FitRecord {
         }),
         rrw: None,
     };
-    f.readouts = Some(Box::new(r.record("arcsec")));
+    f.readouts = Some(Box::new(ReadoutsRecord::new(&r, "arcsec")));
     f
 }
 
@@ -113,7 +121,7 @@ fn lines() -> Vec<String> {
         {
             let mut f = gyro();
             f.r#final = false;
-            f.coef["N"]["value"] = json!(9.0);
+            f.coef.N.value = Some(9.0);
             serde_json::to_string(&f).unwrap()
         },
         serde_json::to_string(&gyro()).unwrap(),
@@ -284,10 +292,10 @@ fn the_metrics_tap_keeps_the_newest_n_and_lost_frames_for_the_status_line() {
     use allanscope::sink::records::Record;
     let m = std::sync::Arc::new(Metrics::new());
     let tap = m.tap("dut", &[]);
-    tap.observe(&Record::Fit(gyro()));
+    tap.observe(&Record::from(gyro()));
     // Not determined in a later fit: no longer shown.
     let mut acc = accel();
-    tap.observe(&Record::Fit(acc.clone()));
+    tap.observe(&Record::from(acc.clone()));
     let latest = m.latest();
     // N = 0.25 arcsec/sqrt(s) = 0.25/60 deg/sqrt(h); 0.01 m/s/sqrt(s) = 0.6 m/s/sqrt(h).
     assert_eq!(latest.n.len(), 2);
@@ -295,8 +303,8 @@ fn the_metrics_tap_keeps_the_newest_n_and_lost_frames_for_the_status_line() {
     assert!((latest.n[0].1 - 0.25 / 60.0).abs() < 1e-15);
     assert_eq!(latest.n[0].2, "deg/sqrt(h)");
     assert!((latest.n[1].1 - 0.6).abs() < 1e-12);
-    acc.coef["N"]["determined"] = json!(false);
-    tap.observe(&Record::Fit(acc));
+    acc.coef.N.determined = false;
+    tap.observe(&Record::from(acc));
     assert_eq!(m.latest().n.len(), 1);
     let h = allanscope::frame::Health {
         missing: 3,

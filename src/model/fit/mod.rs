@@ -27,9 +27,6 @@
 
 mod estimators;
 mod intervals;
-mod record;
-
-pub use record::*;
 
 use crate::allan::CurvePoint;
 use crate::model::avar_cov::{cov_points, strides, AvarCovariance, CovPoint};

@@ -24,7 +24,7 @@
 //! bounded however small S is.
 //!
 //! This module is the file and what it holds; the threads that take the cut (the schedule and
-//! the collector) are the pipeline's, in `pipeline::checkpointing`.
+//! the collector) are in [`super::checkpointing`].
 //!
 //! # File format
 //!
@@ -41,10 +41,10 @@ use std::time::{SystemTime, UNIX_EPOCH};
 
 use serde::{Deserialize, Serialize};
 
+use super::decode::DecodeStageState;
 use crate::analysis::AnalysisState;
 use crate::error::UsageError;
 use crate::input::text::TextPosition;
-use crate::pipeline::decode::DecodeStageState;
 
 /// Version of the checkpoint format; a file of another version is refused.
 pub const FORMAT_VERSION: u32 = 1;
