@@ -344,17 +344,46 @@ pub struct CoefValue {
     pub value: Option<f64>,
 }
 
-/// The `coef` object of the `fit` record: keys Q, N, B, K, R ([`CoefRecord::by_index`] in that
-/// order).
+/// Five values keyed by the term names, as the `fit` record's `coef` and `datasheet` objects hold
+/// them ([`Terms::by_index`] in the order Q, N, B, K, R of `crate::model::terms::TERM_NAMES`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[allow(non_snake_case)]
-pub struct CoefRecord {
-    pub B: CoefValue,
-    pub K: CoefValue,
-    pub N: CoefValue,
-    pub Q: CoefValue,
-    pub R: CoefValue,
+pub struct Terms<T> {
+    pub B: T,
+    pub K: T,
+    pub N: T,
+    pub Q: T,
+    pub R: T,
 }
+
+impl<T> Terms<T> {
+    /// The five values from `v(i)`, `i` the index in Q, N, B, K, R order.
+    pub fn from_fn(v: impl Fn(usize) -> T) -> Terms<T> {
+        Terms {
+            Q: v(0),
+            N: v(1),
+            B: v(2),
+            K: v(3),
+            R: v(4),
+        }
+    }
+
+    /// Q..R in order (`crate::model::terms::TERM_NAMES`).
+    pub fn by_index(&self, i: usize) -> &T {
+        [&self.Q, &self.N, &self.B, &self.K, &self.R][i]
+    }
+
+    /// The value of the term named `Q`, `N`, `B`, `K` or `R`.
+    pub fn get(&self, name: &str) -> Option<&T> {
+        TERM_NAMES
+            .iter()
+            .position(|k| *k == name)
+            .map(|i| self.by_index(i))
+    }
+}
+
+/// The `coef` object of the `fit` record: keys Q, N, B, K, R, each a [`CoefValue`].
+pub type CoefRecord = Terms<CoefValue>;
 
 impl CoefRecord {
     /// The fit's five coefficients.
@@ -368,26 +397,7 @@ impl CoefRecord {
                 determined: e.determined,
             }
         };
-        CoefRecord {
-            Q: v(0),
-            N: v(1),
-            B: v(2),
-            K: v(3),
-            R: v(4),
-        }
-    }
-
-    /// Q..R in order (`crate::model::terms::TERM_NAMES`).
-    pub fn by_index(&self, i: usize) -> &CoefValue {
-        [&self.Q, &self.N, &self.B, &self.K, &self.R][i]
-    }
-
-    /// The coefficient named `Q`, `N`, `B`, `K` or `R`.
-    pub fn get(&self, name: &str) -> Option<&CoefValue> {
-        TERM_NAMES
-            .iter()
-            .position(|k| *k == name)
-            .map(|i| self.by_index(i))
+        Terms::from_fn(v)
     }
 }
 
@@ -402,16 +412,8 @@ pub struct DatasheetValue {
     pub value: Option<f64>,
 }
 
-/// The `datasheet` object of the `fit` record: Q..R, each [`DatasheetValue`].
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[allow(non_snake_case)]
-pub struct DatasheetRecord {
-    pub B: DatasheetValue,
-    pub K: DatasheetValue,
-    pub N: DatasheetValue,
-    pub Q: DatasheetValue,
-    pub R: DatasheetValue,
-}
+/// The `datasheet` object of the `fit` record: Q..R, each a [`DatasheetValue`].
+pub type DatasheetRecord = Terms<DatasheetValue>;
 
 impl DatasheetRecord {
     /// The `coef` of a channel in `unit`, converted (`crate::model::units::datasheet_factors`).
@@ -427,26 +429,7 @@ impl DatasheetRecord {
                 unit: names[i].to_string(),
             }
         };
-        DatasheetRecord {
-            Q: v(0),
-            N: v(1),
-            B: v(2),
-            K: v(3),
-            R: v(4),
-        }
-    }
-
-    /// Q..R in order.
-    pub fn by_index(&self, i: usize) -> &DatasheetValue {
-        [&self.Q, &self.N, &self.B, &self.K, &self.R][i]
-    }
-
-    /// The coefficient named `Q`, `N`, `B`, `K` or `R`.
-    pub fn get(&self, name: &str) -> Option<&DatasheetValue> {
-        TERM_NAMES
-            .iter()
-            .position(|k| *k == name)
-            .map(|i| self.by_index(i))
+        Terms::from_fn(v)
     }
 }
 
