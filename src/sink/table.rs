@@ -181,10 +181,10 @@ fn readout_cell(r: Option<&ReadoutRecord>, which: usize) -> String {
     format!("{} {} {at}", sig3(v), interval(Some(lo), Some(hi)))
 }
 
-/// Columns padded to their widest cell (the last column is not padded).
-fn aligned(rows: &[Vec<String>], indent: &str) -> String {
+/// The widest cell of each column, in characters.
+fn column_widths(rows: &[Vec<String>]) -> Vec<usize> {
     let n = rows.iter().map(Vec::len).max().unwrap_or(0);
-    let widths: Vec<usize> = (0..n)
+    (0..n)
         .map(|j| {
             rows.iter()
                 .filter_map(|r| r.get(j))
@@ -192,7 +192,12 @@ fn aligned(rows: &[Vec<String>], indent: &str) -> String {
                 .max()
                 .unwrap_or(0)
         })
-        .collect();
+        .collect()
+}
+
+/// Columns padded to their widest cell (the last column is not padded).
+fn aligned(rows: &[Vec<String>], indent: &str) -> String {
+    let widths = column_widths(rows);
     let mut out = String::new();
     for r in rows {
         let mut line = indent.to_string();
@@ -739,16 +744,7 @@ fn aggregates(h: &mut String, res: &Results, runs: &Results, style: &TableStyle)
 /// Columns padded to their widest cell, the first left-aligned and the others right-aligned
 /// (numbers line up on their last digit).
 fn aligned_right(rows: &[Vec<String>], indent: &str) -> String {
-    let n = rows.iter().map(Vec::len).max().unwrap_or(0);
-    let widths: Vec<usize> = (0..n)
-        .map(|j| {
-            rows.iter()
-                .filter_map(|r| r.get(j))
-                .map(|c| c.chars().count())
-                .max()
-                .unwrap_or(0)
-        })
-        .collect();
+    let widths = column_widths(rows);
     let mut out = String::new();
     for r in rows {
         let mut line = indent.to_string();
