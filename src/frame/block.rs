@@ -84,20 +84,26 @@ pub trait FrameSink {
     fn push_frame(&mut self, frame: BlockEvent, values: &[Option<ChannelValue>]);
     /// Every event of `block`, in order; `block` is left empty.
     fn take_all(&mut self, block: &mut FrameBlock) {
-        let mut values = Vec::with_capacity(block.width());
-        let mut frame = 0;
-        for e in &block.events {
-            match *e {
-                BlockEvent::Gap { missing } => self.push_gap(missing),
-                ev => {
-                    block.frame_values(frame, &mut values);
-                    self.push_frame(ev, &values);
-                    frame += 1;
-                }
+        push_each_event(self, block);
+    }
+}
+
+/// Every event of `block` handed to `sink` one at a time, in order; `block` is left empty
+/// ([`FrameSink::take_all`]'s default, and a block's fallback when the value kinds differ).
+fn push_each_event<S: FrameSink + ?Sized>(sink: &mut S, block: &mut FrameBlock) {
+    let mut values = Vec::with_capacity(block.width());
+    let mut frame = 0;
+    for e in &block.events {
+        match *e {
+            BlockEvent::Gap { missing } => sink.push_gap(missing),
+            ev => {
+                block.frame_values(frame, &mut values);
+                sink.push_frame(ev, &values);
+                frame += 1;
             }
         }
-        block.clear();
     }
+    block.clear();
 }
 
 impl FrameBlock {
@@ -367,19 +373,7 @@ impl FrameSink for FrameBlock {
             return;
         }
         if self.kinds != block.kinds {
-            let mut values = Vec::with_capacity(block.width());
-            let mut frame = 0;
-            for e in &block.events {
-                match *e {
-                    BlockEvent::Gap { missing } => self.push_gap(missing),
-                    ev => {
-                        block.frame_values(frame, &mut values);
-                        self.push_frame(ev, &values);
-                        frame += 1;
-                    }
-                }
-            }
-            block.clear();
+            push_each_event(self, block);
             return;
         }
         let (e0, f0) = (self.events.len(), self.frames);
