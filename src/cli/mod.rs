@@ -487,7 +487,9 @@ impl DataArgs {
             } else {
                 InputKind::Increments
             },
-            unit: self.unit.clone(),
+            // `--unit` names the increment's unit; with `--rate` the rate's own unit (`deg/s`)
+            // means the same (docs: README "--unit").
+            unit: allanscope::model::units::increment_unit_label(&self.unit, self.rate),
             taus,
             overlap,
             stats,

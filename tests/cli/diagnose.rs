@@ -111,6 +111,20 @@ fn a_clean_run_is_consistent() {
     assert!(d["gap_before"].as_f64().unwrap() < 1.7);
 }
 
+/// `--unit` names the increment's unit; with `--rate` the rate's unit (`arcsec/s`) means the
+/// same: the record says `arcsec` (the table's parameters are then in arcsec/s, not arcsec/s/s)
+/// and the diagnosis is the one `--unit arcsec` gives.
+#[test]
+fn a_rate_unit_with_rate_names_the_increment_unit() {
+    let run = simulate(&model(false), 3, "clean3_rate.csv");
+    let path = run.to_str().unwrap();
+    let per_s = diagnosis(&[path, "--rate", "--unit", "arcsec/s"]);
+    let plain = diagnosis(&[path, "--rate", "--unit", "arcsec"]);
+    assert_eq!(per_s["unit"], "arcsec", "{per_s}");
+    assert_eq!(per_s["gap_before"], plain["gap_before"]);
+    assert_eq!(per_s["unit"], plain["unit"]);
+}
+
 #[test]
 fn the_stream_carries_diagnosis_records_refreshed_with_the_fits() {
     let run = simulate(&model(true), 8, "gm8-stream.csv");
