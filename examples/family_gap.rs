@@ -64,7 +64,7 @@
 //! cargo run --release --example family_gap -- [--draws 20] [--seed 1] [--threads 2]
 //!     [--families navfog,tacfog,vog4,memsgyro,ma4,memsacc]
 //!     [--effects none,gauss_markov,sinusoid,output_filter,warmup,bias_jumps] [--hours 1,3]
-//!     [--csv FILE] [--resid FILE]
+//!     [--csv FILE] [--resid FILE] [--no-oracle]
 //! ```
 //!
 //! `--draws` is per family and effect. Jump draws (and clean draws, for the level) also get the
@@ -75,7 +75,11 @@
 //! detection (the true effect named anywhere) against the oracle at 5% and at the family's
 //! measured false-alarm share, the parameter errors, and the count of runs whose final gap is
 //! above the base gap (the bookkeeping rule says none). Shares carry 95% Wilson intervals.
-//! `--csv` writes one row per draw.
+//! `--csv` writes one row per draw, with the statistics each test of the diagnosis decides on
+//! (the base `G`, each stationary candidate's first-scan score `lr_*` and the gap with it in
+//! `galt_*`, the warm-up's `B` and its block-mean scale, the step z scores), so that the null
+//! distribution of each test can be read off clean runs. `--no-oracle` leaves out the clean
+//! draws' oracle statistics and jump ceiling (a null study of the diagnosis alone).
 
 mod common;
 
@@ -538,7 +542,30 @@ struct Outcome {
     /// draws: at the count and rms of the null stream's jump draw (its share below `alpha`
     /// checks the level on clean runs).
     jceil_p: f64,
+    /// The first stationary scan's drop of `r' S^-1 r` per parameter of each candidate against
+    /// the base model (`Diagnosis::first_scores`), in the order of `LR_KINDS` (NaN: not scanned).
+    lr: [f64; 6],
+    /// The gap `G` of the model with each of `LR_KINDS` in (its residual scale).
+    galt: [f64; 6],
+    /// The warm-up test's drift-alone whitened residual sum of squares per degree of freedom
+    /// (`WarmupFinding::null_scale`).
+    warm_scale: f64,
+    /// The warm-up's `B` in units of that scale (`WarmupFinding::log_bf_scaled`).
+    warm_b_scaled: f64,
+    /// The p-value of the warm-up's `B` under the run's own Gaussian null
+    /// (`WarmupFinding::p_value`).
+    warm_p: f64,
 }
+
+/// The stationary candidates whose first-scan scores `--csv` writes (`lr_*` columns).
+const LR_KINDS: [EffectKind; 6] = [
+    EffectKind::GaussMarkov,
+    EffectKind::Sinusoid,
+    EffectKind::OutputFilter,
+    EffectKind::MovingAverage,
+    EffectKind::SecondOrderFilter,
+    EffectKind::ZeroPhaseFilter,
+];
 
 fn run_one(
     family: &'static str,
@@ -546,6 +573,7 @@ fn run_one(
     i: u64,
     seed: u64,
     hours: Option<(f64, f64)>,
+    no_oracle: bool,
 ) -> Outcome {
     let fam_ix = FAMILIES.iter().position(|f| *f == family).unwrap_or(0) as u64;
     let kind_ix = KINDS
@@ -609,17 +637,19 @@ fn run_one(
             ));
         }
     }
-    let warm_b = base_c5
-        .and_then(|c5| {
-            fit_warmup(
-                &snap.block_means,
-                block_s,
-                snap.n_increments as f64 * unit.tau0,
-                &c5,
-                &[],
-            )
-        })
-        .map_or(f64::NAN, |w| w.log_bf);
+    let warm = base_c5.and_then(|c5| {
+        fit_warmup(
+            &snap.block_means,
+            block_s,
+            snap.n_increments as f64 * unit.tau0,
+            &c5,
+            &[],
+        )
+    });
+    let warm_b = warm.map_or(f64::NAN, |w| w.log_bf);
+    let warm_scale = warm.map_or(f64::NAN, |w| w.null_scale);
+    let warm_b_scaled = warm.map_or(f64::NAN, |w| w.log_bf_scaled);
+    let warm_p = warm.map_or(f64::NAN, |w| w.p_value);
     let mut jump_z = [0.0; 3];
     if let Some(f) = base_c5.and_then(|c5| forward_steps(&snap.block_means, block_s, &c5, &[], 3.0))
     {
@@ -634,7 +664,7 @@ fn run_one(
         jceil_p = ceiling(count, rms_size, &c5, stream);
     }
     let mut null_z = [f64::NAN; 5];
-    if kind.is_none() {
+    if kind.is_none() && !no_oracle {
         let mut nrng = Xoshiro256PlusPlus::seed_from_u64(stream ^ 0x6a_c1e5);
         for (k, (_, kk)) in KINDS[1..].iter().enumerate() {
             let (p, _) = draw_effect(&mut nrng, &unit, kk.expect("effect kind"));
@@ -647,6 +677,16 @@ fn run_one(
             null_z[k] = oracle_z(p, &js, &unit, &snap).map_or(f64::NAN, |o| o.0);
             if let (EffectParams::BiasJumps { count, .. }, Some(c5)) = (p, base_c5) {
                 jceil_p = ceiling(count, jumps_rms(&js), &c5, stream);
+            }
+        }
+    }
+    let mut lr = [f64::NAN; 6];
+    let mut galt = [f64::NAN; 6];
+    if let Ok(d) = &d {
+        for sc in &d.first_scores {
+            if let Some(ix) = LR_KINDS.iter().position(|k| *k == sc.kind) {
+                lr[ix] = sc.score;
+                galt[ix] = sc.gap_alt;
             }
         }
     }
@@ -681,6 +721,11 @@ fn run_one(
         jump_z,
         resid,
         jceil_p,
+        lr,
+        galt,
+        warm_scale,
+        warm_b_scaled,
+        warm_p,
     }
 }
 
@@ -903,6 +948,9 @@ fn main() {
             .unwrap_or_else(|| d.to_string())
     };
     let draws: u64 = get("--draws", "20").parse().expect("--draws");
+    // Clean draws without their oracle statistics and jump ceiling (null studies of the
+    // diagnosis's own statistics, about twice as fast).
+    let no_oracle = args.iter().any(|a| a == "--no-oracle");
     let seed: u64 = get("--seed", "1").parse().expect("--seed");
     let threads: usize = get("--threads", "2").parse().expect("--threads");
     let default_kinds: Vec<&str> = KINDS.iter().map(|k| k.0).collect();
@@ -949,7 +997,9 @@ fn main() {
         }
     }
     let t = Instant::now();
-    let res = par_map(&items, threads, |(f, k, i)| run_one(f, k, i, seed, hours));
+    let res = par_map(&items, threads, |(f, k, i)| {
+        run_one(f, k, i, seed, hours, no_oracle)
+    });
     println!(
         "# family_gap: {draws} draws per family and effect, seed {seed}, {:.0} s wall",
         t.elapsed().as_secs_f64()
@@ -960,7 +1010,7 @@ fn main() {
     }
     if !csv.is_empty() {
         let mut text = String::from(
-            "family,effect,draw,tau0,t_run,q,n,b,k,r,lsb,rate_lsb,rho,verdict,gap_before,gap_after,named,shape_true,amp_true,oracle_z,oracle_delta,null_z_gm,null_z_sin,null_z_filter,null_z_warmup,null_z_jumps,secs,qlim,warm_b,jump_z1,jump_z2,jump_z3,jceil_p\n",
+            "family,effect,draw,tau0,t_run,q,n,b,k,r,lsb,rate_lsb,rho,verdict,gap_before,gap_after,named,shape_true,amp_true,oracle_z,oracle_delta,null_z_gm,null_z_sin,null_z_filter,null_z_warmup,null_z_jumps,secs,qlim,warm_b,jump_z1,jump_z2,jump_z3,jceil_p,lr_gm,lr_sin,lr_filter,lr_ma,lr_second,lr_zero,galt_gm,galt_sin,galt_filter,galt_ma,galt_second,galt_zero,warm_scale,warm_b_scaled,warm_p\n",
         );
         for (o, (_, _, i)) in res.iter().zip(&items) {
             let u = &o.unit;
@@ -970,7 +1020,7 @@ fn main() {
             });
             let nz: Vec<String> = o.null_z.iter().map(|z| format!("{z:.4}")).collect();
             text += &format!(
-                "{},{},{},{},{:.0},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:.3},{:?},{:.4},{:.4},{},{:e},{:e},{:.4},{:.4},{},{:.3},{},{:.3},{:.3},{:.3},{:.3},{:.4}\n",
+                "{},{},{},{},{:.0},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:.3},{:?},{:.4},{:.4},{},{:e},{:e},{:.4},{:.4},{},{:.3},{},{:.3},{:.3},{:.3},{:.3},{:.4},{},{},{:.4},{:.3},{:.4}\n",
                 u.family,
                 kind_name(o.truth_kind),
                 i,
@@ -1003,7 +1053,19 @@ fn main() {
                 o.jump_z[0],
                 o.jump_z[1],
                 o.jump_z[2],
-                o.jceil_p
+                o.jceil_p,
+                o.lr.iter()
+                    .map(|v| format!("{v:.3}"))
+                    .collect::<Vec<_>>()
+                    .join(","),
+                o.galt
+                    .iter()
+                    .map(|v| format!("{v:.4}"))
+                    .collect::<Vec<_>>()
+                    .join(","),
+                o.warm_scale,
+                o.warm_b_scaled,
+                o.warm_p
             );
         }
         std::fs::write(&csv, text).expect("csv");

@@ -38,6 +38,9 @@ pub struct CandidateScore {
     pub score: f64,
     /// The threshold it had to pass at that step.
     pub crit: f64,
+    /// The gap `G` of the model with the candidate in (its residual scale: about 1 when the
+    /// covariance is right).
+    pub gap_alt: f64,
 }
 
 /// The first step of the stationary search.

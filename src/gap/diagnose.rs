@@ -178,6 +178,11 @@ pub struct Diagnosis {
     /// 95% intervals of each effect's parameters, in the order of `effects`
     /// ([`super::intervals`]).
     pub effect_intervals: Vec<super::intervals::Intervals>,
+    /// The first step of the stationary search on the curve: each candidate's best drop of
+    /// `r' S^-1 r` per parameter against the base model and the threshold it had to pass
+    /// (their null distribution on clean runs calibrates `lr_crit`; docs/gap.md,
+    /// "Calibration").
+    pub first_scores: Vec<CandidateScore>,
 }
 
 /// Five-term `(Q, N, B, K, R)` from `c`.
@@ -349,7 +354,7 @@ fn diagnose_curve_once(
         let c5: [f64; 5] = std::array::from_fn(|i| cur.coef.get(i).copied().unwrap_or(0.0));
         let stat_params: Vec<EffectParams> = effects.iter().map(|e| e.params).collect();
         let warm = fit_warmup(&block_means, block_s, t_run, &c5, &stat_params);
-        if let Some(w) = warm.filter(|w| w.w_stat > th.warmup_w || w.log_bf > th.warmup_bf) {
+        if let Some(w) = warm.filter(|w| th.warmup_found(w)) {
             // Its AVAR, exact for the estimator on this record, enters as a fixed offset.
             let col = effect_column(
                 EffectKind::Warmup,
@@ -509,6 +514,10 @@ fn diagnose_curve_once(
     } else {
         Verdict::Unexplained
     };
+    let first_scores = first_scan
+        .as_ref()
+        .map(|fs| fs.scores.clone())
+        .unwrap_or_default();
     let alternatives = first_scan
         .map(|fs| alternatives(&prob, opts, &fs, &effects, &final_spec, &cur))
         .unwrap_or_default();
@@ -540,6 +549,7 @@ fn diagnose_curve_once(
             .and_then(|l| judge_quantization(&prob, &final_spec, &cur, l)),
         alternatives,
         effect_intervals,
+        first_scores,
     })
 }
 
@@ -630,7 +640,13 @@ fn still_needed(
             } else {
                 th.lr_crit_of(e.params.kind())
             };
-            if (b.chi2 - a.chi2) / e.params.kind().n_params() as f64 >= crit {
+            let score = (b.chi2 - a.chi2) / e.params.kind().n_params() as f64;
+            let stat = if b.gap() > th.gap_crit {
+                score
+            } else {
+                th.lr_stat(score, a.gap())
+            };
+            if stat >= crit {
                 kept.push(*e);
             }
         }
@@ -697,9 +713,15 @@ fn add_stationary(
                         params,
                         score,
                         crit,
+                        gap_alt: f.gap(),
                     });
                 }
-                if score >= crit {
+                let stat = if flagged_g {
+                    score
+                } else {
+                    th.lr_stat(score, f.gap())
+                };
+                if stat >= crit {
                     passed.push((params, f, score));
                 }
             }

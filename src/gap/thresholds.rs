@@ -35,6 +35,18 @@ pub struct Thresholds {
     /// The warm-up's evidence integrated over the scanned `T` ([`WarmupFinding::log_bf`](super::warmup::WarmupFinding::log_bf)) that
     /// a warm-up must bring. A warm-up is found when either statistic passes its threshold.
     pub warmup_bf: f64,
+    /// The likelihood-ratio flags judge the drop per parameter in units of the residual scale
+    /// of the model with the candidate in, `score / max(1, G_alt)` (an F-type statistic): a
+    /// covariance too tight by a factor `c` inflates every drop by `c`, and `G_alt` estimates
+    /// `c` from the same curve, whatever the kind of unit (docs/gap.md, "Calibration").
+    pub lr_scaled: bool,
+    /// The warm-up test reads `B` in units of the block means' own residual scale when that is
+    /// above the model's ([`WarmupFinding::log_bf_scaled`](super::warmup::WarmupFinding::log_bf_scaled)).
+    pub warmup_scaled: bool,
+    /// When above 0, a warm-up is found when its `B`'s p-value under the run's own Gaussian
+    /// null ([`WarmupFinding::p_value`](super::warmup::WarmupFinding::p_value)) is at most this, in place of
+    /// `B > warmup_bf`: the test's level then follows each run's covariance and scan.
+    pub warmup_alpha: f64,
 }
 
 impl Thresholds {
@@ -51,6 +63,34 @@ impl Thresholds {
             EffectKind::Warmup | EffectKind::BiasJumps | EffectKind::Temperature => f64::INFINITY,
         }
     }
+
+    /// The statistic a likelihood-ratio flag compares with `lr_crit`: the drop of
+    /// `r' S^-1 r` per parameter `score`, divided by `max(1, gap_alt)` (the gap of the model
+    /// with the candidate in) when [`Thresholds::lr_scaled`].
+    pub fn lr_stat(&self, score: f64, gap_alt: f64) -> f64 {
+        if self.lr_scaled && gap_alt.is_finite() {
+            score / gap_alt.max(1.0)
+        } else {
+            score
+        }
+    }
+
+    /// Whether the warm-up test finds the warm-up `w` (`warmup_w`, then `warmup_alpha` or
+    /// `warmup_bf` on [`Thresholds::warmup_scaled`]'s statistic).
+    pub fn warmup_found(&self, w: &super::warmup::WarmupFinding) -> bool {
+        if w.w_stat > self.warmup_w {
+            return true;
+        }
+        if self.warmup_alpha > 0.0 {
+            return w.p_value <= self.warmup_alpha;
+        }
+        let b = if self.warmup_scaled {
+            w.log_bf_scaled
+        } else {
+            w.log_bf
+        };
+        b > self.warmup_bf
+    }
 }
 
 impl Default for Thresholds {
@@ -66,6 +106,9 @@ impl Default for Thresholds {
             // statistics"): at the same share of clean runs its tail is steadier across seeds.
             warmup_w: f64::INFINITY,
             warmup_bf: 3.39,
+            lr_scaled: false,
+            warmup_scaled: false,
+            warmup_alpha: 0.0,
         }
     }
 }

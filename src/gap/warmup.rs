@@ -19,7 +19,26 @@ pub struct WarmupFinding {
     /// likelihood ratio with the amplitude profiled, up to a constant (a Bayes-factor mixture
     /// statistic, e.g. Kass and Raftery 1995, section 4; docs/gap.md, "Mixture statistics").
     pub log_bf: f64,
+    /// The whitened residual sum of squares of the drift alone per degree of freedom: about 1
+    /// when the model's covariance of the block means is right (a check of its scale).
+    pub null_scale: f64,
+    /// `log_bf` with each `W(T)` divided by `max(1, null_scale)`: the evidence in units of the
+    /// block means' own residual scale when that is above the model's (an F-type statistic;
+    /// docs/gap.md, "Calibration").
+    pub log_bf_scaled: f64,
+    /// The p-value of `log_bf` under this run's own Gaussian null: the share of
+    /// [`WARMUP_NULL_DRAWS`] draws of whitened block-mean differences `N(0, I)` (the fitted
+    /// model's covariance, drift alone) whose `B`, through the same scan over `T`, reaches the
+    /// observed one, `(1 + #{B_null >= B}) / (draws + 1)`. A level set per run from its own
+    /// covariance and scan, so it needs no clean runs of the family (docs/gap.md,
+    /// "Calibration").
+    pub p_value: f64,
 }
+
+/// Draws of the Gaussian null behind [`WarmupFinding::p_value`].
+pub const WARMUP_NULL_DRAWS: usize = 999;
+/// Seed of those draws (fixed: the same evidence gives the same p-value).
+const WARMUP_NULL_SEED: u64 = 0x3a7e_0b1f;
 
 impl WarmupFinding {
     /// The warm-up's mean over each block.
@@ -63,22 +82,68 @@ pub fn fit_warmup(
     };
     let mut best: Option<(f64, f64, f64)> = None; // (T, A, rss)
     let mut half_w: Vec<f64> = Vec::new();
+    let mut cols: Vec<NullColumn> = Vec::new();
     for t in grid.points() {
-        let Some((a, rss)) = fitter.at(t) else {
+        let Some((a, rss, col)) = fitter.at(t) else {
             continue;
         };
+        cols.push(col);
         half_w.push((fitter.rss_drift - rss) / 2.0);
         if best.is_none_or(|b| rss < b.2) {
             best = Some((t, a, rss));
         }
     }
     let (t, a, rss) = best?;
+    let null_scale = fitter.rss_drift / (fitter.yw.len().max(2) - 1) as f64;
+    let scaled: Vec<f64> = half_w.iter().map(|h| h / null_scale.max(1.0)).collect();
+    let log_bf = log_mean_exp(&half_w);
+    let p_value = null_p_value(&fitter, &cols, log_bf);
     Some(WarmupFinding {
         amplitude: a,
         time_constant_s: t,
         w_stat: fitter.rss_drift - rss,
-        log_bf: log_mean_exp(&half_w),
+        log_bf,
+        null_scale,
+        log_bf_scaled: log_mean_exp(&scaled),
+        p_value,
     })
+}
+
+/// One scanned `T` of the warm-up fit, for the null draws: the whitened warm-up column and the
+/// inverse of the normal matrix of `[1, e_w]`.
+struct NullColumn {
+    ew: DVector<f64>,
+    /// `(X'X)^-1` of the drift and warm-up columns, row-major 2x2.
+    inv: [f64; 4],
+}
+
+/// [`WarmupFinding::p_value`]: `B` of `N(0, I)` whitened differences through the same columns.
+/// For whitened data `y`, `W(T) = b' (X'X)^-1 b - (1'y)^2 / |1|^2` with `b = (1'y, e_w'y)`.
+fn null_p_value(fitter: &WarmupFitter, cols: &[NullColumn], observed: f64) -> f64 {
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, StandardNormal};
+    if cols.is_empty() || !observed.is_finite() {
+        return f64::NAN;
+    }
+    let n = fitter.yw.len();
+    let ones_sq = fitter.ones.norm_squared();
+    let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(WARMUP_NULL_SEED);
+    let mut half_w = vec![0.0; cols.len()];
+    let mut at_least = 0usize;
+    for _ in 0..WARMUP_NULL_DRAWS {
+        let y = DVector::from_fn(n, |_, _| StandardNormal.sample(&mut rng));
+        let b0 = fitter.ones.dot(&y);
+        let drift = b0 * b0 / ones_sq;
+        for (h, c) in half_w.iter_mut().zip(cols) {
+            let b1 = c.ew.dot(&y);
+            let q = c.inv[0] * b0 * b0 + 2.0 * c.inv[1] * b0 * b1 + c.inv[3] * b1 * b1;
+            *h = (q - drift) / 2.0;
+        }
+        if log_mean_exp(&half_w) >= observed {
+            at_least += 1;
+        }
+    }
+    (1 + at_least) as f64 / (WARMUP_NULL_DRAWS + 1) as f64
 }
 
 /// `ln((1/n) sum_i exp(x_i))`, computed without overflow; `-inf` for an empty slice.
@@ -131,17 +196,23 @@ impl WarmupFitter {
         })
     }
 
-    /// `(A, rss)` of the drift plus a warm-up of time constant `t` (s).
-    fn at(&self, t: f64) -> Option<(f64, f64)> {
+    /// `(A, rss)` of the drift plus a warm-up of time constant `t` (s), and its column for
+    /// the null draws.
+    fn at(&self, t: f64) -> Option<(f64, f64, NullColumn)> {
         let n = self.yw.len();
         let e: Vec<f64> = (0..=n)
             .map(|i| warmup_block_shape(i, self.block_s, t))
             .collect();
         let de = DVector::from_iterator(n, e.windows(2).map(|p| p[1] - p[0]));
         let ew = self.chol.l().solve_lower_triangular(&de)?;
-        let x = DMatrix::from_columns(&[self.ones.clone(), ew]);
-        let beta = (x.transpose() * &x).try_inverse()? * x.transpose() * &self.yw;
+        let x = DMatrix::from_columns(&[self.ones.clone(), ew.clone()]);
+        let inv = (x.transpose() * &x).try_inverse()?;
+        let beta = &inv * x.transpose() * &self.yw;
         let rss = (&self.yw - &x * &beta).norm_squared();
-        Some((beta[1], rss))
+        let col = NullColumn {
+            ew,
+            inv: [inv[(0, 0)], inv[(0, 1)], inv[(1, 0)], inv[(1, 1)]],
+        };
+        Some((beta[1], rss, col))
     }
 }
