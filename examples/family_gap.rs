@@ -56,6 +56,16 @@
 //!   meets the flicker floor at T_run / 100 to T_run / 20), VRW 0.01-0.05 m/s/sqrt(h), flicker
 //!   10-50 ug, rate samples rounded.
 //!
+//! Held-out families of session 7 (defined at 14:27 UTC on 2026-11-24, before any run of them;
+//! run only for the final per-family tables):
+//! - `kmems`: a MEMS gyro at 1 kHz whose rate random walk dominates the long taus: ARW
+//!   0.05-0.3 deg/sqrt(h), flicker 0.5-3 deg/h, `K` such that its ADEV meets the flicker floor
+//!   at `tau_k` log-uniform in [T_run / 1000, T_run / 100], each rate sample rounded to 0.1-1 of
+//!   the sample's noise;
+//! - `rfog`: a FOG at 100 Hz (tau0 = 10 ms) with a rate ramp: ARW 0.01-0.05 deg/sqrt(h),
+//!   flicker 0.02-0.2 deg/h, K 0.005-0.05 deg/h/sqrt(h), `R` such that its ADEV meets the
+//!   flicker floor at `tau_x` log-uniform in [T_run / 50, T_run / 10], a fine angle LSB.
+//!
 //! Run lengths are 1-3 h (log-uniform), one draw in ten 6-24 h at a sampling step raised so
 //! that a run has at most 8 M samples (the benchmark's compute stays affordable); `--hours A,B`
 //! draws them log-uniform in [A, B] h instead (no long draws).
@@ -104,12 +114,13 @@ use std::path::Path;
 use std::time::Instant;
 
 /// The families; the first six are the default list, `coarse` is drawn on request.
-const FAMILIES: [&str; 10] = [
-    "navfog", "tacfog", "vog4", "memsgyro", "ma4", "memsacc", "coarse", "consmems", "fog2k", "accr",
+const FAMILIES: [&str; 12] = [
+    "navfog", "tacfog", "vog4", "memsgyro", "ma4", "memsacc", "coarse", "consmems", "fog2k",
+    "accr", "kmems", "rfog",
 ];
 /// The held-out families (`--families heldout`): defined before the calibration of issue 13's
 /// last round and run only for its final tables, so nothing was tuned on them.
-const HELDOUT: [&str; 3] = ["consmems", "fog2k", "accr"];
+const HELDOUT: [&str; 5] = ["consmems", "fog2k", "accr", "kmems", "rfog"];
 /// Importance samples and null draws of the fair jump ceiling (`oracle::JumpCeiling`).
 const JUMP_CEIL_SAMPLES: usize = 1000;
 const JUMP_CEIL_NULLS: usize = 199;
@@ -253,6 +264,27 @@ fn draw_unit(
             u.c[4] = 0.664 * u.c[2] * 2f64.sqrt() / tau_x;
             u.tau0 = rate(rng, 200.0, 200.0);
             u.rate_lsb = log_uniform(rng, 0.1, 1.0) * u.c[1] / u.tau0.sqrt();
+        }
+        "kmems" => {
+            // A MEMS gyro at 1 kHz, K dominant: ADEV_K = K sqrt(tau / 3) meets the flicker
+            // floor 0.664 B at tau_k.
+            u.c[1] = log_uniform(rng, 0.05, 0.3) * ARW;
+            u.c[2] = log_uniform(rng, 0.5, 3.0) * DEG_H;
+            let tau_k = log_uniform(rng, t_run / 1000.0, t_run / 100.0);
+            u.c[3] = 0.664 * u.c[2] * (3.0 / tau_k).sqrt();
+            u.tau0 = (0.001f64).max(t_run / MAX_SAMPLES);
+            u.rate_lsb = log_uniform(rng, 0.1, 1.0) * u.c[1] / u.tau0.sqrt();
+        }
+        "rfog" => {
+            // A FOG at 100 Hz with a rate ramp: ADEV_R = R tau / sqrt(2) meets the flicker
+            // floor at tau_x.
+            u.c[1] = log_uniform(rng, 0.01, 0.05) * ARW;
+            u.c[2] = log_uniform(rng, 0.02, 0.2) * DEG_H;
+            u.c[3] = log_uniform(rng, 0.005, 0.05) * RRW;
+            let tau_x = log_uniform(rng, t_run / 50.0, t_run / 10.0);
+            u.c[4] = 0.664 * u.c[2] * 2f64.sqrt() / tau_x;
+            u.tau0 = (0.01f64).max(t_run / MAX_SAMPLES);
+            u.lsb = log_uniform(rng, 0.1, 1.0) * u.c[1] * u.tau0.sqrt();
         }
         _ => unreachable!("family list"),
     }

@@ -106,9 +106,12 @@ impl Default for Thresholds {
             // statistics"): at the same share of clean runs its tail is steadier across seeds.
             warmup_w: f64::INFINITY,
             warmup_bf: 3.39,
-            lr_scaled: false,
+            // Session 7 (docs/gap.md, "Calibration", "The level of each test per run"): the
+            // likelihood ratios in units of the residual scale, and the warm-up at a level set
+            // per run by its own Gaussian null (B = 3.39 was about p = 0.011 there).
+            lr_scaled: true,
             warmup_scaled: false,
-            warmup_alpha: 0.0,
+            warmup_alpha: 0.005,
         }
     }
 }
