@@ -553,25 +553,24 @@ fn unit_finals(recs: &[serde_json::Value], name: &str) -> Vec<(String, serde_jso
 fn units_killed_part_way_resume_to_the_uninterrupted_records() {
     use allanscope::pipeline::checkpoint::Checkpoint;
     let all = siu8_capture();
-    let config = r#"[run]
-checkpoint_every = 20.0
-[output]
-path = "lab.jsonl"
-
-[[unit]]
-name = "imu01"
-source = { kind = "file", path = "a.siu8", format = "siu8" }
-
-[[unit]]
-name = "imu02"
-source = { kind = "file", path = "b.siu8", format = "siu8" }
-channels = { include = ["g1", "g2", "a1"] }
-"#;
+    // imu01 with all 8 channels, imu02 with 3; checkpoints every 20 data-seconds.
+    let mut config = "[run]\ncheckpoint_every = 20.0\n[output]\npath = \"lab.jsonl\"\n".to_string();
+    for (name, file, include) in [
+        ("imu01", "a", ""),
+        ("imu02", "b", "[\"g1\", \"g2\", \"a1\"]"),
+    ] {
+        config += &format!(
+            "[[unit]]\nname = \"{name}\"\nsource = {{ kind = \"file\", path = \"{file}.siu8\", format = \"siu8\" }}\n"
+        );
+        if !include.is_empty() {
+            config += &format!("channels = {{ include = {include} }}\n");
+        }
+    }
     let setup = |tag: &str| {
         let dir = crate::common::fresh_dir(tag);
         std::fs::write(dir.join("a.siu8"), frames(&all, 0, 30_000)).expect("a");
         std::fs::write(dir.join("b.siu8"), frames(&all, 40_000, 30_000)).expect("b");
-        std::fs::write(dir.join("lab.toml"), config).expect("config");
+        std::fs::write(dir.join("lab.toml"), &config).expect("config");
         dir
     };
     let straight = setup("units-straight");
