@@ -1,13 +1,13 @@
 //! The noise model of the time-domain tests: the covariance of the first differences of the
 //! block-mean rate under the five-term model plus stationary effects, from the generalised
-//! covariance of the phase (model/avar_cov/mod.rs's table). Used by [`super::warmup`], [`super::steps`]
+//! covariance of the phase (avar_cov.rs's table). Used by [`super::warmup`], [`super::steps`]
 //! and [`super::oracle`].
 
 use super::effects::EffectParams;
 use nalgebra::DMatrix;
 
 /// Generalised covariance `G(t)` of the phase (u^2) under the five-term model `c` plus
-/// stationary effects (model/avar_cov/mod.rs's table; Gauss-Markov `-S(t)/2` with the structure
+/// stationary effects (avar_cov.rs's table; Gauss-Markov `-S(t)/2` with the structure
 /// function `S(t) = 2 s^2 T^2 (t/T - 1 + e^{-t/T})`; sinusoid `A^2 cos(w t) / (2 w^2)`). Valid
 /// under filters that annihilate polynomials of degree <= 1, such as a second difference.
 fn phase_gcov(c: &[f64; 5], effects: &[EffectParams], t: f64) -> f64 {
