@@ -241,27 +241,21 @@ impl AvarCovariance {
         let cs: [f64; 4] = std::array::from_fn(|t| c[t] * scale[t]);
         let c_r = c[4];
         let mut out = DMatrix::zeros(n, n);
-        for i in 0..n {
-            for j in i..n {
-                let (a, b) = (points[i], points[j]);
-                let s = self.sums_strided(a, b, i, j, strides);
-                let tau1 = a.m as f64 * tau0_s;
-                let tau2 = b.m as f64 * tau0_s;
-                let t12 = tau1 * tau1 * tau2 * tau2;
-                let mut quad = 0.0;
-                let mut lin = 0.0;
-                for t in 0..NRAND {
-                    lin += cs[t] * s.lin[t];
-                    for u in 0..NRAND {
-                        quad += cs[t] * cs[u] * s.quad[t][u];
-                    }
+        self.each_pair(tau0_s, points, strides, |i, j, s, t12| {
+            let (a, b) = (points[i], points[j]);
+            let mut quad = 0.0;
+            let mut lin = 0.0;
+            for t in 0..NRAND {
+                lin += cs[t] * s.lin[t];
+                for u in 0..NRAND {
+                    quad += cs[t] * cs[u] * s.quad[t][u];
                 }
-                let v = (2.0 * quad + 4.0 * c_r * t12 * lin)
-                    / (4.0 * t12 * a.count as f64 * b.count as f64);
-                out[(i, j)] = v;
-                out[(j, i)] = v;
             }
-        }
+            let v = (2.0 * quad + 4.0 * c_r * t12 * lin)
+                / (4.0 * t12 * a.count as f64 * b.count as f64);
+            out[(i, j)] = v;
+            out[(j, i)] = v;
+        });
         out
     }
 
@@ -279,27 +273,42 @@ impl AvarCovariance {
         let n = points.len();
         let scale = [1.0, tau0_s, tau0_s * tau0_s, tau0_s.powi(3)];
         let mut out = Vec::with_capacity(n * (n + 1) / 2);
+        self.each_pair(tau0_s, points, strides, |i, j, s, t12| {
+            let (a, b) = (points[i], points[j]);
+            let den = 4.0 * t12 * a.count as f64 * b.count as f64;
+            let mut t = [[0.0; 5]; 5];
+            for u in 0..NRAND {
+                for v in 0..NRAND {
+                    t[u][v] = 2.0 * scale[u] * scale[v] * s.quad[u][v] / den;
+                }
+                // The mean term 4 c_R t12 sum c_u lin_u, split over both triangles.
+                let m = 2.0 * t12 * scale[u] * s.lin[u] / den;
+                t[u][4] = m;
+                t[4][u] = m;
+            }
+            out.push(t);
+        });
+        out
+    }
+
+    /// Calls `each(i, j, sums, t12)` for every pair of points `i <= j`, row-major over the upper
+    /// triangle, with the pair's (strided) lag sums and `t12 = tau_i^2 tau_j^2` in s^4.
+    fn each_pair(
+        &mut self,
+        tau0_s: f64,
+        points: &[CovPoint],
+        strides: &[u64],
+        mut each: impl FnMut(usize, usize, &PairSums, f64),
+    ) {
+        let n = points.len();
         for i in 0..n {
             for j in i..n {
                 let (a, b) = (points[i], points[j]);
                 let s = self.sums_strided(a, b, i, j, strides);
                 let tau1 = a.m as f64 * tau0_s;
                 let tau2 = b.m as f64 * tau0_s;
-                let t12 = tau1 * tau1 * tau2 * tau2;
-                let den = 4.0 * t12 * a.count as f64 * b.count as f64;
-                let mut t = [[0.0; 5]; 5];
-                for u in 0..NRAND {
-                    for v in 0..NRAND {
-                        t[u][v] = 2.0 * scale[u] * scale[v] * s.quad[u][v] / den;
-                    }
-                    // The mean term 4 c_R t12 sum c_u lin_u, split over both triangles.
-                    let m = 2.0 * t12 * scale[u] * s.lin[u] / den;
-                    t[u][4] = m;
-                    t[4][u] = m;
-                }
-                out.push(t);
+                each(i, j, &s, tau1 * tau1 * tau2 * tau2);
             }
         }
-        out
     }
 }
