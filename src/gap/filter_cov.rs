@@ -51,7 +51,7 @@ fn excess(lp: &LowPass, tau0_s: f64) -> Vec<f64> {
     // Two-sided r over q = -k..=k, renormalised to sum 1 (the IIR tails are cut at 1e-15).
     let mut r: Vec<f64> = (-k..=k).map(|q| rho[q.unsigned_abs() as usize]).collect();
     let total: f64 = r.iter().sum();
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return vec![0.0];
     }
     for v in r.iter_mut() {
