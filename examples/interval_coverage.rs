@@ -64,7 +64,7 @@ fn main() {
                 continue;
             };
             let rec = DiagnosisRecord::new("g", &d, None, true);
-            let Some(e) = rec.effects.iter().find(|e| e.kind == kind) else {
+            let Some(e) = rec.effects.iter().find(|e| e.effect.kind_name() == kind) else {
                 continue;
             };
             named += 1;

@@ -49,7 +49,7 @@ pub struct FirstScan {
     pub chosen: Option<EffectKind>,
 }
 
-/// Another explanation of about equal fit.
+/// Another explanation of about equal fit (its record: [`super::record::AlternativeRecord`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Alternative {
     /// The effects of that model (kinds and parameters; empty: the five terms alone).
@@ -59,21 +59,6 @@ pub struct Alternative {
     pub delta_chi2: f64,
     /// Its five terms `(Q, N, B, K, R)`.
     pub coef: [f64; 5],
-}
-
-impl Alternative {
-    /// The record's object: `{effects: [{kind, params}], gap, delta_chi2, coef}`.
-    pub fn to_json(&self) -> serde_json::Value {
-        serde_json::json!({
-            "effects": self.effects.iter().map(|p| serde_json::json!({
-                "kind": p.kind().name(),
-                "params": p.to_json(),
-            })).collect::<Vec<_>>(),
-            "gap": self.gap,
-            "delta_chi2": self.delta_chi2,
-            "coef": self.coef,
-        })
-    }
 }
 
 /// The effect `p` with the amplitude of column `col` of `fit` (filters have none).

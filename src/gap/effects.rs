@@ -86,44 +86,71 @@ impl EffectKind {
 }
 
 /// A fitted effect with docs/records.md's parameters (rate units u/s, times s, frequencies Hz).
-#[derive(Debug, Clone, Copy, PartialEq)]
+///
+/// As the record writes it: `{"kind": "gauss_markov", "params": {"sigma": .., "tau_c": ..}}`,
+/// the parameters under their record names. The fields of each kind are declared in
+/// alphabetical order of those names, the order every earlier version wrote them in (through a
+/// sorted JSON map), so the records stay byte-identical. A number that is not finite (a
+/// temperature interval not computed) is written `null` and read back as NaN.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", content = "params", rename_all = "snake_case")]
 pub enum EffectParams {
     GaussMarkov {
+        #[serde(deserialize_with = "nullable_f64")]
         sigma: f64,
+        #[serde(rename = "tau_c", deserialize_with = "nullable_f64")]
         tau_c_s: f64,
     },
     Sinusoid {
+        #[serde(deserialize_with = "nullable_f64")]
         amplitude: f64,
+        #[serde(rename = "frequency", deserialize_with = "nullable_f64")]
         frequency_hz: f64,
     },
     OutputFilter {
+        #[serde(rename = "time_constant", deserialize_with = "nullable_f64")]
         time_constant_s: f64,
     },
     Warmup {
+        #[serde(deserialize_with = "nullable_f64")]
         amplitude: f64,
+        #[serde(rename = "time_constant", deserialize_with = "nullable_f64")]
         time_constant_s: f64,
     },
     BiasJumps {
         count: u64,
+        #[serde(deserialize_with = "nullable_f64")]
         rms_size: f64,
     },
     /// u/s per degC, with its 95% interval.
     Temperature {
+        #[serde(deserialize_with = "nullable_f64")]
         coefficient: f64,
-        lo: f64,
+        #[serde(deserialize_with = "nullable_f64")]
         hi: f64,
+        #[serde(deserialize_with = "nullable_f64")]
+        lo: f64,
     },
     MovingAverage {
-        taps: u32,
         stages: u32,
+        taps: u32,
     },
     SecondOrderFilter {
-        natural_frequency_hz: f64,
+        #[serde(deserialize_with = "nullable_f64")]
         damping: f64,
+        #[serde(rename = "natural_frequency", deserialize_with = "nullable_f64")]
+        natural_frequency_hz: f64,
     },
     ZeroPhaseFilter {
+        #[serde(rename = "time_constant", deserialize_with = "nullable_f64")]
         time_constant_s: f64,
     },
+}
+
+/// Reads a number the writer may have printed as `null` (serde_json writes a non-finite f64 so)
+/// back as NaN, so a record holding one still parses.
+pub fn nullable_f64<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 impl EffectParams {
@@ -219,42 +246,43 @@ impl EffectParams {
         }
     }
 
-    /// The `params` object of the record, with docs/records.md's names.
-    pub fn to_json(&self) -> serde_json::Value {
-        use serde_json::json;
+    /// The `params` of the record: each parameter's record name and value, in the record's
+    /// (alphabetical) order; counts as whole numbers, NaN where the record has `null`.
+    pub fn record_params(&self) -> Vec<(&'static str, f64)> {
         match *self {
             EffectParams::GaussMarkov { sigma, tau_c_s } => {
-                json!({"sigma": sigma, "tau_c": tau_c_s})
+                vec![("sigma", sigma), ("tau_c", tau_c_s)]
             }
             EffectParams::Sinusoid {
                 amplitude,
                 frequency_hz,
-            } => json!({"amplitude": amplitude, "frequency": frequency_hz}),
-            EffectParams::OutputFilter { time_constant_s } => {
-                json!({"time_constant": time_constant_s})
+            } => vec![("amplitude", amplitude), ("frequency", frequency_hz)],
+            EffectParams::OutputFilter { time_constant_s }
+            | EffectParams::ZeroPhaseFilter { time_constant_s } => {
+                vec![("time_constant", time_constant_s)]
             }
             EffectParams::Warmup {
                 amplitude,
                 time_constant_s,
-            } => json!({"amplitude": amplitude, "time_constant": time_constant_s}),
+            } => vec![("amplitude", amplitude), ("time_constant", time_constant_s)],
             EffectParams::BiasJumps { count, rms_size } => {
-                json!({"count": count, "rms_size": rms_size})
+                vec![("count", count as f64), ("rms_size", rms_size)]
             }
             EffectParams::Temperature {
                 coefficient,
-                lo,
                 hi,
-            } => json!({"coefficient": coefficient, "lo": lo, "hi": hi}),
-            EffectParams::MovingAverage { taps, stages } => {
-                json!({"taps": taps, "stages": stages})
+                lo,
+            } => vec![("coefficient", coefficient), ("hi", hi), ("lo", lo)],
+            EffectParams::MovingAverage { stages, taps } => {
+                vec![("stages", f64::from(stages)), ("taps", f64::from(taps))]
             }
             EffectParams::SecondOrderFilter {
-                natural_frequency_hz,
                 damping,
-            } => json!({"natural_frequency": natural_frequency_hz, "damping": damping}),
-            EffectParams::ZeroPhaseFilter { time_constant_s } => {
-                json!({"time_constant": time_constant_s})
-            }
+                natural_frequency_hz,
+            } => vec![
+                ("damping", damping),
+                ("natural_frequency", natural_frequency_hz),
+            ],
         }
     }
 

@@ -19,15 +19,16 @@
 //! then its own white-rate contribution: its share of the fitted `N^2`, and the unit's own `N`
 //! is what is left (`sqrt(N^2 - N_q^2)`).
 
+use super::effects::nullable_f64;
 use super::problem::{GapProblem, GlsFit, ModelSpec};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Rise of `r' S^-1 r` (one constraint) beyond which a hypothesis is rejected: 3 standard
 /// deviations of a chi-square with one degree of freedom at the boundary.
 pub const QUANT_CHI2: f64 = 9.0;
 
 /// The verdict on the values' step.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum QuantKind {
     /// A counter with carry: white phase `Q_q`.
@@ -41,42 +42,36 @@ pub enum QuantKind {
     Neither,
 }
 
-/// What the values' step does to the curve.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// What the values' step does to the curve: docs/records.md's `quantization` object of the
+/// diagnosis record. The fields are declared in alphabetical order, the order earlier versions
+/// wrote them in (through a sorted JSON map); a share that is not finite (no white rate fitted)
+/// is written `null` and read back as NaN.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct QuantizationFinding {
+    /// Rise of `r' S^-1 r` with each floor forced in.
+    #[serde(deserialize_with = "nullable_f64")]
+    pub delta_chi2_angle: f64,
+    #[serde(deserialize_with = "nullable_f64")]
+    pub delta_chi2_rate: f64,
     pub kind: QuantKind,
     /// The step of the increments, u.
+    #[serde(deserialize_with = "nullable_f64")]
     pub lsb: f64,
-    /// The same step as a rate, `lsb / tau0` (u/s).
-    pub rate_lsb: f64,
-    /// White phase of a counter with carry, `lsb / sqrt(12)` (u).
-    pub q_q: f64,
     /// White rate of rounded rate samples, `lsb / sqrt(12 tau0)` (u/sqrt(s)).
+    #[serde(deserialize_with = "nullable_f64")]
     pub n_q: f64,
-    /// Rise of `r' S^-1 r` with each floor forced in.
-    pub delta_chi2_angle: f64,
-    pub delta_chi2_rate: f64,
-    /// `N_q^2 / N^2` of the final fit (the share of the white rate that is rounding).
-    pub share_of_n2: f64,
     /// The unit's own white rate when the kind is `rate`: `sqrt(N^2 - N_q^2)` (u/sqrt(s)).
+    #[serde(deserialize_with = "nullable_f64")]
     pub n_unit: f64,
-}
-
-impl QuantizationFinding {
-    /// docs/records.md's `quantization` object.
-    pub fn to_json(&self) -> serde_json::Value {
-        serde_json::json!({
-            "kind": self.kind,
-            "lsb": self.lsb,
-            "rate_lsb": self.rate_lsb,
-            "q_q": self.q_q,
-            "n_q": self.n_q,
-            "delta_chi2_angle": self.delta_chi2_angle,
-            "delta_chi2_rate": self.delta_chi2_rate,
-            "share_of_n2": self.share_of_n2,
-            "n_unit": self.n_unit,
-        })
-    }
+    /// White phase of a counter with carry, `lsb / sqrt(12)` (u).
+    #[serde(deserialize_with = "nullable_f64")]
+    pub q_q: f64,
+    /// The same step as a rate, `lsb / tau0` (u/s).
+    #[serde(deserialize_with = "nullable_f64")]
+    pub rate_lsb: f64,
+    /// `N_q^2 / N^2` of the final fit (the share of the white rate that is rounding).
+    #[serde(deserialize_with = "nullable_f64")]
+    pub share_of_n2: f64,
 }
 
 /// Judges the step `lsb` (u) against the final model (`spec`, fitted as `fit`).

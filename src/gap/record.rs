@@ -4,8 +4,13 @@
 //! `model_effects`, `outliers`, `quantization`, `quantization_limited`, `alternatives`, and
 //! `run` when several inputs are analyzed).
 
+use std::collections::BTreeMap;
+
+use super::alternatives::Alternative;
 use super::diagnose::{Diagnosis, Verdict};
+use super::effects::{nullable_f64, EffectParams};
 use super::holdout::HoldoutGap;
+use super::quantization::QuantizationFinding;
 use serde::{Deserialize, Serialize};
 
 /// One region of the record.
@@ -17,16 +22,75 @@ pub struct RegionRecord {
     pub worst_ratio: f64,
 }
 
-/// One effect of the record (`params` with docs/records.md's names: u/s, s, Hz).
+/// One effect of the record: `kind` and `params` (docs/records.md's names and units: u/s, s,
+/// Hz), the gap with it added, and its parameters' intervals.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct EffectRecord {
-    pub kind: String,
-    pub params: serde_json::Value,
+    /// `kind` and `params`, written first.
+    #[serde(flatten)]
+    pub effect: RecordedEffect,
     pub gap_after: f64,
     /// 95% intervals of the parameters, by their `params` names (`{name: [lo, hi]}`;
     /// docs/gap.md, "Parameter intervals"); absent when none was computed (warm-ups, jumps).
-    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
-    pub intervals: std::collections::BTreeMap<String, [f64; 2]>,
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub intervals: BTreeMap<String, [f64; 2]>,
+}
+
+/// An effect as a record holds it: one of the kinds this version diagnoses, or a kind a newer
+/// version wrote, kept with its numbers under their record names so a reader can still show it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum RecordedEffect {
+    Known(EffectParams),
+    Unknown(UnknownEffect),
+}
+
+/// An effect of a kind this version does not know: its `kind` and its `params` (numbers, `null`
+/// where not finite) in the record's order.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct UnknownEffect {
+    pub kind: String,
+    pub params: BTreeMap<String, Option<f64>>,
+}
+
+impl RecordedEffect {
+    /// The record's `kind` string.
+    pub fn kind_name(&self) -> &str {
+        match self {
+            RecordedEffect::Known(p) => p.kind().name(),
+            RecordedEffect::Unknown(u) => &u.kind,
+        }
+    }
+}
+
+/// An entry of the record's `alternatives` (docs/gap.md, "Alternatives";
+/// [`super::alternatives::Alternative`]): `{coef, delta_chi2, effects: [{kind, params}], gap}`,
+/// the fields in alphabetical order, the order earlier versions wrote them in.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AlternativeRecord {
+    /// Its five terms `[Q, N, B, K, R]` (docs/theory.md section 2 units).
+    pub coef: [f64; 5],
+    /// Its `r' S^-1 r` less the chosen model's.
+    #[serde(deserialize_with = "nullable_f64")]
+    pub delta_chi2: f64,
+    pub effects: Vec<RecordedEffect>,
+    #[serde(deserialize_with = "nullable_f64")]
+    pub gap: f64,
+}
+
+impl AlternativeRecord {
+    pub fn new(a: &Alternative) -> Self {
+        AlternativeRecord {
+            coef: a.coef,
+            delta_chi2: a.delta_chi2,
+            effects: a
+                .effects
+                .iter()
+                .map(|p| RecordedEffect::Known(*p))
+                .collect(),
+            gap: a.gap,
+        }
+    }
 }
 
 /// The gap on a held-out run (docs/records.md's `gap_before`, `gap_after`; extra fields `carried`
@@ -109,12 +173,12 @@ pub struct DiagnosisRecord {
     /// What the values' step does to the curve (docs/gap.md, "Rate-sample quantization"):
     /// absent when the values are not whole multiples of one step.
     #[serde(skip_serializing_if = "Option::is_none", default)]
-    pub quantization: Option<serde_json::Value>,
+    pub quantization: Option<QuantizationFinding>,
     /// Other explanations that fit about as well as the one chosen (docs/gap.md,
     /// "Alternatives"): `[{effects: [{kind, params}], gap, delta_chi2, coef}]`, empty when the
     /// choice is clear.
     #[serde(default)]
-    pub alternatives: Vec<serde_json::Value>,
+    pub alternatives: Vec<AlternativeRecord>,
     /// Run index (0-based) when several inputs are analyzed, as in the other records.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub run: Option<usize>,
@@ -191,8 +255,7 @@ impl DiagnosisRecord {
                 .iter()
                 .enumerate()
                 .map(|(i, e)| EffectRecord {
-                    kind: e.params.kind().name().into(),
-                    params: e.params.to_json(),
+                    effect: RecordedEffect::Known(e.params),
                     gap_after: e.gap_after,
                     intervals: d
                         .effect_intervals
@@ -258,8 +321,8 @@ impl DiagnosisRecord {
                 rms_size: d.outliers.rms_size(),
                 max_size: d.outliers.max_size,
             },
-            quantization: d.quantization.map(|q| q.to_json()),
-            alternatives: d.alternatives.iter().map(|a| a.to_json()).collect(),
+            quantization: d.quantization,
+            alternatives: d.alternatives.iter().map(AlternativeRecord::new).collect(),
             run: None,
             unit: None,
             quantization_limited: d.quantization_limited.map(|q| QuantizationRecord {
@@ -279,5 +342,147 @@ impl DiagnosisRecord {
                 self.channel
             )
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gap::effects::EffectKind;
+    use crate::gap::quantization::QuantKind;
+
+    fn every_kind() -> Vec<EffectParams> {
+        vec![
+            EffectParams::GaussMarkov {
+                sigma: 0.3,
+                tau_c_s: 30.0,
+            },
+            EffectParams::Sinusoid {
+                amplitude: 0.25,
+                frequency_hz: 0.8,
+            },
+            EffectParams::OutputFilter {
+                time_constant_s: 0.01,
+            },
+            EffectParams::Warmup {
+                amplitude: -1.5,
+                time_constant_s: 60.0,
+            },
+            EffectParams::BiasJumps {
+                count: 3,
+                rms_size: 0.125,
+            },
+            EffectParams::Temperature {
+                coefficient: 0.02,
+                lo: f64::NAN,
+                hi: 0.03,
+            },
+            EffectParams::MovingAverage { taps: 8, stages: 2 },
+            EffectParams::SecondOrderFilter {
+                natural_frequency_hz: 20.0,
+                damping: 0.7,
+            },
+            EffectParams::ZeroPhaseFilter {
+                time_constant_s: 0.02,
+            },
+        ]
+    }
+
+    /// The bytes the untyped records wrote (a sorted JSON map per `params`, `null` for NaN),
+    /// written out by hand: the typed effects must write exactly these.
+    #[test]
+    fn effects_write_the_bytes_of_the_untyped_records() {
+        let want = [
+            r#"{"kind":"gauss_markov","params":{"sigma":0.3,"tau_c":30.0},"gap_after":1.5}"#,
+            r#"{"kind":"sinusoid","params":{"amplitude":0.25,"frequency":0.8},"gap_after":1.5}"#,
+            r#"{"kind":"output_filter","params":{"time_constant":0.01},"gap_after":1.5}"#,
+            r#"{"kind":"warmup","params":{"amplitude":-1.5,"time_constant":60.0},"gap_after":1.5}"#,
+            r#"{"kind":"bias_jumps","params":{"count":3,"rms_size":0.125},"gap_after":1.5}"#,
+            r#"{"kind":"temperature","params":{"coefficient":0.02,"hi":0.03,"lo":null},"gap_after":1.5}"#,
+            r#"{"kind":"moving_average","params":{"stages":2,"taps":8},"gap_after":1.5}"#,
+            r#"{"kind":"second_order_filter","params":{"damping":0.7,"natural_frequency":20.0},"gap_after":1.5}"#,
+            r#"{"kind":"zero_phase_filter","params":{"time_constant":0.02},"gap_after":1.5}"#,
+        ];
+        let kinds = every_kind();
+        assert_eq!(kinds.len(), EffectKind::ALL.len());
+        for (p, want) in kinds.iter().zip(want) {
+            let mut rec = EffectRecord {
+                effect: RecordedEffect::Known(*p),
+                gap_after: 1.5,
+                intervals: BTreeMap::new(),
+            };
+            let line = serde_json::to_string(&rec).unwrap();
+            assert_eq!(line, want);
+            // Read back: the same kind and numbers (NaN from `null`).
+            let back: EffectRecord = serde_json::from_str(&line).unwrap();
+            assert_eq!(serde_json::to_string(&back).unwrap(), want);
+            assert!(matches!(back.effect, RecordedEffect::Known(q) if q.kind() == p.kind()));
+            // `record_params` names the same parameters in the same order.
+            let v: serde_json::Value = serde_json::from_str(&line).unwrap();
+            let keys: Vec<&String> = v["params"].as_object().unwrap().keys().collect();
+            let named: Vec<&str> = p.record_params().iter().map(|(k, _)| *k).collect();
+            assert_eq!(keys, named, "{want}");
+            // Intervals follow `params`.
+            rec.intervals.insert(named[0].into(), [0.5, 2.0]);
+            let line = serde_json::to_string(&rec).unwrap();
+            assert!(line.ends_with(&format!(
+                r#""gap_after":1.5,"intervals":{{"{}":[0.5,2.0]}}}}"#,
+                named[0]
+            )));
+        }
+    }
+
+    /// A kind a newer version wrote is kept with its numbers, and written back as it was.
+    #[test]
+    fn an_unknown_kind_is_kept() {
+        let line = r#"{"kind":"vibration","params":{"amplitude":0.5,"band":null},"gap_after":2.0}"#;
+        let e: EffectRecord = serde_json::from_str(line).unwrap();
+        match &e.effect {
+            RecordedEffect::Unknown(u) => {
+                assert_eq!(u.kind, "vibration");
+                assert_eq!(u.params.get("amplitude"), Some(&Some(0.5)));
+                assert_eq!(u.params.get("band"), Some(&None));
+            }
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(e.effect.kind_name(), "vibration");
+        assert_eq!(serde_json::to_string(&e).unwrap(), line);
+    }
+
+    #[test]
+    fn quantization_and_alternatives_write_sorted_keys() {
+        let q = QuantizationFinding {
+            kind: QuantKind::Rate,
+            lsb: 0.5,
+            rate_lsb: 50.0,
+            q_q: 0.25,
+            n_q: 1.5,
+            delta_chi2_angle: 12.0,
+            delta_chi2_rate: 0.5,
+            share_of_n2: f64::INFINITY,
+            n_unit: 2.0,
+        };
+        let line = serde_json::to_string(&q).unwrap();
+        assert_eq!(
+            line,
+            r#"{"delta_chi2_angle":12.0,"delta_chi2_rate":0.5,"kind":"rate","lsb":0.5,"n_q":1.5,"n_unit":2.0,"q_q":0.25,"rate_lsb":50.0,"share_of_n2":null}"#
+        );
+        let back: QuantizationFinding = serde_json::from_str(&line).unwrap();
+        assert!(back.share_of_n2.is_nan() && back.kind == QuantKind::Rate);
+        let a = AlternativeRecord::new(&Alternative {
+            effects: vec![EffectParams::GaussMarkov {
+                sigma: 0.3,
+                tau_c_s: 30.0,
+            }],
+            gap: 1.25,
+            delta_chi2: 0.5,
+            coef: [0.0, 0.25, 0.5, 0.0, 1.0],
+        });
+        let line = serde_json::to_string(&a).unwrap();
+        assert_eq!(
+            line,
+            r#"{"coef":[0.0,0.25,0.5,0.0,1.0],"delta_chi2":0.5,"effects":[{"kind":"gauss_markov","params":{"sigma":0.3,"tau_c":30.0}}],"gap":1.25}"#
+        );
+        assert_eq!(serde_json::from_str::<AlternativeRecord>(&line).unwrap(), a);
     }
 }

@@ -41,11 +41,15 @@
 //! ([`AvarCovariance`]); each window of far lags evaluates only the series terms its nearest lag
 //! needs (2^-64 of the leading term). The two fits of a live tick take about 0.35 ms for 21
 //! octave taus, a cold fit about 7 ms (BENCHMARKS.md, "Noise-model fit").
+//!
+//! Pairs computed from scratch are also kept process-wide ([`clear_shared_cache`]): the sums
+//! depend only on `(m1, m2, M1, M2)`, so the channels of one run share them.
 
 use crate::allan::CurvePoint;
 use nalgebra::DMatrix;
 use std::collections::HashMap;
 use std::f64::consts::PI;
+use std::sync::{Arc, Mutex, OnceLock, PoisonError};
 
 /// Index of the random terms in [`PairSums`]: Q, N, B, K.
 const NQ: usize = 0;
@@ -528,6 +532,42 @@ impl PairState {
     }
 }
 
+/// Fresh pair states kept for the whole process, keyed by `(m1, m2, M1, M2)`: the lag sums are
+/// per unit coefficient, so they depend on nothing else, and the channels of one run (same
+/// cluster sizes, same counts) need the same ones. Eight channels' final fits computed each pair
+/// eight times (BENCHMARKS.md, "session 7"). Each entry is a cell that the first caller fills
+/// while later callers of the same key wait for it, so two threads fitting two channels at
+/// once compute each pair once. Cleared when it reaches [`SHARED_CAPACITY`] keys.
+type SharedFresh = HashMap<(u64, u64, u64, u64), Arc<OnceLock<PairState>>>;
+
+static SHARED_FRESH: Mutex<Option<SharedFresh>> = Mutex::new(None);
+
+/// Keys the process-wide cache holds before it is cleared (a pair state is about 0.5 kB).
+const SHARED_CAPACITY: usize = 1024;
+
+/// [`PairState::fresh`] through the process-wide cache ([`SharedFresh`]): the same value,
+/// computed once per key.
+fn shared_fresh(m1: u64, m2: u64, big_m1: u64, big_m2: u64) -> PairState {
+    let key = (m1, m2, big_m1, big_m2);
+    let cell = {
+        let mut guard = SHARED_FRESH.lock().unwrap_or_else(PoisonError::into_inner);
+        let map = guard.get_or_insert_with(HashMap::new);
+        if map.len() >= SHARED_CAPACITY && !map.contains_key(&key) {
+            map.clear();
+        }
+        Arc::clone(map.entry(key).or_default())
+    };
+    cell.get_or_init(|| PairState::fresh(m1, m2, big_m1, big_m2))
+        .clone()
+}
+
+/// Empties the process-wide cache of fresh pair states, so the next covariance computes every
+/// pair (benchmarks of a cold fit call this between iterations).
+pub fn clear_shared_cache() {
+    let mut guard = SHARED_FRESH.lock().unwrap_or_else(PoisonError::into_inner);
+    *guard = None;
+}
+
 /// Lag sums by quadrature (see the module doc). `m1, m2 >= 1`, `M1, M2 >= 1`.
 pub fn pair_sums(m1: u64, m2: u64, big_m1: u64, big_m2: u64) -> PairSums {
     PairState::fresh(m1, m2, big_m1, big_m2).sums()
@@ -758,7 +798,7 @@ impl AvarCovariance {
                 return st.sums();
             }
         }
-        let st = PairState::fresh(m1, m2, c1, c2);
+        let st = shared_fresh(m1, m2, c1, c2);
         let s = st.sums();
         if states.len() >= STATES_PER_PAIR {
             states.remove(0);

@@ -165,14 +165,6 @@ impl Judgement {
         Judgement { results, pass }
     }
 
-    /// The `summary` record's `limits` field.
-    pub fn limits_json(&self) -> Vec<serde_json::Value> {
-        self.results
-            .iter()
-            .filter_map(|r| serde_json::to_value(r).ok())
-            .collect()
-    }
-
     /// Both judgements together (e.g. per-run and run-to-run limits).
     pub fn merge(self, other: Judgement) -> Judgement {
         let mut r = self.results;

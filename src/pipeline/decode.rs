@@ -18,6 +18,12 @@
 //!   `M / 2` frame periods of the truth, i.e. always for siu8 (262 s) and to +-64 ms for
 //!   kvh1750. Formats without a counter (or whose counter is shared with other messages, as
 //!   hg4930's) use the time alone.
+//! - **Backlogs are not silences.** A host that did not read for a while (a loaded machine, a
+//!   stalled thread) finds the frames of that while waiting in the port's buffer and gets them in
+//!   one read. The silence is measured to the *first* frame of a read, whose latest possible
+//!   emission is the read time less `(n - 1)` frame periods for the `n` whole frames the read can
+//!   hold ([`DecodeStage::backlog_s`]). So a stall of the reader is no outage, and an outage
+//!   followed by a burst from the adapter's buffer is not sized too long by that burst.
 
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
@@ -100,6 +106,11 @@ pub struct DecodeStage {
     /// Counter modulus of the frame (1: no usable counter).
     modulus: u64,
     silence_limit_s: f64,
+    /// Bytes of the longest message kind (a read of `b` bytes holds at most `b / max_len` whole
+    /// frames of it, so the backlog is never overestimated).
+    max_len: usize,
+    /// Seconds before the current read that its first frame was due at the latest.
+    backlog_s: f64,
     last_frame: Option<(Option<u64>, Instant)>,
     pending: Option<Pending>,
     pieces: Vec<Bytes>,
@@ -123,13 +134,22 @@ impl DecodeStage {
         } else {
             f64::INFINITY
         };
+        let max_len = desc
+            .messages
+            .iter()
+            .map(|m| m.length)
+            .max()
+            .unwrap_or(1)
+            .max(1);
         DecodeStage {
+            max_len,
             decoder: Decoder::new(desc.clone()),
             reorder: Reorder::new(&desc),
             desc,
             retired: Health::default(),
             modulus,
             silence_limit_s,
+            backlog_s: 0.0,
             last_frame: None,
             pending: None,
             pieces: Vec::new(),
@@ -143,11 +163,13 @@ impl DecodeStage {
     pub fn push(&mut self, ev: SourceEvent, out: &mut impl FrameSink) -> u64 {
         match ev {
             SourceEvent::Data { bytes, at } => {
+                self.backlog_s = self.backlog_s(bytes.len());
                 let n = self.check_silence(at, out);
                 self.decoder.push(&bytes);
                 n + self.collect(at, out)
             }
             SourceEvent::Datagram { bytes, at } => {
+                self.backlog_s = self.backlog_s(bytes.len());
                 let n = self.check_silence(at, out);
                 match &mut self.reorder {
                     Some(r) => {
@@ -161,6 +183,7 @@ impl DecodeStage {
                 n + self.collect(at, out)
             }
             SourceEvent::Idle => {
+                self.backlog_s = 0.0;
                 if let Some(r) = &mut self.reorder {
                     r.flush(&mut self.pieces);
                     for p in self.pieces.drain(..) {
@@ -171,6 +194,18 @@ impl DecodeStage {
             }
             SourceEvent::Reconnected { .. } => self.restart(out),
         }
+    }
+
+    /// Seconds by which the first frame of a read of `len` bytes came before the read at least:
+    /// `(n - 1) / rate_hz` for the `n` whole frames it can hold (0 for a read of one frame or
+    /// less).
+    fn backlog_s(&self, len: usize) -> f64 {
+        (len / self.max_len).saturating_sub(1) as f64 / self.desc.rate_hz
+    }
+
+    /// Seconds from `since` to the first frame of the read that arrived at `at`.
+    fn silence_to(&self, at: Instant, since: Instant) -> f64 {
+        (at.saturating_duration_since(since).as_secs_f64() - self.backlog_s).max(0.0)
     }
 
     /// End of input: frames held for reordering and a frame cut off by the end.
@@ -187,13 +222,13 @@ impl DecodeStage {
         n
     }
 
-    /// A live stream silent for longer than half the counter period is an outage.
+    /// A live stream silent for longer than half the counter period is an outage (the silence
+    /// ends at the first frame of the read, [`Self::backlog_s`]).
     /// Returns the good frames released by the restart, if there was one.
     fn check_silence(&mut self, at: Instant, out: &mut impl FrameSink) -> u64 {
         match self.last_frame.filter(|_| self.live) {
             Some((_, t))
-                if self.pending.is_none()
-                    && at.saturating_duration_since(t).as_secs_f64() > self.silence_limit_s =>
+                if self.pending.is_none() && self.silence_to(at, t) > self.silence_limit_s =>
             {
                 self.restart(out)
             }
@@ -247,7 +282,7 @@ impl DecodeStage {
                 BlockEvent::Frame { seq, .. } => {
                     let counter = (m > 1).then_some(seq % m);
                     if let Some(p) = self.pending.take() {
-                        let silence = at.saturating_duration_since(p.since).as_secs_f64();
+                        let silence = self.silence_to(at, p.since);
                         let adv = outage_advance(p.prev_counter, counter, m, silence, rate);
                         if adv == 0 {
                             self.outage.duplicates += 1;
@@ -378,5 +413,75 @@ mod tests {
         // No counter: the time alone, at least one period.
         assert_eq!(outage_advance(None, None, 1, 0.0104, 100.0), 1);
         assert_eq!(outage_advance(None, None, 1, 2.0, 100.0), 200);
+    }
+
+    /// kvh1750 frames `from..to` of the shipped one-minute capture (1000 Hz, counter mod 128).
+    fn kvh(from: usize, to: usize) -> Bytes {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/fixtures/captures/kvh1750_stand_1min_seed1.kvh1750"
+        );
+        let all = std::fs::read(path).expect("kvh1750 fixture");
+        Bytes::copy_from_slice(&all[from * 36..to * 36])
+    }
+
+    /// Feeds `reads` (first frame, end frame, arrival in ms after t0) to a live kvh1750 stage:
+    /// (good frames, frames recorded as lost, outages).
+    fn live_run(reads: &[(usize, usize, u64)]) -> (u64, u64, u64) {
+        let desc = FrameDescriptor::load("kvh1750").expect("kvh1750");
+        assert_eq!(desc.frame_len(), 36);
+        let mut stage = DecodeStage::new(desc, true);
+        let mut out: Vec<crate::frame::FrameEvent> = Vec::new();
+        let t0 = Instant::now();
+        let mut frames = 0;
+        for &(from, to, ms) in reads {
+            let ev = SourceEvent::Data {
+                bytes: kvh(from, to),
+                at: t0 + Duration::from_millis(ms),
+            };
+            frames += stage.push(ev, &mut out);
+        }
+        frames += stage.finish(&mut out);
+        let lost = out
+            .iter()
+            .map(|e| match e {
+                crate::frame::FrameEvent::Gap { missing } => *missing,
+                crate::frame::FrameEvent::Frame(_) => 0,
+            })
+            .sum();
+        (frames, lost, stage.outage.outages)
+    }
+
+    /// Reads of 10 frames, each arriving when its last frame is due (1 ms per frame).
+    fn steady(from: usize, to: usize) -> Vec<(usize, usize, u64)> {
+        (from..to)
+            .step_by(10)
+            .map(|k| (k, k + 10, k as u64 + 9))
+            .collect()
+    }
+
+    /// A reader that stalls for 200 ms (four times the 64 ms that half of kvh1750's counter
+    /// period allows) finds 200 frames waiting and reads them at once: nothing was lost, and
+    /// it is no outage. Before the backlog was counted, the silence of 200 ms made the counter's
+    /// advance of 1 into 1 + 128 j with j = 2: 256 phantom frames lost.
+    #[test]
+    fn a_stalled_reader_is_not_an_outage() {
+        let mut reads = steady(0, 100);
+        // Frames 100..300 were due by 299 ms; the reader's last read was at 99 ms.
+        reads.push((100, 300, 299));
+        reads.extend(steady(300, 400));
+        assert_eq!(live_run(&reads), (400, 0, 0));
+    }
+
+    /// A real outage (frames 100..600 never arrive) followed by the adapter's buffered burst
+    /// of 200 frames in one read at 799 ms: the silence ends at the burst's first frame (600,
+    /// due at 600 ms), so 500 frames are lost; timed by the read instead (700 ms), the
+    /// counter's advance 117 + 128 j would be placed at j = 5 (757).
+    #[test]
+    fn an_outage_is_sized_to_the_first_frame_of_a_burst() {
+        let mut reads = steady(0, 100);
+        reads.push((600, 800, 799));
+        reads.extend(steady(800, 900));
+        assert_eq!(live_run(&reads), (400, 500, 1));
     }
 }

@@ -6,10 +6,10 @@
 //!
 //! The record's parameters (docs/records.md): rates (`sigma`, `amplitude`, `rms_size`) in u/s,
 //! times (`tau_c`, `time_constant`) in s, `frequency` in Hz, `coefficient` in u/s per deg C, and
-//! `count`. A kind or parameter this module does not know is shown by its record name and value.
+//! `count`. A kind this version does not know (a newer writer's, [`RecordedEffect::Unknown`]) is
+//! shown by its record names and values.
 
-use serde_json::Value;
-
+use crate::gap::record::RecordedEffect;
 use crate::model::units::{datasheet_factors, datasheet_units, IncrementUnit};
 
 /// What a parameter measures, which decides its unit.
@@ -103,17 +103,41 @@ pub struct ParamText {
 /// The effect's name and its parameters; `unit` is the channel's unit (`u` or empty when not
 /// known: rates are then in `u/s` only), `number` formats a value.
 pub fn effect_parts(
-    kind: &str,
-    params: &Value,
+    effect: &RecordedEffect,
     unit: &str,
     number: &dyn Fn(f64) -> String,
 ) -> (String, Vec<ParamText>) {
+    let kind = effect.kind_name();
+    // The record's parameters by name, in its order; NaN stands for `null`.
+    let params: Vec<(&str, f64)> = match effect {
+        RecordedEffect::Known(p) => p.record_params(),
+        RecordedEffect::Unknown(o) => o
+            .params
+            .iter()
+            .map(|(k, v)| (k.as_str(), v.unwrap_or(f64::NAN)))
+            .collect(),
+    };
+    let param = |key: &str| {
+        params
+            .iter()
+            .find(|(k, _)| *k == key)
+            .map(|(_, v)| *v)
+            .filter(|v| v.is_finite())
+    };
+    // A value as the record shows it: `null` where it is not a number.
+    let shown = |v: f64| {
+        if v.is_finite() {
+            number(v)
+        } else {
+            "null".to_string()
+        }
+    };
     let u = if unit.is_empty() { "u" } else { unit };
     // A rate in datasheet units: the factor and unit of the bias-instability coefficient (u/s).
     let ds =
         IncrementUnit::parse(u).map(|iu| (datasheet_factors(&iu)[2], datasheet_units(iu.kind)[2]));
     // `lo`, `hi` (a kind with one rate, e.g. temperature): that rate's 95% interval.
-    let bounds = (params["lo"].as_f64(), params["hi"].as_f64());
+    let bounds = (param("lo"), param("hi"));
     let rate = |v: f64, per: &str| -> String {
         let iv = |f: f64| match bounds {
             (Some(lo), Some(hi)) => format!(" [{}, {}]", number(lo * f), number(hi * f)),
@@ -132,24 +156,20 @@ pub fn effect_parts(
     };
     let Some((name, keys)) = known(kind) else {
         let kv = params
-            .as_object()
-            .map(|o| {
-                o.iter()
-                    .map(|(k, v)| ParamText {
-                        name: k.clone(),
-                        value: v.as_f64().map_or_else(|| v.to_string(), number),
-                    })
-                    .collect()
+            .iter()
+            .map(|(k, v)| ParamText {
+                name: k.to_string(),
+                value: shown(*v),
             })
-            .unwrap_or_default();
+            .collect();
         return (kind.replace('_', " "), kv);
     };
     let mut out = Vec::new();
     for (key, pname, dim) in keys {
-        let v = &params[*key];
-        let text = match (dim, v.as_f64()) {
+        let text = match (dim, param(key)) {
             (_, None) => "?".to_string(),
-            (Dim::Count, Some(x)) => v.as_u64().map_or_else(|| number(x), |n| n.to_string()),
+            (Dim::Count, Some(x)) if x >= 0.0 && x.fract() == 0.0 => format!("{x:.0}"),
+            (Dim::Count, Some(x)) => number(x),
             (Dim::Plain, Some(x)) => number(x),
             (Dim::Rate, Some(x)) => rate(x, ""),
             (Dim::RatePerC, Some(x)) => rate(x, " per deg C"),
@@ -171,29 +191,22 @@ pub fn effect_parts(
         .filter(|(_, _, d)| matches!(d, Dim::Rate | Dim::RatePerC))
         .count()
         == 1;
-    if let Some(o) = params.as_object() {
-        for (k, v) in o {
-            let shown =
-                (k == "lo" || k == "hi") && one_rate && bounds.0.is_some() && bounds.1.is_some();
-            if !shown && !keys.iter().any(|(key, _, _)| key == k) {
-                out.push(ParamText {
-                    name: k.replace('_', " "),
-                    value: v.as_f64().map_or_else(|| v.to_string(), number),
-                });
-            }
+    for (k, v) in &params {
+        let with_rate =
+            (*k == "lo" || *k == "hi") && one_rate && bounds.0.is_some() && bounds.1.is_some();
+        if !with_rate && !keys.iter().any(|(key, _, _)| key == k) {
+            out.push(ParamText {
+                name: k.replace('_', " "),
+                value: shown(*v),
+            });
         }
     }
     (name.to_string(), out)
 }
 
 /// `name: p1 = v1, p2 = v2` in one line.
-pub fn effect_line(
-    kind: &str,
-    params: &Value,
-    unit: &str,
-    number: &dyn Fn(f64) -> String,
-) -> String {
-    let (name, ps) = effect_parts(kind, params, unit, number);
+pub fn effect_line(effect: &RecordedEffect, unit: &str, number: &dyn Fn(f64) -> String) -> String {
+    let (name, ps) = effect_parts(effect, unit, number);
     if ps.is_empty() {
         return name;
     }

@@ -355,7 +355,7 @@ fn render_panel(svg: &mut String, series: &[Series], y_off: f64) -> f64 {
             .diagnosis
             .filter(|d| !d.model_effects.is_empty() && !d.effects.is_empty())
         {
-            let names: Vec<&str> = d.effects.iter().map(|e| e.kind.as_str()).collect();
+            let names: Vec<&str> = d.effects.iter().map(|e| e.effect.kind_name()).collect();
             let names: Vec<&str> = names.iter().map(|k| effect_name(k)).collect();
             legend.push(LegendLine::Style(
                 i,

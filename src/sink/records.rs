@@ -10,6 +10,7 @@
 use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::allan::{Curve, Stat};
+use crate::gap::effects::nullable_f64;
 use crate::model::aggregate::RunCoefs;
 use crate::model::fit::FitResult;
 use crate::model::readout::{Readout, Readouts};
@@ -23,12 +24,6 @@ fn finite(v: f64) -> Option<f64> {
 
 fn is_zero(n: &u64) -> bool {
     *n == 0
-}
-
-/// Reads a number that the writer may have printed as `null` (serde_json writes a non-finite f64
-/// so) back as NaN, so a record holding one still parses.
-fn nullable_f64<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 /// `curve`: one statistic of one channel. Arrays are parallel, one entry per tau.

@@ -12,6 +12,7 @@ use std::fmt::Write;
 
 use serde_json::Value;
 
+use crate::gap::record::RecordedEffect;
 use crate::gap::DiagnosisRecord;
 use crate::model::aggregate::{aggregate_channels, RunCoefs};
 use crate::model::terms::TERM_NAMES;
@@ -705,8 +706,8 @@ fn single_run_fits(h: &mut String, fits: &[&Labelled<FitRecord>]) {
 
 /// An effect's name and parameters in words and units, rates in datasheet units beside the
 /// record's u/s (sink::effect_text).
-pub fn effect_words(kind: &str, params: &Value, unit: &str) -> String {
-    crate::sink::effect_text::effect_line(kind, params, unit, &tick)
+pub fn effect_words(effect: &RecordedEffect, unit: &str) -> String {
+    crate::sink::effect_text::effect_line(effect, unit, &tick)
 }
 
 fn diagnosis(h: &mut String, res: &Results) {
@@ -765,7 +766,7 @@ fn diagnosis(h: &mut String, res: &Results) {
             .map(|e| {
                 format!(
                     "{} (gap {:.2})",
-                    esc(&effect_words(&e.kind, &e.params, &unit)),
+                    esc(&effect_words(&e.effect, &unit)),
                     e.gap_after
                 )
             })
@@ -891,8 +892,12 @@ fn interim_table(h: &mut String, interim: &[&Labelled<DiagnosisRecord>], several
                             .ok()
                             .and_then(|v| v.as_str().map(String::from))
                             .unwrap_or_default();
-                        let kinds: Vec<&str> =
-                            d.rec.effects.iter().map(|e| effect_name(&e.kind)).collect();
+                        let kinds: Vec<&str> = d
+                            .rec
+                            .effects
+                            .iter()
+                            .map(|e| effect_name(e.effect.kind_name()))
+                            .collect();
                         let _ = write!(
                             h,
                             "<td class=\"l\">{} {:.2}&rarr;{:.2}{}</td>",

@@ -15,6 +15,7 @@ use std::io::Write;
 
 use serde_json::Value;
 
+use crate::gap::record::RecordedEffect;
 use crate::gap::DiagnosisRecord;
 use crate::model::terms::TERM_NAMES;
 use crate::model::units::{
@@ -400,8 +401,8 @@ fn diagnosis_of<'a>(res: &'a Results, k: RunKey, channel: &str) -> Option<&'a Di
 
 /// An effect in a few words with its parameters named and in units, rates in datasheet units
 /// beside the record's u/s (sink::effect_text).
-pub fn effect_brief(kind: &str, params: &Value, unit: &str) -> String {
-    let (name, ps) = crate::sink::effect_text::effect_parts(kind, params, unit, &sig3);
+pub fn effect_brief(effect: &RecordedEffect, unit: &str) -> String {
+    let (name, ps) = crate::sink::effect_text::effect_parts(effect, unit, &sig3);
     if ps.is_empty() {
         return name;
     }
@@ -422,7 +423,7 @@ pub fn diagnosis_line(d: &DiagnosisRecord, unit: &str, style: &TableStyle) -> St
     let effects: Vec<String> = d
         .effects
         .iter()
-        .map(|e| effect_brief(&e.kind, &e.params, unit))
+        .map(|e| effect_brief(&e.effect, unit))
         .collect();
     let misses = || -> String {
         d.regions

@@ -175,9 +175,11 @@ fn a_replay_stopped_by_sigint_says_so_and_exits_1() {
     let rx = stderr_lines(&mut child);
     std::thread::sleep(Duration::from_millis(1500));
     signal(&child, "-INT");
-    let (code, took) = wait_at_most(&mut child, Duration::from_secs(10));
+    // The replay had about 298 s of real time left: it must stop within seconds. The bound is
+    // wide because the end of the run (eight channels' fits) takes seconds on a loaded host.
+    let (code, took) = wait_at_most(&mut child, Duration::from_secs(30));
     assert_eq!(code, Some(1));
-    assert!(took < Duration::from_secs(3), "{took:?}");
+    assert!(took < Duration::from_secs(15), "{took:?}");
     let err: Vec<String> = rx.try_iter().collect();
     assert!(
         err.iter()

@@ -4,8 +4,8 @@
 
 use allanscope::allan::CurvePoint;
 use allanscope::model::avar_cov::{
-    cov_points, flicker_far_field, pair_sums, pair_sums_advanced, pair_sums_exact,
-    second_difference_cov, AvarCovariance, CovPoint, PairSums,
+    clear_shared_cache, cov_points, flicker_far_field, pair_sums, pair_sums_advanced,
+    pair_sums_exact, second_difference_cov, AvarCovariance, CovPoint, PairSums,
 };
 use nalgebra::DMatrix;
 use std::f64::consts::{LN_2, PI};
@@ -210,7 +210,12 @@ fn white_fm_edf_matches_known_large_sample_form() {
 
 /// Full-overlap octave points m = 1 .. 2^18 of an `n`-increment run.
 fn octave_grid(n: u64) -> Vec<CovPoint> {
-    (0..19)
+    octave_grid_to(n, 19)
+}
+
+/// Full-overlap octave points m = 1 .. 2^(levels - 1) of an `n`-increment run.
+fn octave_grid_to(n: u64, levels: u32) -> Vec<CovPoint> {
+    (0..levels)
         .map(|k| {
             let m = 1u64 << k;
             CovPoint {
@@ -334,6 +339,49 @@ fn incremental_sums_match_exact_lag_sum() {
             FLICKER_LIN_TOL,
             &format!("advanced/exact {what}"),
         );
+    }
+}
+
+#[test]
+fn shared_cache_keeps_each_count_apart() {
+    // Two threads fit two runs of different lengths at once, twice each, through the
+    // process-wide cache of pair sums: every entry is the one `pair_sums` computes for its own
+    // counts (a cache keyed without the counts would hand one run the other's sums, 2% apart).
+    clear_shared_cache();
+    let c = [0.0, 1.0, 0.0, 0.0, 0.0];
+    let runs = [1u64 << 16, (1u64 << 16) + (1 << 16) / 50];
+    let got: Vec<(u64, DMatrix<f64>)> = std::thread::scope(|s| {
+        let hs: Vec<_> = runs
+            .iter()
+            .map(|&n| {
+                s.spawn(move || {
+                    let first = AvarCovariance::new().matrix(1.0, &octave_grid_to(n, 15), &c);
+                    let again = AvarCovariance::new().matrix(1.0, &octave_grid_to(n, 15), &c);
+                    assert_eq!(
+                        first, again,
+                        "n = {n}: a cached pair differs from its first value"
+                    );
+                    (n, again)
+                })
+            })
+            .collect();
+        hs.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    for (n, m) in got {
+        let pts = octave_grid_to(n, 15);
+        for (i, a) in pts.iter().enumerate() {
+            for (j, b) in pts.iter().enumerate().skip(i) {
+                let s = pair_sums(a.m, b.m, a.count, b.count);
+                // White rate alone at tau0 = 1: Cov = 2 quad_NN / (4 m1^2 m2^2 M1 M2).
+                let t12 = (a.m * a.m * b.m * b.m) as f64;
+                let want = 2.0 * s.quad[1][1] / (4.0 * t12 * a.count as f64 * b.count as f64);
+                assert!(
+                    rel(m[(i, j)], want) < 1e-15,
+                    "n = {n} ({i}, {j}): {} vs {want}",
+                    m[(i, j)]
+                );
+            }
+        }
     }
 }
 
