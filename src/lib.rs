@@ -35,7 +35,7 @@
 //! the tree disagree):
 //!
 //! ```text
-//! lib.rs                   the library's map (this text) and its modules
+//! lib.rs                   the library's map (this list, the dependency order) and its modules
 //! main.rs                  the binary: logging to standard error, the command line, exit statuses
 //! cli/                     the binary's commands (clap), one file each; not part of the library
 //!   analyze.rs             `analyze`: a capture or text columns through the pipeline
