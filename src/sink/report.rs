@@ -10,22 +10,19 @@
 
 use std::fmt::Write;
 
-use serde_json::Value;
-
 use crate::gap::record::RecordedEffect;
 use crate::gap::DiagnosisRecord;
 use crate::model::aggregate::{aggregate_channels, RunCoefs};
+use crate::model::limits::LimitResult;
 use crate::model::terms::TERM_NAMES;
 use crate::sink::dynamic::render_dynamic_svg;
 use crate::sink::plot::{
     coef_units, effect_name, escape as esc, ratio_text, render_svg, tick, Series,
 };
-use crate::sink::records::{FitRecord, ReadoutRecord};
-use crate::sink::results::{Completion, Labelled, ResultFile, Results};
-
-fn num(v: &Value) -> String {
-    opt(v.as_f64())
-}
+use crate::sink::records::{
+    AggregateRecord, FitRecord, HealthRecord, ReadoutRecord, TimeColumnRecord,
+};
+use crate::sink::results::{Labelled, ResultFile, Results};
 
 fn opt(v: Option<f64>) -> String {
     v.map_or("&ndash;".into(), tick)
@@ -50,16 +47,8 @@ pub enum Banner {
 
 /// PASS when every judged limit passes, FAIL when any fails, else undecided.
 pub fn banner_of(res: &Results) -> Banner {
-    let verdicts: Vec<&str> = res
-        .limits
-        .iter()
-        .filter_map(|l| l.rec.get("verdict").and_then(Value::as_str))
-        .collect();
-    let summary_pass: Vec<Option<bool>> = res
-        .summaries
-        .iter()
-        .map(|s| s.rec.get("pass").and_then(Value::as_bool))
-        .collect();
+    let verdicts: Vec<&str> = res.limits.iter().map(|l| l.rec.verdict.name()).collect();
+    let summary_pass: Vec<Option<bool>> = res.summaries.iter().map(|s| s.rec.record.pass).collect();
     if verdicts.is_empty() && summary_pass.iter().all(Option::is_none) {
         Banner::NoLimits
     } else if verdicts.contains(&"fail") || summary_pass.contains(&Some(false)) {
@@ -151,7 +140,7 @@ fn banner(h: &mut String, res: &Results) {
         .summaries
         .iter()
         .filter_map(|s| {
-            let c = Completion::of_summary(&s.rec);
+            let c = &s.rec.completion;
             c.is_warning()
                 .then(|| format!("{}: {}", s.label, c.phrase()))
         })
@@ -164,27 +153,22 @@ fn banner(h: &mut String, res: &Results) {
     let named = |verdict: &str| -> Vec<String> {
         res.limits
             .iter()
-            .filter(|l| l.rec["verdict"].as_str() == Some(verdict))
+            .filter(|l| l.rec.verdict.name() == verdict)
             .map(|l| {
-                let interval = match (l.rec["lo"].as_f64(), l.rec["hi"].as_f64()) {
+                let interval = match (l.rec.lo, l.rec.hi) {
                     (Some(lo), Some(hi)) => format!(" [{}, {}]", tick(lo), tick(hi)),
                     _ => String::new(),
                 };
                 format!(
                     "{} {} {} {} {} (measured {}{interval}{})",
-                    esc(l.rec["channel"].as_str().unwrap_or("")),
-                    esc(l.rec["coef"].as_str().unwrap_or("")),
-                    if l.rec["bound"].as_str() == Some("min") {
-                        "&ge;"
-                    } else {
-                        "&le;"
-                    },
-                    num(&l.rec["limit"]),
+                    esc(&l.rec.channel),
+                    esc(l.rec.coef.name()),
+                    if l.rec.bound == "min" { "&ge;" } else { "&le;" },
+                    tick(l.rec.limit),
                     esc(&limit_unit(res, &l.rec)),
-                    if l.rec["value"].is_f64() {
-                        num(&l.rec["value"])
-                    } else {
-                        "not determined".into()
+                    match l.rec.value {
+                        Some(v) => tick(v),
+                        None => "not determined".into(),
                     },
                     if res.summaries.len() > 1 {
                         format!(", {}", esc(&l.label))
@@ -226,49 +210,38 @@ fn runs_table(h: &mut String, res: &Results) {
     }
     h.push_str("<h2>Runs</h2>\n<table><tr><th class=\"l\">run</th><th class=\"l\">input</th><th>data (s)</th><th>&#964;0 (s)</th><th class=\"l\">channels</th><th>unreadable rows</th><th class=\"l\">input read</th></tr>\n");
     for s in &res.summaries {
-        let v = &s.rec;
-        let c = Completion::of_summary(v);
-        let chans = v["channels"]
-            .as_array()
-            .map(|a| {
-                a.iter()
-                    .filter_map(Value::as_str)
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            })
-            .unwrap_or_default();
+        let v = &s.rec.record;
+        let c = &s.rec.completion;
+        let chans = v.channels.join(", ");
         let _ = writeln!(
             h,
             "<tr><td class=\"l\">{}</td><td class=\"l\">{}</td><td>{}</td><td>{}</td><td class=\"l\">{}</td><td>{}</td><td class=\"l{}\">{}{}</td></tr>",
             esc(&s.label),
-            esc(v["input"].as_str().unwrap_or("")),
-            num(&v["t_data"]),
-            num(&v["tau0"]),
+            esc(&v.input),
+            tick(v.t_data),
+            tick(v.tau0),
             esc(&chans),
-            v["bad_rows"].as_u64().unwrap_or(0),
+            v.bad_rows,
             if c.is_warning() { " warn" } else { "" },
             esc(&c.phrase()),
-            time_column_note(&v["time_column"])
+            v.time_column.as_ref().map(time_column_note).unwrap_or_default()
         );
     }
     h.push_str("</table>\n");
 }
 
 /// What a text input's time column found (summary `time_column`), under the run's "input read".
-fn time_column_note(tc: &Value) -> String {
-    let Some(name) = tc["name"].as_str().map(esc) else {
-        return String::new();
-    };
-    let n = |k: &str| tc[k].as_u64().unwrap_or(0);
-    let text = if tc["used"].as_bool() == Some(false) {
+fn time_column_note(tc: &TimeColumnRecord) -> String {
+    let name = esc(&tc.name);
+    let text = if !tc.used {
         format!("time column `{name}` not used: its step is not &tau;0")
     } else {
         format!(
             "time column `{name}`: {} jumps = {} missing samples (gaps), {} steps backwards, {} off-step",
-            n("gaps"),
-            n("missing_samples"),
-            n("backwards"),
-            n("irregular") + n("discontinuities")
+            tc.gaps,
+            tc.missing_samples,
+            tc.backwards,
+            tc.irregular + tc.discontinuities
         )
     };
     format!(
@@ -289,7 +262,7 @@ fn limits_table(h: &mut String, res: &Results) {
     h.push_str("<th class=\"l\">channel</th><th>coefficient</th><th class=\"l\">over</th><th class=\"l\">bound</th><th>limit</th><th class=\"l\">unit</th><th>value</th><th>95% interval</th><th class=\"l\">verdict</th></tr>\n");
     for l in &res.limits {
         let v = &l.rec;
-        let verdict = v["verdict"].as_str().unwrap_or("?");
+        let verdict = v.verdict.name();
         let class = match verdict {
             "pass" => "pass",
             "fail" => "fail",
@@ -299,22 +272,23 @@ fn limits_table(h: &mut String, res: &Results) {
         if several {
             let _ = write!(h, "<td class=\"l\">{}</td>", esc(&l.label));
         }
-        let note = v["note"]
-            .as_str()
+        let note = v
+            .note
+            .as_deref()
             .map(|n| format!("<br><span class=\"small\">{}</span>", esc(n)))
             .unwrap_or_default();
         let _ = writeln!(
             h,
             "<td class=\"l\">{}</td><td>{}</td><td class=\"l\">{}</td><td class=\"l\">{}</td><td>{}</td><td class=\"l\">{}</td><td>{}</td><td>[{}, {}]</td><td class=\"l {class}\">{}{note}</td></tr>",
-            esc(v["channel"].as_str().unwrap_or("")),
-            esc(v["coef"].as_str().unwrap_or("")),
-            esc(v["over"].as_str().unwrap_or("run")),
-            esc(v["bound"].as_str().unwrap_or("max")),
-            num(&v["limit"]),
+            esc(&v.channel),
+            esc(v.coef.name()),
+            esc(v.over.name()),
+            esc(&v.bound),
+            tick(v.limit),
             esc(&limit_unit(res, v)),
-            num(&v["value"]),
-            num(&v["lo"]),
-            num(&v["hi"]),
+            opt(v.value),
+            opt(v.lo),
+            opt(v.hi),
             esc(&verdict.to_uppercase())
         );
     }
@@ -322,23 +296,13 @@ fn limits_table(h: &mut String, res: &Results) {
 }
 
 /// A limit's unit; `native` spelt out as the coefficient's unit for the channel's unit.
-fn limit_unit(res: &Results, l: &Value) -> String {
-    let u = l["unit"].as_str().unwrap_or("native");
-    if u != "native" {
-        return u.to_string();
+fn limit_unit(res: &Results, l: &LimitResult) -> String {
+    if l.unit != "native" {
+        return l.unit.clone();
     }
-    let ch = l["channel"].as_str().unwrap_or("");
-    let idx = TERM_NAMES
-        .iter()
-        .position(|k| Some(*k) == l["coef"].as_str());
-    let cu = res
-        .fits
-        .iter()
-        .find(|f| f.rec.channel == ch)
-        .map(|f| f.rec.unit.clone());
-    match (idx, cu) {
-        (Some(i), Some(cu)) => coef_units(&cu)[i].clone(),
-        _ => "native".into(),
+    match res.fits.iter().find(|f| f.rec.channel == l.channel) {
+        Some(f) => coef_units(&f.rec.unit)[l.coef.index()].clone(),
+        None => "native".into(),
     }
 }
 
@@ -425,7 +389,7 @@ fn noise_model(h: &mut String, res: &Results) {
     }
     // The aggregate records written with the runs; computed here as `aggregate` would when the
     // files came from separate analyses.
-    let mut aggs: Vec<Value> = res.aggregates.iter().map(|a| a.rec.clone()).collect();
+    let mut aggs: Vec<AggregateRecord> = res.aggregates.iter().map(|a| a.rec.clone()).collect();
     if aggs.is_empty() {
         let mut runs: Vec<(RunKey, Vec<RunCoefs>)> = Vec::new();
         for f in &finals {
@@ -438,12 +402,7 @@ fn noise_model(h: &mut String, res: &Results) {
         let runs: Vec<Vec<RunCoefs>> = runs.into_iter().map(|(_, v)| v).collect();
         aggs = aggregate_channels(&runs)
             .iter()
-            .map(|a| {
-                let s = a.stats.as_ref();
-                serde_json::json!({"type": "aggregate", "channel": a.channel, "unit": a.unit, "coef": a.coef,
-                    "n": s.map_or(0, |s| s.n), "mean": s.map(|s| s.mean), "sd": s.and_then(|s| s.sd),
-                    "ci_t": s.and_then(|s| s.ci_t), "ci_z": s.and_then(|s| s.ci_z)})
-            })
+            .map(AggregateRecord::new)
             .collect();
     }
     h.push_str("<p>The seed paper's table 2 layout: one table per channel, one row per run (named by its file), the coefficients as columns scaled by the power of ten in the heading; &ndash; = not determined. The mean, the 95% interval of the mean (mean &plusmn; 1.96 sd/&radic;n, as the paper; the Student interval below it) and the sd are over the runs that determined the coefficient.</p>\n");
@@ -457,11 +416,7 @@ fn noise_model(h: &mut String, res: &Results) {
     for (ch, unit) in channels {
         let rows: Vec<&&Labelled<FitRecord>> =
             finals.iter().filter(|f| f.rec.channel == ch).collect();
-        let agg_of = |k: &str| {
-            aggs.iter().find(|a| {
-                a["channel"].as_str() == Some(ch.as_str()) && a["coef"].as_str() == Some(k)
-            })
-        };
+        let agg_of = |k: &str| aggs.iter().find(|a| a.channel == ch && a.coef == k);
         let units = coef_units(&unit);
         let value = |f: &FitRecord, i: usize| -> Option<f64> {
             let c = f.coef.by_index(i);
@@ -471,7 +426,9 @@ fn noise_model(h: &mut String, res: &Results) {
             .iter()
             .map(|&i| {
                 let mut v: Vec<f64> = rows.iter().filter_map(|f| value(&f.rec, i)).collect();
-                if let Some(m) = agg_of(TERM_NAMES[i]).and_then(|a| a["mean"].as_f64()) {
+                if let Some(m) =
+                    agg_of(TERM_NAMES[i]).and_then(|a| a.mean.filter(|m| m.is_finite()))
+                {
                     v.push(m);
                 }
                 column_scale(&v)
@@ -507,38 +464,35 @@ fn noise_model(h: &mut String, res: &Results) {
             }
             h.push_str("</tr>\n");
         }
-        let stat_row =
-            |h: &mut String, name: &str, key: &str, cell: &dyn Fn(&Value, i32) -> String| {
-                let _ = write!(
-                    h,
-                    "<tr class=\"stat\" data-row=\"{key}\"><td class=\"l\">{name}</td>"
-                );
-                for (c, &i) in PAPER_ORDER.iter().enumerate() {
-                    let txt =
-                        agg_of(TERM_NAMES[i]).map_or("&ndash;".into(), |a| cell(a, scales[c]));
-                    let _ = write!(h, "<td>{txt}</td>");
-                }
-                h.push_str("</tr>\n");
-            };
-        let pair = |v: &Value, e: i32| match v.as_array() {
-            Some(p) if p.len() == 2 => format!(
-                "[{}; {}]",
-                scaled(p[0].as_f64(), e),
-                scaled(p[1].as_f64(), e)
-            ),
-            _ => "&ndash;".into(),
+        let stat_row = |h: &mut String,
+                        name: &str,
+                        key: &str,
+                        cell: &dyn Fn(&AggregateRecord, i32) -> String| {
+            let _ = write!(
+                h,
+                "<tr class=\"stat\" data-row=\"{key}\"><td class=\"l\">{name}</td>"
+            );
+            for (c, &i) in PAPER_ORDER.iter().enumerate() {
+                let txt = agg_of(TERM_NAMES[i]).map_or("&ndash;".into(), |a| cell(a, scales[c]));
+                let _ = write!(h, "<td>{txt}</td>");
+            }
+            h.push_str("</tr>\n");
         };
-        stat_row(h, "mean", "mean", &|a, e| scaled(a["mean"].as_f64(), e));
+        // As JSON shows it: a bound that is not finite is `null`, shown as a dash.
+        let fin = |v: f64| v.is_finite().then_some(v);
+        let pair = |v: Option<[f64; 2]>, e: i32| match v {
+            Some([lo, hi]) => format!("[{}; {}]", scaled(fin(lo), e), scaled(fin(hi), e)),
+            None => "&ndash;".into(),
+        };
+        stat_row(h, "mean", "mean", &|a, e| scaled(a.mean.and_then(fin), e));
         stat_row(h, "95% interval of the mean", "ci_z", &|a, e| {
-            pair(&a["ci_z"], e)
+            pair(a.ci_z, e)
         });
-        stat_row(h, "Student 95% interval", "ci_t", &|a, e| {
-            pair(&a["ci_t"], e)
+        stat_row(h, "Student 95% interval", "ci_t", &|a, e| pair(a.ci_t, e));
+        stat_row(h, "sd (1 sigma)", "sd", &|a, e| {
+            scaled(a.sd.and_then(fin), e)
         });
-        stat_row(h, "sd (1 sigma)", "sd", &|a, e| scaled(a["sd"].as_f64(), e));
-        stat_row(h, "runs determined (n)", "n", &|a, _| {
-            a["n"].as_u64().map_or("&ndash;".into(), |n| n.to_string())
-        });
+        stat_row(h, "runs determined (n)", "n", &|a, _| a.n.to_string());
         // The mean and its interval again in datasheet units, as a lead quotes them.
         if let Some(iu) = crate::model::units::IncrementUnit::parse(&unit) {
             let f = crate::model::units::datasheet_factors(&iu);
@@ -550,14 +504,11 @@ fn noise_model(h: &mut String, res: &Results) {
             for &i in &PAPER_ORDER {
                 let cell = agg_of(TERM_NAMES[i])
                     .and_then(|a| {
-                        let m = a["mean"].as_f64()? * f[i];
-                        let ci = a["ci_z"].as_array().and_then(|p| {
-                            Some(format!(
-                                " [{}, {}]",
-                                tick(p.first()?.as_f64()? * f[i]),
-                                tick(p.get(1)?.as_f64()? * f[i])
-                            ))
-                        });
+                        let m = a.mean.filter(|m| m.is_finite())? * f[i];
+                        let ci = a
+                            .ci_z
+                            .filter(|p| p.iter().all(|x| x.is_finite()))
+                            .map(|[lo, hi]| format!(" [{}, {}]", tick(lo * f[i]), tick(hi * f[i])));
                         Some(format!(
                             "<span data-value=\"{m:e}\">{}</span>{}<br><span class=\"small\">{}</span>",
                             tick(m),
@@ -956,7 +907,7 @@ fn health(h: &mut String, res: &Results) {
     }
     h.push_str("<h2>Decoder health</h2>\n<table><tr><th class=\"l\">run</th><th>frames</th><th>checksum errors</th><th>resynchronisations</th><th>missing</th><th>duplicated</th><th>bytes skipped</th></tr>\n");
     // The last health record of each run.
-    let mut last: Vec<&Labelled<Value>> = Vec::new();
+    let mut last: Vec<&Labelled<HealthRecord>> = Vec::new();
     for hl in &res.health {
         match last
             .iter_mut()
@@ -968,20 +919,17 @@ fn health(h: &mut String, res: &Results) {
     }
     for hl in last {
         let v = &hl.rec;
-        let n = |k: &str| v[k].as_u64().map_or("&ndash;".into(), |x| x.to_string());
-        let bad = ["crc_errors", "missing", "duplicates"]
-            .iter()
-            .any(|k| v[*k].as_u64().unwrap_or(0) > 0);
+        let bad = v.crc_errors > 0 || v.missing > 0 || v.duplicates > 0;
         let _ = writeln!(
             h,
             "<tr><td class=\"l\">{}</td><td>{}</td><td{c}>{}</td><td>{}</td><td{c}>{}</td><td{c}>{}</td><td>{}</td></tr>",
             esc(&hl.label),
-            n("frames"),
-            n("crc_errors"),
-            n("resyncs"),
-            n("missing"),
-            n("duplicates"),
-            n("bytes_skipped"),
+            v.frames,
+            v.crc_errors,
+            v.resyncs,
+            v.missing,
+            v.duplicates,
+            v.bytes_skipped,
             c = if bad { " class=\"warn\"" } else { "" }
         );
     }

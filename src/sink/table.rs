@@ -17,12 +17,13 @@ use serde_json::Value;
 
 use crate::gap::record::RecordedEffect;
 use crate::gap::DiagnosisRecord;
+use crate::model::limits::{LimitResult, Scope, Verdict};
 use crate::model::terms::TERM_NAMES;
 use crate::model::units::{
     datasheet_factors, datasheet_units, native_units, IncrementUnit, SensorKind,
 };
-use crate::sink::records::{FitRecord, ReadoutRecord, ReadoutsRecord};
-use crate::sink::results::{Completion, Labelled, ResultFile, Results};
+use crate::sink::records::{AggregateRecord, FitRecord, ReadoutRecord, ReadoutsRecord};
+use crate::sink::results::{Labelled, ResultFile, Results, RunSummary};
 
 /// How the text is dressed.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -233,18 +234,14 @@ fn runs_in_order(res: &Results) -> Vec<RunKey> {
     }
     for s in &res.summaries {
         // The closing summary of several runs (run-to-run limits) has no channels.
-        if s.rec
-            .get("channels")
-            .and_then(Value::as_array)
-            .is_some_and(|c| !c.is_empty())
-        {
+        if !s.rec.record.channels.is_empty() {
             add((s.file, s.run));
         }
     }
     keys
 }
 
-fn summary_of(res: &Results, k: RunKey) -> Option<&Value> {
+fn summary_of(res: &Results, k: RunKey) -> Option<&RunSummary> {
     res.summaries
         .iter()
         .rev()
@@ -267,7 +264,7 @@ fn run_heading(h: &mut String, res: &Results, k: RunKey, style: &TableStyle) {
                 .map(|d| d.label.clone())
         })
         .unwrap_or_default();
-    let input = match summary.and_then(|s| s["input"].as_str()) {
+    let input = match summary.map(|s| s.record.input.as_str()) {
         Some("-") => "standard input".to_string(),
         Some(i) => i.to_string(),
         None => label,
@@ -278,10 +275,13 @@ fn run_heading(h: &mut String, res: &Results, k: RunKey, style: &TableStyle) {
     }
     let run = k.1.map(|r| format!("run {}: ", r + 1)).unwrap_or_default();
     let mut line = style.bold(&format!("{run}{input}"));
-    if let Some(s) = summary {
-        let t = s["t_data"].as_f64().unwrap_or(0.0);
-        let tau0 = s["tau0"].as_f64().unwrap_or(0.0);
-        let nch = s["channels"].as_array().map_or(0, Vec::len);
+    if let Some(RunSummary {
+        record: s,
+        completion: c,
+    }) = summary
+    {
+        let (t, tau0) = (s.t_data, s.tau0);
+        let nch = s.channels.len();
         let _ = write!(
             line,
             ": {} of data at tau0 = {}, {nch} channel{}",
@@ -289,7 +289,6 @@ fn run_heading(h: &mut String, res: &Results, k: RunKey, style: &TableStyle) {
             tau_text(tau0),
             if nch == 1 { "" } else { "s" }
         );
-        let c = Completion::of_summary(s);
         let phrase = c.phrase();
         let _ = write!(
             line,
@@ -300,14 +299,13 @@ fn run_heading(h: &mut String, res: &Results, k: RunKey, style: &TableStyle) {
                 phrase
             }
         );
-        let gaps: u64 = s["segments"].as_array().map_or(0, |v| {
-            v.iter()
-                .filter_map(Value::as_u64)
-                .map(|n| n.saturating_sub(1))
-                .max()
-                .unwrap_or(0)
-        });
-        let bad = s["bad_rows"].as_u64().unwrap_or(0);
+        let gaps: u64 = s
+            .segments
+            .iter()
+            .map(|n| n.saturating_sub(1))
+            .max()
+            .unwrap_or(0);
+        let bad = s.bad_rows;
         let mut notes = Vec::new();
         if gaps > 0 {
             notes.push(format!("{gaps} gap{}", if gaps == 1 { "" } else { "s" }));
@@ -318,27 +316,29 @@ fn run_heading(h: &mut String, res: &Results, k: RunKey, style: &TableStyle) {
                 if bad == 1 { "" } else { "s" }
             ));
         }
-        if let Some(n) = s["invalid_values"].as_u64().filter(|n| *n > 0) {
-            notes.push(format!("{n} implausible values read as gaps"));
+        if s.invalid_values > 0 {
+            notes.push(format!(
+                "{} implausible values read as gaps",
+                s.invalid_values
+            ));
         }
-        let tc = &s["time_column"];
-        if let Some(name) = tc["name"].as_str() {
-            let n = |k: &str| tc[k].as_u64().unwrap_or(0);
-            if tc["used"].as_bool() == Some(false) {
+        if let Some(tc) = &s.time_column {
+            let name = &tc.name;
+            if !tc.used {
                 notes.push(style.yellow(&format!(
                     "time column `{name}` not used: its step is not tau0"
                 )));
-            } else if n("gaps") + n("backwards") + n("irregular") + n("discontinuities") > 0 {
+            } else if tc.gaps + tc.backwards + tc.irregular + tc.discontinuities > 0 {
                 notes.push(format!(
                     "time column `{name}`: {} jumps = {} missing samples, {} backwards, {} off-step",
-                    n("gaps"),
-                    n("missing_samples"),
-                    n("backwards"),
-                    n("irregular") + n("discontinuities")
+                    tc.gaps,
+                    tc.missing_samples,
+                    tc.backwards,
+                    tc.irregular + tc.discontinuities
                 ));
             }
         }
-        if let Some(e) = s["capture_error"].as_str() {
+        if let Some(e) = &s.capture_error {
             notes.push(style.red(&format!("capture stopped: {e}")));
         }
         if !notes.is_empty() {
@@ -348,22 +348,22 @@ fn run_heading(h: &mut String, res: &Results, k: RunKey, style: &TableStyle) {
     h.push_str(&line);
     h.push('\n');
     if let Some(hl) = res.health.iter().rev().find(|x| (x.file, x.run) == k) {
-        let n = |key: &str| hl.rec[key].as_u64().unwrap_or(0);
-        let mut parts = vec![format!("{} frames", n("frames"))];
-        let lost = n("missing");
+        let v = &hl.rec;
+        let mut parts = vec![format!("{} frames", v.frames)];
+        let lost = v.missing;
         parts.push(if lost > 0 {
             style.yellow(&format!("{lost} lost"))
         } else {
             "none lost".into()
         });
-        for (key, name) in [
-            ("crc_errors", "checksum errors"),
-            ("resyncs", "resyncs"),
-            ("duplicates", "duplicates"),
-            ("bytes_skipped", "bytes skipped"),
+        for (n, name) in [
+            (v.crc_errors, "checksum errors"),
+            (v.resyncs, "resyncs"),
+            (v.duplicates, "duplicates"),
+            (v.bytes_skipped, "bytes skipped"),
         ] {
-            if n(key) > 0 {
-                parts.push(format!("{} {name}", n(key)));
+            if n > 0 {
+                parts.push(format!("{n} {name}"));
             }
         }
         let _ = writeln!(h, "  decoder: {}", parts.join(", "));
@@ -473,38 +473,37 @@ pub fn diagnosis_line(d: &DiagnosisRecord, unit: &str, style: &TableStyle) -> St
 }
 
 /// The limits judged on one channel of a run, one cell each: `N max 0.005 deg/sqrt(h): PASS`.
-fn limit_cells(limits: &[&Value], style: &TableStyle) -> Vec<String> {
+fn limit_cells(limits: &[&LimitResult], style: &TableStyle) -> Vec<String> {
     limits
         .iter()
         .map(|l| {
-            let coef = l["coef"].as_str().unwrap_or("?");
-            let bound = l["bound"].as_str().unwrap_or("?");
-            let op = if bound == "min" { ">=" } else { "<=" };
-            let unit = l["unit"].as_str().unwrap_or("");
-            let verdict = l["verdict"].as_str().unwrap_or("?");
-            let v = match verdict {
-                "pass" => style.green("PASS"),
-                "fail" => style.red("FAIL"),
-                "undecided" => style.yellow("UNDECIDED"),
-                _ => style.yellow("NOT JUDGED"),
+            let coef = l.coef.name();
+            let op = if l.bound == "min" { ">=" } else { "<=" };
+            let unit = &l.unit;
+            let v = match l.verdict {
+                Verdict::Pass => style.green("PASS"),
+                Verdict::Fail => style.red("FAIL"),
+                Verdict::Undecided => style.yellow("UNDECIDED"),
+                Verdict::Invalid => style.yellow("NOT JUDGED"),
             };
-            let over = match l["over"].as_str() {
-                Some("runs_sd") => "sd over runs of ",
-                Some("runs_mean") => "mean over runs of ",
-                _ => "",
+            let over = match l.over {
+                Scope::RunsSd => "sd over runs of ",
+                Scope::RunsMean => "mean over runs of ",
+                Scope::Run => "",
             };
-            let value = match (l["value"].as_f64(), l["lo"].as_f64(), l["hi"].as_f64()) {
+            let value = match (l.value, l.lo, l.hi) {
                 (Some(v), lo, hi) => format!(" (fit {} {})", sig3(v), interval(lo, hi)),
                 (None, _, Some(hi)) => format!(" (not determined, < {})", sig3(hi)),
                 _ => String::new(),
             };
-            let note = l["note"]
-                .as_str()
+            let note = l
+                .note
+                .as_deref()
                 .map(|n| format!(": {n}"))
                 .unwrap_or_default();
             format!(
                 "{v} {over}{coef} {op} {} {unit}{value}{note}",
-                sig3(l["limit"].as_f64().unwrap_or(f64::NAN))
+                sig3(l.limit)
             )
         })
         .collect()
@@ -564,11 +563,11 @@ fn channel_block(h: &mut String, res: &Results, k: RunKey, f: &FitRecord, style:
             sig3(q)
         );
     }
-    let limits: Vec<&Value> = res
+    let limits: Vec<&LimitResult> = res
         .limits
         .iter()
-        .filter(|l| (l.file, l.run) == k && l.rec["channel"].as_str() == Some(f.channel.as_str()))
-        .filter(|l| matches!(l.rec["over"].as_str(), None | Some("run")))
+        .filter(|l| (l.file, l.run) == k && l.rec.channel == f.channel)
+        .filter(|l| l.rec.over == Scope::Run)
         .map(|l| &l.rec)
         .collect();
     for (j, c) in limit_cells(&limits, style).iter().enumerate() {
@@ -661,10 +660,7 @@ fn aggregates(h: &mut String, res: &Results, runs: &Results, style: &TableStyle)
     );
     let mut channels: Vec<(String, String)> = Vec::new();
     for a in &res.aggregates {
-        let k = (
-            a.rec["channel"].as_str().unwrap_or("").to_string(),
-            a.rec["unit"].as_str().unwrap_or("").to_string(),
-        );
+        let k = (a.rec.channel.clone(), a.rec.unit.clone());
         if !channels.contains(&k) {
             channels.push(k);
         }
@@ -679,10 +675,9 @@ fn aggregates(h: &mut String, res: &Results, runs: &Results, style: &TableStyle)
             None => ([1.0; 5], native_units(&unit)),
         };
         let agg = |i: usize| {
-            res.aggregates.iter().find(|a| {
-                a.rec["channel"].as_str() == Some(ch.as_str())
-                    && a.rec["coef"].as_str() == Some(TERM_NAMES[i])
-            })
+            res.aggregates
+                .iter()
+                .find(|a| a.rec.channel == ch && a.rec.coef == TERM_NAMES[i])
         };
         let mut rows = vec![
             std::iter::once("run".to_string())
@@ -705,36 +700,34 @@ fn aggregates(h: &mut String, res: &Results, runs: &Results, style: &TableStyle)
             }
             rows.push(row);
         }
-        let stat = |name: &str, cell: &dyn Fn(&Value, f64) -> Option<String>| -> Vec<String> {
-            std::iter::once(name.to_string())
-                .chain(PAPER_ORDER.iter().map(|&i| {
-                    agg(i)
-                        .and_then(|a| cell(&a.rec, factors[i]))
-                        .unwrap_or_else(|| "-".into())
-                }))
-                .collect()
-        };
+        let stat =
+            |name: &str, cell: &dyn Fn(&AggregateRecord, f64) -> Option<String>| -> Vec<String> {
+                std::iter::once(name.to_string())
+                    .chain(PAPER_ORDER.iter().map(|&i| {
+                        agg(i)
+                            .and_then(|a| cell(&a.rec, factors[i]))
+                            .unwrap_or_else(|| "-".into())
+                    }))
+                    .collect()
+            };
+        // As JSON shows it: a number that is not finite is `null`, shown as a dash.
+        let fin = |v: f64| v.is_finite().then_some(v);
         rows.push(stat("mean", &|a, f| {
-            a["mean"].as_f64().map(|m| sig3(m * f))
+            a.mean.and_then(fin).map(|m| sig3(m * f))
         }));
         rows.push(stat("95% interval", &|a, f| {
-            let p = a["ci_z"].as_array()?;
-            Some(interval(
-                p.first()?.as_f64().map(|x| x * f),
-                p.get(1)?.as_f64().map(|x| x * f),
-            ))
+            let [lo, hi] = a.ci_z?;
+            Some(interval(fin(lo).map(|x| x * f), fin(hi).map(|x| x * f)))
         }));
-        rows.push(stat("sd", &|a, f| a["sd"].as_f64().map(|m| sig3(m * f))));
-        rows.push(stat("runs determined", &|a, _| {
-            a["n"].as_u64().map(|n| n.to_string())
-        }));
+        rows.push(stat("sd", &|a, f| a.sd.and_then(fin).map(|m| sig3(m * f))));
+        rows.push(stat("runs determined", &|a, _| Some(a.n.to_string())));
         let _ = writeln!(h, "\n{} [{unit}]", style.bold(&ch));
         h.push_str(&aligned_right(&rows, "  "));
     }
-    let run_limits: Vec<&Value> = res
+    let run_limits: Vec<&LimitResult> = res
         .limits
         .iter()
-        .filter(|l| matches!(l.rec["over"].as_str(), Some("runs_sd") | Some("runs_mean")))
+        .filter(|l| l.rec.over != Scope::Run)
         .map(|l| &l.rec)
         .collect();
     for c in limit_cells(&run_limits, style) {
@@ -768,16 +761,8 @@ fn aligned_right(rows: &[Vec<String>], indent: &str) -> String {
 
 /// The overall verdict of the datasheet limits: every judged bound, and the runs' `pass`.
 fn verdict_line(res: &Results, style: &TableStyle) -> Option<String> {
-    let verdicts: Vec<&str> = res
-        .limits
-        .iter()
-        .filter_map(|l| l.rec["verdict"].as_str())
-        .collect();
-    let pass: Vec<Option<bool>> = res
-        .summaries
-        .iter()
-        .map(|s| s.rec["pass"].as_bool())
-        .collect();
+    let verdicts: Vec<&str> = res.limits.iter().map(|l| l.rec.verdict.name()).collect();
+    let pass: Vec<Option<bool>> = res.summaries.iter().map(|s| s.rec.record.pass).collect();
     if verdicts.is_empty() && pass.iter().all(Option::is_none) {
         return None;
     }
