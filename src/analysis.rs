@@ -1,8 +1,12 @@
 //! One run's analysis: per-channel accumulators fed with [`Chunk`]s, read into curves, fitted,
-//! and turned into records. Plain synchronous code: the pipeline runs it on a worker thread and
+//! and diagnosed: per channel a typed [`ChannelReport`] (channel_report.rs), which the writer
+//! turns into records. Plain synchronous code: the pipeline runs it on a worker thread and
 //! tests and benchmarks call it directly. It never knows where the samples came from.
 
 mod block;
+mod channel_report;
+
+pub use channel_report::ChannelReport;
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -12,14 +16,10 @@ use crate::allan::accum::{AccumConfig, ChannelAccumulator, Overlap};
 use crate::allan::curve::{build_curves, AlphaSource};
 use crate::allan::{Curve, Stat};
 use crate::frame::{ChannelValue, FrameEvent};
-use crate::gap::{diagnose, DiagnoseOptions, DiagnosisRecord, GapConfig, GapEvidence};
+use crate::gap::{GapConfig, GapEvidence};
 use crate::input::Chunk;
 use crate::model::fit::{FitOptions, FitResult, Fitter};
-use crate::model::readout::readouts;
-use crate::model::units::{quantization_ratio, IncrementUnit};
-use crate::sink::records::{
-    CoefRecord, CurveRecord, DatasheetRecord, FitRecord, ReadoutsRecord, Record, SummaryRecord,
-};
+use crate::sink::records::{Record, SummaryRecord};
 
 /// What the values of a text column are.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -524,13 +524,14 @@ impl RunAnalysis {
         }
     }
 
-    /// Curve and fit records of every channel as of now.
+    /// Every channel's results as of now, in channel order: its curves, fit, read-outs and
+    /// diagnosis ([`ChannelReport`]), for a program that uses them directly.
     ///
-    /// The final records of several channels are made on as many threads as the machine has
-    /// cores (channels split in consecutive parts, records put back in channel order): each
-    /// channel's curves, fit and diagnosis depend on that channel alone, so the records are the
-    /// same, and the end of a replay (the fits are most of it) takes a fraction of the wall time.
-    pub fn records(&mut self, final_: bool) -> Vec<Record> {
+    /// The final reports of several channels are made on as many threads as the machine has
+    /// cores (channels split in consecutive parts, put back in channel order): each channel's
+    /// curves, fit and diagnosis depend on that channel alone, so they are the same, and the end
+    /// of a replay (the fits are most of it) takes a fraction of the wall time.
+    pub fn reports(&mut self, final_: bool) -> Vec<ChannelReport> {
         let opts = &self.opts;
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
         let parts = if final_ {
@@ -539,20 +540,29 @@ impl RunAnalysis {
             1
         };
         if parts <= 1 {
-            return channel_records(&mut self.channels, opts, final_);
+            return channel_report::channel_reports(&mut self.channels, opts, final_);
         }
         let per = self.channels.len().div_ceil(parts);
         std::thread::scope(|s| {
             let handles: Vec<_> = self
                 .channels
                 .chunks_mut(per)
-                .map(|chs| s.spawn(move || channel_records(chs, opts, final_)))
+                .map(|chs| s.spawn(move || channel_report::channel_reports(chs, opts, final_)))
                 .collect();
             handles
                 .into_iter()
                 .flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
                 .collect()
         })
+    }
+
+    /// The records of every channel's [`reports`](RunAnalysis::reports), in the order the
+    /// writer prints them (per channel: its curves, fit, diagnosis).
+    pub fn records(&mut self, final_: bool) -> Vec<Record> {
+        self.reports(final_)
+            .iter()
+            .flat_map(ChannelReport::records)
+            .collect()
     }
 
     /// The final fits, one per channel (`None` where no fit could be made), after [`records`].
@@ -657,58 +667,6 @@ impl RunAnalysis {
     }
 }
 
-/// The records of `channels` (see [`RunAnalysis::records`]), in channel order.
-fn channel_records(
-    channels: &mut [ChannelState],
-    opts: &AnalysisOptions,
-    final_: bool,
-) -> Vec<Record> {
-    let run = opts.run;
-    let mut out = Vec::new();
-    for ch in channels {
-        if final_ {
-            // The final fit starts from a fresh covariance cache, so it does not depend on
-            // how many interim refits came before (the cache's incremental updates agree
-            // with a fresh computation only to ~1e-11).
-            ch.fitter = Fitter::new();
-        }
-        let (curves, fit) = analyze_channel(ch, opts);
-        for c in &curves {
-            out.push(Record::Curve(CurveRecord::new(
-                &ch.setup.name,
-                &ch.setup.unit,
-                c,
-                final_,
-                run,
-            )));
-        }
-        if let Some(f) = fit {
-            let readouts = curves
-                .iter()
-                .find(|c| c.stat == Stat::Avar)
-                .map(|c| Box::new(ReadoutsRecord::new(&readouts(&c.points), &ch.setup.unit)));
-            let mut rec = fit_record(&ch.setup, &f, final_, ch.acc.t_data_s(), run);
-            rec.readouts = readouts;
-            out.push(Record::from(rec));
-            ch.last_fit = Some(f);
-        }
-        if let Some(g) = &mut ch.gap {
-            // The diagnosis refreshed with the fits (docs/theory.md section 5); a run still too
-            // short for it gives no record yet.
-            match diagnose(&g.snapshot(), &DiagnoseOptions::default()) {
-                Ok(d) => {
-                    let mut rec = DiagnosisRecord::new(&ch.setup.name, &d, None, final_);
-                    rec.run = run;
-                    rec.unit = Some(ch.setup.unit.clone());
-                    out.push(Record::Diagnosis(Box::new(rec)));
-                }
-                Err(e) => tracing::debug!("{}: {e}", ch.setup.name),
-            }
-        }
-    }
-    out
-}
-
 /// Reads a channel's accumulator into curves, fits the AVAR curve, and re-derives each tau's
 /// noise type from the fitted model (the term that dominates there) for the final edf.
 fn analyze_channel(
@@ -758,33 +716,4 @@ fn analyze_channel(
         .and_then(|c| ch.fitter.fit(&c.points, fit_opts).ok())
         .unwrap_or(first);
     (curves, Some(fit))
-}
-
-fn fit_record(
-    setup: &ChannelSetup,
-    f: &FitResult,
-    final_: bool,
-    t_data_s: f64,
-    run: Option<usize>,
-) -> FitRecord {
-    let coef = CoefRecord::new(f);
-    let datasheet = IncrementUnit::parse(&setup.unit).map(|u| DatasheetRecord::new(&coef, &u));
-    let q = &f.coef[0];
-    FitRecord {
-        channel: setup.name.clone(),
-        unit: setup.unit.clone(),
-        r#final: final_,
-        t_data: t_data_s,
-        coef,
-        gof: f.gof.is_finite().then_some(f.gof),
-        method: f.method.name().into(),
-        model_c: f.c.to_vec(),
-        datasheet,
-        readouts: None,
-        q_over_lsb: setup
-            .counts_lsb
-            .filter(|_| q.determined)
-            .map(|lsb| quantization_ratio(q.value, lsb)),
-        run,
-    }
 }
