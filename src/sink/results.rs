@@ -186,10 +186,20 @@ impl Results {
     /// The final diagnosis of a curve's channel in the same run, if any (the last one written
     /// when none is marked final).
     pub fn diagnosis_of(&self, c: &Labelled<CurveRecord>) -> Option<&DiagnosisRecord> {
+        self.diagnosis_in((c.file, c.run), &c.rec.channel)
+    }
+
+    /// The final diagnosis of `channel` in the run `(file, run index)`, if any (the last one
+    /// written when none is marked final).
+    pub fn diagnosis_in(
+        &self,
+        run: (usize, Option<usize>),
+        channel: &str,
+    ) -> Option<&DiagnosisRecord> {
         let mine: Vec<&Labelled<DiagnosisRecord>> = self
             .diagnoses
             .iter()
-            .filter(|d| d.file == c.file && d.run == c.run && d.rec.channel == c.rec.channel)
+            .filter(|d| (d.file, d.run) == run && d.rec.channel == channel)
             .collect();
         mine.iter()
             .rev()

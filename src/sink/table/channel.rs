@@ -317,7 +317,7 @@ pub(super) fn channel_block(
             if j == 0 { "limits:   " } else { "          " }
         );
     }
-    if let Some(d) = diagnosis_of(res, k, &f.channel) {
+    if let Some(d) = res.diagnosis_in(k, &f.channel) {
         let _ = writeln!(h, "  diagnosis: {}", diagnosis_line(d, &f.unit, style));
     }
 }

@@ -91,7 +91,7 @@ pub(super) fn diagnosis_only(
             continue;
         }
         seen.push(ch);
-        let d = diagnosis_of(res, k, ch).unwrap_or(&d.rec);
+        let d = res.diagnosis_in(k, ch).unwrap_or(&d.rec);
         let unit = d.unit.as_deref().unwrap_or("u");
         let _ = writeln!(
             h,

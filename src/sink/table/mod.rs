@@ -94,19 +94,6 @@ fn fits_of(res: &Results, k: RunKey) -> Vec<&Labelled<FitRecord>> {
     out
 }
 
-fn diagnosis_of<'a>(res: &'a Results, k: RunKey, channel: &str) -> Option<&'a DiagnosisRecord> {
-    let mine: Vec<&Labelled<DiagnosisRecord>> = res
-        .diagnoses
-        .iter()
-        .filter(|d| (d.file, d.run) == k && d.rec.channel == channel)
-        .collect();
-    mine.iter()
-        .rev()
-        .find(|d| d.rec.is_final)
-        .or(mine.last())
-        .map(|d| &d.rec)
-}
-
 /// The whole table of `res` (every run in it, then the run-to-run statistics and the verdict).
 pub fn render(res: &Results, style: &TableStyle) -> String {
     render_with_runs(res, res, style)
