@@ -166,6 +166,7 @@ fn run_units(r: &RunArgs, cfg: &StandConfig, plan: RunPlan) -> Result<()> {
         every_wall: plan.every_wall_s.map(Duration::from_secs_f64),
         quiet_after: Duration::from_secs_f64(plan.quiet_after_s),
         workers: None,
+        crash_hook: super::process::abort_hook(r.abort_after_frames),
     };
     // Records of many units: room for a full set of interim records of each before a live
     // run coalesces them (allanscope::pipeline::writer).

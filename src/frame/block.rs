@@ -254,6 +254,30 @@ impl FrameBlock {
         true
     }
 
+    /// Appends the counts `values` to every column, channel by channel (`values(channel,
+    /// column)` extends one column), for frames already begun whose values were left to be
+    /// filled column by column (the decoder's batch of clean frames). False (and nothing
+    /// pushed) unless every column holds counts.
+    #[inline]
+    pub(crate) fn extend_count_columns(
+        &mut self,
+        mut values: impl FnMut(usize, &mut Vec<i64>),
+    ) -> bool {
+        if !self.all_counts {
+            return false;
+        }
+        for (ch, col) in self.columns.iter_mut().enumerate() {
+            values(ch, col);
+        }
+        true
+    }
+
+    /// Every column holds counts.
+    #[inline]
+    pub(crate) fn all_counts(&self) -> bool {
+        self.all_counts
+    }
+
     /// Channel `channel` of the frame begun last is the count `c`.
     #[inline]
     pub fn push_count(&mut self, channel: usize, c: i64) {

@@ -255,16 +255,22 @@ pub struct Decoder {
     finished: bool,
     /// A frame whose counter jumped, held for the next frame to confirm (its bytes).
     held: Option<Vec<u8>>,
+    /// Clean frames begun in `out` whose channels are still to be read: where each message
+    /// starts in the bytes being decoded ([`FramePlan::fill_columns`], at the end of each
+    /// [`Decoder::run`] or before any other frame's values).
+    deferred: Vec<usize>,
+    /// Bytes of a push joined to the pending ones ([`Decoder::push`]): twice the longest
+    /// message and its sync offset, so the message they share is complete in the join.
+    stitch: usize,
 }
-
-/// Compact the buffer once this many consumed bytes sit at its front.
-const COMPACT_AT_BYTES: usize = 1 << 16;
 
 impl Decoder {
     pub fn new(desc: FrameDescriptor) -> Self {
         let cycle = desc.interleave.as_ref().map_or(1, |i| i.count + 1);
         let modulus = desc.frame().counter.as_ref().map_or(1, |c| c.modulus);
         let plan = FramePlan::new(&desc);
+        let longest = desc.messages.iter().map(|m| m.length).max().unwrap_or(0);
+        let stitch = 2 * (longest + desc.sync.offset + desc.sync.bytes.len());
         Decoder {
             out: FrameBlock::with_kinds(&plan.kinds, 0),
             plan,
@@ -284,6 +290,8 @@ impl Decoder {
             next_index: 0,
             finished: false,
             held: None,
+            deferred: Vec::new(),
+            stitch,
         }
     }
 
@@ -331,22 +339,49 @@ impl Decoder {
 
     /// Appends bytes and decodes as far as they allow. Bytes pushed after [`Decoder::finish`]
     /// start a new stretch of the same stream.
+    ///
+    /// The bytes are decoded where they lie, not copied into the decoder: only the pending
+    /// bytes (at most about one message) and the first [`Decoder::stitch`] bytes of `bytes`
+    /// are joined in the buffer to finish the message they share; once the scan is past the
+    /// pending bytes it goes on in `bytes` itself, and only what is left at the end is kept.
+    /// The scan stops only where the bytes run out (a message or sync not complete), so going
+    /// on from there with more bytes gives exactly what one pass over all of them gives.
     pub fn push(&mut self, bytes: &[u8]) {
         self.finished = false;
         self.health.bytes_in += bytes.len() as u64;
-        if self.pos >= COMPACT_AT_BYTES || (self.pos > 0 && self.pos == self.buf.len()) {
-            self.buf.drain(..self.pos);
-            self.pos = 0;
+        let pending = self.buf.len() - self.pos;
+        self.buf.drain(..self.pos);
+        self.pos = 0;
+        if pending > 0 {
+            let k = bytes.len().min(self.stitch);
+            self.buf.extend_from_slice(&bytes[..k]);
+            self.run_buffered();
+            if self.pos < pending {
+                // Still inside the pending bytes (a short push): the rest joins them.
+                self.buf.extend_from_slice(&bytes[k..]);
+                self.run_buffered();
+                return;
+            }
+            self.pos -= pending;
         }
-        self.buf.extend_from_slice(bytes);
-        self.run();
+        self.run(bytes);
+        self.buf.clear();
+        self.buf.extend_from_slice(&bytes[self.pos..]);
+        self.pos = 0;
+    }
+
+    /// [`Decoder::run`] on the decoder's own buffer.
+    fn run_buffered(&mut self) {
+        let buf = std::mem::take(&mut self.buf);
+        self.run(&buf);
+        self.buf = buf;
     }
 
     /// End of input: a message cut off by the end is skipped, and whatever follows it is still
     /// searched. Afterwards `pending()` is 0.
     pub fn finish(&mut self) {
         self.finished = true;
-        self.run();
+        self.run_buffered();
         let rest = self.buf.len() - self.pos;
         self.skip(rest);
         // Nothing follows to contradict a held frame's jump.
@@ -435,18 +470,33 @@ impl Decoder {
         }
     }
 
-    fn run(&mut self) {
+    /// Decodes `data` (the buffer, or a pushed read when nothing was pending) from `self.pos`
+    /// as far as it allows, every begun frame's values filled in at the end.
+    fn run(&mut self, data: &[u8]) {
+        self.scan(data);
+        self.fill_deferred(data);
+    }
+
+    /// The deferred frames' channels, read column by column from `data`.
+    fn fill_deferred(&mut self, data: &[u8]) {
+        if !self.deferred.is_empty() {
+            self.plan.fill_columns(data, &self.deferred, &mut self.out);
+            self.deferred.clear();
+        }
+    }
+
+    fn scan(&mut self, data: &[u8]) {
         let sync_len = self.desc.sync.bytes.len();
         let sync_off = self.desc.sync.offset;
         loop {
             let from = self.pos + sync_off;
-            let found = find(&self.buf, from, &self.desc.sync.bytes);
+            let found = find(data, from, &self.desc.sync.bytes);
             let Some(q) = found else {
                 // No sync: keep only the bytes that could still begin one.
                 let keep_from = if self.finished {
-                    self.buf.len()
+                    data.len()
                 } else {
-                    (self.buf.len() + 1).saturating_sub(sync_len + sync_off)
+                    (data.len() + 1).saturating_sub(sync_len + sync_off)
                 };
                 let n = keep_from.saturating_sub(self.pos);
                 self.skip(n);
@@ -454,7 +504,7 @@ impl Decoder {
             };
             let start = q - sync_off;
             self.skip(start - self.pos);
-            let avail = self.buf.len() - start;
+            let avail = data.len() - start;
             // Which kind? (id bytes)
             let kind = if self.desc.messages.len() == 1 && self.desc.messages[0].id.is_empty() {
                 Some(0)
@@ -468,7 +518,7 @@ impl Decoder {
                     }
                     return;
                 }
-                let id = &self.buf[start + id_off..start + id_off + id_len];
+                let id = &data[start + id_off..start + id_off + id_len];
                 self.desc.messages.iter().position(|m| m.id == id)
             };
             let Some(kind) = kind else {
@@ -483,18 +533,18 @@ impl Decoder {
                 }
                 return;
             }
-            let msg = &self.buf[start..start + len];
+            let msg = &data[start..start + len];
             if !checksum_ok(&self.desc.messages[kind], msg) {
                 self.health.crc_errors += 1;
                 self.skip(1);
                 continue;
             }
-            self.accept(kind, start, len);
+            self.accept(kind, data, start, len);
             self.pos = start + len;
         }
     }
 
-    fn accept(&mut self, kind: usize, start: usize, len: usize) {
+    fn accept(&mut self, kind: usize, data: &[u8], start: usize, len: usize) {
         self.health.bytes_accepted += len as u64;
         if self.skipping {
             self.health.resyncs += 1;
@@ -502,10 +552,10 @@ impl Decoder {
         }
         let is_frame = kind == self.desc.frame_kind;
         if is_frame && self.tracker.cycle == 1 && self.desc.messages[kind].counter.is_some() {
-            return self.accept_counted_frame(start, len);
+            return self.accept_counted_frame(data, start, len);
         }
         let spec = &self.desc.messages[kind];
-        let msg = &self.buf[start..start + len];
+        let msg = &data[start..start + len];
         let tracked = is_frame
             || self
                 .desc
@@ -544,6 +594,7 @@ impl Decoder {
             return;
         }
         self.next_index = seq + 1;
+        self.fill_deferred(data);
         self.plan
             .decode(msg, seq, &mut self.health.invalid_values, &mut self.out);
         self.health.frames += 1;
@@ -553,9 +604,10 @@ impl Decoder {
 impl Decoder {
     /// The frame at `buf[start..start + len]`, of a format with its own counter (no
     /// interleave): the counter rules with the plausibility check of the module documentation.
-    fn accept_counted_frame(&mut self, start: usize, len: usize) {
+    fn accept_counted_frame(&mut self, data: &[u8], start: usize, len: usize) {
         let m = self.tracker.modulus;
-        let c = self.plan.counter(&self.buf[start..start + len]);
+        let msg = &data[start..start + len];
+        let c = self.plan.counter(msg);
         if self.held.is_none() {
             if let Some((slot, prev, true)) = self.tracker.last {
                 // Clean data: the counter advanced by one. What `commit` does for an advance
@@ -568,14 +620,25 @@ impl Decoder {
                     self.tracker.last = Some((seq, c, true));
                     self.tracker.last_seq = Some(seq);
                     self.next_index = seq + 1;
-                    let msg = &self.buf[start..start + len];
-                    self.plan
-                        .decode(msg, seq, &mut self.health.invalid_values, &mut self.out);
+                    let bad = self.plan.begin(msg, seq, &mut self.out);
+                    if self.plan.deferrable(msg, bad, &self.out) {
+                        self.deferred.push(start);
+                    } else {
+                        self.fill_deferred(data);
+                        self.plan.read_channels(
+                            msg,
+                            bad,
+                            &mut self.health.invalid_values,
+                            &mut self.out,
+                        );
+                    }
                     self.health.frames += 1;
                     return;
                 }
             }
         }
+        // Every frame before this one has its values before any other path adds frames.
+        self.fill_deferred(data);
         if let Some(held) = self.held.take() {
             let h = self.plan.counter(&held);
             let prev = self.tracker.last.map_or(h, |l| l.1);
@@ -603,9 +666,8 @@ impl Decoder {
             .last
             .is_some_and(|(_, prev, _)| !matches!((c + m - prev % m) % m, 0 | 1));
         if jumped {
-            self.held = Some(self.buf[start..start + len].to_vec());
+            self.held = Some(msg.to_vec());
         } else {
-            let msg = &self.buf[start..start + len];
             commit(
                 &self.plan,
                 &mut self.tracker,

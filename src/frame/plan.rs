@@ -235,6 +235,21 @@ impl FramePlan {
     /// values marked invalid or not usable are counted in `invalid`.
     #[inline]
     pub(crate) fn decode(&self, msg: &[u8], seq: u64, invalid: &mut u64, out: &mut FrameBlock) {
+        let bad = self.begin(msg, seq, out);
+        if self.deferrable(msg, bad, out) {
+            // A batch of one frame, starting at 0.
+            self.fill_columns(msg, &[0], out);
+        } else {
+            self.read_channels(msg, bad, invalid, out);
+        }
+    }
+
+    /// Starts frame `seq` in `out` (its event: counter, temperature, status) and returns the
+    /// status bits that mark a value invalid; the channels follow, from
+    /// [`FramePlan::read_channels`] or, for a [`FramePlan::deferrable`] frame, later from
+    /// [`FramePlan::fill_columns`].
+    #[inline]
+    pub(crate) fn begin(&self, msg: &[u8], seq: u64, out: &mut FrameBlock) -> u64 {
         let status = self.status.and_then(|(at, load, _)| load.bits(msg, at));
         // The status bits that mark a value invalid: set bits of a fault status, clear bits of
         // a valid status.
@@ -254,14 +269,32 @@ impl FramePlan {
             temperature_c,
             status,
         });
-        if let Some(load) = self.uniform {
-            if bad & self.all_masks == 0
-                && msg.len() >= self.min_len
-                && self.read_counts(load, msg, out)
-            {
-                return;
-            }
-        }
+        bad
+    }
+
+    /// Every channel field inside `msg` and none marked invalid by `bad`.
+    #[inline]
+    fn clean(&self, msg: &[u8], bad: u64) -> bool {
+        bad & self.all_masks == 0 && msg.len() >= self.min_len
+    }
+
+    /// The channels of a frame begun with `bad` may be left to [`FramePlan::fill_columns`]:
+    /// all counts of one integer load, every field inside, none marked invalid, and the
+    /// block's columns all counts. What [`FramePlan::decode`] would then push is exactly the
+    /// loads in channel order, so filling them column by column later gives the same block.
+    #[inline]
+    pub(crate) fn deferrable(&self, msg: &[u8], bad: u64, out: &FrameBlock) -> bool {
+        self.uniform.is_some() && out.all_counts() && self.clean(msg, bad)
+    }
+
+    /// Reads the channels of the frame begun last, one by one (any kinds, holes, status).
+    pub(crate) fn read_channels(
+        &self,
+        msg: &[u8],
+        bad: u64,
+        invalid: &mut u64,
+        out: &mut FrameBlock,
+    ) {
         for (ch, c) in self.channels.iter().enumerate() {
             if bad & c.status_mask != 0 {
                 *invalid += 1;
@@ -285,41 +318,45 @@ impl FramePlan {
             }
         }
     }
-}
 
-impl FramePlan {
-    /// Every channel's count, all of one integer `load`, in one loop per load (the match out of
-    /// the loop); false when the block's columns are not all counts (nothing pushed then).
-    #[inline]
-    fn read_counts(&self, load: Load, msg: &[u8], out: &mut FrameBlock) -> bool {
+    /// Fills the columns of the deferred frames whose messages start at `starts` in `data`
+    /// (each checked [`FramePlan::deferrable`] when begun, in this order): channel by channel,
+    /// one pass over the starts per column, instead of eight pushes per frame (the per-value
+    /// push was most of the field reads' cost; BENCHMARKS.md "session 7").
+    pub(crate) fn fill_columns(&self, data: &[u8], starts: &[usize], out: &mut FrameBlock) {
         fn each<const N: usize>(
             offsets: &[usize],
-            msg: &[u8],
+            data: &[u8],
+            starts: &[usize],
             out: &mut FrameBlock,
             conv: impl Fn([u8; N]) -> i64,
-        ) -> bool {
-            // `msg.len() >= min_len` was checked: every field is inside.
-            out.push_counts(|ch| {
+        ) {
+            out.extend_count_columns(|ch, col| {
                 let at = offsets[ch];
-                let mut b = [0u8; N];
-                b.copy_from_slice(&msg[at..at + N]);
-                conv(b)
-            })
+                col.extend(starts.iter().map(|&s| {
+                    let mut b = [0u8; N];
+                    b.copy_from_slice(&data[s + at..s + at + N]);
+                    conv(b)
+                }));
+            });
         }
-        let o = &self.offsets;
+        let Some(load) = self.uniform else {
+            return;
+        };
+        let (o, d, st) = (&self.offsets, data, starts);
         match load {
-            Load::U8 => each::<1>(o, msg, out, |b| i64::from(b[0])),
-            Load::I8 => each::<1>(o, msg, out, |b| i64::from(b[0] as i8)),
-            Load::U16Le => each::<2>(o, msg, out, |b| i64::from(u16::from_le_bytes(b))),
-            Load::U16Be => each::<2>(o, msg, out, |b| i64::from(u16::from_be_bytes(b))),
-            Load::I16Le => each::<2>(o, msg, out, |b| i64::from(i16::from_le_bytes(b))),
-            Load::I16Be => each::<2>(o, msg, out, |b| i64::from(i16::from_be_bytes(b))),
-            Load::U32Le => each::<4>(o, msg, out, |b| i64::from(u32::from_le_bytes(b))),
-            Load::U32Be => each::<4>(o, msg, out, |b| i64::from(u32::from_be_bytes(b))),
-            Load::I32Le => each::<4>(o, msg, out, |b| i64::from(i32::from_le_bytes(b))),
-            Load::I32Be => each::<4>(o, msg, out, |b| i64::from(i32::from_be_bytes(b))),
+            Load::U8 => each::<1>(o, d, st, out, |b| i64::from(b[0])),
+            Load::I8 => each::<1>(o, d, st, out, |b| i64::from(b[0] as i8)),
+            Load::U16Le => each::<2>(o, d, st, out, |b| i64::from(u16::from_le_bytes(b))),
+            Load::U16Be => each::<2>(o, d, st, out, |b| i64::from(u16::from_be_bytes(b))),
+            Load::I16Le => each::<2>(o, d, st, out, |b| i64::from(i16::from_le_bytes(b))),
+            Load::I16Be => each::<2>(o, d, st, out, |b| i64::from(i16::from_be_bytes(b))),
+            Load::U32Le => each::<4>(o, d, st, out, |b| i64::from(u32::from_le_bytes(b))),
+            Load::U32Be => each::<4>(o, d, st, out, |b| i64::from(u32::from_be_bytes(b))),
+            Load::I32Le => each::<4>(o, d, st, out, |b| i64::from(i32::from_le_bytes(b))),
+            Load::I32Be => each::<4>(o, d, st, out, |b| i64::from(i32::from_be_bytes(b))),
             // Floats are never counts (no uniform plan).
-            Load::F32Le | Load::F32Be | Load::F64Le | Load::F64Be => false,
+            Load::F32Le | Load::F32Be | Load::F64Le | Load::F64Be => {}
         }
     }
 }

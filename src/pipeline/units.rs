@@ -26,8 +26,12 @@
 //!   the worker that owns a unit writes its decoder state, byte offset and analysis state
 //!   together (one thread holds all three, so no marks travel between threads as in the one-unit
 //!   pipeline), every `every_s` of data (a file) or wall time (live), and once more at the end.
+//!   The `--abort-after-frames` test hook ([`UnitsControl::crash_hook`]) fires once the units
+//!   together have decoded that many frames and each has a checkpoint on disk.
+//! - A live unit's frames reach its analysis in blocks of [`LIVE_BLOCK_EVENTS`] (and whenever
+//!   records or a checkpoint are due), a replay's whenever its worker's queue runs dry.
 
-use std::sync::atomic::Ordering;
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -37,7 +41,7 @@ use tokio_util::sync::CancellationToken;
 
 use super::checkpoint::{Checkpoint, CheckpointPlan, Position};
 use super::decode::DecodeStage;
-use super::{stage_health_record, RecordQueue, SourceFlags};
+use super::{stage_health_record, CrashHook, RecordQueue, SourceFlags};
 use crate::analysis::RunAnalysis;
 use crate::frame::{FrameBlock, FrameDescriptor};
 use crate::input::Chunk;
@@ -53,6 +57,15 @@ pub const WORK_QUEUE: usize = 4096;
 /// Frames of one unit gathered before they go to its analysis when the worker has more events
 /// waiting: bounds the block's memory, as the one-unit pipeline's chunk limit does.
 const MAX_BLOCK_EVENTS: usize = 4096;
+
+/// Frames (events) of a live unit gathered before they go to its analysis. A live unit's
+/// datagrams are a few frames each; handing them to the accumulators one datagram at a time
+/// touched every level of 600 channels' state (cold in the cache) for 10 samples each, and cost
+/// several times the replay's statistics per sample (BENCHMARKS.md, "Several units live"). A
+/// live block is analysed when it holds this many events, and whenever its records or a
+/// checkpoint are due and at the end, so no record misses a frame: 1024 events are 0.5 s of a
+/// 2 kHz unit, 100 KB of a 6-channel one.
+pub const LIVE_BLOCK_EVENTS: usize = 1024;
 
 /// How often the workers look for quiet units: a tenth of a second is well inside any
 /// `quiet_after` a user may give (at least `crate::ranges::MIN_INTERVAL_S`).
@@ -88,6 +101,49 @@ pub struct UnitsControl {
     pub quiet_after: Duration,
     /// Worker threads; `None`: the machine's cores, at most one per unit.
     pub workers: Option<usize>,
+    /// Called once the units together have decoded
+    /// [`CheckpointPlan::abort_after_frames`] frames and every unit with checkpoints has one on
+    /// disk (so `--resume` can continue each of them); the binary's `--abort-after-frames` test
+    /// hook aborts the process there, as a crash would. Without a hook the run goes on.
+    pub crash_hook: Option<CrashHook>,
+}
+
+/// The crash point of a run of several units ([`UnitsControl::crash_hook`]), shared by the
+/// workers: the frames of every unit, and the units still without a checkpoint on disk.
+struct CrashWatch {
+    limit: u64,
+    hook: CrashHook,
+    frames: AtomicU64,
+    without_checkpoint: AtomicUsize,
+    fired: AtomicBool,
+}
+
+impl CrashWatch {
+    /// The watch of `units`, when a hook is given and the units' checkpoint plans ask for one.
+    fn new(units: &[UnitRun], hook: Option<&CrashHook>) -> Option<Arc<CrashWatch>> {
+        let plans: Vec<&CheckpointPlan> = units
+            .iter()
+            .filter_map(|u| u.checkpoint.as_deref())
+            .collect();
+        let limit = plans.iter().filter_map(|p| p.abort_after_frames).min()?;
+        Some(Arc::new(CrashWatch {
+            limit,
+            hook: hook?.clone(),
+            frames: AtomicU64::new(0),
+            without_checkpoint: AtomicUsize::new(plans.len()),
+            fired: AtomicBool::new(false),
+        }))
+    }
+
+    /// Runs the hook (once) when both conditions hold.
+    fn check(&self) {
+        if self.frames.load(Ordering::SeqCst) >= self.limit
+            && self.without_checkpoint.load(Ordering::SeqCst) == 0
+            && !self.fired.swap(true, Ordering::SeqCst)
+        {
+            (self.hook.0)();
+        }
+    }
 }
 
 /// How one unit ended.
@@ -150,10 +206,14 @@ struct UnitState {
     /// When the next checkpoint is due: data-seconds (a file) or wall time (live).
     next_data_s: f64,
     next_wall: Instant,
+    /// A checkpoint of this run is on disk.
+    checkpointed: bool,
+    /// The run's crash point, if any.
+    crash: Option<Arc<CrashWatch>>,
 }
 
 impl UnitState {
-    fn new(mut run: UnitRun) -> UnitState {
+    fn new(mut run: UnitRun, crash: Option<Arc<CrashWatch>>) -> UnitState {
         let live = run.spec.is_live();
         let replay = matches!(run.spec, SourceSpec::File { .. });
         let width = run.desc.frame().channels.len();
@@ -194,6 +254,8 @@ impl UnitState {
             quiet: 0,
             ended: false,
             failed: None,
+            checkpointed: false,
+            crash,
             run,
         }
     }
@@ -257,12 +319,20 @@ impl UnitState {
             },
             analysis: self.run.analysis.snapshot(),
         };
-        if let Err(e) = ck.write_atomic(&plan.path) {
-            tracing::warn!(
+        match ck.write_atomic(&plan.path) {
+            Ok(_) if !self.checkpointed => {
+                self.checkpointed = true;
+                if let Some(c) = &self.crash {
+                    c.without_checkpoint.fetch_sub(1, Ordering::SeqCst);
+                    c.check();
+                }
+            }
+            Ok(_) => {}
+            Err(e) => tracing::warn!(
                 "unit {}: checkpoint {} not written: {e:#}",
                 self.run.name,
                 plan.path.display()
-            );
+            ),
         }
     }
 
@@ -299,6 +369,7 @@ pub async fn run_units_async(
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let n_workers = ctl.workers.unwrap_or(cores).clamp(1, units.len().max(1));
     let n_units = units.len();
+    let crash = CrashWatch::new(&units, ctl.crash_hook.as_ref());
     // Unit i goes to worker i % n_workers, as its (i / n_workers)-th unit.
     let mut shares: Vec<Vec<UnitState>> = (0..n_workers).map(|_| Vec::new()).collect();
     let mut sources = Vec::new();
@@ -312,7 +383,7 @@ pub async fn run_units_async(
             start_offset(&u),
         ));
         u.progress.input_ended.store(false, Ordering::SeqCst);
-        shares[i % n_workers].push(UnitState::new(u));
+        shares[i % n_workers].push(UnitState::new(u, crash.clone()));
     }
     let mut txs = Vec::new();
     let mut workers = Vec::new();
@@ -446,16 +517,29 @@ fn work(
                     let before = u.block.len();
                     let n = u.stage.push(ev, &mut u.block);
                     u.run.progress.frames.fetch_add(n, Ordering::Relaxed);
-                    if before == 0 && !u.block.is_empty() {
+                    if let Some(c) = &u.crash {
+                        c.frames.fetch_add(n, Ordering::SeqCst);
+                    }
+                    // A replay's block goes to the analysis when the queue runs dry; a live
+                    // unit's when it is full (LIVE_BLOCK_EVENTS).
+                    if before == 0 && !u.block.is_empty() && !u.flags.live {
                         dirty.push(i);
                     }
-                    if u.block.len() >= MAX_BLOCK_EVENTS {
+                    let full = if u.flags.live {
+                        LIVE_BLOCK_EVENTS
+                    } else {
+                        MAX_BLOCK_EVENTS
+                    };
+                    if u.block.len() >= full {
                         u.flush(&mut out, queue);
                     }
                     u.checkpoint(&mut out, queue, None);
                 }
                 if let Some(m) = &u.run.metrics {
                     m.health(&u.stage.health());
+                }
+                if let Some(c) = &u.crash {
+                    c.check();
                 }
             }
             Work::Ended(i, error) => {
@@ -495,6 +579,7 @@ fn work(
                         u.seen_bytes = bytes;
                         u.last_data = now;
                         if let Some(since) = u.quiet_since.take() {
+                            u.flush(&mut out, queue);
                             let r = u.outage("resumed", now.saturating_duration_since(since), None);
                             queue.push_final_of(Some(&u.run.name), r);
                         }
@@ -510,6 +595,8 @@ fn work(
                         );
                         u.quiet_since = Some(u.last_data);
                         u.quiet += 1;
+                        // Its record says how far its data reached: every frame decoded.
+                        u.flush(&mut out, queue);
                         let r = u.outage("quiet", silent, None);
                         queue.push_final_of(Some(&u.run.name), r);
                     }

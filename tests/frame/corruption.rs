@@ -378,14 +378,20 @@ fn build(desc: &FrameDescriptor, seed: u64, first_seq: u64, n: u64) -> (Vec<u8>,
     )
 }
 
-/// Decodes at seeded random splits.
-fn decode_split(desc: &FrameDescriptor, stream: &[u8], seed: u64) -> (Vec<FrameEvent>, Health) {
+/// Decodes at seeded random splits of up to `max_piece` bytes (small pieces keep the decoder
+/// joining pending bytes to the next push; large ones let it decode most bytes where they lie).
+fn decode_split(
+    desc: &FrameDescriptor,
+    stream: &[u8],
+    seed: u64,
+    max_piece: usize,
+) -> (Vec<FrameEvent>, Health) {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
     let mut d = Decoder::new(desc.clone());
     let mut ev = Vec::new();
     let mut i = 0;
     while i < stream.len() {
-        let k = rng.random_range(0..=300usize).min(stream.len() - i);
+        let k = rng.random_range(0..=max_piece).min(stream.len() - i);
         d.push(&stream[i..i + k]);
         ev.extend(d.drain());
         i += k;
@@ -449,8 +455,8 @@ fn run_case(name: &str, seed: u64, first_seq: u64, n: u64) {
     assert!(t.crc_errors >= 20 && t.missing >= 20 && t.duplicates >= 5 && t.resyncs >= 20);
     assert!(truth.longest_drop_run < desc.frame().counter.as_ref().expect("counter").modulus);
 
-    for split_seed in [1u64, 2, 3] {
-        let (ev, h) = decode_split(&desc, &stream, split_seed);
+    for (split_seed, max_piece) in [(1u64, 300), (2, 300), (3, 300), (4, 5000), (5, usize::MAX)] {
+        let (ev, h) = decode_split(&desc, &stream, split_seed, max_piece);
         assert_events(&desc, &ev, &truth.events);
         let gaps: u64 = ev
             .iter()

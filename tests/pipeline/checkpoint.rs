@@ -10,6 +10,7 @@
 //! SIGKILL wherever it happens to be after its first checkpoint.
 
 use crate::common::exe;
+use crate::common::pipeline::same_record as same;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Output, Stdio};
@@ -201,40 +202,6 @@ fn finals(path: &Path) -> Vec<((String, String, String), serde_json::Value)> {
         out.push((key, v));
     }
     out
-}
-
-/// Compares two records field by field: numbers to 1e-12 relative, integers (counts) and
-/// everything else exactly; `elapsed_s` (wall time) is left out.
-fn same(a: &serde_json::Value, b: &serde_json::Value, at: &str) {
-    use serde_json::Value as V;
-    match (a, b) {
-        (V::Object(x), V::Object(y)) => {
-            let mut kx: Vec<_> = x.keys().collect();
-            let mut ky: Vec<_> = y.keys().collect();
-            kx.sort();
-            ky.sort();
-            assert_eq!(kx, ky, "{at}: fields differ");
-            for (k, v) in x {
-                if k != "elapsed_s" {
-                    same(v, &y[k], &format!("{at}.{k}"));
-                }
-            }
-        }
-        (V::Array(x), V::Array(y)) => {
-            assert_eq!(x.len(), y.len(), "{at}: lengths differ");
-            for (i, (u, v)) in x.iter().zip(y).enumerate() {
-                same(u, v, &format!("{at}[{i}]"));
-            }
-        }
-        (V::Number(x), V::Number(y)) if x.is_f64() || y.is_f64() => {
-            let (u, v) = (x.as_f64().unwrap(), y.as_f64().unwrap());
-            assert!(
-                (u - v).abs() <= 1e-12 * u.abs().max(v.abs()),
-                "{at}: {u} vs {v}"
-            );
-        }
-        _ => assert_eq!(a, b, "{at}"),
-    }
 }
 
 fn assert_same_finals(reference: &Path, resumed: &Path) {

@@ -144,6 +144,7 @@ fn each_unit_equals_its_frames_alone_and_outages_are_recorded() {
         quiet_after: QUIET_AFTER,
         // Fewer workers than units: units share them.
         workers: Some(2),
+        crash_hook: None,
     };
     let (queue, ctl2) = (writer.queue().clone(), ctl.clone());
     let run = std::thread::spawn(move || run_units(units, &queue, &ctl2).expect("run"));
@@ -524,5 +525,93 @@ fn each_unit_resumes_from_its_own_checkpoint() {
             "imu{k}: the outage breaks the segment"
         );
         assert_eq!(last_of(&mine, "health")["frames"], 6000);
+    }
+}
+
+/// Each unit's final records, keyed by (type, channel, statistic); a later record of the same
+/// key (the resumed run's) replaces an earlier one.
+fn unit_finals(recs: &[serde_json::Value], name: &str) -> Vec<(String, serde_json::Value)> {
+    let mut out: Vec<(String, serde_json::Value)> = Vec::new();
+    for r in of_unit(recs, name) {
+        let ty = r["type"].as_str().unwrap_or("").to_string();
+        if !(r["final"] == true || ty == "health" || ty == "summary") {
+            continue;
+        }
+        let key = format!("{ty} {} {}", r["channel"], r["stat"]);
+        out.retain(|(k, _)| *k != key);
+        out.push((key, r));
+    }
+    out
+}
+
+/// The crash hook in a run of several units: two replayed units with `checkpoint_every`,
+/// aborted by `--abort-after-frames` (as a crash: no final records, no flush) once 20,000 of
+/// their 60,000 frames are decoded and each has a checkpoint on disk, then `run --resume`:
+/// each unit continues from its own checkpoint, and its final records equal those of the
+/// same config run without a crash.
+#[test]
+fn units_killed_part_way_resume_to_the_uninterrupted_records() {
+    use allanscope::pipeline::checkpoint::Checkpoint;
+    let all = siu8_capture();
+    // imu01 with all 8 channels, imu02 with 3; checkpoints every 20 data-seconds.
+    let mut config = "[run]\ncheckpoint_every = 20.0\n[output]\npath = \"lab.jsonl\"\n".to_string();
+    for (name, file, include) in [
+        ("imu01", "a", ""),
+        ("imu02", "b", "[\"g1\", \"g2\", \"a1\"]"),
+    ] {
+        config += &format!(
+            "[[unit]]\nname = \"{name}\"\nsource = {{ kind = \"file\", path = \"{file}.siu8\", format = \"siu8\" }}\n"
+        );
+        if !include.is_empty() {
+            config += &format!("channels = {{ include = {include} }}\n");
+        }
+    }
+    let setup = |tag: &str| {
+        let dir = crate::common::fresh_dir(tag);
+        std::fs::write(dir.join("a.siu8"), frames(&all, 0, 30_000)).expect("a");
+        std::fs::write(dir.join("b.siu8"), frames(&all, 40_000, 30_000)).expect("b");
+        std::fs::write(dir.join("lab.toml"), &config).expect("config");
+        dir
+    };
+    let straight = setup("units-straight");
+    let (code, err) = allanscope(&straight, &["run", "--config", "lab.toml"]);
+    assert_eq!(code, 0, "{err}");
+
+    let crashed = setup("units-crash");
+    let (code, err) = allanscope(
+        &crashed,
+        &[
+            "run",
+            "--config",
+            "lab.toml",
+            "--abort-after-frames",
+            "20000",
+        ],
+    );
+    assert_eq!(code, -1, "aborted by a signal: {err}");
+    assert!(err.contains("--abort-after-frames reached"), "{err}");
+    for name in ["imu01", "imu02"] {
+        let ck = Checkpoint::load(&crashed.join(format!("lab.jsonl.{name}.ckpt")))
+            .unwrap_or_else(|e| panic!("{name}'s checkpoint: {e:#}"));
+        assert!(!ck.complete, "{name}: a checkpoint of a run cut short");
+    }
+    let (code, err) = allanscope(&crashed, &["run", "--config", "lab.toml", "--resume"]);
+    assert_eq!(code, 0, "{err}");
+
+    let want = parse_lines(&std::fs::read(straight.join("lab.jsonl")).expect("straight"));
+    let got = parse_lines(&std::fs::read(crashed.join("lab.jsonl")).expect("resumed"));
+    for (name, channels) in [("imu01", 8), ("imu02", 3)] {
+        let (a, b) = (unit_finals(&want, name), unit_finals(&got, name));
+        // 3 curves and a fit per channel, the health and the summary.
+        assert_eq!(a.len(), 4 * channels + 2, "{name}");
+        assert_eq!(
+            a.iter().map(|x| &x.0).collect::<Vec<_>>(),
+            b.iter().map(|x| &x.0).collect::<Vec<_>>(),
+            "{name}"
+        );
+        for ((k, x), (_, y)) in a.iter().zip(&b) {
+            same_record(x, y, &format!("{name} {k}"));
+        }
+        assert_eq!(last_of(&of_unit(&got, name), "health")["frames"], 30_000);
     }
 }

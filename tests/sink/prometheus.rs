@@ -10,6 +10,15 @@
 //! drop a datagram on a starved machine; at most 2% tolerated). Everything on 127.0.0.1, every
 //! wait bounded.
 //!
+//! The Grafana dashboard (config/grafana/allanscope.json) is checked against the same server:
+//! every panel's PromQL, with the template variables at "All" and at the run's unit and one
+//! channel, and every template variable's `label_values` through `/api/v1/label/.../values`,
+//! must return the series the panel is for, with the labels its legend shows: the coefficients
+//! each channel's final fit determined, the interval ends of all 8 channels, one series per unit
+//! for the frame counters, the verdicts of the two datasheet limits given (`--limits`) as the
+//! summary judges them. (No Grafana server is installable here: not in Debian, crates, PyPI or
+//! npm; `dashboard_has_the_fields_of_grafanas_model` checks the JSON model instead.)
+//!
 //! Without a `prometheus` binary the test is skipped, except under CI (`CI=true`), where it
 //! fails.
 
@@ -126,6 +135,13 @@ fn prometheus_scrapes_the_coefficients_and_counters() {
     std::fs::create_dir_all(&dir).expect("tmp dir");
     let (udp, metrics, prom) = (free_udp_port(), free_tcp_port(), free_tcp_port());
     let out = dir.join("out.jsonl");
+    // One limit every channel passes (N of g1 below 1000 arcsec/sqrt(s)) and one it fails.
+    std::fs::write(
+        dir.join("limits.toml"),
+        "[[limits]]\nchannel = \"g1\"\ncoef = \"N\"\nmax = 1000.0\n\n\
+         [[limits]]\nchannel = \"g2\"\ncoef = \"N\"\nmax = 1e-9\n",
+    )
+    .expect("limits");
     let log = std::fs::File::create(dir.join("allanscope.log")).expect("log");
     let listen = Reaped(
         Command::new(env!("CARGO_BIN_EXE_allanscope"))
@@ -142,6 +158,8 @@ fn prometheus_scrapes_the_coefficients_and_counters() {
                 "--every",
                 "0.5",
             ])
+            .arg("--limits")
+            .arg(dir.join("limits.toml"))
             .arg("--out")
             .arg(&out)
             .stdout(Stdio::null())
@@ -279,6 +297,37 @@ fn prometheus_scrapes_the_coefficients_and_counters() {
         read("allanscope_coef_hi"),
         read("allanscope_coef"),
     );
+    // The dashboard's queries, while the run still serves them (the Lost frames and Frame rate
+    // panels look one minute back).
+    // `rate` and `increase` need two samples of a counter in their window.
+    wait_for("two scrapes of the counters", || {
+        let n = query(prom, "count_over_time(allanscope_missing_frames_total[1m])");
+        n.first().is_some_and(|s| s.1 >= 2.0).then_some(())
+    });
+    let unit = format!("udp:127.0.0.1:{udp}");
+    let label_values = |label: &str, selector: &str| -> Vec<String> {
+        let path = format!(
+            "/api/v1/label/{label}/values?{}={}",
+            url_encode("match[]"),
+            url_encode(selector)
+        );
+        let (status, body) = http_get(prom, &path).expect("label values");
+        assert_eq!(status, 200, "{path}: {body}");
+        let v: serde_json::Value = serde_json::from_str(&body).expect("JSON");
+        v["data"]
+            .as_array()
+            .map(|a| {
+                a.iter()
+                    .filter_map(|x| x.as_str().map(String::from))
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    let (dash_all, dash_one, variables) = crate::grafana::evaluate(
+        &|q| query(prom, q),
+        &label_values,
+        &[("unit", &unit), ("channel", "g1")],
+    );
 
     // The final fit records, written on SIGTERM.
     let pid = listen.0.id().to_string();
@@ -326,5 +375,121 @@ fn prometheus_scrapes_the_coefficients_and_counters() {
     }
     // 60 s of the stand's unit determine at least N of every channel.
     assert!(determined >= 8, "only {determined} coefficients determined");
+    let summary = last_of(&recs, "summary");
+    check_dashboard(&dash_all, &dash_one, &variables, &recs, summary, &unit);
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The channels whose final fit determined `coef` (a value, not only an interval).
+fn determined_channels(recs: &[serde_json::Value], coef: &str) -> Vec<String> {
+    let mut v: Vec<String> = recs
+        .iter()
+        .filter(|r| r["type"] == "fit" && r["final"] == true)
+        .filter(|r| r["coef"][coef]["value"].is_number())
+        .map(|r| r["channel"].as_str().expect("channel").to_string())
+        .collect();
+    v.sort();
+    v
+}
+
+/// The dashboard's answers through Prometheus against the run's own records (see the module
+/// doc): `all` with the template variables at "All", `one` at the run's unit and channel g1.
+fn check_dashboard(
+    all: &[crate::grafana::Answer],
+    one: &[crate::grafana::Answer],
+    variables: &std::collections::BTreeMap<String, Vec<String>>,
+    recs: &[serde_json::Value],
+    summary: &serde_json::Value,
+    unit: &str,
+) {
+    let mut sorted: Vec<String> = ["g1", "g2", "g3", "g4", "a1", "a2", "a3", "a4"]
+        .map(String::from)
+        .into();
+    sorted.sort();
+    assert_eq!(variables["unit"], [unit.to_string()], "the unit variable");
+    assert_eq!(variables["channel"], sorted, "the channel variable");
+    assert!(all.len() >= 12, "{} panel targets", all.len());
+    for (answers, picked) in [(all, None), (one, Some("g1"))] {
+        for a in answers {
+            let at = format!("{}: `{}`", a.at, a.expr);
+            let label = |s: &serde_json::Value, k: &str| s[k].as_str().map(String::from);
+            // Every label the legend shows is on every series, and the unit is the run's.
+            for (m, _) in &a.series {
+                for part in a.legend.as_deref().unwrap_or("").split("{{").skip(1) {
+                    let key = part.split("}}").next().expect("closed").trim();
+                    assert!(m[key].is_string(), "{at}: series {m} lacks `{key}`");
+                }
+                assert_eq!(label(m, "unit").as_deref(), Some(unit), "{at}: {m}");
+            }
+            let mut got: Vec<String> = a
+                .series
+                .iter()
+                .filter_map(|(m, _)| label(m, "channel"))
+                .collect();
+            got.sort();
+            let restrict = |v: Vec<String>| -> Vec<String> {
+                v.into_iter()
+                    .filter(|c| picked.is_none_or(|p| p == c))
+                    .collect()
+            };
+            let coef = ["N", "B"]
+                .into_iter()
+                .find(|c| a.expr.contains(&format!("coef=\"{c}\"")));
+            let e = &a.expr;
+            if e.contains("allanscope_coef_datasheet{") || e.starts_with("allanscope_coef{") {
+                // The value: exactly the channels whose fit determined it.
+                let want = restrict(determined_channels(recs, coef.expect("a coefficient")));
+                assert_eq!(got, want, "{at}");
+            } else if e.starts_with("allanscope_coef_lo{") || e.starts_with("allanscope_coef_hi{") {
+                assert_eq!(got, restrict(sorted.clone()), "{at}");
+            } else if e.contains("_total{") {
+                // One series per unit, without a channel; a counter's increase is >= 0.
+                assert_eq!(a.series.len(), 1, "{at}: {:?}", a.series);
+                assert!(got.is_empty() && a.series[0].1 >= 0.0, "{at}");
+            } else if e.starts_with("allanscope_limit_verdict{") {
+                // The verdicts the summary gives for the two limits.
+                let limits = summary["limits"].as_array().expect("summary limits");
+                let mut want: Vec<(String, f64)> = limits
+                    .iter()
+                    .filter(|l| picked.is_none_or(|p| l["channel"] == p))
+                    .map(|l| {
+                        let v = match l["verdict"].as_str() {
+                            Some("pass") => 1.0,
+                            Some("undecided") => 0.0,
+                            Some("fail") => -1.0,
+                            _ => -2.0,
+                        };
+                        (l["channel"].as_str().expect("channel").to_string(), v)
+                    })
+                    .collect();
+                let mut have: Vec<(String, f64)> = a
+                    .series
+                    .iter()
+                    .map(|(m, v)| (label(m, "channel").expect("channel"), *v))
+                    .collect();
+                want.sort_by(|x, y| x.0.cmp(&y.0));
+                have.sort_by(|x, y| x.0.cmp(&y.0));
+                assert_eq!(have, want, "{at}");
+                if picked.is_none() {
+                    assert_eq!(have, [("g1".into(), 1.0), ("g2".into(), -1.0)], "{at}");
+                }
+            } else if e.contains("allanscope_fit_timestamp_seconds{") {
+                assert_eq!(got, restrict(sorted.clone()), "{at}");
+                assert!(a.series.iter().all(|s| (0.0..600.0).contains(&s.1)), "{at}");
+            } else if e.contains("allanscope_health_timestamp_seconds{") {
+                assert_eq!(a.series.len(), 1, "{at}");
+                assert!((0.0..600.0).contains(&a.series[0].1), "{at}");
+            } else {
+                panic!("{at}: a query this test does not know what to expect of");
+            }
+            if a.expr.contains("_total{") || a.expr.contains("timestamp") {
+                continue;
+            }
+            // Per-channel panels show something for every channel they select, except a
+            // value not determined by 60 s of data.
+            if coef != Some("B") || !determined_channels(recs, "B").is_empty() {
+                assert!(!a.series.is_empty(), "{at}: no series");
+            }
+        }
+    }
 }
