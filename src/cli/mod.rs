@@ -158,7 +158,8 @@ pub struct DataArgs {
     /// A frame descriptor (a name from config/frames, or a path), or `csv` for text columns.
     #[arg(long, default_value = "csv")]
     pub format: String,
-    /// Sampling step in seconds (required for csv; taken from the descriptor for frames).
+    /// Sampling step in seconds (frames: taken from the descriptor; text columns: read off their
+    /// time column when they have one, else required).
     #[arg(long, value_parser = tau0_arg)]
     pub tau0: Option<f64>,
     /// Text columns hold rate samples (u/s) instead of increments (u).
@@ -299,16 +300,62 @@ where
         anyhow::Error::new(UsageError::Option(e.to_string()))
     })?;
     match cli.command {
-        Command::Analyze(a) => analyze::run(&a),
+        Command::Analyze(mut a) => {
+            let inputs: Vec<&str> = a.inputs.iter().map(String::as_str).collect();
+            text_tau0(&mut a.data, &inputs)?;
+            analyze::run(&a)
+        }
         Command::Listen(l) => listen::run(&l),
         Command::Run(r) => run::run(&r),
         Command::Simulate(s) => simulate::run(&s),
-        Command::Diagnose(d) => diagnose::run(&d),
+        Command::Diagnose(mut d) => {
+            let mut inputs = vec![d.input.as_str()];
+            inputs.extend(d.holdout.as_deref());
+            text_tau0(&mut d.data, &inputs)?;
+            diagnose::run(&d)
+        }
         Command::Plot(p) => plot::run(&p),
         Command::Report(r) => report::run(&r),
         Command::Aggregate(a) => aggregate::run(&a),
         Command::Export(e) => export::run(&e),
     }
+}
+
+/// Text columns given no `--tau0`: the sampling step read off each input's time column
+/// ([`allanscope::input::sampling_step`]), logged; every input must show the same step.
+fn text_tau0(d: &mut DataArgs, inputs: &[&str]) -> Result<()> {
+    if d.format != "csv" || d.tau0.is_some() {
+        return Ok(());
+    }
+    let mut found: Option<(&str, allanscope::input::sampling_step::InferredStep)> = None;
+    for &input in inputs {
+        if input == "-" {
+            return Err(usage(
+                "--tau0 is required for text columns on standard input",
+            ));
+        }
+        let src = std::io::BufReader::new(open_input(input)?);
+        let opts = TextOptions {
+            tau0_s: None,
+            ..d.text_options()
+        };
+        let step = allanscope::input::sampling_step::infer_tau0(src, Path::new(input), &opts)
+            .map_err(anyhow::Error::new)?;
+        match &found {
+            Some((first, s)) if (s.tau0_s - step.tau0_s).abs() > 1e-9 * s.tau0_s => {
+                return Err(usage(format!(
+                    "{input}: {step}; but {first}: {s}: the inputs differ, give --tau0"
+                )))
+            }
+            Some(_) => {}
+            None => {
+                tracing::info!("{input}: {step}");
+                found = Some((input, step));
+            }
+        }
+    }
+    d.tau0 = found.map(|(_, s)| s.tau0_s);
+    Ok(())
 }
 
 /// Where a command's JSON lines go: `out` (a result file, opened as [`OutputFile`] explains: an

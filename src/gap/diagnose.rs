@@ -74,8 +74,9 @@ pub struct DiagnoseOptions {
     /// pulled down at short taus by a filter misleads the plain fit (N near 0, B inflated), and
     /// `S` with it.
     pub cov_coef: Option<[f64; 5]>,
-    /// The output filter found by the first pass: `S` is widened at the taus it smooths
-    /// ([`super::problem::GapProblem::new`]).
+    /// The output filter found by the previous pass: `S` gets its exact correction for the
+    /// filtered white rate ([`super::filter_cov`]) and the model it is normalised by takes the
+    /// white and flicker rate through the filter ([`super::problem::GapProblem::new`]).
     pub cov_filter: Option<crate::model::lowpass::LowPass>,
 }
 
@@ -262,31 +263,45 @@ fn diagnose_curve(
     temperature: Option<&EvidenceSnapshot>,
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
-    let d = diagnose_curve_once(snap, temperature, opts)?;
-    if opts.cov_coef.is_some() || !d.effects.iter().any(|e| e.params.kind().is_filter()) {
+    let mut d = diagnose_curve_once(snap, temperature, opts)?;
+    if opts.cov_coef.is_some() {
         return Ok(d);
     }
-    // The covariance's five terms: the plain fit of the taus beyond ten memories of the
-    // filter, where it no longer shows (on a clean curve that is the plain fit itself).
-    let Some(lp) = d.effects.iter().find_map(|e| e.params.lowpass()) else {
-        return Ok(d);
-    };
-    let m_cut = (10.0 * lp.memory_s(snap.tau0_s) / snap.tau0_s)
-        .ceil()
-        .max(1.0) as u64;
-    let cut = DiagnoseOptions {
-        min_m: opts.min_m.max(m_cut),
-        ..opts.clone()
-    };
-    let Ok(beyond) = GapProblem::new(snap, &cut) else {
-        return Ok(d);
-    };
-    let second = DiagnoseOptions {
-        cov_coef: Some(beyond.c_init),
-        cov_filter: Some(lp),
-        ..opts.clone()
-    };
-    diagnose_curve_once(snap, temperature, &second).or(Ok(d))
+    // Again with the covariance of the filter found, until the filter named is the one whose
+    // covariance was used (three passes at most: the first pass's covariance, without the
+    // filter, can favour another filter of the family).
+    let mut used: Option<crate::model::lowpass::LowPass> = None;
+    for _ in 0..2 {
+        let Some(lp) = d.effects.iter().find_map(|e| e.params.lowpass()) else {
+            return Ok(d);
+        };
+        if used.is_some_and(|u| std::mem::discriminant(&u) == std::mem::discriminant(&lp)) {
+            return Ok(d);
+        }
+        // The covariance's five terms: the plain fit of the taus beyond ten memories of the
+        // filter, where it no longer shows (on a clean curve that is the plain fit itself).
+        let m_cut = (10.0 * lp.memory_s(snap.tau0_s) / snap.tau0_s)
+            .ceil()
+            .max(1.0) as u64;
+        let cut = DiagnoseOptions {
+            min_m: opts.min_m.max(m_cut),
+            ..opts.clone()
+        };
+        let Ok(beyond) = GapProblem::new(snap, &cut) else {
+            return Ok(d);
+        };
+        let next = DiagnoseOptions {
+            cov_coef: Some(beyond.c_init),
+            cov_filter: Some(lp),
+            ..opts.clone()
+        };
+        match diagnose_curve_once(snap, temperature, &next) {
+            Ok(n) => d = n,
+            Err(_) => return Ok(d),
+        }
+        used = Some(lp);
+    }
+    Ok(d)
 }
 
 fn diagnose_curve_once(
@@ -706,7 +721,11 @@ fn add_stationary(
         }
         // The filters compete among themselves by the drop less two per parameter (Akaike):
         // per parameter, a one-parameter filter would beat the second order whatever the
-        // drop; the best of them then competes with the other kinds per parameter.
+        // drop. The best of them then competes with the other kinds at the filters' best drop
+        // per parameter: the filters are one family of explanations (a first-order filter is
+        // also the second order's limit), and a Gauss-Markov term, which mimics a filtered
+        // white rate with N near 0, must not win because the family's Akaike choice has two
+        // parameters.
         let aic = |p: &(EffectParams, GlsFit, f64)| {
             (cur.chi2 - p.1.chi2) - 2.0 * p.0.kind().n_params() as f64
         };
@@ -715,10 +734,18 @@ fn add_stationary(
             .filter(|p| p.0.kind().is_filter())
             .max_by(|a, b| aic(a).total_cmp(&aic(b)))
             .map(|p| p.0.kind());
-        for p in passed {
+        let filter_score = passed
+            .iter()
+            .filter(|p| p.0.kind().is_filter())
+            .map(|p| p.2)
+            .fold(f64::NEG_INFINITY, f64::max);
+        for mut p in passed {
             let k = p.0.kind();
-            if k.is_filter() && Some(k) != best_filter {
-                continue;
+            if k.is_filter() {
+                if Some(k) != best_filter {
+                    continue;
+                }
+                p.2 = filter_score;
             }
             if best.as_ref().is_none_or(|b| p.2 > b.2) {
                 best = Some(p);

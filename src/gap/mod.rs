@@ -4,7 +4,8 @@
 //!
 //! Layout: [`evidence`] gathers, in one streaming pass over increments, the dense AVAR curve,
 //! per-segment curves and block means ([`GapEvidence`]); [`effects`] holds the candidate effects
-//! and their AVAR columns; [`problem`] is the GLS fit on the curve, [`block_cov`] the noise model
+//! and their AVAR columns; [`problem`] is the GLS fit on the curve ([`filter_cov`]: its covariance
+//! with an output filter), [`block_cov`] the noise model
 //! of the time-domain tests [`warmup`] and [`steps`] ([`jump_mixture`]: statistics measured and
 //! not adopted); [`segments`] tests homogeneity in time; [`diagnose`](mod@diagnose) orchestrates
 //! them and decides ([`Diagnosis`]) by [`thresholds`]; [`holdout`] judges a held-out run;
@@ -25,6 +26,7 @@ pub mod diagnose;
 pub mod effects;
 pub mod ensemble;
 pub mod evidence;
+pub mod filter_cov;
 pub mod filter_scan;
 pub mod holdout;
 pub mod intervals;

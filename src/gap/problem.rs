@@ -8,6 +8,7 @@
 use super::diagnose::{DiagnoseError, DiagnoseOptions, Region};
 use super::effects::{canonical_lowpass, effect_column, EffectKind, EffectParams, Grid};
 use super::evidence::EvidenceSnapshot;
+use super::filter_cov::filter_cov_correction;
 use crate::allan::CurvePoint;
 use crate::model::avar_cov::{AvarCovariance, CovPoint};
 use crate::model::fit::{fit, FitOptions};
@@ -129,30 +130,34 @@ impl GapProblem {
         let strides: Vec<u64> = pts.iter().map(|p| p.stride.max(1)).collect();
         // The covariance's five terms: the plain fit's, or those given (DiagnoseOptions::cov_coef).
         let c_cov = opts.cov_coef.unwrap_or(c_init);
-        let cov = AvarCovariance::new().matrix_strided(tau0, &cov_pts, &strides, &c_cov);
+        let mut cov = AvarCovariance::new().matrix_strided(tau0, &cov_pts, &strides, &c_cov);
+        // A found output filter smooths the white rate: the exact correction for it
+        // ([`super::filter_cov`]; docs/gap.md, "Low-pass filters beyond first order").
+        if let Some(lp) = opts.cov_filter {
+            cov += filter_cov_correction(tau0, &cov_pts, &strides, &c_cov, &lp);
+        }
         let a: Vec<f64> = pts
             .iter()
             .map(|p| {
                 let b = basis(p.tau_s);
-                (0..5).map(|i| b[i] * c_cov[i]).sum::<f64>().max(1e-300)
+                let (n_col, b_col) = opts.cov_filter.map_or((b[1], b[2]), |lp| {
+                    (
+                        lp.white_rate_avar(tau0, &[p.m])[0],
+                        lp.flicker_rate_avar(tau0, &[p.m])[0],
+                    )
+                });
+                (0..5)
+                    .map(|i| match i {
+                        1 => n_col,
+                        2 => b_col,
+                        _ => b[i],
+                    } * c_cov[i])
+                    .sum::<f64>()
+                    .max(1e-300)
             })
             .collect();
         let j = pts.len();
-        // Below a found filter's memory, the filtered increments' second differences stay
-        // correlated over about `1 / rho_0` samples (the filter's equivalent averaging length)
-        // instead of `m`: the relative variance of the AVAR estimate is widened by
-        // `max(1, L / m)` there (an approximation, measured in docs/gap.md, "Low-pass filters
-        // beyond first order").
-        let widen: Vec<f64> = match opts.cov_filter {
-            Some(lp) => {
-                let l = 1.0 / lp.autocorrelation(tau0)[0].max(1e-12);
-                pts.iter().map(|p| (l / p.m as f64).max(1.0)).collect()
-            }
-            None => vec![1.0; pts.len()],
-        };
-        let mut s = DMatrix::from_fn(j, j, |r, c| {
-            cov[(r, c)] / (a[r] * a[c]) * (widen[r] * widen[c]).sqrt()
-        });
+        let mut s = DMatrix::from_fn(j, j, |r, c| cov[(r, c)] / (a[r] * a[c]));
         let s_diag: Vec<f64> = (0..j).map(|i| s[(i, i)]).collect();
         if s_diag.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
             return Err(DiagnoseError::Covariance);
@@ -235,10 +240,15 @@ impl GapProblem {
             ),
             other => other.white_rate_avar(self.tau0_s, &self.ms),
         });
+        // The unit's filter smooths its flicker floor too (LowPass::flicker_rate_avar).
+        let filt_b = spec
+            .filter
+            .map(|lp| lp.flicker_rate_avar(self.tau0_s, &self.ms));
         DMatrix::from_fn(j, k, |r, c| {
             if c < 5 {
-                match (&filt, c) {
-                    (Some(f), 1) => f[r],
+                match (&filt, &filt_b, c) {
+                    (Some(f), _, 1) => f[r],
+                    (_, Some(f), 2) => f[r],
                     _ => basis(self.tau[r])[c],
                 }
             } else {

@@ -1,9 +1,12 @@
 //! Text columns: one row per sample, columns separated by commas, semicolons, tabs or spaces,
 //! an optional first row of channel names (otherwise `c1`, `c2`, ...; a UTF-8 byte-order mark
-//! before it is dropped, duplicate names are refused), `#` lines skipped (docs/records.md). A column
-//! named `time`, `t`, `timestamp` or `time_s` (or the one [`TextOptions::time_column`] names) is
-//! a time stamp, not a channel: with the sampling step ([`TextOptions::tau0_s`]) its jumps
-//! become gaps of the missing samples ([`super::time_column`]), else it is skipped;
+//! before it is dropped, duplicate names are refused), `#` lines skipped (docs/records.md). A `#`
+//! line just before the first data row that names as many columns as the row has (`#timestamp
+//! [ns],w_RS_S_x [rad s^-1],...`, as EuRoC and TUM datasets write) is that header. A column
+//! named `time`, `t`, `timestamp`, `time_s` (any case, a unit after it such as `timestamp [ns]`,
+//! `time (s)` or `t_ns` allowed: [`time_column_unit`]) or the one [`TextOptions::time_column`]
+//! names is a time stamp, not a channel: with the sampling step ([`TextOptions::tau0_s`]) its
+//! jumps become gaps of the missing samples ([`super::time_column`]), else it is skipped;
 //! [`TextOptions::columns`] picks and renames channels.
 //!
 //! Streams: rows are read line by line and handed on in batches; the file is never held in
@@ -27,6 +30,51 @@ const BAD_ROWS_LOGGED: u64 = 10;
 
 /// Header names taken as a time column when no `--time-column` is given (case-insensitive).
 pub const TIME_COLUMN_NAMES: [&str; 4] = ["time", "t", "timestamp", "time_s"];
+
+/// Seconds per unit of the time units a column name may carry.
+const TIME_UNITS: [(&str, f64); 6] = [
+    ("s", 1.0),
+    ("sec", 1.0),
+    ("ms", 1e-3),
+    ("us", 1e-6),
+    ("\u{b5}s", 1e-6),
+    ("ns", 1e-9),
+];
+
+/// Whether `name` names a time column by itself ([`TIME_COLUMN_NAMES`], any case, with or
+/// without a unit: `timestamp [ns]`, `time (s)`, `t_ns`), and the unit's seconds when it gives
+/// one (`Some(None)`: a time column without a unit; `None`: not a time column's name).
+pub fn time_column_unit(name: &str) -> Option<Option<f64>> {
+    let n = name
+        .trim()
+        .trim_start_matches('#')
+        .trim()
+        .to_ascii_lowercase();
+    let unit_of = |u: &str| {
+        let u = u.trim();
+        TIME_UNITS.iter().find(|(x, _)| *x == u).map(|(_, s)| *s)
+    };
+    // `timestamp [ns]`, `time (s)`: the unit in brackets.
+    if let Some(open) = n.find(['[', '(']) {
+        let (base, rest) = n.split_at(open);
+        let close = if rest.starts_with('[') { ']' } else { ')' };
+        let inner = rest[1..].strip_suffix(close)?;
+        let base = base.trim();
+        return (TIME_COLUMN_NAMES.contains(&base) && base != "time_s")
+            .then(|| unit_of(inner))
+            .flatten()
+            .map(Some);
+    }
+    if TIME_COLUMN_NAMES.contains(&n.as_str()) {
+        return Some((n == "time_s").then_some(1.0));
+    }
+    // `t_ns`, `time_ms`, `timestamp_us`.
+    let (base, unit) = n.rsplit_once('_')?;
+    (["t", "time", "timestamp"].contains(&base))
+        .then(|| unit_of(unit))
+        .flatten()
+        .map(Some)
+}
 
 /// One `--columns` item: the input column `source`, called `name` in the analysis
 /// (`gx=g1`, or `gy` to keep the name).
@@ -119,7 +167,7 @@ impl Layout {
             })?),
             None if header => source_names
                 .iter()
-                .position(|n| TIME_COLUMN_NAMES.iter().any(|t| n.eq_ignore_ascii_case(t))),
+                .position(|n| time_column_unit(n).is_some()),
             None => None,
         };
         let (keep, names) = match &opts.columns {
@@ -251,6 +299,22 @@ fn parse_field(t: &str) -> Result<f64, ()> {
     t.parse::<f64>().map_err(|_| ())
 }
 
+/// The column names of a `#` line taken as the header of data rows `width` wide: as many
+/// fields as the rows, none empty, at least one not a number (so a commented-out data row is not
+/// a header). `None` when the line is an ordinary comment.
+fn commented_header(line: &str, width: usize) -> Option<Vec<String>> {
+    let fields = split(line);
+    let names: Vec<String> = fields
+        .iter()
+        .map(|f| f.trim().trim_matches('"').trim().to_string())
+        .collect();
+    let ok = width > 1
+        && names.len() == width
+        && names.iter().all(|n| !n.is_empty())
+        && fields.iter().any(|f| parse_field(f).is_err());
+    ok.then_some(names)
+}
+
 fn split(line: &str) -> Vec<&str> {
     if line.contains(',') {
         line.split(',').collect()
@@ -278,6 +342,8 @@ impl<R: BufRead> TextReader<R> {
         let mut line_no = 0u64;
         let mut offset = 0u64;
         let mut layout: Option<Layout> = None;
+        // The last `#` line before the first data row (a commented header, see the module doc).
+        let mut hash_line: Option<String> = None;
         loop {
             line.clear();
             let n = src
@@ -294,7 +360,13 @@ impl<R: BufRead> TextReader<R> {
             } else {
                 line.trim()
             };
-            if t.is_empty() || t.starts_with('#') {
+            if t.is_empty() {
+                continue;
+            }
+            if let Some(c) = t.strip_prefix('#') {
+                if layout.is_none() {
+                    hash_line = Some(c.trim().to_string());
+                }
                 continue;
             }
             let (values, layout) = match layout.take() {
@@ -313,8 +385,14 @@ impl<R: BufRead> TextReader<R> {
                 None => {
                     let fields = split(t);
                     if fields.iter().all(|f| parse_field(f).is_ok()) {
-                        let names = (1..=fields.len()).map(|i| format!("c{i}")).collect();
-                        let l = Layout::new(names, false, opts, path, line_no)?;
+                        let commented = hash_line
+                            .as_deref()
+                            .and_then(|h| commented_header(h, fields.len()));
+                        let header = commented.is_some();
+                        let names = commented.unwrap_or_else(|| {
+                            (1..=fields.len()).map(|i| format!("c{i}")).collect()
+                        });
+                        let l = Layout::new(names, header, opts, path, line_no)?;
                         let (v, time) = l.parse(t).map_err(|p| input_error(path, line_no, p))?;
                         ((Ok(v), time), l)
                     } else {
@@ -398,6 +476,29 @@ impl<R: BufRead> TextReader<R> {
     /// Values read so far that were numbers (gaps and bad rows left out).
     pub fn samples(&self) -> u64 {
         self.samples
+    }
+
+    /// The header name of the time column, if the input has one.
+    pub fn time_column_name(&self) -> Option<&str> {
+        self.layout
+            .time
+            .map(|i| self.layout.source_names[i].as_str())
+    }
+
+    /// The time stamps of the next `max_rows` rows (NaN where a row has none), consuming them:
+    /// for a look at the start of an input (`super::sampling_step`), not for a run.
+    pub fn take_stamps(&mut self, max_rows: usize) -> std::io::Result<Vec<f64>> {
+        let mut stamps = Vec::new();
+        if let Some((_, t)) = self.pending.take() {
+            stamps.push(t);
+        }
+        while stamps.len() < max_rows {
+            match self.next_row()? {
+                Some((_, t)) => stamps.push(t),
+                None => break,
+            }
+        }
+        Ok(stamps)
     }
 
     /// Channel names, from the header row or `c1..cn`.

@@ -27,6 +27,7 @@ pub mod model_avar;
 pub mod model_file;
 pub mod model_write;
 pub mod noise;
+pub mod stand_rate;
 pub mod writer;
 
 use rand::RngExt;

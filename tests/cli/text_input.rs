@@ -299,3 +299,79 @@ fn a_time_column_that_goes_backwards_or_is_not_uniform_is_reported() {
     let t = s.time_column.as_ref().expect("summary.time_column");
     assert_eq!((t.used, t.unit.as_deref(), t.gaps), (false, None, 0));
 }
+
+/// `analyze` with the given arguments and no `--tau0`.
+fn analyze_no_tau0(path: &Path, extra: &[&str]) -> Output {
+    exe()
+        .args(["analyze", path.to_str().unwrap(), "--fit", "none"])
+        .args(["--stats", "avar"])
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
+/// A dataset as EuRoC writes it: a commented header with units in brackets, nanosecond stamps
+/// since 1970 (resolved to 256 ns as f64), rows 200..210 absent. Without `--tau0` the step is
+/// read off the time column (0.01 s, said on standard error), and the records are those of the
+/// same file given `--tau0 0.01`: the same curves, the gap found.
+#[test]
+fn a_euroc_file_needs_no_tau0() {
+    let (a, b) = columns();
+    let mut text = String::from("#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1]\n");
+    for i in (0..a.len()).filter(|i| !(200..210).contains(i)) {
+        let ns = 1_403_636_579_758_555_392u64 + i as u64 * 10_000_000;
+        text += &format!("{ns},{:e},{:e}\n", a[i], b[i]);
+    }
+    let p = write("euroc_imu0.csv", text.as_bytes());
+    let told = analyze(&p, &["--stats", "avar"]);
+    let (tc, ts) = parsed(&told);
+    let out = analyze_no_tau0(&p, &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("tau0 0.01 s from the time column `timestamp [ns]`"),
+        "{err}"
+    );
+    let (c, s) = parsed(&out);
+    assert_eq!(s.tau0, 0.01);
+    assert_eq!(s.channels, ["w_RS_S_x [rad s^-1]", "w_RS_S_y [rad s^-1]"]);
+    assert_eq!(s.t_data, 4.0);
+    assert_eq!(s.segments, [2, 2]);
+    let t = s.time_column.as_ref().expect("time column");
+    assert_eq!((t.unit.as_deref(), t.missing_samples), (Some("ns"), 10));
+    assert_eq!(
+        (s.samples.clone(), s.segments.clone()),
+        (ts.samples, ts.segments)
+    );
+    assert_eq!(c.len(), tc.len());
+    for (x, y) in c.iter().zip(&tc) {
+        assert_eq!((&x.channel, &x.sigma), (&y.channel, &y.sigma));
+    }
+}
+
+/// Without `--tau0` and without a usable time column: exit 2 saying why, once.
+#[test]
+fn no_tau0_without_a_usable_time_column_is_a_usage_error() {
+    let p = write(
+        "no_time.csv",
+        format!("gx,gy\n{}", rows(",", false)).as_bytes(),
+    );
+    usage_error(
+        &analyze_no_tau0(&p, &[]),
+        &["no_time.csv", "no time column"],
+    );
+    let mut irregular = String::from("time,gx\n");
+    for i in 0..50u64 {
+        irregular += &format!("{},{}\n", i * i, i % 7);
+    }
+    let p = write("irregular_time.csv", irregular.as_bytes());
+    usage_error(
+        &analyze_no_tau0(&p, &[]),
+        &["irregular_time.csv", "irregular"],
+    );
+    let out = exe()
+        .args(["analyze", "-", "--fit", "none"])
+        .stdin(std::process::Stdio::null())
+        .output()
+        .unwrap();
+    usage_error(&out, &["standard input"]);
+}

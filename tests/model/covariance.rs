@@ -1,4 +1,4 @@
-//! The analytic covariance of AVAR estimates between taus (src/model/avar_cov.rs): closed forms of
+//! The analytic covariance of AVAR estimates between taus (src/model/avar_cov/): closed forms of
 //! each term's AVAR, quadrature against the lag-by-lag sum, and the whole matrix against a dense
 //! computation from the phase's own covariance matrix.
 

@@ -2,6 +2,10 @@
 //! its checked form [`FrameDescriptor`]. Loading collects every problem it finds (file, key,
 //! what is wrong, what is allowed) and rejects unknown keys; nothing here reads a byte stream.
 //!
+//! This file holds the types; the checker that builds them from TOML is `parse` (the top level
+//! and the checks across message kinds), `message` (one message kind), `walker` (typed reads of
+//! one TOML table) and `layout` (fields inside the message, no shared bytes).
+//!
 //! # The language
 //!
 //! ```toml
@@ -53,7 +57,10 @@
 
 use std::path::{Path, PathBuf};
 
+mod layout;
+mod message;
 mod parse;
+mod walker;
 
 use super::checksum::ChecksumAlgorithm;
 use super::field::{ByteOrder, FieldType};

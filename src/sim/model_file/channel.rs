@@ -1,0 +1,323 @@
+//! One `[[channel]]` table of a model file: its name and unit, the five terms, the flicker band,
+//! the axis, and every effect (temperature coefficient, Gauss-Markov, sinusoids, output filter
+//! or another low-pass, warm-up, bias jumps, rate quantization, outliers), into a
+//! [`ChannelModel`].
+
+use super::keys::Keys;
+use super::{
+    BiasJumps, ChannelModel, FlickerBank, GaussMarkov, IncrementUnit, LowPass, Outliers,
+    OutputFilterSpec, Sinusoid, Warmup, FLICKER_BAND_DECADES_DEFAULT,
+};
+use crate::toml_check::Collector;
+
+fn parse_axis(v: &toml::Value, path: &str, errs: &mut Collector) -> Option<[f64; 3]> {
+    let raw = match v {
+        toml::Value::String(s) => match s.as_str() {
+            "east" => [1.0, 0.0, 0.0],
+            "west" => [-1.0, 0.0, 0.0],
+            "north" => [0.0, 1.0, 0.0],
+            "south" => [0.0, -1.0, 0.0],
+            "up" => [0.0, 0.0, 1.0],
+            "down" => [0.0, 0.0, -1.0],
+            other => {
+                errs.bad(
+                    path,
+                    format!("unknown direction `{other}` (allowed: up, down, north, south, east, west, or [east, north, up])"),
+                );
+                return None;
+            }
+        },
+        toml::Value::Array(a) => {
+            let nums: Vec<f64> = a
+                .iter()
+                .filter_map(|x| x.as_float().or(x.as_integer().map(|i| i as f64)))
+                .collect();
+            if a.len() != 3 || nums.len() != 3 || nums.iter().any(|x| !x.is_finite()) {
+                errs.bad(path, "expected three numbers [east, north, up]");
+                return None;
+            }
+            [nums[0], nums[1], nums[2]]
+        }
+        other => {
+            errs.bad(
+                path,
+                format!(
+                    "expected a direction name or [east, north, up], found {}",
+                    other.type_str()
+                ),
+            );
+            return None;
+        }
+    };
+    let norm = (raw[0] * raw[0] + raw[1] * raw[1] + raw[2] * raw[2]).sqrt();
+    if norm == 0.0 {
+        errs.bad(path, "must not be the zero vector");
+        return None;
+    }
+    Some([raw[0] / norm, raw[1] / norm, raw[2] / norm])
+}
+
+pub(super) fn parse_channel(
+    t: &toml::Table,
+    path: &str,
+    tau0_s: f64,
+    has_temperature: bool,
+    has_stand: bool,
+    errs: &mut Collector,
+) -> Option<ChannelModel> {
+    let n_before = errs.problems().len();
+    let mut k = Keys::new(t, path);
+    let name = k.string("name", errs).unwrap_or("").to_string();
+    if !t.contains_key("name") {
+        errs.bad(k.path("name"), "missing");
+    } else if name.is_empty() || name.contains([',', '"', '\n', '\r']) {
+        errs.bad(
+            k.path("name"),
+            "must be non-empty, without commas, quotes or line breaks",
+        );
+    }
+    let unit = k.string("unit", errs).unwrap_or("").to_string();
+    if !t.contains_key("unit") {
+        errs.bad(k.path("unit"), "missing");
+    }
+    let kind = IncrementUnit::parse(&unit);
+    let lsb = k.num_pos("lsb", true, errs);
+    let bias = k.num("bias", errs).unwrap_or(0.0);
+    let q = k.num_pos("Q", false, errs).unwrap_or(0.0);
+    let n = k.num_pos("N", false, errs).unwrap_or(0.0);
+    let b = k.num_pos("B", false, errs).unwrap_or(0.0);
+    let kk = k.num_pos("K", false, errs).unwrap_or(0.0);
+    let r = k.num("R", errs).unwrap_or(0.0);
+    let band_path = k.path("flicker_band_s");
+    let flicker_band_s = match k.get("flicker_band_s") {
+        None => (tau0_s, tau0_s * 10f64.powf(FLICKER_BAND_DECADES_DEFAULT)),
+        Some(v) => {
+            let nums: Vec<f64> = v
+                .as_array()
+                .map(|a| {
+                    a.iter()
+                        .filter_map(|x| x.as_float().or(x.as_integer().map(|i| i as f64)))
+                        .collect()
+                })
+                .unwrap_or_default();
+            if nums.len() != 2 || !(nums[0] > 0.0 && nums[1] > nums[0] && nums[1].is_finite()) {
+                errs.bad(
+                    &band_path,
+                    "expected [tau_lo_s, tau_hi_s] with 0 < tau_lo_s < tau_hi_s",
+                );
+                (tau0_s, tau0_s * 10f64.powf(FLICKER_BAND_DECADES_DEFAULT))
+            } else {
+                (nums[0], nums[1])
+            }
+        }
+    };
+    let axis_path = k.path("axis");
+    let axis_enu = k.get("axis").and_then(|v| parse_axis(v, &axis_path, errs));
+    if axis_enu.is_some() && kind.is_none() {
+        errs.bad(
+            &axis_path,
+            format!(
+                "an axis needs a unit of angle (arcsec, deg, rad, mrad) or velocity (m/s, ft/s, g, mg), not `{unit}`"
+            ),
+        );
+    }
+    if axis_enu.is_some() && !has_stand {
+        errs.bad(
+            &axis_path,
+            "an axis needs a [stand] table (latitude) to project on",
+        );
+    }
+    let temperature_coefficient = k.num("temperature_coefficient", errs).unwrap_or(0.0);
+    if temperature_coefficient != 0.0 && !has_temperature {
+        errs.bad(
+            k.path("temperature_coefficient"),
+            "needs a top-level [temperature] profile",
+        );
+    }
+    let mut gauss_markov = Vec::new();
+    for (p, tt) in k.tables("gauss_markov", errs) {
+        let mut e = Keys::new(tt, &p);
+        let s = e.num_pos("sigma", false, errs);
+        let sigma = e.required("sigma", s, errs);
+        let tc = e.num_pos("tau_c", true, errs);
+        let tau_c_s = e.required("tau_c", tc, errs);
+        e.finish(errs);
+        gauss_markov.push(GaussMarkov { sigma, tau_c_s });
+    }
+    let mut sinusoids = Vec::new();
+    for (p, tt) in k.tables("sinusoid", errs) {
+        let mut e = Keys::new(tt, &p);
+        let a = e.num("amplitude", errs);
+        let amplitude = e.required("amplitude", a, errs);
+        let f = e.num_pos("frequency", true, errs);
+        let frequency_hz = e.required("frequency", f, errs);
+        let phase_rad = e.num("phase", errs).unwrap_or(0.0);
+        e.finish(errs);
+        sinusoids.push(Sinusoid {
+            amplitude,
+            frequency_hz,
+            phase_rad,
+        });
+    }
+    let output_filter = k.table("output_filter", errs).map(|(p, tt)| {
+        let mut e = Keys::new(tt, &p);
+        let tc = e.num_pos("time_constant", true, errs);
+        let time_constant_s = e.required("time_constant", tc, errs);
+        e.finish(errs);
+        OutputFilterSpec { time_constant_s }
+    });
+    let lowpass = parse_lowpass(&mut k, tau0_s, output_filter.is_some(), errs);
+    let warmup = k.table("warmup", errs).map(|(p, tt)| {
+        let mut e = Keys::new(tt, &p);
+        let a = e.num("amplitude", errs);
+        let amplitude = e.required("amplitude", a, errs);
+        let tc = e.num_pos("time_constant", true, errs);
+        let time_constant_s = e.required("time_constant", tc, errs);
+        e.finish(errs);
+        Warmup {
+            amplitude,
+            time_constant_s,
+        }
+    });
+    let bias_jumps = k.table("bias_jumps", errs).map(|(p, tt)| {
+        let mut e = Keys::new(tt, &p);
+        let mi = e.num_pos("mean_interval", true, errs);
+        let mean_interval_s = e.required("mean_interval", mi, errs);
+        let rs = e.num_pos("rms_size", false, errs);
+        let rms_size = e.required("rms_size", rs, errs);
+        e.finish(errs);
+        BiasJumps {
+            mean_interval_s,
+            rms_size,
+        }
+    });
+    let rate_lsb = k.num_pos("rate_lsb", true, errs);
+    let outliers = k.table("outliers", errs).map(|(p, tt)| {
+        let mut e = Keys::new(tt, &p);
+        let r = e.num_pos("rate", false, errs);
+        let rate_per_s = e.required("rate", r, errs);
+        if rate_per_s * tau0_s > 0.5 {
+            errs.bad(
+                e.path("rate"),
+                format!("{rate_per_s} per second is more than one outlier every two samples"),
+            );
+        }
+        let sz = e.num_pos("size", true, errs);
+        let size = e.required("size", sz, errs);
+        e.finish(errs);
+        Outliers { rate_per_s, size }
+    });
+    k.finish(errs);
+    if errs.problems().len() > n_before {
+        return None;
+    }
+    let flicker = (b > 0.0).then(|| FlickerBank::design(b, flicker_band_s.0, flicker_band_s.1));
+    Some(ChannelModel {
+        name,
+        unit,
+        lsb,
+        bias,
+        q,
+        n,
+        b,
+        k: kk,
+        r,
+        flicker_band_s,
+        flicker,
+        axis_enu,
+        kind,
+        temperature_coefficient,
+        gauss_markov,
+        sinusoids,
+        output_filter,
+        lowpass,
+        warmup,
+        bias_jumps,
+        rate_lsb,
+        outliers,
+    })
+}
+
+/// The keys `moving_average = {taps, stages}`, `second_order_filter = {natural_frequency,
+/// damping}` and `zero_phase_filter = {time_constant}`: at most one filter per channel
+/// (`output_filter` included).
+fn parse_lowpass(
+    k: &mut Keys<'_>,
+    tau0_s: f64,
+    has_output_filter: bool,
+    errs: &mut Collector,
+) -> Option<LowPass> {
+    let mut found: Vec<(String, LowPass)> = Vec::new();
+    if let Some((p, tt)) = k.table("moving_average", errs) {
+        let mut e = Keys::new(tt, &p);
+        let t = e.num_pos("taps", true, errs);
+        let taps = e.required("taps", t, errs);
+        let stages = e.num_pos("stages", true, errs).unwrap_or(1.0);
+        e.finish(errs);
+        for (key, v) in [("taps", taps), ("stages", stages)] {
+            if v.is_finite() && v.fract() != 0.0 {
+                errs.bad(
+                    format!("{p}.{key}"),
+                    format!("must be a whole number, got {v}"),
+                );
+            }
+        }
+        found.push((
+            p,
+            LowPass::MovingAverage {
+                taps: taps.clamp(0.0, u32::MAX as f64) as u32,
+                stages: stages.clamp(0.0, u32::MAX as f64) as u32,
+            },
+        ));
+    }
+    if let Some((p, tt)) = k.table("second_order_filter", errs) {
+        let mut e = Keys::new(tt, &p);
+        let f = e.num_pos("natural_frequency", true, errs);
+        let natural_frequency_hz = e.required("natural_frequency", f, errs);
+        let z = e.num_pos("damping", true, errs);
+        let damping = e.required("damping", z, errs);
+        e.finish(errs);
+        found.push((
+            p,
+            LowPass::SecondOrder {
+                natural_frequency_hz,
+                damping,
+            },
+        ));
+    }
+    if let Some((p, tt)) = k.table("zero_phase_filter", errs) {
+        let mut e = Keys::new(tt, &p);
+        let tc = e.num_pos("time_constant", true, errs);
+        let time_constant_s = e.required("time_constant", tc, errs);
+        e.finish(errs);
+        found.push((p, LowPass::ZeroPhase { time_constant_s }));
+    }
+    let mut out = None;
+    for (i, (p, lp)) in found.into_iter().enumerate() {
+        if i > 0 || has_output_filter {
+            errs.bad(
+                p,
+                "one filter per channel: output_filter, moving_average, second_order_filter \
+                 and zero_phase_filter exclude each other",
+            );
+            continue;
+        }
+        // Parameters already reported missing or not positive are not judged again.
+        let judged = match lp {
+            LowPass::SecondOrder {
+                natural_frequency_hz,
+                damping,
+            } => natural_frequency_hz.is_finite() && damping.is_finite(),
+            LowPass::ZeroPhase { time_constant_s } => time_constant_s.is_finite(),
+            _ => true,
+        };
+        if judged {
+            if let Some(problem) = lp.check(tau0_s) {
+                errs.bad(p, problem);
+                continue;
+            }
+        }
+        out = Some(lp);
+    }
+    out
+}
