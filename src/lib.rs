@@ -8,7 +8,7 @@
 //! ```text
 //! source (file, stdin, serial, udp)                       bytes            (tokio tasks)
 //!   -> frame (descriptor, decoder) | input (text columns)  bytes -> Chunk  (decode thread)
-//!   -> analysis: one run, per channel                      Chunk -> records (worker threads)
+//!   -> analysis: one run, per channel       Chunk -> ChannelReport -> records (worker threads)
 //!        allan (accumulators, batch reference, edf, noise id)   samples -> Curve
 //!        model (terms, covariance, fit, aggregate, limits)      Curve -> FitResult
 //!        gap (evidence, effects, diagnosis)                     increments -> Diagnosis
@@ -72,9 +72,13 @@
 //!   decoder.rs             the streaming decoder: sync, checksum, counter, health
 //!   block.rs               a flat batch of decoded frames for the analysis
 //!   encoder.rs             valid messages of a descriptor (the decoder's inverse)
-//! analysis.rs              one run: chunks -> accumulators -> curves, fits, diagnoses -> records
-//! analysis/                what the run's analysis is fed
+//! analysis.rs              one run: chunks -> curves, fits, diagnoses -> ChannelReports -> records
+//! analysis/                the run's parts
+//!   setup.rs               what the analysis is given: input kind, channels, options
 //!   block.rs               a frame block handed to each channel at once
+//!   channel_fit.rs         a channel's curves and fit, noise types read off first
+//!   channel_report.rs      ChannelReport: one channel's curves, fit, read-outs, diagnosis
+//!   state.rs               the run's saved state for a checkpoint
 //! allan/                   the Allan family                                   samples -> Curve
 //!   accum/                 streaming accumulators of AVAR, HVAR, MVAR
 //!     config.rs            which statistics, which cluster sizes, exact or bounded overlap
@@ -146,7 +150,13 @@
 //!   unit_record.rs         the `unit` tag of a run of several units
 //!   json.rs                records as JSON lines
 //!   output.rs              result files never overwritten unless asked
-//!   table.rs               the readable table for a terminal
+//!   table/                 the readable table for a terminal
+//!     layout.rs            style, number formats, padded columns
+//!     channel.rs           one run: heading, per-channel rows, limits cells
+//!     diagnosis.rs         a channel's diagnosis in one line
+//!     runs.rs              the run-to-run table of several runs
+//!     writer.rs            TableWriter, in place of standard output on a terminal
+//!     status.rs            the one-line status of a live run
 //!   status_area.rs         the terminal line kept for a live run's status
 //!   effect_text.rs         an effect of a diagnosis as a person reads it
 //!   results.rs             the records `plot` and `report` read, labelled
@@ -158,7 +168,14 @@
 //!     fit_terms.rs         the determined terms of a fit record
 //!     text.rs              the words and numbers of labels
 //!   dynamic.rs             the dynamic Allan view (time x tau)
-//!   report.rs              the HTML test report
+//!   report/                the HTML test report: the page skeleton
+//!     banner.rs            the PASS/FAIL banner of the datasheet limits
+//!     runs.rs              the runs and limits tables
+//!     figures.rs           the embedded SVG figures and dynamic views
+//!     noise_model.rs       the noise-model section (table 2 layout)
+//!     diagnosis.rs         each channel's diagnosis in words
+//!     health.rs            the decoder-health table
+//!     css.rs               the stylesheet, screen and print
 //!   page_file.rs           a finished figure or page written safely
 //!   export.rs              the fitted model in other tools' files
 //!   metrics.rs             the metrics registry (Prometheus text)
@@ -196,7 +213,7 @@
 //! Dependencies (users first):
 //! plan: builds the run's pipeline inputs and its checkpoint setup
 //! pipeline: runs analysis, source, sink; owns the checkpoint file format
-//! analysis: drives allan, model, gap; yields sink's typed records
+//! analysis: drives allan, model, gap; yields typed ChannelReports and sink's records
 //! stand: reads the stand config (frame descriptors, sources)
 //! source: bytes in (writes a capture through sink)
 //! sink: the typed records and what is made of them
