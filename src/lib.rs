@@ -8,7 +8,7 @@
 //! ```text
 //! source (file, stdin, serial, udp)                       bytes            (tokio tasks)
 //!   -> frame (descriptor, decoder) | input (text columns)  bytes -> Chunk  (decode thread)
-//!   -> analysis: one run, per channel                      Chunk -> records (worker threads)
+//!   -> analysis: one run, per channel       Chunk -> ChannelReport -> records (worker threads)
 //!        allan (accumulators, batch reference, edf, noise id)   samples -> Curve
 //!        model (terms, covariance, fit, aggregate, limits)      Curve -> FitResult
 //!        gap (evidence, effects, diagnosis)                     increments -> Diagnosis
@@ -36,7 +36,7 @@
 //! Dependencies (users first):
 //! plan: builds the run's pipeline inputs and its checkpoint setup
 //! pipeline: runs analysis, source, sink; owns the checkpoint file format
-//! analysis: drives allan, model, gap; yields sink's typed records
+//! analysis: drives allan, model, gap; yields typed ChannelReports and sink's records
 //! stand: reads the stand config (frame descriptors, sources)
 //! source: bytes in (writes a capture through sink)
 //! sink: the typed records and what is made of them

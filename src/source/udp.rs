@@ -1,6 +1,9 @@
 //! UDP source: one socket, each datagram one or more whole frames, passed on whole. Reordering
 //! and duplicate datagrams are the decode stage's business (`pipeline::reorder`); this task
 //! only receives, so the socket's buffer drains as fast as the kernel fills it.
+//! The socket asks for a receive buffer of [`RECV_BUFFER`] bytes, so a receiver that misses the
+//! CPU for a while (a loaded host, many units in one process) finds its datagrams waiting
+//! instead of dropped.
 
 use std::net::SocketAddr;
 use std::time::{Duration, Instant};
@@ -22,6 +25,14 @@ pub const IDLE_AFTER: Duration = Duration::from_millis(20);
 /// Datagrams taken from the socket after one has arrived, before waiting with a timeout again.
 const DRAIN_AT_ONCE: usize = 64;
 
+/// The receive buffer asked for (`SO_RCVBUF`), in bytes. Linux's default (`rmem_default`, often
+/// 208 KiB) holds a few hundred small datagrams: at 200 datagrams/s per unit, about a second of
+/// a receiver that does not get the CPU, and a loaded 2-core host with 100 units lost 1.4% of
+/// its frames there (BENCHMARKS.md, "Several units live"). 4 MiB holds several seconds; the
+/// kernel caps the request at `net.core.rmem_max` (the size granted is logged), and the memory
+/// is used only while datagrams wait.
+pub const RECV_BUFFER: usize = 4 << 20;
+
 /// Parses `--udp`: `ADDR:PORT`, or a bare `PORT` (bound to 127.0.0.1).
 pub fn parse_bind(s: &str) -> Result<SocketAddr, String> {
     let s = s.trim();
@@ -33,12 +44,35 @@ pub fn parse_bind(s: &str) -> Result<SocketAddr, String> {
     })
 }
 
+/// A non-blocking UDP socket bound to `bind`, with a receive buffer of `recv_buffer` bytes
+/// asked for (the kernel may grant less, or, as Linux does, twice the request for its own
+/// bookkeeping); returns the socket and the size granted.
+pub fn bind_socket(bind: SocketAddr, recv_buffer: usize) -> Result<(std::net::UdpSocket, usize)> {
+    use socket2::{Domain, Protocol, Socket, Type};
+    let sock = Socket::new(Domain::for_address(bind), Type::DGRAM, Some(Protocol::UDP))
+        .context("cannot create a UDP socket")?;
+    // A smaller buffer than asked is not an error: the kernel's limit is the administrator's.
+    if let Err(e) = sock.set_recv_buffer_size(recv_buffer) {
+        tracing::debug!("udp {bind}: SO_RCVBUF {recv_buffer}: {e}");
+    }
+    sock.set_nonblocking(true)
+        .context("cannot make the UDP socket non-blocking")?;
+    sock.bind(&bind.into())
+        .with_context(|| format!("cannot bind UDP socket {bind}"))?;
+    let granted = sock.recv_buffer_size().unwrap_or(0);
+    Ok((sock.into(), granted))
+}
+
 /// Receives datagrams until shutdown.
 pub async fn run(bind: SocketAddr, ctx: &mut SourceContext) -> Result<()> {
-    let sock = UdpSocket::bind(bind)
-        .await
-        .with_context(|| format!("cannot bind UDP socket {bind}"))?;
-    tracing::info!("listening on udp {}", sock.local_addr()?);
+    let (std_sock, granted) = bind_socket(bind, RECV_BUFFER)?;
+    let sock = UdpSocket::from_std(std_sock)
+        .with_context(|| format!("cannot register UDP socket {bind}"))?;
+    tracing::info!(
+        "listening on udp {} (receive buffer {} KiB)",
+        sock.local_addr()?,
+        granted / 1024
+    );
     let mut buf = vec![0u8; MAX_DATAGRAM];
     let mut idle_sent = true;
     loop {
@@ -84,6 +118,30 @@ pub async fn run(bind: SocketAddr, ctx: &mut SourceContext) -> Result<()> {
                 // ICMP errors surfacing on an unconnected socket are not fatal.
                 tracing::debug!("udp {bind}: {e}");
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The receive buffer granted is the one asked for, up to the kernel's limit: Linux grants
+    /// twice the request (its own bookkeeping), the request capped at `net.core.rmem_max`.
+    #[test]
+    fn the_socket_gets_the_receive_buffer_asked_for() {
+        let any = SocketAddr::from(([127, 0, 0, 1], 0));
+        let (_, small) = bind_socket(any, 4096).expect("bind");
+        let (sock, granted) = bind_socket(any, RECV_BUFFER).expect("bind");
+        assert_ne!(sock.local_addr().expect("addr").port(), 0);
+        assert!(granted >= small, "{granted} < {small}");
+        #[cfg(target_os = "linux")]
+        {
+            let max: usize = std::fs::read_to_string("/proc/sys/net/core/rmem_max")
+                .ok()
+                .and_then(|t| t.trim().parse().ok())
+                .unwrap_or(0);
+            assert_eq!(granted, 2 * RECV_BUFFER.min(max), "rmem_max {max}");
         }
     }
 }
