@@ -69,7 +69,8 @@
 //!   checksum.rs            the named CRCs and plain sums
 //!   crc_msb.rs             CRCs most significant bit first, sixteen bytes a step
 //!   plan.rs                a message compiled into a read plan of loads and scales
-//!   decoder.rs             the streaming decoder: sync, checksum, counter, health
+//!   decoder.rs             the streaming decoder: sync, checksum, health
+//!   seq_tracker.rs         the frame counter unwrapped: lost and repeated messages
 //!   block.rs               a flat batch of decoded frames for the analysis
 //!   encoder.rs             valid messages of a descriptor (the decoder's inverse)
 //! analysis.rs              one run: chunks -> curves, fits, diagnoses -> ChannelReports -> records
