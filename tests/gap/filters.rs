@@ -103,3 +103,39 @@ fn clean_runs_gain_no_filter() {
         );
     }
 }
+
+/// A filtered run with its filter named ends there: the filter alone, `explained`, and the gap
+/// after it near 1 (at most `gap_crit`, at least 0.3), now that the filter smooths the flicker
+/// floor as well as the white rate and the covariance of the filtered white rate is exact
+/// (docs/gap.md, "Low-pass filters beyond first order"; before, these runs ended `unexplained`
+/// at gaps of 2.7-18 with a Gauss-Markov term added).
+#[test]
+fn filtered_runs_end_explained_by_the_filter_alone() {
+    let crit = allanscope::gap::Thresholds::default().gap_crit;
+    let mut bad = Vec::new();
+    for (extra, seed) in [
+        ("output_filter = { time_constant = 0.025 }", 5u64),
+        ("moving_average = { taps = 16, stages = 2 }", 1),
+        (
+            "second_order_filter = { natural_frequency = 8.0, damping = 0.3 }",
+            3,
+        ),
+        ("zero_phase_filter = { time_constant = 0.02 }", 4),
+    ] {
+        let d = diagnosed(extra, seed);
+        let only_filter = d.effects.len() == 1 && d.effects[0].params.kind().is_filter();
+        if !(only_filter
+            && d.verdict == allanscope::gap::Verdict::Explained
+            && (0.3..=crit).contains(&d.gap_after))
+        {
+            bad.push(format!(
+                "{extra}: {:?} gap {:.2} -> {:.2}, {:?}",
+                d.verdict,
+                d.gap_before,
+                d.gap_after,
+                d.effects.iter().map(|e| e.params).collect::<Vec<_>>()
+            ));
+        }
+    }
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+}
