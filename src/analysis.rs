@@ -1,123 +1,36 @@
 //! One run's analysis: per-channel accumulators fed with [`Chunk`]s, read into curves, fitted,
-//! and turned into records. Plain synchronous code: the pipeline runs it on a worker thread and
+//! and diagnosed: per channel a typed [`ChannelReport`] (channel_report.rs), which the writer
+//! turns into records. Plain synchronous code: the pipeline runs it on a worker thread and
 //! tests and benchmarks call it directly. It never knows where the samples came from.
+//!
+//! Files: setup.rs (input kind, channel setups, options), block.rs (frame blocks in),
+//! channel_fit.rs (a channel's curves and two-pass fit), channel_report.rs (the typed report and
+//! its records), state.rs (the checkpointed state); here, [`RunAnalysis`]: feeding, the interim
+//! schedule, reports, the summary, splitting a run over threads.
 
 mod block;
+mod channel_fit;
+mod channel_report;
+mod setup;
+mod state;
+
+use channel_fit::analyze_channel;
+pub use channel_report::ChannelReport;
+pub use setup::{AnalysisOptions, ChannelSetup, InputKind, AUXILIARY_COLUMNS};
+pub use state::{AnalysisState, ChannelSnapshot};
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
-use crate::allan::accum::{AccumConfig, ChannelAccumulator, Overlap};
+use crate::allan::accum::{ChannelAccumulator, Overlap};
 use crate::allan::curve::{build_curves, AlphaSource};
 use crate::allan::{Curve, Stat};
 use crate::frame::{ChannelValue, FrameEvent};
-use crate::gap::{diagnose, DiagnoseOptions, DiagnosisRecord, GapConfig, GapEvidence};
+use crate::gap::{GapConfig, GapEvidence};
 use crate::input::Chunk;
-use crate::model::fit::{FitOptions, FitResult, Fitter};
-use crate::model::readout::readouts;
-use crate::model::units::{quantization_ratio, IncrementUnit};
-use crate::sink::records::{
-    CoefRecord, CurveRecord, DatasheetRecord, FitRecord, ReadoutsRecord, Record, SummaryRecord,
-};
-
-/// What the values of a text column are.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum InputKind {
-    /// Increments over each step, in u (the default; docs/theory.md section 1).
-    #[default]
-    Increments,
-    /// Rate samples in u/s: the increment is `y * tau0`.
-    Rate,
-    /// Phase, the running sum of increments, in u.
-    Phase,
-}
-
-impl InputKind {
-    /// The increment (u) one text value `v` stands for: the rule every reader of text columns
-    /// shares (the analysis's gap evidence and `diagnose`). `None`: the value gives no step (the
-    /// first phase value, or the first after a missing one: there is no previous phase to
-    /// difference); a non-finite result is a missing step (a gap). `last_phase` carries the
-    /// previous finite phase value of the channel.
-    #[inline]
-    pub fn step(self, v: f64, tau0_s: f64, last_phase: &mut Option<f64>) -> Option<f64> {
-        match self {
-            InputKind::Phase => {
-                let d = last_phase.map(|p| v - p);
-                *last_phase = v.is_finite().then_some(v);
-                d
-            }
-            InputKind::Increments => Some(v),
-            InputKind::Rate => Some(v * tau0_s),
-        }
-    }
-}
-
-/// Text columns that are not channels: the simulator's temperature column (degC), which
-/// `diagnose` reads as the unit's temperature.
-pub const AUXILIARY_COLUMNS: [&str; 1] = ["temperature_c"];
-
-/// One channel as the input describes it.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct ChannelSetup {
-    pub name: String,
-    pub unit: String,
-    /// Position of the channel's value in each row of the input.
-    pub column: usize,
-    /// `Some(lsb)` when values arrive as integer counts of `lsb` u (frame fields): they are
-    /// accumulated exactly and scaled at read-out.
-    pub counts_lsb: Option<f64>,
-}
-
-impl ChannelSetup {
-    /// The channels of a frame format, in the order its frames carry them; integer increment
-    /// fields are counts of their LSB.
-    pub fn for_frames(desc: &crate::frame::FrameDescriptor) -> Vec<ChannelSetup> {
-        desc.channels()
-            .into_iter()
-            .enumerate()
-            .map(|(i, c)| ChannelSetup {
-                name: c.name,
-                unit: c.unit,
-                column: i,
-                counts_lsb: c.scale,
-            })
-            .collect()
-    }
-
-    /// The channels of text columns with header `names` ([`AUXILIARY_COLUMNS`] left out), each
-    /// in `unit`.
-    pub fn for_text(names: &[String], unit: &str) -> Vec<ChannelSetup> {
-        names
-            .iter()
-            .enumerate()
-            .filter(|(_, n)| !AUXILIARY_COLUMNS.contains(&n.as_str()))
-            .map(|(i, n)| ChannelSetup {
-                name: n.clone(),
-                unit: unit.to_string(),
-                column: i,
-                counts_lsb: None,
-            })
-            .collect()
-    }
-}
-
-/// Settings of one run's analysis.
-#[derive(Debug, Clone)]
-pub struct AnalysisOptions {
-    pub accum: AccumConfig,
-    pub kind: InputKind,
-    /// Data-seconds between interim records; `None`: final records only.
-    pub every_s: Option<f64>,
-    /// The five-term fit, or `None` for curves only.
-    pub fit: Option<FitOptions>,
-    /// Run index when several inputs are analyzed.
-    pub run: Option<usize>,
-    /// Datasheet limits judged on each run's final fits (per-run scope), in `summary`.
-    pub limits: Vec<crate::model::limits::LimitSpec>,
-    /// Also gather the sim-to-real evidence and write `diagnosis` records with the fits.
-    pub diagnose: bool,
-}
+use crate::model::fit::{FitResult, Fitter};
+use crate::sink::records::{Record, SummaryRecord};
 
 struct ChannelState {
     setup: ChannelSetup,
@@ -128,29 +41,6 @@ struct ChannelState {
     last_phase: Option<f64>,
     fitter: Fitter,
     last_fit: Option<FitResult>,
-}
-
-/// One channel's saved state (a checkpoint): its setup, accumulator and evidence as they were.
-#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-pub struct ChannelSnapshot {
-    pub setup: ChannelSetup,
-    pub acc: ChannelAccumulator,
-    pub gap: Option<GapEvidence>,
-    pub last_phase: Option<f64>,
-}
-
-/// A run's saved state (a checkpoint, `crate::pipeline::checkpoint`): everything the final records
-/// depend on. The fits are not saved: the final fit starts from a fresh covariance cache
-/// anyway (see [`RunAnalysis::records`]), and interim fits are recomputed from the curves.
-#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-pub struct AnalysisState {
-    pub input: String,
-    pub channels: Vec<ChannelSnapshot>,
-    /// Data-second of the next interim record (infinite: none).
-    pub next_emit_s: f64,
-    pub bad_rows: u64,
-    /// Wall-seconds the run had taken when saved.
-    pub elapsed_s: f64,
 }
 
 /// The first of `next, next + every, next + 2 every, ...` (summed one by one, as the records'
@@ -201,11 +91,6 @@ pub struct RunAnalysis {
     stopping: Arc<AtomicBool>,
 }
 
-/// The power-law exponent of S_y for the term that dominates the model at a tau: Q is white
-/// phase (+2), N white rate (0), B flicker rate (-1), K random-walk rate (-2); the ramp R is
-/// deterministic and is given the random-walk type, the steepest AVAR supports.
-const TERM_ALPHA: [i32; 5] = [2, 0, -1, -2, -2];
-
 impl RunAnalysis {
     pub fn new(input: &str, channels: Vec<ChannelSetup>, opts: AnalysisOptions) -> RunAnalysis {
         let channels = channels
@@ -235,124 +120,6 @@ impl RunAnalysis {
             started: Instant::now(),
             stopping: Arc::default(),
         }
-    }
-
-    /// The run's state as of now (pending points are not processed, so continuing from the
-    /// saved state gives the same numbers as not stopping).
-    pub fn snapshot(&self) -> AnalysisState {
-        AnalysisState {
-            input: self.input.clone(),
-            channels: self
-                .channels
-                .iter()
-                .map(|c| ChannelSnapshot {
-                    setup: c.setup.clone(),
-                    acc: c.acc.clone(),
-                    gap: c.gap.clone(),
-                    last_phase: c.last_phase,
-                })
-                .collect(),
-            next_emit_s: self.next_emit_s,
-            bad_rows: self.bad_rows,
-            elapsed_s: self.started.elapsed().as_secs_f64(),
-        }
-    }
-
-    /// Continues a run from its saved state with `opts`, which must accumulate the same way
-    /// (same tau0, cluster sizes, overlap and statistics; the diagnosis on or off as before).
-    /// `setups` are the channels the input has now: the saved ones must be the same.
-    pub fn restore(
-        state: AnalysisState,
-        setups: &[ChannelSetup],
-        opts: AnalysisOptions,
-    ) -> Result<RunAnalysis, String> {
-        let saved: Vec<&ChannelSetup> = state.channels.iter().map(|c| &c.setup).collect();
-        if saved.len() != setups.len() || saved.iter().zip(setups).any(|(a, b)| *a != b) {
-            return Err(format!(
-                "saved for the channels [{}], the input now has [{}]",
-                saved
-                    .iter()
-                    .map(|c| c.name.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                setups
-                    .iter()
-                    .map(|c| c.name.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ));
-        }
-        // The next interim record is due at a data-second ahead of zero, or never.
-        if state.next_emit_s.is_nan() || state.next_emit_s < 0.0 {
-            return Err(format!(
-                "the next interim record is due at {} data-seconds",
-                state.next_emit_s
-            ));
-        }
-        for c in &state.channels {
-            if c.acc.config() != &opts.accum {
-                return Err(format!(
-                    "channel {} was accumulated with other settings than asked now (saved vs \
-                     now: {}); resume with the options of the saved run",
-                    c.setup.name,
-                    c.acc.config().differences(&opts.accum).join("; ")
-                ));
-            }
-            if c.gap.is_some() != opts.diagnose {
-                return Err(format!(
-                    "the saved run was made {} the diagnosis; give --diagnose {}",
-                    if opts.diagnose { "without" } else { "with" },
-                    if opts.diagnose {
-                        "only if it was given"
-                    } else {
-                        "again"
-                    }
-                ));
-            }
-        }
-        for c in &state.channels {
-            c.acc
-                .check_restored()
-                .map_err(|e| format!("channel {}: {e}", c.setup.name))?;
-            if let Some(g) = &c.gap {
-                g.check_restored(opts.accum.tau0_s)
-                    .map_err(|e| format!("channel {}: {e}", c.setup.name))?;
-            }
-            if c.last_phase.is_some_and(|x| !x.is_finite()) {
-                return Err(format!("channel {}: last phase not finite", c.setup.name));
-            }
-        }
-        let started = Instant::now()
-            .checked_sub(std::time::Duration::from_secs_f64(
-                if state.elapsed_s.is_finite() {
-                    state.elapsed_s.clamp(0.0, 1.0e9)
-                } else {
-                    0.0
-                },
-            ))
-            .unwrap_or_else(Instant::now);
-        Ok(RunAnalysis {
-            input: state.input,
-            opts,
-            channels: state
-                .channels
-                .into_iter()
-                .map(|c| ChannelState {
-                    setup: c.setup,
-                    acc: c.acc,
-                    gap: c.gap,
-                    last_phase: c.last_phase,
-                    fitter: Fitter::new(),
-                    last_fit: None,
-                })
-                .collect(),
-            next_emit_s: state.next_emit_s,
-            bad_rows: state.bad_rows,
-            invalid_values: 0,
-            time_column: None,
-            started,
-            stopping: Arc::default(),
-        })
     }
 
     /// Once `flag` is set (the run is being stopped: SIGINT/SIGTERM), the data already read is
@@ -524,13 +291,14 @@ impl RunAnalysis {
         }
     }
 
-    /// Curve and fit records of every channel as of now.
+    /// Every channel's results as of now, in channel order: its curves, fit, read-outs and
+    /// diagnosis ([`ChannelReport`]), for a program that uses them directly.
     ///
-    /// The final records of several channels are made on as many threads as the machine has
-    /// cores (channels split in consecutive parts, records put back in channel order): each
-    /// channel's curves, fit and diagnosis depend on that channel alone, so the records are the
-    /// same, and the end of a replay (the fits are most of it) takes a fraction of the wall time.
-    pub fn records(&mut self, final_: bool) -> Vec<Record> {
+    /// The final reports of several channels are made on as many threads as the machine has
+    /// cores (channels split in consecutive parts, put back in channel order): each channel's
+    /// curves, fit and diagnosis depend on that channel alone, so they are the same, and the end
+    /// of a replay (the fits are most of it) takes a fraction of the wall time.
+    pub fn reports(&mut self, final_: bool) -> Vec<ChannelReport> {
         let opts = &self.opts;
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
         let parts = if final_ {
@@ -539,20 +307,29 @@ impl RunAnalysis {
             1
         };
         if parts <= 1 {
-            return channel_records(&mut self.channels, opts, final_);
+            return channel_report::channel_reports(&mut self.channels, opts, final_);
         }
         let per = self.channels.len().div_ceil(parts);
         std::thread::scope(|s| {
             let handles: Vec<_> = self
                 .channels
                 .chunks_mut(per)
-                .map(|chs| s.spawn(move || channel_records(chs, opts, final_)))
+                .map(|chs| s.spawn(move || channel_report::channel_reports(chs, opts, final_)))
                 .collect();
             handles
                 .into_iter()
                 .flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
                 .collect()
         })
+    }
+
+    /// The records of every channel's [`reports`](RunAnalysis::reports), in the order the
+    /// writer prints them (per channel: its curves, fit, diagnosis).
+    pub fn records(&mut self, final_: bool) -> Vec<Record> {
+        self.reports(final_)
+            .iter()
+            .flat_map(ChannelReport::records)
+            .collect()
     }
 
     /// The final fits, one per channel (`None` where no fit could be made), after [`records`].
@@ -654,137 +431,5 @@ impl RunAnalysis {
     pub fn curves(&mut self, channel: usize) -> Vec<Curve> {
         let ch = &mut self.channels[channel];
         analyze_channel(ch, &self.opts).0
-    }
-}
-
-/// The records of `channels` (see [`RunAnalysis::records`]), in channel order.
-fn channel_records(
-    channels: &mut [ChannelState],
-    opts: &AnalysisOptions,
-    final_: bool,
-) -> Vec<Record> {
-    let run = opts.run;
-    let mut out = Vec::new();
-    for ch in channels {
-        if final_ {
-            // The final fit starts from a fresh covariance cache, so it does not depend on
-            // how many interim refits came before (the cache's incremental updates agree
-            // with a fresh computation only to ~1e-11).
-            ch.fitter = Fitter::new();
-        }
-        let (curves, fit) = analyze_channel(ch, opts);
-        for c in &curves {
-            out.push(Record::Curve(CurveRecord::new(
-                &ch.setup.name,
-                &ch.setup.unit,
-                c,
-                final_,
-                run,
-            )));
-        }
-        if let Some(f) = fit {
-            let readouts = curves
-                .iter()
-                .find(|c| c.stat == Stat::Avar)
-                .map(|c| Box::new(ReadoutsRecord::new(&readouts(&c.points), &ch.setup.unit)));
-            let mut rec = fit_record(&ch.setup, &f, final_, ch.acc.t_data_s(), run);
-            rec.readouts = readouts;
-            out.push(Record::from(rec));
-            ch.last_fit = Some(f);
-        }
-        if let Some(g) = &mut ch.gap {
-            // The diagnosis refreshed with the fits (docs/theory.md section 5); a run still too
-            // short for it gives no record yet.
-            match diagnose(&g.snapshot(), &DiagnoseOptions::default()) {
-                Ok(d) => {
-                    let mut rec = DiagnosisRecord::new(&ch.setup.name, &d, None, final_);
-                    rec.run = run;
-                    rec.unit = Some(ch.setup.unit.clone());
-                    out.push(Record::Diagnosis(Box::new(rec)));
-                }
-                Err(e) => tracing::debug!("{}: {e}", ch.setup.name),
-            }
-        }
-    }
-    out
-}
-
-/// Reads a channel's accumulator into curves, fits the AVAR curve, and re-derives each tau's
-/// noise type from the fitted model (the term that dominates there) for the final edf.
-fn analyze_channel(
-    ch: &mut ChannelState,
-    opts: &AnalysisOptions,
-) -> (Vec<Curve>, Option<FitResult>) {
-    let readings = ch.acc.read();
-    let cfg = &opts.accum;
-    let (n, t) = (ch.acc.phase_points(), ch.acc.t_data_s());
-    let curves = build_curves(&readings, cfg.stats, cfg.tau0_s, n, t, AlphaSource::Lag1);
-    let Some(fit_opts) = &opts.fit else {
-        return (curves, None);
-    };
-    let Some(avar) = curves.iter().find(|c| c.stat == Stat::Avar) else {
-        return (curves, None);
-    };
-    let first = match ch.fitter.fit(&avar.points, fit_opts) {
-        Ok(f) => f,
-        Err(e) => {
-            tracing::debug!("{}: {e}", ch.setup.name);
-            return (curves, None);
-        }
-    };
-    // The noise type at each tau from the model, then the curves and the fit once more with
-    // the edf that type gives.
-    let alphas: Vec<i32> = readings
-        .iter()
-        .map(|r| {
-            let b = crate::model::terms::basis(r.tau_s);
-            let (i, _) = (0..5)
-                .map(|i| (i, b[i] * first.c[i]))
-                .fold((1, f64::MIN), |a, x| if x.1 > a.1 { x } else { a });
-            TERM_ALPHA[i]
-        })
-        .collect();
-    let curves = build_curves(
-        &readings,
-        cfg.stats,
-        cfg.tau0_s,
-        n,
-        t,
-        AlphaSource::Given(&alphas),
-    );
-    let fit = curves
-        .iter()
-        .find(|c| c.stat == Stat::Avar)
-        .and_then(|c| ch.fitter.fit(&c.points, fit_opts).ok())
-        .unwrap_or(first);
-    (curves, Some(fit))
-}
-
-fn fit_record(
-    setup: &ChannelSetup,
-    f: &FitResult,
-    final_: bool,
-    t_data_s: f64,
-    run: Option<usize>,
-) -> FitRecord {
-    let coef = CoefRecord::new(f);
-    let datasheet = IncrementUnit::parse(&setup.unit).map(|u| DatasheetRecord::new(&coef, &u));
-    let q = &f.coef[0];
-    FitRecord {
-        channel: setup.name.clone(),
-        unit: setup.unit.clone(),
-        r#final: final_,
-        t_data: t_data_s,
-        coef,
-        gof: f.gof.is_finite().then_some(f.gof),
-        method: f.method.name().into(),
-        model_c: f.c.to_vec(),
-        datasheet,
-        readouts: None,
-        q_over_lsb: setup
-            .counts_lsb
-            .filter(|_| q.determined)
-            .map(|lsb| quantization_ratio(q.value, lsb)),
-        run,
     }
 }

@@ -5,12 +5,19 @@
 //! in its "Dependencies" block, users before what they use; every edge must point down that
 //! list, which also makes the graph acyclic, and every module must be listed once. The binary's
 //! `src/cli/` and `src/main.rs` are not part of the library and not checked.
+//!
+//! The file maps are checked against the tree: lib.rs's map and README's layout section each
+//! hold a block that names every folder and `.rs` file under `src/` once (a folder's `mod.rs` is
+//! the folder's line), nested by indentation, and nothing that is not there.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 /// `module -> (module it uses -> a file where it does)`.
 type Graph = BTreeMap<String, BTreeMap<String, String>>;
+
+/// The heading above the file map of lib.rs and of README's layout section.
+const FILES_MARKER: &str = "Every file of src/";
 
 /// The text with `//` comments (doc comments included) removed, string literals kept.
 fn strip_comments(text: &str) -> String {
@@ -239,6 +246,102 @@ fn layout_problems(src: &Path) -> Vec<String> {
     problems
 }
 
+/// The files and folders a tree block names: the lines of the ```` ```text ```` block that
+/// follows the line holding `marker`, each `name.rs  role` or `name/  role`, nested two spaces a
+/// level under its folder; other lines (a role running on) are passed over. Paths are relative
+/// to `src/`, folders end in `/`.
+fn documented_tree(text: &str, marker: &str, prefix: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut folders: Vec<String> = Vec::new();
+    let mut state = 0; // 0: before the marker, 1: before the block, 2: inside it
+    for line in text.lines() {
+        let Some(line) = line.strip_prefix(prefix) else {
+            continue;
+        };
+        // The space after a comment's `//!` is not indentation.
+        let line = match prefix {
+            "" => line,
+            _ => line.strip_prefix(' ').unwrap_or(line),
+        };
+        match state {
+            0 if line.contains(marker) => state = 1,
+            1 if line.trim_start().starts_with("```") => state = 2,
+            2 if line.trim_start().starts_with("```") => break,
+            2 => {
+                let indent = line.len() - line.trim_start().len();
+                let Some(name) = line.split_whitespace().next() else {
+                    continue;
+                };
+                let is_file = name.ends_with(".rs");
+                let is_folder = name.ends_with('/') && name.len() > 1;
+                if indent % 2 != 0 || !(is_file || is_folder) {
+                    continue;
+                }
+                let depth = indent / 2;
+                if depth > folders.len() {
+                    continue;
+                }
+                folders.truncate(depth);
+                out.push(format!("{}{name}", folders.concat()));
+                if is_folder {
+                    folders.push(name.to_string());
+                }
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+/// Every `.rs` file and every folder under `src` (relative, folders ending in `/`); a folder's
+/// `mod.rs` is the folder's own line.
+fn source_tree(src: &Path) -> BTreeSet<String> {
+    let mut files = Vec::new();
+    rust_files(src, &mut files);
+    let mut out = BTreeSet::new();
+    for f in files {
+        let rel = f
+            .strip_prefix(src)
+            .expect("under src")
+            .to_string_lossy()
+            .replace('\\', "/");
+        let mut dir = String::new();
+        let parts: Vec<&str> = rel.split('/').collect();
+        for p in &parts[..parts.len() - 1] {
+            dir.push_str(p);
+            dir.push('/');
+            out.insert(dir.clone());
+        }
+        if !rel.ends_with("/mod.rs") {
+            out.insert(rel);
+        }
+    }
+    out
+}
+
+/// What a tree block gets wrong against the sources: a file or folder it leaves out, one it
+/// names that does not exist, one it names twice.
+fn tree_problems(src: &Path, text: &str, marker: &str, prefix: &str, what: &str) -> Vec<String> {
+    let listed = documented_tree(text, marker, prefix);
+    let tree = source_tree(src);
+    let mut problems = Vec::new();
+    for t in &tree {
+        if !listed.contains(t) {
+            problems.push(format!("{what} leaves out src/{t}"));
+        }
+    }
+    let mut seen = BTreeSet::new();
+    for l in &listed {
+        if !tree.contains(l) {
+            problems.push(format!("{what} names src/{l}, which does not exist"));
+        }
+        if !seen.insert(l) {
+            problems.push(format!("{what} names src/{l} twice"));
+        }
+    }
+    problems
+}
+
 #[test]
 fn the_library_layout_follows_the_documented_order() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
@@ -274,5 +377,73 @@ fn a_use_against_the_order_or_a_cycle_is_found() {
     std::fs::write(dir.join("d.rs"), "").unwrap();
     let p = layout_problems(&dir);
     assert!(p.iter().any(|s| s.contains("`d` is not in")), "{p:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// lib.rs's file map and README's layout name every file and folder of `src/` once, and
+/// nothing else.
+#[test]
+fn the_maps_name_every_file() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let src = root.join("src");
+    let lib = std::fs::read_to_string(src.join("lib.rs")).expect("lib.rs");
+    let readme = std::fs::read_to_string(root.join("README.md")).expect("README.md");
+    let mut problems = tree_problems(&src, &lib, FILES_MARKER, "//!", "lib.rs's map");
+    problems.extend(tree_problems(
+        &src,
+        &readme,
+        FILES_MARKER,
+        "",
+        "README's layout",
+    ));
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+    // The check sees the tree: nested folders and their files.
+    let tree = source_tree(&src);
+    for p in [
+        "frame/",
+        "frame/descriptor/",
+        "frame/descriptor/parse.rs",
+        "lib.rs",
+    ] {
+        assert!(tree.contains(p), "{p}");
+    }
+}
+
+#[test]
+fn a_file_left_out_of_a_map_is_found() {
+    let dir = std::env::temp_dir().join(format!("allanscope-tree-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(dir.join("a/b")).unwrap();
+    for f in [
+        "lib.rs",
+        "a/mod.rs",
+        "a/x.rs",
+        "a/b/mod.rs",
+        "a/b/y.rs",
+        "c.rs",
+    ] {
+        std::fs::write(dir.join(f), "").unwrap();
+    }
+    let map = format!(
+        "{FILES_MARKER}\n```text\nlib.rs   the map\na/       a folder\n  x.rs   a file\n  b/     \
+         nested\n    y.rs the file in it\n         a role running on\nc.rs     last\n```\n"
+    );
+    assert_eq!(
+        tree_problems(&dir, &map, FILES_MARKER, "", "map"),
+        Vec::<String>::new()
+    );
+    // y.rs at the wrong depth, c.rs left out, z.rs named but absent.
+    let bad = map
+        .replace("    y.rs", "  y.rs")
+        .replace("c.rs     last", "z.rs     gone");
+    let p = tree_problems(&dir, &bad, FILES_MARKER, "", "map");
+    for want in [
+        "map leaves out src/a/b/y.rs",
+        "map leaves out src/c.rs",
+        "map names src/a/y.rs, which does not exist",
+        "map names src/z.rs, which does not exist",
+    ] {
+        assert!(p.iter().any(|s| s == want), "{want}: {p:?}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -11,7 +11,7 @@ use std::path::Path;
 use anyhow::Result;
 
 use super::{read_json_lines, usage, AggregateArgs};
-use allanscope::model::aggregate::{aggregate_channels, CoefAggregate, RunCoefs};
+use allanscope::model::aggregate::{aggregate_channels, RunCoefs};
 use allanscope::sink::json::JsonLines;
 use allanscope::sink::records::{AggregateRecord, Record};
 use allanscope::sink::results::ResultFile;
@@ -60,25 +60,10 @@ pub fn run(a: &AggregateArgs) -> Result<()> {
         })),
     };
     for agg in aggregate_channels(&runs) {
-        sink.write(&Record::from(record(&agg)))?;
+        sink.write(&Record::from(AggregateRecord::new(&agg)))?;
     }
     sink.flush()?;
     Ok(())
-}
-
-/// The `aggregate` record of one coefficient.
-pub fn record(a: &CoefAggregate) -> AggregateRecord {
-    let s = a.stats.as_ref();
-    AggregateRecord {
-        channel: a.channel.clone(),
-        unit: a.unit.clone(),
-        coef: a.coef.into(),
-        n: s.map_or(0, |s| s.n),
-        mean: s.map(|s| s.mean),
-        sd: s.and_then(|s| s.sd),
-        ci_t: s.and_then(|s| s.ci_t),
-        ci_z: s.and_then(|s| s.ci_z),
-    }
 }
 
 /// One run's channels as read so far: (is the record final, its coefficients).

@@ -23,7 +23,7 @@ use allanscope::pipeline::checkpoint::Position;
 use allanscope::pipeline::{RecordQueue, RecordWriter, RunControl, RunOutcome};
 use allanscope::plan::unit::{InputPlan, UnitPlan};
 use allanscope::sink::output::OutputMode;
-use allanscope::sink::records::Record;
+use allanscope::sink::records::{AggregateRecord, Record};
 use allanscope::source::{Pace, SourceSpec};
 
 pub fn run(a: &AnalyzeArgs) -> Result<()> {
@@ -153,7 +153,7 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue, ctl: &RunControl) -> Result
     if several {
         let aggregates = aggregate_channels(&run_coefs(&fits));
         for a in &aggregates {
-            queue.push_final(Record::Aggregate(super::aggregate::record(a)));
+            queue.push_final(Record::Aggregate(AggregateRecord::new(a)));
         }
         // Run-to-run datasheet limits (e.g. the sd of B over runs) in a closing summary.
         let j = allanscope::model::limits::judge_runs(&base.limits, &aggregates);

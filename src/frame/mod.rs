@@ -23,6 +23,7 @@ pub mod descriptor;
 pub mod encoder;
 pub mod field;
 pub(crate) mod plan;
+mod seq_tracker;
 
 pub use block::{BlockEvent, ColumnKind, FrameBlock, FrameSink, GapAt, Hole};
 pub use decoder::{Decoder, DecoderState, Health};

@@ -70,6 +70,11 @@ impl Coef {
         }
     }
 
+    /// Its name, `Q`..`R`, as the records write it.
+    pub fn name(self) -> &'static str {
+        TERM_NAMES[self.index()]
+    }
+
     /// Power of time the coefficient carries beyond the channel's unit: Q u, N u/sqrt(s),
     /// B u/s, K u/s/sqrt(s), R u/s^2 (docs/theory.md section 2).
     fn time_exponent(self) -> f64 {
@@ -88,6 +93,17 @@ pub enum Scope {
     RunsSd,
     /// The mean of the coefficient over runs.
     RunsMean,
+}
+
+impl Scope {
+    /// Its name as the records write it (`run`, `runs_sd`, `runs_mean`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Scope::Run => "run",
+            Scope::RunsSd => "runs_sd",
+            Scope::RunsMean => "runs_mean",
+        }
+    }
 }
 
 /// One `[[limits]]` table of a stand config (module doc).
@@ -122,6 +138,18 @@ pub enum Verdict {
     Invalid,
 }
 
+impl Verdict {
+    /// Its name as the records write it (`pass`, `fail`, `undecided`, `invalid`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Verdict::Pass => "pass",
+            Verdict::Fail => "fail",
+            Verdict::Undecided => "undecided",
+            Verdict::Invalid => "invalid",
+        }
+    }
+}
+
 /// One judged bound, as the `summary` record's `limits` field lists it. `limit`, `value`, `lo`
 /// and `hi` are in `unit`, the unit the bound was stated in. The fields are declared in
 /// alphabetical order: the order the records have always written them in.
@@ -136,6 +164,8 @@ pub struct LimitResult {
     pub lo: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub note: Option<String>,
+    /// `run` when a reader finds none (as earlier readers took it).
+    #[serde(default)]
     pub over: Scope,
     pub unit: String,
     pub value: Option<f64>,

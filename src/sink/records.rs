@@ -11,7 +11,7 @@ use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::allan::{Curve, Stat};
 use crate::gap::effects::nullable_f64;
-use crate::model::aggregate::RunCoefs;
+use crate::model::aggregate::{CoefAggregate, RunCoefs};
 use crate::model::fit::FitResult;
 use crate::model::readout::{Readout, Readouts};
 use crate::model::terms::TERM_NAMES;
@@ -303,6 +303,23 @@ pub struct AggregateRecord {
     pub ci_t: Option<[f64; 2]>,
     /// The seed paper's `mean +- 1.96 sd / sqrt(n)`.
     pub ci_z: Option<[f64; 2]>,
+}
+
+impl AggregateRecord {
+    /// The record of one coefficient's run-to-run statistics.
+    pub fn new(a: &CoefAggregate) -> AggregateRecord {
+        let s = a.stats.as_ref();
+        AggregateRecord {
+            channel: a.channel.clone(),
+            unit: a.unit.clone(),
+            coef: a.coef.into(),
+            n: s.map_or(0, |s| s.n),
+            mean: s.map(|s| s.mean),
+            sd: s.and_then(|s| s.sd),
+            ci_t: s.and_then(|s| s.ci_t),
+            ci_z: s.and_then(|s| s.ci_z),
+        }
+    }
 }
 
 /// `outage`: a unit of a run of several (`[[unit]]`) that went quiet, came back, or whose

@@ -2,11 +2,17 @@
 //! fit and diagnosis carries the label of the run it came from (its file's name, or for a file
 //! holding several runs the name of that run's input as its `summary` gives it), so overlaid
 //! runs are told apart as in the seed paper's figure 2.
+//!
+//! Every record is read into its struct of `crate::sink::records` (or `crate::gap::record`); a
+//! record of a type this version does not know, or one that does not parse as its type (a much
+//! older or newer writer's), is skipped, as [`crate::sink::records::Record::from_line`] does.
 
+use serde::de::DeserializeOwned;
 use serde_json::Value;
 
 use crate::gap::DiagnosisRecord;
-use crate::sink::records::{CurveRecord, FitRecord};
+use crate::model::limits::LimitResult;
+use crate::sink::records::{AggregateRecord, CurveRecord, FitRecord, HealthRecord, SummaryRecord};
 
 /// One input file's records.
 #[derive(Debug, Clone)]
@@ -46,10 +52,24 @@ pub struct Results {
     pub curves: Vec<Labelled<CurveRecord>>,
     pub fits: Vec<Labelled<FitRecord>>,
     pub diagnoses: Vec<Labelled<DiagnosisRecord>>,
-    pub summaries: Vec<Labelled<Value>>,
-    pub health: Vec<Labelled<Value>>,
-    pub aggregates: Vec<Labelled<Value>>,
-    pub limits: Vec<Labelled<Value>>,
+    pub summaries: Vec<Labelled<RunSummary>>,
+    pub health: Vec<Labelled<HealthRecord>>,
+    pub aggregates: Vec<Labelled<AggregateRecord>>,
+    /// The limits judged in the summaries, one entry per bound.
+    pub limits: Vec<Labelled<LimitResult>>,
+}
+
+/// A `summary` record read back, with how far its run's input was read ([`Completion`]: a
+/// summary of a writer older than `read_to_end` does not say).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunSummary {
+    pub record: SummaryRecord,
+    pub completion: Completion,
+}
+
+/// The record `v` as a `T`, `None` when it does not parse as one.
+fn typed<T: DeserializeOwned>(v: &Value) -> Option<T> {
+    serde_json::from_value(v.clone()).ok()
 }
 
 fn of_type<'a>(v: &'a Value, t: &str) -> Option<&'a Value> {
@@ -127,34 +147,25 @@ impl Results {
                     rec: (),
                 };
                 match t {
-                    "curve" => {
-                        if let Ok(c) = serde_json::from_value::<CurveRecord>(v.clone()) {
-                            out.curves.push(at.with(c));
-                        }
-                    }
-                    "fit" => {
-                        if let Ok(c) = serde_json::from_value::<FitRecord>(v.clone()) {
-                            out.fits.push(at.with(c));
-                        }
-                    }
-                    "diagnosis" => {
-                        if let Ok(c) = serde_json::from_value::<DiagnosisRecord>(v.clone()) {
-                            out.diagnoses.push(at.with(c));
-                        }
-                    }
+                    "curve" => out.curves.extend(typed(v).map(|c| at.with(c))),
+                    "fit" => out.fits.extend(typed(v).map(|c| at.with(c))),
+                    "diagnosis" => out.diagnoses.extend(typed(v).map(|c| at.with(c))),
                     "summary" => {
-                        for l in v
-                            .get("limits")
-                            .and_then(Value::as_array)
-                            .into_iter()
-                            .flatten()
-                        {
+                        let Some(record) = typed::<SummaryRecord>(v) else {
+                            continue;
+                        };
+                        for l in &record.limits {
                             out.limits.push(at.with(l.clone()));
                         }
-                        out.summaries.push(at.with(v.clone()));
+                        let completion = Completion::of(
+                            v.get("read_to_end").and_then(Value::as_bool),
+                            record.stopped_by.as_deref(),
+                        );
+                        out.summaries
+                            .push(at.with(RunSummary { record, completion }));
                     }
-                    "health" => out.health.push(at.with(v.clone())),
-                    "aggregate" => out.aggregates.push(at.with(v.clone())),
+                    "health" => out.health.extend(typed(v).map(|c| at.with(c))),
+                    "aggregate" => out.aggregates.extend(typed(v).map(|c| at.with(c))),
                     _ => {}
                 }
             }
@@ -175,10 +186,20 @@ impl Results {
     /// The final diagnosis of a curve's channel in the same run, if any (the last one written
     /// when none is marked final).
     pub fn diagnosis_of(&self, c: &Labelled<CurveRecord>) -> Option<&DiagnosisRecord> {
+        self.diagnosis_in((c.file, c.run), &c.rec.channel)
+    }
+
+    /// The final diagnosis of `channel` in the run `(file, run index)`, if any (the last one
+    /// written when none is marked final).
+    pub fn diagnosis_in(
+        &self,
+        run: (usize, Option<usize>),
+        channel: &str,
+    ) -> Option<&DiagnosisRecord> {
         let mine: Vec<&Labelled<DiagnosisRecord>> = self
             .diagnoses
             .iter()
-            .filter(|d| d.file == c.file && d.run == c.run && d.rec.channel == c.rec.channel)
+            .filter(|d| (d.file, d.run) == run && d.rec.channel == channel)
             .collect();
         mine.iter()
             .rev()
@@ -262,18 +283,14 @@ pub enum Completion {
 }
 
 impl Completion {
-    /// From a `summary` record's `read_to_end` and `stopped_by`.
-    pub fn of_summary(s: &Value) -> Completion {
-        let stopped = s
-            .get("stopped_by")
-            .and_then(Value::as_str)
-            .map(String::from);
-        match (s.get("read_to_end").and_then(Value::as_bool), stopped) {
+    /// From a `summary` record's `read_to_end` (absent from an older writer's) and `stopped_by`.
+    pub fn of(read_to_end: Option<bool>, stopped_by: Option<&str>) -> Completion {
+        match (read_to_end, stopped_by) {
             (Some(true), _) => Completion::Complete,
             (_, Some(by)) if by.starts_with("--duration") || by == "duration" => {
-                Completion::Planned(by)
+                Completion::Planned(by.to_string())
             }
-            (_, Some(by)) => Completion::Interrupted(by),
+            (_, Some(by)) => Completion::Interrupted(by.to_string()),
             (Some(false), None) => Completion::Incomplete,
             (None, None) => Completion::Unknown,
         }
@@ -292,6 +309,95 @@ impl Completion {
             Completion::Interrupted(by) => format!("INTERRUPTED ({by}): input not read to its end"),
             Completion::Incomplete => "INCOMPLETE: input not read to its end".into(),
             Completion::Unknown => "not stated".into(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::limits::{Scope, Verdict};
+    use serde_json::json;
+
+    fn summary(extra: Value) -> Value {
+        let mut s = json!({"type": "summary", "input": "runs/a.csv", "channels": ["g4"],
+            "tau0": 0.004, "t_data": 60.0, "samples": [15000], "segments": [1], "bad_rows": 0,
+            "overlap": "16", "elapsed_s": 0.5,
+            "limits": [{"bound": "max", "channel": "g4", "coef": "N", "hi": 0.26, "limit": 0.3,
+                "lo": 0.25, "over": "runs_sd", "unit": "native", "value": 0.255,
+                "verdict": "pass"}]});
+        for (k, v) in extra.as_object().unwrap() {
+            s[k] = v.clone();
+        }
+        s
+    }
+
+    #[test]
+    fn summaries_limits_and_health_are_read_typed() {
+        let file = ResultFile {
+            name: "a.jsonl".into(),
+            records: vec![
+                summary(json!({"read_to_end": false, "stopped_by": "SIGINT"})),
+                json!({"type": "health", "frames": 7, "missing": 2}),
+                json!({"type": "aggregate", "channel": "g4", "unit": "arcsec", "coef": "N",
+                    "n": 3, "mean": 0.25, "sd": null, "ci_t": null, "ci_z": [0.2, 0.3]}),
+                // A newer writer's record type, and a summary that is not one: skipped.
+                json!({"type": "vibration", "channel": "g4"}),
+                json!({"type": "summary", "input": 3}),
+            ],
+        };
+        let res = Results::from_files(&[file]);
+        assert_eq!(res.summaries.len(), 1);
+        let s = &res.summaries[0].rec;
+        assert_eq!(s.record.channels, ["g4"]);
+        assert_eq!(s.completion, Completion::Interrupted("SIGINT".into()));
+        assert_eq!(res.limits.len(), 1);
+        let l = &res.limits[0].rec;
+        assert_eq!(
+            (l.over, l.verdict, l.value),
+            (Scope::RunsSd, Verdict::Pass, Some(0.255))
+        );
+        assert_eq!(res.health[0].rec.frames, 7);
+        assert_eq!(res.health[0].rec.missing, 2);
+        // A count the health record lacks reads as 0.
+        assert_eq!(res.health[0].rec.crc_errors, 0);
+        assert_eq!(res.aggregates[0].rec.ci_z, Some([0.2, 0.3]));
+        assert_eq!(res.aggregates[0].rec.sd, None);
+    }
+
+    /// A summary of a writer older than `read_to_end` does not say how far it read; one that
+    /// says so is complete, or stopped, or incomplete.
+    #[test]
+    fn completion_follows_read_to_end_and_stopped_by() {
+        let of = |extra: Value| {
+            let res = Results::from_files(&[ResultFile {
+                name: "a".into(),
+                records: vec![summary(extra)],
+            }]);
+            res.summaries[0].rec.completion.clone()
+        };
+        assert_eq!(of(json!({})), Completion::Unknown);
+        assert_eq!(of(json!({"read_to_end": true})), Completion::Complete);
+        assert_eq!(of(json!({"read_to_end": false})), Completion::Incomplete);
+        assert_eq!(
+            of(json!({"read_to_end": false, "stopped_by": "--duration"})),
+            Completion::Planned("--duration".into())
+        );
+    }
+
+    /// The names the tables print are the names the records write.
+    #[test]
+    fn limit_names_are_the_record_names() {
+        for v in [
+            Verdict::Pass,
+            Verdict::Fail,
+            Verdict::Undecided,
+            Verdict::Invalid,
+        ] {
+            assert_eq!(serde_json::to_value(v).unwrap(), v.name());
+        }
+        for o in [Scope::Run, Scope::RunsSd, Scope::RunsMean] {
+            assert_eq!(serde_json::to_value(o).unwrap(), o.name());
         }
     }
 }

@@ -2,7 +2,7 @@
 //! field against docs/records.md, interim records with `--every`, several runs with `aggregate`
 //! records, and exit statuses for bad input.
 
-use crate::common::exe;
+use crate::common::{exe, parse_lines_of, stdout_of};
 use std::path::PathBuf;
 use std::process::Output;
 
@@ -281,34 +281,14 @@ fn plot_draws_each_channel_with_its_intervals_and_model() {
         ],
     );
     let jsonl = tmp("plot.jsonl");
-    let out = exe()
-        .args([
-            "analyze",
-            csv.to_str().unwrap(),
-            "--tau0",
-            "0.01",
-            "--unit",
-            "arcsec",
-            "--out",
-        ])
-        .arg(&jsonl)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    stdout_of(
+        exe()
+            .args(["analyze", csv.to_str().unwrap(), "--tau0", "0.01"])
+            .args(["--unit", "arcsec", "--out"])
+            .arg(&jsonl),
     );
     let svg = tmp("plot.svg");
-    let out = exe()
-        .args(["plot", jsonl.to_str().unwrap(), "-o", svg.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    stdout_of(exe().args(["plot", jsonl.to_str().unwrap(), "-o", svg.to_str().unwrap()]));
     let text = std::fs::read_to_string(&svg).unwrap();
     let recs: Vec<Record> = std::fs::read_to_string(&jsonl)
         .unwrap()
@@ -357,31 +337,18 @@ fn report_is_one_page_with_plots_tables_and_health() {
         env!("CARGO_MANIFEST_DIR"),
         "/fixtures/captures/siu8_stand_5min_seed1.siu8"
     );
-    let out = exe()
-        .args(["analyze", capture, "--format", "siu8", "--out"])
-        .arg(&jsonl)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    stdout_of(
+        exe()
+            .args(["analyze", capture, "--format", "siu8", "--out"])
+            .arg(&jsonl),
     );
     let html = tmp("report.html");
-    let out = exe()
-        .args([
-            "report",
-            jsonl.to_str().unwrap(),
-            "-o",
-            html.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    stdout_of(exe().args([
+        "report",
+        jsonl.to_str().unwrap(),
+        "-o",
+        html.to_str().unwrap(),
+    ]));
     let text = std::fs::read_to_string(&html).unwrap();
     // Two units (arcsec gyros, m/s accelerometers): one figure of two panels; eight channels
     // of five terms in the fit table; health.
@@ -451,17 +418,7 @@ fn diagnoses_of_several_runs_carry_their_run_index() {
     let args = |inputs: &[&PathBuf]| {
         let mut v: Vec<String> = inputs.iter().map(|p| p.display().to_string()).collect();
         v.extend(["--tau0", "0.01", "--diagnose"].map(String::from));
-        let out = exe().arg("analyze").args(&v).output().unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        String::from_utf8(out.stdout)
-            .unwrap()
-            .lines()
-            .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
-            .collect::<Vec<_>>()
+        parse_lines_of(exe().arg("analyze").args(&v))
     };
     let recs = args(&[&a, &b]);
     let diag: Vec<&serde_json::Value> = recs.iter().filter(|r| r["type"] == "diagnosis").collect();

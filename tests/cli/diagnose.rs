@@ -1,7 +1,7 @@
 //! `diagnose` through the binary: a simulated gyro with a hidden Gauss-Markov term, judged on
 //! its own run and on a held-out run of the same model; a clean run is consistent.
 
-use crate::common::exe;
+use crate::common::{exe, first_record, parse_lines_of, simulate_to, write_vog4_model};
 
 fn tmp(name: &str) -> std::path::PathBuf {
     crate::common::tmp_in("diag", name)
@@ -10,50 +10,29 @@ fn tmp(name: &str) -> std::path::PathBuf {
 /// The seed paper's VOG4 terms (table 2 means) with or without a Gauss-Markov term.
 fn model(gm: bool) -> std::path::PathBuf {
     let p = tmp(if gm { "gm.toml" } else { "clean.toml" });
-    let mut t = String::from(
-        "rate_hz = 250\n[[channel]]\nname = \"g4\"\nunit = \"arcsec\"\nlsb = 0.004\nN = 0.254\n\
-         B = 0.225\nK = 1.826e-2\nflicker_band_s = [0.004, 1.0e4]\n",
-    );
-    if gm {
-        t += "gauss_markov = { sigma = 0.6, tau_c = 1.5 }\n";
-    }
-    std::fs::write(&p, t).unwrap();
+    let effect = if gm {
+        "gauss_markov = { sigma = 0.6, tau_c = 1.5 }\n"
+    } else {
+        ""
+    };
+    write_vog4_model(&p, effect);
     p
 }
 
+/// Thirty minutes of `model`'s run as text columns.
 fn simulate(model: &std::path::Path, seed: u64, name: &str) -> std::path::PathBuf {
     let out = tmp(name);
-    let st = exe()
-        .args([
-            "simulate",
-            "--model",
-            model.to_str().unwrap(),
-            "--duration",
-            "30min",
-        ])
-        .args(["--seed", &seed.to_string(), "--format", "csv", "-o"])
-        .arg(&out)
-        .status()
-        .unwrap();
-    assert!(st.success());
+    let seed = seed.to_string();
+    simulate_to(
+        model,
+        &["--duration", "30min", "--seed", &seed, "--format", "csv"],
+        &out,
+    );
     out
 }
 
 fn diagnosis(args: &[&str]) -> serde_json::Value {
-    let out = exe()
-        .arg("diagnose")
-        .args(args)
-        .args(["--tau0", "0.004"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8_lossy(&out.stdout);
-    let line = text.lines().next().expect("one diagnosis record");
-    serde_json::from_str(line).unwrap()
+    first_record(exe().arg("diagnose").args(args).args(["--tau0", "0.004"]))
 }
 
 #[test]
@@ -128,28 +107,18 @@ fn a_rate_unit_with_rate_names_the_increment_unit() {
 #[test]
 fn the_stream_carries_diagnosis_records_refreshed_with_the_fits() {
     let run = simulate(&model(true), 8, "gm8-stream.csv");
-    let out = exe()
-        .args([
-            "analyze",
-            run.to_str().unwrap(),
-            "--tau0",
-            "0.004",
-            "--diagnose",
-            "--every",
-            "600",
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let recs: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .filter(|v: &serde_json::Value| v["type"] == "diagnosis")
-        .collect();
+    let recs: Vec<serde_json::Value> = parse_lines_of(exe().args([
+        "analyze",
+        run.to_str().unwrap(),
+        "--tau0",
+        "0.004",
+        "--diagnose",
+        "--every",
+        "600",
+    ]))
+    .into_iter()
+    .filter(|v| v["type"] == "diagnosis")
+    .collect();
     // 30 minutes, every 600 s: interim at 600, 1200 and 1800 s, then the final one.
     assert_eq!(recs.len(), 4);
     assert_eq!(recs.iter().filter(|r| r["final"] == true).count(), 1);
@@ -181,19 +150,7 @@ fn analyze_and_diagnose_read_the_same_gaps() {
     std::fs::write(&file, lines.join("\n") + "\n").unwrap();
     let path = file.to_str().unwrap();
 
-    let out = exe()
-        .args(["analyze", path, "--tau0", "0.004", "--diagnose"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let recs: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let recs = parse_lines_of(exe().args(["analyze", path, "--tau0", "0.004", "--diagnose"]));
     let summary = recs.iter().rfind(|r| r["type"] == "summary").unwrap();
     // The three missing steps cut the run into four stretches; `inf` and `-inf` are counted.
     assert_eq!(summary["segments"], serde_json::json!([4]));

@@ -2,7 +2,7 @@
 //! round trip diagnose -> model file -> simulate -> diagnose giving back the effects and
 //! parameters (issue 13, "Close the loop").
 
-use crate::common::{self, exe};
+use crate::common::{self, exe, first_record, simulate_to, write_vog4_model};
 use std::path::{Path, PathBuf};
 
 fn tmp(name: &str) -> PathBuf {
@@ -12,44 +12,31 @@ fn tmp(name: &str) -> PathBuf {
 /// VOG4's terms (the seed paper's table 2 means) with a bias and one hidden effect.
 fn model(name: &str, effect: &str) -> PathBuf {
     let p = tmp(name);
-    let t = format!(
-        "rate_hz = 250\n[[channel]]\nname = \"g4\"\nunit = \"arcsec\"\nlsb = 0.004\nbias = 15.0\n\
-         N = 0.254\nB = 0.225\nK = 1.826e-2\nflicker_band_s = [0.004, 1.0e4]\n{effect}\n"
-    );
-    std::fs::write(&p, t).unwrap();
+    write_vog4_model(&p, &format!("bias = 15.0\n{effect}\n"));
     p
 }
 
+/// One hour of `model`'s run.
 fn simulate(model: &Path, seed: u64, name: &str) -> PathBuf {
     let out = tmp(name);
-    let _ = std::fs::remove_file(&out);
-    let st = exe()
-        .args(["simulate", "--model", model.to_str().unwrap()])
-        .args(["--duration", "1h", "--seed", &seed.to_string(), "-o"])
-        .arg(&out)
-        .status()
-        .unwrap();
-    assert!(st.success());
+    simulate_to(
+        model,
+        &["--duration", "1h", "--seed", &seed.to_string()],
+        &out,
+    );
     out
 }
 
 /// The diagnosis record of `run`, writing the fitted unit to `model_out`.
 fn diagnose(run: &Path, model_out: &Path) -> serde_json::Value {
     let _ = std::fs::remove_file(model_out);
-    let out = exe()
-        .arg("diagnose")
-        .arg(run)
-        .args(["--tau0", "0.004", "--unit", "arcsec", "--model-out"])
-        .arg(model_out)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8_lossy(&out.stdout);
-    serde_json::from_str(text.lines().next().expect("a diagnosis record")).unwrap()
+    first_record(
+        exe()
+            .arg("diagnose")
+            .arg(run)
+            .args(["--tau0", "0.004", "--unit", "arcsec", "--model-out"])
+            .arg(model_out),
+    )
 }
 
 fn param(d: &serde_json::Value, kind: &str, key: &str) -> f64 {
@@ -283,19 +270,14 @@ fn the_ensemble_band_shows_the_twin_matching() {
         "gauss_markov = { sigma = 0.6, tau_c = 1.5 }",
     );
     let run = simulate(&truth, 8, "ens-run.csv");
-    let out = exe()
-        .arg("diagnose")
-        .arg(&run)
-        .args(["--tau0", "0.004", "--unit", "arcsec", "--ensemble", "20"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8_lossy(&out.stdout);
-    let d: serde_json::Value = serde_json::from_str(text.lines().next().unwrap()).unwrap();
+    let d = first_record(exe().arg("diagnose").arg(&run).args([
+        "--tau0",
+        "0.004",
+        "--unit",
+        "arcsec",
+        "--ensemble",
+        "20",
+    ]));
     let e = &d["ensemble"];
     assert_eq!(e["runs"], 20);
     let n = d["model_tau"].as_array().unwrap().len();

@@ -19,7 +19,7 @@ use std::process::{Child, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-use crate::common::pipeline::free_udp_port;
+use crate::common::pipeline::{free_udp_port, last_of, parse_lines};
 use crate::common::{exe, fixtures, tmp_in};
 
 const FRAME_LEN: usize = 42;
@@ -87,6 +87,38 @@ fn stderr_lines(child: &mut Child) -> mpsc::Receiver<String> {
     rx
 }
 
+/// Spawns `cmd` logging at `info`, standard output to `stdout`, standard error forwarded to the
+/// channel returned.
+fn spawn_logged(cmd: &mut std::process::Command, stdout: Stdio) -> (Child, mpsc::Receiver<String>) {
+    let mut child = cmd
+        .env("ALLANSCOPE_LOG", "info")
+        .stdout(stdout)
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let rx = stderr_lines(&mut child);
+    (child, rx)
+}
+
+/// Everything the child writes to its standard output, until it closes it.
+fn read_stdout(child: &mut Child) -> String {
+    let mut text = String::new();
+    child
+        .stdout
+        .take()
+        .expect("stdout")
+        .read_to_string(&mut text)
+        .expect("read");
+    text
+}
+
+/// How many final records of the `types` there are.
+fn finals(recs: &[serde_json::Value], types: &[&str]) -> usize {
+    recs.iter()
+        .filter(|r| types.iter().any(|t| r["type"] == *t) && r["final"] == true)
+        .count()
+}
+
 fn wait_for_line(rx: &mpsc::Receiver<String>, what: &str) -> Vec<String> {
     let mut seen = Vec::new();
     let t0 = Instant::now();
@@ -112,18 +144,9 @@ fn replay_interims(pause: Duration) -> (Vec<f64>, usize) {
         .spawn()
         .expect("spawn");
     std::thread::sleep(pause);
-    let mut text = String::new();
-    child
-        .stdout
-        .take()
-        .expect("stdout")
-        .read_to_string(&mut text)
-        .expect("read");
+    let text = read_stdout(&mut child);
     assert!(child.wait().expect("wait").success());
-    let recs: Vec<serde_json::Value> = text
-        .lines()
-        .map(|l| serde_json::from_str(l).expect("JSON line"))
-        .collect();
+    let recs = parse_lines(text.as_bytes());
     let t = recs
         .iter()
         .filter(|r| {
@@ -186,11 +209,7 @@ fn a_replay_stopped_by_sigint_says_so_and_exits_1() {
             .any(|l| l.contains("stopped by SIGINT before the end")),
         "{err:?}"
     );
-    let recs: Vec<serde_json::Value> = std::fs::read_to_string(&out)
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let recs = records_of(&out);
     let s = recs.last().unwrap();
     assert_eq!(s["type"], "summary");
     assert_eq!(s["read_to_end"], false);
@@ -198,13 +217,9 @@ fn a_replay_stopped_by_sigint_says_so_and_exits_1() {
     // About 1.5 s of the 300 s were read in real time, every frame of it analysed.
     let t = s["t_data"].as_f64().unwrap();
     assert!(t > 0.5 && t < 10.0, "t_data {t}");
-    let h = recs.iter().rev().find(|r| r["type"] == "health").unwrap();
+    let h = last_of(&recs, "health");
     assert_eq!(h["frames"].as_f64().unwrap() * TAU0_S, t);
-    let finals = recs
-        .iter()
-        .filter(|r| r["type"] == "curve" && r["final"] == true)
-        .count();
-    assert_eq!(finals, 24);
+    assert_eq!(finals(&recs, &["curve"]), 24);
 }
 
 /// A live listener with `--every 0.05` fed 10 s of frames over UDP; standard output piped and
@@ -223,14 +238,7 @@ fn stalled_listener(out: Option<&str>) -> (Child, mpsc::Receiver<String>) {
     if let Some(o) = out {
         args.extend(["--out".into(), o.into()]);
     }
-    let mut child = exe()
-        .args(&args)
-        .env("ALLANSCOPE_LOG", "info")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn");
-    let rx = stderr_lines(&mut child);
+    let (child, rx) = spawn_logged(exe().args(&args), Stdio::piped());
     wait_for_line(&rx, "listening on udp");
     let bytes = std::fs::read(siu8_path()).unwrap();
     let sock = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
@@ -267,17 +275,9 @@ fn sigint_ends_a_run_whose_output_is_not_read() {
     let (code, took) = wait_at_most(&mut child, Duration::from_secs(15));
     assert_eq!(code, Some(0));
     assert!(took < Duration::from_secs(2), "{took:?}");
-    let recs: Vec<serde_json::Value> = std::fs::read_to_string(&out)
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
-    let finals: Vec<&serde_json::Value> = recs
-        .iter()
-        .filter(|r| (r["type"] == "curve" || r["type"] == "fit") && r["final"] == true)
-        .collect();
-    assert_eq!(finals.len(), 32);
-    let h = recs.iter().rev().find(|r| r["type"] == "health").unwrap();
+    let recs = records_of(&out);
+    assert_eq!(finals(&recs, &["curve", "fit"]), 32);
+    let h = last_of(&recs, "health");
     assert_eq!(h["frames"], 2500);
     let s = recs.last().unwrap();
     assert_eq!(s["stopped_by"], "SIGINT");
@@ -287,21 +287,17 @@ fn sigint_ends_a_run_whose_output_is_not_read() {
 /// A replay (`analyze` at full speed, an interim set every 50 ms of data) whose standard output
 /// is piped and not read: back-pressure holds the analysis once the pipe is full.
 fn stalled_replay() -> (Child, mpsc::Receiver<String>) {
-    let mut child = exe()
-        .args([
+    let (child, rx) = spawn_logged(
+        exe().args([
             "analyze",
             &siu8_path(),
             "--format",
             "siu8",
             "--every",
             "0.05",
-        ])
-        .env("ALLANSCOPE_LOG", "info")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn");
-    let rx = stderr_lines(&mut child);
+        ]),
+        Stdio::piped(),
+    );
     // 32 records of ~1 KB per interim set: the 64 KiB pipe is full after a few sets, long
     // before this (the whole replay at full speed takes about a second).
     std::thread::sleep(Duration::from_millis(1000));
@@ -320,20 +316,11 @@ fn sigint_ends_a_replay_held_by_back_pressure() {
     let (mut child, _rx) = stalled_replay();
     signal(&child, "-INT");
     let t0 = Instant::now();
-    let mut text = String::new();
-    child
-        .stdout
-        .take()
-        .expect("stdout")
-        .read_to_string(&mut text)
-        .expect("read");
+    let text = read_stdout(&mut child);
     let (code, _) = wait_at_most(&mut child, Duration::from_secs(10));
     assert!(t0.elapsed() < Duration::from_secs(2), "{:?}", t0.elapsed());
     assert_eq!(code, Some(1));
-    let recs: Vec<serde_json::Value> = text
-        .lines()
-        .map(|l| serde_json::from_str(l).expect("JSON line"))
-        .collect();
+    let recs = parse_lines(text.as_bytes());
     let s = recs.last().expect("records");
     assert_eq!(s["type"], "summary");
     assert_eq!(s["read_to_end"], false);
@@ -342,7 +329,7 @@ fn sigint_ends_a_replay_held_by_back_pressure() {
     assert!(t > 0.0 && t < 300.0, "t_data {t}");
     // The finals describe every frame the analysis took: health frames x tau0 = t_data (to
     // the rounding of t_data's own sum).
-    let h = recs.iter().rev().find(|r| r["type"] == "health").unwrap();
+    let h = last_of(&recs, "health");
     let frames_s = h["frames"].as_f64().unwrap() * TAU0_S;
     assert!(
         (frames_s - t).abs() <= 1e-9 * t,
@@ -371,16 +358,13 @@ fn a_signal_ends_a_listener_on_a_quiet_udp_port_at_once() {
         let port = free_udp_port();
         let out = tmp_in("stop-quiet-udp", "out.jsonl");
         let _ = std::fs::remove_file(&out);
-        let mut child = exe()
-            .args(["listen", "--udp", &format!("127.0.0.1:{port}")])
-            .args(["--format", "siu8", "--every", "1", "--out"])
-            .arg(&out)
-            .env("ALLANSCOPE_LOG", "info")
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("spawn");
-        let rx = stderr_lines(&mut child);
+        let (mut child, rx) = spawn_logged(
+            exe()
+                .args(["listen", "--udp", &format!("127.0.0.1:{port}")])
+                .args(["--format", "siu8", "--every", "1", "--out"])
+                .arg(&out),
+            Stdio::null(),
+        );
         wait_for_line(&rx, "listening on udp");
         // Nothing is ever sent.
         std::thread::sleep(Duration::from_millis(300));
@@ -390,12 +374,8 @@ fn a_signal_ends_a_listener_on_a_quiet_udp_port_at_once() {
         assert!(took < Duration::from_secs(2), "{sig}: {took:?}");
         // The final records (empty curves: no data), health with nothing received, summary.
         let recs = records_of(&out);
-        let finals = recs
-            .iter()
-            .filter(|r| r["type"] == "curve" && r["final"] == true)
-            .count();
-        assert_eq!(finals, 24, "{sig}");
-        let h = recs.iter().rev().find(|r| r["type"] == "health").unwrap();
+        assert_eq!(finals(&recs, &["curve"]), 24, "{sig}");
+        let h = last_of(&recs, "health");
         assert_eq!(h["frames"], 0);
         assert_eq!(h["bytes_in"], 0);
         let s = recs.last().unwrap();
@@ -423,18 +403,15 @@ fn sigint_ends_a_serial_listener_on_a_pseudo_terminal() {
     let port = slave.name().expect("pty name");
     let out = tmp_in("stop-serial", "out.jsonl");
     let _ = std::fs::remove_file(&out);
-    let mut child = exe()
-        .args([
-            "listen", "--serial", &port, "--format", "siu8", "--every", "1",
-        ])
-        .arg("--out")
-        .arg(&out)
-        .env("ALLANSCOPE_LOG", "info")
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn");
-    let rx = stderr_lines(&mut child);
+    let (mut child, rx) = spawn_logged(
+        exe()
+            .args([
+                "listen", "--serial", &port, "--format", "siu8", "--every", "1",
+            ])
+            .arg("--out")
+            .arg(&out),
+        Stdio::null(),
+    );
     wait_for_line(&rx, "reading serial port");
     // 10 s of frames, then the line stays quiet (a unit that stopped sending).
     let bytes = std::fs::read(siu8_path()).unwrap();
@@ -451,14 +428,10 @@ fn sigint_ends_a_serial_listener_on_a_pseudo_terminal() {
     assert!(took < Duration::from_secs(2), "{took:?}");
     drop(slave);
     let recs = records_of(&out);
-    let h = recs.iter().rev().find(|r| r["type"] == "health").unwrap();
+    let h = last_of(&recs, "health");
     assert_eq!(h["frames"], FRAMES as u64);
     assert_eq!(h["missing"], 0);
-    let finals = recs
-        .iter()
-        .filter(|r| (r["type"] == "curve" || r["type"] == "fit") && r["final"] == true)
-        .count();
-    assert_eq!(finals, 32);
+    assert_eq!(finals(&recs, &["curve", "fit"]), 32);
     let s = recs.last().unwrap();
     assert_eq!(s["stopped_by"], "SIGINT");
     assert_eq!(s["t_data"], FRAMES as f64 * TAU0_S);

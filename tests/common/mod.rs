@@ -16,6 +16,55 @@ pub fn exe() -> std::process::Command {
     std::process::Command::new(env!("CARGO_BIN_EXE_allanscope"))
 }
 
+/// Runs `cmd` and returns its standard output; fails the test, showing the command's standard
+/// error, unless it exits 0.
+pub fn stdout_of(cmd: &mut std::process::Command) -> String {
+    let out = cmd.output().expect("run allanscope");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// The JSON lines of a successful command's standard output.
+pub fn parse_lines_of(cmd: &mut std::process::Command) -> Vec<serde_json::Value> {
+    pipeline::parse_lines(stdout_of(cmd).as_bytes())
+}
+
+/// The first JSON line of a successful command's standard output.
+pub fn first_record(cmd: &mut std::process::Command) -> serde_json::Value {
+    let text = stdout_of(cmd);
+    let line = text.lines().next().expect("a JSON line on standard output");
+    serde_json::from_str(line).unwrap_or_else(|e| panic!("{line}: {e}"))
+}
+
+/// The seed paper's VOG4 gyro (its table 2 means: N 0.254 arcsec/sqrt(s), B 0.225 arcsec/s,
+/// K 1.826e-2 arcsec/s/sqrt(s); 250 Hz, LSB 0.004 arcsec) written as the model file `path`,
+/// one channel `g4`, with the `extra` lines (a bias, an effect) added to the channel.
+pub fn write_vog4_model(path: &Path, extra: &str) {
+    let text = format!(
+        "rate_hz = 250\n[[channel]]\nname = \"g4\"\nunit = \"arcsec\"\nlsb = 0.004\nN = 0.254\n\
+         B = 0.225\nK = 1.826e-2\nflicker_band_s = [0.004, 1.0e4]\n{extra}"
+    );
+    std::fs::write(path, text).unwrap();
+}
+
+/// `simulate --model MODEL ARGS... -o OUT`, an earlier `out` removed first; fails the test
+/// unless the command succeeds.
+pub fn simulate_to(model: &Path, args: &[&str], out: &Path) {
+    let _ = std::fs::remove_file(out);
+    let st = exe()
+        .args(["simulate", "--model", model.to_str().unwrap()])
+        .args(args)
+        .arg("-o")
+        .arg(out)
+        .status()
+        .unwrap();
+    assert!(st.success());
+}
+
 /// A name for this test process: its id and the time it first asked (ns). Process ids alone are
 /// reused (32768 of them here, with several test runs at once), and a reused one used to hand a
 /// test an earlier run's outputs, which the commands then refuse to overwrite: `analyze --out`

@@ -1,0 +1,229 @@
+//! The diagnosis section: each channel's final diagnosis in words, its effects' parameters named
+//! and in units, and the interim diagnoses in a small time table.
+
+use super::*;
+
+/// An effect's name and parameters in words and units, rates in datasheet units beside the
+/// record's u/s (sink::effect_text).
+pub fn effect_words(effect: &RecordedEffect, unit: &str) -> String {
+    crate::sink::effect_text::effect_line(effect, unit, &tick)
+}
+
+pub(super) fn diagnosis(h: &mut String, res: &Results) {
+    if res.diagnoses.is_empty() {
+        return;
+    }
+    let several = res.several_runs();
+    h.push_str("<h2>Sim-to-real gap (diagnosis)</h2>\n<p>The gap statistic is near 1 when the model explains the curve. Final diagnosis of each channel; effect parameters named, rates in datasheet units with the channel's own unit in brackets:</p>\n<table class=\"diagnosis\"><tr>");
+    if several {
+        h.push_str("<th class=\"l\">run</th>");
+    }
+    h.push_str("<th class=\"l\">channel</th><th class=\"l\">verdict</th><th>gap before</th><th>gap after</th><th class=\"l\">effects (in the order added; gap after each)</th><th class=\"l\">where the base model misses</th></tr>\n");
+    // The final (or last) diagnosis per run and channel.
+    let mut keys: Vec<(usize, Option<usize>, String)> = Vec::new();
+    for d in &res.diagnoses {
+        let k = (d.file, d.run, d.rec.channel.clone());
+        if !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    // The channel's unit: its curve's, else the one the record names (`diagnose` writes no curve).
+    let unit_of = |d: &Labelled<DiagnosisRecord>| {
+        res.curves
+            .iter()
+            .find(|c| c.file == d.file && c.rec.channel == d.rec.channel)
+            .map(|c| c.rec.unit.clone())
+            .or_else(|| d.rec.unit.clone())
+            .unwrap_or_else(|| "u".to_string())
+    };
+    let mut interim: Vec<&Labelled<DiagnosisRecord>> = Vec::new();
+    for (file, run, ch) in &keys {
+        let mine: Vec<&Labelled<DiagnosisRecord>> = res
+            .diagnoses
+            .iter()
+            .filter(|d| d.file == *file && d.run == *run && &d.rec.channel == ch)
+            .collect();
+        let Some(last) = mine
+            .iter()
+            .rev()
+            .find(|d| d.rec.is_final)
+            .or(mine.last())
+            .copied()
+        else {
+            continue;
+        };
+        // Interim diagnoses, less one written at the same data time as the final (its copy).
+        interim.extend(mine.iter().filter(|d| {
+            let copy_of_final = last.rec.is_final && d.rec.t_data == last.rec.t_data;
+            !std::ptr::eq(**d, last) && !copy_of_final
+        }));
+        let d = &last.rec;
+        let unit = unit_of(last);
+        let effects: Vec<String> = d
+            .effects
+            .iter()
+            .map(|e| {
+                format!(
+                    "{} (gap {:.2})",
+                    esc(&effect_words(&e.effect, &unit)),
+                    e.gap_after
+                )
+            })
+            .collect();
+        // The four regions the model misses most; the count of the others.
+        let mut worst: Vec<&crate::gap::record::RegionRecord> = d.regions.iter().collect();
+        worst.sort_by(|a, b| {
+            b.worst_ratio
+                .ln()
+                .abs()
+                .total_cmp(&a.worst_ratio.ln().abs())
+        });
+        let more = worst.len().saturating_sub(4);
+        worst.truncate(4);
+        worst.sort_by(|a, b| a.tau_lo.total_cmp(&b.tau_lo));
+        let mut regions: Vec<String> = worst
+            .iter()
+            .map(|r| {
+                let taus = if r.tau_lo == r.tau_hi {
+                    format!("&#964; = {} s", tick(r.tau_lo))
+                } else {
+                    format!("&#964; {}&ndash;{} s", tick(r.tau_lo), tick(r.tau_hi))
+                };
+                format!(
+                    "{taus}: data {} the model (&#215;{} at worst)",
+                    if r.sign > 0 { "above" } else { "below" },
+                    ratio_text(r.worst_ratio)
+                )
+            })
+            .collect();
+        if more > 0 {
+            regions.push(format!("and {more} more, closer to the model"));
+        }
+        let verdict = serde_json::to_value(d.verdict)
+            .ok()
+            .and_then(|v| v.as_str().map(String::from))
+            .unwrap_or_default();
+        let shape = d
+            .residual_shape
+            .as_ref()
+            .map(|s| {
+                format!(
+                    "<br><span class=\"small\">what is left unexplained: {}</span>",
+                    esc(s)
+                )
+            })
+            .unwrap_or_default();
+        let _ = writeln!(
+            h,
+            "<tr>{}<td class=\"l\">{}</td><td class=\"l\"><b>{}</b>{shape}</td><td>{:.2}</td><td>{:.2}</td><td class=\"l\">{}</td><td class=\"l\">{}</td></tr>",
+            if several {
+                format!("<td class=\"l\">{}</td>", esc(&last.label))
+            } else {
+                String::new()
+            },
+            esc(ch),
+            esc(&verdict),
+            d.gap_before,
+            d.gap_after,
+            if effects.is_empty() { "none".into() } else { effects.join("<br>") },
+            if regions.is_empty() { "nowhere".into() } else { regions.join("<br>") }
+        );
+    }
+    h.push_str("</table>\n");
+    interim_table(h, &interim, several);
+}
+
+/// The interim diagnoses as a small time table: one row per data time (per run), one column
+/// per channel, each cell the verdict, the gap before and after and the effects' names. At
+/// most [`INTERIM_ROWS`] rows per run: a long run shows every k-th time, and says so.
+pub(super) fn interim_table(h: &mut String, interim: &[&Labelled<DiagnosisRecord>], several: bool) {
+    if interim.is_empty() {
+        return;
+    }
+    let mut channels: Vec<&str> = Vec::new();
+    let mut runs: Vec<(usize, Option<usize>)> = Vec::new();
+    for d in interim {
+        if !channels.contains(&d.rec.channel.as_str()) {
+            channels.push(&d.rec.channel);
+        }
+        if !runs.contains(&(d.file, d.run)) {
+            runs.push((d.file, d.run));
+        }
+    }
+    h.push_str("<h3>Interim diagnoses</h3>\n<p class=\"small\">Each cell: the verdict, the gap before &rarr; after the effects, and the effects added.</p>\n<table class=\"interim small\"><tr>");
+    if several {
+        h.push_str("<th class=\"l\">run</th>");
+    }
+    h.push_str("<th>data (s)</th>");
+    for c in &channels {
+        let _ = write!(h, "<th class=\"l\">{}</th>", esc(c));
+    }
+    h.push_str("</tr>\n");
+    let mut thinned = 0usize;
+    for key in runs {
+        let mine: Vec<&&Labelled<DiagnosisRecord>> =
+            interim.iter().filter(|d| (d.file, d.run) == key).collect();
+        let mut times: Vec<f64> = mine.iter().map(|d| d.rec.t_data).collect();
+        times.sort_by(f64::total_cmp);
+        times.dedup();
+        let step = times.len().div_ceil(INTERIM_ROWS).max(1);
+        if step > 1 {
+            thinned = thinned.max(step);
+        }
+        let label = mine.first().map(|d| d.label.clone()).unwrap_or_default();
+        for (n, t) in times.iter().enumerate() {
+            // Every step-th time, and always the last.
+            if n % step != 0 && n + 1 != times.len() {
+                continue;
+            }
+            h.push_str("<tr>");
+            if several {
+                let _ = write!(h, "<td class=\"l\">{}</td>", esc(&label));
+            }
+            let _ = write!(h, "<td>{}</td>", tick(*t));
+            for c in &channels {
+                match mine
+                    .iter()
+                    .find(|d| d.rec.t_data == *t && d.rec.channel == *c)
+                {
+                    Some(d) => {
+                        let verdict = serde_json::to_value(d.rec.verdict)
+                            .ok()
+                            .and_then(|v| v.as_str().map(String::from))
+                            .unwrap_or_default();
+                        let kinds: Vec<&str> = d
+                            .rec
+                            .effects
+                            .iter()
+                            .map(|e| effect_name(e.effect.kind_name()))
+                            .collect();
+                        let _ = write!(
+                            h,
+                            "<td class=\"l\">{} {:.2}&rarr;{:.2}{}</td>",
+                            esc(&verdict),
+                            d.rec.gap_before,
+                            d.rec.gap_after,
+                            if kinds.is_empty() {
+                                String::new()
+                            } else {
+                                format!("<br>{}", esc(&kinds.join(", ")))
+                            }
+                        );
+                    }
+                    None => h.push_str("<td>&ndash;</td>"),
+                }
+            }
+            h.push_str("</tr>\n");
+        }
+    }
+    h.push_str("</table>\n");
+    if thinned > 1 {
+        let _ = writeln!(
+            h,
+            "<p class=\"small\">Every {thinned}th interim time shown (and the last); the JSON lines hold them all.</p>"
+        );
+    }
+}
+
+/// Rows of the interim-diagnosis table per run.
+pub(super) const INTERIM_ROWS: usize = 24;

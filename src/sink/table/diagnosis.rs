@@ -1,0 +1,141 @@
+//! A channel's diagnosis in one line (its verdict, the effects with their parameters in units, the
+//! gap before and after), and the channels diagnosed without a fit (the `diagnose` command's).
+
+use super::*;
+
+/// An effect in a few words with its parameters named and in units, rates in datasheet units
+/// beside the record's u/s (sink::effect_text).
+pub fn effect_brief(effect: &RecordedEffect, unit: &str) -> String {
+    let (name, ps) = crate::sink::effect_text::effect_parts(effect, unit, &sig3);
+    if ps.is_empty() {
+        return name;
+    }
+    let list: Vec<String> = ps
+        .iter()
+        .map(|p| format!("{} {}", p.name, p.value))
+        .collect();
+    format!("{name} [{}]", list.join(", "))
+}
+
+/// The diagnosis in one line: the verdict, what explains the gap, and the gap before and after.
+pub fn diagnosis_line(d: &DiagnosisRecord, unit: &str, style: &TableStyle) -> String {
+    let gap = if d.effects.is_empty() {
+        format!("gap {}", sig3(d.gap_before))
+    } else {
+        format!("gap {} -> {}", sig3(d.gap_before), sig3(d.gap_after))
+    };
+    let effects: Vec<String> = d
+        .effects
+        .iter()
+        .map(|e| effect_brief(&e.effect, unit))
+        .collect();
+    let misses = || -> String {
+        d.regions
+            .iter()
+            .map(|r| {
+                format!(
+                    "tau {} to {} ({} the model, up to {}x)",
+                    tau_text(r.tau_lo),
+                    tau_text(r.tau_hi),
+                    if r.sign > 0 { "above" } else { "below" },
+                    sig3(r.worst_ratio)
+                )
+            })
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
+    let mut line = match d.verdict {
+        crate::gap::diagnose::Verdict::Consistent => {
+            format!("consistent: the five-term model explains the curve ({gap})")
+        }
+        crate::gap::diagnose::Verdict::Explained => {
+            format!("explained by {} ({gap})", effects.join(" + "))
+        }
+        crate::gap::diagnose::Verdict::Unexplained => {
+            let mut s = style.yellow("UNEXPLAINED");
+            let m = misses();
+            if !m.is_empty() {
+                let _ = write!(s, ": the model misses at {m}");
+            }
+            if !effects.is_empty() {
+                let _ = write!(s, "; best try {}", effects.join(" + "));
+            }
+            let _ = write!(s, " ({gap})");
+            s
+        }
+    };
+    if let Some(ho) = &d.holdout {
+        let _ = write!(
+            line,
+            "; on the held-out run gap {} -> {}{}",
+            sig3(ho.gap_before),
+            sig3(ho.gap_after),
+            if ho.carried { "" } else { " (did not carry)" }
+        );
+    }
+    line
+}
+
+/// Diagnoses of channels that have no fit (the `diagnose` command writes only diagnoses).
+pub(super) fn diagnosis_only(
+    h: &mut String,
+    res: &Results,
+    k: RunKey,
+    fitted: &[&str],
+    style: &TableStyle,
+) {
+    let mut seen: Vec<&str> = Vec::new();
+    for d in res.diagnoses.iter().filter(|d| (d.file, d.run) == k) {
+        let ch = d.rec.channel.as_str();
+        if fitted.contains(&ch) || seen.contains(&ch) {
+            continue;
+        }
+        seen.push(ch);
+        let d = res.diagnosis_in(k, ch).unwrap_or(&d.rec);
+        let unit = d.unit.as_deref().unwrap_or("u");
+        let _ = writeln!(
+            h,
+            "\n{}{}  diagnosis: {}",
+            style.bold(ch),
+            d.unit
+                .as_deref()
+                .map(|u| format!(" [{u}]"))
+                .unwrap_or_default(),
+            diagnosis_line(d, unit, style)
+        );
+        // The five terms refitted with the effects in, in datasheet units when the unit is known
+        // (terms the fit set to zero are left out).
+        let (factors, units) = match IncrementUnit::parse(unit) {
+            Some(iu) => (
+                datasheet_factors(&iu),
+                datasheet_units(iu.kind).map(String::from),
+            ),
+            None => ([1.0; 5], native_units(unit)),
+        };
+        let terms: Vec<String> = (0..5)
+            .filter(|&i| d.final_coef[i] > 0.0)
+            .map(|i| {
+                format!(
+                    "{} {} {}",
+                    TERM_NAMES[i],
+                    sig3(d.final_coef[i] * factors[i]),
+                    units[i]
+                )
+            })
+            .collect();
+        let _ = writeln!(
+            h,
+            "  {}",
+            style.dim(&format!(
+                "five-term model with the effects: {}; taus {} to {}",
+                if terms.is_empty() {
+                    "-".to_string()
+                } else {
+                    terms.join(", ")
+                },
+                tau_text(d.tau_span[0]),
+                tau_text(d.tau_span[1])
+            ))
+        );
+    }
+}
