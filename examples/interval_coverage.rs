@@ -4,7 +4,7 @@
 //! (runs where the effect is not named first count as misses).
 //!
 //! ```text
-//! cargo run --release --example interval_coverage -- [--seeds 50] [--minutes 30]
+//! cargo run --release --example interval_coverage -- [--seeds 50] [--minutes 30] [--cases KIND,...]
 //! ```
 
 use allanscope::gap::{diagnose, DiagnoseOptions, DiagnosisRecord, GapConfig, GapEvidence};
@@ -25,7 +25,8 @@ fn main() {
     let seeds: u64 = get("--seeds", "50").parse().expect("--seeds");
     let minutes: f64 = get("--minutes", "30").parse().expect("--minutes");
     let tau0 = 0.004;
-    let cases: [Case; 4] = [
+    let only = get("--cases", "");
+    let cases: [Case; 6] = [
         (
             "gauss_markov",
             "gauss_markov = { sigma = 0.6, tau_c = 1.5 }",
@@ -46,8 +47,21 @@ fn main() {
             "second_order_filter = { natural_frequency = 8.0, damping = 0.3 }",
             &[("natural_frequency", 8.0), ("damping", 0.3)],
         ),
+        (
+            "output_filter",
+            "output_filter = { time_constant = 0.025 }",
+            &[("time_constant", 0.025)],
+        ),
+        (
+            "moving_average",
+            "moving_average = { taps = 16, stages = 2 }",
+            &[("taps", 16.0)],
+        ),
     ];
     for (kind, extra, truth) in cases {
+        if !only.is_empty() && !only.split(',').any(|c| c == kind) {
+            continue;
+        }
         let mut named = 0;
         let mut covered = vec![0u64; truth.len()];
         let mut widths: Vec<Vec<f64>> = vec![Vec::new(); truth.len()];

@@ -4,9 +4,10 @@
 //! parameter, `J = d ln AVAR_model / d theta` (shapes by central differences), the covariance
 //! of `theta_hat` is `(J' S^-1 J)^-1`, scaled up (never down) by the final gap `G` as a
 //! residual variance. Each interval is `p exp(+-1.96 sd(ln p))`, so it stays positive.
-//! The temperature's interval is its own (gap::temperature); warm-ups, jumps and the output
-//! filters get none yet (the filters' were measured miscalibrated; [`taps_profile`] is kept for
-//! when their covariance is right).
+//! The temperature's interval is its own (gap::temperature); warm-ups and jumps get none. The
+//! filters' shapes get theirs the same way (the covariance is exact for them since
+//! [`super::filter_cov`]; coverage in docs/gap.md), the moving average's whole taps by the
+//! profile of `r' S^-1 r` ([`taps_profile`]).
 
 use super::diagnose::AddedEffect;
 use super::effects::{EffectKind, EffectParams};
@@ -150,12 +151,6 @@ pub fn effect_intervals(
         .map(|(e, p)| {
             let mut out: Intervals = Vec::new();
             let kind = p.kind();
-            // Filters: none yet. Their Fisher intervals were measured too narrow (zero-phase
-            // time constant: 0 of 50 runs covered, half-width 2.4% against a 6% bias from the
-            // approximate covariance below the filter's memory; docs/gap.md).
-            if kind.is_filter() {
-                return out;
-            }
             if kind.is_stationary() && !kind.is_filter() {
                 let amp_name = if kind == EffectKind::GaussMarkov {
                     "sigma"
@@ -184,7 +179,6 @@ pub fn effect_intervals(
         .collect()
 }
 
-#[allow(dead_code)]
 /// Whole taps whose fit's `r' S^-1 r` is within `3.84 scale` of the best, around `taps`.
 fn taps_profile(
     prob: &GapProblem,
