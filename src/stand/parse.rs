@@ -229,13 +229,13 @@ impl StandConfig {
                 if root.contains_key("source") {
                     ck.bad(
                         "source",
-                        "a config with [[unit]] tables gives each unit its own source                          (`source = { kind = ..., format = ... }` in the unit): remove [source]",
+                        "a config with [[unit]] tables gives each unit its own source (`source = { kind = ..., format = ... }` in the unit): remove [source]",
                     );
                 }
                 if capture.is_some() {
                     ck.bad(
                         "run.capture",
-                        "a config with [[unit]] tables gives each unit its own capture                          (`capture = \"FILE\"` in the unit)",
+                        "a config with [[unit]] tables gives each unit its own capture (`capture = \"FILE\"` in the unit)",
                     );
                 }
                 ck.units(v, descriptor_dirs, &channels, &limits, output.as_deref())
