@@ -74,10 +74,11 @@
 //! cargo run --release --example family_gap -- [--draws 20] [--seed 1] [--threads 2]
 //!     [--families navfog,tacfog,vog4,memsgyro,ma4,memsacc]
 //!     [--effects none,gauss_markov,sinusoid,output_filter,warmup,bias_jumps] [--hours 1,3]
-//!     [--csv FILE] [--resid FILE] [--no-oracle]
+//!     [--csv FILE] [--resid FILE] [--no-oracle] [--from 0]
 //! ```
 //!
-//! `--draws` is per family and effect. Jump draws (and clean draws, for the level) also get the
+//! `--draws` is per family and effect; `--from N` starts at draw `N` (a split run gives the
+//! same draws as one run). Jump draws (and clean draws, for the level) also get the
 //! fair jump ceiling: the most powerful test told the count and rms but not the times
 //! (`oracle::JumpCeiling`), its p-value from 199 draws of the Gaussian null. `--resid FILE`
 //! writes the base fit's standardized residuals per tau of the clean draws. Prints, per family: the false alarms (clean runs whose
@@ -980,6 +981,9 @@ fn main() {
             .unwrap_or_else(|| d.to_string())
     };
     let draws: u64 = get("--draws", "20").parse().expect("--draws");
+    // The first draw's index: `--from 10 --draws 10` runs draws 10-19 (the same draws a
+    // `--draws 20` run would give them), so that a long run can be split.
+    let from: u64 = get("--from", "0").parse().expect("--from");
     // Clean draws without their oracle statistics and jump ceiling (null studies of the
     // diagnosis's own statistics, about twice as fast).
     let no_oracle = args.iter().any(|a| a == "--no-oracle");
@@ -1022,7 +1026,7 @@ fn main() {
     let csv = get("--csv", "");
     let mut items: Vec<(&'static str, Option<EffectKind>, u64)> = Vec::new();
     for &f in &fams {
-        for i in 0..draws {
+        for i in from..from + draws {
             for &k in &kinds {
                 items.push((f, k, i));
             }
