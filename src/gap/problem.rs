@@ -330,8 +330,9 @@ impl GapProblem {
     /// `k` or above (a fixed offset `k x_term`, the column itself still free) raises `r' S^-1 r`
     /// by `delta`; `delta = 1` is the one-sided profile-likelihood bound at about 84% (Wilks;
     /// e.g. Pawitan, "In All Likelihood", section 9.3). The curve cannot tell the term from any
-    /// value below it. Bisection in `ln k` up to the value that alone reaches the data at the
-    /// longest tau; `None` when no fit can be made.
+    /// value below it. Bisection in `ln k` up to the value whose term alone reaches the data at
+    /// some tau (the bound's ceiling, often reached on runs of an hour or two); `None` when no
+    /// fit can be made.
     pub fn upper_bound(
         &self,
         spec: &ModelSpec,
