@@ -32,11 +32,12 @@ use allanscope::gap::{
     diagnose, DiagnoseOptions, EffectKind, EffectParams, EvidenceSnapshot, GapConfig, GapEvidence,
 };
 use allanscope::model::terms;
-use allanscope::sim::{SimModel, Simulator};
-use common::{add_jumps, draw_jumps, jumps_rms, log_uniform, par_map, quantile, std_normal_cdf};
-use rand::{RngExt, SeedableRng};
+use common::{
+    draw_effect_params, draw_jumps, effect_toml, jumps_rms, log_uniform, par_map, quantile,
+    simulate_channel, std_normal_cdf,
+};
+use rand::SeedableRng;
 use rand_xoshiro::Xoshiro256PlusPlus;
-use std::path::Path;
 use std::time::Instant;
 
 #[derive(Debug, Clone, Copy)]
@@ -81,156 +82,28 @@ fn draw_effect(
     tau0: f64,
 ) -> Draw {
     let rho = log_uniform(rng, 0.15, 3.0);
-    let effect = kind.map(|k| match k {
-        EffectKind::GaussMarkov => {
-            let tc = log_uniform(rng, 20.0 * tau0, t_run / 50.0);
-            // Peak ADEV 0.6174 sigma at tau = 1.893 tau_c (docs/theory.md section 3).
-            let sigma = rho * base.adev(1.893 * tc) / 0.6174;
-            EffectParams::GaussMarkov { sigma, tau_c_s: tc }
-        }
-        EffectKind::Sinusoid => {
-            let f = log_uniform(rng, 30.0 / t_run, 0.1 / tau0);
-            // First maximum of sin^2(x)/x at x = pi 0.371: 0.725 A.
-            let a = rho * base.adev(0.371 / f) / 0.725;
-            EffectParams::Sinusoid {
-                amplitude: a,
-                frequency_hz: f,
-            }
-        }
-        EffectKind::OutputFilter => EffectParams::OutputFilter {
-            time_constant_s: log_uniform(rng, 1.0 * tau0, 10.0 * tau0),
-        },
-        EffectKind::Warmup => {
-            let tc = log_uniform(rng, 60.0, t_run / 5.0);
-            let n_inc = (t_run / tau0) as u64;
-            // Amplitude for the drawn peak ratio over the dense taus (warmup_avar is exact for
-            // the estimator on this record).
-            let ms = allanscope::gap::evidence::dense_ms(4, n_inc / 10);
-            let peak = ms
-                .iter()
-                .map(|&m| {
-                    let tau = m as f64 * tau0;
-                    terms::warmup_avar(1.0, tc, tau0, m, n_inc).sqrt() / base.adev(tau)
-                })
-                .fold(0.0, f64::max);
-            EffectParams::Warmup {
-                amplitude: rho / peak,
-                time_constant_s: tc,
-            }
-        }
-        EffectKind::BiasJumps => {
-            let count = rng.random_range(2..=8u64);
-            let mean_interval = t_run / count as f64;
-            let tau = t_run / 10.0;
-            let s = rho * base.adev(tau) / (tau / (3.0 * mean_interval)).sqrt();
-            EffectParams::BiasJumps { count, rms_size: s }
-        }
-        // Filters beyond first order (docs/gap.md, "Low-pass filters beyond first order"):
-        // memory of 1-10 tau0 as the first order's (`rho` is not used).
-        EffectKind::MovingAverage => EffectParams::MovingAverage {
-            taps: log_uniform(rng, 2.0, 32.0).round() as u32,
-            stages: rng.random_range(1..=2u32),
-        },
-        EffectKind::SecondOrderFilter => EffectParams::SecondOrderFilter {
-            natural_frequency_hz: 1.0
-                / (2.0 * std::f64::consts::PI * log_uniform(rng, 1.0 * tau0, 10.0 * tau0)),
-            damping: log_uniform(rng, 0.2, 2.0),
-        },
-        EffectKind::ZeroPhaseFilter => EffectParams::ZeroPhaseFilter {
-            time_constant_s: log_uniform(rng, 1.0 * tau0, 10.0 * tau0),
-        },
-        // Not drawn: these runs carry no temperature column (gap::temperature has its own
-        // study, examples/temperature_study.rs).
-        EffectKind::Temperature => EffectParams::Temperature {
-            coefficient: 0.0,
-            lo: 0.0,
-            hi: 0.0,
-        },
-    });
+    let adev = |tau: f64| base.adev(tau);
+    let effect = kind.map(|k| draw_effect_params(rng, k, rho, tau0, t_run, &adev, 32.0));
     Draw { base, effect, rho }
 }
 
 fn model_toml(d: &Draw, tau0: f64) -> String {
-    let mut s = format!(
+    let s = format!(
         "tau0_s = {tau0}\n[[channel]]\nname = \"g\"\nunit = \"arcsec\"\nlsb = {}\nN = {}\nB = {}\nK = {}\nflicker_band_s = [{}, 1.0e5]\n",
         d.base.lsb, d.base.n, d.base.b, d.base.k, tau0
     );
-    match d.effect {
-        Some(EffectParams::GaussMarkov { sigma, tau_c_s }) => {
-            s += &format!("gauss_markov = {{ sigma = {sigma}, tau_c = {tau_c_s} }}\n")
-        }
-        Some(EffectParams::Sinusoid {
-            amplitude,
-            frequency_hz,
-        }) => {
-            s += &format!(
-            "sinusoid = {{ amplitude = {amplitude}, frequency = {frequency_hz}, phase = 0.3 }}\n"
-        )
-        }
-        Some(EffectParams::OutputFilter { time_constant_s }) => {
-            s += &format!("output_filter = {{ time_constant = {time_constant_s} }}\n")
-        }
-        Some(EffectParams::Warmup {
-            amplitude,
-            time_constant_s,
-        }) => {
-            s += &format!(
-                "warmup = {{ amplitude = {amplitude}, time_constant = {time_constant_s} }}\n"
-            )
-        }
-        Some(EffectParams::MovingAverage { taps, stages }) => {
-            s += &format!("moving_average = {{ taps = {taps}, stages = {stages} }}\n")
-        }
-        Some(EffectParams::SecondOrderFilter {
-            natural_frequency_hz,
-            damping,
-        }) => {
-            s += &format!(
-                "second_order_filter = {{ natural_frequency = {natural_frequency_hz}, damping = {damping} }}\n"
-            )
-        }
-        Some(EffectParams::ZeroPhaseFilter { time_constant_s }) => {
-            s += &format!("zero_phase_filter = {{ time_constant = {time_constant_s} }}\n")
-        }
-        // Bias jumps are added by `simulate` itself.
-        Some(EffectParams::BiasJumps { .. }) | None => {}
-        Some(EffectParams::Temperature { .. }) => {}
-    }
-    s
+    s + &effect_toml(d.effect)
 }
 
-/// Simulates a draw. Bias jumps are added here rather than by the simulator, so that the
-/// truth is the realised jumps: `count` jumps at uniform times (a Poisson process given its
-/// count), Gaussian sizes of rms `rms_size`; the realised draw (count, rms of the sizes) is
-/// returned in place of the nominal one, with the realised jumps `(time s, size u/s)`.
+/// Simulates a draw (the jumps added by `common::simulate_channel`, the truth the realised
+/// ones).
 fn simulate(
     d: &Draw,
     tau0: f64,
     t_run: f64,
     seed: u64,
 ) -> (Vec<f64>, Option<EffectParams>, Vec<(f64, f64)>) {
-    let mut clean = *d;
-    if let Some(EffectParams::BiasJumps { .. }) = d.effect {
-        clean.effect = None;
-    }
-    let toml = model_toml(&clean, tau0);
-    let model = SimModel::from_toml_str(&toml, Path::new("<blind>")).expect("generated model");
-    let mut sim = Simulator::new(&model, seed);
-    let n = (t_run / tau0) as usize;
-    let mut out = vec![0.0; n];
-    sim.fill_channel(0, &mut out);
-    let mut truth = d.effect;
-    let mut jumps = Vec::new();
-    if let Some(EffectParams::BiasJumps { count, rms_size }) = d.effect {
-        jumps = draw_jumps(count, rms_size, t_run, seed ^ 0x0005_eed1_u64);
-        add_jumps(&mut out, tau0, &jumps);
-        let rms = jumps_rms(&jumps);
-        truth = Some(EffectParams::BiasJumps {
-            count,
-            rms_size: rms,
-        });
-    }
-    (out, truth, jumps)
+    simulate_channel(&model_toml(d, tau0), "<blind>", tau0, t_run, d.effect, seed)
 }
 
 struct Outcome {

@@ -74,10 +74,11 @@
 //! cargo run --release --example family_gap -- [--draws 20] [--seed 1] [--threads 2]
 //!     [--families navfog,tacfog,vog4,memsgyro,ma4,memsacc]
 //!     [--effects none,gauss_markov,sinusoid,output_filter,warmup,bias_jumps] [--hours 1,3]
-//!     [--csv FILE] [--resid FILE] [--no-oracle]
+//!     [--csv FILE] [--resid FILE] [--no-oracle] [--from 0]
 //! ```
 //!
-//! `--draws` is per family and effect. Jump draws (and clean draws, for the level) also get the
+//! `--draws` is per family and effect; `--from N` starts at draw `N` (a split run gives the
+//! same draws as one run). Jump draws (and clean draws, for the level) also get the
 //! fair jump ceiling: the most powerful test told the count and rms but not the times
 //! (`oracle::JumpCeiling`), its p-value from 199 draws of the Gaussian null. `--resid FILE`
 //! writes the base fit's standardized residuals per tau of the clean draws. Prints, per family: the false alarms (clean runs whose
@@ -103,14 +104,12 @@ use allanscope::gap::{
     Verdict,
 };
 use allanscope::model::terms;
-use allanscope::sim::{SimModel, Simulator};
 use common::{
-    add_jumps, draw_jumps, jumps_rms, log_uniform, par_map, quantile, share, std_normal_cdf,
-    std_normal_quantile,
+    draw_effect_params, draw_jumps, effect_toml, jumps_rms, log_uniform, par_map, quantile, share,
+    simulate_channel, std_normal_cdf, std_normal_quantile,
 };
 use rand::{RngExt, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
-use std::path::Path;
 use std::time::Instant;
 
 /// The families; the first six are the default list, `coarse` is drawn on request.
@@ -316,62 +315,8 @@ fn kind_name(k: Option<EffectKind>) -> &'static str {
 /// An effect of `kind` on `u` with its drawn size `rho` (module doc).
 fn draw_effect(rng: &mut Xoshiro256PlusPlus, u: &Unit, kind: EffectKind) -> (EffectParams, f64) {
     let rho = log_uniform(rng, 0.3, 3.0);
-    let p = match kind {
-        EffectKind::GaussMarkov => {
-            let tau_c = log_uniform(rng, 20.0 * u.tau0, u.t_run / 50.0);
-            // Peak ADEV 0.6174 sigma at tau = 1.893 tau_c (docs/theory.md section 3).
-            let sigma = rho * u.adev(1.893 * tau_c) / 0.6174;
-            EffectParams::GaussMarkov {
-                sigma,
-                tau_c_s: tau_c,
-            }
-        }
-        EffectKind::Sinusoid => {
-            let f = log_uniform(rng, 30.0 / u.t_run, 0.1 / u.tau0);
-            // First maximum of sin^2(x)/x at x = pi 0.371: 0.725 A.
-            EffectParams::Sinusoid {
-                amplitude: rho * u.adev(0.371 / f) / 0.725,
-                frequency_hz: f,
-            }
-        }
-        EffectKind::OutputFilter => EffectParams::OutputFilter {
-            time_constant_s: log_uniform(rng, u.tau0, 10.0 * u.tau0),
-        },
-        EffectKind::Warmup => {
-            let tc = log_uniform(rng, 60.0, u.t_run / 5.0);
-            let n_inc = (u.t_run / u.tau0) as u64;
-            let peak = allanscope::gap::evidence::dense_ms(4, n_inc / 10)
-                .iter()
-                .map(|&m| {
-                    let tau = m as f64 * u.tau0;
-                    terms::warmup_avar(1.0, tc, u.tau0, m, n_inc).sqrt() / u.adev(tau)
-                })
-                .fold(0.0, f64::max);
-            EffectParams::Warmup {
-                amplitude: rho / peak,
-                time_constant_s: tc,
-            }
-        }
-        EffectKind::BiasJumps => {
-            let count = rng.random_range(2..=8u64);
-            let tau = u.t_run / 10.0;
-            let s = rho * u.adev(tau) / (tau / (3.0 * u.t_run / count as f64)).sqrt();
-            EffectParams::BiasJumps { count, rms_size: s }
-        }
-        EffectKind::MovingAverage => EffectParams::MovingAverage {
-            taps: log_uniform(rng, 2.0, 10.0).round() as u32,
-            stages: rng.random_range(1..=2u32),
-        },
-        EffectKind::SecondOrderFilter => EffectParams::SecondOrderFilter {
-            natural_frequency_hz: 1.0
-                / (2.0 * std::f64::consts::PI * log_uniform(rng, u.tau0, 10.0 * u.tau0)),
-            damping: log_uniform(rng, 0.2, 2.0),
-        },
-        EffectKind::ZeroPhaseFilter => EffectParams::ZeroPhaseFilter {
-            time_constant_s: log_uniform(rng, u.tau0, 10.0 * u.tau0),
-        },
-        other => panic!("{}: not drawn by this benchmark", other.name()),
-    };
+    let adev = |tau: f64| u.adev(tau);
+    let p = draw_effect_params(rng, kind, rho, u.tau0, u.t_run, &adev, 10.0);
     (p, rho)
 }
 
@@ -390,47 +335,7 @@ fn model_toml(u: &Unit, effect: Option<EffectParams>) -> String {
     if u.lsb > 0.0 {
         s += &format!("lsb = {:e}\n", u.lsb);
     }
-    match effect {
-        Some(EffectParams::GaussMarkov { sigma, tau_c_s }) => {
-            s += &format!("gauss_markov = {{ sigma = {sigma:e}, tau_c = {tau_c_s:e} }}\n")
-        }
-        Some(EffectParams::Sinusoid {
-            amplitude,
-            frequency_hz,
-        }) => {
-            s += &format!(
-                "sinusoid = {{ amplitude = {amplitude:e}, frequency = {frequency_hz:e}, phase = 0.3 }}\n"
-            )
-        }
-        Some(EffectParams::OutputFilter { time_constant_s }) => {
-            s += &format!("output_filter = {{ time_constant = {time_constant_s:e} }}\n")
-        }
-        Some(EffectParams::Warmup {
-            amplitude,
-            time_constant_s,
-        }) => {
-            s += &format!(
-                "warmup = {{ amplitude = {amplitude:e}, time_constant = {time_constant_s:e} }}\n"
-            )
-        }
-        Some(EffectParams::MovingAverage { taps, stages }) => {
-            s += &format!("moving_average = {{ taps = {taps}, stages = {stages} }}\n")
-        }
-        Some(EffectParams::SecondOrderFilter {
-            natural_frequency_hz,
-            damping,
-        }) => {
-            s += &format!(
-                "second_order_filter = {{ natural_frequency = {natural_frequency_hz:e}, damping = {damping:e} }}\n"
-            )
-        }
-        Some(EffectParams::ZeroPhaseFilter { time_constant_s }) => {
-            s += &format!("zero_phase_filter = {{ time_constant = {time_constant_s:e} }}\n")
-        }
-        // Jumps are added by `simulate` (the truth is the realised jumps).
-        _ => {}
-    }
-    s
+    s + &effect_toml(effect)
 }
 
 /// Simulates `u` with `effect`: the increments, the realised effect (jumps: the count and the
@@ -441,22 +346,14 @@ fn simulate(
     effect: Option<EffectParams>,
     seed: u64,
 ) -> (Vec<f64>, Option<EffectParams>, Vec<(f64, f64)>) {
-    let text = model_toml(u, effect);
-    let m = SimModel::from_toml_str(&text, Path::new("<family_gap>")).expect("model");
-    let mut sim = Simulator::new(&m, seed);
-    let n = (u.t_run / u.tau0) as usize;
-    let mut inc = vec![0.0; n];
-    sim.fill_channel(0, &mut inc);
-    let mut truth = effect;
-    let mut jumps = Vec::new();
-    if let Some(EffectParams::BiasJumps { count, rms_size }) = effect {
-        jumps = draw_jumps(count, rms_size, u.t_run, seed ^ 0x0005_eed1);
-        add_jumps(&mut inc, u.tau0, &jumps);
-        truth = Some(EffectParams::BiasJumps {
-            count,
-            rms_size: jumps_rms(&jumps),
-        });
-    }
+    let (mut inc, truth, jumps) = simulate_channel(
+        &model_toml(u, effect),
+        "<family_gap>",
+        u.tau0,
+        u.t_run,
+        effect,
+        seed,
+    );
     if u.rate_lsb > 0.0 {
         let step = u.rate_lsb * u.tau0;
         for v in inc.iter_mut() {
@@ -980,6 +877,9 @@ fn main() {
             .unwrap_or_else(|| d.to_string())
     };
     let draws: u64 = get("--draws", "20").parse().expect("--draws");
+    // The first draw's index: `--from 10 --draws 10` runs draws 10-19 (the same draws a
+    // `--draws 20` run would give them), so that a long run can be split.
+    let from: u64 = get("--from", "0").parse().expect("--from");
     // Clean draws without their oracle statistics and jump ceiling (null studies of the
     // diagnosis's own statistics, about twice as fast).
     let no_oracle = args.iter().any(|a| a == "--no-oracle");
@@ -1022,7 +922,7 @@ fn main() {
     let csv = get("--csv", "");
     let mut items: Vec<(&'static str, Option<EffectKind>, u64)> = Vec::new();
     for &f in &fams {
-        for i in 0..draws {
+        for i in from..from + draws {
             for &k in &kinds {
                 items.push((f, k, i));
             }

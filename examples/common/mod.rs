@@ -1,12 +1,17 @@
 //! Helpers shared by the diagnosis studies (`examples/blind_gap.rs`, `examples/family_gap.rs`):
-//! parallel map over draws, empirical quantiles, Wilson intervals, log-uniform draws and the
-//! bias jumps the benchmarks add themselves (so that the truth is the realised jumps).
+//! parallel map over draws, empirical quantiles, Wilson intervals, log-uniform draws, the
+//! simulator model lines of a drawn effect and the simulation of a drawn channel with the bias
+//! jumps the benchmarks add themselves (so that the truth is the realised jumps).
 //!
 //! Each example that uses it declares `mod common;`; not every example uses every helper.
 #![allow(dead_code)]
 
+use allanscope::gap::{EffectKind, EffectParams};
+use allanscope::model::terms;
+use allanscope::sim::{SimModel, Simulator};
 use rand::{RngExt, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
+use std::path::Path;
 
 /// `f(item)` for each of `items` on `threads` threads (item `k` on thread `k % threads`), in
 /// the order of `items`.
@@ -131,4 +136,156 @@ pub fn add_jumps(inc: &mut [f64], tau0: f64, jumps: &[(f64, f64)]) {
 /// The rms of the sizes of `jumps`.
 pub fn jumps_rms(jumps: &[(f64, f64)]) -> f64 {
     (jumps.iter().map(|j| j.1 * j.1).sum::<f64>() / jumps.len().max(1) as f64).sqrt()
+}
+
+/// The simulator's model lines (config/models format) of `effect`: none for bias jumps, which
+/// [`simulate_channel`] adds itself, nor for a temperature coefficient (these runs carry no
+/// temperature column).
+pub fn effect_toml(effect: Option<EffectParams>) -> String {
+    match effect {
+        Some(EffectParams::GaussMarkov { sigma, tau_c_s }) => {
+            format!("gauss_markov = {{ sigma = {sigma:e}, tau_c = {tau_c_s:e} }}\n")
+        }
+        Some(EffectParams::Sinusoid {
+            amplitude,
+            frequency_hz,
+        }) => format!(
+            "sinusoid = {{ amplitude = {amplitude:e}, frequency = {frequency_hz:e}, phase = 0.3 }}\n"
+        ),
+        Some(EffectParams::OutputFilter { time_constant_s }) => {
+            format!("output_filter = {{ time_constant = {time_constant_s:e} }}\n")
+        }
+        Some(EffectParams::Warmup {
+            amplitude,
+            time_constant_s,
+        }) => format!("warmup = {{ amplitude = {amplitude:e}, time_constant = {time_constant_s:e} }}\n"),
+        Some(EffectParams::MovingAverage { taps, stages }) => {
+            format!("moving_average = {{ taps = {taps}, stages = {stages} }}\n")
+        }
+        Some(EffectParams::SecondOrderFilter {
+            natural_frequency_hz,
+            damping,
+        }) => format!(
+            "second_order_filter = {{ natural_frequency = {natural_frequency_hz:e}, damping = {damping:e} }}\n"
+        ),
+        Some(EffectParams::ZeroPhaseFilter { time_constant_s }) => {
+            format!("zero_phase_filter = {{ time_constant = {time_constant_s:e} }}\n")
+        }
+        Some(EffectParams::BiasJumps { .. }) | Some(EffectParams::Temperature { .. }) | None => {
+            String::new()
+        }
+    }
+}
+
+/// Simulates channel 0 of the model `toml` (its base terms and `effect_toml(effect)`) for
+/// `t_run` s of `tau0` increments. Bias jumps are added here rather than by the simulator, so
+/// that the truth is the realised jumps: `count` jumps at uniform times (a Poisson process
+/// given its count), Gaussian sizes of rms `rms_size`. Returns the increments, the realised
+/// effect (jumps: the count and the rms of the drawn sizes) and the realised jumps `(time s,
+/// size u/s)`. `origin` names the generated model in an error.
+pub fn simulate_channel(
+    toml: &str,
+    origin: &str,
+    tau0: f64,
+    t_run: f64,
+    effect: Option<EffectParams>,
+    seed: u64,
+) -> (Vec<f64>, Option<EffectParams>, Vec<(f64, f64)>) {
+    let model = SimModel::from_toml_str(toml, Path::new(origin)).expect("generated model");
+    let mut sim = Simulator::new(&model, seed);
+    let mut inc = vec![0.0; (t_run / tau0) as usize];
+    sim.fill_channel(0, &mut inc);
+    let mut truth = effect;
+    let mut jumps = Vec::new();
+    if let Some(EffectParams::BiasJumps { count, rms_size }) = effect {
+        jumps = draw_jumps(count, rms_size, t_run, seed ^ 0x0005_eed1);
+        add_jumps(&mut inc, tau0, &jumps);
+        truth = Some(EffectParams::BiasJumps {
+            count,
+            rms_size: jumps_rms(&jumps),
+        });
+    }
+    (inc, truth, jumps)
+}
+
+/// The parameters of an effect of `kind` whose peak ADEV is `rho` times the base model's
+/// (`base_adev`, u/s at tau s) on a run of `t_run` s at `tau0`, drawn from the benchmarks'
+/// priors (examples/family_gap.rs's module doc; docs/gap.md, "Blind benchmark"): the
+/// Gauss-Markov `tau_c` log-uniform in [20 tau0, T_run / 50], the sinusoid's frequency in
+/// [30 / T_run, 0.1 / tau0], the filters' memory in [1, 10] tau0 (moving average: 2 to
+/// `ma_taps_hi` taps, 1-2 stages), the warm-up's `T` in [60 s, T_run / 5] with its exact AVAR
+/// on the record peaking at `rho`, and 2-8 jumps whose rate-random-walk ADEV at T_run / 10 is
+/// `rho` times the base. `rho` is not used by the filters. Temperature is not drawn (these runs
+/// carry no temperature column; examples/temperature_study.rs has its own study): a zero
+/// coefficient.
+pub fn draw_effect_params(
+    rng: &mut Xoshiro256PlusPlus,
+    kind: EffectKind,
+    rho: f64,
+    tau0: f64,
+    t_run: f64,
+    base_adev: &dyn Fn(f64) -> f64,
+    ma_taps_hi: f64,
+) -> EffectParams {
+    match kind {
+        EffectKind::GaussMarkov => {
+            let tau_c = log_uniform(rng, 20.0 * tau0, t_run / 50.0);
+            // Peak ADEV 0.6174 sigma at tau = 1.893 tau_c (docs/theory.md section 3).
+            EffectParams::GaussMarkov {
+                sigma: rho * base_adev(1.893 * tau_c) / 0.6174,
+                tau_c_s: tau_c,
+            }
+        }
+        EffectKind::Sinusoid => {
+            let f = log_uniform(rng, 30.0 / t_run, 0.1 / tau0);
+            // First maximum of sin^2(x)/x at x = pi 0.371: 0.725 A.
+            EffectParams::Sinusoid {
+                amplitude: rho * base_adev(0.371 / f) / 0.725,
+                frequency_hz: f,
+            }
+        }
+        EffectKind::OutputFilter => EffectParams::OutputFilter {
+            time_constant_s: log_uniform(rng, tau0, 10.0 * tau0),
+        },
+        EffectKind::Warmup => {
+            let tc = log_uniform(rng, 60.0, t_run / 5.0);
+            let n_inc = (t_run / tau0) as u64;
+            // The amplitude for the drawn peak ratio over the dense taus (`warmup_avar` is
+            // exact for the estimator on this record).
+            let peak = allanscope::gap::evidence::dense_ms(4, n_inc / 10)
+                .iter()
+                .map(|&m| {
+                    let tau = m as f64 * tau0;
+                    terms::warmup_avar(1.0, tc, tau0, m, n_inc).sqrt() / base_adev(tau)
+                })
+                .fold(0.0, f64::max);
+            EffectParams::Warmup {
+                amplitude: rho / peak,
+                time_constant_s: tc,
+            }
+        }
+        EffectKind::BiasJumps => {
+            let count = rng.random_range(2..=8u64);
+            let tau = t_run / 10.0;
+            let s = rho * base_adev(tau) / (tau / (3.0 * t_run / count as f64)).sqrt();
+            EffectParams::BiasJumps { count, rms_size: s }
+        }
+        EffectKind::MovingAverage => EffectParams::MovingAverage {
+            taps: log_uniform(rng, 2.0, ma_taps_hi).round() as u32,
+            stages: rng.random_range(1..=2u32),
+        },
+        EffectKind::SecondOrderFilter => EffectParams::SecondOrderFilter {
+            natural_frequency_hz: 1.0
+                / (2.0 * std::f64::consts::PI * log_uniform(rng, tau0, 10.0 * tau0)),
+            damping: log_uniform(rng, 0.2, 2.0),
+        },
+        EffectKind::ZeroPhaseFilter => EffectParams::ZeroPhaseFilter {
+            time_constant_s: log_uniform(rng, tau0, 10.0 * tau0),
+        },
+        EffectKind::Temperature => EffectParams::Temperature {
+            coefficient: 0.0,
+            lo: 0.0,
+            hi: 0.0,
+        },
+    }
 }

@@ -52,7 +52,7 @@ use super::segments::{segment_tests, SegmentTest};
 use super::steps::{detect_steps, JumpFinding};
 use super::temperature::{enter_temperature, TEMPERATURE_Z};
 use super::thresholds::Thresholds;
-use super::warmup::fit_warmup;
+use super::warmup::{fit_warmup, WARMUP_K_DELTA};
 use crate::model::terms;
 
 /// What to diagnose.
@@ -366,7 +366,13 @@ fn diagnose_curve_once(
         time_offsets.push((EffectKind::Temperature, t.curve_offset()));
     }
     if opts.candidates.contains(&EffectKind::Warmup) {
-        let c5: [f64; 5] = std::array::from_fn(|i| cur.coef.get(i).copied().unwrap_or(0.0));
+        let mut c5: [f64; 5] = std::array::from_fn(|i| cur.coef.get(i).copied().unwrap_or(0.0));
+        // The null's random walk at what the curve cannot exclude (docs/gap.md, "The warm-up's
+        // null level"): a K fitted low (often 0) leaves the block means' slow wander out of the
+        // covariance, and the scan over T reads it as a warm-up.
+        if let Some(k_up) = prob.upper_bound(&spec, &cur, 3, WARMUP_K_DELTA) {
+            c5[3] = c5[3].max(k_up);
+        }
         let stat_params: Vec<EffectParams> = effects.iter().map(|e| e.params).collect();
         let warm = fit_warmup(&block_means, block_s, t_run, &c5, &stat_params);
         if let Some(w) = warm.filter(|w| th.warmup_found(w)) {

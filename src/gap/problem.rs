@@ -325,6 +325,62 @@ impl GapProblem {
         })
     }
 
+    /// One-sided upper profile bound on the five-term coefficient `term` (`Q^2 .. R^2`) of the
+    /// fit `fit` of `spec`: the least `k >= fit.coef[term]` at which holding the coefficient at
+    /// `k` or above (a fixed offset `k x_term`, the column itself still free) raises `r' S^-1 r`
+    /// by `delta`; `delta = 1` is the one-sided profile-likelihood bound at about 84% (Wilks;
+    /// e.g. Pawitan, "In All Likelihood", section 9.3). The curve cannot tell the term from any
+    /// value below it. Bisection in `ln k` up to the value that alone reaches the data at the
+    /// longest tau; `None` when no fit can be made.
+    pub fn upper_bound(
+        &self,
+        spec: &ModelSpec,
+        fit: &GlsFit,
+        term: usize,
+        delta: f64,
+    ) -> Option<f64> {
+        let col: Vec<f64> = self.columns(spec).column(term).iter().copied().collect();
+        let c0 = fit.coef.get(term).copied()?.max(0.0);
+        let chi2_at = |k: f64| -> f64 {
+            let mut s = spec.clone();
+            let base = s.offset.take().unwrap_or_else(|| vec![0.0; self.len()]);
+            s.offset = Some(base.iter().zip(&col).map(|(o, x)| o + k * x).collect());
+            self.gls(&s).map_or(f64::INFINITY, |f| f.chi2)
+        };
+        // The largest value: the term alone at the data's level where it is largest.
+        let k_max = self
+            .y
+            .iter()
+            .zip(&col)
+            .filter(|(_, x)| **x > 0.0)
+            .map(|(y, x)| y / x)
+            .fold(f64::INFINITY, f64::min);
+        if !(k_max.is_finite() && k_max > 0.0) {
+            return None;
+        }
+        let target = fit.chi2 + delta;
+        if chi2_at(k_max) < target {
+            return Some(k_max.max(c0));
+        }
+        let mut lo = if c0 > 0.0 { c0 } else { k_max * 1e-9 };
+        if chi2_at(lo) >= target {
+            return Some(c0);
+        }
+        let mut hi = k_max;
+        for _ in 0..30 {
+            let mid = (lo * hi).sqrt();
+            if chi2_at(mid) < target {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+            if hi / lo < 1.01 {
+                break;
+            }
+        }
+        Some(lo.max(c0))
+    }
+
     /// Per-tau `z_j = r_j / sqrt(S_jj)` of a model.
     pub fn z(&self, model: &[f64]) -> Vec<f64> {
         (0..self.len())
