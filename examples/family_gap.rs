@@ -74,7 +74,7 @@
 //! cargo run --release --example family_gap -- [--draws 20] [--seed 1] [--threads 2]
 //!     [--families navfog,tacfog,vog4,memsgyro,ma4,memsacc]
 //!     [--effects none,gauss_markov,sinusoid,output_filter,warmup,bias_jumps] [--hours 1,3]
-//!     [--csv FILE] [--resid FILE] [--no-oracle] [--from 0]
+//!     [--csv FILE] [--resid FILE] [--no-oracle] [--from 0] [--shares 1,1,1,0.5,1]
 //! ```
 //!
 //! `--draws` is per family and effect; `--from N` starts at draw `N` (a split run gives the
@@ -83,8 +83,11 @@
 //! (`oracle::JumpCeiling`), its p-value from 199 draws of the Gaussian null. `--resid FILE`
 //! writes the base fit's standardized residuals per tau of the clean draws. Prints, per family: the false alarms (clean runs whose
 //! verdict is not `consistent`), the confusion matrix (truth against the first effect named),
-//! detection (the true effect named anywhere) against the oracle at 5% and at the family's
-//! measured false-alarm share, the parameter errors, and the count of runs whose final gap is
+//! detection (the true effect named anywhere) against the oracle at 5% and at the share each
+//! test of the diagnosis spends (`--shares`, in percent, per effect in the order
+//! gauss_markov, sinusoid, output_filter, warmup, bias_jumps; without it the family's measured
+//! false-alarm share, floored at 1%): its expected power and, in brackets, the draws its own `z`
+//! passes, the parameter errors, and the count of runs whose final gap is
 //! above the base gap (the bookkeeping rule says none). Shares carry 95% Wilson intervals.
 //! `--csv` writes one row per draw, with the statistics each test of the diagnosis decides on
 //! (the base `G`, each stationary candidate's first-scan score `lr_*` and the gap with it in
@@ -683,7 +686,9 @@ fn fmt_q(v: &[f64]) -> String {
     format!("{:.3} / {:.3}", quantile(v, 0.5), quantile(v, 0.9))
 }
 
-fn report(fam: &str, res: &[&Outcome], kinds: &[Option<EffectKind>]) {
+/// `shares`: the false-alarm share each test of the diagnosis spends, per effect in the order of
+/// `KINDS[1..]` (`--shares`), at which the oracle is read beside the whole 5%.
+fn report(fam: &str, res: &[&Outcome], kinds: &[Option<EffectKind>], shares: Option<[f64; 5]>) {
     let clean: Vec<&&Outcome> = res.iter().filter(|o| o.truth_kind.is_none()).collect();
     let fa = clean
         .iter()
@@ -774,13 +779,18 @@ fn report(fam: &str, res: &[&Outcome], kinds: &[Option<EffectKind>]) {
         println!("| {} | {} | {} |", kind_name(k), r.len(), cells.join(" | "));
     }
     println!(
-        "\n| effect | n | right first | named anywhere | oracle at 5% (expected) | oracle at {:.1}% (expected) | named - oracle(5%) | shape err q50 / q90 | amplitude err q50 / q90 |",
-        100.0 * alpha.max(0.01)
+        "\n| effect | n | right first | named anywhere | oracle at 5%: expected [z passes] | oracle at the test's share: expected [z passes] | named - oracle at that share | shape err q50 / q90 | amplitude err q50 / q90 |"
     );
     println!("|---|---|---|---|---|---|---|---|---|");
-    // The diagnosis's measured share, floored at 1% (0 of a few tens of runs does not say the
-    // share is 0).
-    let za = std_normal_quantile(1.0 - alpha.max(0.01));
+    // Without `--shares`, the diagnosis's measured share in this family, floored at 1% (0 of a
+    // few tens of runs does not say the share is 0).
+    let share_of = |k: EffectKind| {
+        KINDS[1..]
+            .iter()
+            .position(|x| x.1 == Some(k))
+            .and_then(|i| shares.map(|s| s[i]))
+            .unwrap_or(alpha.max(0.01))
+    };
     let z5 = std_normal_quantile(0.95);
     for &k in kinds.iter().filter(|k| k.is_some()) {
         let r: Vec<&&Outcome> = res.iter().filter(|o| o.truth_kind == k).collect();
@@ -817,30 +827,39 @@ fn report(fam: &str, res: &[&Outcome], kinds: &[Option<EffectKind>]) {
                 r.len()
             );
         }
+        let a = k.map_or(0.05, share_of);
+        let za = std_normal_quantile(1.0 - a);
         let deltas: Vec<f64> = r.iter().filter_map(|o| o.oracle.map(|x| x.1)).collect();
+        let zs: Vec<f64> = r.iter().filter_map(|o| o.oracle.map(|x| x.0)).collect();
+        // The oracle's expected power `mean Phi(delta - z_(1-a))` and the draws its own `z`
+        // passes at that share.
         let pow = |zc: f64| {
             deltas.iter().map(|d| std_normal_cdf(d - zc)).sum::<f64>() / deltas.len().max(1) as f64
         };
+        let passes = |zc: f64| zs.iter().filter(|&&z| z > zc).count();
         let (p5, pa) = (pow(z5), pow(za));
         let named = anywhere as f64 / r.len() as f64;
         println!(
-            "| {} | {} | {} | {} | {:.0}% | {:.0}% | {:+.0} | {} | {} |",
+            "| {} | {} | {} | {} | {:.0}% [{}] | {:.1}%: {:.0}% [{}] | {:+.0} | {} | {} |",
             kind_name(k),
             r.len(),
             share(first, r.len()),
             share(anywhere, r.len()),
             100.0 * p5,
+            passes(z5),
+            100.0 * a,
             100.0 * pa,
-            100.0 * (named - p5),
+            passes(za),
+            100.0 * (named - pa),
             fmt_q(&es),
             fmt_q(&ea)
         );
     }
-    report_ceiling(res, alpha);
+    report_ceiling(res, share_of(EffectKind::BiasJumps));
 }
 
 /// The fair jump ceiling's line of the report: jump draws whose ceiling p-value is at most 5%
-/// and at most the family's share (floored at 1%), and the clean runs' share at 5%.
+/// and at most `alpha` (the jump test's share), and the clean runs' share at 5%.
 fn report_ceiling(res: &[&Outcome], alpha: f64) {
     let jp: Vec<f64> = res
         .iter()
@@ -858,7 +877,7 @@ fn report_ceiling(res: &[&Outcome], alpha: f64) {
         return;
     }
     let below = |v: &[f64], a: f64| v.iter().filter(|&&p| p <= a + 1e-12).count();
-    let a = alpha.max(0.01);
+    let a = alpha;
     println!(
         "jump ceiling (count and rms told, times unknown): {} at 5%, {} at {:.1}%; clean runs at 5%: {}",
         share(below(&jp, 0.05), jp.len()),
@@ -920,6 +939,22 @@ fn main() {
         })
         .collect();
     let csv = get("--csv", "");
+    // The share each test of the diagnosis spends, in percent, per effect of `KINDS[1..]`
+    // (docs/gap.md, "Detection against the oracle"); the oracle is also read at it.
+    let shares: Option<[f64; 5]> = match get("--shares", "").as_str() {
+        "" => None,
+        v => {
+            let p: Vec<f64> = v
+                .split(',')
+                .map(|x| x.parse::<f64>().expect("--shares: five percentages") / 100.0)
+                .collect();
+            assert!(
+                p.len() == 5 && p.iter().all(|x| *x > 0.0 && *x < 1.0),
+                "--shares: five percentages in (0, 100), gauss_markov,sinusoid,output_filter,warmup,bias_jumps"
+            );
+            Some([p[0], p[1], p[2], p[3], p[4]])
+        }
+    };
     let mut items: Vec<(&'static str, Option<EffectKind>, u64)> = Vec::new();
     for &f in &fams {
         for i in from..from + draws {
@@ -938,7 +973,7 @@ fn main() {
     );
     for &f in &fams {
         let r: Vec<&Outcome> = res.iter().filter(|o| o.family == f).collect();
-        report(f, &r, &kinds);
+        report(f, &r, &kinds, shares);
     }
     if !csv.is_empty() {
         let mut text = String::from(

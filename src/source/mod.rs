@@ -3,7 +3,8 @@
 //! bounded channel, and stops when its input ends or the shutdown token fires.
 //!
 //! - [`file`]: a capture file or standard input, as fast as possible or paced at the data's
-//!   own rate, with a progress bar when standard error is a terminal.
+//!   own rate, with a progress bar when standard error is a terminal. A file replayed as fast
+//!   as possible (no `--capture`) is read by plain blocking reads on a thread of its own.
 //! - [`serial`]: a serial port, reopened with backoff when it disappears; each outage is
 //!   reported so the decode stage can record it as a gap.
 //! - [`udp`]: a UDP socket (bound to 127.0.0.1 unless told otherwise); each datagram holds
@@ -334,7 +335,20 @@ pub async fn run(spec: SourceSpec, mut ctx: SourceContext) -> Result<()> {
             ctx.progress
                 .input_len
                 .store(len.unwrap_or(0), Ordering::Relaxed);
-            file::read_stream(f, pace, &mut ctx).await
+            if pace == Pace::Max && ctx.capture.is_none() && direct_file_reads() {
+                // As fast as possible: plain blocking reads on a thread of their own.
+                let f = f.into_std().await;
+                let (res, back) = tokio::task::spawn_blocking(move || {
+                    let res = file::read_file(f, &mut ctx);
+                    (res, ctx)
+                })
+                .await
+                .map_err(|_| anyhow::anyhow!("the file reader panicked"))?;
+                ctx = back;
+                res
+            } else {
+                file::read_stream(f, pace, &mut ctx).await
+            }
         }
         SourceSpec::Stdin { pace } => file::read_stream(tokio::io::stdin(), pace, &mut ctx).await,
         #[cfg(feature = "serial")]
@@ -349,6 +363,11 @@ pub async fn run(spec: SourceSpec, mut ctx: SourceContext) -> Result<()> {
         c.finish().await;
     }
     res
+}
+
+/// Measurement knob: `ALLANSCOPE_FILE_READS=tokio` reads replayed files through tokio.
+fn direct_file_reads() -> bool {
+    std::env::var("ALLANSCOPE_FILE_READS").map_or(true, |v| v != "tokio")
 }
 
 /// Backoff between attempts to reopen a serial port: doubling from the first to the last.
