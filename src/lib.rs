@@ -164,9 +164,11 @@
 //!   plot/                  Allan-deviation figures (SVG)
 //!     panel.rs             one panel per unit: curves, heading, legend
 //!     curves.rs            one curve: points, intervals, model, asymptotes, misses
+//!     band.rs              a diagnosis's ensemble band behind the curve
 //!     axes.rs              log-log scale, grid, ticks, slope key
 //!     legend.rs            the legend's lines
 //!     fit_terms.rs         the determined terms of a fit record
+//!     series.rs            the curves a figure draws (plot and report)
 //!     text.rs              the words and numbers of labels
 //!   dynamic.rs             the dynamic Allan view (time x tau)
 //!   report/                the HTML test report: the page skeleton

@@ -6,7 +6,7 @@ use anyhow::Result;
 use super::{read_json_lines, usage, PlotArgs};
 use allanscope::sink::dynamic::{render_dynamic_svg, stack};
 use allanscope::sink::page_file::write_page;
-use allanscope::sink::plot::{default_title, render_svg, Series};
+use allanscope::sink::plot::{default_title, figure_series, final_curves, render_svg};
 use allanscope::sink::results::{ResultFile, Results};
 
 pub fn run(a: &PlotArgs) -> Result<()> {
@@ -26,12 +26,9 @@ pub fn run(a: &PlotArgs) -> Result<()> {
             .as_ref()
             .is_none_or(|c| c.iter().any(|x| x == ch))
     };
-    let finals: Vec<_> = res
-        .curves
-        .iter()
-        .filter(|c| c.rec.r#final && c.rec.stat.name() == a.stat && wanted(&c.rec.channel))
-        .collect();
-    if finals.is_empty() {
+    let finals = final_curves(&res, &a.stat, &wanted);
+    let series = figure_series(&res, &finals, &a.stat, &wanted, !a.no_model);
+    if series.is_empty() {
         return Err(usage(format!(
             "plot: no final `{}` curve records in the input{}",
             a.stat,
@@ -42,24 +39,6 @@ pub fn run(a: &PlotArgs) -> Result<()> {
             }
         )));
     }
-    let several = res.several_runs();
-    let series: Vec<Series> = finals
-        .iter()
-        .map(|c| Series {
-            curve: &c.rec,
-            run_label: if several {
-                c.label.clone()
-            } else {
-                String::new()
-            },
-            fit: if a.no_model { None } else { res.fit_of(c) },
-            diagnosis: if a.no_model {
-                None
-            } else {
-                res.diagnosis_of(c)
-            },
-        })
-        .collect();
     let names: Vec<String> = files.iter().map(|f| f.name.clone()).collect();
     let title = a
         .title

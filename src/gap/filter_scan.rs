@@ -5,7 +5,7 @@
 //! then polished (neighbouring whole taps; golden sections in `ln f_n` and `ln zeta` in turn).
 
 use super::effects::{EffectKind, EffectParams};
-use super::problem::{GapProblem, GlsFit, ModelSpec};
+use super::problem::{golden_section, GapProblem, GlsFit, ModelSpec};
 use crate::model::lowpass::LowPass;
 use std::f64::consts::PI;
 
@@ -147,30 +147,7 @@ fn scan_second_order(
 }
 
 /// The minimiser of `chi2(f(x))` on `[lo, hi]` by golden section.
-fn golden(f: impl Fn(f64) -> Option<GlsFit>, mut lo: f64, mut hi: f64) -> f64 {
-    let g = 0.618_033_988_749_895;
+fn golden(f: impl Fn(f64) -> Option<GlsFit>, lo: f64, hi: f64) -> f64 {
     let c = |x: f64| f(x).map_or(f64::INFINITY, |r| r.chi2);
-    let mut x1 = hi - g * (hi - lo);
-    let mut x2 = lo + g * (hi - lo);
-    let (mut f1, mut f2) = (c(x1), c(x2));
-    for _ in 0..GOLDEN_STEPS {
-        if f1 < f2 {
-            hi = x2;
-            x2 = x1;
-            f2 = f1;
-            x1 = hi - g * (hi - lo);
-            f1 = c(x1);
-        } else {
-            lo = x1;
-            x1 = x2;
-            f1 = f2;
-            x2 = lo + g * (hi - lo);
-            f2 = c(x2);
-        }
-    }
-    if f1 < f2 {
-        x1
-    } else {
-        x2
-    }
+    golden_section(c, lo, hi, GOLDEN_STEPS).best()
 }

@@ -330,8 +330,9 @@ impl GapProblem {
     /// `k` or above (a fixed offset `k x_term`, the column itself still free) raises `r' S^-1 r`
     /// by `delta`; `delta = 1` is the one-sided profile-likelihood bound at about 84% (Wilks;
     /// e.g. Pawitan, "In All Likelihood", section 9.3). The curve cannot tell the term from any
-    /// value below it. Bisection in `ln k` up to the value that alone reaches the data at the
-    /// longest tau; `None` when no fit can be made.
+    /// value below it. Bisection in `ln k` up to the value whose term alone reaches the data at
+    /// some tau (the bound's ceiling, often reached on runs of an hour or two); `None` when no
+    /// fit can be made.
     pub fn upper_bound(
         &self,
         spec: &ModelSpec,
@@ -541,31 +542,72 @@ impl GapProblem {
             }
         }
         let (bi, _) = best?;
-        let mut lo = pts[bi.saturating_sub(1)].ln();
-        let mut hi = pts[(bi + 1).min(pts.len() - 1)].ln();
-        let g = 0.618_033_988_749_895;
+        let lo = pts[bi.saturating_sub(1)].ln();
+        let hi = pts[(bi + 1).min(pts.len() - 1)].ln();
         let f = |x: f64| eval(x.exp()).map_or(f64::INFINITY, |f| f.chi2);
-        let mut x1 = hi - g * (hi - lo);
-        let mut x2 = lo + g * (hi - lo);
-        let (mut f1, mut f2) = (f(x1), f(x2));
-        for _ in 0..24 {
-            if f1 < f2 {
-                hi = x2;
-                x2 = x1;
-                f2 = f1;
-                x1 = hi - g * (hi - lo);
-                f1 = f(x1);
-            } else {
-                lo = x1;
-                x1 = x2;
-                f1 = f2;
-                x2 = lo + g * (hi - lo);
-                f2 = f(x2);
-            }
-        }
-        let cand = [pts[bi].ln(), 0.5 * (lo + hi)];
+        let gb = golden_section(f, lo, hi, 24);
+        let cand = [pts[bi].ln(), 0.5 * (gb.lo + gb.hi)];
         cand.iter()
             .filter_map(|&x| eval(x.exp()).map(|fit| (x.exp(), fit)))
             .min_by(|a, b| a.1.chi2.total_cmp(&b.1.chi2))
+    }
+}
+
+/// The last state of a golden-section search for a minimum of `f` on `[lo, hi]`: the bracket
+/// and its two inner points with their values (Press et al., Numerical Recipes, section 10.2).
+pub(crate) struct GoldenBracket {
+    pub lo: f64,
+    pub hi: f64,
+    pub x1: f64,
+    pub f1: f64,
+    pub x2: f64,
+    pub f2: f64,
+}
+
+impl GoldenBracket {
+    /// The inner point with the lower value.
+    pub fn best(&self) -> f64 {
+        if self.f1 < self.f2 {
+            self.x1
+        } else {
+            self.x2
+        }
+    }
+}
+
+/// `steps` golden-section reductions of `[lo, hi]` toward a minimum of `f` (the curve scans'
+/// polish, [`GapProblem::scan`] and [`super::filter_scan`]).
+pub(crate) fn golden_section(
+    f: impl Fn(f64) -> f64,
+    mut lo: f64,
+    mut hi: f64,
+    steps: usize,
+) -> GoldenBracket {
+    let g = 0.618_033_988_749_895;
+    let mut x1 = hi - g * (hi - lo);
+    let mut x2 = lo + g * (hi - lo);
+    let (mut f1, mut f2) = (f(x1), f(x2));
+    for _ in 0..steps {
+        if f1 < f2 {
+            hi = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = hi - g * (hi - lo);
+            f1 = f(x1);
+        } else {
+            lo = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = lo + g * (hi - lo);
+            f2 = f(x2);
+        }
+    }
+    GoldenBracket {
+        lo,
+        hi,
+        x1,
+        f1,
+        x2,
+        f2,
     }
 }

@@ -3,7 +3,8 @@
 //! bounded channel, and stops when its input ends or the shutdown token fires.
 //!
 //! - [`file`]: a capture file or standard input, as fast as possible or paced at the data's
-//!   own rate, with a progress bar when standard error is a terminal.
+//!   own rate, with a progress bar when standard error is a terminal. A file replayed as fast
+//!   as possible (no `--capture`) is read by plain blocking reads on a thread of its own.
 //! - [`serial`]: a serial port, reopened with backoff when it disappears; each outage is
 //!   reported so the decode stage can record it as a gap.
 //! - [`udp`]: a UDP socket (bound to 127.0.0.1 unless told otherwise); each datagram holds

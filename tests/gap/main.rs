@@ -13,3 +13,4 @@ mod quantization;
 mod real_slice;
 mod reference;
 mod temperature;
+mod warmup_null;

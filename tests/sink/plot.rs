@@ -8,9 +8,11 @@ use allanscope::gap::DiagnosisRecord;
 use allanscope::model::terms::avar;
 use allanscope::model::units::IncrementUnit;
 use allanscope::sink::dynamic::windows;
-use allanscope::sink::plot::{render_svg, Series};
+use allanscope::sink::plot::{figure_series, final_curves, render_svg, Series};
 use allanscope::sink::records::{CoefRecord, CoefValue, CurveRecord, DatasheetRecord, FitRecord};
+use allanscope::sink::results::{ResultFile, Results};
 use serde_json::json;
+use std::borrow::Cow;
 
 /// Pixel positions are written with one decimal: half a tenth of rounding, plus float noise.
 const PX_TOL: f64 = 0.06;
@@ -139,19 +141,19 @@ fn gyros_and_accelerometers_get_their_own_panels_with_the_right_numbers() {
     // Interleaved on purpose: the panels must still separate the units.
     let series = vec![
         Series {
-            curve: &g1a,
+            curve: Cow::Borrowed(&g1a),
             run_label: "run1.jsonl".into(),
             fit: Some(&fa),
             diagnosis: None,
         },
         Series {
-            curve: &a1,
+            curve: Cow::Borrowed(&a1),
             run_label: "run1.jsonl".into(),
             fit: Some(&fc),
             diagnosis: None,
         },
         Series {
-            curve: &g1b,
+            curve: Cow::Borrowed(&g1b),
             run_label: "run2.jsonl".into(),
             fit: Some(&fb),
             diagnosis: None,
@@ -314,7 +316,7 @@ fn the_diagnosis_is_shaded_and_the_model_with_effects_drawn() {
     .unwrap();
     let svg = render_svg(
         vec![Series {
-            curve: &c,
+            curve: Cow::Borrowed(&c),
             run_label: String::new(),
             fit: Some(&f),
             diagnosis: Some(&d),
@@ -366,4 +368,120 @@ fn dynamic_windows_are_the_differences_of_the_cumulative_sums() {
     // Second tau: 50 differences of mean square 9, then S = 150 - 450 < 0: no value.
     assert!((w[0].sigma[1].unwrap() - 3.0).abs() < 1e-12);
     assert_eq!(w[1].sigma[1], None);
+}
+
+/// A `diagnose --ensemble 20` record of g4 (what `diagnose` writes: no curve record) at the 12
+/// octave taus of `model_curve`: measured = the model G1, base band around a curve 20% lower
+/// (9 of the 12 taus outside), twin band +-8% around the model (1 outside); with
+/// `ensemble: false`, the same record without its band.
+pub fn ensemble_diagnosis(ensemble: bool) -> serde_json::Value {
+    let c = model_curve("g4", "arcsec", G1, 12);
+    let base: Vec<f64> = c.sigma.iter().map(|s| 0.8 * s).collect();
+    let mut d = json!({
+        "type": "diagnosis", "channel": "g4", "gap_before": 21.5, "gap_after": 1.1,
+        "verdict": "explained", "regions": [],
+        "effects": [{"kind": "gauss_markov", "params": {"sigma": 0.6, "tau_c": 1.5}, "gap_after": 1.1}],
+        "final": true, "t_data": 3600.0, "unit": "arcsec",
+        "model_tau": c.tau, "model_base": base, "model_effects": c.sigma,
+    });
+    if ensemble {
+        d["ensemble"] = json!({
+            "runs": 20, "measured": c.sigma,
+            "base_lo": base.iter().map(|s| 0.95 * s).collect::<Vec<_>>(),
+            "base_hi": base.iter().enumerate().map(|(i, s)| if i < 3 { 1.3 * s } else { 1.05 * s }).collect::<Vec<_>>(),
+            "twin_lo": c.sigma.iter().map(|s| 0.92 * s).collect::<Vec<_>>(),
+            "twin_hi": c.sigma.iter().map(|s| 1.08 * s).collect::<Vec<_>>(),
+            "outside_base": 0.75, "outside_twin": 1.0 / 12.0,
+        });
+    }
+    d
+}
+
+/// The figure `plot` draws from result files (the library's choice of series).
+fn figure_of(records: Vec<serde_json::Value>) -> String {
+    let files = vec![ResultFile {
+        name: "diag.jsonl".into(),
+        records,
+    }];
+    let res = Results::from_files(&files);
+    let all = |_: &str| true;
+    let finals = final_curves(&res, "avar", &all);
+    render_svg(figure_series(&res, &finals, "avar", &all, true), "t")
+}
+
+/// The two ensemble bands of a diagnosis (docs/gap.md, "The ensemble band") are drawn at the
+/// record's numbers: each band's polygon runs along its upper edge at the record's taus and
+/// back along its lower edge, at the pixels the panel's log-log mapping (read from the tick
+/// labels) gives; the measured curve the band carries is the curve drawn; the legend says how
+/// many taus lie outside each. A record without `ensemble` draws no band.
+#[test]
+fn the_ensemble_bands_are_drawn_at_the_records_numbers() {
+    let rec = ensemble_diagnosis(true);
+    let svg = figure_of(vec![rec.clone()]);
+    let xm = mapping(&elements(&svg, "text", "xtick"), "x");
+    let ym = mapping(&elements(&svg, "text", "ytick"), "y");
+    let at = |t: f64, v: f64| (xm.0 + xm.1 * t.log10(), ym.0 + ym.1 * v.log10());
+    let num = |k: &str| -> Vec<f64> {
+        rec["ensemble"][k]
+            .as_array()
+            .or_else(|| rec[k].as_array())
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect()
+    };
+    let tau = num("model_tau");
+    let close = |got: &[(f64, f64)], want: &[(f64, f64)], what: &str| {
+        assert_eq!(got.len(), want.len(), "{what}");
+        for (k, (g, w)) in got.iter().zip(want).enumerate() {
+            assert!(
+                (g.0 - w.0).abs() < 2.0 * PX_TOL && (g.1 - w.1).abs() < 2.0 * PX_TOL,
+                "{what} point {k}: {g:?} vs {w:?}"
+            );
+        }
+    };
+    for band in ["base", "twin"] {
+        let polys = elements(&svg, "polygon", &format!("band-{band}"));
+        assert_eq!(polys.len(), 1, "{band}");
+        let (lo, hi) = (num(&format!("{band}_lo")), num(&format!("{band}_hi")));
+        let mut want: Vec<(f64, f64)> = (0..tau.len()).map(|i| at(tau[i], hi[i])).collect();
+        want.extend((0..tau.len()).rev().map(|i| at(tau[i], lo[i])));
+        close(&points(polys[0].0), &want, band);
+    }
+    let measured = num("measured");
+    let curve = elements(&svg, "polyline", "curve");
+    assert_eq!(curve.len(), 1);
+    let want: Vec<(f64, f64)> = (0..tau.len()).map(|i| at(tau[i], measured[i])).collect();
+    close(&points(curve[0].0), &want, "measured curve");
+    // Behind the curve: both bands come before it.
+    let (b, t, c) = (
+        svg.find("class=\"band-base\"").unwrap(),
+        svg.find("class=\"band-twin\"").unwrap(),
+        svg.find("class=\"curve\"").unwrap(),
+    );
+    assert!(b < t && t < c);
+    assert!(svg.contains("measured outside at 9 of 12 taus (75%)"));
+    assert!(svg.contains("measured outside at 1 of 12 taus (8%)"));
+    assert!(svg.contains("twin (+ Gauss-Markov): 2.5\u{2013}97.5% of 20 runs"));
+    // No intervals on a curve made from the band.
+    assert!(!svg.contains("95% intervals"));
+
+    // Without `ensemble`: a diagnosis alone has no curve to draw; beside a curve record it
+    // draws no band, and the curve keeps its intervals.
+    let bare = ensemble_diagnosis(false);
+    let files = vec![ResultFile {
+        name: "d.jsonl".into(),
+        records: vec![bare.clone()],
+    }];
+    let res = Results::from_files(&files);
+    let all = |_: &str| true;
+    assert!(figure_series(&res, &[], "avar", &all, true).is_empty());
+    let c = serde_json::to_value(model_curve("g4", "arcsec", G1, 12)).unwrap();
+    let plain = figure_of(vec![c.clone(), bare]);
+    assert!(!plain.contains("band-"), "a band without an ensemble");
+    assert!(plain.contains("95% intervals"));
+    // With one, beside the curve record: the bands behind that curve, no second curve.
+    let banded = figure_of(vec![c, rec]);
+    assert_eq!(elements(&banded, "polygon", "band-twin").len(), 1);
+    assert_eq!(elements(&banded, "polyline", "curve").len(), 1);
 }

@@ -404,3 +404,34 @@ fn the_runs_table_shows_the_time_column_and_diagnose_output_is_not_called_cut_sh
     assert!(html.contains("Diagnosis records only"), "{html}");
     assert!(html.contains("<table class=\"diagnosis\">"));
 }
+
+/// `diagnose --ensemble` output reported: the figure carries both bands, and the words say
+/// how far the five terms alone miss and how far the twin matches, from the record's shares
+/// (0.75 and 1/12 of 12 taus), with the rate a run of the model itself would show by chance
+/// with 20 runs (2 (0.475 + 1) / 21 = 14%). The same record without `ensemble` gives neither.
+#[test]
+fn the_ensemble_band_is_drawn_and_said_in_words() {
+    let page = |rec: Value| {
+        render_html(
+            &[ResultFile {
+                name: "diag.jsonl".into(),
+                records: vec![rec],
+            }],
+            "t",
+            "now",
+        )
+    };
+    let html = page(crate::plot::ensemble_diagnosis(true));
+    assert!(html.contains("class=\"band-base\""));
+    assert!(html.contains("class=\"band-twin\""));
+    assert!(html.contains(
+        "<b>g4</b>: the measured curve is outside the base band at 75% of taus (9 of 12); \
+         outside the twin's at 8% (1 of 12). Bands of 20 simulated runs each (a run of the \
+         model itself would be outside at about 14% by chance); the twin is the five terms \
+         with Gauss-Markov."
+    ));
+    let bare = page(crate::plot::ensemble_diagnosis(false));
+    assert!(!bare.contains("band-"));
+    assert!(!bare.contains("ensemble band"));
+    assert!(!bare.contains("<h2>Allan deviation</h2>"));
+}

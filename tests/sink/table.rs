@@ -514,3 +514,29 @@ fn log_lines_are_written_above_the_status_line_never_through_it() {
     assert_eq!(text(&mut out), "INFO done\n");
     assert!(area.is_suspended());
 }
+
+/// `diagnose --ensemble 20` on a terminal: the diagnosis line ends with how far the measured
+/// curve lies outside each band, from the record's shares (0.75 and 1/12 of 12 taus); the same
+/// record without `ensemble` says nothing of a band.
+#[test]
+fn the_diagnose_table_says_how_far_the_twin_matches() {
+    let table = |rec: serde_json::Value| {
+        let out = Shared::default();
+        let mut w = TableWriter::new(out.clone(), TableStyle::default(), None);
+        writeln!(w, "{rec}").unwrap();
+        drop(w);
+        out.text()
+    };
+    let t = table(crate::plot::ensemble_diagnosis(true));
+    let g = row(&t, "g4 [arcsec]  diagnosis:");
+    assert!(
+        g.ends_with(
+            "(gap 21.5 -> 1.10); against 20 simulated runs: outside the base band at 75% of \
+             taus (9 of 12); outside the twin's at 8% (1 of 12)"
+        ),
+        "{g}"
+    );
+    let bare = table(crate::plot::ensemble_diagnosis(false));
+    assert!(!bare.contains("simulated runs"), "{bare}");
+    assert!(row(&bare, "g4 [arcsec]  diagnosis:").ends_with("(gap 21.5 -> 1.10)"));
+}

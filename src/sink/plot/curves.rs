@@ -108,7 +108,7 @@ pub(super) fn draw_series(
     labelled: &mut [bool; 5],
 ) {
     let col = COLOURS[i % COLOURS.len()];
-    let c = s.curve;
+    let c = &*s.curve;
     let _ = writeln!(
         svg,
         r#"<polyline class="curve" data-channel="{}" data-run="{}" points="{}" fill="none" stroke="{col}" stroke-width="1.6"/>"#,

@@ -1,8 +1,10 @@
 //! The legend's lines: a curve's name with its colour and marker, text and small text lines, the
-//! model's and the effects' line styles, the shading of misses, and gaps between curves.
+//! model's and the effects' line styles, the shading of misses, the ensemble bands, and gaps
+//! between curves.
 
 use std::fmt::Write;
 
+use super::band::{band_style, BandKind};
 use super::curves::marker;
 use super::text::escape;
 use super::COLOURS;
@@ -18,6 +20,9 @@ pub(super) enum LegendLine {
     Small(String),
     Style(usize, Dash, String),
     Shade(usize, String),
+    /// An ensemble band: the curve's index, which band, the words, and the id of the panel's
+    /// hatching pattern.
+    Band(usize, BandKind, String, String),
     Gap,
 }
 
@@ -25,7 +30,10 @@ impl LegendLine {
     pub(super) fn height(&self) -> f64 {
         match self {
             LegendLine::Curve(..) => 19.0,
-            LegendLine::Text(_) | LegendLine::Style(..) | LegendLine::Shade(..) => 15.0,
+            LegendLine::Text(_)
+            | LegendLine::Style(..)
+            | LegendLine::Shade(..)
+            | LegendLine::Band(..) => 15.0,
             LegendLine::Small(_) => 13.0,
             LegendLine::Gap => 8.0,
         }
@@ -81,19 +89,33 @@ impl LegendLine {
             }
             LegendLine::Shade(i, t) => {
                 let col = COLOURS[i % COLOURS.len()];
-                let _ = writeln!(
-                    svg,
-                    r#"<rect x="{x:.1}" y="{:.1}" width="26" height="11" fill="{col}" fill-opacity="0.13" stroke="{col}" stroke-width="0.5"/>"#,
-                    y - 5.5
+                let look = format!(
+                    r#"fill="{col}" fill-opacity="0.13" stroke="{col}" stroke-width="0.5""#
                 );
-                writeln!(
-                    svg,
-                    r#"<text class="legend" x="{tx:.1}" y="{:.1}" font-size="11.5">{}</text>"#,
-                    y + 4.0,
-                    escape(t)
-                )
+                swatch(svg, x, y, &look, t)
+            }
+            LegendLine::Band(i, kind, t, hatch) => {
+                let (fill, edge, dash) = band_style(*kind, COLOURS[i % COLOURS.len()], hatch);
+                let look = format!(r#"{fill} stroke="{edge}" stroke-width="0.9"{dash}"#);
+                swatch(svg, x, y, &look, t)
             }
             LegendLine::Gap => Ok(()),
         };
     }
+}
+
+/// A legend line of a filled swatch (its attributes `look`) and its words `t`.
+fn swatch(svg: &mut String, x: f64, y: f64, look: &str, t: &str) -> std::fmt::Result {
+    let _ = writeln!(
+        svg,
+        r#"<rect x="{x:.1}" y="{:.1}" width="26" height="11" {look}/>"#,
+        y - 5.5
+    );
+    writeln!(
+        svg,
+        r#"<text class="legend" x="{:.1}" y="{:.1}" font-size="11.5">{}</text>"#,
+        x + 34.0,
+        y + 4.0,
+        escape(t)
+    )
 }

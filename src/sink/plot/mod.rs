@@ -12,30 +12,41 @@
 //!
 //! This file lays out the figure (title, one panel per unit); `panel` draws one panel and its
 //! legend lines, `curves` what belongs to one curve (markers, intervals, model lines, asymptotes,
-//! the shaded misses of a diagnosis), `axes` the log-log scale, grid, ticks and slope key,
-//! `legend` the legend's lines, `fit_terms` the determined terms read from a fit record and
-//! `text` the words and numbers of labels (shared with the report and the dynamic plot).
+//! the shaded misses of a diagnosis), `band` the ensemble band of a diagnosis behind the
+//! curve, `axes` the log-log scale, grid, ticks and slope key, `legend` the legend's lines,
+//! `fit_terms` the determined terms read from a fit record, `series` the curves a figure draws
+//! from result files (shared by `plot` and the report) and `text` the words and numbers of
+//! labels (shared with the report and the dynamic plot).
 
+use std::borrow::Cow;
 use std::fmt::Write;
 
 use crate::gap::DiagnosisRecord;
 use crate::sink::records::{CurveRecord, FitRecord};
 
 mod axes;
+mod band;
 mod curves;
 mod fit_terms;
 mod legend;
 mod panel;
+mod series;
 mod text;
 
 use panel::render_panel;
 
+pub use band::{band_sentence, chance_share, outside_count, percent};
 pub use fit_terms::{determined_terms, TermValue};
-pub use text::{coef_units, effect_name, escape, ratio_text, sig4, sigma_unit, tick, unit_kind};
+pub use series::{figure_series, final_curves, measured_curve};
+pub use text::{
+    coef_units, effect_name, effect_names, escape, ratio_text, sig4, sigma_unit, tick, unit_kind,
+};
 
-/// One curve to draw: its record, its run's label, and its fit and diagnosis when known.
+/// One curve to draw: its record, its run's label, and its fit and diagnosis when known. The
+/// record is borrowed from the results, or owned when made from a diagnosis's ensemble band
+/// ([`measured_curve`]).
 pub struct Series<'a> {
-    pub curve: &'a CurveRecord,
+    pub curve: Cow<'a, CurveRecord>,
     /// The run's name (a file name) when several runs are overlaid, else empty.
     pub run_label: String,
     pub fit: Option<&'a FitRecord>,

@@ -2,17 +2,27 @@
 //! model, diagnosis), heading, axes, labels, clipping and slope key; the panel grows to hold a
 //! long legend.
 
+use std::borrow::Cow;
 use std::fmt::Write;
 
 use super::axes::{draw_grid, draw_slope_key, Axes};
+use super::band::{
+    band_values, draw_band, ensemble_of, hatch_pattern, outside_count, percent, BandKind,
+};
 use super::curves::{draw_regions, draw_series};
 use super::fit_terms::determined_terms;
 use super::legend::{Dash, LegendLine};
 use super::text::{
-    capitalise, coef_units, effect_name, escape, sig4, sigma_unit, unit_kind, verdict_word,
+    capitalise, coef_units, effect_names, escape, sig4, sigma_unit, unit_kind, verdict_word,
 };
 use super::{Series, BOTTOM, COLOURS, LEFT, LEGEND_W, PANEL_H, TOP, W};
+use crate::gap::record::EnsembleRecord;
 use crate::model::terms::TERM_NAMES;
+
+/// The ensemble band of a series' diagnosis, drawn on an AVAR panel only.
+fn band_of<'a>(s: &Series<'a>, stat: &str) -> Option<&'a EnsembleRecord> {
+    s.diagnosis.filter(|_| stat == "avar").and_then(ensemble_of)
+}
 
 /// Draws one panel at vertical offset `y_off`; returns its height.
 pub(super) fn render_panel(svg: &mut String, series: &[Series], y_off: f64) -> f64 {
@@ -34,6 +44,10 @@ pub(super) fn render_panel(svg: &mut String, series: &[Series], y_off: f64) -> f
                 .zip(&s.curve.sigma)
                 .filter_map(|(h, y)| h.map(|h| h.min(3.0 * y))),
         );
+        // An ensemble band is drawn whole.
+        if let Some(d) = s.diagnosis.filter(|_| stat == "avar") {
+            ys.extend(band_values(d));
+        }
     }
     let pos = |v: Vec<f64>| -> Vec<f64> {
         v.into_iter()
@@ -44,6 +58,8 @@ pub(super) fn render_panel(svg: &mut String, series: &[Series], y_off: f64) -> f
     // Legend lines first: the panel grows to hold them.
     let mut legend: Vec<LegendLine> = Vec::new();
     let several_runs = series.iter().any(|s| !s.run_label.is_empty());
+    // The hatching of the base bands, one pattern per panel.
+    let hatch = format!("hatch{}", y_off as i64);
     // More than four curves: the legend names them only (their terms are in the report's
     // tables), so it stays beside the plot.
     let compact = series.len() > 4;
@@ -85,15 +101,23 @@ pub(super) fn render_panel(svg: &mut String, series: &[Series], y_off: f64) -> f
             .diagnosis
             .filter(|d| !d.model_effects.is_empty() && !d.effects.is_empty())
         {
-            let names: Vec<&str> = d.effects.iter().map(|e| e.effect.kind_name()).collect();
-            let names: Vec<&str> = names.iter().map(|k| effect_name(k)).collect();
+            let names = effect_names(d);
             legend.push(LegendLine::Style(
                 i,
                 Dash::Effects,
                 format!("model + {} (gap {:.2})", names.join(" + "), d.gap_after),
             ));
         }
-        if let Some(d) = s.diagnosis.filter(|d| !d.regions.is_empty()) {
+        // With an ensemble band the base band shows where the five terms miss; the shading
+        // of the misses (of the same colour as the twin's band) is left out.
+        if let (Some(d), Some(_)) = (s.diagnosis, band_of(s, stat)) {
+            legend.push(LegendLine::Text(format!(
+                "diagnosis: gap {:.2} \u{2192} {:.2}, {}",
+                d.gap_before,
+                d.gap_after,
+                verdict_word(d)
+            )));
+        } else if let Some(d) = s.diagnosis.filter(|d| !d.regions.is_empty()) {
             legend.push(LegendLine::Shade(
                 i,
                 format!(
@@ -102,6 +126,35 @@ pub(super) fn render_panel(svg: &mut String, series: &[Series], y_off: f64) -> f
                     verdict_word(d)
                 ),
             ));
+        }
+        if let (Some(e), Some(d)) = (band_of(s, stat), s.diagnosis) {
+            let n = d.model_tau.len();
+            let names = effect_names(d);
+            let twin = if names.is_empty() {
+                "twin (no effect kept)".to_string()
+            } else {
+                format!("twin (+ {})", names.join(" + "))
+            };
+            for (kind, what, share) in [
+                (
+                    BandKind::Base,
+                    "five terms alone".to_string(),
+                    e.outside_base,
+                ),
+                (BandKind::Twin, twin, e.outside_twin),
+            ] {
+                legend.push(LegendLine::Band(
+                    i,
+                    kind,
+                    format!("{what}: 2.5\u{2013}97.5% of {} runs", e.runs),
+                    hatch.clone(),
+                ));
+                legend.push(LegendLine::Small(format!(
+                    "    measured outside at {} of {n} taus ({})",
+                    outside_count(share, n),
+                    percent(share)
+                )));
+            }
         }
         legend.push(LegendLine::Gap);
     }
@@ -121,6 +174,20 @@ pub(super) fn render_panel(svg: &mut String, series: &[Series], y_off: f64) -> f
                 6,
                 Dash::Effects,
                 "model with the diagnosed effects".into(),
+            ));
+        }
+        if let Some(i) = series.iter().position(|s| band_of(s, stat).is_some()) {
+            legend.push(LegendLine::Band(
+                i,
+                BandKind::Base,
+                "simulated five terms alone, 2.5\u{2013}97.5%".into(),
+                hatch.clone(),
+            ));
+            legend.push(LegendLine::Band(
+                i,
+                BandKind::Twin,
+                "simulated twin (with effects), 2.5\u{2013}97.5%".into(),
+                hatch.clone(),
             ));
         }
     }
@@ -178,8 +245,20 @@ pub(super) fn render_panel(svg: &mut String, series: &[Series], y_off: f64) -> f
     draw_grid(svg, &ax);
     // Shaded regions of the diagnoses, under everything else.
     for (i, s) in series.iter().enumerate() {
-        if let Some(d) = s.diagnosis {
+        if let Some(d) = s.diagnosis.filter(|_| band_of(s, stat).is_none()) {
             draw_regions(svg, &ax, d, COLOURS[i % COLOURS.len()], &clip);
+        }
+    }
+    // The ensemble bands, base under twin, behind the curves.
+    if series.iter().any(|s| band_of(s, stat).is_some()) {
+        hatch_pattern(svg, &hatch);
+        for kind in [BandKind::Base, BandKind::Twin] {
+            for (i, s) in series.iter().enumerate() {
+                if let (Some(d), true) = (s.diagnosis, band_of(s, stat).is_some()) {
+                    let col = COLOURS[i % COLOURS.len()];
+                    draw_band(svg, &ax, d, kind, &s.curve.channel, col, &hatch, &clip);
+                }
+            }
         }
     }
     let _ = writeln!(
@@ -188,9 +267,15 @@ pub(super) fn render_panel(svg: &mut String, series: &[Series], y_off: f64) -> f
         LEFT + pw / 2.0,
         top + ph + 44.0
     );
+    // Curves made from an ensemble band (owned, not read) have no intervals.
+    let intervals = if series.iter().any(|s| matches!(s.curve, Cow::Borrowed(_))) {
+        ", 95% intervals"
+    } else {
+        ""
+    };
     let _ = writeln!(
         svg,
-        r#"<text class="ylabel" transform="translate(22,{}) rotate(-90)" text-anchor="middle">{dev} &#963;(&#964;) ({}), 95% intervals</text>"#,
+        r#"<text class="ylabel" transform="translate(22,{}) rotate(-90)" text-anchor="middle">{dev} &#963;(&#964;) ({}){intervals}</text>"#,
         top + ph / 2.0,
         escape(&sigma_unit(&unit))
     );

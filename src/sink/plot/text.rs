@@ -68,6 +68,14 @@ pub fn unit_kind(u: &str) -> &'static str {
         _ => "channels",
     }
 }
+/// The kept effects of a diagnosis, in the order added, as a person names them.
+pub fn effect_names(d: &DiagnosisRecord) -> Vec<&str> {
+    d.effects
+        .iter()
+        .map(|e| effect_name(e.effect.kind_name()))
+        .collect()
+}
+
 /// An effect kind of the diagnosis record, as a person names it.
 pub fn effect_name(kind: &str) -> &str {
     match kind {

@@ -37,6 +37,7 @@ pub(super) fn diagnosis(h: &mut String, res: &Results) {
             .unwrap_or_else(|| "u".to_string())
     };
     let mut interim: Vec<&Labelled<DiagnosisRecord>> = Vec::new();
+    let mut bands: Vec<String> = Vec::new();
     for (file, run, ch) in &keys {
         let mine: Vec<&Labelled<DiagnosisRecord>> = res
             .diagnoses
@@ -59,6 +60,13 @@ pub(super) fn diagnosis(h: &mut String, res: &Results) {
         }));
         let d = &last.rec;
         let unit = unit_of(last);
+        bands.extend(band_words(d).map(|w| {
+            if several {
+                format!("<b>{}</b> ({}): {w}", esc(ch), esc(&last.label))
+            } else {
+                format!("<b>{}</b>: {w}", esc(ch))
+            }
+        }));
         let effects: Vec<String> = d
             .effects
             .iter()
@@ -130,7 +138,33 @@ pub(super) fn diagnosis(h: &mut String, res: &Results) {
         );
     }
     h.push_str("</table>\n");
+    if !bands.is_empty() {
+        h.push_str("<h3>How far the twin matches the unit (ensemble band)</h3>\n<p>The fitted unit simulated as long as the input, many times: its five terms alone (the base band, grey hatching in the figure) and with the accepted effects (the twin's band, in the curve's colour). Each band holds 2.5% to 97.5% of the simulated Allan deviations at each &#964;. A run of the model itself would fall outside its band at a few of the &#964;s by chance (the share given with each channel).</p>\n<ul class=\"bands\">\n");
+        for b in &bands {
+            let _ = writeln!(h, "<li>{b}</li>");
+        }
+        h.push_str("</ul>\n");
+    }
     interim_table(h, &interim, several);
+}
+
+/// The ensemble band of a diagnosis in words: how far the five terms alone miss and how far
+/// the twin matches, with the runs and the twin's effects.
+fn band_words(d: &DiagnosisRecord) -> Option<String> {
+    let e = d.ensemble.as_ref()?;
+    let sentence = band_sentence(d)?;
+    let names = effect_names(d);
+    let twin = if names.is_empty() {
+        "no effect was kept, so the twin is the five terms".to_string()
+    } else {
+        format!("the twin is the five terms with {}", names.join(", "))
+    };
+    Some(format!(
+        "the measured curve is {}. Bands of {} simulated runs each (a run of the model itself would be outside at about {} by chance); {twin}.",
+        esc(&sentence),
+        e.runs,
+        esc(&percent(chance_share(e.runs)))
+    ))
 }
 
 /// The interim diagnoses as a small time table: one row per data time (per run), one column

@@ -4,28 +4,13 @@
 use super::*;
 
 pub(super) fn figures(h: &mut String, res: &Results) {
-    let finals: Vec<&Labelled<_>> = res
-        .curves
-        .iter()
-        .filter(|c| c.rec.r#final && c.rec.stat.name() == "avar")
-        .collect();
-    if finals.is_empty() {
+    let all = |_: &str| true;
+    let finals = final_curves(res, "avar", &all);
+    let series = figure_series(res, &finals, "avar", &all, true);
+    if series.is_empty() {
         return;
     }
     let several = res.several_runs();
-    let series: Vec<Series> = finals
-        .iter()
-        .map(|c| Series {
-            curve: &c.rec,
-            run_label: if several {
-                c.label.clone()
-            } else {
-                String::new()
-            },
-            fit: res.fit_of(c),
-            diagnosis: res.diagnosis_of(c),
-        })
-        .collect();
     h.push_str("<h2>Allan deviation</h2>\n");
     if !several {
         h.push_str(&render_svg(

@@ -19,7 +19,8 @@ use crate::model::limits::LimitResult;
 use crate::model::terms::TERM_NAMES;
 use crate::sink::dynamic::render_dynamic_svg;
 use crate::sink::plot::{
-    coef_units, effect_name, escape as esc, ratio_text, render_svg, tick, Series,
+    band_sentence, chance_share, coef_units, effect_name, effect_names, escape as esc,
+    figure_series, final_curves, percent, ratio_text, render_svg, tick, Series,
 };
 use crate::sink::records::{
     AggregateRecord, FitRecord, HealthRecord, ReadoutRecord, TimeColumnRecord,

@@ -9,6 +9,8 @@ pub(super) fn runs_table(h: &mut String, res: &Results) {
         // summary are a run that stopped before writing its last record.
         if !(res.curves.is_empty() && res.fits.is_empty()) {
             h.push_str("<p class=\"warn\">No summary record: the run may have been cut short before its end.</p>\n");
+        } else if res.diagnoses.iter().any(|d| d.rec.ensemble.is_some()) {
+            h.push_str("<p class=\"meta\">Diagnosis records only (the output of <code>allanscope diagnose --ensemble</code>): no curve records, fit or summary; the figure draws the measured Allan deviation the diagnosis judged against its ensemble bands.</p>\n");
         } else if !res.diagnoses.is_empty() {
             h.push_str("<p class=\"meta\">Diagnosis records only (the output of <code>allanscope diagnose</code>): no curves, fit or summary to show.</p>\n");
         }

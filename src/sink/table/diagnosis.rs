@@ -73,6 +73,10 @@ pub fn diagnosis_line(d: &DiagnosisRecord, unit: &str, style: &TableStyle) -> St
             if ho.carried { "" } else { " (did not carry)" }
         );
     }
+    // `diagnose --ensemble N`: how far the five terms alone and the twin match the curve.
+    if let (Some(e), Some(words)) = (&d.ensemble, crate::sink::plot::band_sentence(d)) {
+        let _ = write!(line, "; against {} simulated runs: {words}", e.runs);
+    }
     line
 }
 
