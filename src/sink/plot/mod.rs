@@ -35,7 +35,7 @@ mod text;
 
 use panel::render_panel;
 
-pub use band::{band_sentence, chance_share, outside_count, percent};
+pub use crate::sink::band_words::{band_sentence, chance_share, outside_count, percent};
 pub use fit_terms::{determined_terms, TermValue};
 pub use series::{figure_series, final_curves, measured_curve};
 pub use text::{

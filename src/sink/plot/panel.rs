@@ -6,9 +6,7 @@ use std::borrow::Cow;
 use std::fmt::Write;
 
 use super::axes::{draw_grid, draw_slope_key, Axes};
-use super::band::{
-    band_values, draw_band, ensemble_of, hatch_pattern, outside_count, percent, BandKind,
-};
+use super::band::{band_values, draw_band, hatch_pattern, BandKind};
 use super::curves::{draw_regions, draw_series};
 use super::fit_terms::determined_terms;
 use super::legend::{Dash, LegendLine};
@@ -18,6 +16,7 @@ use super::text::{
 use super::{Series, BOTTOM, COLOURS, LEFT, LEGEND_W, PANEL_H, TOP, W};
 use crate::gap::record::EnsembleRecord;
 use crate::model::terms::TERM_NAMES;
+use crate::sink::band_words::{ensemble_of, outside_count, percent};
 
 /// The ensemble band of a series' diagnosis, drawn on an AVAR panel only.
 fn band_of<'a>(s: &Series<'a>, stat: &str) -> Option<&'a EnsembleRecord> {

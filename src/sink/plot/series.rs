@@ -6,10 +6,10 @@
 
 use std::borrow::Cow;
 
-use super::band::ensemble_of;
 use super::Series;
 use crate::allan::Stat;
 use crate::gap::DiagnosisRecord;
+use crate::sink::band_words::ensemble_of;
 use crate::sink::records::CurveRecord;
 use crate::sink::results::{Labelled, Results};
 

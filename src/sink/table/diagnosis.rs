@@ -74,7 +74,7 @@ pub fn diagnosis_line(d: &DiagnosisRecord, unit: &str, style: &TableStyle) -> St
         );
     }
     // `diagnose --ensemble N`: how far the five terms alone and the twin match the curve.
-    if let (Some(e), Some(words)) = (&d.ensemble, crate::sink::plot::band_sentence(d)) {
+    if let (Some(e), Some(words)) = (&d.ensemble, crate::sink::band_words::band_sentence(d)) {
         let _ = write!(line, "; against {} simulated runs: {words}", e.runs);
     }
     line
