@@ -3,7 +3,7 @@
 //!
 //! The interim `curve` records of a run are cumulative: at `t_data` the record holds
 //! `sigma^2 = S / count`, the mean of `count` squared second differences over the data so far
-//! (THEORY.md section 1). The differences added between two records are those that ended
+//! (docs/theory.md section 1). The differences added between two records are those that ended
 //! between them, so the AVAR of that window is `(S_b - S_a) / (count_b - count_a)` with
 //! `S = sigma^2 * count` (exact up to the rounding of the printed sigma, whose 17 digits leave
 //! about 1e-13 of relative error after the subtraction for windows a tenth of the run).

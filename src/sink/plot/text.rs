@@ -47,7 +47,7 @@ pub(super) fn decade_label(k: i32) -> String {
 }
 
 /// The native unit of each coefficient `(Q, N, B, K, R)` for a channel in `u`
-/// (THEORY.md section 2).
+/// (docs/theory.md section 2).
 pub fn coef_units(u: &str) -> [String; 5] {
     [
         u.to_string(),

@@ -77,7 +77,7 @@ pub fn render_html(files: &[ResultFile], title: &str, generated: &str) -> String
     h.push_str(
         "<h2>Sign-off</h2>\n<div class=\"sign\"><table><tr><th class=\"l\">role</th><th class=\"l\">name</th><th class=\"l\">signature</th><th class=\"l\">date</th></tr>\n\
          <tr><td>Tested by</td><td></td><td></td><td></td></tr>\n<tr><td>Checked by</td><td></td><td></td><td></td></tr>\n<tr><td>Approved by</td><td></td><td></td><td></td></tr></table></div>\n\
-         <p class=\"small\">Written by allanscope from its JSON-lines records; coefficients in the units of THEORY.md section 2 (u = the channel's unit), 95% intervals in brackets.</p>\n</body></html>\n",
+         <p class=\"small\">Written by allanscope from its JSON-lines records; coefficients in the units of docs/theory.md section 2 in allanscope's repository (u = the channel's unit), 95% intervals in brackets.</p>\n</body></html>\n",
     );
     h
 }
