@@ -200,14 +200,16 @@ fn analyze_text(
         &d.text_options(),
     )
     .map_err(anyhow::Error::new)?;
-    let unit = allanscope::model::units::increment_unit_label(&d.unit, d.rate);
+    let (setups, kind) = d.text_channels(input, &reader, &d.settings()?)?;
+    let mut opts = opts;
+    opts.kind = kind;
     let plan = UnitPlan::with_options(
         InputPlan::Text {
             input: input.into(),
             options: d.text_options(),
         },
         "csv",
-        ChannelSetup::for_text(reader.names(), &unit),
+        setups,
         &d.channels,
         opts,
         &d.unit_request(false),

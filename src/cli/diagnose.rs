@@ -105,7 +105,6 @@ fn gather(
     let req = UnitRequest::default();
     match desc {
         None => {
-            let kind = settings.kind;
             let path = Path::new(input);
             let mut reader = TextReader::with_options(
                 BufReader::with_capacity(1 << 16, open_input(input)?),
@@ -113,13 +112,15 @@ fn gather(
                 &settings.text,
             )
             .map_err(anyhow::Error::new)?;
+            let (setups, kind) = a.data.text_channels(input, &reader, &settings)?;
+            settings.kind = kind;
             let plan = UnitPlan::new(
                 InputPlan::Text {
                     input: input.into(),
                     options: settings.text.clone(),
                 },
                 "csv",
-                ChannelSetup::for_text(reader.names(), &settings.unit),
+                setups,
                 &settings,
                 tau0,
                 &req,
