@@ -95,6 +95,13 @@ pub struct Health {
     pub counter_rejects: u64,
 }
 
+/// Clean frames whose columns are filled together (see `Decoder::deferred`): 256 siu8 frames
+/// are 11 KB, still in the first-level cache from the scan that just checked them, where
+/// filling once per 256 KiB read fetched every frame again from the second level for each
+/// column. A small gain: the column fill of the 3-hour siu8 replay 5% cheaper, its decode
+/// thread 2-3% (BENCHMARKS.md, issue 15, session 9).
+const FILL_BATCH: usize = 256;
+
 /// What a [`Decoder`] holds between two pushes, for a checkpoint (`crate::pipeline::checkpoint`): the
 /// bytes of a message not yet complete, the counters, and where the frame counter stands.
 /// Taken when every decoded event has been collected.
@@ -139,8 +146,8 @@ pub struct Decoder {
     /// A frame whose counter jumped, held for the next frame to confirm (its bytes).
     held: Option<Vec<u8>>,
     /// Clean frames begun in `out` whose channels are still to be read: where each message
-    /// starts in the bytes being decoded ([`FramePlan::fill_columns`], at the end of each
-    /// [`Decoder::run`] or before any other frame's values).
+    /// starts in the bytes being decoded ([`FramePlan::fill_columns`], every [`FILL_BATCH`]
+    /// frames, at the end of each [`Decoder::run`] and before any other frame's values).
     deferred: Vec<usize>,
     /// Bytes of a push joined to the pending ones ([`Decoder::push`]): twice the longest
     /// message and its sync offset, so the message they share is complete in the join.
@@ -506,6 +513,9 @@ impl Decoder {
                     let bad = self.plan.begin(msg, seq, &mut self.out);
                     if self.plan.deferrable(msg, bad, &self.out) {
                         self.deferred.push(start);
+                        if self.deferred.len() >= FILL_BATCH {
+                            self.fill_deferred(data);
+                        }
                     } else {
                         self.fill_deferred(data);
                         self.plan.read_channels(

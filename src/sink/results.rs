@@ -1,4 +1,5 @@
-//! The records of the JSON-lines files `plot` and `report` read, typed and labelled: every curve,
+//! The records of the JSON-lines files `plot`, `report` and the terminal table read, typed and
+//! labelled: every curve,
 //! fit and diagnosis carries the label of the run it came from (its file's name, or for a file
 //! holding several runs the name of that run's input as its `summary` gives it), so overlaid
 //! runs are told apart as in the seed paper's figure 2.
@@ -6,13 +7,16 @@
 //! Every record is read into its struct of `crate::sink::records` (or `crate::gap::record`); a
 //! record of a type this version does not know, or one that does not parse as its type (a much
 //! older or newer writer's), is skipped, as [`crate::sink::records::Record::from_line`] does.
+//! [`ReadRecord`] is one record read so, with the unit's name of a run of several units; the
+//! terminal table keeps its records in that form and [`Results::from_read`] labels them.
 
-use serde::de::DeserializeOwned;
 use serde_json::Value;
 
 use crate::gap::DiagnosisRecord;
 use crate::model::limits::LimitResult;
-use crate::sink::records::{AggregateRecord, CurveRecord, FitRecord, HealthRecord, SummaryRecord};
+use crate::sink::records::{
+    AggregateRecord, CurveRecord, FitRecord, HealthRecord, Record, SummaryRecord,
+};
 
 /// One input file's records.
 #[derive(Debug, Clone)]
@@ -67,15 +71,6 @@ pub struct RunSummary {
     pub completion: Completion,
 }
 
-/// The record `v` as a `T`, `None` when it does not parse as one.
-fn typed<T: DeserializeOwned>(v: &Value) -> Option<T> {
-    serde_json::from_value(v.clone()).ok()
-}
-
-fn of_type<'a>(v: &'a Value, t: &str) -> Option<&'a Value> {
-    (v.get("type").and_then(Value::as_str) == Some(t)).then_some(v)
-}
-
 fn base_name(s: &str) -> String {
     std::path::Path::new(s)
         .file_name()
@@ -83,32 +78,120 @@ fn base_name(s: &str) -> String {
         .unwrap_or_else(|| s.to_string())
 }
 
+/// One record read back, typed: in its one-unit shape, with the unit's name when it came from a
+/// run of several units ([`crate::sink::unit_record::untag`]). Parsed once from its line or JSON
+/// object; a record of a type this version does not know, or one that does not parse as its
+/// type, is no `ReadRecord` (skipped, as [`Record::from_line`] does).
+#[derive(Debug, Clone)]
+pub struct ReadRecord {
+    /// The unit's name (`unit[i].name` of a stand config of several units).
+    pub unit: Option<String>,
+    pub record: Record,
+    /// A `summary`'s `read_to_end` as written: `None` when absent (a writer older than it), which
+    /// the typed [`SummaryRecord`] cannot tell from `false`.
+    read_to_end: Option<bool>,
+}
+
+impl ReadRecord {
+    /// The record of a JSON object as written.
+    pub fn from_value(mut v: Value) -> Option<ReadRecord> {
+        let unit = crate::sink::unit_record::untag(&mut v);
+        let read_to_end = v.get("read_to_end").and_then(Value::as_bool);
+        let record = Record::from_value(v).ok()??;
+        Some(ReadRecord {
+            unit,
+            record,
+            read_to_end,
+        })
+    }
+
+    /// The record of one JSON line; `Err` when the line is not JSON at all, `Ok(None)` when it
+    /// is JSON but not a record this version reads.
+    pub fn from_line(line: &[u8]) -> Result<Option<ReadRecord>, serde_json::Error> {
+        let v: Value = serde_json::from_slice(line)?;
+        Ok(ReadRecord::from_value(v))
+    }
+
+    /// The record's `run` index, when it has one (several inputs of one `analyze`).
+    pub fn run(&self) -> Option<usize> {
+        match &self.record {
+            Record::Curve(c) => c.run,
+            Record::Fit(f) => f.run,
+            Record::Health(h) => h.run,
+            Record::Summary(s) => s.run,
+            Record::Aggregate(_) | Record::Outage(_) | Record::Diagnosis(_) => None,
+        }
+    }
+}
+
+/// One input file's records, read typed.
+#[derive(Debug, Clone, Default)]
+pub struct ReadFile {
+    /// The file's name (no directory).
+    pub name: String,
+    pub records: Vec<ReadRecord>,
+}
+
+impl ReadFile {
+    /// The records of `f` that this version reads, typed.
+    pub fn of(f: &ResultFile) -> ReadFile {
+        ReadFile {
+            name: f.name.clone(),
+            records: f
+                .records
+                .iter()
+                .filter_map(|v| ReadRecord::from_value(v.clone()))
+                .collect(),
+        }
+    }
+}
+
 impl Results {
     /// Types and labels the records. Records that do not parse as their type are skipped (a
     /// newer or older writer's), never fatal.
     pub fn from_files(files: &[ResultFile]) -> Results {
+        Results::from_read(files.iter().map(ReadFile::of).collect())
+    }
+
+    /// Labels records already read typed ([`ReadFile`]), in file order.
+    pub fn from_read(files: Vec<ReadFile>) -> Results {
+        let several = files.len() > 1;
         let mut out = Results::default();
-        for (fi, f) in files.iter().enumerate() {
-            // A run of several units: each unit's records as one run, named by the unit.
-            let (records, units) = units_as_runs(&f.records);
-            // Run index -> the input named by its summary (a file holding several runs).
-            let mut runs_named: Vec<(Option<usize>, String)> = records
+        for (fi, f) in files.into_iter().enumerate() {
+            // A run of several units: each unit's records as one run (its index the unit's
+            // place in the file), named by the unit.
+            let mut units: Vec<String> = Vec::new();
+            let runs: Vec<Option<usize>> = f
+                .records
                 .iter()
-                .filter_map(|v| of_type(v, "summary"))
-                .filter_map(|s| {
-                    let run = s.get("run").and_then(Value::as_u64).map(|r| r as usize);
-                    let input = s.get("input").and_then(Value::as_str)?;
-                    Some((run, base_name(input)))
+                .map(|r| match &r.unit {
+                    Some(name) => Some(match units.iter().position(|u| u == name) {
+                        Some(i) => i,
+                        None => {
+                            units.push(name.clone());
+                            units.len() - 1
+                        }
+                    }),
+                    None => r.run(),
                 })
                 .collect();
-            if !units.is_empty() {
-                runs_named = units
+            // Run index -> the input named by its summary (a file holding several runs).
+            let runs_named: Vec<(Option<usize>, String)> = if units.is_empty() {
+                f.records
+                    .iter()
+                    .zip(&runs)
+                    .filter_map(|(r, run)| match &r.record {
+                        Record::Summary(s) => Some((*run, base_name(&s.input))),
+                        _ => None,
+                    })
+                    .collect()
+            } else {
+                units
                     .into_iter()
                     .enumerate()
                     .map(|(i, n)| (Some(i), n))
-                    .collect();
-            }
-            let several = files.len() > 1;
+                    .collect()
+            };
             let label = |run: Option<usize>| -> String {
                 match run {
                     Some(r) => {
@@ -130,43 +213,32 @@ impl Results {
             // has none) belongs to the run of the indexed record before it: `analyze` writes
             // each run's records together.
             let mut current: Option<usize> = None;
-            for v in &records {
-                let t = v.get("type").and_then(Value::as_str).unwrap_or("");
-                let run = match v.get("run").and_then(Value::as_u64) {
-                    Some(r) => {
-                        current = Some(r as usize);
-                        current
-                    }
-                    None => current,
-                };
-                let lab = label(run);
+            for (r, indexed) in f.records.into_iter().zip(runs) {
+                if indexed.is_some() {
+                    current = indexed;
+                }
                 let at = Labelled {
                     file: fi,
-                    run,
-                    label: lab.clone(),
+                    run: current,
+                    label: label(current),
                     rec: (),
                 };
-                match t {
-                    "curve" => out.curves.extend(typed(v).map(|c| at.with(c))),
-                    "fit" => out.fits.extend(typed(v).map(|c| at.with(c))),
-                    "diagnosis" => out.diagnoses.extend(typed(v).map(|c| at.with(c))),
-                    "summary" => {
-                        let Some(record) = typed::<SummaryRecord>(v) else {
-                            continue;
-                        };
+                match r.record {
+                    Record::Curve(c) => out.curves.push(at.with(c)),
+                    Record::Fit(c) => out.fits.push(at.with(*c)),
+                    Record::Diagnosis(c) => out.diagnoses.push(at.with(*c)),
+                    Record::Summary(record) => {
                         for l in &record.limits {
                             out.limits.push(at.with(l.clone()));
                         }
-                        let completion = Completion::of(
-                            v.get("read_to_end").and_then(Value::as_bool),
-                            record.stopped_by.as_deref(),
-                        );
+                        let completion =
+                            Completion::of(r.read_to_end, record.stopped_by.as_deref());
                         out.summaries
                             .push(at.with(RunSummary { record, completion }));
                     }
-                    "health" => out.health.extend(typed(v).map(|c| at.with(c))),
-                    "aggregate" => out.aggregates.extend(typed(v).map(|c| at.with(c))),
-                    _ => {}
+                    Record::Health(c) => out.health.push(at.with(c)),
+                    Record::Aggregate(c) => out.aggregates.push(at.with(c)),
+                    Record::Outage(_) => {}
                 }
             }
         }

@@ -6,8 +6,8 @@
 //! fitted N, B and K (model::readout), the datasheet limits with PASS/FAIL, and the diagnosis in
 //! one line; then the run-to-run statistics of several runs and the overall verdict.
 //! [`TableWriter`] is the adapter the binary puts in place of standard output: it takes the JSON
-//! lines the record writer produces, keeps the final records and prints a run's table when its
-//! `summary` arrives (the rest when it is dropped). Whether standard output is a terminal is the
+//! lines the record writer produces, each parsed once into its typed record, keeps the final
+//! records and prints a run's table when its `summary` arrives (the rest when it is dropped). Whether standard output is a terminal is the
 //! binary's business.
 //!
 //! Files: layout.rs (style, number formats, padded columns), channel.rs (a run's heading and
@@ -22,9 +22,8 @@ use crate::model::terms::TERM_NAMES;
 use crate::model::units::{
     datasheet_factors, datasheet_units, native_units, IncrementUnit, SensorKind,
 };
-use crate::sink::records::{AggregateRecord, FitRecord, ReadoutRecord, ReadoutsRecord};
+use crate::sink::records::{AggregateRecord, FitRecord, ReadoutRecord, ReadoutsRecord, Record};
 use crate::sink::results::{Labelled, ResultFile, Results, RunSummary};
-use serde_json::Value;
 use std::fmt::Write as _;
 use std::io::Write;
 
