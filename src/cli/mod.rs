@@ -162,7 +162,7 @@ pub struct DataArgs {
     pub format: String,
     /// Sampling step in seconds (frames: taken from the descriptor; text columns: read off their
     /// time column when they have one, else required).
-    #[arg(long, value_parser = tau0_arg)]
+    #[arg(long, value_parser = tau0_arg, allow_hyphen_values = true)]
     pub tau0: Option<f64>,
     /// Text columns hold rate samples (u/s) instead of increments (u).
     #[arg(long, conflicts_with = "phase")]
