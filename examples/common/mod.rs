@@ -191,7 +191,17 @@ pub fn simulate_channel(
     effect: Option<EffectParams>,
     seed: u64,
 ) -> (Vec<f64>, Option<EffectParams>, Vec<(f64, f64)>) {
-    let model = SimModel::from_toml_str(toml, Path::new(origin)).expect("generated model");
+    // Jumps change the bias the unit's counter sees, so they go in before its quantization
+    // with carry: the model's `lsb` is taken out of the simulation and applied after them (before
+    // session 9 they were added to the quantized increments, which then were no longer whole
+    // multiples of the LSB).
+    let jumpy = matches!(effect, Some(EffectParams::BiasJumps { .. }));
+    let (toml, lsb) = if jumpy {
+        take_lsb(toml)
+    } else {
+        (toml.to_string(), None)
+    };
+    let model = SimModel::from_toml_str(&toml, Path::new(origin)).expect("generated model");
     let mut sim = Simulator::new(&model, seed);
     let mut inc = vec![0.0; (t_run / tau0) as usize];
     sim.fill_channel(0, &mut inc);
@@ -205,7 +215,41 @@ pub fn simulate_channel(
             rms_size: jumps_rms(&jumps),
         });
     }
+    if let Some(l) = lsb {
+        quantize_with_carry(&mut inc, l);
+    }
     (inc, truth, jumps)
+}
+
+/// The model text without its `lsb = ...` line, and that LSB (u); one channel.
+fn take_lsb(toml: &str) -> (String, Option<f64>) {
+    let mut lsb = None;
+    let mut out = String::with_capacity(toml.len());
+    for line in toml.lines() {
+        match line.trim().strip_prefix("lsb") {
+            Some(rest) if rest.trim_start().starts_with('=') => {
+                let v = rest.trim_start()[1..].trim();
+                lsb = Some(v.parse::<f64>().expect("generated model: lsb"));
+            }
+            _ => {
+                out += line;
+                out.push('\n');
+            }
+        }
+    }
+    (out, lsb)
+}
+
+/// Quantization with carry (a counter that keeps its remainder): each increment becomes the
+/// difference of the running sum rounded to whole `lsb` (u).
+pub fn quantize_with_carry(inc: &mut [f64], lsb: f64) {
+    let (mut sum, mut prev) = (0.0f64, 0.0f64);
+    for v in inc.iter_mut() {
+        sum += *v;
+        let q = (sum / lsb).round();
+        *v = (q - prev) * lsb;
+        prev = q;
+    }
 }
 
 /// The parameters of an effect of `kind` whose peak ADEV is `rho` times the base model's

@@ -37,6 +37,12 @@ struct Gathered {
     temperature: Option<GapEvidence>,
     temperature_sum: f64,
     temperature_n: u64,
+    /// The last known temperature (degC), held over steps without one (a temperature logged
+    /// more slowly than the rates, or a missing value), and how many steps were held.
+    temperature_last: Option<f64>,
+    temperature_held: u64,
+    /// Steps before the first known temperature: given that first value when it comes.
+    temperature_pending: u64,
 }
 
 impl Gathered {
@@ -53,17 +59,60 @@ impl Gathered {
         self.lsb[k].push(f64::NAN);
     }
 
-    /// The temperature of one step (NaN or None: not known for this step).
+    /// The temperature of one step (NaN or None: not known for this step). A step without one
+    /// gets the last known temperature (zero-order hold: a temperature logged at 1 Hz beside
+    /// 100 Hz rates, or a missing value), the steps before the first known one that first
+    /// value, so that the temperature's evidence sees every step the channels see (the
+    /// temperature test needs both on the same steps: gap::temperature).
     fn push_temperature(&mut self, t: Option<f64>, tau0: f64) {
-        if let Some(ev) = self.temperature.as_mut() {
-            match t.filter(|t| t.is_finite()) {
-                Some(t) => {
+        let Some(ev) = self.temperature.as_mut() else {
+            return;
+        };
+        match (t.filter(|t| t.is_finite()), self.temperature_last) {
+            (Some(t), _) => {
+                for _ in 0..std::mem::take(&mut self.temperature_pending) {
                     ev.push_increment(t * tau0);
-                    self.temperature_sum += t;
-                    self.temperature_n += 1;
+                    self.temperature_held += 1;
                 }
-                None => ev.push_gap(1),
+                ev.push_increment(t * tau0);
+                self.temperature_sum += t;
+                self.temperature_n += 1;
+                self.temperature_last = Some(t);
             }
+            (None, Some(l)) => {
+                ev.push_increment(l * tau0);
+                self.temperature_held += 1;
+            }
+            (None, None) => self.temperature_pending += 1,
+        }
+    }
+
+    /// `missing` lost steps of the temperature (a gap of the frames).
+    fn temperature_gap(&mut self, missing: u64) {
+        if let Some(ev) = self.temperature.as_mut() {
+            // Steps waiting for a first temperature stay unknown when a gap comes first.
+            ev.push_gap(std::mem::take(&mut self.temperature_pending) + missing);
+        }
+    }
+
+    /// At the end of the input: a temperature column without a single value is not used;
+    /// held steps are said once.
+    fn finish_temperature(&mut self, input: &str) {
+        if self.temperature.is_none() {
+            return;
+        }
+        if self.temperature_n == 0 {
+            tracing::warn!("{input}: the temperature has no value; it is not used");
+            self.temperature = None;
+            return;
+        }
+        if self.temperature_held > 0 {
+            tracing::warn!(
+                "{input}: the temperature is missing at {} of {} steps; each such step takes \
+                 the last known value (the steps before the first known value take that value)",
+                self.temperature_held,
+                self.temperature_held + self.temperature_n
+            );
         }
     }
 
@@ -96,6 +145,9 @@ fn gather(
         temperature: None,
         temperature_sum: 0.0,
         temperature_n: 0,
+        temperature_last: None,
+        temperature_held: 0,
+        temperature_pending: 0,
     };
     let mut settings = a.data.settings()?;
     if a.channel.is_some() {
@@ -105,7 +157,6 @@ fn gather(
     let req = UnitRequest::default();
     match desc {
         None => {
-            let kind = settings.kind;
             let path = Path::new(input);
             let mut reader = TextReader::with_options(
                 BufReader::with_capacity(1 << 16, open_input(input)?),
@@ -113,13 +164,15 @@ fn gather(
                 &settings.text,
             )
             .map_err(anyhow::Error::new)?;
+            let (setups, kind) = a.data.text_channels(input, &reader, &settings)?;
+            settings.kind = kind;
             let plan = UnitPlan::new(
                 InputPlan::Text {
                     input: input.into(),
                     options: settings.text.clone(),
                 },
                 "csv",
-                ChannelSetup::for_text(reader.names(), &settings.unit),
+                setups,
                 &settings,
                 tau0,
                 &req,
@@ -232,9 +285,7 @@ fn gather(
                         }
                         FrameEvent::Gap { missing } => {
                             (0..columns.len()).for_each(|k| g.gap(k, missing));
-                            if let Some(t) = g.temperature.as_mut() {
-                                t.push_gap(missing);
-                            }
+                            g.temperature_gap(missing);
                         }
                     }
                 }
@@ -244,6 +295,7 @@ fn gather(
             }
         }
     }
+    g.finish_temperature(input);
     Ok(g)
 }
 
