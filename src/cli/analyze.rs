@@ -306,7 +306,7 @@ const SNIFF_BYTES: usize = 4096;
 
 /// Refuses an input whose first bytes show it is the other kind than the format says: binary
 /// data read as text columns, or text read as frames (standard input is not looked at).
-fn sniff(input: &str, frames: Option<&FrameDescriptor>) -> Result<()> {
+pub(crate) fn sniff(input: &str, frames: Option<&FrameDescriptor>) -> Result<()> {
     use std::io::Read;
     if input == "-" {
         return Ok(());

@@ -155,6 +155,9 @@ fn gather(
     }
     // Diagnose reads the input once: no checkpoints (refused in `run`).
     let req = UnitRequest::default();
+    // Binary data given as text columns, text or another unit's bytes given as frames: refused
+    // as `analyze` refuses them.
+    super::analyze::sniff(input, desc)?;
     match desc {
         None => {
             let path = Path::new(input);

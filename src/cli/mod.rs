@@ -261,7 +261,7 @@ pub struct SimulateArgs {
     #[arg(long)]
     pub model: PathBuf,
     /// Duration in seconds (suffixes s, min, h accepted: `3h`).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub duration: String,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
