@@ -45,6 +45,38 @@ const WRITER_STALL: Duration = Duration::from_millis(50);
 /// Plays of a scenario before the host is declared too loaded to run it.
 const ATTEMPTS: u32 = 6;
 
+/// A thread that sleeps 2 ms at a time and keeps its longest oversleep: how long the host left
+/// this process's threads (the listener's among them) unscheduled. A listener not run for longer
+/// than [`WRITER_STALL`] sees its frames late and in pieces, as a writer's pause does.
+struct HostWatch {
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    thread: std::thread::JoinHandle<Duration>,
+}
+
+impl HostWatch {
+    fn start() -> HostWatch {
+        let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let flag = stop.clone();
+        let thread = std::thread::spawn(move || {
+            let tick = Duration::from_millis(2);
+            let mut worst = Duration::ZERO;
+            while !flag.load(Ordering::Relaxed) {
+                let t = Instant::now();
+                std::thread::sleep(tick);
+                worst = worst.max(t.elapsed().saturating_sub(tick));
+            }
+            worst
+        });
+        HostWatch { stop, thread }
+    }
+
+    /// The longest oversleep since [`HostWatch::start`].
+    fn stop(self) -> Duration {
+        self.stop.store(true, Ordering::Relaxed);
+        self.thread.join().unwrap_or(Duration::MAX)
+    }
+}
+
 /// Writes frames `from..to` of `bytes` at their real-time instants after `t0`. Returns the
 /// longest pause between two writes.
 async fn play(
@@ -101,7 +133,8 @@ fn check_outage(recs: &[serde_json::Value], lost: u64) {
 }
 
 /// Plays the outage once: the listener's records and the frames lost, or `None` when the
-/// writer itself paused for longer than [`WRITER_STALL`] while playing.
+/// writer itself (or any thread of this process, [`HostWatch`]) paused for longer than
+/// [`WRITER_STALL`] while playing.
 fn outage_scenario(attempt: u32) -> Option<(Vec<serde_json::Value>, u64)> {
     let bytes =
         std::fs::read(fixtures().join("captures/kvh1750_stand_1min_seed1.kvh1750")).expect("kvh");
@@ -125,6 +158,7 @@ fn outage_scenario(attempt: u32) -> Option<(Vec<serde_json::Value>, u64)> {
         .expect("pty");
     repoint(&slave.name().expect("pty name"));
     let ctl = RunControl::default();
+    let watch = HostWatch::start();
     let (ctl2, desc2, link2) = (ctl.clone(), desc.clone(), link.clone());
     let listener = std::thread::spawn(move || {
         let spec = SourceSpec::Serial {
@@ -162,8 +196,12 @@ fn outage_scenario(attempt: u32) -> Option<(Vec<serde_json::Value>, u64)> {
     drop(slave);
     let _ = std::fs::remove_dir_all(&dir);
 
-    if pause1.max(pause2) > WRITER_STALL {
-        eprintln!("the writer paused for {:?}", pause1.max(pause2));
+    let host = watch.stop();
+    if pause1.max(pause2).max(host) > WRITER_STALL {
+        eprintln!(
+            "the writer paused for {:?}, a thread of this process for {host:?}",
+            pause1.max(pause2)
+        );
         return None;
     }
     // Frames 0..500 arrived, then k1.. : the lost ones are 500..k1.
@@ -198,7 +236,8 @@ fn udp_silence_longer_than_the_counter_is_sized_by_time() {
 }
 
 /// Sends the silence once: the listener's records and the frames lost, or `None` when the
-/// sender itself paused for longer than [`WRITER_STALL`] (one frame per datagram: a burst of
+/// sender itself (or any thread of this process, [`HostWatch`]) paused for longer than
+/// [`WRITER_STALL`] (one frame per datagram: a burst of
 /// them after such a pause is a silence to the listener, as a real one would be).
 fn udp_silence_scenario() -> Option<(Vec<serde_json::Value>, u64)> {
     let bytes =
@@ -206,6 +245,7 @@ fn udp_silence_scenario() -> Option<(Vec<serde_json::Value>, u64)> {
     let desc = FrameDescriptor::load("kvh1750").expect("kvh1750");
     let port = free_udp_port();
     let ctl = RunControl::default();
+    let watch = HostWatch::start();
     let (ctl2, desc2) = (ctl.clone(), desc.clone());
     let listener = std::thread::spawn(move || {
         let spec = SourceSpec::Udp {
@@ -247,8 +287,12 @@ fn udp_silence_scenario() -> Option<(Vec<serde_json::Value>, u64)> {
     });
     ctl.shutdown.cancel();
     let recs = listener.join().expect("listener");
-    if pause1.max(pause2) > WRITER_STALL {
-        eprintln!("the sender paused for {:?}", pause1.max(pause2));
+    let host = watch.stop();
+    if pause1.max(pause2).max(host) > WRITER_STALL {
+        eprintln!(
+            "the sender paused for {:?}, a thread of this process for {host:?}",
+            pause1.max(pause2)
+        );
         return None;
     }
     Some((recs, (k1 - PHASE_FRAMES) as u64))
