@@ -59,6 +59,7 @@
 //!   text.rs                the column reader: separators, header, rates or increments
 //!   time_column.rs         the time column: gaps found from the sampling step
 //!   sampling_step.rs       the sampling step read off the time column (no --tau0)
+//!   header_unit.rs         a data column's unit in its header (`[rad s^-1]`), without --unit
 //! frame/                   frames (pure: no I/O)                          bytes -> FrameEvent
 //!   descriptor/            the descriptor language (TOML) and its checked types
 //!     parse.rs             the top level, sync, checks across message kinds, interleave

@@ -200,14 +200,16 @@ fn analyze_text(
         &d.text_options(),
     )
     .map_err(anyhow::Error::new)?;
-    let unit = allanscope::model::units::increment_unit_label(&d.unit, d.rate);
+    let (setups, kind) = d.text_channels(input, &reader, &d.settings()?)?;
+    let mut opts = opts;
+    opts.kind = kind;
     let plan = UnitPlan::with_options(
         InputPlan::Text {
             input: input.into(),
             options: d.text_options(),
         },
         "csv",
-        ChannelSetup::for_text(reader.names(), &unit),
+        setups,
         &d.channels,
         opts,
         &d.unit_request(false),
@@ -293,11 +295,7 @@ fn analyze_frames(
     let outcome = allanscope::pipeline::run_frames(spec, desc, analysis, queue, ctl)?;
     if let Some(h) = &outcome.health {
         if h.frames == 0 && h.bytes_in > 0 && !d.resume {
-            return Err(usage(format!(
-                "{input}: no {} frame found in {} bytes: is it a {} capture? (another unit's \
-                 frames need their --format; text columns need --format csv)",
-                desc.name, h.bytes_in, desc.name
-            )));
+            return Err(no_frame_error(input, desc, h.bytes_in));
         }
     }
     Ok(outcome)
@@ -308,7 +306,7 @@ const SNIFF_BYTES: usize = 4096;
 
 /// Refuses an input whose first bytes show it is the other kind than the format says: binary
 /// data read as text columns, or text read as frames (standard input is not looked at).
-fn sniff(input: &str, frames: Option<&FrameDescriptor>) -> Result<()> {
+pub(crate) fn sniff(input: &str, frames: Option<&FrameDescriptor>) -> Result<()> {
     use std::io::Read;
     if input == "-" {
         return Ok(());
@@ -348,9 +346,45 @@ fn sniff(input: &str, frames: Option<&FrameDescriptor>) -> Result<()> {
                     desc.name
                 )));
             }
+            no_frame_in_head(input, desc)?;
         }
     }
     Ok(())
+}
+
+/// Bytes decoded before a run starts to find one frame of the format given: many frames of any
+/// descriptor, and little to read (a few ms).
+const FRAME_SNIFF_BYTES: u64 = 1 << 20;
+
+/// Refuses a capture in whose first [`FRAME_SNIFF_BYTES`] the format's decoder finds no frame
+/// (binary data of another kind, another unit's frames), before the output is touched: a run
+/// that would end with no data must not replace an earlier result.
+fn no_frame_in_head(input: &str, desc: &FrameDescriptor) -> Result<()> {
+    use std::io::Read;
+    let mut head = Vec::new();
+    let read =
+        std::fs::File::open(input).and_then(|f| f.take(FRAME_SNIFF_BYTES).read_to_end(&mut head));
+    if read.is_err() || head.is_empty() {
+        return Ok(()); // open_input reports it
+    }
+    let mut dec = allanscope::frame::decoder::Decoder::new(desc.clone());
+    dec.push(&head);
+    if head.len() < FRAME_SNIFF_BYTES as usize {
+        dec.finish();
+    }
+    if dec.health().frames == 0 {
+        return Err(no_frame_error(input, desc, head.len() as u64));
+    }
+    Ok(())
+}
+
+/// The usage error of a capture with no frame of `desc` in its first `bytes`.
+fn no_frame_error(input: &str, desc: &FrameDescriptor, bytes: u64) -> anyhow::Error {
+    usage(format!(
+        "{input}: no {} frame found in {bytes} bytes: is it a {} capture? (another unit's \
+         frames need their --format; text columns need --format csv)",
+        desc.name, desc.name
+    ))
 }
 
 /// Each run's determined coefficients, for the run-to-run statistics.

@@ -155,9 +155,11 @@ fn gather(
     }
     // Diagnose reads the input once: no checkpoints (refused in `run`).
     let req = UnitRequest::default();
+    // Binary data given as text columns, text or another unit's bytes given as frames: refused
+    // as `analyze` refuses them.
+    super::analyze::sniff(input, desc)?;
     match desc {
         None => {
-            let kind = settings.kind;
             let path = Path::new(input);
             let mut reader = TextReader::with_options(
                 BufReader::with_capacity(1 << 16, open_input(input)?),
@@ -165,13 +167,15 @@ fn gather(
                 &settings.text,
             )
             .map_err(anyhow::Error::new)?;
+            let (setups, kind) = a.data.text_channels(input, &reader, &settings)?;
+            settings.kind = kind;
             let plan = UnitPlan::new(
                 InputPlan::Text {
                     input: input.into(),
                     options: settings.text.clone(),
                 },
                 "csv",
-                ChannelSetup::for_text(reader.names(), &settings.unit),
+                setups,
                 &settings,
                 tau0,
                 &req,

@@ -25,10 +25,12 @@ use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
 
 use allanscope::allan::accum::{Overlap, StatSet, TauSpec, DEFAULT_L};
+use allanscope::analysis::ChannelSetup;
 use allanscope::analysis::{AnalysisOptions, InputKind};
 use allanscope::error::UsageError;
 use allanscope::frame::FrameDescriptor;
-use allanscope::input::text::{ColumnPick, TextOptions};
+use allanscope::input::header_unit::{header_unit, units_from_headers};
+use allanscope::input::text::{ColumnPick, TextOptions, TextReader};
 use allanscope::model::fit::FitMethod;
 use allanscope::plan::checkpoint_setup::CheckpointRequest;
 use allanscope::plan::settings::DataSettings;
@@ -160,7 +162,7 @@ pub struct DataArgs {
     pub format: String,
     /// Sampling step in seconds (frames: taken from the descriptor; text columns: read off their
     /// time column when they have one, else required).
-    #[arg(long, value_parser = tau0_arg)]
+    #[arg(long, value_parser = tau0_arg, allow_hyphen_values = true)]
     pub tau0: Option<f64>,
     /// Text columns hold rate samples (u/s) instead of increments (u).
     #[arg(long, conflicts_with = "phase")]
@@ -170,8 +172,10 @@ pub struct DataArgs {
     pub phase: bool,
     /// Unit of the increment of text columns, also with --rate or --phase (with --rate, `deg/s`
     /// means `deg`): deg, rad, mrad, arcsec, m/s, ft/s, g (g*s), mg give datasheet units.
-    #[arg(long, default_value = "u")]
-    pub unit: String,
+    /// Without it, a unit in brackets in a column's header (`w_RS_S_x [rad s^-1]`, `acc_x[g]`)
+    /// is read, rates or increments as it says; else `u`.
+    #[arg(long, value_name = "U")]
+    pub unit: Option<String>,
     /// Cluster sizes: `octave` (powers of two), `decade` (1, 2, 4 per decade) or a list of m.
     #[arg(long, default_value = "octave")]
     pub taus: String,
@@ -257,7 +261,7 @@ pub struct SimulateArgs {
     #[arg(long)]
     pub model: PathBuf,
     /// Duration in seconds (suffixes s, min, h accepted: `3h`).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub duration: String,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -536,7 +540,7 @@ impl DataArgs {
             },
             // `--unit` names the increment's unit; with `--rate` the rate's own unit (`deg/s`)
             // means the same (docs: README "--unit").
-            unit: allanscope::model::units::increment_unit_label(&self.unit, self.rate),
+            unit: allanscope::model::units::increment_unit_label(self.unit_or_default(), self.rate),
             taus,
             overlap,
             stats,
@@ -550,6 +554,67 @@ impl DataArgs {
             channels: self.channels.clone(),
             text: self.text_options(),
         })
+    }
+
+    /// `--unit`, or `u` when not given.
+    pub(crate) fn unit_or_default(&self) -> &str {
+        self.unit.as_deref().unwrap_or("u")
+    }
+
+    /// The channels of a text input in `reader` and what their values are: in `--unit` with the
+    /// kind of `--rate`/`--phase` (`settings`) when `--unit` is given or no column header
+    /// carries a unit; else in the units the headers give, rates or increments as they say
+    /// (src/input/header_unit.rs), said in the log. A header unit not known, rates mixed with
+    /// increments, or headers that contradict `--rate`/`--phase` are usage errors (exit 2)
+    /// naming the input, column and header.
+    pub(crate) fn text_channels<R: BufRead>(
+        &self,
+        input: &str,
+        reader: &TextReader<R>,
+        settings: &DataSettings,
+    ) -> Result<(Vec<ChannelSetup>, InputKind)> {
+        let mut setups = ChannelSetup::for_text(reader.names(), &settings.unit);
+        let columns = reader.channel_columns();
+        let ours: Vec<(usize, &str)> = setups.iter().map(|c| columns[c.column]).collect();
+        if self.unit.is_some() {
+            let carried: Vec<String> = ours
+                .iter()
+                .filter(|(_, n)| header_unit(n).is_some())
+                .map(|(_, n)| format!("`{n}`"))
+                .collect();
+            if !carried.is_empty() {
+                tracing::info!(
+                    "{input}: --unit {} given: the units in the headers of {} are not read",
+                    self.unit_or_default(),
+                    carried.join(", ")
+                );
+            }
+            return Ok((setups, settings.kind));
+        }
+        let read = units_from_headers(&ours, self.rate, self.phase)
+            .map_err(|e| usage(format!("{input}: {e}")))?;
+        let Some(read) = read else {
+            return Ok((setups, settings.kind));
+        };
+        for (c, u) in setups.iter_mut().zip(&read.units) {
+            c.unit.clone_from(u);
+        }
+        let kind = if read.rate {
+            InputKind::Rate
+        } else {
+            settings.kind
+        };
+        let how = match kind {
+            InputKind::Rate => "rate samples, as --rate",
+            InputKind::Phase => "phase, as --phase",
+            InputKind::Increments => "increments",
+        };
+        tracing::info!(
+            "{input}: no --unit: units from the column headers: {}; read as {how} \
+             (--unit U overrides the headers)",
+            read.account
+        );
+        Ok((setups, kind))
     }
 
     /// What the unit's checkpoints are checked against: `--checkpoint-every`, `--resume`,

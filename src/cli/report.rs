@@ -3,8 +3,9 @@
 
 use anyhow::Result;
 
-use super::{read_json_lines, ReportArgs};
+use super::{read_json_lines, usage, ReportArgs};
 use allanscope::sink::page_file::write_page;
+use allanscope::sink::records::Record;
 use allanscope::sink::report::render_html;
 use allanscope::sink::results::ResultFile;
 
@@ -22,6 +23,21 @@ pub fn run(a: &ReportArgs) -> Result<()> {
             })
         })
         .collect::<Result<Vec<_>>>()?;
+    // A file with no record to show (empty, or JSON of something else) is a mistake, not an
+    // empty page.
+    for (f, p) in inputs.iter().zip(&a.inputs) {
+        let any = f
+            .records
+            .iter()
+            .any(|v| matches!(Record::from_value(v.clone()), Ok(Some(_))));
+        if !any {
+            return Err(usage(format!(
+                "{}: no allanscope record in it (curve, fit, diagnosis, health, aggregate, \
+                 summary); give the JSON lines of `analyze`, `listen`, `run` or `diagnose`",
+                p.display()
+            )));
+        }
+    }
     let html = render_html(&inputs, &a.title, &utc_now());
     write_page(&a.out, html.as_bytes(), a.force)?;
     tracing::info!("{}: report written", a.out.display());

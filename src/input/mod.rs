@@ -2,6 +2,7 @@
 //!
 //! A reader turns bytes into [`Chunk`]s of rows; it knows nothing of statistics.
 
+pub mod header_unit;
 pub mod sampling_step;
 pub mod text;
 pub mod time_column;

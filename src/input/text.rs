@@ -506,6 +506,16 @@ impl<R: BufRead> TextReader<R> {
         &self.names
     }
 
+    /// Each channel's input column (1-based) and its name there (the header's, or `c1..cn`),
+    /// in the order of [`TextReader::names`]: where a message points a person to.
+    pub fn channel_columns(&self) -> Vec<(usize, &str)> {
+        self.layout
+            .keep
+            .iter()
+            .map(|&i| (i + 1, self.layout.source_names[i].as_str()))
+            .collect()
+    }
+
     pub fn bad_rows(&self) -> u64 {
         self.bad_rows
     }

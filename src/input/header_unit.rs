@@ -1,0 +1,356 @@
+//! The unit a text column's header gives in brackets (EuRoC's `w_RS_S_x [rad s^-1]` and
+//! `a_RS_S_x [m s^-2]`, a logger's `gyro_x (deg/s)` or `acc_x[g]`), read when no `--unit` is
+//! given: which increment unit the column is in and whether it holds rates or increments
+//! ([`header_unit`]), and for a whole input the channels' units and the one kind they share
+//! ([`units_from_headers`]). The time column's unit (`timestamp [ns]`) is
+//! [`super::text::time_column_unit`]'s; this module reads the data columns'.
+//!
+//! A header unit is read as a product of atoms with powers, `/` dividing (`rad/s`, `rad s^-1`,
+//! `m/s^2`, `m.s-2`, `deg/sec`, `°/s`, `dps`), and classed by its one physical atom and its power
+//! of time: an angle (rad, mrad, urad, deg, arcsec) is an increment, per second a rate; a
+//! velocity (m/s, mm/s, ft/s) an increment, per second again a rate; an acceleration in g or mg a
+//! rate, times s an increment. The increment unit is the one `--unit` would name
+//! (`crate::model::units::IncrementUnit`). Anything else (a magnetometer's `[G]` or `[uT]`, a
+//! temperature's `[degC]`) is not known, and the caller refuses it, naming column and header.
+
+/// What a column's header says of its values.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct HeaderUnit {
+    /// The increment's unit, as `--unit` names it (`rad`, `deg`, `m/s`, `g`).
+    pub unit: String,
+    /// The values are rates (the increment's unit per second), not increments.
+    pub rate: bool,
+    /// The unit as the header writes it (inside the brackets).
+    pub text: String,
+}
+
+/// The unit in brackets at the end of a column's name: `Some(Ok)` when it is a unit this module
+/// knows, `Some(Err(text))` when it is not (`text` is what the brackets hold), `None` when the
+/// name carries no unit in brackets.
+pub fn header_unit(name: &str) -> Option<Result<HeaderUnit, String>> {
+    let n = name.trim();
+    let (open, close) = match n.chars().last()? {
+        ']' => ('[', ']'),
+        ')' => ('(', ')'),
+        _ => return None,
+    };
+    let start = n.rfind(open)?;
+    let inner = n[start + open.len_utf8()..n.len() - close.len_utf8()].trim();
+    // A name that is nothing but brackets is a name, not a unit.
+    if n[..start].trim().is_empty() {
+        return None;
+    }
+    Some(parse(inner).ok_or_else(|| inner.to_string()))
+}
+
+/// The physical atoms a header unit may hold: the name, the increment unit it gives, the power
+/// of time it carries itself (`dps` is deg/s) and the power of time of its increment (`m/s` for
+/// a length, `g*s` for an acceleration); one power below the increment's is a rate.
+const ATOMS: [(&str, &str, i32, i32); 12] = [
+    ("rad", "rad", 0, 0),
+    ("mrad", "mrad", 0, 0),
+    ("urad", "urad", 0, 0),
+    ("deg", "deg", 0, 0),
+    ("\u{b0}", "deg", 0, 0),
+    ("arcsec", "arcsec", 0, 0),
+    ("dps", "deg", -1, 0),
+    ("m", "m/s", 0, -1),
+    ("mm", "mm/s", 0, -1),
+    ("ft", "ft/s", 0, -1),
+    ("g", "g", 0, 1),
+    ("mg", "mg", 0, 1),
+];
+
+fn parse(text: &str) -> Option<HeaderUnit> {
+    let t = text
+        .replace(['\u{b5}', '\u{3bc}'], "u")
+        .replace('\u{b7}', "*")
+        .replace('\u{b2}', "^2")
+        .replace("\u{207b}\u{b9}", "^-1")
+        .replace("\u{207b}\u{b2}", "^-2");
+    // `G` is a gauss (magnetometers) as often as a g: not taken.
+    if t.split(|c: char| !c.is_alphanumeric()).any(|w| w == "G") {
+        return None;
+    }
+    let t = t.to_lowercase();
+    let mut atom: Option<(&str, i32)> = None;
+    // The power of time of the whole unit.
+    let mut time = 0i32;
+    for (i, part) in t.split('/').enumerate() {
+        let sign = if i == 0 { 1 } else { -1 };
+        let factors = part
+            .split(|c: char| c.is_whitespace() || c == '*' || c == '.')
+            .filter(|f| !f.is_empty());
+        let mut any = false;
+        for f in factors {
+            any = true;
+            let (base, power) = split_power(f)?;
+            let power = sign * power;
+            if base == "s" || base == "sec" {
+                time += power;
+                continue;
+            }
+            let &(_, unit, own, incr) = ATOMS.iter().find(|(a, _, _, _)| *a == base)?;
+            if atom.is_some() || power != 1 {
+                return None;
+            }
+            time += own;
+            atom = Some((unit, incr));
+        }
+        if !any {
+            return None;
+        }
+    }
+    let (unit, incr) = atom?;
+    let rate = match time - incr {
+        0 => false,
+        -1 => true,
+        _ => return None,
+    };
+    Some(HeaderUnit {
+        unit: unit.to_string(),
+        rate,
+        text: text.to_string(),
+    })
+}
+
+/// `s^-2`, `s-2`, `s2` -> (`s`, -2); a factor without a power has power 1.
+fn split_power(f: &str) -> Option<(&str, i32)> {
+    let at = f
+        .find(|c: char| c == '^' || c == '-' || c == '+' || c.is_ascii_digit())
+        .unwrap_or(f.len());
+    let (base, rest) = f.split_at(at);
+    if base.is_empty() {
+        return None;
+    }
+    let rest = rest.strip_prefix('^').unwrap_or(rest);
+    let power = if rest.is_empty() {
+        1
+    } else {
+        rest.parse::<i32>().ok()?
+    };
+    Some((base, power))
+}
+
+/// The channels' units of a text input whose headers carry them, and the kind they share.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ColumnUnits {
+    /// Per channel, in the reader's order: the increment unit (`u` for a column whose header
+    /// gives none).
+    pub units: Vec<String>,
+    /// The columns hold rates (every header with a unit says so).
+    pub rate: bool,
+    /// What was read, for the log: `` `w_RS_S_x [rad s^-1]`: rad/s `` per column, then the
+    /// columns without a unit.
+    pub account: String,
+}
+
+/// The units of `columns` (each channel's 1-based input column and header name) read from the
+/// headers, when no `--unit` is given. `rate`/`phase` are the options given. `Ok(None)`: no
+/// header carries a unit (the columns are in `u`, as before). Errors (a usage error to the
+/// caller, naming column and header): a unit not known; rates and increments mixed; `--rate`
+/// on increments, or `--phase` on rates, by their headers.
+pub fn units_from_headers(
+    columns: &[(usize, &str)],
+    rate: bool,
+    phase: bool,
+) -> Result<Option<ColumnUnits>, String> {
+    let mut read: Vec<Option<HeaderUnit>> = Vec::new();
+    for &(col, name) in columns {
+        match header_unit(name) {
+            None => read.push(None),
+            Some(Ok(u)) => read.push(Some(u)),
+            Some(Err(text)) => {
+                return Err(format!(
+                    "column {col} `{name}`: unit `{text}` in its header is not one allanscope \
+                     knows (angles rad, mrad, urad, deg, arcsec; velocities m/s, mm/s, ft/s; \
+                     accelerations g, mg; each per s for a rate, as `rad/s`, `rad s^-1`, \
+                     `m/s^2`); give --unit U for the columns' unit, or --columns to leave this \
+                     one out"
+                ))
+            }
+        }
+    }
+    let with: Vec<(usize, &HeaderUnit)> = read
+        .iter()
+        .enumerate()
+        .filter_map(|(i, u)| u.as_ref().map(|u| (i, u)))
+        .collect();
+    let Some(&(first, u0)) = with.first() else {
+        return Ok(None);
+    };
+    let name = |i: usize| format!("column {} `{}`", columns[i].0, columns[i].1);
+    if let Some(&(other, _)) = with.iter().find(|(_, u)| u.rate != u0.rate) {
+        let (r, inc) = if u0.rate {
+            (first, other)
+        } else {
+            (other, first)
+        };
+        return Err(format!(
+            "{} holds rates and {} increments by their headers: analyse them in separate runs \
+             (--columns), or give --unit and --rate or not to read them all one way",
+            name(r),
+            name(inc)
+        ));
+    }
+    if rate && !u0.rate {
+        return Err(format!(
+            "--rate, but {} holds increments by its header unit `{}`: leave out --rate, or give \
+             --unit to override the headers",
+            name(first),
+            u0.text
+        ));
+    }
+    if phase && u0.rate {
+        return Err(format!(
+            "--phase, but {} holds rates by its header unit `{}`: leave out --phase, or give \
+             --unit to override the headers",
+            name(first),
+            u0.text
+        ));
+    }
+    let mut account: Vec<String> = with
+        .iter()
+        .map(|(i, u)| format!("`{}` {}", columns[*i].1, shown(u)))
+        .collect();
+    let bare: Vec<String> = read
+        .iter()
+        .enumerate()
+        .filter(|(_, u)| u.is_none())
+        .map(|(i, _)| format!("`{}`", columns[i].1))
+        .collect();
+    if !bare.is_empty() {
+        account.push(format!("no unit (u) for {}", bare.join(", ")));
+    }
+    Ok(Some(ColumnUnits {
+        units: read
+            .iter()
+            .map(|u| u.as_ref().map_or("u".to_string(), |u| u.unit.clone()))
+            .collect(),
+        rate: u0.rate,
+        account: account.join(", "),
+    }))
+}
+
+/// `rates in deg/s (unit deg)` or `increments in m/s (unit m/s)`: a header unit as the log
+/// shows it, as written and as the records name it.
+fn shown(u: &HeaderUnit) -> String {
+    let what = if u.rate { "rates" } else { "increments" };
+    format!("{what} in {} (unit {})", u.text, u.unit)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::units::IncrementUnit;
+
+    fn unit(name: &str) -> (String, bool) {
+        let u = header_unit(name)
+            .unwrap_or_else(|| panic!("{name}: no unit"))
+            .unwrap_or_else(|t| panic!("{name}: `{t}` not known"));
+        // Every unit read is one `--unit` accepts, with datasheet units.
+        assert!(
+            IncrementUnit::parse(&u.unit).is_some(),
+            "{name}: {}",
+            u.unit
+        );
+        (u.unit, u.rate)
+    }
+
+    #[test]
+    fn the_units_datasets_write() {
+        let r = |u: &str| (u.to_string(), true);
+        let i = |u: &str| (u.to_string(), false);
+        // EuRoC, TUM-VI.
+        assert_eq!(unit("w_RS_S_x [rad s^-1]"), r("rad"));
+        assert_eq!(unit("a_RS_S_x [m s^-2]"), r("m/s"));
+        // Loggers and ROS exports.
+        assert_eq!(unit("gyro_x (deg/s)"), r("deg"));
+        assert_eq!(unit("acc_x[g]"), r("g"));
+        assert_eq!(unit("acc_z [mg]"), r("mg"));
+        assert_eq!(unit("gx [dps]"), r("deg"));
+        assert_eq!(unit("gx [\u{b0}/s]"), r("deg"));
+        assert_eq!(unit("wx [rad/sec]"), r("rad"));
+        assert_eq!(unit("ax [m/s^2]"), r("m/s"));
+        assert_eq!(unit("ax [m/s\u{b2}]"), r("m/s"));
+        assert_eq!(unit("ax [m.s-2]"), r("m/s"));
+        assert_eq!(unit("ax [m/s/s]"), r("m/s"));
+        assert_eq!(unit("ax [ft/s^2]"), r("ft/s"));
+        assert_eq!(unit("wx [mrad/s]"), r("mrad"));
+        assert_eq!(unit("wx [\u{b5}rad/s]"), r("urad"));
+        // Increments.
+        assert_eq!(unit("dtheta_x [rad]"), i("rad"));
+        assert_eq!(unit("dtheta_x [arcsec]"), i("arcsec"));
+        assert_eq!(unit("dv_x [m/s]"), i("m/s"));
+        assert_eq!(unit("dv_x [m s^-1]"), i("m/s"));
+        assert_eq!(unit("dv_x [g*s]"), i("g"));
+    }
+
+    #[test]
+    fn names_without_a_unit_and_units_not_known() {
+        for n in ["gx", "w_RS_S_x", "(x)", "[a]", "gyro x"] {
+            assert_eq!(header_unit(n), None, "{n}");
+        }
+        for (n, t) in [
+            ("mag_x [G]", "G"),
+            ("mag_x [uT]", "uT"),
+            ("temp [degC]", "degC"),
+            ("gx [deg/h]", "deg/h"),
+            ("gx [rad/s^2]", "rad/s^2"),
+            ("ax [m]", "m"),
+            ("gx [rad rad/s]", "rad rad/s"),
+            ("gx []", ""),
+            ("acc (x)", "x"),
+        ] {
+            assert_eq!(header_unit(n), Some(Err(t.to_string())), "{n}");
+        }
+    }
+
+    #[test]
+    fn an_input_reads_one_kind_or_is_refused() {
+        let euroc = [
+            (2, "w_RS_S_x [rad s^-1]"),
+            (5, "a_RS_S_x [m s^-2]"),
+            (8, "status"),
+        ];
+        let u = units_from_headers(&euroc, false, false).unwrap().unwrap();
+        assert_eq!(u.units, ["rad", "m/s", "u"]);
+        assert!(u.rate);
+        assert!(
+            u.account
+                .contains("`w_RS_S_x [rad s^-1]` rates in rad s^-1 (unit rad)"),
+            "{}",
+            u.account
+        );
+        assert!(
+            u.account.contains("no unit (u) for `status`"),
+            "{}",
+            u.account
+        );
+        // `--rate` agrees with the headers; `--phase` does not.
+        assert!(units_from_headers(&euroc, true, false).unwrap().is_some());
+        let e = units_from_headers(&euroc, false, true).unwrap_err();
+        assert!(
+            e.contains("--phase, but column 2 `w_RS_S_x [rad s^-1]`"),
+            "{e}"
+        );
+        // Increments by their headers: `--rate` refused, `--phase` taken.
+        let inc = [(1, "dth [deg]"), (2, "dv [m/s]")];
+        let e = units_from_headers(&inc, true, false).unwrap_err();
+        assert!(e.contains("--rate, but column 1 `dth [deg]`"), "{e}");
+        let u = units_from_headers(&inc, false, true).unwrap().unwrap();
+        assert_eq!((u.units, u.rate), (vec!["deg".into(), "m/s".into()], false));
+        // Mixed kinds, a unit not known, no units at all.
+        let e = units_from_headers(&[(1, "g [deg/s]"), (3, "d [deg]")], false, false).unwrap_err();
+        assert!(
+            e.starts_with("column 1 `g [deg/s]` holds rates and column 3 `d [deg]` increments"),
+            "{e}"
+        );
+        let e = units_from_headers(&[(4, "gyro_x (furlong/s)")], false, false).unwrap_err();
+        assert!(
+            e.starts_with("column 4 `gyro_x (furlong/s)`: unit `furlong/s`"),
+            "{e}"
+        );
+        assert_eq!(units_from_headers(&[(1, "gx")], false, false), Ok(None));
+    }
+}

@@ -1,0 +1,184 @@
+//! Text columns whose headers carry their unit in brackets (src/input/header_unit.rs): without
+//! `--unit`, `gyro_x (deg/s)` and `acc_x[g]` are rate samples in deg/s and g, and give the same
+//! records as the same column read with `--rate --unit deg` (or `g`) told by hand; `dtheta [deg]`
+//! is increments in deg. A unit not known, rates mixed with increments, and headers that
+//! contradict `--rate` or `--phase` are usage errors (exit 2) naming the column and its header.
+//! `--unit` overrides the headers.
+
+use crate::common::{exe, tmp_in};
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+use allanscope::sink::records::{CurveRecord, Record};
+
+/// A file of `header` over 400 rows of three deterministic, unequal columns with a time column
+/// first (10 ms steps).
+fn file(name: &str, header: &str) -> PathBuf {
+    let mut s = format!("{header}\n");
+    for i in 0..400 {
+        let a = ((i * 37 % 101) as f64 - 50.0) * 1e-3;
+        let b = ((i * 53 % 89) as f64 - 44.0) * 2e-3;
+        let c = ((i * 29 % 83) as f64 - 41.0) * 5e-4;
+        s += &format!("{:.2},{a:e},{b:e},{c:e}\n", i as f64 * 0.01);
+    }
+    let p = tmp_in("cli_header_units", name);
+    std::fs::write(&p, s).unwrap();
+    p
+}
+
+fn analyze(path: &Path, extra: &[&str]) -> Output {
+    exe()
+        .arg("analyze")
+        .arg(path)
+        .args(["--fit", "none", "--stats", "avar", "--json"])
+        .args(extra)
+        .env("ALLANSCOPE_LOG", "info")
+        .output()
+        .unwrap()
+}
+
+/// The final curves, by channel.
+fn curves(out: &Output) -> Vec<CurveRecord> {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter_map(|l| match serde_json::from_str(l).unwrap() {
+            Record::Curve(c) if c.r#final => Some(c),
+            _ => None,
+        })
+        .collect()
+}
+
+fn curve<'a>(cs: &'a [CurveRecord], channel: &str) -> &'a CurveRecord {
+    cs.iter()
+        .find(|c| c.channel == channel)
+        .unwrap_or_else(|| panic!("no curve of {channel}"))
+}
+
+fn usage_error(out: &Output, needles: &[&str]) {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    for n in needles {
+        assert!(err.contains(n), "`{n}` not in: {err}");
+    }
+    assert!(out.stdout.is_empty(), "records written before the error");
+}
+
+#[test]
+fn rates_and_increments_are_read_from_the_headers() {
+    let p = file("rates.csv", "time (s),gyro_x (deg/s),acc_x[g],dtheta [deg]");
+    // Two rate columns and one of increments: refused, naming both.
+    usage_error(
+        &analyze(&p, &[]),
+        &["column 2 `gyro_x (deg/s)` holds rates and column 4 `dtheta [deg]` increments"],
+    );
+    // The rates alone.
+    let picked = ["--columns", "gyro_x (deg/s),acc_x[g]"];
+    let out = analyze(&p, &picked);
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(
+        err.contains("no --unit: units from the column headers: `gyro_x (deg/s)` rates in deg/s (unit deg), `acc_x[g]` rates in g (unit g); read as rate samples, as --rate (--unit U overrides the headers)"),
+        "{err}"
+    );
+    let read = curves(&out);
+    let gyro = curve(&read, "gyro_x (deg/s)");
+    let acc = curve(&read, "acc_x[g]");
+    assert_eq!((gyro.unit.as_str(), acc.unit.as_str()), ("deg", "g"));
+    // Told by hand: the same numbers to the last bit.
+    let told = |column: &str, unit: &str| {
+        curves(&analyze(
+            &p,
+            &["--columns", column, "--rate", "--unit", unit],
+        ))
+        .remove(0)
+    };
+    assert_eq!(*gyro, told("gyro_x (deg/s)", "deg"));
+    assert_eq!(*acc, told("acc_x[g]", "g"));
+    // Rate samples, not increments: at m = 1, sigma of rate samples y is that of the
+    // increments y * tau0 divided by tau0 (both in u/s), so read as increments it would be
+    // 100 times larger at tau0 = 10 ms.
+    let as_increments = curves(&analyze(
+        &p,
+        &["--columns", "gyro_x (deg/s)", "--unit", "deg"],
+    ))
+    .remove(0);
+    let ratio = as_increments.sigma[0] / gyro.sigma[0];
+    assert!((ratio - 100.0).abs() < 1e-9, "{ratio}");
+
+    // The increments alone: as `--unit deg`; `--phase` takes them too.
+    let inc = ["--columns", "dtheta [deg]"];
+    let read = curves(&analyze(&p, &inc));
+    let mut told = inc.to_vec();
+    told.extend(["--unit", "deg"]);
+    assert_eq!(read, curves(&analyze(&p, &told)));
+    assert_eq!(read[0].unit, "deg");
+    let mut phase = inc.to_vec();
+    phase.push("--phase");
+    assert_eq!(curves(&analyze(&p, &phase))[0].unit, "deg");
+}
+
+#[test]
+fn headers_that_cannot_be_read_or_contradict_the_options_are_usage_errors() {
+    let p = file("mixed.csv", "t,w [rad s^-1],a [m s^-2],mag_x [uT]");
+    usage_error(
+        &analyze(&p, &[]),
+        &[
+            "mixed.csv: column 4 `mag_x [uT]`: unit `uT` in its header is not one",
+            "--unit U",
+        ],
+    );
+    let p = file(
+        "euroc.csv",
+        "#timestamp [s],w [rad s^-1],a [m s^-2],b [m s^-2]",
+    );
+    usage_error(
+        &analyze(&p, &["--phase"]),
+        &["--phase, but column 2 `w [rad s^-1]` holds rates by its header unit `rad s^-1`"],
+    );
+    // `--rate` agrees with these headers.
+    let read = curves(&analyze(&p, &["--rate"]));
+    assert_eq!(read.len(), 3);
+    assert_eq!(curve(&read, "w [rad s^-1]").unit, "rad");
+    assert_eq!(curve(&read, "b [m s^-2]").unit, "m/s");
+    let p = file("inc.csv", "t,dth_x [rad],dth_y [rad],dth_z [rad]");
+    usage_error(
+        &analyze(&p, &["--rate"]),
+        &["--rate, but column 2 `dth_x [rad]` holds increments by its header unit `rad`"],
+    );
+    // `--unit` overrides the headers, and says so.
+    let out = analyze(&p, &["--rate", "--unit", "mrad"]);
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(
+        err.contains("--unit mrad given: the units in the headers of `dth_x [rad]`"),
+        "{err}"
+    );
+    assert!(curves(&out).iter().all(|c| c.unit == "mrad"));
+}
+
+/// `diagnose` reads the headers as `analyze` does.
+#[test]
+fn diagnose_reads_the_header_units() {
+    let p = file("diag.csv", "t,gx [deg/s],gy [deg/s],gz [deg/s]");
+    let out = exe()
+        .arg("diagnose")
+        .arg(&p)
+        .args(["--channel", "gx [deg/s]", "--json"])
+        .env("ALLANSCOPE_LOG", "info")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("read as rate samples, as --rate"), "{err}");
+    let p = file("diag_bad.csv", "t,gx [deg/s],gy [deg/h],gz [deg/s]");
+    let out = exe()
+        .arg("diagnose")
+        .arg(&p)
+        .args(["--json"])
+        .output()
+        .unwrap();
+    usage_error(&out, &["column 3 `gy [deg/h]`: unit `deg/h`"]);
+}
