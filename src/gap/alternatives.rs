@@ -5,8 +5,11 @@
 //! The decisions of the stationary search are thresholds on the drop of `r' S^-1 r` per added
 //! parameter (a candidate's `score`; [`super::thresholds`]). "About as well" is read on that same
 //! scale: within [`ALT_MARGIN`] per parameter of the decision. At the first stationary step:
-//! - a candidate `Y` that passed its own threshold and scored within the margin of the chosen
-//!   `X`: the final model with `Y` in place of `X` (its shape from the scan);
+//! - a candidate `Y` that passed its own threshold and whose Akaike drop (its drop of
+//!   `r' S^-1 r` less two per parameter) is within [`AIC_MARGIN`] of the chosen `X`'s: the
+//!   final model with `Y` in place of `X` (its shape from the scan). For kinds with the same
+//!   number of parameters this is the margin [`ALT_MARGIN`] on their drops per parameter
+//!   (two-parameter kinds; one-parameter kinds get twice it);
 //! - a chosen `X` added on its likelihood ratio alone (the five terms alone were not flagged by
 //!   `G`) whose score is within the margin of its threshold: the final model without `X`, in
 //!   which the five terms absorb what `X` took (a Gauss-Markov hump becomes a raised flicker
@@ -27,6 +30,14 @@ use super::problem::{GapProblem, GlsFit, ModelSpec};
 /// ratio of `e` per parameter: weak evidence either way (Kass and Raftery 1995, J. Am. Stat.
 /// Assoc. 90, 773: Bayes factors below about 3 are "not worth more than a bare mention").
 pub const ALT_MARGIN: f64 = 2.0;
+
+/// Margin on Akaike's drop (the drop of `r' S^-1 r` less two per parameter) between candidates
+/// with different numbers of parameters: beyond 4 the model behind has "considerably less
+/// support" (Burnham and Anderson, "Model Selection and Multimodel Inference", 2002, section
+/// 2.6: a likelihood ratio above `e^2`). Twice [`ALT_MARGIN`], which is the same margin on the
+/// drop per parameter of a two-parameter kind. A candidate beyond it replaces the choice made
+/// per parameter ([`super::diagnose`](mod@super::diagnose)); within it, it is listed.
+pub const AIC_MARGIN: f64 = 2.0 * ALT_MARGIN;
 
 /// One candidate of a scan step.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -131,8 +142,13 @@ pub fn alternatives(
             let Some(sx) = first.scores.iter().find(|c| c.kind == x) else {
                 return out;
             };
+            // Akaike's drop of a candidate: its drop less two per parameter.
+            let aic = |c: &CandidateScore| {
+                let k = c.kind.n_params() as f64;
+                (c.score - 2.0) * k
+            };
             for y in first.scores.iter().filter(|c| c.kind != x) {
-                if y.score >= y.crit && y.score >= sx.score - ALT_MARGIN {
+                if y.score >= y.crit && aic(y) >= aic(sx) - AIC_MARGIN {
                     let mut alt = effects.to_vec();
                     alt[pos] = placeholder(y.params);
                     out.extend(refit(prob, &alt, &offset, fit));

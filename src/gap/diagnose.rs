@@ -41,7 +41,7 @@
 //! block-mean covariance of [`super::block_cov`]; [`super::segments`] tests homogeneity across
 //! segments and [`super::holdout`] judges a held-out run. This file orchestrates them.
 
-use super::alternatives::{alternatives, Alternative, CandidateScore, FirstScan};
+use super::alternatives::{alternatives, Alternative, CandidateScore, FirstScan, AIC_MARGIN};
 use super::effects::{effect_column, EffectKind, EffectParams};
 use super::evidence::EvidenceSnapshot;
 use super::outliers::OutlierCount;
@@ -314,7 +314,11 @@ fn diagnose_curve_once(
     temperature: Option<&EvidenceSnapshot>,
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
-    let prob = GapProblem::new(snap, opts)?;
+    let mut prob = GapProblem::new(snap, opts)?;
+    if let Some(lsb) = snap.lsb {
+        prob.set_filter_floor(lsb);
+    }
+    let prob = prob;
     let th = opts.thresholds;
     let j = prob.len();
     let base = prob
@@ -767,6 +771,7 @@ fn add_stationary(
             .filter(|p| p.0.kind().is_filter())
             .map(|p| p.2)
             .fold(f64::NEG_INFINITY, f64::max);
+        let passed_all = passed.clone();
         for mut p in passed {
             let k = p.0.kind();
             if k.is_filter() {
@@ -777,6 +782,26 @@ fn add_stationary(
             }
             if best.as_ref().is_none_or(|b| p.2 > b.2) {
                 best = Some(p);
+            }
+        }
+        // Across kinds the drop per parameter chooses. But a filter fitted at the long-memory
+        // end of its scan is not located (`at_memory_end`): a Gauss-Markov hump with a
+        // correlation time beyond the filters' range drops more per parameter through a
+        // one-parameter filter, and the model it leaves fits far worse. Such a choice is then
+        // replaced by a candidate that passed and fits better by more than AIC_MARGIN in
+        // Akaike's terms (drop less two per parameter; docs/gap.md, "Filters and
+        // Gauss-Markov terms").
+        if let Some(b) = best
+            .as_ref()
+            .filter(|b| super::filter_scan::at_memory_end(prob, &b.0))
+        {
+            let b_aic = aic(b);
+            if let Some(a) = passed_all
+                .iter()
+                .filter(|p| aic(p) > b_aic + AIC_MARGIN)
+                .max_by(|x, y| aic(x).total_cmp(&aic(y)))
+            {
+                best = Some(a.clone());
             }
         }
         if added == 0 {

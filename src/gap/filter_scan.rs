@@ -20,6 +20,42 @@ const DAMPING_PER_DECADE: f64 = 6.0;
 const GOLDEN_STEPS: usize = 16;
 const POLISH_ROUNDS: usize = 3;
 
+/// Whether the filter `p` was fitted at the long-memory end of its scan (within [`END_TOL`] of
+/// it; the polish converges onto the bound when the curve asks for more): the first order's or
+/// zero phase's longest time constant, the moving average's most taps, the second order's
+/// lowest natural frequency or highest damping (an overdamped second order's slow pole is its
+/// memory). There the curve asks for a longer memory than the scan spans, so the filter is not
+/// located: the diagnosis then weighs it against the other kinds by their whole fit
+/// (docs/gap.md, "Filters and Gauss-Markov terms"). False for the other kinds.
+pub fn at_memory_end(prob: &GapProblem, p: &EffectParams) -> bool {
+    let grid = prob.grid(p.kind());
+    let near = |x: f64, bound: f64| (x / bound).ln().abs() <= END_TOL.ln_1p();
+    match *p {
+        EffectParams::OutputFilter { time_constant_s }
+        | EffectParams::ZeroPhaseFilter { time_constant_s } => {
+            time_constant_s >= grid.hi || near(time_constant_s, grid.hi)
+        }
+        EffectParams::MovingAverage { taps, .. } => {
+            let m_max = prob.ms.last().copied().unwrap_or(1);
+            taps as u64 >= (MAX_TAPS as u64).min(m_max / 10).max(2)
+        }
+        EffectParams::SecondOrderFilter {
+            natural_frequency_hz,
+            damping,
+        } => {
+            natural_frequency_hz <= grid.lo
+                || near(natural_frequency_hz, grid.lo)
+                || damping >= DAMPING_RANGE.1
+                || near(damping, DAMPING_RANGE.1)
+        }
+        _ => false,
+    }
+}
+
+/// Relative distance to a scan's bound within which a fitted filter is at it
+/// ([`at_memory_end`]).
+pub const END_TOL: f64 = 0.02;
+
 /// Best parameters of `kind` (moving average or second order) on top of `base`, with the fit.
 pub fn scan(
     prob: &GapProblem,

@@ -97,17 +97,26 @@ pub fn effect_intervals(
     // Columns of J: active coefficients, then the shapes.
     let mut cols: Vec<Vec<f64>> = Vec::new();
     let mut coef_col: Vec<Option<usize>> = vec![None; fit.coef.len()];
+    let no_offset = ModelSpec {
+        offset: None,
+        ..spec.clone()
+    };
+    // What stays fixed without the offset (a filter's unfiltered rounding floor,
+    // `GapProblem::filter_floor`), taken off each column's part.
+    let fixed = prob.model_of(&no_offset, &vec![0.0; fit.coef.len()]);
     for (c, &v) in fit.coef.iter().enumerate() {
         if v > 0.0 {
             let mut unit = vec![0.0; fit.coef.len()];
             unit[c] = v;
-            let no_offset = ModelSpec {
-                offset: None,
-                ..spec.clone()
-            };
             let part = prob.model_of(&no_offset, &unit);
             coef_col[c] = Some(cols.len());
-            cols.push(part.iter().zip(&m0).map(|(a, m)| a / m).collect());
+            cols.push(
+                part.iter()
+                    .zip(&fixed)
+                    .zip(&m0)
+                    .map(|((a, f), m)| (a - f) / m)
+                    .collect(),
+            );
         }
     }
     let mut shape_col: Vec<Vec<usize>> = vec![Vec::new(); params.len()];

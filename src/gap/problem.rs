@@ -42,6 +42,12 @@ pub struct GapProblem {
     pub n_inc: u64,
     /// The plain five-term fit (the paper's model-weighted NNLS) that set the covariance.
     pub c_init: [f64; 5],
+    /// White rate that a unit's output filter does not smooth, as AVAR at each tau: the
+    /// rounding of each delivered rate sample, `N_q^2 / tau` with `N_q^2 = lsb^2 / (12 tau0)`
+    /// ([`super::quantization`]), which happens after the filter. When set, every model with a
+    /// filter carries it as a fixed part beside the filtered N column ([`GapProblem::set_filter_floor`];
+    /// docs/gap.md, "Filters and Gauss-Markov terms"). None: no such part.
+    pub filter_floor: Option<Vec<f64>>,
 }
 
 /// One model to fit: the five terms (N column optionally filtered) plus free effect columns and
@@ -184,7 +190,59 @@ impl GapProblem {
             tau0_s: tau0,
             n_inc: n,
             c_init,
+            filter_floor: None,
         })
+    }
+
+    /// The fixed part of a model's curve: the spec's offset, plus the unfiltered rounding floor
+    /// ([`GapProblem::filter_floor`]) when the spec has a filter.
+    fn offset_of(&self, spec: &ModelSpec) -> Vec<f64> {
+        let mut off = spec.offset.clone().unwrap_or_else(|| vec![0.0; self.len()]);
+        if let (Some(_), Some(fl)) = (spec.filter, self.filter_floor.as_ref()) {
+            for (o, f) in off.iter_mut().zip(fl) {
+                *o += f;
+            }
+        }
+        off
+    }
+
+    /// Decides whether the models with an output filter carry the white rate of rate samples
+    /// rounded after the filter, for values that are whole multiples of `lsb` (u per increment):
+    /// a MEMS part filters its rate, then rounds each sample, so that rounding (`N_q^2 / tau`,
+    /// [`super::quantization`]) is white rate the filter does not smooth, while a counter with
+    /// carry leaves white phase noise (the Q column) instead. The two cases give the same values,
+    /// so the curve decides: the first-order filter is scanned with and without the floor and the
+    /// floor is kept when it fits better. Without a filter on the curve the choice changes
+    /// nothing (the filter is not named); with one and a counter with carry the floor is a
+    /// white rate that is not there, and the fit without it wins.
+    pub fn set_filter_floor(&mut self, lsb: f64) {
+        self.filter_floor = None;
+        if !(lsb > 0.0 && lsb.is_finite()) {
+            return;
+        }
+        let n_q2 = lsb * lsb / (12.0 * self.tau0_s);
+        let floor: Vec<f64> = self.tau.iter().map(|t| n_q2 / t).collect();
+        let base = ModelSpec::default();
+        let without = self.scan(&base, EffectKind::OutputFilter).map(|f| f.1.chi2);
+        self.filter_floor = Some(floor);
+        let with = self.scan(&base, EffectKind::OutputFilter);
+        let keep = match (&with, without) {
+            (Some((t, w)), Some(wo)) if w.chi2 < wo => {
+                // The rounding is white and uniform only while the filtered sample's own noise
+                // is above about half a step (Widrow and Kollar 2008, ch. 4-5): the filtered
+                // white rate's per-sample variance is `N^2 / tau0 (1 - a) / (1 + a)`,
+                // `a = exp(-tau0 / T)`. A coarser step makes the rounding a slow wander that
+                // neither model describes, and the floor is left out.
+                let a = (-self.tau0_s / t).exp();
+                let n2 = w.coef.get(1).copied().unwrap_or(0.0).max(0.0);
+                let sd_rate = (n2 / self.tau0_s * (1.0 - a) / (1.0 + a)).sqrt();
+                sd_rate >= 0.5 * lsb / self.tau0_s
+            }
+            _ => false,
+        };
+        if !keep {
+            self.filter_floor = None;
+        }
     }
 
     pub fn len(&self) -> usize {
@@ -221,8 +279,10 @@ impl GapProblem {
                 let v: f64 = (0..x.ncols())
                     .map(|c| x[(r, c)] * coef.get(c).copied().unwrap_or(0.0))
                     .sum();
-                v + spec.offset.as_ref().map_or(0.0, |o| o[r])
+                v
             })
+            .zip(self.offset_of(spec))
+            .map(|(v, o)| v + o)
             .collect()
     }
 
@@ -274,7 +334,7 @@ impl GapProblem {
         let j = self.len();
         let x = self.columns(spec);
         let k = x.ncols();
-        let off = spec.offset.clone().unwrap_or_else(|| vec![0.0; j]);
+        let off = self.offset_of(spec);
         let mut d: Vec<f64> = self.y.clone();
         let mut coef = DVector::zeros(k);
         let mut model = vec![0.0; j];

@@ -99,14 +99,24 @@ pub fn judge_quantization(
         prob.gls(&s).map(|f| f.chi2 - fit.chi2)
     };
     let d_angle = with_floor(&|t| 3.0 * q_q * q_q / (t * t))?.max(0.0);
-    let d_rate = with_floor(&|t| n_q * n_q / t)?.max(0.0);
+    // A filtered model may carry the rounding floor already (`GapProblem::filter_floor`): the
+    // rate hypothesis is then the fitted model itself.
+    let d_rate = if spec.filter.is_some() && prob.filter_floor.is_some() {
+        0.0
+    } else {
+        with_floor(&|t| n_q * n_q / t)?.max(0.0)
+    };
     let kind = match (d_angle > QUANT_CHI2, d_rate > QUANT_CHI2) {
         (false, false) => QuantKind::Either,
         (true, false) => QuantKind::Rate,
         (false, true) => QuantKind::Angle,
         (true, true) => QuantKind::Neither,
     };
-    let n2 = fit.coef.get(1).copied().unwrap_or(0.0).max(0.0);
+    // With the floor in, the N column is the unit's own white rate and the rounding is beside
+    // it; the whole white rate is their sum.
+    let floor_in = spec.filter.is_some() && prob.filter_floor.is_some();
+    let n2_col = fit.coef.get(1).copied().unwrap_or(0.0).max(0.0);
+    let n2 = if floor_in { n2_col + n_q * n_q } else { n2_col };
     let share = if n2 > 0.0 {
         n_q * n_q / n2
     } else {

@@ -6,6 +6,7 @@ mod alternatives;
 mod diagnosis;
 mod families;
 mod filters;
+mod gm_or_filter;
 mod mixture;
 mod oracle;
 mod outliers;
