@@ -14,15 +14,7 @@ fn tmp(name: &str) -> PathBuf {
 }
 
 fn records(out: &Output) -> Vec<Record> {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout)
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{l}: {e}")))
-        .collect()
+    crate::common::records_of(out)
 }
 
 /// White rate noise of 0.5 u/sqrt(s) as increments at tau0 = 0.01 s (seeded LCG + Box-Muller).

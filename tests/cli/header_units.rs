@@ -39,14 +39,9 @@ fn analyze(path: &Path, extra: &[&str]) -> Output {
 
 /// The final curves, by channel.
 fn curves(out: &Output) -> Vec<CurveRecord> {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout)
-        .lines()
-        .filter_map(|l| match serde_json::from_str(l).unwrap() {
+    crate::common::records_of(out)
+        .into_iter()
+        .filter_map(|r| match r {
             Record::Curve(c) if c.r#final => Some(c),
             _ => None,
         })

@@ -29,6 +29,17 @@ pub fn stdout_of(cmd: &mut std::process::Command) -> String {
 }
 
 /// The JSON lines of a successful command's standard output.
+/// The records a successful run wrote to standard output, typed (a failed run's standard error
+/// is the panic message).
+pub fn records_of(out: &std::process::Output) -> Vec<allanscope::sink::records::Record> {
+    if !out.status.success() {
+        panic!("{:?}: {}", out.status, String::from_utf8_lossy(&out.stderr));
+    }
+    let text = String::from_utf8_lossy(&out.stdout);
+    let record = |l: &str| serde_json::from_str(l).unwrap_or_else(|e| panic!("{l}: {e}"));
+    text.lines().map(record).collect()
+}
+
 pub fn parse_lines_of(cmd: &mut std::process::Command) -> Vec<serde_json::Value> {
     pipeline::parse_lines(stdout_of(cmd).as_bytes())
 }

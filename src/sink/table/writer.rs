@@ -102,24 +102,25 @@ impl<W: Write> TableWriter<W> {
         }
         if let Some(unit) = summary {
             // The other units' records wait for their own summaries.
-            let (mine, others) = std::mem::take(&mut self.pending)
-                .into_iter()
-                .partition(|w| w.unit == unit);
-            self.pending = others;
-            self.print(mine)?;
+            self.print_unit(&unit)?;
         }
         Ok(())
+    }
+
+    /// Prints the pending records of `unit` (`None`: a one-unit run), leaving the others.
+    fn print_unit(&mut self, unit: &Option<String>) -> std::io::Result<()> {
+        let (mine, others) = std::mem::take(&mut self.pending)
+            .into_iter()
+            .partition(|w| w.unit == *unit);
+        self.pending = others;
+        self.print(mine)
     }
 
     /// Prints every pending record, each unit's under its name.
     fn print_pending(&mut self) -> std::io::Result<()> {
         while let Some(first) = self.pending.first() {
             let unit = first.unit.clone();
-            let (mine, others) = std::mem::take(&mut self.pending)
-                .into_iter()
-                .partition(|w| w.unit == unit);
-            self.pending = others;
-            self.print(mine)?;
+            self.print_unit(&unit)?;
         }
         Ok(())
     }
