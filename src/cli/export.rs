@@ -204,7 +204,16 @@ pub fn run(a: &ExportArgs) -> Result<()> {
                 ExportFormat::Vins => export::vins(&imu),
                 _ => export::kf_gins(&imu),
             }
-            .map_err(usage)?
+            .map_err(|e| {
+                let mut have: Vec<String> = Vec::new();
+                for f in &fits {
+                    let c = format!("{} [{}]", f.channel, f.unit);
+                    if !have.contains(&c) {
+                        have.push(c);
+                    }
+                }
+                usage(format!("{tag}: {e} (its fits: {})", have.join(", ")))
+            })?
         }
     };
     let mut f = if a.force {

@@ -306,3 +306,40 @@ fn curves_csv_and_stable32_table() {
     assert_eq!(rows[0].af, 1);
     assert!((rows[0].sigma / curve["sigma"][0].as_f64().unwrap() - 1.0).abs() < 5e-5);
 }
+
+/// An IMU format from results without a gyro channel: exit 2, and the message names the input
+/// and the channels its fits have, so the user sees why none was taken.
+#[test]
+fn a_missing_kind_names_the_input_and_its_fits() {
+    let text = std::fs::read_to_string(results()).unwrap();
+    let accel_only: String = text
+        .lines()
+        .filter(|l| {
+            let v: Value = serde_json::from_str(l).unwrap();
+            v["channel"] != "gx"
+        })
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let res = common::tmp_in("export", "accel_only.jsonl");
+    std::fs::write(&res, accel_only).unwrap();
+    let out = common::tmp_in("export", "accel_only.yaml");
+    let _ = std::fs::remove_file(&out);
+    let o = common::exe()
+        .args(["export", res.to_str().unwrap(), "--to", "kalibr", "-o"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("accel_only.jsonl: this format needs gyro channels")
+            && err.contains("(its fits: ax [m/s])"),
+        "{err}"
+    );
+    let said = err
+        .lines()
+        .filter(|l| l.starts_with("allanscope: "))
+        .count();
+    assert_eq!(said, 1, "the error once: {err}");
+    assert!(!out.exists());
+}
