@@ -327,6 +327,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
     let profile = temp_snap
         .as_ref()
         .and_then(|t| settling_profile(&t.block_means, t.block_len as f64 * tau0));
+    let mut written = 0usize;
     for (i, name) in main.names.iter().enumerate() {
         let snap = main.evidence[i].snapshot();
         let diag = match diagnose_with_temperature(&snap, temp_snap.as_ref(), &opts) {
@@ -382,11 +383,20 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
             ));
         }
         sink.write(&Record::from(rec))?;
+        written += 1;
         if a.model_out.is_some() {
             fitted.extend(twin);
         }
     }
     sink.flush()?;
+    if written == 0 {
+        // Each channel's reason was logged above; a run that diagnosed nothing is an error,
+        // not an empty success.
+        return Err(usage(format!(
+            "{}: no channel could be diagnosed (see the warnings above)",
+            a.input
+        )));
+    }
     if let Some(p) = &a.model_out {
         if fitted.is_empty() {
             return Err(anyhow::anyhow!(
