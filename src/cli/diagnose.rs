@@ -398,12 +398,6 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
         )));
     }
     if let Some(p) = &a.model_out {
-        if fitted.is_empty() {
-            return Err(anyhow::anyhow!(
-                "--model-out {}: no channel could be diagnosed, no model written",
-                p.display()
-            ));
-        }
         let model = fitted_unit(tau0, fitted, profile);
         let header = vec![
             format!("The unit fitted by `allanscope diagnose {}`.", a.input),

@@ -41,6 +41,18 @@ fn kind_of(f: &FitRecord) -> Option<SensorKind> {
     IncrementUnit::parse(&f.unit).map(|u| u.kind)
 }
 
+/// `label` of each fit, each label once, in the order the fits come.
+fn distinct(fits: &[&FitRecord], label: impl Fn(&FitRecord) -> String) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for f in fits {
+        let l = label(f);
+        if !out.contains(&l) {
+            out.push(l);
+        }
+    }
+    out
+}
+
 /// The fits of one kind: the named channels, or every channel of that kind.
 fn chosen<'a>(
     fits: &[&'a FitRecord],
@@ -57,12 +69,7 @@ fn chosen<'a>(
                 let mine: Vec<&FitRecord> =
                     fits.iter().copied().filter(|f| &f.channel == n).collect();
                 if mine.is_empty() {
-                    let mut have: Vec<&str> = Vec::new();
-                    for f in fits {
-                        if !have.contains(&f.channel.as_str()) {
-                            have.push(&f.channel);
-                        }
-                    }
+                    let have = distinct(fits, |f| f.channel.clone());
                     return Err(usage(format!(
                         "--{flag} {n}: no final fit of that channel in the input (it has: {})",
                         have.join(", ")
@@ -205,13 +212,7 @@ pub fn run(a: &ExportArgs) -> Result<()> {
                 _ => export::kf_gins(&imu),
             }
             .map_err(|e| {
-                let mut have: Vec<String> = Vec::new();
-                for f in &fits {
-                    let c = format!("{} [{}]", f.channel, f.unit);
-                    if !have.contains(&c) {
-                        have.push(c);
-                    }
-                }
+                let have = distinct(&refs, |f| format!("{} [{}]", f.channel, f.unit));
                 usage(format!("{tag}: {e} (its fits: {})", have.join(", ")))
             })?
         }
