@@ -5,9 +5,8 @@ use anyhow::Result;
 
 use super::{read_json_lines, usage, ReportArgs};
 use allanscope::sink::page_file::write_page;
-use allanscope::sink::records::Record;
 use allanscope::sink::report::render_html;
-use allanscope::sink::results::ResultFile;
+use allanscope::sink::results::{ReadRecord, ResultFile};
 
 pub fn run(a: &ReportArgs) -> Result<()> {
     let inputs = a
@@ -29,7 +28,7 @@ pub fn run(a: &ReportArgs) -> Result<()> {
         let any = f
             .records
             .iter()
-            .any(|v| matches!(Record::from_value(v.clone()), Ok(Some(_))));
+            .any(|v| ReadRecord::from_value(v.clone()).is_some());
         if !any {
             return Err(usage(format!(
                 "{}: no allanscope record in it (curve, fit, diagnosis, health, aggregate, \
