@@ -124,6 +124,7 @@
 //!   lsb.rs                 the quantization step read off the values
 //!   quantization.rs        which quantization the values show
 //!   quant_limit.rs         when quantization limits what can be told
+//!   rounding.rs            rate samples rounded after a filter, as AVAR
 //!   segments.rs            homogeneity of the curve across the run's segments
 //!   thresholds.rs          the decision thresholds, calibrated by simulation
 //!   diagnose.rs            the diagnosis: effects chosen, verdict

@@ -52,6 +52,10 @@ pub struct CandidateScore {
     /// The gap `G` of the model with the candidate in (its residual scale: about 1 when the
     /// covariance is right).
     pub gap_alt: f64,
+    /// For a filter judged by its own threshold (the model not flagged by `G`): its drop per
+    /// parameter against the model with white phase noise of either sign, the statistic its
+    /// threshold judged (`diagnose`'s `beyond_tail_reference`); `score` otherwise.
+    pub score_tail: f64,
 }
 
 /// The first step of the stationary search.
@@ -148,13 +152,13 @@ pub fn alternatives(
                 (c.score - 2.0) * k
             };
             for y in first.scores.iter().filter(|c| c.kind != x) {
-                if y.score >= y.crit && aic(y) >= aic(sx) - AIC_MARGIN {
+                if y.score_tail >= y.crit && aic(y) >= aic(sx) - AIC_MARGIN {
                     let mut alt = effects.to_vec();
                     alt[pos] = placeholder(y.params);
                     out.extend(refit(prob, &alt, &offset, fit));
                 }
             }
-            if !first.flagged_g && sx.score < sx.crit + ALT_MARGIN {
+            if !first.flagged_g && sx.score_tail < sx.crit + ALT_MARGIN {
                 let mut alt = effects.to_vec();
                 alt.remove(pos);
                 out.extend(refit(prob, &alt, &offset, fit));
@@ -162,7 +166,7 @@ pub fn alternatives(
         }
         None if !first.flagged_g => {
             for y in &first.scores {
-                if y.score >= y.crit - ALT_MARGIN && y.score < y.crit {
+                if y.score_tail >= y.crit - ALT_MARGIN && y.score_tail < y.crit {
                     let mut alt = effects.to_vec();
                     alt.push(placeholder(y.params));
                     out.extend(refit(prob, &alt, &offset, fit));

@@ -718,6 +718,9 @@ fn add_stationary(
         let mut best: Option<(EffectParams, GlsFit, f64)> = None;
         let mut scores: Vec<CandidateScore> = Vec::new();
         let mut passed: Vec<(EffectParams, GlsFit, f64)> = Vec::new();
+        // The filters' likelihood ratios are taken against the model with white phase noise
+        // of either sign (`beyond_tail_reference`), computed once per step.
+        let mut tail_ref: Option<f64> = None;
         for &kind in kinds {
             // One output filter at most (it takes the N column).
             if effects.iter().any(|e| {
@@ -732,6 +735,14 @@ fn add_stationary(
                 } else {
                     th.lr_crit_of(kind)
                 };
+                // A filter flags the model on its own only by what it shows beyond its tail
+                // (docs/gap.md, "A filter's tail is white phase noise").
+                let score_tail = if kind.is_filter() && !flagged_g && th.filter_tail {
+                    let r = *tail_ref.get_or_insert_with(|| beyond_tail_reference(prob, &spec, &cur));
+                    (r - f.chi2) / kind.n_params() as f64
+                } else {
+                    score
+                };
                 if added == 0 {
                     scores.push(CandidateScore {
                         kind,
@@ -739,12 +750,13 @@ fn add_stationary(
                         score,
                         crit,
                         gap_alt: f.gap(),
+                        score_tail,
                     });
                 }
                 let stat = if flagged_g {
                     score
                 } else {
-                    th.lr_stat(score, f.gap())
+                    th.lr_stat(score_tail, f.gap())
                 };
                 if stat >= crit {
                     passed.push((params, f, score));
@@ -824,6 +836,29 @@ fn add_stationary(
         added += 1;
     }
     (spec, cur, first)
+}
+
+/// The `r' S^-1 r` against which a filter's likelihood ratio is taken when the model is not
+/// flagged by `G`: the lower of the current model's (`cur`, of `spec`) and that of the same
+/// model with white phase noise of either sign (the Q column free below zero as well).
+///
+/// Far beyond its memory `T`, any low-pass filter of the white rate leaves `N^2 / tau` less a
+/// term in `1 / tau^2` (a first order's filtered phase is the phase less `T` times the filtered
+/// rate, which is stationary: white phase noise, negatively correlated with the rate's), i.e.
+/// white phase noise of negative size. A filter whose memory is short against the curve's
+/// first taus shows nothing else; and where the unit has no white phase noise (a MEMS part
+/// that rounds rate samples), the base fit holds `Q = 0` at its bound, so on clean runs a
+/// chance deficit of the shortest taus is taken by the filter in half the runs: its
+/// likelihood ratio then has the law of about two degrees of freedom, not the one its
+/// threshold was set for (docs/gap.md, "A filter's tail is white phase noise").
+fn beyond_tail_reference(prob: &GapProblem, spec: &ModelSpec, cur: &GlsFit) -> f64 {
+    let mut s = spec.clone();
+    s.extra
+        .push(prob.tau.iter().map(|&t| -terms::basis(t)[0]).collect());
+    prob.gls(&s)
+        .map(|f| f.chi2)
+        .filter(|c| c.is_finite())
+        .map_or(cur.chi2, |c| c.min(cur.chi2))
 }
 
 /// A few words on the shape of what the model leaves.

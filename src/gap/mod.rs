@@ -38,6 +38,7 @@ pub mod problem;
 pub mod quant_limit;
 pub mod quantization;
 pub mod record;
+pub mod rounding;
 pub mod segments;
 pub mod steps;
 pub mod temperature;

@@ -9,6 +9,7 @@ use super::diagnose::{DiagnoseError, DiagnoseOptions, Region};
 use super::effects::{canonical_lowpass, effect_column, EffectKind, EffectParams, Grid};
 use super::evidence::EvidenceSnapshot;
 use super::filter_cov::filter_cov_correction;
+use super::rounding::{filtered_sigma, rounding_avar, MIN_SIGMA_STEPS};
 use crate::allan::CurvePoint;
 use crate::model::avar_cov::{AvarCovariance, CovPoint};
 use crate::model::fit::{fit, FitOptions};
@@ -42,12 +43,23 @@ pub struct GapProblem {
     pub n_inc: u64,
     /// The plain five-term fit (the paper's model-weighted NNLS) that set the covariance.
     pub c_init: [f64; 5],
-    /// White rate that a unit's output filter does not smooth, as AVAR at each tau: the
-    /// rounding of each delivered rate sample, `N_q^2 / tau` with `N_q^2 = lsb^2 / (12 tau0)`
-    /// ([`super::quantization`]), which happens after the filter. When set, every model with a
-    /// filter carries it as a fixed part beside the filtered N column ([`GapProblem::set_filter_floor`];
-    /// docs/gap.md, "Filters and Gauss-Markov terms"). None: no such part.
-    pub filter_floor: Option<Vec<f64>>,
+    /// The rounding of each delivered rate sample after the unit's filter, which the filter
+    /// does not smooth ([`super::rounding`]; white, `N_q^2 / tau` with
+    /// `N_q^2 = lsb^2 / (12 tau0)`, when the step is fine against the filtered noise). When
+    /// set, every model with a filter carries its AVAR, for that filter, as a fixed part beside
+    /// the filtered N column ([`GapProblem::set_filter_floor`]; docs/gap.md, "Filters and
+    /// Gauss-Markov terms", "Rounding after a filter"). None: no such part.
+    pub filter_floor: Option<FilterFloor>,
+}
+
+/// The rate rounding after a unit's filter ([`GapProblem::filter_floor`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FilterFloor {
+    /// The step of the delivered rate samples, u/s.
+    pub step: f64,
+    /// The unit's white rate `N^2` (u^2/s) that sets the filtered samples' noise, from the
+    /// filter's fit when the floor was chosen.
+    pub n2: f64,
 }
 
 /// One model to fit: the five terms (N column optionally filtered) plus free effect columns and
@@ -198,21 +210,24 @@ impl GapProblem {
     /// ([`GapProblem::filter_floor`]) when the spec has a filter.
     fn offset_of(&self, spec: &ModelSpec) -> Vec<f64> {
         let mut off = spec.offset.clone().unwrap_or_else(|| vec![0.0; self.len()]);
-        if let (Some(_), Some(fl)) = (spec.filter, self.filter_floor.as_ref()) {
-            for (o, f) in off.iter_mut().zip(fl) {
+        if let (Some(lp), Some(fl)) = (spec.filter, self.filter_floor) {
+            let r = rounding_avar(&lp, self.tau0_s, fl.step, fl.n2, &self.ms);
+            for (o, f) in off.iter_mut().zip(&r) {
                 *o += f;
             }
         }
         off
     }
 
-    /// Decides whether the models with an output filter carry the white rate of rate samples
+    /// Decides whether the models with an output filter carry the rounding of rate samples
     /// rounded after the filter, for values that are whole multiples of `lsb` (u per increment):
-    /// a MEMS part filters its rate, then rounds each sample, so that rounding (`N_q^2 / tau`,
-    /// [`super::quantization`]) is white rate the filter does not smooth, while a counter with
-    /// carry leaves white phase noise (the Q column) instead. The two cases give the same values,
-    /// so the curve decides: the first-order filter is scanned with and without the floor and the
-    /// floor is kept when it fits better. Without a filter on the curve the choice changes
+    /// a MEMS part filters its rate, then rounds each sample, so that rounding
+    /// ([`super::rounding`]: white `N_q^2 / tau` when the step is fine against the filtered
+    /// noise, correlated as the filtered samples are when it is not) is rate noise the filter
+    /// does not smooth, while a counter with carry leaves white phase noise (the Q column)
+    /// instead. The two cases give the same values, so the curve decides: the first-order
+    /// filter and the moving average are scanned with and without the rounding and it is kept
+    /// when the best with it fits better. Without a filter on the curve the choice changes
     /// nothing (the filter is not named); with one and a counter with carry the floor is a
     /// white rate that is not there, and the fit without it wins.
     pub fn set_filter_floor(&mut self, lsb: f64) {
@@ -220,23 +235,39 @@ impl GapProblem {
         if !(lsb > 0.0 && lsb.is_finite()) {
             return;
         }
-        let n_q2 = lsb * lsb / (12.0 * self.tau0_s);
-        let floor: Vec<f64> = self.tau.iter().map(|t| n_q2 / t).collect();
+        let step = lsb / self.tau0_s;
         let base = ModelSpec::default();
-        let without = self.scan(&base, EffectKind::OutputFilter).map(|f| f.1.chi2);
-        self.filter_floor = Some(floor);
-        let with = self.scan(&base, EffectKind::OutputFilter);
+        // The first order and the moving average (the filters MEMS parts run), each scanned
+        // without the rounding and with it; the best of each set decides.
+        let best = |p: &Self| {
+            [EffectKind::OutputFilter, EffectKind::MovingAverage]
+                .iter()
+                .filter_map(|&k| p.scan_params(&base, k))
+                .min_by(|a, b| a.1.chi2.total_cmp(&b.1.chi2))
+        };
+        let without = best(self).map(|f| f.1.chi2);
+        // The filtered noise the rounding acts on comes from the unit's N: first the plain
+        // fit's (which holds the rounding's white part too), then the filter's own.
+        self.filter_floor = Some(FilterFloor {
+            step,
+            n2: self.c_init[1].max(0.0),
+        });
+        let mut with = best(self);
+        if let Some((p, f)) = &with {
+            self.filter_floor = Some(FilterFloor {
+                step,
+                n2: f.coef.get(1).copied().unwrap_or(0.0).max(0.0),
+            });
+            with = self.scan_params(&base, p.kind());
+        }
         let keep = match (&with, without) {
-            (Some((t, w)), Some(wo)) if w.chi2 < wo => {
-                // The rounding is white and uniform only while the filtered sample's own noise
-                // is above about half a step (Widrow and Kollar 2008, ch. 4-5): the filtered
-                // white rate's per-sample variance is `N^2 / tau0 (1 - a) / (1 + a)`,
-                // `a = exp(-tau0 / T)`. A coarser step makes the rounding a slow wander that
-                // neither model describes, and the floor is left out.
-                let a = (-self.tau0_s / t).exp();
+            (Some((p, w)), Some(wo)) if w.chi2 < wo => {
+                // The model holds while the filtered sample's noise is at least
+                // MIN_SIGMA_STEPS steps ([`super::rounding`]): below, the rounding holds the
+                // output on one step (a dead band) and neither model describes it.
                 let n2 = w.coef.get(1).copied().unwrap_or(0.0).max(0.0);
-                let sd_rate = (n2 / self.tau0_s * (1.0 - a) / (1.0 + a)).sqrt();
-                sd_rate >= 0.5 * lsb / self.tau0_s
+                p.lowpass()
+                    .is_some_and(|lp| filtered_sigma(&lp, self.tau0_s, n2) >= MIN_SIGMA_STEPS * step)
             }
             _ => false,
         };

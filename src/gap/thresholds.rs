@@ -47,6 +47,11 @@ pub struct Thresholds {
     /// null ([`WarmupFinding::p_value`](super::warmup::WarmupFinding::p_value)) is at most this, in place of
     /// `B > warmup_bf`: the test's level then follows each run's covariance and scan.
     pub warmup_alpha: f64,
+    /// A filter judged by its own threshold (the model not flagged by `G`) is judged by its
+    /// drop against the model with white phase noise of either sign, what a filter shows
+    /// beyond its `1 / tau^2` tail (docs/gap.md, "A filter's tail is white phase noise");
+    /// false: against the model before it, as until session 9.
+    pub filter_tail: bool,
 }
 
 impl Thresholds {
@@ -115,6 +120,8 @@ impl Default for Thresholds {
             lr_scaled: true,
             warmup_scaled: false,
             warmup_alpha: 0.02,
+            // Session 10: the filters' likelihood ratios beyond their tail.
+            filter_tail: true,
         }
     }
 }
