@@ -114,6 +114,7 @@
 //!   with carry: VRW 5-30 ug/sqrt(Hz), flicker 1-10 ug, K 1e-7-1e-6 m/s^2/sqrt(s), `R` meeting the
 //!   flicker floor at T_run / 30 to T_run / 3, 100-400 Hz, the LSB 0.3-3 of the per-sample noise,
 //!   a constant input (gravity's projection) uniform in [-9.81, 9.81] m/s^2.
+//!
 //! On the families with an intrinsic filter an `output_filter` (or other filter) draw replaces
 //! that filter (the simulator holds one); their detection cells are the other four effects on
 //! top of it.
