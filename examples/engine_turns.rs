@@ -5,7 +5,7 @@
 //! same settings, same results (the levels are compared); thread CPU time of each way, several
 //! rounds side by side. BENCHMARKS.md, issue 15 session 9, item (a).
 //!
-//! `cargo run --release --example engine_turns`
+//! `cargo run --release --example engine_turns [-- TURN]` (TURN samples per turn, default 6,200)
 use allanscope::allan::accum::{AccumConfig, ChannelAccumulator, LevelReading, Overlap, StatSet};
 use allanscope::sim::{SimModel, Simulator};
 
@@ -31,14 +31,18 @@ fn main() -> anyhow::Result<()> {
             d.push(c.unwrap_or(0));
         }
     }
+    let turn: usize = match std::env::args().nth(1) {
+        Some(a) => a.parse()?,
+        None => TURN,
+    };
     let mut ratios = Vec::new();
     for round in 1..=ROUNDS {
         let (whole, a) = feed(&cfg, &data, N);
-        let (turns, b) = feed(&cfg, &data, TURN);
+        let (turns, b) = feed(&cfg, &data, turn);
         anyhow::ensure!(a == b, "the two ways gave different levels");
         ratios.push(turns / whole);
         println!(
-            "round {round}: whole {whole:.4} s, taking turns every {TURN} samples {turns:.4} s, ratio {:.3}",
+            "round {round}: whole {whole:.4} s, taking turns every {turn} samples {turns:.4} s, ratio {:.3}",
             turns / whole
         );
     }

@@ -12,6 +12,12 @@
 //! state: the decoder waits for the next [`Decoder::push`]. Every byte is accounted for:
 //! `bytes_accepted + bytes_skipped + pending() == bytes_in`.
 //!
+//! After a good frame of a format with its own counter and no interleave, the frames that
+//! follow it where it ended are checked four at a time without the search (their checksums
+//! side by side) for as long as each is complete, good and one counter on: exactly what the
+//! search would accept next, without its per-frame cost (`Decoder::run_locked`; BENCHMARKS.md,
+//! issue 15 session 10). Anything else stops the run and the search takes over.
+//!
 //! # Counter rules
 //!
 //! Frames carry a counter modulo `M`. A frame whose counter equals the previous frame's is a
@@ -52,6 +58,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::block::{BlockEvent, FrameBlock, FrameSink};
+use super::checksum::ChecksumAlgorithm;
+use super::crc_msb::{self, MsbCrc};
 use super::descriptor::{FrameDescriptor, MessageSpec};
 use super::field::read_bits;
 use super::plan::FramePlan;
@@ -152,6 +160,68 @@ pub struct Decoder {
     /// Bytes of a push joined to the pending ones ([`Decoder::push`]): twice the longest
     /// message and its sync offset, so the message they share is complete in the join.
     stitch: usize,
+    /// How a run of clean frames is checked without the search, when the format allows it
+    /// ([`Decoder::run_locked`]).
+    lock: Option<Lock>,
+}
+
+/// What [`Decoder::run_locked`] needs to check the frames that follow a good frame where they
+/// must be (a format with one frame counter and no interleave): the frame's length, its sync
+/// and id where the search would find them, and its checksum.
+struct Lock {
+    len: usize,
+    sync_at: usize,
+    sync: Vec<u8>,
+    /// The frame message (its checksum).
+    spec: MessageSpec,
+    /// The frame's id and where it sits (none: the format has one message and no id).
+    id: Option<(usize, Vec<u8>)>,
+    /// An MSB-first CRC, computed four frames side by side; other checksums one by one.
+    crc: Option<&'static MsbCrc>,
+}
+
+impl Lock {
+    /// The lock for `desc`, or None when a frame's place is not that simple: interleaved
+    /// messages, no counter, or an id the search could match to another kind first.
+    fn new(desc: &FrameDescriptor) -> Option<Lock> {
+        let f = desc.frame();
+        if desc.interleave.is_some() || f.counter.is_none() {
+            return None;
+        }
+        let sync_end = desc.sync.offset + desc.sync.bytes.len();
+        let c = &f.checksum;
+        if desc.sync.bytes.is_empty() || sync_end > f.length || c.end >= f.length {
+            return None;
+        }
+        let id = if desc.messages.len() == 1 && f.id.is_empty() {
+            None
+        } else {
+            let at = desc.sync.id_offset;
+            // The search reads `messages[0].id.len()` bytes and takes the first kind whose id
+            // they are.
+            let unique = desc.messages[..desc.frame_kind]
+                .iter()
+                .all(|m| m.id != f.id);
+            if !unique || f.id.len() != desc.messages[0].id.len() || at + f.id.len() > f.length {
+                return None;
+            }
+            Some((at, f.id.clone()))
+        };
+        let crc = match c.algorithm {
+            ChecksumAlgorithm::Crc16Ibm3740 => Some(&crc_msb::CRC16_IBM_3740),
+            ChecksumAlgorithm::Crc16Xmodem => Some(&crc_msb::CRC16_XMODEM),
+            ChecksumAlgorithm::Crc32Mpeg2 => Some(&crc_msb::CRC32_MPEG2),
+            _ => None,
+        };
+        Some(Lock {
+            len: f.length,
+            sync_at: desc.sync.offset,
+            sync: desc.sync.bytes.clone(),
+            spec: f.clone(),
+            id,
+            crc,
+        })
+    }
 }
 
 impl Decoder {
@@ -164,7 +234,6 @@ impl Decoder {
         Decoder {
             out: FrameBlock::with_kinds(&plan.kinds, 0),
             plan,
-            desc,
             buf: Vec::new(),
             pos: 0,
             taken: (0, 0),
@@ -182,6 +251,8 @@ impl Decoder {
             held: None,
             deferred: Vec::new(),
             stitch,
+            lock: Lock::new(&desc),
+            desc,
         }
     }
 
@@ -431,6 +502,89 @@ impl Decoder {
             }
             self.accept(kind, data, start, len);
             self.pos = start + len;
+            self.run_locked(data);
+        }
+    }
+
+    /// After a good frame: the frames that follow it directly, four at a time, as long as each
+    /// is where the last one ended, complete, with its sync, id and checksum, and its counter
+    /// one on (clean data). Each such frame is exactly what the search would find next and
+    /// goes through the same direct path of [`Decoder::accept_counted_frame`]; the saving is
+    /// the search and the four checksums computed side by side (independent chains of table
+    /// lookups). Stops, leaving `self.pos` at the first frame it did not take, at anything
+    /// else (fewer than four frames left, a bad byte, a counter jump), where the search
+    /// takes over.
+    fn run_locked(&mut self, data: &[u8]) {
+        if let Some(lock) = self.lock.take() {
+            self.locked_frames(&lock, data);
+            self.lock = Some(lock);
+        }
+    }
+
+    /// [`Decoder::run_locked`] with the lock taken out of `self`.
+    fn locked_frames(&mut self, lock: &Lock, data: &[u8]) {
+        let len = lock.len;
+        let spec = &lock.spec;
+        let sync = lock.sync.as_slice();
+        let c = &spec.checksum;
+        let stored_ty = width_type(c.algorithm.width());
+        while self.held.is_none() && !self.skipping && self.pos + 4 * len <= data.len() {
+            let p = self.pos;
+            let msgs: [&[u8]; 4] = [
+                &data[p..p + len],
+                &data[p + len..p + 2 * len],
+                &data[p + 2 * len..p + 3 * len],
+                &data[p + 3 * len..p + 4 * len],
+            ];
+            // Compared byte by byte: a call to memcmp costs more than these few bytes.
+            let same = |a: &[u8], b: &[u8]| a.iter().zip(b).all(|(x, y)| x == y);
+            let placed = msgs.iter().all(|m| {
+                same(&m[lock.sync_at..lock.sync_at + sync.len()], sync)
+                    && lock
+                        .id
+                        .as_ref()
+                        .is_none_or(|(at, id)| same(&m[*at..*at + id.len()], id))
+            });
+            if !placed {
+                return;
+            }
+            let mut good = [false; 4];
+            match lock.crc {
+                Some(crc) => {
+                    let sums = crc.checksums4([
+                        &msgs[0][c.start..=c.end],
+                        &msgs[1][c.start..=c.end],
+                        &msgs[2][c.start..=c.end],
+                        &msgs[3][c.start..=c.end],
+                    ]);
+                    for k in 0..4 {
+                        good[k] = read_bits(msgs[k], c.at, stored_ty, c.order)
+                            == Some(u64::from(sums[k]));
+                    }
+                }
+                None => {
+                    for k in 0..4 {
+                        good[k] = checksum_ok(spec, msgs[k]);
+                    }
+                }
+            }
+            for (k, msg) in msgs.iter().enumerate() {
+                if !good[k] {
+                    return;
+                }
+                let Some((slot, prev, true)) = self.tracker.last else {
+                    return;
+                };
+                let m = self.tracker.modulus;
+                let counter = self.plan.counter(msg);
+                let p = if prev < m { prev } else { prev % m };
+                if counter != if p + 1 == m { 0 } else { p + 1 } {
+                    return;
+                }
+                self.health.bytes_accepted += len as u64;
+                self.accept_next(data, self.pos, msg, slot + 1, counter);
+                self.pos += len;
+            }
         }
     }
 
@@ -506,27 +660,7 @@ impl Decoder {
                 let p = if prev < m { prev } else { prev % m };
                 let next = if p + 1 == m { 0 } else { p + 1 };
                 if c == next {
-                    let seq = slot + 1;
-                    self.tracker.last = Some((seq, c, true));
-                    self.tracker.last_seq = Some(seq);
-                    self.next_index = seq + 1;
-                    let bad = self.plan.begin(msg, seq, &mut self.out);
-                    if self.plan.deferrable(msg, bad, &self.out) {
-                        self.deferred.push(start);
-                        if self.deferred.len() >= FILL_BATCH {
-                            self.fill_deferred(data);
-                        }
-                    } else {
-                        self.fill_deferred(data);
-                        self.plan.read_channels(
-                            msg,
-                            bad,
-                            &mut self.health.invalid_values,
-                            &mut self.out,
-                        );
-                    }
-                    self.health.frames += 1;
-                    return;
+                    return self.accept_next(data, start, msg, slot + 1, c);
                 }
             }
         }
@@ -570,6 +704,26 @@ impl Decoder {
                 msg,
             );
         }
+    }
+
+    /// The frame `msg` (at `data[start..]`) continues the last one: frame `seq`, counter `c`.
+    #[inline(always)]
+    fn accept_next(&mut self, data: &[u8], start: usize, msg: &[u8], seq: u64, c: u64) {
+        self.tracker.last = Some((seq, c, true));
+        self.tracker.last_seq = Some(seq);
+        self.next_index = seq + 1;
+        let bad = self.plan.begin(msg, seq, &mut self.out);
+        if self.plan.deferrable(msg, bad, &self.out) {
+            self.deferred.push(start);
+            if self.deferred.len() >= FILL_BATCH {
+                self.fill_deferred(data);
+            }
+        } else {
+            self.fill_deferred(data);
+            self.plan
+                .read_channels(msg, bad, &mut self.health.invalid_values, &mut self.out);
+        }
+        self.health.frames += 1;
     }
 
     /// Delivers a held frame (see [`commit`]).
@@ -706,6 +860,107 @@ mod tests {
         // The same frame again: a duplicate.
         assert!(matches!(t.observe(true, 2, &mut br), Placement::Duplicate));
         assert_eq!(br, 0);
+    }
+
+    /// The run of clean frames taken without the search (`Decoder::run_locked`) gives what the
+    /// search alone gives, event for event and counter for counter, on streams that leave the
+    /// run in every way: bit flips (bad checksums), a byte lost (the next frame off its place),
+    /// repeats of the last frame, a stale frame from far back, a damaged counter that passes
+    /// the checksum (a held frame), lost frames, garbage, the end in the middle of a frame;
+    /// for siu8 (CRC-16, no id) and kvh1750 (CRC-32, an id, built-in-test messages between
+    /// frames), fed whole and in pieces of many sizes.
+    #[test]
+    fn locked_runs_match_the_search_alone() {
+        use crate::frame::encoder::encode_message;
+        for name in ["siu8", "kvh1750"] {
+            let desc = FrameDescriptor::builtin(name).unwrap().unwrap();
+            let n = desc.frame().channels.len();
+            let counts = desc.frame().channels[0].is_count();
+            let values = |seq: u64| -> Vec<ChannelValue> {
+                (0..n as i64)
+                    .map(|c| (seq as i64 * 7919 + c * 104_729) % 2001 - 1000)
+                    .map(|v| {
+                        if counts {
+                            ChannelValue::Count(v)
+                        } else {
+                            ChannelValue::Real(v as f64 * 1e-7)
+                        }
+                    })
+                    .collect()
+            };
+            let valid = desc.status_all_valid();
+            let frames: Vec<Vec<u8>> = (0..3000u64)
+                .map(|seq| crate::frame::encode(&desc, seq, &values(seq), valid).unwrap())
+                .collect();
+            let mut stream = Vec::new();
+            let mut x = 12345u64;
+            let mut rnd = |m: u64| {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                x % m
+            };
+            let mut i = 0;
+            while i < frames.len() {
+                let mut f = frames[i].clone();
+                match rnd(60) {
+                    0 => {
+                        let b = rnd(f.len() as u64 * 8) as usize;
+                        f[b / 8] ^= 1 << (b % 8);
+                    }
+                    1 => {
+                        f.remove(rnd(f.len() as u64) as usize);
+                    }
+                    2 => stream.extend_from_slice(&frames[i.saturating_sub(1)]),
+                    3 => stream.extend_from_slice(&frames[i.saturating_sub(500)]),
+                    4 => i += 1 + rnd(5) as usize,
+                    5 => {
+                        for _ in 0..rnd(50) {
+                            stream.push(rnd(256) as u8);
+                        }
+                    }
+                    6 if desc.messages.len() > 1 => {
+                        let other = (desc.frame_kind + 1) % desc.messages.len();
+                        let m = encode_message(&desc, other, i as u64, &[], 0, None);
+                        stream.extend(m.unwrap());
+                    }
+                    _ => {}
+                }
+                stream.extend_from_slice(&f);
+                i += 1;
+            }
+            // A frame whose counter jumped yet passes its checksum: its counter rewritten and
+            // the frame encoded again.
+            let jumped = crate::frame::encode(&desc, 1000 + 60, &values(7), valid).unwrap();
+            let at = frames[..1000].iter().map(Vec::len).sum::<usize>();
+            stream.splice(at..at, jumped);
+            stream.truncate(stream.len() - 5);
+            for piece in [stream.len(), 7, 100, 333, 4096, 65_536] {
+                let decode = |locked: bool| {
+                    let mut d = Decoder::new(desc.clone());
+                    if !locked {
+                        d.lock = None;
+                    }
+                    let mut ev = Vec::new();
+                    for p in stream.chunks(piece) {
+                        d.push(p);
+                        ev.extend(d.drain());
+                    }
+                    d.finish();
+                    ev.extend(d.drain());
+                    (ev, d.health().clone())
+                };
+                let (with, without) = (decode(true), decode(false));
+                let h = &with.1;
+                assert!(
+                    h.crc_errors > 0 && h.missing > 0 && h.duplicates > 0,
+                    "{h:?}"
+                );
+                assert!(h.stale_frames + h.counter_rejects > 0, "{h:?}");
+                assert_eq!(with.1, without.1, "{name}, pieces of {piece}");
+                assert_eq!(with.0, without.0, "{name}, pieces of {piece}");
+            }
+        }
     }
 
     /// The `health` record carries the docs/records.md field names.

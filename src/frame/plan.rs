@@ -219,16 +219,17 @@ impl FramePlan {
     }
 
     /// The frame's counter modulo its modulus (0 without a counter).
-    #[inline]
+    #[inline(always)]
     pub(crate) fn counter(&self, msg: &[u8]) -> u64 {
-        self.counter.map_or(0, |(at, load, shift, m)| {
-            let raw = load.bits(msg, at).unwrap_or(0) >> shift;
-            if m.is_power_of_two() {
-                raw & (m - 1)
-            } else {
-                raw % m
-            }
-        })
+        let Some((at, load, shift, m)) = self.counter else {
+            return 0;
+        };
+        let raw = load.bits(msg, at).unwrap_or(0) >> shift;
+        if m.is_power_of_two() {
+            raw & (m - 1)
+        } else {
+            raw % m
+        }
     }
 
     /// Reads a good frame's channels, validity and temperature into `out` as frame `seq`;
