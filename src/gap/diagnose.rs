@@ -738,7 +738,8 @@ fn add_stationary(
                 // A filter flags the model on its own only by what it shows beyond its tail
                 // (docs/gap.md, "A filter's tail is white phase noise").
                 let score_tail = if kind.is_filter() && !flagged_g && th.filter_tail {
-                    let r = *tail_ref.get_or_insert_with(|| beyond_tail_reference(prob, &spec, &cur));
+                    let r =
+                        *tail_ref.get_or_insert_with(|| beyond_tail_reference(prob, &spec, &cur));
                     (r - f.chi2) / kind.n_params() as f64
                 } else {
                     score

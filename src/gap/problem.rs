@@ -266,8 +266,9 @@ impl GapProblem {
                 // MIN_SIGMA_STEPS steps ([`super::rounding`]): below, the rounding holds the
                 // output on one step (a dead band) and neither model describes it.
                 let n2 = w.coef.get(1).copied().unwrap_or(0.0).max(0.0);
-                p.lowpass()
-                    .is_some_and(|lp| filtered_sigma(&lp, self.tau0_s, n2) >= MIN_SIGMA_STEPS * step)
+                p.lowpass().is_some_and(|lp| {
+                    filtered_sigma(&lp, self.tau0_s, n2) >= MIN_SIGMA_STEPS * step
+                })
             }
             _ => false,
         };

@@ -13,6 +13,7 @@ mod outliers;
 mod quantization;
 mod real_slice;
 mod reference;
+mod rounding;
 mod sinusoid_behind_filter;
 mod temperature;
 mod warmup_null;
