@@ -5,6 +5,7 @@
 mod alternatives;
 mod diagnosis;
 mod families;
+mod filter_tail;
 mod filters;
 mod gm_or_filter;
 mod mixture;
