@@ -8,7 +8,13 @@
 //! record's rms size, outliers a spike process with the run's rate and the simulator's size law
 //! fitted to the record's rms size, rounded rate samples (`rate_lsb`) in place of a counter when
 //! the curve says so (the rounding's white rate taken out of N), the flicker band is the simulator's default (six decades from `tau0`).
+//!
+//! A sinusoid is named as the curve sees it, at the output, after the unit's filter; the
+//! simulator writes its sinusoids before the filter, so the model file carries the named
+//! amplitude divided by the accepted filter's gain `|H(f)|` at the sinusoid's frequency
+//! ([`input_amplitude`]; docs/gap.md, "Sinusoids behind a filter in the model file").
 
+use crate::model::lowpass::LowPass;
 use crate::model::terms;
 use crate::model::units::IncrementUnit;
 use crate::sim::effects::TemperatureProfile;
@@ -86,6 +92,7 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
             size: d.outliers.rms_size() / 5f64.sqrt(),
         }),
     };
+    let filter = d.effects.iter().find_map(|e| e.params.lowpass());
     for e in &d.effects {
         match e.params {
             EffectParams::GaussMarkov { sigma, tau_c_s } => {
@@ -95,7 +102,7 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
                 amplitude,
                 frequency_hz,
             } => ch.sinusoids.push(Sinusoid {
-                amplitude,
+                amplitude: input_amplitude(amplitude, frequency_hz, filter.as_ref(), tau0_s),
                 frequency_hz,
                 phase_rad: 0.0,
             }),
@@ -127,6 +134,31 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
         }
     }
     ch
+}
+
+/// Least amplitude gain `|H(f)|` a named sinusoid is divided by: a line the filter all but
+/// removes (near a moving average's zero) cannot be told from the curve, and its input amplitude
+/// is then kept at most 100 times the one seen.
+pub const MIN_SINUSOID_GAIN: f64 = 0.01;
+
+/// The amplitude (u/s) of a sinusoid before the unit's output filter `filter`, from the
+/// amplitude seen after it at `frequency_hz`: `amplitude / |H(f)|` with the filter's exact
+/// discrete gain on the increments ([`LowPass::power_gain`]: the sinusoid's increments are a
+/// sampled sinusoid at `f`, which a linear filter scales by `|H(e^{i 2 pi f tau0})|`), `|H|`
+/// held at least [`MIN_SINUSOID_GAIN`]. Without a filter the amplitude is unchanged.
+pub fn input_amplitude(
+    amplitude: f64,
+    frequency_hz: f64,
+    filter: Option<&LowPass>,
+    tau0_s: f64,
+) -> f64 {
+    match filter {
+        Some(lp) => {
+            let g = lp.power_gain(tau0_s, frequency_hz).max(0.0).sqrt();
+            amplitude / g.max(MIN_SINUSOID_GAIN)
+        }
+        None => amplitude,
+    }
 }
 
 /// The model file of a diagnosed unit: its channels and, when one was fitted, its temperature

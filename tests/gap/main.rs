@@ -13,5 +13,6 @@ mod outliers;
 mod quantization;
 mod real_slice;
 mod reference;
+mod sinusoid_behind_filter;
 mod temperature;
 mod warmup_null;
