@@ -35,7 +35,9 @@ fn a_settled_warmup_does_not_carry_on_a_negligible_gain() {
     let (a, b) = halves(WARMUP, 4);
     let d = diagnose(&a, &opts).expect("diagnosis");
     assert!(
-        d.effects.iter().any(|e| e.params.kind() == EffectKind::Warmup),
+        d.effects
+            .iter()
+            .any(|e| e.params.kind() == EffectKind::Warmup),
         "{:?}",
         d.effects
     );
