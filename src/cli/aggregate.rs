@@ -37,8 +37,11 @@ pub fn run(a: &AggregateArgs) -> Result<()> {
     }
     let mut sink = match &a.out {
         Some(p) => {
-            let f = std::fs::File::create(p)
-                .map_err(|e| anyhow::anyhow!("cannot create output {}: {e}", p.display()))?;
+            // An earlier result is refused unless --force, and replaced only at the first
+            // record (sink::output).
+            let mode = allanscope::sink::output::OutputMode::new(a.force, false);
+            let f = allanscope::sink::output::OutputFile::open(p, mode, "aggregate --out")
+                .map_err(anyhow::Error::new)?;
             JsonLines::new(Box::new(std::io::BufWriter::new(f)))
         }
         // On a terminal the table shows each run's fit as a row above the statistics.

@@ -123,6 +123,22 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue, ctl: &RunControl) -> Result
     let (descriptor, tau0) = format_and_tau0(d)?;
     let base = analysis_options(d, tau0)?;
     let several = a.inputs.len() > 1;
+    // Standard input, or a pipe, is read to its end by the first run that names it.
+    if let Some(twice) = a
+        .inputs
+        .iter()
+        .enumerate()
+        .find_map(|(i, x)| (super::read_once(x) && a.inputs[..i].contains(x)).then_some(x))
+    {
+        return Err(usage(format!(
+            "{} is given twice, but it can be read only once (each input is one run)",
+            if twice == "-" {
+                "standard input `-`"
+            } else {
+                twice.as_str()
+            }
+        )));
+    }
     if several && (d.checkpoint_every.is_some() || d.resume) {
         return Err(usage(
             "--checkpoint-every and --resume take one input (one run per output file)",
@@ -294,7 +310,13 @@ fn analyze_frames(
     let ctl = &ctl;
     let outcome = allanscope::pipeline::run_frames(spec, desc, analysis, queue, ctl)?;
     if let Some(h) = &outcome.health {
-        if h.frames == 0 && h.bytes_in > 0 && !d.resume {
+        if h.frames == 0 && !d.resume {
+            if h.bytes_in == 0 {
+                return Err(usage(format!(
+                    "{input}: empty (0 bytes): no {} frame to analyse",
+                    desc.name
+                )));
+            }
             return Err(no_frame_error(input, desc, h.bytes_in));
         }
     }
@@ -305,28 +327,71 @@ fn analyze_frames(
 const SNIFF_BYTES: usize = 4096;
 
 /// Refuses an input whose first bytes show it is the other kind than the format says: binary
-/// data read as text columns, or text read as frames (standard input is not looked at).
+/// data read as text columns, or text read as frames; a compressed file or UTF-16 text, which
+/// must be converted first; a directory; an empty capture. Only regular files are looked at:
+/// standard input, a FIFO or a process substitution (`<(zcat run.csv.gz)`) cannot be read twice,
+/// so their first bytes are left to the run.
 pub(crate) fn sniff(input: &str, frames: Option<&FrameDescriptor>) -> Result<()> {
     use std::io::Read;
     if input == "-" {
+        return Ok(());
+    }
+    let Ok(meta) = std::fs::metadata(input) else {
+        return Ok(()); // open_input reports it
+    };
+    if meta.is_dir() {
+        return Err(usage(format!("{input}: is a directory, not an input file")));
+    }
+    if !meta.is_file() {
         return Ok(());
     }
     let mut head = Vec::with_capacity(SNIFF_BYTES);
     let Ok(f) = std::fs::File::open(input) else {
         return Ok(()); // open_input reports it
     };
-    if f.take(SNIFF_BYTES as u64).read_to_end(&mut head).is_err() || head.is_empty() {
+    if f.take(SNIFF_BYTES as u64).read_to_end(&mut head).is_err() {
         return Ok(());
+    }
+    if head.is_empty() {
+        return match frames {
+            // Text columns say "no data rows" with the line.
+            None => Ok(()),
+            Some(desc) => Err(usage(format!(
+                "{input}: empty (0 bytes): no {} frame to analyse",
+                desc.name
+            ))),
+        };
+    }
+    // A capture that holds frames is a capture, whatever its first bytes are.
+    let frames_found = frames.is_some_and(|d| no_frame_in_head(input, d).is_ok());
+    if let Some(kind) = compressed(&head).filter(|_| !frames_found) {
+        return Err(usage(format!(
+            "{input}: {kind}-compressed; decompress it first, or read it through a pipe: \
+             `{} {input} | allanscope ... -` (standard input)",
+            match kind {
+                "gzip" => "zcat",
+                "xz" => "xzcat",
+                "bzip2" => "bzcat",
+                _ => "zstdcat",
+            }
+        )));
+    }
+    if head.starts_with(&[0xff, 0xfe]) || head.starts_with(&[0xfe, 0xff]) {
+        return Err(usage(format!(
+            "{input}: UTF-16 text (as Windows tools write it); convert it to UTF-8 first, e.g. \
+             `iconv -f UTF-16 -t UTF-8 {input} > OUT.csv`"
+        )));
     }
     let text_like = |b: &u8| matches!(b, b'\t' | b'\n' | b'\r' | 0x20..=0x7e);
     match frames {
         None => {
-            let utf8 = match std::str::from_utf8(&head) {
-                Ok(_) => true,
-                // Cut in the middle of a character by the sniff: still text.
-                Err(e) => e.error_len().is_none(),
-            };
-            if head.contains(&0) || !utf8 {
+            // Text may be in any 8-bit code page (a Latin-1 header); binary data has NUL bytes or
+            // many control bytes.
+            let control = head
+                .iter()
+                .filter(|&&b| b < 0x20 && !matches!(b, b'\t' | b'\n' | b'\r' | 0x0c))
+                .count();
+            if head.contains(&0) || control * 20 > head.len() {
                 let names: Vec<&str> = allanscope::frame::descriptor::BUILTIN
                     .iter()
                     .map(|(n, _)| *n)
@@ -338,6 +403,7 @@ pub(crate) fn sniff(input: &str, frames: Option<&FrameDescriptor>) -> Result<()>
                 )));
             }
         }
+        Some(_) if frames_found => {}
         Some(desc) => {
             if head.iter().all(text_like) {
                 return Err(usage(format!(
@@ -350,6 +416,21 @@ pub(crate) fn sniff(input: &str, frames: Option<&FrameDescriptor>) -> Result<()>
         }
     }
     Ok(())
+}
+
+/// The compression whose magic bytes start `head`, if any.
+fn compressed(head: &[u8]) -> Option<&'static str> {
+    const MAGIC: [(&[u8], &str); 3] = [
+        (&[0x1f, 0x8b, 0x08], "gzip"),
+        (&[0xfd, b'7', b'z', b'X', b'Z', 0], "xz"),
+        (&[0x28, 0xb5, 0x2f, 0xfd], "zstd"),
+    ];
+    let bzip2 = head.len() >= 4 && head.starts_with(b"BZh") && (b'1'..=b'9').contains(&head[3]);
+    MAGIC
+        .iter()
+        .find(|(m, _)| head.starts_with(m))
+        .map(|(_, k)| *k)
+        .or(bzip2.then_some("bzip2"))
 }
 
 /// Bytes decoded before a run starts to find one frame of the format given: many frames of any

@@ -2,12 +2,12 @@
 //! OpenVINS, VINS, KF-GINS), or its curves as CSV or a Stable32-style table (sink::export).
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use clap::Args;
 
-use super::{read_json_lines, usage};
+use super::usage;
 use allanscope::model::units::{IncrementUnit, SensorKind};
 use allanscope::sink::export::{self, ExportFormat, ImuNoise};
 use allanscope::sink::records::{CurveRecord, FitRecord};
@@ -89,7 +89,9 @@ fn chosen<'a>(
 
 pub fn run(a: &ExportArgs) -> Result<()> {
     let format: ExportFormat = a.to.parse().map_err(usage)?;
-    if !a.force && a.out.exists() {
+    allanscope::sink::page_file::check_target(&a.out, "-o")?;
+    let stdout = a.out == Path::new("-");
+    if !a.force && !stdout && a.out.exists() {
         return Err(usage(format!(
             "{} exists: give --force to replace it",
             a.out.display()
@@ -101,7 +103,18 @@ pub fn run(a: &ExportArgs) -> Result<()> {
     let tag = a.input.display().to_string();
     // A run of several units: one unit is exported (--stand-unit), by its name.
     let mut units: Vec<String> = Vec::new();
-    for mut v in read_json_lines(&a.input)? {
+    // A record of a known type that does not read (another version's file): its line named.
+    let bad = |line: u64, what: &str, e: serde_json::Error| {
+        anyhow::Error::new(allanscope::error::UsageError::Input {
+            file: a.input.clone(),
+            line,
+            problem: format!(
+                "a {what} record that does not read ({e}): a file written by another version of \
+                 allanscope? rerun the analysis"
+            ),
+        })
+    };
+    for (line, mut v) in super::numbered_json_lines(&a.input)? {
         if let Some(u) = allanscope::sink::unit_record::untag(&mut v) {
             if !units.contains(&u) {
                 units.push(u.clone());
@@ -112,15 +125,14 @@ pub fn run(a: &ExportArgs) -> Result<()> {
         }
         match v.get("type").and_then(|t| t.as_str()) {
             Some("fit") if v["final"] == true => {
-                let f: FitRecord =
-                    serde_json::from_value(v).with_context(|| format!("{tag}: a fit record"))?;
+                let f: FitRecord = serde_json::from_value(v).map_err(|e| bad(line, "fit", e))?;
                 // A later final fit of the same channel and run replaces an earlier one.
                 fits.retain(|g| !(g.channel == f.channel && g.run == f.run));
                 fits.push(f);
             }
             Some("curve") if v["final"] == true => {
                 let c: CurveRecord =
-                    serde_json::from_value(v).with_context(|| format!("{tag}: a curve record"))?;
+                    serde_json::from_value(v).map_err(|e| bad(line, "curve", e))?;
                 curves.retain(|g| !(g.channel == c.channel && g.run == c.run && g.stat == c.stat));
                 curves.push(c);
             }
@@ -217,6 +229,13 @@ pub fn run(a: &ExportArgs) -> Result<()> {
             })?
         }
     };
+    if stdout {
+        let mut out = std::io::stdout().lock();
+        out.write_all(text.as_bytes())
+            .and_then(|()| out.flush())
+            .context("cannot write to standard output")?;
+        return Ok(());
+    }
     let mut f = if a.force {
         std::fs::File::create(&a.out)
     } else {

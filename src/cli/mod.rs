@@ -146,9 +146,13 @@ pub struct AggregateArgs {
     /// JSON-lines files written by `analyze`, one per run.
     #[arg(required = true)]
     pub inputs: Vec<PathBuf>,
-    /// JSON lines to this file instead of standard output.
+    /// JSON lines to this file instead of standard output (an existing non-empty file is
+    /// refused unless --force).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Overwrite a non-empty --out.
+    #[arg(long)]
+    pub force: bool,
     /// JSON lines even when standard output is a terminal (which otherwise gets a table).
     #[arg(long)]
     pub json: bool,
@@ -337,6 +341,12 @@ fn text_tau0(d: &mut DataArgs, inputs: &[&str]) -> Result<()> {
             return Err(usage(
                 "--tau0 is required for text columns on standard input",
             ));
+        }
+        if read_once(input) {
+            // Its start would be consumed finding the step.
+            return Err(usage(format!(
+                "{input}: --tau0 is required for text columns from a pipe (a FIFO or `<(...)`)"
+            )));
         }
         let src = std::io::BufReader::new(open_input(input)?);
         let opts = TextOptions {
@@ -633,6 +643,12 @@ impl DataArgs {
     }
 }
 
+/// Whether `input` is a stream that can be read only once (a FIFO, a process substitution, a
+/// character device), not a file that can be opened again: standard input `-` included.
+pub(crate) fn read_once(input: &str) -> bool {
+    input == "-" || std::fs::metadata(input).is_ok_and(|m| !m.is_file() && !m.is_dir())
+}
+
 pub(crate) fn open_input(input: &str) -> Result<Box<dyn Read + Send>> {
     if input == "-" {
         Ok(Box::new(std::io::stdin()))
@@ -655,8 +671,15 @@ pub fn read_json_lines(path: &Path) -> Result<Vec<serde_json::Value>> {
         .collect())
 }
 
-/// The JSON lines of a file with their line numbers (1-based), blank lines skipped.
-fn numbered_json_lines(path: &Path) -> Result<Vec<(u64, serde_json::Value)>> {
+/// The longest JSON line read back (bytes): a curve of thousands of taus takes a few hundred kB.
+const MAX_JSON_LINE_BYTES: usize = 64 << 20;
+
+/// The JSON lines of a file with their line numbers (1-based), blank lines skipped. A last line
+/// that is cut short (no newline after it, and not a whole record: the file of a run killed
+/// while writing, or still being written) is left out with a warning; any other line that is
+/// not a record is an error naming its line.
+pub(crate) fn numbered_json_lines(path: &Path) -> Result<Vec<(u64, serde_json::Value)>> {
+    use std::io::BufRead;
     if path.is_dir() {
         return Err(usage(format!(
             "{}: is a directory, not a file of JSON lines",
@@ -665,26 +688,59 @@ fn numbered_json_lines(path: &Path) -> Result<Vec<(u64, serde_json::Value)>> {
     }
     let f = std::fs::File::open(path)
         .map_err(|e| usage(format!("{}: cannot open: {e}", path.display())))?;
+    let mut src = BufReader::new(f);
     let mut out = Vec::new();
-    for (i, line) in BufReader::new(f).lines().enumerate() {
-        let line = line.map_err(|e| {
-            usage(format!(
-                "{}: line {}: not text ({e}); give a file of JSON lines written by allanscope",
-                path.display(),
-                i + 1
-            ))
-        })?;
+    let mut buf = Vec::new();
+    let mut line_no = 0u64;
+    let input_error = |line: u64, problem: String| {
+        anyhow::Error::new(UsageError::Input {
+            file: path.into(),
+            line,
+            problem,
+        })
+    };
+    loop {
+        buf.clear();
+        let n = (&mut src)
+            .take(MAX_JSON_LINE_BYTES as u64 + 1)
+            .read_until(b'\n', &mut buf)
+            .map_err(|e| input_error(line_no + 1, format!("cannot read: {e}")))?;
+        if n == 0 {
+            break;
+        }
+        line_no += 1;
+        if buf.len() > MAX_JSON_LINE_BYTES {
+            return Err(input_error(
+                line_no,
+                format!(
+                    "longer than {} MiB: not a file of JSON lines written by allanscope",
+                    MAX_JSON_LINE_BYTES >> 20
+                ),
+            ));
+        }
+        let torn = !buf.ends_with(b"\n");
+        let Ok(line) = std::str::from_utf8(&buf) else {
+            return Err(usage(format!(
+                "{}: line {line_no}: not text (stream did not contain valid UTF-8); give a file \
+                 of JSON lines written by allanscope",
+                path.display()
+            )));
+        };
         if line.trim().is_empty() {
             continue;
         }
-        let v = serde_json::from_str(&line).map_err(|e| {
-            anyhow::Error::new(UsageError::Input {
-                file: path.into(),
-                line: i as u64 + 1,
-                problem: format!("not a JSON record: {e}"),
-            })
-        })?;
-        out.push((i as u64 + 1, v));
+        match serde_json::from_str(line) {
+            Ok(v) => out.push((line_no, v)),
+            Err(e) if torn && e.is_eof() => {
+                tracing::warn!(
+                    "{}: line {line_no}: the last line is cut short ({} bytes, no newline: a run \
+                     stopped while writing?); left out",
+                    path.display(),
+                    buf.len()
+                );
+            }
+            Err(e) => return Err(input_error(line_no, format!("not a JSON record: {e}"))),
+        }
     }
     Ok(out)
 }

@@ -10,6 +10,7 @@ use allanscope::sink::plot::{default_title, figure_series, final_curves, render_
 use allanscope::sink::results::{ResultFile, Results};
 
 pub fn run(a: &PlotArgs) -> Result<()> {
+    allanscope::sink::page_file::check_target(&a.out, "-o")?;
     let files = a
         .inputs
         .iter()

@@ -92,6 +92,9 @@ impl SignalWatch {
                             );
                         } else {
                             tracing::warn!("{name} again; not waiting for the output any longer");
+                            if n == 2 {
+                                exit_unless_ended(name);
+                            }
                         }
                     }
                 });
@@ -119,6 +122,27 @@ impl SignalWatch {
             _ => Some(Duration::ZERO),
         }
     }
+}
+
+/// How long the command may go on after a second signal before the process exits anyway.
+pub const FORCE_EXIT_AFTER: Duration = Duration::from_secs(5);
+
+/// After a second signal: exits the process with status 1 unless the command has ended within
+/// [`FORCE_EXIT_AFTER`]. A thread blocked in a system call, such as opening a FIFO no writer
+/// has opened yet or reading a terminal, cannot see the shutdown token; without this the signals
+/// would be ignored (their default action is gone once they are caught).
+fn exit_unless_ended(name: &'static str) {
+    let _ = std::thread::Builder::new()
+        .name("allanscope-force-exit".into())
+        .spawn(move || {
+            std::thread::sleep(FORCE_EXIT_AFTER);
+            eprintln!(
+                "allanscope: {name} twice and the command has not ended in {} s (blocked on its \
+                 input or output?); exiting, the records written so far are kept",
+                FORCE_EXIT_AFTER.as_secs()
+            );
+            std::process::exit(1);
+        });
 }
 
 /// The signals that stop a run: SIGINT and SIGTERM.

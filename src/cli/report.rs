@@ -9,6 +9,7 @@ use allanscope::sink::report::render_html;
 use allanscope::sink::results::{ReadRecord, ResultFile};
 
 pub fn run(a: &ReportArgs) -> Result<()> {
+    allanscope::sink::page_file::check_target(&a.out, "-o")?;
     let inputs = a
         .inputs
         .iter()

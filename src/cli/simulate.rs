@@ -20,7 +20,9 @@ const CSV_BYTES_PER_VALUE: u64 = 24;
 
 pub fn run(s: &SimulateArgs) -> Result<()> {
     let duration = parse_duration_s(&s.duration)?;
-    if !s.force && s.out.exists() {
+    allanscope::sink::page_file::check_target(&s.out, "-o")?;
+    let stdout = s.out == Path::new("-");
+    if !s.force && !stdout && s.out.exists() {
         return Err(usage(format!(
             "{}: exists; give --force to replace it, or another -o",
             s.out.display()
@@ -52,6 +54,13 @@ pub fn run(s: &SimulateArgs) -> Result<()> {
             bytes,
             allanscope::ranges::MAX_SIMULATED_BYTES >> 30
         )));
+    }
+    if stdout {
+        // `-o -`: standard output, written as it goes (`simulate ... -o - | allanscope analyze -`).
+        let steps = write_capture_to(s, &model, desc.as_ref(), duration, std::io::stdout().lock())
+            .context("writing to standard output")?;
+        tracing::info!("standard output: {steps} steps written");
+        return Ok(());
     }
     if std::fs::metadata(&s.out).is_ok_and(|m| !m.is_file()) {
         // A pipe or a device (`-o /dev/stdout --force`): written as it goes, nothing to rename.
@@ -96,7 +105,18 @@ fn write_capture(
         .truncate(true)
         .open(path)
         .with_context(|| format!("cannot create {}", path.display()))?;
-    let mut w = std::io::BufWriter::with_capacity(1 << 16, f);
+    write_capture_to(s, model, desc, duration, f)
+        .with_context(|| format!("cannot write {}", path.display()))
+}
+
+fn write_capture_to(
+    s: &SimulateArgs,
+    model: &allanscope::sim::SimModel,
+    desc: Option<&FrameDescriptor>,
+    duration: f64,
+    out: impl Write,
+) -> Result<u64> {
+    let mut w = std::io::BufWriter::with_capacity(1 << 16, out);
     let steps = match desc {
         None => allanscope::sim::simulate_to_writer(
             model,
@@ -109,7 +129,6 @@ fn write_capture(
             allanscope::sim::capture::simulate_to_frames(model, desc, duration, s.seed, &mut w)?
         }
     };
-    w.flush()
-        .with_context(|| format!("cannot write {}", path.display()))?;
+    w.flush()?;
     Ok(steps)
 }

@@ -25,6 +25,44 @@ use crate::input::time_column::{TimeColumn, TimeState};
 /// Rows per batch handed to the analysis.
 pub const BATCH_ROWS: usize = 8192;
 
+/// The longest line read, in bytes: a row of 256 channels takes a few kB. A longer line (a
+/// file with no line ends) is skipped as it streams by, never held whole in memory.
+pub const MAX_LINE_BYTES: usize = 1 << 20;
+
+/// Reads one line, through its `\n`, into `buf` (emptied first), keeping at most `max` bytes
+/// of it; returns the bytes consumed (0 at the end of the input) and whether the line was
+/// longer than `max`.
+fn read_line_bounded<R: BufRead>(
+    src: &mut R,
+    buf: &mut Vec<u8>,
+    max: usize,
+) -> std::io::Result<(usize, bool)> {
+    buf.clear();
+    let (mut consumed, mut long) = (0, false);
+    loop {
+        let avail = match src.fill_buf() {
+            Ok(b) => b,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        if avail.is_empty() {
+            return Ok((consumed, long));
+        }
+        let (n, done) = match avail.iter().position(|&b| b == b'\n') {
+            Some(i) => (i + 1, true),
+            None => (avail.len(), false),
+        };
+        let room = max.saturating_sub(buf.len());
+        long |= n > room;
+        buf.extend_from_slice(&avail[..n.min(room)]);
+        src.consume(n);
+        consumed += n;
+        if done {
+            return Ok((consumed, long));
+        }
+    }
+}
+
 /// How many bad rows are logged one by one before the rest are only counted.
 const BAD_ROWS_LOGGED: u64 = 10;
 
@@ -116,6 +154,8 @@ pub struct TextOptions {
 struct Layout {
     /// Fields per input row.
     width_in: usize,
+    /// The separator of the header (or first data row), tried first on every row.
+    sep: Sep,
     /// Input column (0-based) of each channel.
     keep: Vec<usize>,
     /// Input column names (header or `c1..cn`).
@@ -136,13 +176,29 @@ fn input_error(path: &Path, line: u64, problem: String) -> UsageError {
 
 impl Layout {
     fn new(
-        source_names: Vec<String>,
+        mut source_names: Vec<String>,
         header: bool,
+        sep: Sep,
         opts: &TextOptions,
         path: &Path,
         line: u64,
     ) -> Result<Layout, UsageError> {
         let err = |p: String| input_error(path, line, p);
+        // A header field left empty: the last one is a trailing separator (`g1,g2,`), its
+        // column no channel; another is named by its column number, as without a header.
+        let trailing_empty =
+            header && source_names.len() > 1 && source_names.last().is_some_and(String::is_empty);
+        let last = source_names.len() - 1;
+        for (j, n) in source_names.iter_mut().enumerate() {
+            if n.is_empty() && !(trailing_empty && j == last) {
+                *n = format!("c{}", j + 1);
+                tracing::warn!(
+                    "{}: line {line}: column {} has no name in the header; called `{n}`",
+                    path.display(),
+                    j + 1
+                );
+            }
+        }
         for (j, n) in source_names.iter().enumerate() {
             if let Some(i) = source_names[..j].iter().position(|m| m == n) {
                 return Err(err(format!(
@@ -194,7 +250,7 @@ impl Layout {
                 (keep, names)
             }
             None => (0..source_names.len())
-                .filter(|&i| Some(i) != time)
+                .filter(|&i| Some(i) != time && !(trailing_empty && i == last))
                 .map(|i| (i, source_names[i].clone()))
                 .unzip(),
         };
@@ -203,6 +259,7 @@ impl Layout {
         }
         Ok(Layout {
             width_in: source_names.len(),
+            sep,
             keep,
             source_names,
             names,
@@ -213,7 +270,7 @@ impl Layout {
     /// The channel values of a row and its time stamp (NaN without a time column or where the
     /// stamp is not a number), or what is wrong with the row.
     fn parse(&self, t: &str) -> Result<(Vec<f64>, f64), String> {
-        let fields = split(t);
+        let fields = self.split(t);
         if fields.len() != self.width_in {
             return Err(format!(
                 "{} fields, expected {}",
@@ -240,6 +297,19 @@ impl Layout {
             .and_then(|i| parse_field(fields[i]).ok())
             .unwrap_or(f64::NAN);
         Ok((values, time))
+    }
+}
+
+impl Layout {
+    /// The fields of a row: split at the header's separator, or, when that does not give the
+    /// header's width, as the row itself suggests (a row written with spaces in a comma file).
+    fn split<'a>(&self, t: &'a str) -> Vec<&'a str> {
+        let fields = self.sep.split(t);
+        if fields.len() == self.width_in {
+            fields
+        } else {
+            split(t)
+        }
     }
 }
 
@@ -292,18 +362,37 @@ pub struct TextPosition {
 }
 
 fn parse_field(t: &str) -> Result<f64, ()> {
-    let t = t.trim();
+    let mut t = t.trim();
+    // `"0.25"`: a spreadsheet that quotes every field.
+    if let Some(q) = t.strip_prefix('"').and_then(|q| q.strip_suffix('"')) {
+        t = q.trim();
+    }
     if t.is_empty() || t.eq_ignore_ascii_case("nan") {
         return Ok(f64::NAN);
     }
-    t.parse::<f64>().map_err(|_| ())
+    t.parse::<f64>()
+        .or_else(|e| decimal_comma(t).ok_or(e))
+        .map_err(|_| ())
+}
+
+/// `0,25` or `-1,5e-3` read as `0.25`, `-1.5e-3`: a decimal comma, as spreadsheets in many
+/// languages write it. Only a comma between two digits, with no point in the field, is taken;
+/// such a field can only arise where the columns are separated by semicolons or tabs.
+fn decimal_comma(t: &str) -> Option<f64> {
+    let (int, frac) = t.split_once(',')?;
+    let digit_before = int.bytes().last().is_some_and(|b| b.is_ascii_digit());
+    let digit_after = frac.bytes().next().is_some_and(|b| b.is_ascii_digit());
+    if !digit_before || !digit_after || t.contains('.') || frac.contains(',') {
+        return None;
+    }
+    format!("{int}.{frac}").parse().ok()
 }
 
 /// The column names of a `#` line taken as the header of data rows `width` wide: as many
 /// fields as the rows, none empty, at least one not a number (so a commented-out data row is not
 /// a header). `None` when the line is an ordinary comment.
 fn commented_header(line: &str, width: usize) -> Option<Vec<String>> {
-    let fields = split(line);
+    let fields = Sep::of(line).split(line);
     let names: Vec<String> = fields
         .iter()
         .map(|f| f.trim().trim_matches('"').trim().to_string())
@@ -315,6 +404,41 @@ fn commented_header(line: &str, width: usize) -> Option<Vec<String>> {
     ok.then_some(names)
 }
 
+/// The column separator of a file, read off its header or first data row: a semicolon where
+/// there is one (so `0,25;1,5` is two columns with decimal commas), else a tab where the tabs
+/// leave no field empty, else a comma, else runs of spaces.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Sep {
+    Semicolon,
+    Tab,
+    Comma,
+    Spaces,
+}
+
+impl Sep {
+    fn of(line: &str) -> Sep {
+        if line.contains(';') {
+            Sep::Semicolon
+        } else if line.contains('\t') && line.trim().split('\t').all(|f| !f.trim().is_empty()) {
+            Sep::Tab
+        } else if line.contains(',') {
+            Sep::Comma
+        } else {
+            Sep::Spaces
+        }
+    }
+
+    fn split(self, line: &str) -> Vec<&str> {
+        match self {
+            Sep::Semicolon => line.split(';').collect(),
+            Sep::Tab => line.split('\t').collect(),
+            Sep::Comma => line.split(',').collect(),
+            Sep::Spaces => line.split_whitespace().collect(),
+        }
+    }
+}
+
+/// A row's fields by the row alone: commas, else semicolons, else spaces and tabs.
 fn split(line: &str) -> Vec<&str> {
     if line.contains(',') {
         line.split(',').collect()
@@ -338,22 +462,63 @@ impl<R: BufRead> TextReader<R> {
     /// a channel of the first data row is not a number (a text column such as a status flag;
     /// a row of the wrong width is a counted bad row, as later).
     pub fn with_options(mut src: R, path: &Path, opts: &TextOptions) -> Result<Self, UsageError> {
-        let mut line = String::new();
+        let mut raw = Vec::new();
         let mut line_no = 0u64;
         let mut offset = 0u64;
         let mut layout: Option<Layout> = None;
         // The last `#` line before the first data row (a commented header, see the module doc).
         let mut hash_line: Option<String> = None;
+        let mut latin1_logged = false;
         loop {
-            line.clear();
-            let n = src
-                .read_line(&mut line)
+            let (n, long) = read_line_bounded(&mut src, &mut raw, MAX_LINE_BYTES)
                 .map_err(|e| input_error(path, line_no + 1, e.to_string()))?;
             if n == 0 {
                 return Err(input_error(path, line_no, "no data rows".into()));
             }
             line_no += 1;
             offset += n as u64;
+            let mut body: &[u8] = &raw;
+            if let Some(b) = body.strip_suffix(b"\n") {
+                body = b;
+            }
+            if let Some(b) = body.strip_suffix(b"\r") {
+                body = b;
+            }
+            if body.contains(&b'\r') {
+                return Err(input_error(
+                    path,
+                    line_no,
+                    "the lines end with a bare carriage return (CR, no line feed): convert the \
+                     file to LF or CRLF line ends first, e.g. `tr '\\r' '\\n' < IN > OUT`"
+                        .into(),
+                ));
+            }
+            if long {
+                return Err(input_error(
+                    path,
+                    line_no,
+                    format!(
+                        "a line longer than {} MiB: not text columns (a capture of frames needs \
+                         --format NAME)",
+                        MAX_LINE_BYTES >> 20
+                    ),
+                ));
+            }
+            // A header saved in a Windows code page (`Temp (\u{b0}C)` in Latin-1) is read as
+            // Latin-1; data rows are numbers, ASCII either way.
+            let line: String = match std::str::from_utf8(&raw) {
+                Ok(t) => t.to_string(),
+                Err(_) => {
+                    if !latin1_logged {
+                        latin1_logged = true;
+                        tracing::warn!(
+                            "{}: line {line_no}: not UTF-8; read as Latin-1 (Windows-1252)",
+                            path.display()
+                        );
+                    }
+                    raw.iter().map(|&b| char::from(b)).collect()
+                }
+            };
             // A byte-order mark (spreadsheets write one) is not part of the first name.
             let t = if line_no == 1 {
                 line.trim_start_matches('\u{feff}').trim()
@@ -373,7 +538,7 @@ impl<R: BufRead> TextReader<R> {
                 Some(l) => match l.parse(t) {
                     Ok((v, time)) => ((Ok(v), time), l),
                     // A row of the wrong width is a bad row, as later ones are.
-                    Err(problem) if split(t).len() != l.width_in => ((Err(problem), f64::NAN), l),
+                    Err(problem) if l.split(t).len() != l.width_in => ((Err(problem), f64::NAN), l),
                     Err(problem) => {
                         return Err(input_error(
                             path,
@@ -383,7 +548,8 @@ impl<R: BufRead> TextReader<R> {
                     }
                 },
                 None => {
-                    let fields = split(t);
+                    let sep = Sep::of(t);
+                    let fields = sep.split(t);
                     if fields.iter().all(|f| parse_field(f).is_ok()) {
                         let commented = hash_line
                             .as_deref()
@@ -392,7 +558,7 @@ impl<R: BufRead> TextReader<R> {
                         let names = commented.unwrap_or_else(|| {
                             (1..=fields.len()).map(|i| format!("c{i}")).collect()
                         });
-                        let l = Layout::new(names, header, opts, path, line_no)?;
+                        let l = Layout::new(names, header, sep, opts, path, line_no)?;
                         let (v, time) = l.parse(t).map_err(|p| input_error(path, line_no, p))?;
                         ((Ok(v), time), l)
                     } else {
@@ -400,7 +566,7 @@ impl<R: BufRead> TextReader<R> {
                             .iter()
                             .map(|f| f.trim().trim_matches('"').trim().to_string())
                             .collect();
-                        layout = Some(Layout::new(names, true, opts, path, line_no)?);
+                        layout = Some(Layout::new(names, true, sep, opts, path, line_no)?);
                         continue;
                     }
                 }
@@ -423,7 +589,7 @@ impl<R: BufRead> TextReader<R> {
                 time,
                 gap_left: 0,
                 time_reported: false,
-                line: line.into_bytes(),
+                line: raw,
                 bad_rows: 0,
                 invalid_values: 0,
                 rows: 0,
@@ -584,13 +750,16 @@ impl<R: BufRead> TextReader<R> {
     fn next_row(&mut self) -> std::io::Result<Option<Row>> {
         let width = self.names.len();
         loop {
-            self.line.clear();
-            let got = self.src.read_until(b'\n', &mut self.line)?;
+            let (got, long) = read_line_bounded(&mut self.src, &mut self.line, MAX_LINE_BYTES)?;
             if got == 0 {
                 return Ok(None);
             }
             self.offset += got as u64;
             self.line_no += 1;
+            if long {
+                let problem = format!("a line of {got} bytes, longer than any row of text columns");
+                return Ok(Some((Err(problem), f64::NAN)));
+            }
             // A line that is not UTF-8 (a damaged stretch of the file) is a bad row, not the
             // end of the run.
             let Ok(text) = std::str::from_utf8(&self.line) else {

@@ -11,6 +11,10 @@
 //!   an absent serial port, a bad option found late) leaves an earlier result as it was, and a
 //!   file that did not exist before is removed again.
 //!
+//! - **One writer.** A regular file is locked (advisory, `flock`) while the run has it open; a
+//!   second run given the same file is refused (exit status 2) instead of interleaving its
+//!   records with the first run's.
+//!
 //! Special files (`/dev/null`, a FIFO, a terminal) are never truncated or refused.
 
 use std::fs::{File, OpenOptions};
@@ -70,7 +74,7 @@ impl OutputFile {
                      overwrite it{}",
                     path.display(),
                     m.len(),
-                    if what.contains("capture") {
+                    if what.contains("capture") || what.contains("aggregate") {
                         ""
                     } else {
                         ", or --resume to continue its run"
@@ -86,6 +90,18 @@ impl OutputFile {
         let file = opts.open(path).map_err(|e| {
             UsageError::Option(format!("{what} {}: cannot open: {e}", path.display()))
         })?;
+        // One writer at a time: a second run given the same file (or --out and --capture naming
+        // one file) would interleave its bytes with the first's. The lock is advisory and lasts
+        // as long as the file is open; where locks are not supported the file is used as is.
+        if regular || meta.is_none() {
+            if let Err(std::fs::TryLockError::WouldBlock) = file.try_lock() {
+                return Err(UsageError::Option(format!(
+                    "{what} {}: another writer has it open (an allanscope run still going, or \
+                     two options naming the same file); wait for it to end or choose another file",
+                    path.display()
+                )));
+            }
+        }
         Ok(OutputFile {
             path: path.to_path_buf(),
             file,

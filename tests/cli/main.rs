@@ -13,6 +13,7 @@ mod header_units;
 mod limits_summary;
 mod malformed;
 mod model_out;
+mod odd_inputs;
 mod outputs;
 mod plot_report;
 mod stop;

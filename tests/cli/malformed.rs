@@ -172,6 +172,21 @@ fn cases() -> Vec<Case> {
         case("300 columns", vec![text("wide.csv", &(long_header + "1\n"))], &["analyze", "wide.csv", "--tau0", "1"], "allanscope: wide.csv: 301 channels; at most 256 are analysed in one run (choose some with --channels, or check the column separator)"),
         case("plot input missing", vec![], &["plot", "nothere.jsonl", "-o", "x.svg"], "allanscope: nothere.jsonl: cannot open: No such file or directory (os error 2)"),
         case("plot input binary", vec![capture()], &["plot", "cap.siu8", "-o", "x.svg"], "allanscope: cap.siu8: line 1: not text (stream did not contain valid UTF-8); give a file of JSON lines written by allanscope"),
+        // Inputs the project had not met before (session 10, docs/robustness.md).
+        case("text with bare CR line ends", vec![text("cr.csv", "g1,g2\r1,2\r3,4\r")], &["analyze", "cr.csv", "--tau0", "1"], "allanscope: cr.csv: line 1: the lines end with a bare carriage return (CR, no line feed): convert the file to LF or CRLF line ends first, e.g. `tr '\\r' '\\n' < IN > OUT`"),
+        case("UTF-16 text", vec![("u16.csv", utf16("g1,g2\n1,2\n3,4\n"))], &["analyze", "u16.csv", "--tau0", "1"], "allanscope: u16.csv: UTF-16 text (as Windows tools write it); convert it to UTF-8 first, e.g. `iconv -f UTF-16 -t UTF-8 u16.csv > OUT.csv`"),
+        case("gzip text columns", vec![("s.csv.gz", gzip(&small_csv().1))], &["analyze", "s.csv.gz", "--tau0", "1"], "allanscope: s.csv.gz: gzip-compressed; decompress it first, or read it through a pipe: `zcat s.csv.gz | allanscope ... -` (standard input)"),
+        case("gzip capture", vec![("cap.siu8.gz", gzip(&capture().1[..200_000]))], &["analyze", "cap.siu8.gz", "--format", "siu8"], "allanscope: cap.siu8.gz: gzip-compressed; decompress it first, or read it through a pipe: `zcat cap.siu8.gz | allanscope ... -` (standard input)"),
+        case("empty capture", vec![text("e.siu8", "")], &["analyze", "e.siu8", "--format", "siu8"], "allanscope: e.siu8: empty (0 bytes): no siu8 frame to analyse"),
+        case("directory as a capture", vec![text("sub/keep", "")], &["analyze", "sub", "--format", "siu8"], "allanscope: sub: is a directory, not an input file"),
+        case("a header line of 2 MiB", vec![text("wide.csv", &("g".repeat(2 << 20) + "\n1\n"))], &["analyze", "wide.csv", "--tau0", "1"], "allanscope: wide.csv: line 1: a line longer than 1 MiB: not text columns (a capture of frames needs --format NAME)"),
+        case("standard input twice", vec![], &["analyze", "-", "-", "--tau0", "1"], "allanscope: standard input `-` is given twice, but it can be read only once (each input is one run)"),
+        case("report into a missing folder", vec![earlier()], &["report", "o.jsonl", "-o", "none/r.html"], "allanscope: -o none/r.html: the folder none does not exist; create it first"),
+        case("plot into a directory", vec![earlier(), text("sub/keep", "")], &["plot", "o.jsonl", "-o", "sub"], "allanscope: -o sub: is a directory; give a file name"),
+        case("export into a missing folder", vec![earlier()], &["export", "o.jsonl", "--to", "csv", "-o", "none/x.csv"], "allanscope: -o none/x.csv: the folder none does not exist; create it first"),
+        case("simulate into a missing folder", vec![text("m.toml", MODEL)], &["simulate", "--model", "m.toml", "--duration", "1", "-o", "none/x.csv"], "allanscope: -o none/x.csv: the folder none does not exist; create it first"),
+        case("aggregate over an earlier result", vec![("r.jsonl", results()), text("keep.jsonl", "keep\n")], &["aggregate", "r.jsonl", "--out", "keep.jsonl"], "allanscope: aggregate --out keep.jsonl: exists and holds 5 bytes (an earlier result?); pass --force to overwrite it"),
+        case("export of another version's records", vec![("r.jsonl", String::from_utf8(results()).unwrap().replace("\"sigma\"", "\"sigmas\"").into_bytes())], &["export", "r.jsonl", "--to", "csv", "-o", "x.csv"], "allanscope: r.jsonl: line 1: a curve record that does not read (missing field `sigma`): a file written by another version of allanscope? rerun the analysis"),
         // Frame descriptors.
         case("descriptor rate tiny", vec![capture(), siu8_with("rate_hz = 250.0", "rate_hz = 1e-306")], &["analyze", "cap.siu8", "--format", "./d.toml"], "allanscope: frame descriptor: 1 problem\n  ./d.toml:6: key `rate_hz`: must be from 1e-6 to 1e9 Hz, found 1e-306"),
         case("descriptor rate huge", vec![capture(), siu8_with("rate_hz = 250.0", "rate_hz = 1e308")], &["analyze", "cap.siu8", "--format", "./d.toml"], "allanscope: frame descriptor: 1 problem\n  ./d.toml:6: key `rate_hz`: must be from 1e-6 to 1e9 Hz, found 1e308"),
@@ -220,6 +235,47 @@ fn cases() -> Vec<Case> {
         case("checkpoint other options", vec![small_csv(), earlier(), ("o.jsonl.ckpt", checkpoint_bytes())], &["analyze", "small.csv", "--tau0", "2", "--out", "o.jsonl", "--resume"], "allanscope: checkpoint o.jsonl.ckpt: saved with other options than given now (--tau0: saved 1.0 s, now 2.0 s); resume with the options of the saved run, or start a new run without --resume"),
         case("checkpoint other taus", vec![small_csv(), earlier(), ("o.jsonl.ckpt", checkpoint_bytes())], &["analyze", "small.csv", "--tau0", "1", "--taus", "1,2", "--out", "o.jsonl", "--resume"], "allanscope: checkpoint o.jsonl.ckpt: saved with other options than given now (--taus: saved [1, 2, ..., 1099511627776] (41 sizes), now [1, 2]); resume with the options of the saved run, or start a new run without --resume"),
     ]
+}
+
+/// `t` as UTF-16 little-endian text with its byte-order mark, as Windows tools save it.
+fn utf16(t: &str) -> Vec<u8> {
+    let mut b = vec![0xff, 0xfe];
+    for u in t.encode_utf16() {
+        b.extend_from_slice(&u.to_le_bytes());
+    }
+    b
+}
+
+fn gzip(bytes: &[u8]) -> Vec<u8> {
+    use std::io::Write;
+    let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    e.write_all(bytes).expect("gzip");
+    e.finish().expect("gzip")
+}
+
+/// The JSON lines of a real run (once per test process).
+fn results() -> Vec<u8> {
+    static R: std::sync::OnceLock<Vec<u8>> = std::sync::OnceLock::new();
+    R.get_or_init(|| {
+        let csv: String = std::iter::once("g1\n".to_string())
+            .chain((0..400u32).map(|i| format!("{}\n", (i.wrapping_mul(2_654_435_761) >> 20) % 97)))
+            .collect();
+        let dir = scratch("results-source");
+        std::fs::write(dir.join("r.csv"), csv).expect("write");
+        let out = Command::new(env!("CARGO_BIN_EXE_allanscope"))
+            .current_dir(&dir)
+            .env("ALLANSCOPE_LOG", "off")
+            .args(["analyze", "r.csv", "--tau0", "0.01", "--json"])
+            .output()
+            .expect("run");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        out.stdout
+    })
+    .clone()
 }
 
 /// A descriptor of `n` i16 channels after a 2-byte sync, with a CRC over them.

@@ -13,6 +13,8 @@
 //! - A listener on a UDP port that never receives anything ends at once on SIGINT or SIGTERM,
 //!   exit 0, with its (empty) final records, health and summary; so does a serial listener on a
 //!   pseudo-terminal whose line went quiet, with the final records of the frames it received.
+//! - A run blocked in a system call (opening a FIFO no writer has opened) cannot see the first
+//!   signal; a second one ends it within 5 s, exit 1 (it hung through any number of signals).
 
 use std::io::{BufRead, BufReader, Read};
 use std::process::{Child, Stdio};
@@ -435,4 +437,37 @@ fn sigint_ends_a_serial_listener_on_a_pseudo_terminal() {
     let s = recs.last().unwrap();
     assert_eq!(s["stopped_by"], "SIGINT");
     assert_eq!(s["t_data"], FRAMES as f64 * TAU0_S);
+}
+
+#[cfg(unix)]
+#[test]
+fn a_second_sigint_ends_a_run_blocked_opening_its_input() {
+    let fifo = tmp_in("stop-fifo", "fifo");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .expect("mkfifo");
+    assert!(made.success());
+    let mut child = exe()
+        .args(["analyze", fifo.to_str().expect("utf-8"), "--tau0", "1"])
+        .env("ALLANSCOPE_LOG", "warn")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    std::thread::sleep(Duration::from_millis(500));
+    signal(&child, "-INT");
+    std::thread::sleep(Duration::from_millis(300));
+    signal(&child, "-INT");
+    let (code, took) = wait_at_most(&mut child, Duration::from_secs(15));
+    assert_eq!(code, Some(1));
+    assert!(took < Duration::from_secs(8), "{took:?}");
+    let mut err = String::new();
+    child
+        .stderr
+        .take()
+        .expect("stderr")
+        .read_to_string(&mut err)
+        .expect("read");
+    assert!(err.contains("SIGINT twice"), "{err}");
 }
