@@ -7,6 +7,7 @@ mod diagnosis;
 mod families;
 mod filters;
 mod gm_or_filter;
+mod holdout_carry;
 mod mixture;
 mod oracle;
 mod outliers;
