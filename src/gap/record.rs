@@ -100,7 +100,8 @@ pub struct HoldoutRecord {
     pub gap_before: f64,
     /// With the effects that carried: never above `gap_before`.
     pub gap_after: f64,
-    /// Whether any effect of the fitting run lowered the held-out gap; `false` says plainly
+    /// Whether any effect of the fitting run carried (`gap::holdout::carries`: lowered the
+    /// held-out `r' S^-1 r` by a margin that means something); `false` says plainly
     /// that the diagnosis did not carry to this run.
     #[serde(default)]
     pub carried: bool,
@@ -115,8 +116,13 @@ pub struct HeldEffectRecord {
     pub kind: String,
     /// The held-out gap with it added to the effects that carried before it.
     pub gap_after: f64,
-    /// Whether it lowered the held-out gap (kept for the effects after it).
+    /// Whether it carried: it lowered the held-out `r' S^-1 r` by a margin that means
+    /// something (`gap::holdout::carries`), and was kept for the effects after it.
     pub carried: bool,
+    /// The drop of `r' S^-1 r` it brought on the held-out run (negative: it raised it); absent
+    /// in records written before session 10.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub delta_chi2: Option<f64>,
 }
 
 /// One segment homogeneity test (extra field `segments`).
@@ -280,6 +286,7 @@ impl DiagnosisRecord {
                         kind: e.kind.name().into(),
                         gap_after: e.gap_after,
                         carried: e.carried,
+                        delta_chi2: e.delta_chi2.is_finite().then_some(e.delta_chi2),
                     })
                     .collect(),
             }),

@@ -8,6 +8,7 @@ mod families;
 mod filter_tail;
 mod filters;
 mod gm_or_filter;
+mod holdout_carry;
 mod mixture;
 mod oracle;
 mod outliers;
