@@ -49,7 +49,12 @@ fn a_sub_sample_filter_on_a_clean_short_mems_run_is_not_claimed() {
             before.effects
         );
         let d = run(seed, true);
-        assert_eq!(d.verdict, Verdict::Consistent, "seed {seed}: {:?}", d.effects);
+        assert_eq!(
+            d.verdict,
+            Verdict::Consistent,
+            "seed {seed}: {:?}",
+            d.effects
+        );
         for c in d.first_scores.iter().filter(|c| c.kind.is_filter()) {
             assert!(c.score_tail <= c.score + 1e-9, "seed {seed}: {c:?}");
         }
