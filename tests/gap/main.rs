@@ -8,6 +8,7 @@ mod families;
 mod filters;
 mod gm_or_filter;
 mod holdout_carry;
+mod limit_cycle;
 mod mixture;
 mod oracle;
 mod outliers;
