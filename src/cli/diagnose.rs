@@ -222,7 +222,9 @@ fn gather(
                 return Err(anyhow::Error::new(allanscope::error::UsageError::Input {
                     file: path.into(),
                     line: reader.position().line_no,
-                    problem: "no samples: every value is empty, nan or not a number".into(),
+                    problem: allanscope::input::text::no_samples_problem(
+                        reader.position().invalid_values,
+                    ),
                 }));
             }
         }

@@ -1,6 +1,7 @@
 //! The gap on a held-out run (docs/theory.md section 5): the effects fitted on one run held fixed on
 //! another, only the five-term amplitudes refitted, judged as the fitting run's effects are
-//! (each kept only if it lowers the held-out gap), so the record says which effects carried.
+//! (each kept only if it lowers the held-out gap by a margin that means something), so the
+//! record says which effects carried and, plainly, when none did.
 
 use super::diagnose::{DiagnoseError, DiagnoseOptions, Diagnosis};
 use super::effects::{effect_column, EffectKind};
@@ -13,8 +14,25 @@ pub struct HeldEffect {
     pub kind: EffectKind,
     /// The held-out gap with this effect added to those that carried before it.
     pub gap_after: f64,
-    /// Whether it lowered the held-out gap (and so was kept for the effects after it).
+    /// The drop of `r' S^-1 r` on the held-out run when it is added (negative: it raised it).
+    pub delta_chi2: f64,
+    /// Whether it carried ([`carries`]: it lowered the held-out `r' S^-1 r` by at least
+    /// `add_chi2`, on the scale of the model with it in), and so was kept for the effects after it.
     pub carried: bool,
+}
+
+/// Whether an effect held fixed (kind, shape, amplitude) carries to a held-out run: the drop
+/// `delta_chi2` of `r' S^-1 r` it brings there, divided by `max(1, G)` of the model with it in
+/// ([`super::thresholds::Thresholds::lr_stat`]), is at least `add_chi2` (3), the drop the fitting
+/// run asks of an effect once its model is flagged. Any lower gain is noise: for a fixed known
+/// signal of whitened size `delta` the drop is about `N(-delta^2, 4 delta^2)` when the effect is
+/// absent from the held-out run and `N(delta^2, 4 delta^2)` when it is there, so a drop of 3 is
+/// reached by an absent effect with probability at most `Phi(-sqrt(3)) = 4.2%` whatever
+/// `delta` (the worst case at `delta^2 = 3`), while a negligible effect (`delta -> 0`) never
+/// carries (docs/gap.md, "Held-out runs").
+pub fn carries(delta_chi2: f64, gap_with: f64, opts: &DiagnoseOptions) -> bool {
+    let t = &opts.thresholds;
+    gap_with.is_finite() && t.lr_stat(delta_chi2, gap_with) >= t.add_chi2
 }
 
 /// The gap on a held-out run.
@@ -29,7 +47,7 @@ pub struct HoldoutGap {
 }
 
 impl HoldoutGap {
-    /// Whether any effect lowered the held-out gap.
+    /// Whether any effect carried ([`carries`]).
     pub fn carried(&self) -> bool {
         self.effects.iter().any(|e| e.carried)
     }
@@ -38,8 +56,9 @@ impl HoldoutGap {
 /// The gap on a held-out run with the effects (kinds, shapes and amplitudes) fitted on another
 /// run held fixed; only the five-term amplitudes are refitted (they may differ run to run, as
 /// the seed paper's table 2 shows). The effects are added in the fitting run's order, each kept
-/// only if it lowers the held-out gap of the model with those kept before it (the rule of the
-/// fitting run's bookkeeping). Bias jumps are events of one run and are not carried over.
+/// only if it [`carries`]: it lowers the held-out `r' S^-1 r` of the model with those kept
+/// before it by at least the fitting run's `add_chi2`. Bias jumps are events of one run and are
+/// not carried over.
 pub fn holdout_gap(
     fitted: &Diagnosis,
     snap: &EvidenceSnapshot,
@@ -55,6 +74,7 @@ pub fn holdout_gap(
         ..ModelSpec::default()
     };
     let mut gap = base.gap();
+    let mut chi2 = base.chi2;
     let mut effects = Vec::new();
     for e in &fitted.effects {
         let kind = e.params.kind();
@@ -72,15 +92,21 @@ pub fn holdout_gap(
                 }
             }
         }
-        let trial_gap = prob.gls(&trial).map_or(f64::INFINITY, |f| f.gap());
-        let carried = trial_gap.is_finite() && trial_gap < gap;
+        let (trial_gap, trial_chi2) = prob
+            .gls(&trial)
+            .map_or((f64::INFINITY, f64::INFINITY), |f| (f.gap(), f.chi2));
+        let delta_chi2 = chi2 - trial_chi2;
+        // Never above the gap without it (the bookkeeping's rule) and a drop that means something.
+        let carried = trial_gap < gap && carries(delta_chi2, trial_gap, opts);
         if carried {
             spec = trial;
             gap = trial_gap;
+            chi2 = trial_chi2;
         }
         effects.push(HeldEffect {
             kind,
             gap_after: trial_gap,
+            delta_chi2,
             carried,
         });
     }

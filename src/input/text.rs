@@ -63,6 +63,21 @@ fn read_line_bounded<R: BufRead>(
     }
 }
 
+/// What is wrong with a text input that held no usable value, `invalid` of them numbers out of
+/// range (beyond [`super::MAX_ABS_VALUE`] or infinite).
+pub fn no_samples_problem(invalid: u64) -> String {
+    if invalid == 0 {
+        "no samples: every value is empty, nan or not a number".into()
+    } else {
+        format!(
+            "no samples: {invalid} values are numbers beyond {:e} in magnitude or infinite, \
+             taken as gaps, and the others are empty, nan or not numbers (are the columns raw \
+             counts of a wider type, or time stamps? pick the data columns with --columns)",
+            super::MAX_ABS_VALUE
+        )
+    }
+}
+
 /// How many bad rows are logged one by one before the rest are only counted.
 const BAD_ROWS_LOGGED: u64 = 10;
 

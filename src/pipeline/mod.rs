@@ -494,7 +494,7 @@ fn finish_text(
         return Err(UsageError::Input {
             file: path_shown,
             line: position.line_no,
-            problem: "no samples: every value is empty, nan or not a number".into(),
+            problem: crate::input::text::no_samples_problem(position.invalid_values),
         }
         .into());
     }

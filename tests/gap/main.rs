@@ -7,6 +7,8 @@ mod diagnosis;
 mod families;
 mod filters;
 mod gm_or_filter;
+mod holdout_carry;
+mod limit_cycle;
 mod mixture;
 mod oracle;
 mod outliers;
