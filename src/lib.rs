@@ -125,6 +125,7 @@
 //!   quantization.rs        which quantization the values show
 //!   quant_limit.rs         when quantization limits what can be told
 //!   rounding.rs            rate samples rounded after a filter, as AVAR
+//!   limit_cycle.rs         a named line that is the counter's limit cycle
 //!   segments.rs            homogeneity of the curve across the run's segments
 //!   thresholds.rs          the decision thresholds, calibrated by simulation
 //!   diagnose.rs            the diagnosis: effects chosen, verdict

@@ -184,6 +184,9 @@ pub struct Diagnosis {
     /// (their null distribution on clean runs calibrates `lr_crit`; docs/gap.md,
     /// "Calibration").
     pub first_scores: Vec<CandidateScore>,
+    /// Named sinusoids that are the counter's limit cycle, not an effect of the unit
+    /// ([`super::limit_cycle`]).
+    pub limit_cycles: Vec<super::limit_cycle::LimitCycle>,
 }
 
 /// Five-term `(Q, N, B, K, R)` from `c`.
@@ -208,6 +211,17 @@ pub fn diagnose(
 /// (`quantization_limited`) and reads the curve only from the tau where the error is white
 /// again (when enough of it is left; otherwise the whole curve, still flagged).
 pub fn diagnose_with_temperature(
+    snap: &EvidenceSnapshot,
+    temperature: Option<&EvidenceSnapshot>,
+    opts: &DiagnoseOptions,
+) -> Result<Diagnosis, DiagnoseError> {
+    let mut d = diagnose_quantized(snap, temperature, opts)?;
+    super::limit_cycle::attribute(&mut d, snap);
+    Ok(d)
+}
+
+/// [`diagnose_with_temperature`] before the counter's limit cycles are attributed.
+fn diagnose_quantized(
     snap: &EvidenceSnapshot,
     temperature: Option<&EvidenceSnapshot>,
     opts: &DiagnoseOptions,
@@ -575,6 +589,7 @@ fn diagnose_curve_once(
         alternatives,
         effect_intervals,
         first_scores,
+        limit_cycles: Vec::new(),
     })
 }
 

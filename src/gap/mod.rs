@@ -10,7 +10,8 @@
 //! not adopted); [`segments`] tests homogeneity in time; [`diagnose`](mod@diagnose) orchestrates
 //! them and decides ([`Diagnosis`]) by [`thresholds`]; [`holdout`] judges a held-out run;
 //! [`oracle`] bounds what any test could do; [`quant_limit`] tells a unit whose coarse LSB
-//! is not white phase noise; [`record`] writes docs/records.md's `diagnosis` record;
+//! is not white phase noise; [`limit_cycle`] tells a named line that is the counter's limit
+//! cycle; [`record`] writes docs/records.md's `diagnosis` record;
 //! [`unit_model`] turns a diagnosis into the simulator model of the fitted unit (with the LSB
 //! that [`lsb`] reads off the values).
 //! Everything is pure and synchronous.
@@ -31,6 +32,7 @@ pub mod filter_scan;
 pub mod holdout;
 pub mod intervals;
 pub mod jump_mixture;
+pub mod limit_cycle;
 pub mod lsb;
 pub mod oracle;
 pub mod outliers;

@@ -10,6 +10,7 @@ use super::alternatives::Alternative;
 use super::diagnose::{Diagnosis, Verdict};
 use super::effects::{nullable_f64, EffectParams};
 use super::holdout::HoldoutGap;
+use super::limit_cycle::LimitCycle;
 use super::quantization::QuantizationFinding;
 use serde::{Deserialize, Serialize};
 
@@ -34,6 +35,36 @@ pub struct EffectRecord {
     /// docs/gap.md, "Parameter intervals"); absent when none was computed (warm-ups, jumps).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub intervals: BTreeMap<String, [f64; 2]>,
+    /// What the effect is when it is not an effect of the unit (absent otherwise): a named
+    /// sinusoid that is the counter's limit cycle (docs/gap.md, "The counter's limit cycle").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cause: Option<EffectCause>,
+}
+
+/// The record's `cause` of an effect that is not the unit's: `{kind, expected_frequency,
+/// harmonic, mean_rate, lsb}`. `kind` is `quantization_limit_cycle`: the line at the
+/// `harmonic`-th multiple of `|mean_rate| / lsb` (aliased, Hz: `expected_frequency`) that a
+/// counter with carry makes under a nearly constant rate (`mean_rate` in u/s, `lsb` in u).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EffectCause {
+    pub kind: String,
+    pub expected_frequency: f64,
+    pub harmonic: u32,
+    pub mean_rate: f64,
+    pub lsb: f64,
+}
+
+impl EffectCause {
+    /// The cause of a limit cycle.
+    pub fn limit_cycle(c: &LimitCycle) -> Self {
+        EffectCause {
+            kind: "quantization_limit_cycle".into(),
+            expected_frequency: c.expected_hz,
+            harmonic: c.harmonic,
+            mean_rate: c.mean_rate,
+            lsb: c.lsb,
+        }
+    }
 }
 
 /// An effect as a record holds it: one of the kinds this version diagnoses, or a kind a newer
@@ -273,6 +304,11 @@ impl DiagnosisRecord {
                                 .collect()
                         })
                         .unwrap_or_default(),
+                    cause: d
+                        .limit_cycles
+                        .iter()
+                        .find(|c| c.effect == i)
+                        .map(EffectCause::limit_cycle),
                 })
                 .collect(),
             holdout: holdout.map(|h| HoldoutRecord {
@@ -417,6 +453,7 @@ mod tests {
                 effect: RecordedEffect::Known(*p),
                 gap_after: 1.5,
                 intervals: BTreeMap::new(),
+                cause: None,
             };
             let line = serde_json::to_string(&rec).unwrap();
             assert_eq!(line, want);

@@ -9,6 +9,7 @@ mod filter_tail;
 mod filters;
 mod gm_or_filter;
 mod holdout_carry;
+mod limit_cycle;
 mod mixture;
 mod oracle;
 mod outliers;
