@@ -67,7 +67,7 @@
 //!   flicker floor at `tau_x` log-uniform in [T_run / 50, T_run / 10], a fine angle LSB.
 //!
 //! Held-out families of session 9 (defined at 20:27 UTC on 2026-11-24 in the helpers' log,
-//! /work/notes/s9/diag-sync.md, before any run of them; `--families unseen`; nothing tuned on
+//! before any run of them; `--families unseen`; nothing tuned on
 //! them):
 //! - `hrmems`: a high-rate MEMS IMU gyro at 2 kHz (tau0 0.5 ms), ARW 0.15-0.6 deg/sqrt(h), bias
 //!   flicker 3-30 deg/h, K 0.5-5 deg/h/sqrt(h), each rate sample rounded to 0.1-1 of the
@@ -88,7 +88,7 @@
 //!   8.64 M samples; `--hours` is ignored).
 //!
 //! Held-out families of session 10 (defined at 22:41 UTC on 2026-11-24 in the helpers' log,
-//! /work/notes/s10/diag-sync.md, before any run of them; `--families unseen10`; nothing tuned
+//! docs/repro/session10/helpers-log.md, before any run of them; `--families unseen10`; nothing tuned
 //! on them; their tables ran with `--hours 1,2`, `lowrate` with `--hours 1,3`). Three carry an
 //! *intrinsic* filter, part of the unit as sold, so that their right answer on a clean run is
 //! that filter named and nothing else (`adistemp`: also a slow drift, below):
