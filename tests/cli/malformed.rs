@@ -263,18 +263,13 @@ fn results() -> Vec<u8> {
             .collect();
         let dir = scratch("results-source");
         std::fs::write(dir.join("r.csv"), csv).expect("write");
-        let out = Command::new(env!("CARGO_BIN_EXE_allanscope"))
-            .current_dir(&dir)
-            .env("ALLANSCOPE_LOG", "off")
-            .args(["analyze", "r.csv", "--tau0", "0.01", "--json"])
-            .output()
-            .expect("run");
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        out.stdout
+        crate::common::stdout_of(
+            crate::common::exe()
+                .current_dir(&dir)
+                .env("ALLANSCOPE_LOG", "off")
+                .args(["analyze", "r.csv", "--tau0", "0.01", "--json"]),
+        )
+        .into_bytes()
     })
     .clone()
 }

@@ -19,7 +19,7 @@ use std::process::{Child, Stdio};
 use std::time::{Duration, Instant};
 
 use crate::common::pipeline::parse_lines;
-use crate::common::{exe, fixtures, fresh_dir};
+use crate::common::{exe, fixtures, fresh_dir, stdout_of};
 
 /// 3000 rows of two channels, three decimals (a deterministic scramble, no randomness).
 fn rows() -> Vec<[String; 2]> {
@@ -232,18 +232,13 @@ fn a_result_file_cut_short_reads_as_its_whole_lines() {
     torn.extend_from_slice(&full.stdout[..100]);
     std::fs::write(dir.join("torn.jsonl"), &torn).unwrap();
     let run = |args: &[&str]| {
-        let out = exe()
-            .current_dir(&dir)
-            .env("ALLANSCOPE_LOG", "off")
-            .args(args)
-            .output()
-            .expect("run");
-        assert!(
-            out.status.success(),
-            "{args:?}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        out.stdout
+        stdout_of(
+            exe()
+                .current_dir(&dir)
+                .env("ALLANSCOPE_LOG", "off")
+                .args(args),
+        )
+        .into_bytes()
     };
     for (input, out) in [("full.jsonl", "full.csv"), ("torn.jsonl", "torn.csv")] {
         run(&["export", input, "--to", "csv", "-o", out]);
