@@ -25,7 +25,7 @@
 //! filtered rate's plus this within 3% at every cluster size, where the white floor is off by
 //! up to a factor 3.
 
-use crate::model::lowpass::LowPass;
+use crate::model::lowpass::{avar_from_autocovariance, LowPass};
 use std::f64::consts::PI;
 
 /// The filtered sample's noise, in steps, below which the rounding's correlation with the
@@ -74,21 +74,6 @@ pub fn rounding_avar(lp: &LowPass, tau0_s: f64, step: f64, n2: f64, ms: &[u64]) 
         .iter()
         .map(|&v| c * (theta_sum(x * (1.0 - v / rho0).max(0.0)) - tail))
         .collect();
-    let mut p0 = vec![0.0; r.len()];
-    let mut p1 = vec![0.0; r.len()];
-    for k in 1..r.len() {
-        p0[k] = p0[k - 1] + r[k];
-        p1[k] = p1[k - 1] + k as f64 * r[k];
-    }
-    let s = |n: u64| -> f64 {
-        let kk = (n.saturating_sub(1) as usize).min(r.len() - 1);
-        let nf = n as f64;
-        nf * r[0] + 2.0 * (nf * p0[kk] - p1[kk])
-    };
-    ms.iter()
-        .map(|&m| {
-            let mf = m as f64;
-            ((4.0 * s(m) - s(2 * m)) / (2.0 * mf * mf)).max(0.0)
-        })
-        .collect()
+    // the errors' AVAR of averages of m samples (unit sample time: S(n) in samples)
+    avar_from_autocovariance(&r, 1.0, ms)
 }

@@ -192,25 +192,7 @@ impl LowPass {
     /// `S(n) = tau0 (n rho_0 + 2 sum_{0<k<n} (n - k) rho_k)` the variance of a sum of `n`
     /// filtered increments (docs/gap.md, "Low-pass filters beyond first order").
     pub fn white_rate_avar(&self, tau0_s: f64, ms: &[u64]) -> Vec<f64> {
-        let rho = self.autocorrelation(tau0_s);
-        // prefix sums over k = 1..=K of rho_k and k rho_k
-        let mut p0 = vec![0.0; rho.len()];
-        let mut p1 = vec![0.0; rho.len()];
-        for k in 1..rho.len() {
-            p0[k] = p0[k - 1] + rho[k];
-            p1[k] = p1[k - 1] + k as f64 * rho[k];
-        }
-        let s = |n: u64| -> f64 {
-            let kk = ((n.saturating_sub(1)) as usize).min(rho.len() - 1);
-            let nf = n as f64;
-            tau0_s * (nf * rho[0] + 2.0 * (nf * p0[kk] - p1[kk]))
-        };
-        ms.iter()
-            .map(|&m| {
-                let mf = m as f64;
-                ((4.0 * s(m) - s(2 * m)) / (2.0 * mf * mf * tau0_s * tau0_s)).max(0.0)
-            })
-            .collect()
+        avar_from_autocovariance(&self.autocorrelation(tau0_s), tau0_s, ms)
     }
 
     /// AVAR (u^2/s^2) of flicker rate noise of unit `B` through the filter at each cluster
@@ -318,6 +300,32 @@ fn first_order_gain(time_constant_s: f64, tau0_s: f64, w: f64) -> f64 {
     let a = (-tau0_s / time_constant_s).exp();
     let s = (w / 2.0).sin();
     (1.0 - a) * (1.0 - a) / ((1.0 - a) * (1.0 - a) + 4.0 * a * s * s)
+}
+
+/// AVAR at each cluster size of `ms` of a stationary sequence whose lag-`k` autocovariance is
+/// `cov[k]` (zero beyond the slice; `cov` not empty): `(4 S(m) - S(2m)) / (2 m^2 tau0^2)` with
+/// `S(n) = tau0 (n c_0 + 2 sum_{0<k<n} (n - k) c_k)` the variance of a sum of `n` of its samples
+/// scaled by `tau0_s` (prefix sums of `c_k` and `k c_k` make each `S(n)` one lookup). With
+/// `tau0_s = 1` it is the AVAR of averages of `m` samples, in the samples' units squared.
+pub fn avar_from_autocovariance(cov: &[f64], tau0_s: f64, ms: &[u64]) -> Vec<f64> {
+    // prefix sums over k = 1..=K of c_k and k c_k
+    let mut p0 = vec![0.0; cov.len()];
+    let mut p1 = vec![0.0; cov.len()];
+    for k in 1..cov.len() {
+        p0[k] = p0[k - 1] + cov[k];
+        p1[k] = p1[k - 1] + k as f64 * cov[k];
+    }
+    let s = |n: u64| -> f64 {
+        let kk = ((n.saturating_sub(1)) as usize).min(cov.len() - 1);
+        let nf = n as f64;
+        tau0_s * (nf * cov[0] + 2.0 * (nf * p0[kk] - p1[kk]))
+    };
+    ms.iter()
+        .map(|&m| {
+            let mf = m as f64;
+            ((4.0 * s(m) - s(2 * m)) / (2.0 * mf * mf * tau0_s * tau0_s)).max(0.0)
+        })
+        .collect()
 }
 
 #[cfg(test)]
