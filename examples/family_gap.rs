@@ -153,6 +153,7 @@
 //!     [--families navfog,tacfog,vog4,memsgyro,ma4,memsacc]
 //!     [--effects none,gauss_markov,sinusoid,output_filter,warmup,bias_jumps] [--hours 1,3]
 //!     [--csv FILE] [--resid FILE] [--no-oracle] [--from 0] [--shares 1,1,1,0.5,1]
+//!     [--models DIR]
 //! ```
 //!
 //! `--draws` is per family and effect; `--from N` starts at draw `N` (a split run gives the
@@ -171,7 +172,9 @@
 //! (the base `G`, each stationary candidate's first-scan score `lr_*` and the gap with it in
 //! `galt_*`, the warm-up's `B` and its block-mean scale, the step z scores), so that the null
 //! distribution of each test can be read off clean runs. `--no-oracle` leaves out the clean
-//! draws' oracle statistics and jump ceiling (a null study of the diagnosis alone).
+//! draws' oracle statistics and jump ceiling (a null study of the diagnosis alone). `--models
+//! DIR` writes each draw's model file, which `allanscope simulate --model` reads, for
+//! reproducing a run through the command line (another noise stream, the same unit).
 
 mod common;
 
@@ -191,7 +194,12 @@ use common::{
 };
 use rand::{RngExt, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
+use std::sync::OnceLock;
 use std::time::Instant;
+
+/// `--models DIR`: each draw's model file (`FAMILY_EFFECT_DRAW.toml`, the rate rounding as the
+/// model's `rate_lsb`), for `allanscope simulate --model` (reproductions through the CLI).
+static MODELS_DIR: OnceLock<String> = OnceLock::new();
 
 /// The families; the first six are the default list, `coarse` is drawn on request. New
 /// families go at the end: a draw's stream depends on the family's index.
@@ -808,6 +816,15 @@ fn run_one(
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream);
     let unit = draw_unit(&mut rng, family, hours);
     let drawn = kind.map(|k| draw_effect(&mut rng, &unit, k));
+    if let Some(dir) = MODELS_DIR.get() {
+        let mut toml = model_toml(&unit, drawn.map(|d| d.0));
+        if unit.rate_lsb > 0.0 {
+            toml += &format!("rate_lsb = {:e}\n", unit.rate_lsb);
+        }
+        let name = format!("{dir}/{family}_{}_{i}.toml", kind_name(kind));
+        std::fs::write(&name, format!("# family_gap --seed {seed}: {name}\n{toml}"))
+            .expect("--models");
+    }
     let t = Instant::now();
     let (inc, truth, jumps) = simulate(&unit, drawn.map(|d| d.0), rng.random::<u64>());
     let mut ev = GapEvidence::from_increments(GapConfig::new(unit.tau0), &inc);
@@ -1348,6 +1365,11 @@ fn main() {
         })
         .collect();
     let csv = get("--csv", "");
+    let models = get("--models", "");
+    if !models.is_empty() {
+        std::fs::create_dir_all(&models).expect("--models DIR");
+        MODELS_DIR.set(models).expect("--models once");
+    }
     // The share each test of the diagnosis spends, in percent, per effect of `KINDS[1..]`
     // (docs/gap.md, "Detection against the oracle"); the oracle is also read at it.
     let shares: Option<[f64; 5]> = match get("--shares", "").as_str() {
