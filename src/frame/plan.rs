@@ -330,7 +330,7 @@ impl FramePlan {
                     // NaN, infinite or absurd values (a float field's NaN, a damaged exponent)
                     // are invalid: a gap, counted, never summed into the channel.
                     let v = r.as_f64() * c.scale * c.factor;
-                    if !v.is_finite() || v.abs() > crate::ranges::MAX_ABS_VALUE {
+                    if !v.is_finite() || crate::ranges::plausible(v).is_none() {
                         *invalid += 1;
                         out.push_missing(ch);
                     } else {
