@@ -118,22 +118,28 @@ pub fn scan(prob: &GapProblem, base: &ModelSpec) -> Option<(EffectParams, GlsFit
         }
     }
     let sigma = fit.coef.last().copied().unwrap_or(0.0).max(0.0).sqrt();
-    Some((
-        EffectParams::BandNoise {
-            frequency_hz: lf.exp().min(f_max),
-            sigma,
-            width_hz: lw.exp(),
-        },
-        fit,
-    ))
+    let p = EffectParams::BandNoise {
+        frequency_hz: lf.exp().min(f_max),
+        sigma,
+        width_hz: lw.exp(),
+    };
+    // A band at the narrow end of its width range is a line over this curve (a counter's
+    // limit cycle, a wandering tone): the sinusoid's to name, not a band's.
+    if at_narrow_end(&p) {
+        return None;
+    }
+    Some((p, fit))
 }
 
 /// Kinds a band is weighed against by its whole fit: a line (its narrow limit), a first-order
-/// Gauss-Markov hump (its wide limit at a low centre), and the output filters, which take a
-/// band near Nyquist as a reshaped white rate (a 3-tap average against a 42 Hz band at 100 Hz)
-/// or a resonance (the second order).
+/// Gauss-Markov hump (its wide limit at a low centre) and a resonant second-order filter. Not
+/// the other filters: a wide band at a low centre fits a first-order filter's curve by chance
+/// better on some runs (tests/gap/sinusoid_behind_filter.rs's first-order twin).
 fn nested(kind: EffectKind) -> bool {
-    kind.is_stationary() && kind != EffectKind::BandNoise
+    matches!(
+        kind,
+        EffectKind::Sinusoid | EffectKind::GaussMarkov | EffectKind::SecondOrderFilter
+    )
 }
 
 /// Margin (in units of the band's residual scale) by which a band that passed its test must
@@ -153,7 +159,8 @@ pub const PREFER_MARGIN: f64 = super::alternatives::AIC_MARGIN;
 /// `PREFER_MARGIN + 2 (3 - k)` (`k` the chosen kind's parameters: Akaike's price of the extra
 /// ones) in units of `max(1, G_band)`, the band model's residual scale (the scaling of
 /// [`super::thresholds::Thresholds::lr_stat`]): on a pure line the band at its narrow end
-/// fits only by chance better, and the sinusoid stays.
+/// fits only by chance better, and the sinusoid stays. A band at the narrow end of its width
+/// range ([`at_narrow_end`]) never replaces anything.
 pub fn prefer_band(
     best: Option<(EffectParams, GlsFit, f64)>,
     passed: &[(EffectParams, GlsFit, f64)],
@@ -163,7 +170,12 @@ pub fn prefer_band(
     if !nested(kind) {
         return Some(b);
     }
-    let Some(band) = passed.iter().find(|p| p.0.kind() == EffectKind::BandNoise) else {
+    // Only a band that is located in width: one at the narrow end of its scan is a line
+    // over this curve (a counter's limit cycle, a wandering tone), which the sinusoid names.
+    let Some(band) = passed
+        .iter()
+        .find(|p| p.0.kind() == EffectKind::BandNoise && !at_narrow_end(&p.0))
+    else {
         return Some(b);
     };
     let extra = (EffectKind::BandNoise.n_params() as f64 - kind.n_params() as f64).max(0.0);
@@ -172,5 +184,21 @@ pub fn prefer_band(
         Some(band.clone())
     } else {
         Some(b)
+    }
+}
+
+/// Relative distance to the narrow end of the width range within which a band is at it.
+pub const NARROW_TOL: f64 = 0.25;
+
+/// Whether the band `p` was fitted at (within [`NARROW_TOL`] of) the narrow end of its width
+/// range, `RELATIVE_WIDTH.0` centres: there it is not told from a line.
+pub fn at_narrow_end(p: &EffectParams) -> bool {
+    match *p {
+        EffectParams::BandNoise {
+            frequency_hz,
+            width_hz,
+            ..
+        } => width_hz <= RELATIVE_WIDTH.0 * frequency_hz * (1.0 + NARROW_TOL),
+        _ => false,
     }
 }

@@ -82,7 +82,7 @@ fn sum_variance(rho: f64, theta: f64, n: f64) -> f64 {
 /// behind `avar_from_autocovariance`), `V` in closed form ([`sum_variance`]). Exact for every
 /// `m`, centre and width.
 pub fn band_noise_avar(sigma: f64, frequency_hz: f64, width_hz: f64, tau0_s: f64, m: u64) -> f64 {
-    if m == 0 || !(sigma > 0.0) {
+    if m == 0 || sigma.is_nan() || sigma <= 0.0 {
         return 0.0;
     }
     let (rho, theta) = pole(frequency_hz, width_hz, tau0_s);
