@@ -115,6 +115,31 @@
 //!   flicker floor at T_run / 30 to T_run / 3, 100-400 Hz, the LSB 0.3-3 of the per-sample noise,
 //!   a constant input (gravity's projection) uniform in [-9.81, 9.81] m/s^2.
 //!
+//! Held-out families of session 11 (defined at 01:28 UTC on 2026-11-25 in the helpers' log,
+//! /work/notes/s11/diag-sync.md, before any run of them; `--families unseen11`; nothing tuned
+//! on them):
+//! - `mimu`: a consumer MEMS IMU gyro at an ODR of 1-2 kHz, ARW 0.15-1 deg/sqrt(h), flicker 3-30
+//!   deg/h, K 1-10 deg/h/sqrt(h), behind its digital low-pass (a `second_order_filter`, natural
+//!   frequency ODR/20-ODR/4, damping 0.5-1), then each rate sample rounded (16-bit LSB) at
+//!   0.3-1 of the filtered sample noise `N sqrt(rho_0 / tau0)`; runs 20-60 min;
+//! - `cicgyro`: a MEMS gyro (memsgyro's terms) at 200-1000 Hz behind a sinc^3 decimation filter
+//!   (`moving_average`, 2-8 taps, 3 stages), rate samples rounded at 0.1-1 of the filtered
+//!   sample noise;
+//! - `hrg`: a hemispherical resonator gyro at 100-500 Hz, ARW 0.0001-0.0005 deg/sqrt(h),
+//!   flicker 0.0005-0.005 deg/h, K 1e-5-1e-4 deg/h/sqrt(h), the angle counted with carry at
+//!   0.05-0.5 of the per-sample noise;
+//! - `thermfog`: a tactical FOG (tacfog's terms and LSB) at 100 Hz over 12-24 h (`--hours`
+//!   ignored) with a thermal bias drift never shown to the diagnosis: the temperature settles by
+//!   1-5 degC (time constant 1-4 h) under a cycle of 0.5-2 degC (period 4-24 h), 0.005-0.05
+//!   deg/h per degC; allowed on a clean run as `adistemp`'s drift: a warm-up, a sinusoid within
+//!   a factor 2 of the cycle's frequency, or nothing;
+//! - `fog5k`: a tactical FOG (tacfog's terms and LSB) at 5 kHz over 10-20 min (`--hours`
+//!   ignored).
+//!
+//! On `mimu` and `cicgyro` a clean run's false alarm is any named effect that is not a low-pass,
+//! or two or more low-passes (a second-order low-pass near critical damping and a zero-phase
+//! filter have the same `|H|^2`); the kind and its parameters are reported beside.
+//!
 //! On the families with an intrinsic filter an `output_filter` (or other filter) draw replaces
 //! that filter (the simulator holds one); their detection cells are the other four effects on
 //! top of it.
@@ -128,6 +153,7 @@
 //!     [--families navfog,tacfog,vog4,memsgyro,ma4,memsacc]
 //!     [--effects none,gauss_markov,sinusoid,output_filter,warmup,bias_jumps] [--hours 1,3]
 //!     [--csv FILE] [--resid FILE] [--no-oracle] [--from 0] [--shares 1,1,1,0.5,1]
+//!     [--models DIR]
 //! ```
 //!
 //! `--draws` is per family and effect; `--from N` starts at draw `N` (a split run gives the
@@ -146,7 +172,9 @@
 //! (the base `G`, each stationary candidate's first-scan score `lr_*` and the gap with it in
 //! `galt_*`, the warm-up's `B` and its block-mean scale, the step z scores), so that the null
 //! distribution of each test can be read off clean runs. `--no-oracle` leaves out the clean
-//! draws' oracle statistics and jump ceiling (a null study of the diagnosis alone).
+//! draws' oracle statistics and jump ceiling (a null study of the diagnosis alone). `--models
+//! DIR` writes each draw's model file, which `allanscope simulate --model` reads, for
+//! reproducing a run through the command line (another noise stream, the same unit).
 
 mod common;
 
@@ -166,14 +194,19 @@ use common::{
 };
 use rand::{RngExt, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
+use std::sync::OnceLock;
 use std::time::Instant;
+
+/// `--models DIR`: each draw's model file (`FAMILY_EFFECT_DRAW.toml`, the rate rounding as the
+/// model's `rate_lsb`), for `allanscope simulate --model` (reproductions through the CLI).
+static MODELS_DIR: OnceLock<String> = OnceLock::new();
 
 /// The families; the first six are the default list, `coarse` is drawn on request. New
 /// families go at the end: a draw's stream depends on the family's index.
-const FAMILIES: [&str; 23] = [
+const FAMILIES: [&str; 28] = [
     "navfog", "tacfog", "vog4", "memsgyro", "ma4", "memsacc", "coarse", "consmems", "fog2k",
     "accr", "kmems", "rfog", "hrmems", "qtzgyro", "servoacc", "short", "long", "adis", "adistemp",
-    "rlg", "lowrate", "accfilt", "navacc",
+    "rlg", "lowrate", "accfilt", "navacc", "mimu", "cicgyro", "hrg", "thermfog", "fog5k",
 ];
 /// The held-out families (`--families heldout`): defined before the calibration of issue 13's
 /// last round and run only for its final tables, so nothing was tuned on them.
@@ -182,6 +215,8 @@ const HELDOUT: [&str; 5] = ["consmems", "fog2k", "accr", "kmems", "rfog"];
 const UNSEEN: [&str; 5] = ["hrmems", "qtzgyro", "servoacc", "short", "long"];
 /// The held-out families of session 10 (`--families unseen10`), defined before any run of them.
 const UNSEEN10: [&str; 6] = ["adis", "adistemp", "rlg", "lowrate", "accfilt", "navacc"];
+/// The held-out families of session 11 (`--families unseen11`), defined before any run of them.
+const UNSEEN11: [&str; 5] = ["mimu", "cicgyro", "hrg", "thermfog", "fog5k"];
 /// Importance samples and null draws of the fair jump ceiling (`oracle::JumpCeiling`).
 const JUMP_CEIL_SAMPLES: usize = 1000;
 const JUMP_CEIL_NULLS: usize = 199;
@@ -235,9 +270,13 @@ fn draw_unit(
         log_uniform(rng, 10.0, 20.0) * 60.0
     } else if family == "long" {
         log_uniform(rng, 8.0, 24.0) * 3600.0
+    } else if family == "thermfog" {
+        log_uniform(rng, 12.0, 24.0) * 3600.0
+    } else if family == "fog5k" {
+        log_uniform(rng, 10.0, 20.0) * 60.0
     } else if let Some((a, b)) = hours {
         log_uniform(rng, a, b) * 3600.0
-    } else if family == "hrmems" {
+    } else if family == "hrmems" || family == "mimu" {
         log_uniform(rng, 20.0, 60.0) * 60.0
     } else if long {
         log_uniform(rng, 6.0, 24.0) * 3600.0
@@ -455,6 +494,80 @@ fn draw_unit(
             u.tau0 = rate(rng, 100.0, 400.0);
             u.lsb = log_uniform(rng, 0.3, 3.0) * u.c[1] * u.tau0.sqrt();
             u.bias = rng.random_range(-9.81..9.81);
+        }
+        "mimu" | "cicgyro" => {
+            // A low-pass the part runs before it rounds each rate sample: `mimu` a
+            // second-order digital low-pass (natural frequency ODR/20-ODR/4), `cicgyro` a sinc^3
+            // decimation filter (three cascaded moving averages of 2-8 output samples); the
+            // step is a share of the *filtered* sample noise `N sqrt(rho_0 / tau0)`.
+            let (arw, flk, rrw, hz, lsb) = if family == "mimu" {
+                (
+                    (0.15, 1.0),
+                    (3.0, 30.0),
+                    (1.0, 10.0),
+                    (1000.0, 2000.0),
+                    (0.3, 1.0),
+                )
+            } else {
+                (
+                    (0.1, 1.0),
+                    (2.0, 20.0),
+                    (1.0, 10.0),
+                    (200.0, 1000.0),
+                    (0.1, 1.0),
+                )
+            };
+            u.c[1] = log_uniform(rng, arw.0, arw.1) * ARW;
+            u.c[2] = log_uniform(rng, flk.0, flk.1) * DEG_H;
+            u.c[3] = log_uniform(rng, rrw.0, rrw.1) * RRW;
+            u.tau0 = rate(rng, hz.0, hz.1);
+            let filter = if family == "mimu" {
+                let odr = 1.0 / u.tau0;
+                EffectParams::SecondOrderFilter {
+                    natural_frequency_hz: log_uniform(rng, odr / 20.0, odr / 4.0),
+                    damping: log_uniform(rng, 0.5, 1.0),
+                }
+            } else {
+                EffectParams::MovingAverage {
+                    taps: rng.random_range(2..=8u32),
+                    stages: 3,
+                }
+            };
+            u.intrinsic = Some(filter);
+            let rho0 = filter
+                .lowpass()
+                .map_or(1.0, |lp| lp.autocorrelation(u.tau0)[0]);
+            u.rate_lsb = log_uniform(rng, lsb.0, lsb.1) * u.c[1] * (rho0 / u.tau0).sqrt();
+        }
+        "hrg" => {
+            // Hemispherical resonator gyro: tiny N, flicker-dominated, a finely counted angle.
+            u.c[1] = log_uniform(rng, 0.0001, 0.0005) * ARW;
+            u.c[2] = log_uniform(rng, 0.0005, 0.005) * DEG_H;
+            u.c[3] = log_uniform(rng, 1e-5, 1e-4) * RRW;
+            u.tau0 = rate(rng, 100.0, 500.0);
+            u.lsb = log_uniform(rng, 0.05, 0.5) * u.c[1] * u.tau0.sqrt();
+        }
+        "thermfog" | "fog5k" => {
+            // Tactical FOGs: `thermfog` over 12-24 h at 100 Hz with a thermal bias drift the
+            // diagnosis is never shown, `fog5k` over 10-20 min at 5 kHz.
+            u.c[1] = log_uniform(rng, 0.01, 0.1) * ARW;
+            u.c[2] = log_uniform(rng, 0.05, 0.5) * DEG_H;
+            u.c[3] = log_uniform(rng, 0.01, 0.1) * RRW;
+            u.tau0 = if family == "fog5k" {
+                (0.0002f64).max(t_run / MAX_SAMPLES)
+            } else {
+                (0.01f64).max(t_run / MAX_SAMPLES)
+            };
+            u.lsb = log_uniform(rng, 0.1, 1.0) * u.c[1] * u.tau0.sqrt();
+            if family == "thermfog" {
+                u.temp = Some([
+                    log_uniform(rng, 1.0, 5.0),
+                    log_uniform(rng, 3600.0, 14400.0),
+                    log_uniform(rng, 0.5, 2.0),
+                    log_uniform(rng, 4.0 * 3600.0, 24.0 * 3600.0),
+                    log_uniform(rng, 0.005, 0.05) * DEG_H,
+                ]);
+            }
         }
         _ => unreachable!("family list"),
     }
@@ -703,6 +816,15 @@ fn run_one(
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream);
     let unit = draw_unit(&mut rng, family, hours);
     let drawn = kind.map(|k| draw_effect(&mut rng, &unit, k));
+    if let Some(dir) = MODELS_DIR.get() {
+        let mut toml = model_toml(&unit, drawn.map(|d| d.0));
+        if unit.rate_lsb > 0.0 {
+            toml += &format!("rate_lsb = {:e}\n", unit.rate_lsb);
+        }
+        let name = format!("{dir}/{family}_{}_{i}.toml", kind_name(kind));
+        std::fs::write(&name, format!("# family_gap --seed {seed}: {name}\n{toml}"))
+            .expect("--models");
+    }
     let t = Instant::now();
     let (inc, truth, jumps) = simulate(&unit, drawn.map(|d| d.0), rng.random::<u64>());
     let mut ev = GapEvidence::from_increments(GapConfig::new(unit.tau0), &inc);
@@ -887,10 +1009,23 @@ fn part_of_unit(u: &Unit, p: &EffectParams) -> bool {
     }
 }
 
-/// A clean draw's false alarm: `consistent` is the right answer for a unit without an intrinsic
+/// The families of session 11 whose intrinsic filter may be named as any one low-pass kind on a
+/// clean run (their rule, fixed before any run: a second-order low-pass with damping near 1 and
+/// a zero-phase filter have the same `|H|^2`, hence the same AVAR); the kind named and its
+/// parameters are reported beside (`intrinsic_exact`).
+fn any_filter_family(family: &str) -> bool {
+    matches!(family, "mimu" | "cicgyro")
+}
+
+/// A clean draw's false alarm (`any_filter_family`: any named effect that is not a low-pass, or
+/// two or more low-passes): `consistent` is the right answer for a unit without an intrinsic
 /// filter or drift, and anything else a false alarm; for one with them, a false alarm is an
 /// effect named that is not part of the unit (`part_of_unit`).
 fn false_alarm(o: &Outcome) -> bool {
+    if any_filter_family(o.unit.family) {
+        let filters = o.named.iter().filter(|p| p.lowpass().is_some()).count();
+        return filters >= 2 || o.named.iter().any(|p| p.lowpass().is_none());
+    }
     if o.unit.intrinsic.is_none() && o.unit.temp.is_none() {
         o.verdict != Verdict::Consistent
     } else {
@@ -899,7 +1034,8 @@ fn false_alarm(o: &Outcome) -> bool {
 }
 
 /// The intrinsic filter named with the right parameters: a moving average's taps and stages
-/// exactly, a first-order filter's time constant within 25%.
+/// exactly, a first-order filter's time constant within 25%, a second-order filter's natural
+/// frequency within 25%.
 fn intrinsic_exact(o: &Outcome) -> bool {
     let Some(i) = o.unit.intrinsic else {
         return false;
@@ -918,6 +1054,16 @@ fn intrinsic_exact(o: &Outcome) -> bool {
                 time_constant_s: t2,
             },
         ) => ((t2 - time_constant_s) / time_constant_s).abs() <= 0.25,
+        (
+            EffectParams::SecondOrderFilter {
+                natural_frequency_hz: f,
+                ..
+            },
+            EffectParams::SecondOrderFilter {
+                natural_frequency_hz: f2,
+                ..
+            },
+        ) => ((f2 - f) / f).abs() <= 0.25,
         _ => false,
     })
 }
@@ -1207,6 +1353,7 @@ fn main() {
     let fams_arg = fams_arg
         .replace("heldout", &HELDOUT.join(","))
         .replace("unseen10", &UNSEEN10.join(","))
+        .replace("unseen11", &UNSEEN11.join(","))
         .replace("unseen", &UNSEEN.join(","));
     let fams: Vec<&'static str> = fams_arg
         .split(',')
@@ -1218,6 +1365,11 @@ fn main() {
         })
         .collect();
     let csv = get("--csv", "");
+    let models = get("--models", "");
+    if !models.is_empty() {
+        std::fs::create_dir_all(&models).expect("--models DIR");
+        MODELS_DIR.set(models).expect("--models once");
+    }
     // The share each test of the diagnosis spends, in percent, per effect of `KINDS[1..]`
     // (docs/gap.md, "Detection against the oracle"); the oracle is also read at it.
     let shares: Option<[f64; 5]> = match get("--shares", "").as_str() {

@@ -18,11 +18,21 @@
 /// otherwise turn every sigma of its channel into NaN and drop its fit.
 pub const MAX_ABS_VALUE: f64 = 1e15;
 
-/// `v` when it is a usable sample; `None` when it is infinite or beyond [`MAX_ABS_VALUE`]
-/// (NaN, a marked gap, is passed through).
+/// Smallest non-zero magnitude accepted for a sample; anything smaller (but not zero) is
+/// invalid, counted and taken as a gap like a value beyond [`MAX_ABS_VALUE`]. The variances sum
+/// squares of differences of samples: below about 1e-154 those squares leave f64's normal
+/// range (2.2e-308) and a channel of such values reported a deviation of exactly 0. 1e-100
+/// keeps every square above 1e-220 even after `--rate` multiplies by the shortest sampling
+/// step ([`MIN_TAU0_S`]), far below any sensor's resolution in any unit (a count of 1e-100
+/// rad is not a measurement).
+pub const MIN_ABS_VALUE: f64 = 1e-100;
+
+/// `v` when it is a usable sample; `None` when it is infinite, beyond [`MAX_ABS_VALUE`], or
+/// non-zero below [`MIN_ABS_VALUE`] in magnitude (NaN, a marked gap, is passed through).
 #[inline]
 pub fn plausible(v: f64) -> Option<f64> {
-    (v.abs() <= MAX_ABS_VALUE || v.is_nan()).then_some(v)
+    let a = v.abs();
+    ((a <= MAX_ABS_VALUE && (a >= MIN_ABS_VALUE || a == 0.0)) || v.is_nan()).then_some(v)
 }
 
 /// The longest duration or interval accepted anywhere, in seconds (about 31.7 years).

@@ -17,7 +17,7 @@ use std::ops::Range;
 
 use super::{ChannelState, RunAnalysis};
 use crate::allan::accum::ChannelAccumulator;
-use crate::frame::{BlockEvent, ChannelValue, ColumnKind, FrameBlock, Hole};
+use crate::frame::{BlockEvent, ChannelValue, ColumnKind, ColumnValues, FrameBlock, Hole};
 use crate::sink::records::Record;
 
 impl RunAnalysis {
@@ -105,11 +105,11 @@ fn feed(channels: &mut [ChannelState], block: &FrameBlock, ev: Range<usize>, fr:
         let mut mine = holes.iter().filter(|h| h.channel == col).peekable();
         let mut run = |feeder: &mut Feeder, mut a: usize, b: usize| {
             while let Some(h) = mine.next_if(|h| h.frame < b) {
-                feeder.stretch(&column[a..h.frame], kind);
+                feeder.stretch(column.slice(a..h.frame), kind);
                 feeder.hole(h);
                 a = h.frame + 1;
             }
-            feeder.stretch(&column[a..b], kind);
+            feeder.stretch(column.slice(a..b), kind);
         };
         let mut at = fr.start;
         for g in gaps {
@@ -128,25 +128,34 @@ struct Feeder<'a> {
 }
 
 impl Feeder<'_> {
-    /// An unbroken run of values of one column kind.
-    fn stretch(&mut self, values: &[i64], kind: ColumnKind) {
+    /// An unbroken run of values of one column kind, as the column stores them (`i32` counts
+    /// of a narrow column are widened as the engine sums them).
+    fn stretch(&mut self, values: ColumnValues, kind: ColumnKind) {
+        match values {
+            ColumnValues::Wide(v) => self.stretch_of(v, kind),
+            ColumnValues::Narrow(v) => self.stretch_of(v, kind),
+        }
+    }
+
+    fn stretch_of<T: Copy + Into<i64>>(&mut self, values: &[T], kind: ColumnKind) {
         if values.is_empty() {
             return;
         }
         let lsb = self.ch.setup.counts_lsb;
         let physical = |raw: i64| match kind {
-            ColumnKind::Count => raw as f64 * lsb.unwrap_or(1.0),
+            ColumnKind::Count | ColumnKind::Count32 => raw as f64 * lsb.unwrap_or(1.0),
             ColumnKind::Real => f64::from_bits(raw as u64),
         };
         if let Some(g) = &mut self.ch.gap {
             for &raw in values {
-                g.push_increment(physical(raw));
+                g.push_increment(physical(raw.into()));
             }
         }
         match (&mut self.ch.acc, kind) {
-            (ChannelAccumulator::Counts { engine, .. }, ColumnKind::Count) => {
-                engine.push_increments(values)
-            }
+            (
+                ChannelAccumulator::Counts { engine, .. },
+                ColumnKind::Count | ColumnKind::Count32,
+            ) => engine.push_increments_from(values),
             // A real value on a counts channel cannot be summed exactly: the descriptor said
             // integers. Each is a gap of one step.
             (ChannelAccumulator::Counts { engine, .. }, ColumnKind::Real) => {
@@ -156,7 +165,8 @@ impl Feeder<'_> {
             }
             (ChannelAccumulator::Real(engine), _) => {
                 self.scratch.clear();
-                self.scratch.extend(values.iter().map(|&raw| physical(raw)));
+                self.scratch
+                    .extend(values.iter().map(|&raw| physical(raw.into())));
                 engine.push_increments(self.scratch);
             }
         }

@@ -48,6 +48,7 @@ pub fn run(a: &AnalyzeArgs) -> Result<()> {
         ctl.progress.clone(),
         None,
     );
+    signals.release_fifos(&a.inputs);
     let result = analyze_all(a, writer.queue(), &ctl);
     let written = finish_records(writer, &dest, &signals);
     let unfinished = result?;
@@ -158,8 +159,20 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue, ctl: &RunControl) -> Result
         opts.run = several.then_some(run);
         ctl.metrics = server.as_ref().map(|s| s.tap(input, &opts.limits));
         let outcome = match &descriptor {
-            None => analyze_text(input, d, opts, realtime, queue, &ctl)?,
-            Some(desc) => analyze_frames(input, desc, d, opts, realtime, queue, &ctl)?,
+            None => analyze_text(input, d, opts, realtime, queue, &ctl),
+            Some(desc) => analyze_frames(input, desc, d, opts, realtime, queue, &ctl),
+        };
+        // A pipe the first signal let through (super::process::release_fifos) ends empty: its
+        // "no data rows" or "empty capture" is the stop, not a fault of the input.
+        let outcome = match outcome {
+            Err(_) if ctl.shutdown.is_cancelled() && super::read_once(input) && input != "-" => {
+                return Err(anyhow::anyhow!(
+                    "{input}: stopped by {} before the pipe delivered any data; nothing was \
+                     analysed",
+                    ctl.progress.stopped_by().unwrap_or("a signal")
+                ));
+            }
+            r => r?,
         };
         if !outcome.read_to_end {
             unfinished.get_or_insert_with(|| input.clone());

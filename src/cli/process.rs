@@ -12,6 +12,10 @@
 //!   then written if the output takes them within [`STOP_GRACE`] of silence;
 //! - a second signal stops waiting for the output at once ([`SignalWatch::grace`], handed to
 //!   [`allanscope::pipeline::RecordWriter::finish_within`]);
+//! - a run still waiting to open a FIFO that no writer has opened (a blocking `open(2)`, which
+//!   no token reaches) is let through by the first signal: the watch opens each input named with
+//!   [`SignalWatch::release_fifos`] for writing and closes it again, so the run's open returns,
+//!   its first read sees the end of the input and the run ends as stopped;
 //! - the end of `--duration` cancels the token as a first signal would, and the output is then
 //!   waited for without a limit (nothing asked the command to hurry).
 
@@ -31,6 +35,7 @@ pub const STOP_GRACE: Duration = Duration::from_secs(3);
 #[derive(Debug, Clone, Default)]
 pub struct SignalWatch {
     count: Arc<AtomicU32>,
+    fifos: Arc<std::sync::Mutex<Vec<std::path::PathBuf>>>,
 }
 
 impl SignalWatch {
@@ -46,6 +51,7 @@ impl SignalWatch {
     ) -> SignalWatch {
         let watch = SignalWatch::default();
         let count = watch.count.clone();
+        let fifos = watch.fifos.clone();
         let (ready_tx, ready_rx) = std::sync::mpsc::channel::<()>();
         let spawned = std::thread::Builder::new()
             .name("allanscope-signals".into())
@@ -90,6 +96,8 @@ impl SignalWatch {
                             tracing::info!(
                                 "{name}; finishing (a second signal stops waiting for the output)"
                             );
+                            let names = fifos.lock().map(|f| f.clone()).unwrap_or_default();
+                            release_fifos(&names);
                         } else {
                             tracing::warn!("{name} again; not waiting for the output any longer");
                             if n == 2 {
@@ -108,6 +116,15 @@ impl SignalWatch {
         watch
     }
 
+    /// Names the command's input files, so that the first signal can let through a run blocked
+    /// opening one of them that is a FIFO with no writer yet (see the module documentation).
+    /// Inputs that are not FIFOs are left alone.
+    pub fn release_fifos<P: AsRef<std::path::Path>>(&self, inputs: &[P]) {
+        if let Ok(mut f) = self.fifos.lock() {
+            f.extend(inputs.iter().map(|p| p.as_ref().to_path_buf()));
+        }
+    }
+
     /// Signals received so far.
     pub fn count(&self) -> u32 {
         self.count.load(Ordering::SeqCst)
@@ -122,6 +139,26 @@ impl SignalWatch {
             _ => Some(Duration::ZERO),
         }
     }
+}
+
+/// Opens each of `inputs` that is a FIFO for writing and closes it again, each on a thread of its
+/// own: a reader blocked opening it returns at once and then reads the end of the input. Where
+/// no reader is waiting the open blocks that thread alone, which ends with the process.
+fn release_fifos(inputs: &[std::path::PathBuf]) {
+    #[cfg(unix)]
+    for p in inputs {
+        use std::os::unix::fs::FileTypeExt;
+        let is_fifo = std::fs::metadata(p).is_ok_and(|m| m.file_type().is_fifo());
+        if !is_fifo {
+            continue;
+        }
+        let p = p.clone();
+        let _ = std::thread::Builder::new()
+            .name("allanscope-fifo-release".into())
+            .spawn(move || drop(std::fs::OpenOptions::new().write(true).open(&p)));
+    }
+    #[cfg(not(unix))]
+    let _ = inputs;
 }
 
 /// How long the command may go on after a second signal before the process exits anyway.

@@ -102,6 +102,9 @@ pub fn run(r: &RunArgs) -> Result<()> {
         ctl.progress.clone(),
         plan.duration_s.map(Duration::from_secs_f64),
     );
+    if let SourceSpec::File { path, .. } = &spec {
+        signals.release_fifos(std::slice::from_ref(path));
+    }
     let _bar = (replay && std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .then(|| super::process::ProgressBar::start(ctl.progress.clone()));
     let status = (live && super::status::wanted())
@@ -183,6 +186,14 @@ fn run_units(r: &RunArgs, cfg: &StandConfig, plan: RunPlan) -> Result<()> {
         ctl.progress.clone(),
         plan.duration_s.map(Duration::from_secs_f64),
     );
+    let files: Vec<&PathBuf> = units
+        .iter()
+        .filter_map(|u| match &u.spec {
+            SourceSpec::File { path, .. } => Some(path),
+            _ => None,
+        })
+        .collect();
+    signals.release_fifos(&files);
     let result = allanscope::pipeline::units::run_units(units, writer.queue(), &ctl);
     let written = super::finish_records(writer, &dest, &signals);
     let outcomes = result?;

@@ -4,8 +4,11 @@
 //! A [`FrameBlock`] holds the events of a stretch of stream in order ([`BlockEvent`]: a frame's
 //! counter, temperature and status, or a gap) and the channel values of its frames **column by
 //! column**: one vector per channel, one entry per frame. A column holds one kind of value
-//! ([`ColumnKind`]: exact counts, or real increments as their f64 bit patterns), so a run of a
-//! channel's counts is a plain `&[i64]` the accumulators take as it is. A value that is missing,
+//! ([`ColumnKind`]: exact counts of up to 32 bits as `i32`, wider counts as `i64`, or real
+//! increments as their f64 bit patterns), so a run of a channel's counts is a plain `&[i32]` or
+//! `&[i64]` ([`ColumnValues`]) the accumulators take as it is. The narrow columns halve the bytes
+//! the decoder stores and the analysis reads for the usual 32-bit increments (BENCHMARKS.md,
+//! issue 15, sessions 10 and 11). A value that is missing,
 //! or of the other kind (a real value handed to a counts column), is a [`Hole`]: the column
 //! keeps a placeholder and the block lists the hole, in frame order. Clean data has none.
 //!
@@ -36,11 +39,114 @@ pub enum BlockEvent {
 /// What a column's entries are.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum ColumnKind {
-    /// [`ChannelValue::Count`]s, as they are.
+    /// [`ChannelValue::Count`]s, as they are (`i64`).
     #[default]
     Count,
+    /// [`ChannelValue::Count`]s of a field of at most 32 bits whose values all fit an `i32`
+    /// (`i8`, `u8`, `i16`, `u16`, `i32` fields), stored as `i32`; a count outside that range is a
+    /// [`Hole`] holding its value.
+    Count32,
     /// [`ChannelValue::Real`]s, as `f64::to_bits` (reinterpreted as `i64`).
     Real,
+}
+
+impl ColumnKind {
+    /// The column holds counts (of either width).
+    pub fn is_count(self) -> bool {
+        matches!(self, ColumnKind::Count | ColumnKind::Count32)
+    }
+}
+
+/// A column's storage: `i32` entries for [`ColumnKind::Count32`], `i64` for the others.
+#[derive(Debug, Clone, PartialEq)]
+enum Column {
+    Wide(Vec<i64>),
+    Narrow(Vec<i32>),
+}
+
+impl Column {
+    fn new(kind: ColumnKind, frames: usize) -> Column {
+        match kind {
+            ColumnKind::Count32 => Column::Narrow(Vec::with_capacity(frames)),
+            ColumnKind::Count | ColumnKind::Real => Column::Wide(Vec::with_capacity(frames)),
+        }
+    }
+
+    /// Storage for `kind`: this one (emptied) when its width fits, a new one otherwise.
+    fn remake(&mut self, kind: ColumnKind) {
+        match (&mut *self, kind) {
+            (Column::Narrow(v), ColumnKind::Count32) => v.clear(),
+            (Column::Wide(v), ColumnKind::Count | ColumnKind::Real) => v.clear(),
+            _ => *self = Column::new(kind, 0),
+        }
+    }
+
+    fn clear(&mut self) {
+        match self {
+            Column::Wide(v) => v.clear(),
+            Column::Narrow(v) => v.clear(),
+        }
+    }
+
+    /// A placeholder entry (a hole's).
+    fn push_zero(&mut self) {
+        match self {
+            Column::Wide(v) => v.push(0),
+            Column::Narrow(v) => v.push(0),
+        }
+    }
+
+    fn values(&self) -> ColumnValues<'_> {
+        match self {
+            Column::Wide(v) => ColumnValues::Wide(v),
+            Column::Narrow(v) => ColumnValues::Narrow(v),
+        }
+    }
+
+    /// Appends `other`'s entries (of the same width).
+    fn extend_from(&mut self, other: &Column) {
+        match (self, other) {
+            (Column::Wide(a), Column::Wide(b)) => a.extend_from_slice(b),
+            (Column::Narrow(a), Column::Narrow(b)) => a.extend_from_slice(b),
+            _ => unreachable!("columns of one kind have one width"),
+        }
+    }
+}
+
+/// A stretch of one column's entries, as stored: `i32` ([`ColumnKind::Count32`]) or `i64`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ColumnValues<'a> {
+    Wide(&'a [i64]),
+    Narrow(&'a [i32]),
+}
+
+impl<'a> ColumnValues<'a> {
+    pub fn len(self) -> usize {
+        match self {
+            ColumnValues::Wide(v) => v.len(),
+            ColumnValues::Narrow(v) => v.len(),
+        }
+    }
+
+    pub fn is_empty(self) -> bool {
+        self.len() == 0
+    }
+
+    /// The entries `range`.
+    pub fn slice(self, range: std::ops::Range<usize>) -> ColumnValues<'a> {
+        match self {
+            ColumnValues::Wide(v) => ColumnValues::Wide(&v[range]),
+            ColumnValues::Narrow(v) => ColumnValues::Narrow(&v[range]),
+        }
+    }
+
+    /// Entry `i`, widened to `i64` (the raw entry: a count, or a real value's bits).
+    pub fn get(self, i: usize) -> i64 {
+        match self {
+            ColumnValues::Wide(v) => v[i],
+            ColumnValues::Narrow(v) => i64::from(v[i]),
+        }
+    }
 }
 
 /// A value a column cannot hold as it is: missing, or of the other [`ColumnKind`].
@@ -64,13 +170,14 @@ pub struct GapAt {
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct FrameBlock {
     events: Vec<BlockEvent>,
-    /// One per channel; `columns[c][i]` is channel `c` of the `i`-th frame.
-    columns: Vec<Vec<i64>>,
+    /// One per channel; entry `i` of column `c` is channel `c` of the `i`-th frame.
+    columns: Vec<Column>,
     kinds: Vec<ColumnKind>,
     /// In frame order, then channel order.
     holes: Vec<Hole>,
-    /// Every column holds counts.
-    all_counts: bool,
+    /// Every column holds counts of this one kind ([`ColumnKind::Count`] or
+    /// [`ColumnKind::Count32`]); `None` otherwise.
+    all_counts: Option<ColumnKind>,
     /// The gaps, in event order.
     gaps: Vec<GapAt>,
     frames: usize,
@@ -116,9 +223,9 @@ impl FrameBlock {
     pub fn with_kinds(kinds: &[ColumnKind], frames: usize) -> FrameBlock {
         FrameBlock {
             events: Vec::with_capacity(frames),
-            columns: kinds.iter().map(|_| Vec::with_capacity(frames)).collect(),
+            columns: kinds.iter().map(|&k| Column::new(k, frames)).collect(),
             kinds: kinds.to_vec(),
-            all_counts: kinds.iter().all(|k| *k == ColumnKind::Count),
+            all_counts: uniform_counts(kinds),
             holes: Vec::new(),
             gaps: Vec::new(),
             frames: 0,
@@ -138,10 +245,14 @@ impl FrameBlock {
     /// Empties the block and gives its columns `kinds` (and so its width).
     pub fn reset_kinds(&mut self, kinds: &[ColumnKind]) {
         self.clear();
-        self.columns.resize_with(kinds.len(), Vec::new);
+        self.columns
+            .resize_with(kinds.len(), || Column::Wide(Vec::new()));
+        for (c, &k) in self.columns.iter_mut().zip(kinds) {
+            c.remake(k);
+        }
         self.kinds.clear();
         self.kinds.extend_from_slice(kinds);
-        self.all_counts = kinds.iter().all(|k| *k == ColumnKind::Count);
+        self.all_counts = uniform_counts(kinds);
     }
 
     /// Sets the width of an empty block (a recycled block given to another format); the
@@ -149,9 +260,7 @@ impl FrameBlock {
     pub fn reset(&mut self, width: usize) {
         self.clear();
         if width != self.width() {
-            self.columns.resize_with(width, Vec::new);
-            self.kinds = vec![ColumnKind::Count; width];
-            self.all_counts = true;
+            self.reset_kinds(&vec![ColumnKind::Count; width]);
         }
     }
 
@@ -185,8 +294,8 @@ impl FrameBlock {
     }
 
     /// Channel `channel` of every frame, as its column's kind says (holes hold 0).
-    pub fn column(&self, channel: usize) -> &[i64] {
-        &self.columns[channel]
+    pub fn column(&self, channel: usize) -> ColumnValues<'_> {
+        self.columns[channel].values()
     }
 
     /// The values the columns cannot hold, in frame order.
@@ -208,9 +317,9 @@ impl FrameBlock {
         {
             return self.holes[i].value;
         }
-        let raw = self.columns[channel][frame];
+        let raw = self.column(channel).get(frame);
         Some(match self.kinds[channel] {
-            ColumnKind::Count => ChannelValue::Count(raw),
+            ColumnKind::Count | ColumnKind::Count32 => ChannelValue::Count(raw),
             ColumnKind::Real => ChannelValue::Real(f64::from_bits(raw as u64)),
         })
     }
@@ -241,58 +350,72 @@ impl FrameBlock {
         self.frames += 1;
     }
 
-    /// The frame begun last: every channel is the count `value(channel)`. False (and nothing
-    /// pushed) unless every column holds counts.
-    #[inline]
-    pub fn push_counts(&mut self, mut value: impl FnMut(usize) -> i64) -> bool {
-        if !self.all_counts {
-            return false;
-        }
-        for (ch, col) in self.columns.iter_mut().enumerate() {
-            col.push(value(ch));
-        }
-        true
-    }
-
-    /// Appends the counts `values` to every column, channel by channel (`values(channel,
-    /// column)` extends one column), for frames already begun whose values were left to be
-    /// filled column by column (the decoder's batch of clean frames). False (and nothing
-    /// pushed) unless every column holds counts.
+    /// Appends counts to every column, channel by channel (`values(channel, column)` extends
+    /// one column), for frames already begun whose values were left to be filled column by
+    /// column (the decoder's batch of clean frames). False (and nothing pushed) unless every
+    /// column holds [`ColumnKind::Count`]s.
     #[inline]
     pub(crate) fn extend_count_columns(
         &mut self,
         mut values: impl FnMut(usize, &mut Vec<i64>),
     ) -> bool {
-        if !self.all_counts {
+        if self.all_counts != Some(ColumnKind::Count) {
             return false;
         }
         for (ch, col) in self.columns.iter_mut().enumerate() {
-            values(ch, col);
+            if let Column::Wide(v) = col {
+                values(ch, v);
+            }
         }
         true
     }
 
-    /// Every column holds counts.
+    /// [`FrameBlock::extend_count_columns`] for blocks whose columns all hold
+    /// [`ColumnKind::Count32`]s.
     #[inline]
-    pub(crate) fn all_counts(&self) -> bool {
+    pub(crate) fn extend_count32_columns(
+        &mut self,
+        mut values: impl FnMut(usize, &mut Vec<i32>),
+    ) -> bool {
+        if self.all_counts != Some(ColumnKind::Count32) {
+            return false;
+        }
+        for (ch, col) in self.columns.iter_mut().enumerate() {
+            if let Column::Narrow(v) = col {
+                values(ch, v);
+            }
+        }
+        true
+    }
+
+    /// The kind of every column when all hold counts of one width ([`ColumnKind::Count`] or
+    /// [`ColumnKind::Count32`]).
+    #[inline]
+    pub(crate) fn all_counts(&self) -> Option<ColumnKind> {
         self.all_counts
     }
 
     /// Channel `channel` of the frame begun last is the count `c`.
     #[inline]
     pub fn push_count(&mut self, channel: usize, c: i64) {
-        match self.kinds[channel] {
-            ColumnKind::Count => self.columns[channel].push(c),
-            ColumnKind::Real => self.push_hole(channel, Some(ChannelValue::Count(c))),
+        match &mut self.columns[channel] {
+            Column::Wide(v) if self.kinds[channel] == ColumnKind::Count => v.push(c),
+            Column::Narrow(v) => match i32::try_from(c) {
+                Ok(n) => v.push(n),
+                Err(_) => self.push_hole(channel, Some(ChannelValue::Count(c))),
+            },
+            Column::Wide(_) => self.push_hole(channel, Some(ChannelValue::Count(c))),
         }
     }
 
     /// Channel `channel` of the frame begun last is the real increment `x`.
     #[inline]
     pub fn push_real(&mut self, channel: usize, x: f64) {
-        match self.kinds[channel] {
-            ColumnKind::Real => self.columns[channel].push(x.to_bits() as i64),
-            ColumnKind::Count => self.push_hole(channel, Some(ChannelValue::Real(x))),
+        match &mut self.columns[channel] {
+            Column::Wide(v) if self.kinds[channel] == ColumnKind::Real => {
+                v.push(x.to_bits() as i64)
+            }
+            _ => self.push_hole(channel, Some(ChannelValue::Real(x))),
         }
     }
 
@@ -314,7 +437,7 @@ impl FrameBlock {
 
     #[cold]
     fn push_hole(&mut self, channel: usize, value: Option<ChannelValue>) {
-        self.columns[channel].push(0);
+        self.columns[channel].push_zero();
         self.holes.push(Hole {
             frame: self.frames - 1,
             channel,
@@ -355,6 +478,12 @@ impl FrameBlock {
     pub fn events(&self) -> Vec<FrameEvent> {
         self.iter().map(|(e, v)| to_event(e, v)).collect()
     }
+}
+
+/// The one counts kind of `kinds`, when every column holds counts of one width.
+fn uniform_counts(kinds: &[ColumnKind]) -> Option<ColumnKind> {
+    let first = *kinds.first().unwrap_or(&ColumnKind::Count);
+    (first.is_count() && kinds.iter().all(|k| *k == first)).then_some(first)
 }
 
 /// One event of a block as a [`FrameEvent`] (`values`: the frame's own).
@@ -403,7 +532,7 @@ impl FrameSink for FrameBlock {
         let (e0, f0) = (self.events.len(), self.frames);
         self.events.extend_from_slice(&block.events);
         for (to, from) in self.columns.iter_mut().zip(&block.columns) {
-            to.extend_from_slice(from);
+            to.extend_from(from);
         }
         self.holes.extend(block.holes.iter().map(|h| Hole {
             frame: h.frame + f0,
@@ -515,7 +644,7 @@ mod tests {
             .map(|g| (g.event, g.frame, g.missing))
             .collect();
         assert_eq!(gaps, vec![(1, 1, 2), (3, 2, 1)]);
-        assert_eq!(a.column(1)[1], 1.5f64.to_bits() as i64);
+        assert_eq!(a.column(1).get(1), 1.5f64.to_bits() as i64);
         assert_eq!(a.value(3, 1), Some(ChannelValue::Count(3)));
         // Into a block of other kinds: value by value, the same events.
         let mut c = FrameBlock::with_capacity(2, 0);
@@ -524,5 +653,82 @@ mod tests {
         want_c.extend(a.events());
         c.take_all(&mut a);
         assert_eq!(c.events(), want_c);
+    }
+
+    /// A narrow counts column: counts within `i32` are stored as they are, a count beyond it
+    /// and a real value are holes that keep their value; appended blocks and a block of wide
+    /// columns receiving it read back the same events.
+    #[test]
+    fn narrow_columns_keep_every_count() {
+        let kinds = [ColumnKind::Count32, ColumnKind::Count];
+        let f = |seq| BlockEvent::Frame {
+            seq,
+            temperature_c: None,
+            status: None,
+        };
+        let big = i64::from(i32::MAX) + 1;
+        let small = i64::from(i32::MIN);
+        let mut a = FrameBlock::with_kinds(&kinds, 4);
+        a.push_frame(
+            f(0),
+            &[
+                Some(ChannelValue::Count(small)),
+                Some(ChannelValue::Count(big)),
+            ],
+        );
+        a.push_frame(
+            f(1),
+            &[
+                Some(ChannelValue::Count(big)),
+                Some(ChannelValue::Count(-1)),
+            ],
+        );
+        a.push_gap(2);
+        a.push_frame(f(4), &[Some(ChannelValue::Real(0.5)), None]);
+        a.push_frame(
+            f(5),
+            &[
+                Some(ChannelValue::Count(i64::from(i32::MAX))),
+                Some(ChannelValue::Count(3)),
+            ],
+        );
+        assert_eq!(
+            a.column(0),
+            ColumnValues::Narrow(&[i32::MIN, 0, 0, i32::MAX])
+        );
+        assert_eq!(a.column(1), ColumnValues::Wide(&[big, -1, 0, 3]));
+        let holes: Vec<(usize, usize)> = a.holes().iter().map(|h| (h.frame, h.channel)).collect();
+        assert_eq!(holes, vec![(1, 0), (2, 0), (2, 1)]);
+        assert_eq!(a.value(1, 0), Some(ChannelValue::Count(big)));
+        assert_eq!(a.value(2, 0), Some(ChannelValue::Real(0.5)));
+        assert_eq!(a.value(0, 0), Some(ChannelValue::Count(small)));
+        let want = a.events();
+        // Behind another narrow block: column by column.
+        let mut b = FrameBlock::with_kinds(&kinds, 0);
+        b.push_frame(
+            f(9),
+            &[Some(ChannelValue::Count(7)), Some(ChannelValue::Count(8))],
+        );
+        let mut want_b = b.events();
+        want_b.extend(want.clone());
+        let mut a2 = a.clone();
+        b.take_all(&mut a2);
+        assert_eq!(b.events(), want_b);
+        assert_eq!(
+            b.column(0),
+            ColumnValues::Narrow(&[7, i32::MIN, 0, 0, i32::MAX])
+        );
+        // Into wide columns (other kinds): value by value, the same events; the big count is
+        // now an entry of its column, not a hole.
+        let mut w = FrameBlock::with_capacity(2, 0);
+        w.push_gap(1);
+        let mut want_w = w.events();
+        want_w.extend(want);
+        w.take_all(&mut a);
+        assert_eq!(w.events(), want_w);
+        assert_eq!(w.column(0).get(1), big);
+        // The kinds change with the storage: reset to wide and back.
+        w.reset_kinds(&kinds);
+        assert_eq!((w.len(), w.column(0)), (0, ColumnValues::Narrow(&[])));
     }
 }

@@ -25,10 +25,11 @@ pub mod field;
 pub(crate) mod plan;
 mod seq_tracker;
 
-pub use block::{BlockEvent, ColumnKind, FrameBlock, FrameSink, GapAt, Hole};
+pub use block::{BlockEvent, ColumnKind, ColumnValues, FrameBlock, FrameSink, GapAt, Hole};
 pub use decoder::{Decoder, DecoderState, Health};
 pub use descriptor::{DescriptorErrors, FrameDescriptor};
 pub use encoder::{encode, encode_frame, EncodeError, FrameInput};
+pub use plan::column_kinds;
 
 /// One channel's value in one frame.
 #[derive(Debug, Clone, Copy, PartialEq)]

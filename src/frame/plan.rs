@@ -95,6 +95,21 @@ impl Load {
         })
     }
 
+    /// Every value of the load fits an `i32` (a [`ColumnKind::Count32`] column holds it).
+    fn fits_i32(self) -> bool {
+        matches!(
+            self,
+            Load::U8
+                | Load::I8
+                | Load::U16Le
+                | Load::U16Be
+                | Load::I16Le
+                | Load::I16Be
+                | Load::I32Le
+                | Load::I32Be
+        )
+    }
+
     /// The field's bits, unsigned (as [`crate::frame::field::read_bits`] gives them).
     #[inline(always)]
     fn bits(self, msg: &[u8], at: usize) -> Option<u64> {
@@ -137,7 +152,8 @@ pub(crate) struct FramePlan {
     temperature: Option<(usize, Load, f64, u64)>,
     /// Frame counter: where, its shift, its modulus.
     counter: Option<(usize, Load, u32, u64)>,
-    /// The kind of each channel's column.
+    /// The kind of each channel's column: counts of fields that fit an `i32` narrow
+    /// ([`ColumnKind::Count32`]), other counts wide, real values as f64 bits.
     pub kinds: Vec<ColumnKind>,
     /// Every channel an integer count of this one load, every field inside `min_len` bytes:
     /// a frame whose status marks none invalid is read in one tight loop.
@@ -148,6 +164,12 @@ pub(crate) struct FramePlan {
     all_masks: u64,
     /// Bytes a message needs for every channel field.
     min_len: usize,
+}
+
+/// The kind of each channel's column in the blocks a [`crate::frame::Decoder`] for `desc`
+/// fills (a block made with these kinds takes the decoder's frames column by column).
+pub fn column_kinds(desc: &FrameDescriptor) -> Vec<ColumnKind> {
+    FramePlan::new(desc).kinds
 }
 
 /// A status bit as the mask [`FramePlan`] tests (`bits >> b & 1` as a mask).
@@ -187,12 +209,10 @@ impl FramePlan {
                 .unwrap_or(0),
             kinds: channels
                 .iter()
-                .map(|c| {
-                    if c.count {
-                        ColumnKind::Count
-                    } else {
-                        ColumnKind::Real
-                    }
+                .map(|c| match (c.count, c.load.fits_i32()) {
+                    (true, true) => ColumnKind::Count32,
+                    (true, false) => ColumnKind::Count,
+                    (false, _) => ColumnKind::Real,
                 })
                 .collect(),
             channels,
@@ -285,7 +305,9 @@ impl FramePlan {
     /// loads in channel order, so filling them column by column later gives the same block.
     #[inline]
     pub(crate) fn deferrable(&self, msg: &[u8], bad: u64, out: &FrameBlock) -> bool {
-        self.uniform.is_some() && out.all_counts() && self.clean(msg, bad)
+        self.uniform.is_some()
+            && out.all_counts() == self.kinds.first().copied()
+            && self.clean(msg, bad)
     }
 
     /// Reads the channels of the frame begun last, one by one (any kinds, holes, status).
@@ -308,7 +330,7 @@ impl FramePlan {
                     // NaN, infinite or absurd values (a float field's NaN, a damaged exponent)
                     // are invalid: a gap, counted, never summed into the channel.
                     let v = r.as_f64() * c.scale * c.factor;
-                    if !v.is_finite() || v.abs() > crate::ranges::MAX_ABS_VALUE {
+                    if !v.is_finite() || crate::ranges::plausible(v).is_none() {
                         *invalid += 1;
                         out.push_missing(ch);
                     } else {
@@ -325,37 +347,55 @@ impl FramePlan {
     /// one pass over the starts per column, instead of eight pushes per frame (the per-value
     /// push was most of the field reads' cost; BENCHMARKS.md "session 7").
     pub(crate) fn fill_columns(&self, data: &[u8], starts: &[usize], out: &mut FrameBlock) {
-        fn each<const N: usize>(
-            offsets: &[usize],
+        /// One column's values, read at `at` from every start.
+        fn column<const N: usize, T>(
             data: &[u8],
             starts: &[usize],
-            out: &mut FrameBlock,
-            conv: impl Fn([u8; N]) -> i64,
+            at: usize,
+            col: &mut Vec<T>,
+            conv: impl Fn([u8; N]) -> T,
         ) {
-            out.extend_count_columns(|ch, col| {
-                let at = offsets[ch];
-                col.extend(starts.iter().map(|&s| {
-                    let mut b = [0u8; N];
-                    b.copy_from_slice(&data[s + at..s + at + N]);
-                    conv(b)
-                }));
-            });
+            col.extend(starts.iter().map(|&s| {
+                let mut b = [0u8; N];
+                b.copy_from_slice(&data[s + at..s + at + N]);
+                conv(b)
+            }));
+        }
+        /// Narrow columns (`i32`), for loads that fit one.
+        fn narrow<const N: usize>(
+            o: &[usize],
+            d: &[u8],
+            st: &[usize],
+            out: &mut FrameBlock,
+            conv: impl Fn([u8; N]) -> i32 + Copy,
+        ) {
+            out.extend_count32_columns(|ch, col| column(d, st, o[ch], col, conv));
+        }
+        /// Wide columns (`i64`).
+        fn wide<const N: usize>(
+            o: &[usize],
+            d: &[u8],
+            st: &[usize],
+            out: &mut FrameBlock,
+            conv: impl Fn([u8; N]) -> i64 + Copy,
+        ) {
+            out.extend_count_columns(|ch, col| column(d, st, o[ch], col, conv));
         }
         let Some(load) = self.uniform else {
             return;
         };
         let (o, d, st) = (&self.offsets, data, starts);
         match load {
-            Load::U8 => each::<1>(o, d, st, out, |b| i64::from(b[0])),
-            Load::I8 => each::<1>(o, d, st, out, |b| i64::from(b[0] as i8)),
-            Load::U16Le => each::<2>(o, d, st, out, |b| i64::from(u16::from_le_bytes(b))),
-            Load::U16Be => each::<2>(o, d, st, out, |b| i64::from(u16::from_be_bytes(b))),
-            Load::I16Le => each::<2>(o, d, st, out, |b| i64::from(i16::from_le_bytes(b))),
-            Load::I16Be => each::<2>(o, d, st, out, |b| i64::from(i16::from_be_bytes(b))),
-            Load::U32Le => each::<4>(o, d, st, out, |b| i64::from(u32::from_le_bytes(b))),
-            Load::U32Be => each::<4>(o, d, st, out, |b| i64::from(u32::from_be_bytes(b))),
-            Load::I32Le => each::<4>(o, d, st, out, |b| i64::from(i32::from_le_bytes(b))),
-            Load::I32Be => each::<4>(o, d, st, out, |b| i64::from(i32::from_be_bytes(b))),
+            Load::U8 => narrow::<1>(o, d, st, out, |b| i32::from(b[0])),
+            Load::I8 => narrow::<1>(o, d, st, out, |b| i32::from(b[0] as i8)),
+            Load::U16Le => narrow::<2>(o, d, st, out, |b| i32::from(u16::from_le_bytes(b))),
+            Load::U16Be => narrow::<2>(o, d, st, out, |b| i32::from(u16::from_be_bytes(b))),
+            Load::I16Le => narrow::<2>(o, d, st, out, |b| i32::from(i16::from_le_bytes(b))),
+            Load::I16Be => narrow::<2>(o, d, st, out, |b| i32::from(i16::from_be_bytes(b))),
+            Load::I32Le => narrow::<4>(o, d, st, out, i32::from_le_bytes),
+            Load::I32Be => narrow::<4>(o, d, st, out, i32::from_be_bytes),
+            Load::U32Le => wide::<4>(o, d, st, out, |b| i64::from(u32::from_le_bytes(b))),
+            Load::U32Be => wide::<4>(o, d, st, out, |b| i64::from(u32::from_be_bytes(b))),
             // Floats are never counts (no uniform plan).
             Load::F32Le | Load::F32Be | Load::F64Le | Load::F64Be => {}
         }
@@ -401,6 +441,115 @@ mod tests {
                     assert_eq!(read_bits(&msg, at, ty, order), load.bits(&msg, at));
                 }
             }
+        }
+    }
+}
+
+/// The two column widths: counts of fields that fit an `i32` in narrow columns, `u32` counts
+/// wide, each read back exactly at the ends of its range, by the column-by-column fill of a
+/// uniform frame and by the per-channel reads of a mixed one.
+#[cfg(test)]
+mod width_tests {
+    use super::*;
+    use crate::frame::{encode_frame, ChannelValue, Decoder, FrameEvent, FrameInput};
+
+    /// A 4-byte-sync frame with counter, fault status and one channel per type of `types`.
+    fn descriptor(types: &[&str]) -> FrameDescriptor {
+        let mut text = String::from("name = \"w\"\nrate_hz = 100.0\nbyte_order = \"little\"\n");
+        let mut at = 8;
+        let mut channels = String::new();
+        for (i, ty) in types.iter().enumerate() {
+            let size = FieldType::parse(ty).expect("type").size();
+            channels += &format!(
+                "[[channels]]\nname = \"c{i}\"\noffset = {at}\ntype = \"{ty}\"\nscale = 1.0\n\
+                 unit = \"u\"\nkind = \"increment\"\nstatus_bit = {i}\n"
+            );
+            at += size;
+        }
+        text += &format!(
+            "length = {}\n[sync]\nbytes = [0xAA, 0x55]\noffset = 0\n\
+             [checksum]\nalgorithm = \"CRC-16/IBM-3740\"\nrange = [2, {}]\nat = {}\n\
+             [counter]\noffset = 2\ntype = \"u16\"\nmodulus = 65536\n\
+             [status]\noffset = 4\ntype = \"u32\"\nbit_set_means = \"fault\"\n{channels}",
+            at + 2,
+            at - 1,
+            at
+        );
+        FrameDescriptor::from_toml_str(&text, std::path::Path::new("w.toml")).expect("descriptor")
+    }
+
+    /// Frames of `values` (one row per frame) decoded whole: the values come back exactly.
+    fn round_trip(desc: &FrameDescriptor, rows: &[Vec<i64>]) {
+        let mut bytes = Vec::new();
+        for (seq, row) in rows.iter().enumerate() {
+            let values: Vec<ChannelValue> = row.iter().map(|&c| ChannelValue::Count(c)).collect();
+            let input = FrameInput {
+                seq: seq as u64,
+                values: &values,
+                status: 0,
+                temperature_c: None,
+            };
+            bytes.extend(encode_frame(desc, &input).expect("encode"));
+        }
+        let mut dec = Decoder::new(desc.clone());
+        dec.push(&bytes);
+        dec.finish();
+        let got: Vec<Vec<Option<ChannelValue>>> = dec
+            .drain()
+            .map(|e| match e {
+                FrameEvent::Frame(f) => f.values,
+                other => panic!("unexpected {other:?}"),
+            })
+            .collect();
+        let want: Vec<Vec<Option<ChannelValue>>> = rows
+            .iter()
+            .map(|r| r.iter().map(|&c| Some(ChannelValue::Count(c))).collect())
+            .collect();
+        assert_eq!(got, want);
+    }
+
+    #[test]
+    fn narrow_and_wide_columns() {
+        use ColumnKind::{Count, Count32};
+        let cases: [(&[&str], &[ColumnKind]); 4] = [
+            (&["i32", "i32", "i32"], &[Count32; 3]),
+            (&["i16", "i16"], &[Count32; 2]),
+            (&["u32", "u32"], &[Count; 2]),
+            // Mixed loads: no column fill, each value pushed to its own column's width.
+            (
+                &["u8", "i16", "u16", "i32", "u32"],
+                &[Count32, Count32, Count32, Count32, Count],
+            ),
+        ];
+        for (types, kinds) in cases {
+            let desc = descriptor(types);
+            let plan = FramePlan::new(&desc);
+            assert_eq!(plan.kinds, kinds, "{types:?}");
+            assert_eq!(column_kinds(&desc), kinds);
+            let range = |ty: &str| match ty {
+                "u8" => (0, 255),
+                "i16" => (-32768, 32767),
+                "u16" => (0, 65535),
+                "i32" => (i64::from(i32::MIN), i64::from(i32::MAX)),
+                _ => (0, i64::from(u32::MAX)),
+            };
+            let mut rows = Vec::new();
+            for k in 0..600i64 {
+                rows.push(
+                    types
+                        .iter()
+                        .map(|ty| {
+                            let (lo, hi) = range(ty);
+                            match k % 3 {
+                                0 => lo,
+                                1 => hi,
+                                _ => lo + (k * 7919) % (hi - lo),
+                            }
+                        })
+                        .collect(),
+                );
+            }
+            round_trip(&desc, &rows);
         }
     }
 }

@@ -64,16 +64,19 @@ fn read_line_bounded<R: BufRead>(
 }
 
 /// What is wrong with a text input that held no usable value, `invalid` of them numbers out of
-/// range (beyond [`super::MAX_ABS_VALUE`] or infinite).
+/// range (beyond [`super::MAX_ABS_VALUE`], non-zero below [`crate::ranges::MIN_ABS_VALUE`], or
+/// infinite).
 pub fn no_samples_problem(invalid: u64) -> String {
     if invalid == 0 {
         "no samples: every value is empty, nan or not a number".into()
     } else {
         format!(
-            "no samples: {invalid} values are numbers beyond {:e} in magnitude or infinite, \
-             taken as gaps, and the others are empty, nan or not numbers (are the columns raw \
-             counts of a wider type, or time stamps? pick the data columns with --columns)",
-            super::MAX_ABS_VALUE
+            "no samples: {invalid} values are numbers beyond {:e} or non-zero below {:e} in \
+             magnitude, or infinite, taken as gaps, and the others are empty, nan or not \
+             numbers (are the columns raw counts of a wider type, or time stamps? pick the data \
+             columns with --columns; values that small need a larger unit)",
+            super::MAX_ABS_VALUE,
+            crate::ranges::MIN_ABS_VALUE
         )
     }
 }
@@ -799,7 +802,7 @@ impl<R: BufRead> TextReader<R> {
         self.rows += 1;
         match row {
             Ok(v) => {
-                // `inf`, `1e308`: counted, and a gap like `nan`.
+                // `inf`, `1e308`, `1e-300`: counted, and a gap like `nan`.
                 let start = out.len();
                 out.extend_from_slice(&v);
                 for x in &mut out[start..] {

@@ -202,18 +202,19 @@ pub async fn run_frames_async(
         .map(|c| (c.sender(), c.in_flight.clone(), c.written.clone()));
     let abort_after = plan.as_ref().and_then(|p| p.abort_after_frames);
     let metrics = ctl.metrics.clone();
-    let width = desc.frame().channels.len();
+    let kinds = crate::frame::column_kinds(desc);
     let hook = ctl.crash_hook.clone();
     let decode = std::thread::Builder::new()
         .name("allanscope-decode".into())
         .spawn(move || {
             let mut offset = start_offset;
+            // Blocks with the decoder's column kinds, so its frames join them column by column.
             let fresh = || match recycle_rx.try_recv() {
                 Ok(Chunk::Block(mut b)) => {
-                    b.reset(width);
+                    b.reset_kinds(&kinds);
                     b
                 }
-                _ => FrameBlock::with_capacity(width, CHUNK_EVENTS_RESERVE),
+                _ => FrameBlock::with_kinds(&kinds, CHUNK_EVENTS_RESERVE),
             };
             let mut events = fresh();
             let mut open = true;

@@ -241,7 +241,7 @@ impl UnitState {
             next_data_s: run.analysis.t_data_s() + every,
             next_wall: Instant::now() + Duration::from_secs_f64(every),
             stage,
-            block: FrameBlock::with_capacity(width, 64),
+            block: FrameBlock::with_kinds(&crate::frame::column_kinds(&run.desc), 64),
             width,
             flags: SourceFlags {
                 live,

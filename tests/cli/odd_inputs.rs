@@ -13,6 +13,8 @@
 //! - A second run given the output file of a run still going is refused; the first run's file
 //!   holds only its own whole records.
 //! - `simulate -o -` writes to standard output the bytes `-o FILE` writes.
+//! - Values of 1e-90 give the plain file's deviations times 1e-90; values of 1e-300 (squares
+//!   below f64's range: a deviation of exactly 0 before) are refused, saying why.
 
 use std::path::Path;
 use std::process::{Child, Stdio};
@@ -323,4 +325,48 @@ fn simulate_to_standard_output_writes_the_files_bytes() {
     assert!(bytes.len() > 1000);
     assert_eq!(piped.stdout, bytes);
     assert!(!dir.join("-").exists(), "no file named `-`");
+}
+
+/// The plain file with `offset` added to every value and the sum multiplied by `scale` (printed
+/// with 17 significant digits).
+fn scaled(offset: f64, scale: f64) -> String {
+    let mut t = "g1,g2\n".to_string();
+    for [a, b] in rows() {
+        let a: f64 = a.parse().expect("a");
+        let b: f64 = b.parse().expect("b");
+        t += &format!(
+            "{:.16e},{:.16e}\n",
+            (a + offset) * scale,
+            (b + offset) * scale
+        );
+    }
+    t
+}
+
+/// Values of 1e-90 are analysed exactly as values of 1 (every deviation 1e-90 times the plain
+/// file's, to a few ulps: powers of ten are not exact in binary); values of 1e-300, whose
+/// squares underflow, are refused with the reason (a deviation of exactly 0 before).
+#[test]
+fn tiny_values_scale_down_to_1e_minus_100_and_below_are_refused() {
+    let dir = fresh_dir("odd-tiny");
+    std::fs::write(dir.join("plain.csv"), scaled(0.0, 1.0)).expect("write");
+    std::fs::write(dir.join("small.csv"), scaled(0.0, 1e-90)).expect("write");
+    std::fs::write(dir.join("tiny.csv"), scaled(0.0005, 1e-300)).expect("write");
+    let plain = final_curves(&analyze(&dir, "plain.csv", &[]));
+    let small = final_curves(&analyze(&dir, "small.csv", &[]));
+    assert_eq!(plain.len(), small.len());
+    for ((c, s, p), (c2, s2, q)) in plain.iter().zip(&small) {
+        assert_eq!((c, s), (c2, s2));
+        assert_eq!(p.len(), q.len());
+        for (x, y) in p.iter().zip(q) {
+            assert!(*x > 0.0, "{c} {s}: {p:?}");
+            let r = y / (x * 1e-90);
+            assert!((r - 1.0).abs() < 1e-12, "{c} {s}: {y} vs {x} x 1e-90");
+        }
+    }
+    let out = analyze(&dir, "tiny.csv", &[]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("6000 values are numbers beyond"), "{err}");
+    assert!(err.contains("non-zero below 1e-100"), "{err}");
 }

@@ -13,8 +13,10 @@
 //! - A listener on a UDP port that never receives anything ends at once on SIGINT or SIGTERM,
 //!   exit 0, with its (empty) final records, health and summary; so does a serial listener on a
 //!   pseudo-terminal whose line went quiet, with the final records of the frames it received.
-//! - A run blocked in a system call (opening a FIFO no writer has opened) cannot see the first
-//!   signal; a second one ends it within 5 s, exit 1 (it hung through any number of signals).
+//! - A run waiting to open a FIFO no writer has opened ends on the first signal, within 2 s,
+//!   exit 1, saying nothing was analysed (text and frames); a run blocked reading a FIFO whose
+//!   writer holds it open and sends nothing cannot see the first signal, and a second one ends
+//!   it within 5 s, exit 1 (both hung through any number of signals).
 
 use std::io::{BufRead, BufReader, Read};
 use std::process::{Child, Stdio};
@@ -439,29 +441,20 @@ fn sigint_ends_a_serial_listener_on_a_pseudo_terminal() {
     assert_eq!(s["t_data"], FRAMES as f64 * TAU0_S);
 }
 
+/// A FIFO made in a fresh temporary directory.
 #[cfg(unix)]
-#[test]
-fn a_second_sigint_ends_a_run_blocked_opening_its_input() {
-    let fifo = tmp_in("stop-fifo", "fifo");
+fn fifo(name: &str) -> std::path::PathBuf {
+    let fifo = tmp_in(name, "fifo");
     let made = std::process::Command::new("mkfifo")
         .arg(&fifo)
         .status()
         .expect("mkfifo");
     assert!(made.success());
-    let mut child = exe()
-        .args(["analyze", fifo.to_str().expect("utf-8"), "--tau0", "1"])
-        .env("ALLANSCOPE_LOG", "warn")
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn");
-    std::thread::sleep(Duration::from_millis(500));
-    signal(&child, "-INT");
-    std::thread::sleep(Duration::from_millis(300));
-    signal(&child, "-INT");
-    let (code, took) = wait_at_most(&mut child, Duration::from_secs(15));
-    assert_eq!(code, Some(1));
-    assert!(took < Duration::from_secs(8), "{took:?}");
+    fifo
+}
+
+/// Standard error of a child that has ended.
+fn stderr_of(child: &mut Child) -> String {
     let mut err = String::new();
     child
         .stderr
@@ -469,5 +462,68 @@ fn a_second_sigint_ends_a_run_blocked_opening_its_input() {
         .expect("stderr")
         .read_to_string(&mut err)
         .expect("read");
+    err
+}
+
+#[cfg(unix)]
+#[test]
+fn the_first_sigint_ends_a_run_waiting_to_open_its_fifo() {
+    for (format, dir) in [(None, "stop-fifo-text"), (Some("siu8"), "stop-fifo-frames")] {
+        let fifo = fifo(dir);
+        let mut args = vec!["analyze", fifo.to_str().expect("utf-8"), "--tau0", "1"];
+        if let Some(f) = format {
+            args.extend(["--format", f]);
+        }
+        let mut child = exe()
+            .args(&args)
+            .env("ALLANSCOPE_LOG", "warn")
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("spawn");
+        std::thread::sleep(Duration::from_millis(500));
+        signal(&child, "-INT");
+        let (code, took) = wait_at_most(&mut child, Duration::from_secs(15));
+        let err = stderr_of(&mut child);
+        assert_eq!(code, Some(1), "{format:?}: {err}");
+        assert!(took < Duration::from_secs(2), "{format:?}: {took:?}");
+        assert!(
+            err.contains("stopped by SIGINT before the pipe delivered any data"),
+            "{format:?}: {err}"
+        );
+        assert!(!err.contains("SIGINT twice"), "{format:?}: {err}");
+    }
+}
+
+#[cfg(unix)]
+#[test]
+fn a_second_sigint_ends_a_run_blocked_reading_an_idle_fifo() {
+    let fifo = fifo("stop-fifo-idle");
+    let mut child = exe()
+        .args(["analyze", fifo.to_str().expect("utf-8"), "--tau0", "1"])
+        .env("ALLANSCOPE_LOG", "warn")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    // The writer opens the FIFO (this returns once the run has opened it too) and then sends
+    // nothing: the run waits in read(2), which no token reaches.
+    let writer = std::fs::OpenOptions::new()
+        .write(true)
+        .open(&fifo)
+        .expect("open the FIFO for writing");
+    std::thread::sleep(Duration::from_millis(500));
+    signal(&child, "-INT");
+    std::thread::sleep(Duration::from_millis(500));
+    assert!(
+        child.try_wait().expect("wait").is_none(),
+        "the run ended on the first signal although its read cannot be interrupted"
+    );
+    signal(&child, "-INT");
+    let (code, took) = wait_at_most(&mut child, Duration::from_secs(15));
+    drop(writer);
+    assert_eq!(code, Some(1));
+    assert!(took < Duration::from_secs(8), "{took:?}");
+    let err = stderr_of(&mut child);
     assert!(err.contains("SIGINT twice"), "{err}");
 }

@@ -1,9 +1,10 @@
 //! The flat path (a `FrameBlock` per chunk, what the pipeline sends) against the one-frame-at-a-
 //! time path (`Chunk::Frames`): the same events must give the same interim and final records,
 //! bit for bit, with gaps, missing values, a real value on a counts channel, interim records
-//! falling due inside blocks and blocks cut at arbitrary places.
+//! falling due inside blocks and blocks cut at arbitrary places, in narrow (`i32`) and wide
+//! (`i64`) count columns alike.
 
-use allanscope::frame::{ChannelValue, Decoder, FrameBlock, FrameEvent, FrameSink};
+use allanscope::frame::{ChannelValue, ColumnKind, Decoder, FrameBlock, FrameEvent, FrameSink};
 use allanscope::input::Chunk;
 use allanscope::sink::records::Record;
 
@@ -33,6 +34,8 @@ fn damaged_events() -> Vec<FrameEvent> {
             300 => f.values[i % 8] = None,
             // a value a counts channel cannot take exactly
             600 => f.values[(i + 3) % 8] = Some(ChannelValue::Real(0.25)),
+            // a count beyond 32 bits (a hole in a narrow column, an entry of a wide one)
+            800 => f.values[(i + 5) % 8] = Some(ChannelValue::Count(-(1 << 40))),
             _ => {}
         }
         events.push(FrameEvent::Frame(f));
@@ -48,7 +51,8 @@ fn to_json(records: &[Record]) -> Vec<String> {
 }
 
 /// Interim records every 7 data-seconds (due inside blocks) and the final records: the same
-/// strings through either path, and through blocks of 1, 333 and 4096 events.
+/// strings through either path, through blocks of 1, 333 and 4096 events, of narrow and of
+/// wide count columns.
 #[test]
 fn blocks_give_the_records_of_single_frames() {
     let desc = siu8();
@@ -67,11 +71,14 @@ fn blocks_give_the_records_of_single_frames() {
         .count();
     assert!(interim >= 8 * 2 * 11, "interim records: {interim}");
 
-    for size in [1, 333, 4096] {
+    let cases = [1, 333, 4096]
+        .into_iter()
+        .flat_map(|size| [(size, ColumnKind::Count32), (size, ColumnKind::Count)]);
+    for (size, kind) in cases {
         let mut flat = analysis(&desc, Some(7.0));
         let mut got = Vec::new();
         for part in events.chunks(size) {
-            let mut block = FrameBlock::with_capacity(8, part.len());
+            let mut block = FrameBlock::with_kinds(&[kind; 8], part.len());
             for ev in part {
                 match ev {
                     FrameEvent::Gap { missing } => block.push_gap(*missing),
@@ -89,9 +96,9 @@ fn blocks_give_the_records_of_single_frames() {
         }
         got.extend(flat.records(true));
         let got = to_json(&got);
-        assert_eq!(got.len(), want.len(), "blocks of {size}");
+        assert_eq!(got.len(), want.len(), "blocks of {size}, {kind:?}");
         for (g, w) in got.iter().zip(&want) {
-            assert_eq!(g, w, "blocks of {size}");
+            assert_eq!(g, w, "blocks of {size}, {kind:?}");
         }
     }
 }

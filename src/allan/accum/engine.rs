@@ -312,10 +312,17 @@ impl<R: Repr> Engine<R> {
     /// Feeds a run of increments, as [`Engine::push_increment`] on each in turn (the same
     /// result), with the per-sample bookkeeping done a block at a time.
     pub fn push_increments(&mut self, ds: &[R::Inc]) {
+        self.push_increments_from(ds);
+    }
+
+    /// [`Engine::push_increments`] from a narrower type each increment widens from exactly
+    /// (e.g. `i32` counts of a narrow block column into the `i64` counts engine), widened as
+    /// they are summed: the same result as widening them first.
+    pub fn push_increments_from<T: Copy + Into<R::Inc>>(&mut self, ds: &[T]) {
         let mut rest = ds;
         while let Some((&d0, tail)) = rest.split_first() {
             if !self.open || self.first_inc.is_none() {
-                self.push_increment(d0);
+                self.push_increment(d0.into());
                 rest = tail;
                 continue;
             }
@@ -323,12 +330,14 @@ impl<R: Repr> Engine<R> {
             let room = BLOCK.saturating_sub(s0.x.data.len() - s0.x.new_from).max(1);
             let (chunk, tail) = rest.split_at(room.min(rest.len()));
             if let Some(r) = self.first_inc {
-                self.spread |= chunk.iter().fold(0, |acc, &d| acc | R::deviation(d, r));
+                self.spread |= chunk
+                    .iter()
+                    .fold(0, |acc, &d| acc | R::deviation(d.into(), r));
             }
             let from = s0.x.data.len();
             let mut x = self.x_cur;
             s0.x.data.extend(chunk.iter().map(|&d| {
-                x = R::step(x, d);
+                x = R::step(x, d.into());
                 x
             }));
             self.x_cur = x;
