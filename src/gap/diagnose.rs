@@ -78,12 +78,6 @@ pub struct DiagnoseOptions {
     /// filtered white rate ([`super::filter_cov`]) and the model it is normalised by takes the
     /// white and flicker rate through the filter ([`super::problem::GapProblem::new`]).
     pub cov_filter: Option<crate::model::lowpass::LowPass>,
-    /// The counter's limit-cycle lines taken into the base model, each a column of free
-    /// amplitude beside the five terms ([`super::limit_cycle::line_avar`]), so that the unit's
-    /// effects are searched beyond what its counter makes
-    /// ([`super::limit_cycle::counter_lines`]). The diagnosis sets it for its second pass on a
-    /// counter unit whose named line is the counter's.
-    pub counter_lines: Vec<super::limit_cycle::CounterLine>,
 }
 
 impl Default for DiagnoseOptions {
@@ -97,7 +91,6 @@ impl Default for DiagnoseOptions {
             min_m: 1,
             cov_coef: None,
             cov_filter: None,
-            counter_lines: Vec::new(),
         }
     }
 }
@@ -194,9 +187,6 @@ pub struct Diagnosis {
     /// Named sinusoids that are the counter's limit cycle, not an effect of the unit
     /// ([`super::limit_cycle`]).
     pub limit_cycles: Vec<super::limit_cycle::LimitCycle>,
-    /// The fitted amplitudes (u/s) of the counter's lines taken into the base model, in the
-    /// order of [`DiagnoseOptions::counter_lines`] (empty without them).
-    pub counter_line_amplitudes: Vec<f64>,
 }
 
 /// Five-term `(Q, N, B, K, R)` from `c`.
@@ -227,20 +217,6 @@ pub fn diagnose_with_temperature(
 ) -> Result<Diagnosis, DiagnoseError> {
     let mut d = diagnose_quantized(snap, temperature, opts)?;
     super::limit_cycle::attribute(&mut d, snap);
-    // A line that is the counter's, beside effects of the unit or a gap left: the counter's
-    // lines (its harmonics too) go into the base model and the unit's effects are searched
-    // again beyond them (docs/gap.md, "The counter's limit cycle").
-    if opts.counter_lines.is_empty() {
-        if let Some(lines) = super::limit_cycle::counter_lines(&d, snap) {
-            let o = DiagnoseOptions {
-                counter_lines: lines.clone(),
-                ..opts.clone()
-            };
-            if let Ok(d2) = diagnose_quantized(snap, temperature, &o) {
-                d = super::limit_cycle::with_counter_lines(d, d2, &lines, snap);
-            }
-        }
-    }
     Ok(d)
 }
 
@@ -614,13 +590,6 @@ fn diagnose_curve_once(
         effect_intervals,
         first_scores,
         limit_cycles: Vec::new(),
-        // The counter's columns follow the five terms and the final spec's extra columns.
-        counter_line_amplitudes: cur
-            .coef
-            .iter()
-            .skip(5 + final_spec.extra.len())
-            .map(|c| c.max(0.0).sqrt())
-            .collect(),
     })
 }
 

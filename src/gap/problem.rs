@@ -50,10 +50,6 @@ pub struct GapProblem {
     /// the filtered N column ([`GapProblem::set_filter_floor`]; docs/gap.md, "Filters and
     /// Gauss-Markov terms", "Rounding after a filter"). None: no such part.
     pub filter_floor: Option<FilterFloor>,
-    /// The counter's lines taken into the base model ([`DiagnoseOptions::counter_lines`]):
-    /// each the AVAR column of a line of unit amplitude at a known frequency, with a free amplitude in
-    /// every fit, after the spec's extra columns (docs/gap.md, "The counter's limit cycle").
-    pub counter_lines: Vec<Vec<f64>>,
 }
 
 /// The rate rounding after a unit's filter ([`GapProblem::filter_floor`]).
@@ -194,9 +190,8 @@ impl GapProblem {
             .solve_lower_triangular(&DMatrix::identity(j, j))
             .ok_or(DiagnoseError::Covariance)?;
         let m_white = &linv * &s_plain * linv.transpose();
-        let ms: Vec<u64> = pts.iter().map(|p| p.m).collect();
         Ok(Self {
-            ms: ms.clone(),
+            ms: pts.iter().map(|p| p.m).collect(),
             tau: pts.iter().map(|p| p.tau_s).collect(),
             y: pts.iter().map(|p| p.avar).collect(),
             ln_y: DVector::from_iterator(j, pts.iter().map(|p| p.avar.ln())),
@@ -208,11 +203,6 @@ impl GapProblem {
             n_inc: n,
             c_init,
             filter_floor: None,
-            counter_lines: opts
-                .counter_lines
-                .iter()
-                .map(|l| super::limit_cycle::line_avar(l, &ms, tau0))
-                .collect(),
         })
     }
 
@@ -331,7 +321,7 @@ impl GapProblem {
     /// The design columns of a spec.
     fn columns(&self, spec: &ModelSpec) -> DMatrix<f64> {
         let j = self.len();
-        let k = 5 + spec.extra.len() + self.counter_lines.len();
+        let k = 5 + spec.extra.len();
         let filt = spec.filter.map(|lp| match lp {
             LowPass::FirstOrder { time_constant_s } => effect_column(
                 EffectKind::OutputFilter,
@@ -353,10 +343,8 @@ impl GapProblem {
                     (_, Some(f), 2) => f[r],
                     _ => basis(self.tau[r])[c],
                 }
-            } else if c < 5 + spec.extra.len() {
-                spec.extra[c - 5][r]
             } else {
-                self.counter_lines[c - 5 - spec.extra.len()][r]
+                spec.extra[c - 5][r]
             }
         })
     }
@@ -605,14 +593,7 @@ impl GapProblem {
             }
             _ => {
                 let (sh, f) = self.scan(base, kind)?;
-                // The new column follows the five terms and `base`'s extra columns.
-                let amp = f
-                    .coef
-                    .get(5 + base.extra.len())
-                    .copied()
-                    .unwrap_or(0.0)
-                    .max(0.0)
-                    .sqrt();
+                let amp = f.coef.last().copied().unwrap_or(0.0).max(0.0).sqrt();
                 Some((EffectParams::from_shape(kind, sh, amp), f))
             }
         }

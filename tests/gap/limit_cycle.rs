@@ -18,14 +18,9 @@ const LSB: f64 = 1.22;
 const RATE: f64 = 5.83;
 
 fn run(extra: &str, seed: u64) -> Diagnosis {
-    run_unit(LSB, RATE, extra, seed)
-}
-
-/// The unit of [`run`] with the counter's LSB `lsb` (arcsec) and the input `rate` (arcsec/s).
-fn run_unit(lsb: f64, rate: f64, extra: &str, seed: u64) -> Diagnosis {
     let text = format!(
-        "tau0_s = {TAU0}\n[[channel]]\nname = \"r\"\nunit = \"arcsec\"\nlsb = {lsb}\n\
-         bias = {rate}\nQ = 0.255\nN = 0.083\nB = 0.002\nK = 5e-7\n{extra}\n"
+        "tau0_s = {TAU0}\n[[channel]]\nname = \"r\"\nunit = \"arcsec\"\nlsb = {LSB}\n\
+         bias = {RATE}\nQ = 0.255\nN = 0.083\nB = 0.002\nK = 5e-7\n{extra}\n"
     );
     let m = SimModel::from_toml_str(&text, Path::new("<test>")).expect("model");
     let mut sim = Simulator::new(&m, seed);
@@ -94,66 +89,4 @@ fn a_real_vibration_of_a_counter_unit_is_not_attributed() {
     assert!(allanscope::gap::limit_cycle::unit_effects(&d)
         .any(|e| e.params.kind() == EffectKind::Sinusoid));
     assert_ne!(d.verdict, Verdict::Consistent);
-}
-
-/// The unit with an LSB of 1.8 arcsec (the white angle noise beyond the counter 0.14 count, too
-/// little to break the sawtooth up) under 11.67 arcsec/s: the counter's line at 6.48 Hz and its
-/// second harmonic at 12.97 Hz. On cfae409 the fundamental was named and attributed, but a
-/// resonant second-order filter (damping 0.1, the scan's bound) stood in for the harmonic and
-/// the verdict was `unexplained` (G 5792 -> 7.2; seeds 1-5 alike). The sawtooth is one
-/// waveform: its harmonics go into the base model with it, the unit shows nothing else, and
-/// the verdict is `consistent`, every named line the counter's.
-#[test]
-fn the_counters_harmonics_are_the_counters_too() {
-    let (lsb, rate) = (1.8, 11.67);
-    let d = run_unit(lsb, rate, "", 1);
-    assert_eq!(
-        d.verdict,
-        Verdict::Consistent,
-        "{:?} G {} -> {}",
-        d.effects,
-        d.gap_before,
-        d.gap_after
-    );
-    assert_eq!(
-        allanscope::gap::limit_cycle::unit_effects(&d).count(),
-        0,
-        "{:?}",
-        d.effects
-    );
-    assert!(d.gap_after < 1.5, "G {} -> {}", d.gap_before, d.gap_after);
-    let f1 = rate / lsb;
-    for n in [1u32, 2] {
-        let c = d
-            .limit_cycles
-            .iter()
-            .find(|c| c.harmonic == n)
-            .unwrap_or_else(|| panic!("harmonic {n} not named: {:?}", d.effects));
-        let f = d.effects[c.effect].params.shape();
-        assert!(
-            (f / (n as f64 * f1) - 1.0).abs() < 0.002,
-            "harmonic {n} at {f} Hz"
-        );
-    }
-}
-
-/// The same counter shaken at 2.1 Hz (10 arcsec/s): once the counter's lines are in the base
-/// model, the vibration is still named, as the unit's.
-#[test]
-fn a_real_vibration_beside_the_counters_harmonics_is_still_named() {
-    let d = run_unit(
-        1.8,
-        11.67,
-        "sinusoid = { amplitude = 10.0, frequency = 2.1, phase = 0.0 }",
-        1,
-    );
-    let own: Vec<_> = allanscope::gap::limit_cycle::unit_effects(&d).collect();
-    assert!(
-        own.iter()
-            .any(|e| matches!(e.params, EffectParams::Sinusoid { frequency_hz, .. } if (frequency_hz / 2.1 - 1.0).abs() < 0.01)),
-        "{:?}",
-        d.effects
-    );
-    assert_ne!(d.verdict, Verdict::Consistent);
-    assert!(!d.limit_cycles.is_empty(), "{:?}", d.effects);
 }
