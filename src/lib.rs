@@ -127,6 +127,7 @@
 //!   rounding.rs            rate samples rounded after a filter, as AVAR
 //!   limit_cycle.rs         a named line that is the counter's limit cycle
 //!   segments.rs            homogeneity of the curve across the run's segments
+//!   simplex.rs             a two-parameter Nelder-Mead search (the second-order filter's polish)
 //!   thresholds.rs          the decision thresholds, calibrated by simulation
 //!   diagnose.rs            the diagnosis: effects chosen, verdict
 //!   alternatives.rs        another explanation that fits about as well

@@ -983,11 +983,24 @@ fn greedy_stationary(
         let aic = |p: &(EffectParams, GlsFit, f64)| {
             (cur.chi2 - p.1.chi2) - 2.0 * p.0.kind().n_params() as f64
         };
-        let best_filter = passed
+        let mut best_filter = passed
             .iter()
             .filter(|p| p.0.kind().is_filter())
             .max_by(|a, b| aic(a).total_cmp(&aic(b)))
             .map(|p| p.0.kind());
+        // The first order is the second order's limit at large damping (nested): the second
+        // order is named over it only when its Akaike criterion is better by more than
+        // AIC_MARGIN (docs/gap.md, "Rounding after a filter (session 11)").
+        let passed_kind = |k: EffectKind| passed.iter().find(|p| p.0.kind() == k);
+        if let (Some(EffectKind::SecondOrderFilter), Some(so), Some(fo)) = (
+            best_filter,
+            passed_kind(EffectKind::SecondOrderFilter),
+            passed_kind(EffectKind::OutputFilter),
+        ) {
+            if aic(so) <= aic(fo) + AIC_MARGIN {
+                best_filter = Some(EffectKind::OutputFilter);
+            }
+        }
         let filter_score = passed
             .iter()
             .filter(|p| p.0.kind().is_filter())

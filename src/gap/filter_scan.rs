@@ -2,10 +2,12 @@
 //! "Low-pass filters beyond first order"): the moving average (taps, whole, and one or two
 //! stages) and the second-order low-pass (natural frequency and damping). Each grid point is the
 //! GLS fit of [`GapProblem::gls`] with the N column taken through the filter; the best point is
-//! then polished (neighbouring whole taps; golden sections in `ln f_n` and `ln zeta` in turn).
+//! then polished (neighbouring whole taps; golden sections in `ln f_n` and `ln zeta` in turn, then
+//! a simplex in both, [`super::simplex`]).
 
 use super::effects::{EffectKind, EffectParams};
 use super::problem::{golden_section, GapProblem, GlsFit, ModelSpec};
+use super::simplex::nelder_mead_2d;
 use crate::model::lowpass::LowPass;
 use std::f64::consts::PI;
 
@@ -21,6 +23,10 @@ const DAMPING_PER_DECADE: f64 = 6.0;
 /// Golden-section steps per coordinate, and rounds over the two coordinates.
 const GOLDEN_STEPS: usize = 16;
 const POLISH_ROUNDS: usize = 3;
+/// Evaluations of the second-order scan's closing simplex ([`nelder_mead_2d`]), and its stop:
+/// the simplex's `r' S^-1 r` values within this of each other.
+const SIMPLEX_EVALS: usize = 120;
+const SIMPLEX_TOL: f64 = 1e-3;
 
 /// Whether the filter `p` was fitted at the long-memory end of its scan (within [`END_TOL`] of
 /// it; the polish converges onto the bound when the curve asks for more): the first order's or
@@ -180,6 +186,19 @@ fn scan_second_order(
         lf = golden(|x| fit(lp_of(x, lz)), lf - df, lf + df);
         lz = golden(|x| fit(lp_of(lf, x)), lz - dz, lz + dz);
     }
+    let lp = lp_of(lf, lz);
+    let best = better(best, lp, fit(lp));
+    // The valley of r' S^-1 r runs diagonally in (ln f, ln zeta) (a lower frequency with a lower
+    // damping keeps the resonance's shape), so narrow on a long precise curve that the golden
+    // sections stop far from its floor (a consumer IMU's filter at 2 pi f tau0 ~ 1: G 45 at the
+    // polished point, 2.5 at the true one): a simplex follows it from there.
+    let ([lf, lz], _) = nelder_mead_2d(
+        |p| fit(lp_of(p[0], p[1])).map_or(f64::INFINITY, |r| r.chi2),
+        [lf, lz],
+        [df / 4.0, dz / 4.0],
+        SIMPLEX_EVALS,
+        SIMPLEX_TOL,
+    );
     let lp = lp_of(lf, lz);
     better(best, lp, fit(lp))
 }

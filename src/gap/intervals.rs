@@ -101,22 +101,15 @@ pub fn effect_intervals(
         offset: None,
         ..spec.clone()
     };
-    // What stays fixed without the offset (a filter's unfiltered rounding floor,
-    // `GapProblem::filter_floor`), taken off each column's part.
-    let fixed = prob.model_of(&no_offset, &vec![0.0; fit.coef.len()]);
     for (c, &v) in fit.coef.iter().enumerate() {
         if v > 0.0 {
             let mut unit = vec![0.0; fit.coef.len()];
             unit[c] = v;
-            let part = prob.model_of(&no_offset, &unit);
+            // The column's own part, without the fixed part (the offset and a filter's
+            // rounding, `GapProblem::filter_floor`).
+            let part = prob.linear_part(&no_offset, &unit);
             coef_col[c] = Some(cols.len());
-            cols.push(
-                part.iter()
-                    .zip(&fixed)
-                    .zip(&m0)
-                    .map(|((a, f), m)| (a - f) / m)
-                    .collect(),
-            );
+            cols.push(part.iter().zip(&m0).map(|(a, m)| a / m).collect());
         }
     }
     let mut shape_col: Vec<Vec<usize>> = vec![Vec::new(); params.len()];

@@ -42,6 +42,7 @@ pub mod quantization;
 pub mod record;
 pub mod rounding;
 pub mod segments;
+pub(crate) mod simplex;
 pub mod steps;
 pub mod temperature;
 pub mod thresholds;

@@ -57,8 +57,9 @@ pub struct GapProblem {
 pub struct FilterFloor {
     /// The step of the delivered rate samples, u/s.
     pub step: f64,
-    /// The unit's white rate `N^2` (u^2/s) that sets the filtered samples' noise, from the
-    /// filter's fit when the floor was chosen.
+    /// The unit's white rate `N^2` (u^2/s) that sets the filtered samples' noise where a fit
+    /// has none yet: the starting value of each GLS fit, which then takes its own N column's
+    /// ([`GapProblem::gls`]).
     pub n2: f64,
 }
 
@@ -206,17 +207,31 @@ impl GapProblem {
         })
     }
 
-    /// The fixed part of a model's curve: the spec's offset, plus the unfiltered rounding floor
-    /// ([`GapProblem::filter_floor`]) when the spec has a filter.
-    fn offset_of(&self, spec: &ModelSpec) -> Vec<f64> {
+    /// The fixed part of a model's curve at the coefficients `coef`: the spec's offset, plus
+    /// the rounding after the filter ([`GapProblem::filter_floor`]) when the spec has a filter,
+    /// for the filtered noise of the model's own white rate `N^2 = coef[1]`
+    /// ([`GapProblem::floor_n2`]).
+    fn offset_of(&self, spec: &ModelSpec, coef: &[f64]) -> Vec<f64> {
         let mut off = spec.offset.clone().unwrap_or_else(|| vec![0.0; self.len()]);
         if let (Some(lp), Some(fl)) = (spec.filter, self.filter_floor) {
-            let r = rounding_avar(&lp, self.tau0_s, fl.step, fl.n2, &self.ms);
+            let r = rounding_avar(&lp, self.tau0_s, fl.step, self.floor_n2(coef), &self.ms);
             for (o, f) in off.iter_mut().zip(&r) {
                 *o += f;
             }
         }
         off
+    }
+
+    /// The white rate `N^2` (u^2/s) whose filtered samples the rounding after the filter acts
+    /// on, in a model with coefficients `coef`: its own N column's (the rounding's correlation
+    /// depends on the filtered noise against the step, docs/gap.md "Rounding after a filter");
+    /// the floor's starting value when `coef` has none.
+    fn floor_n2(&self, coef: &[f64]) -> f64 {
+        match (coef.get(1), self.filter_floor) {
+            (Some(&n2), _) => n2.max(0.0),
+            (None, Some(fl)) => fl.n2,
+            (None, None) => 0.0,
+        }
     }
 
     /// Decides whether the models with an output filter carry the rounding of rate samples
@@ -305,16 +320,23 @@ impl GapProblem {
     /// The model curve `X c + offset` of a spec at coefficients `coef` (five terms, then the
     /// extra columns' amplitudes squared).
     pub fn model_of(&self, spec: &ModelSpec, coef: &[f64]) -> Vec<f64> {
+        self.linear_part(spec, coef)
+            .into_iter()
+            .zip(self.offset_of(spec, coef))
+            .map(|(v, o)| v + o)
+            .collect()
+    }
+
+    /// The five terms' and extra columns' part `X c` of a model's curve, without its fixed
+    /// part (the offset and the rounding after the filter).
+    pub fn linear_part(&self, spec: &ModelSpec, coef: &[f64]) -> Vec<f64> {
         let x = self.columns(spec);
         (0..self.len())
             .map(|r| {
-                let v: f64 = (0..x.ncols())
+                (0..x.ncols())
                     .map(|c| x[(r, c)] * coef.get(c).copied().unwrap_or(0.0))
-                    .sum();
-                v
+                    .sum()
             })
-            .zip(self.offset_of(spec))
-            .map(|(v, o)| v + o)
             .collect()
     }
 
@@ -366,7 +388,10 @@ impl GapProblem {
         let j = self.len();
         let x = self.columns(spec);
         let k = x.ncols();
-        let off = self.offset_of(spec);
+        // The rounding after the filter depends on the fit's own N (`floor_n2`): it starts at
+        // the floor's value and follows the coefficient from pass to pass.
+        let floor_in = spec.filter.is_some() && self.filter_floor.is_some();
+        let mut off = self.offset_of(spec, &[]);
         let mut d: Vec<f64> = self.y.clone();
         let mut coef = DVector::zeros(k);
         let mut model = vec![0.0; j];
@@ -387,6 +412,9 @@ impl GapProblem {
             let sol = nnls(&a, &b).ok()?;
             a_last = a.clone();
             coef = DVector::from_fn(k, |c, _| sol.x[c] / norms[c]);
+            if floor_in {
+                off = self.offset_of(spec, coef.as_slice());
+            }
             let mv = &x * &coef;
             for r in 0..j {
                 model[r] = mv[r] + off[r];

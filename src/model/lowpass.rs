@@ -271,9 +271,13 @@ impl LowPass {
         }
     }
 
-    /// Its memory in s: `sum_k |k| rho_k tau0`-weighted, the delay beyond which the filtered
-    /// white rate is white again (for grids and plots): the time constant, the moving
-    /// average's span, `1 / (zeta w)` for the second order.
+    /// Its memory in s: the delay beyond which the filtered white rate is white again (for
+    /// grids, plots and the taus the diagnosis's covariance is fitted beyond): the time
+    /// constant, the moving average's span; for the second order its slowest pole's time
+    /// constant, `1 / (zeta w)` while underdamped (the envelope's decay) and
+    /// `(zeta + sqrt(zeta^2 - 1)) / w` when overdamped (the slow real pole
+    /// `w (zeta - sqrt(zeta^2 - 1))`; about `2 zeta / w` at large damping, the first order
+    /// it tends to).
     pub fn memory_s(&self, tau0_s: f64) -> f64 {
         match *self {
             LowPass::FirstOrder { time_constant_s } | LowPass::ZeroPhase { time_constant_s } => {
@@ -283,7 +287,14 @@ impl LowPass {
             LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
-            } => 1.0 / (damping.max(0.01) * 2.0 * PI * natural_frequency_hz),
+            } => {
+                let w = 2.0 * PI * natural_frequency_hz;
+                if damping <= 1.0 {
+                    1.0 / (damping.max(0.01) * w)
+                } else {
+                    (damping + (damping * damping - 1.0).sqrt()) / w
+                }
+            }
         }
     }
 }
@@ -332,6 +343,42 @@ pub fn avar_from_autocovariance(cov: &[f64], tau0_s: f64, ms: &[u64]) -> Vec<f64
 mod tests {
     use super::*;
     use crate::model::terms;
+
+    /// The memory is the slowest pole's time constant: the autocorrelation's decay per lag far
+    /// out is `exp(-tau0 / memory)`, overdamped (where `1 / (zeta w)` was 50 times too short at
+    /// `zeta = 5`) and underdamped (the envelope) alike.
+    #[test]
+    fn second_order_memory_is_its_slowest_pole() {
+        let tau0 = 0.002;
+        for (f0, zeta) in [(35.0, 5.0), (20.0, 2.0), (10.0, 1.2), (8.0, 0.3)] {
+            let lp = LowPass::SecondOrder {
+                natural_frequency_hz: f0,
+                damping: zeta,
+            };
+            let r = lp.autocorrelation(tau0);
+            let mem = lp.memory_s(tau0);
+            let k = (5.0 * mem / tau0).ceil() as usize;
+            // one period of an underdamped ringing apart, the envelope's ratio
+            let period = if zeta < 1.0 {
+                (1.0 / (f0 * (1.0 - zeta * zeta).sqrt() * tau0)).round() as usize
+            } else {
+                1
+            };
+            let decay = (r[k + period] / r[k]).abs().ln() / period as f64;
+            let want = -tau0 / mem;
+            assert!(
+                (decay / want - 1.0).abs() < 0.02,
+                "{lp:?}: {decay} vs {want}"
+            );
+        }
+        // a heavily damped second order is a first order of time constant ~ 2 zeta / w
+        let lp = LowPass::SecondOrder {
+            natural_frequency_hz: 35.0,
+            damping: 5.0,
+        };
+        let t = 2.0 * 5.0 / (2.0 * PI * 35.0);
+        assert!((lp.memory_s(tau0) / t - 1.0).abs() < 0.02);
+    }
 
     /// The generic form reproduces the first-order closed form of `terms`.
     #[test]

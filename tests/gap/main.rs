@@ -18,6 +18,7 @@ mod quantization;
 mod real_slice;
 mod reference;
 mod rounding;
+mod second_order_polish;
 mod sinusoid_behind_filter;
 mod temperature;
 mod warmup_null;
