@@ -790,7 +790,7 @@ fn other_first_steps(
     start: &GlsFit,
     greedy_fit: &GlsFit,
     opts: &DiagnoseOptions,
-    passed_first: &[(EffectParams, GlsFit, f64)],
+    passed_first: &[Passed],
 ) -> Option<(Vec<AddedEffect>, ModelSpec, GlsFit, EffectKind)> {
     let greedy_first = greedy.get(before.len()).map(|e| e.params.kind());
     let mut best_aic = akaike(greedy_fit, &greedy[before.len()..]);
@@ -812,19 +812,6 @@ fn other_first_steps(
         );
         let cur = polish(prob, offset, before.len(), &mut effs, cur);
         let a = akaike(&cur, &effs[before.len()..]);
-        if std::env::var_os("ALLANSCOPE_DEBUG_PAIRS").is_some() {
-            eprintln!(
-                "pairs: from {:?}: {:?} gap {:.3} aic {:.1} (greedy aic {:.1})",
-                p.0,
-                effs[before.len()..]
-                    .iter()
-                    .map(|e| e.params)
-                    .collect::<Vec<_>>(),
-                cur.gap(),
-                a,
-                best_aic
-            );
-        }
         if a < best_aic {
             best_aic = a;
             let spec = spec_from(prob, &effs, offset);
@@ -885,6 +872,9 @@ fn polish(
     fit
 }
 
+/// A candidate that passed its threshold at a step: its parameters, its fit, its score.
+type Passed = (EffectParams, GlsFit, f64);
+
 /// One greedy search of [`add_stationary`]; `forced_first` (a candidate that passed at the
 /// first step, with its fit) is taken as the first step in place of the scan's choice. Also
 /// returns the candidates that passed at the first step, each with its fit and score.
@@ -897,19 +887,14 @@ fn greedy_stationary(
     start: GlsFit,
     opts: &DiagnoseOptions,
     lr_first: bool,
-    forced_first: Option<(EffectParams, GlsFit, f64)>,
-) -> (
-    ModelSpec,
-    GlsFit,
-    Option<FirstScan>,
-    Vec<(EffectParams, GlsFit, f64)>,
-) {
+    forced_first: Option<Passed>,
+) -> (ModelSpec, GlsFit, Option<FirstScan>, Vec<Passed>) {
     let th = opts.thresholds;
     let mut spec = spec_from(prob, effects, offset);
     let mut cur = start;
     let mut added = 0;
     let mut first: Option<FirstScan> = None;
-    let mut passed_first: Vec<(EffectParams, GlsFit, f64)> = Vec::new();
+    let mut passed_first: Vec<Passed> = Vec::new();
     if let Some((params, f, _)) = forced_first {
         effects.push(AddedEffect {
             params,
