@@ -586,10 +586,12 @@ const KINDS: [(&str, Option<EffectKind>); 6] = [
 
 /// Kinds drawn only when asked (`--effects moving_average,...`): the filters beyond first order
 /// (docs/gap.md, "Low-pass filters beyond first order"), memory 1-10 tau0 as the first order's.
-const EXTRA_KINDS: [(&str, Option<EffectKind>); 3] = [
+const EXTRA_KINDS: [(&str, Option<EffectKind>); 4] = [
     ("moving_average", Some(EffectKind::MovingAverage)),
     ("second_order_filter", Some(EffectKind::SecondOrderFilter)),
     ("zero_phase_filter", Some(EffectKind::ZeroPhaseFilter)),
+    // Session 11 (bandgm): narrow-band noise, drawn by common::draw_effect_params.
+    ("band_noise", Some(EffectKind::BandNoise)),
 ];
 
 fn kind_name(k: Option<EffectKind>) -> &'static str {
@@ -718,6 +720,15 @@ fn oracle_z(
                 .zip(&prob.tau)
                 .map(|(g, t)| n2 * (g - 1.0 / t))
                 .collect();
+            oracle::curve_known_z(&prob, &sig)
+        }
+        EffectParams::BandNoise { sigma, .. } => {
+            let s2 = sigma * sigma;
+            let sig: Vec<f64> =
+                allanscope::gap::effects::params_column(&truth, &prob.ms, prob.tau0_s, prob.n_inc)
+                    .iter()
+                    .map(|g| s2 * g)
+                    .collect();
             oracle::curve_known_z(&prob, &sig)
         }
         EffectParams::Warmup {

@@ -130,6 +130,7 @@
 //!   simplex.rs             a two-parameter Nelder-Mead search (the second-order filter's polish)
 //!   thresholds.rs          the decision thresholds, calibrated by simulation
 //!   diagnose.rs            the diagnosis: effects chosen, verdict
+//!   band_noise.rs          the narrow-band noise candidate and its scan
 //!   alternatives.rs        another explanation that fits about as well
 //!   intervals.rs           95% intervals of the accepted effects' parameters
 //!   holdout.rs             the gap on a held-out run
@@ -148,6 +149,7 @@
 //!   noise.rs               streaming generators of the five terms
 //!   effects.rs             streaming generators of the effects beyond them
 //!   lowpass.rs             the output filters as streaming generators
+//!   band_noise.rs          narrow-band (resonant) noise: generator, exact AVAR
 //!   writer.rs              a simulated run as text columns
 //!   capture.rs             a simulated run as frames of a descriptor
 //! sink/                    where results go                                   records -> bytes

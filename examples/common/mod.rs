@@ -171,6 +171,13 @@ pub fn effect_toml(effect: Option<EffectParams>) -> String {
         Some(EffectParams::ZeroPhaseFilter { time_constant_s }) => {
             format!("zero_phase_filter = {{ time_constant = {time_constant_s:e} }}\n")
         }
+        Some(EffectParams::BandNoise {
+            frequency_hz,
+            sigma,
+            width_hz,
+        }) => format!(
+            "band_noise = {{ sigma = {sigma:e}, frequency = {frequency_hz:e}, width = {width_hz:e} }}\n"
+        ),
         Some(EffectParams::BiasJumps { .. }) | Some(EffectParams::Temperature { .. }) | None => {
             String::new()
         }
@@ -331,5 +338,26 @@ pub fn draw_effect_params(
             lo: 0.0,
             hi: 0.0,
         },
+        // Centre log-uniform from 30 periods per run to 0.4 of the sample rate, width 5-50% of
+        // it, the rms for the drawn peak ratio of its exact AVAR over the base's ADEV at the
+        // dense taus.
+        EffectKind::BandNoise => {
+            let f0 = log_uniform(rng, 30.0 / t_run, 0.4 / tau0);
+            let w = f0 * log_uniform(rng, 0.05, 0.5);
+            let n_inc = (t_run / tau0) as u64;
+            let peak = allanscope::gap::evidence::dense_ms(4, n_inc / 10)
+                .iter()
+                .map(|&m| {
+                    let tau = m as f64 * tau0;
+                    allanscope::sim::band_noise::band_noise_avar(1.0, f0, w, tau0, m).sqrt()
+                        / base_adev(tau)
+                })
+                .fold(0.0, f64::max);
+            EffectParams::BandNoise {
+                frequency_hz: f0,
+                sigma: rho / peak,
+                width_hz: w,
+            }
+        }
     }
 }

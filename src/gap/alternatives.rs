@@ -82,7 +82,7 @@ pub struct Alternative {
 /// The effect `p` with the amplitude of column `col` of `fit` (filters have none).
 fn params_at(p: &EffectParams, fit: &GlsFit, col: usize) -> EffectParams {
     let amp = fit.coef.get(col).copied().unwrap_or(0.0).max(0.0).sqrt();
-    EffectParams::from_shape(p.kind(), p.shape(), amp)
+    p.with_amplitude(amp)
 }
 
 /// The model of `effects` (the final offset of the time-domain effects kept) refitted.

@@ -31,10 +31,40 @@ fn phase_gcov(c: &[f64; 5], effects: &[EffectParams], t: f64) -> f64 {
                 let w = 2.0 * std::f64::consts::PI * frequency_hz;
                 g += amplitude * amplitude * (w * at).cos() / (2.0 * w * w);
             }
+            // Narrow-band noise as its continuous-time damped cosine `sigma^2 e^{-a t} cos(w t)`
+            // (`a = pi width`): `-sigma^2 Re(t / p - (1 - e^{-p t}) / p^2)`, `p = a - i w` (the
+            // Gauss-Markov term's form at `w = 0`); exact for blocks long against `tau0`.
+            EffectParams::BandNoise {
+                frequency_hz,
+                sigma,
+                width_hz,
+            } => {
+                g -= sigma * sigma * band_structure(width_hz, frequency_hz, at);
+            }
             _ => {}
         }
     }
     g
+}
+
+/// `Re(t / p - (1 - e^{-p t}) / p^2)` with `p = pi width - i 2 pi f` (half the phase's
+/// structure function of the band per unit variance).
+fn band_structure(width_hz: f64, frequency_hz: f64, t: f64) -> f64 {
+    let (pr, pi_) = (
+        std::f64::consts::PI * width_hz,
+        -2.0 * std::f64::consts::PI * frequency_hz,
+    );
+    let d = pr * pr + pi_ * pi_;
+    // 1/p
+    let (ir, ii) = (pr / d, -pi_ / d);
+    // 1/p^2
+    let (jr, ji) = (ir * ir - ii * ii, 2.0 * ir * ii);
+    // e^{-p t}
+    let e = (-pr * t).exp();
+    let (er, ei) = (e * (pi_ * t).cos(), -e * (pi_ * t).sin());
+    // t/p - (1 - e^{-pt}) / p^2
+    let (ar, ai) = (1.0 - er, -ei);
+    t * ir - (ar * jr - ai * ji)
 }
 
 /// Covariance (u^2/s^2) of the first differences of block-mean rates `d_i = b_{i+1} - b_i`

@@ -478,7 +478,12 @@ fn diagnose_curve_once(
         let stat_params: Vec<EffectParams> = effects
             .iter()
             .map(|e| e.params)
-            .filter(|p| matches!(p.kind(), EffectKind::GaussMarkov | EffectKind::Sinusoid))
+            .filter(|p| {
+                matches!(
+                    p.kind(),
+                    EffectKind::GaussMarkov | EffectKind::Sinusoid | EffectKind::BandNoise
+                )
+            })
             .collect();
         detect_steps(&resid, block_s, &c5, &stat_params, &th.jump_z)
     } else {
@@ -1027,6 +1032,9 @@ fn greedy_stationary(
                 best = Some(a.clone());
             }
         }
+        // A band nests a line, a hump and a resonance: weighed against them by its whole fit
+        // (docs/gap.md, "Narrow-band noise (session 11)").
+        best = super::band_noise::prefer_band(best, &passed_all);
         if added == 0 {
             first = Some(FirstScan {
                 flagged_g,

@@ -5,6 +5,7 @@
 
 use crate::model::lowpass::LowPass;
 use crate::model::terms;
+use crate::sim::band_noise::band_noise_avar;
 use serde::{Deserialize, Serialize};
 
 /// The kinds of effect docs/records.md names.
@@ -24,10 +25,14 @@ pub enum EffectKind {
     MovingAverage,
     SecondOrderFilter,
     ZeroPhaseFilter,
+    /// Narrow-band random noise: white noise through a resonator, a second-order Gauss-Markov
+    /// rate with the damped-cosine autocovariance (docs/gap.md, "Narrow-band noise";
+    /// [`crate::sim::band_noise`]).
+    BandNoise,
 }
 
 impl EffectKind {
-    pub const ALL: [EffectKind; 9] = [
+    pub const ALL: [EffectKind; 10] = [
         EffectKind::GaussMarkov,
         EffectKind::Sinusoid,
         EffectKind::OutputFilter,
@@ -37,12 +42,16 @@ impl EffectKind {
         EffectKind::MovingAverage,
         EffectKind::SecondOrderFilter,
         EffectKind::ZeroPhaseFilter,
+        EffectKind::BandNoise,
     ];
 
     /// Stationary effects are fitted on the curve as columns; warm-ups and jumps are found in
     /// time and enter the curve as fixed offsets.
     pub fn is_stationary(self) -> bool {
-        matches!(self, EffectKind::GaussMarkov | EffectKind::Sinusoid) || self.is_filter()
+        matches!(
+            self,
+            EffectKind::GaussMarkov | EffectKind::Sinusoid | EffectKind::BandNoise
+        ) || self.is_filter()
     }
 
     /// The unit's output filters: they reshape the N column instead of adding one.
@@ -68,6 +77,7 @@ impl EffectKind {
             EffectKind::MovingAverage => "moving_average",
             EffectKind::SecondOrderFilter => "second_order_filter",
             EffectKind::ZeroPhaseFilter => "zero_phase_filter",
+            EffectKind::BandNoise => "band_noise",
         }
     }
 
@@ -80,6 +90,8 @@ impl EffectKind {
             | EffectKind::Temperature
             | EffectKind::MovingAverage
             | EffectKind::ZeroPhaseFilter => 1,
+            // sigma, centre and width
+            EffectKind::BandNoise => 3,
             _ => 2,
         }
     }
@@ -145,6 +157,15 @@ pub enum EffectParams {
         #[serde(rename = "time_constant", deserialize_with = "nullable_f64")]
         time_constant_s: f64,
     },
+    /// Narrow-band noise: centre (Hz), rms (u/s), full width at half power (Hz).
+    BandNoise {
+        #[serde(rename = "frequency", deserialize_with = "nullable_f64")]
+        frequency_hz: f64,
+        #[serde(deserialize_with = "nullable_f64")]
+        sigma: f64,
+        #[serde(rename = "width", deserialize_with = "nullable_f64")]
+        width_hz: f64,
+    },
 }
 
 /// Reads a number the writer may have printed as `null` (serde_json writes a non-finite f64 so)
@@ -165,6 +186,7 @@ impl EffectParams {
             EffectParams::MovingAverage { .. } => EffectKind::MovingAverage,
             EffectParams::SecondOrderFilter { .. } => EffectKind::SecondOrderFilter,
             EffectParams::ZeroPhaseFilter { .. } => EffectKind::ZeroPhaseFilter,
+            EffectParams::BandNoise { .. } => EffectKind::BandNoise,
         }
     }
 
@@ -243,7 +265,26 @@ impl EffectParams {
             | EffectKind::ZeroPhaseFilter => {
                 EffectParams::from_lowpass(canonical_lowpass(kind, shape))
             }
+            EffectKind::BandNoise => EffectParams::BandNoise {
+                frequency_hz: shape,
+                sigma: amplitude,
+                width_hz: shape * super::band_noise::CANONICAL_RELATIVE_WIDTH,
+            },
         }
+    }
+
+    /// The same effect with its amplitude (u/s) set to `amplitude`, its shape parameters kept
+    /// (filters, jumps and the temperature unchanged).
+    pub fn with_amplitude(&self, amplitude: f64) -> Self {
+        let mut p = *self;
+        match &mut p {
+            EffectParams::GaussMarkov { sigma: a, .. }
+            | EffectParams::BandNoise { sigma: a, .. }
+            | EffectParams::Sinusoid { amplitude: a, .. }
+            | EffectParams::Warmup { amplitude: a, .. } => *a = amplitude,
+            _ => {}
+        }
+        p
     }
 
     /// The `params` of the record: each parameter's record name and value, in the record's
@@ -283,6 +324,15 @@ impl EffectParams {
                 ("damping", damping),
                 ("natural_frequency", natural_frequency_hz),
             ],
+            EffectParams::BandNoise {
+                frequency_hz,
+                sigma,
+                width_hz,
+            } => vec![
+                ("frequency", frequency_hz),
+                ("sigma", sigma),
+                ("width", width_hz),
+            ],
         }
     }
 
@@ -296,6 +346,7 @@ impl EffectParams {
                 ..
             } => natural_frequency_hz,
             EffectParams::ZeroPhaseFilter { time_constant_s } => time_constant_s,
+            EffectParams::BandNoise { frequency_hz, .. } => frequency_hz,
             EffectParams::GaussMarkov { tau_c_s, .. } => tau_c_s,
             EffectParams::Sinusoid { frequency_hz, .. } => frequency_hz,
             EffectParams::OutputFilter { time_constant_s } => time_constant_s,
@@ -310,7 +361,9 @@ impl EffectParams {
     /// temperature coefficient).
     pub fn amplitude(&self) -> f64 {
         match *self {
-            EffectParams::GaussMarkov { sigma, .. } => sigma,
+            EffectParams::GaussMarkov { sigma, .. } | EffectParams::BandNoise { sigma, .. } => {
+                sigma
+            }
             EffectParams::Sinusoid { amplitude, .. } => amplitude,
             EffectParams::OutputFilter { .. }
             | EffectParams::MovingAverage { .. }
@@ -393,6 +446,14 @@ pub fn effect_column(
                     canonical_lowpass(kind, shape).white_rate_avar(tau0_s, &[m])[0]
                 }
                 EffectKind::Warmup => terms::warmup_avar(1.0, shape, tau0_s, m, n_inc),
+                // In its canonical width (the full parameters: [`params_column`]).
+                EffectKind::BandNoise => band_noise_avar(
+                    1.0,
+                    shape,
+                    shape * super::band_noise::CANONICAL_RELATIVE_WIDTH,
+                    tau0_s,
+                    m,
+                ),
                 // Bias jumps have the second-order law of a rate random walk (terms.rs): the
                 // K column already holds them, so they add no column. The temperature's AVAR is
                 // the recorded temperature's own (gap::temperature), a fixed offset.
@@ -400,4 +461,17 @@ pub fn effect_column(
             }
         })
         .collect()
+}
+
+/// The column of the effect `p` with all its shape parameters at unit amplitude (AVAR per
+/// (u/s)^2 at each of `ms`): [`effect_column`] at `p`'s shape, the band with its own width.
+pub fn params_column(p: &EffectParams, ms: &[u64], tau0_s: f64, n_inc: u64) -> Vec<f64> {
+    match *p {
+        EffectParams::BandNoise {
+            frequency_hz,
+            width_hz,
+            ..
+        } => super::band_noise::column(frequency_hz, width_hz, ms, tau0_s),
+        _ => effect_column(p.kind(), p.shape(), ms, tau0_s, n_inc),
+    }
 }

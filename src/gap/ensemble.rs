@@ -36,6 +36,7 @@ pub fn base_of(ch: &ChannelModel) -> ChannelModel {
     ChannelModel {
         gauss_markov: Vec::new(),
         sinusoids: Vec::new(),
+        band_noise: Vec::new(),
         output_filter: None,
         lowpass: None,
         warmup: None,

@@ -4,7 +4,7 @@
 //! record says which effects carried and, plainly, when none did.
 
 use super::diagnose::{DiagnoseError, DiagnoseOptions, Diagnosis};
-use super::effects::{effect_column, EffectKind};
+use super::effects::{params_column, EffectKind};
 use super::evidence::EvidenceSnapshot;
 use super::problem::{GapProblem, ModelSpec};
 
@@ -84,7 +84,7 @@ pub fn holdout_gap(
             k if k.is_filter() => trial.filter = e.params.lowpass(),
             _ => {
                 let a = e.params.amplitude();
-                let col = effect_column(kind, e.params.shape(), &prob.ms, prob.tau0_s, prob.n_inc);
+                let col = params_column(&e.params, &prob.ms, prob.tau0_s, prob.n_inc);
                 if let Some(off) = trial.offset.as_mut() {
                     for (o, c) in off.iter_mut().zip(col) {
                         *o += a * a * c;

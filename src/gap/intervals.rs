@@ -38,6 +38,11 @@ fn shapes(p: &EffectParams) -> Vec<(&'static str, f64)> {
             ("natural_frequency", natural_frequency_hz),
             ("damping", damping),
         ],
+        EffectParams::BandNoise {
+            frequency_hz,
+            width_hz,
+            ..
+        } => vec![("frequency", frequency_hz), ("width", width_hz)],
         _ => Vec::new(),
     }
 }
@@ -53,13 +58,18 @@ fn scaled(p: &EffectParams, i: usize, f: f64) -> EffectParams {
         | EffectParams::OutputFilter { time_constant_s: x }
         | EffectParams::ZeroPhaseFilter { time_constant_s: x } => *x *= f,
         EffectParams::SecondOrderFilter {
-            natural_frequency_hz,
-            damping,
+            natural_frequency_hz: a,
+            damping: b,
+        }
+        | EffectParams::BandNoise {
+            frequency_hz: a,
+            width_hz: b,
+            ..
         } => {
             if i == 0 {
-                *natural_frequency_hz *= f
+                *a *= f
             } else {
-                *damping *= f
+                *b *= f
             }
         }
         _ => {}
@@ -154,7 +164,7 @@ pub fn effect_intervals(
             let mut out: Intervals = Vec::new();
             let kind = p.kind();
             if kind.is_stationary() && !kind.is_filter() {
-                let amp_name = if kind == EffectKind::GaussMarkov {
+                let amp_name = if matches!(kind, EffectKind::GaussMarkov | EffectKind::BandNoise) {
                     "sigma"
                 } else {
                     "amplitude"

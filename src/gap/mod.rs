@@ -22,6 +22,7 @@
 //! held-out run, [`holdout::holdout_gap`] on its snapshot.
 
 pub mod alternatives;
+pub mod band_noise;
 pub mod block_cov;
 pub mod diagnose;
 pub mod effects;

@@ -587,6 +587,8 @@ impl GapProblem {
                 hi: t_run / 3.0,
                 per_decade: 12.0,
             },
+            // Its centre (Hz); the width is scanned relative to it ([`super::band_noise`]).
+            EffectKind::BandNoise => super::band_noise::centre_grid(tmin, tmax, self.tau0_s),
             EffectKind::BiasJumps | EffectKind::Temperature => Grid {
                 lo: 1.0,
                 hi: 1.0,
@@ -603,7 +605,16 @@ impl GapProblem {
                 filter: Some(lp),
                 ..base.clone()
             },
-            None => self.spec_with(base, p.kind(), p.shape()),
+            None => {
+                let mut s = base.clone();
+                s.extra.push(super::effects::params_column(
+                    p,
+                    &self.ms,
+                    self.tau0_s,
+                    self.n_inc,
+                ));
+                s
+            }
         }
     }
 
@@ -619,6 +630,7 @@ impl GapProblem {
             EffectKind::MovingAverage | EffectKind::SecondOrderFilter => {
                 super::filter_scan::scan(self, base, kind)
             }
+            EffectKind::BandNoise => super::band_noise::scan(self, base),
             _ => {
                 let (sh, f) = self.scan(base, kind)?;
                 let amp = f.coef.last().copied().unwrap_or(0.0).max(0.0).sqrt();

@@ -65,6 +65,7 @@ impl Thresholds {
             EffectKind::MovingAverage => self.lr_crit_filters[0],
             EffectKind::SecondOrderFilter => self.lr_crit_filters[1],
             EffectKind::ZeroPhaseFilter => self.lr_crit_filters[2],
+            EffectKind::BandNoise => super::band_noise::LR_CRIT,
             EffectKind::Warmup | EffectKind::BiasJumps | EffectKind::Temperature => f64::INFINITY,
         }
     }

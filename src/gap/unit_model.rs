@@ -19,8 +19,8 @@ use crate::model::terms;
 use crate::model::units::IncrementUnit;
 use crate::sim::effects::TemperatureProfile;
 use crate::sim::model_file::{
-    BiasJumps, ChannelModel, GaussMarkov, Outliers, OutputFilterSpec, SimModel, Sinusoid, Warmup,
-    FLICKER_BAND_DECADES_DEFAULT,
+    BandNoise, BiasJumps, ChannelModel, GaussMarkov, Outliers, OutputFilterSpec, SimModel,
+    Sinusoid, Warmup, FLICKER_BAND_DECADES_DEFAULT,
 };
 use crate::sim::noise::FlickerBank;
 
@@ -81,6 +81,7 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
         temperature_coefficient: facts.temperature_coefficient,
         gauss_markov: Vec::new(),
         sinusoids: Vec::new(),
+        band_noise: Vec::new(),
         output_filter: None,
         lowpass: None,
         warmup: None,
@@ -105,6 +106,18 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
                 amplitude: input_amplitude(amplitude, frequency_hz, filter.as_ref(), tau0_s),
                 frequency_hz,
                 phase_rad: 0.0,
+            }),
+            // Named at the output like a sinusoid: its rms before the filter is the named one
+            // over the filter's gain at its centre (exact for a band narrow against the
+            // filter's response).
+            EffectParams::BandNoise {
+                frequency_hz,
+                sigma,
+                width_hz,
+            } => ch.band_noise.push(BandNoise {
+                sigma: input_amplitude(sigma, frequency_hz, filter.as_ref(), tau0_s),
+                frequency_hz,
+                width_hz,
             }),
             EffectParams::OutputFilter { time_constant_s } => {
                 ch.output_filter = Some(OutputFilterSpec { time_constant_s })

@@ -7,7 +7,7 @@
 //! output. Frame encoding is left to the frame layer, which can drive [`Simulator::next_step`].
 //!
 //! Per channel and step the signal is built in this order: rate-domain terms integrated over
-//! the step (bias, stand, N, K, R, B, Gauss-Markov, sinusoids, warm-up, bias jumps, temperature
+//! the step (bias, stand, N, K, R, B, Gauss-Markov, sinusoids, narrow-band noise, warm-up, bias jumps, temperature
 //! bias) -> the unit's output filter (first order, or one of [`lowpass`]) -> outliers (spikes on single rate samples) -> white phase Q
 //! -> rounding of the rate sample (`rate_lsb`, no carry) -> quantization with the remainder
 //! carried (integer counts when `lsb` is set). Each channel draws from its own Xoshiro256++ stream
@@ -21,6 +21,7 @@
 //! call `ln`/`exp`. Both can differ in the last bit between math libraries; quantized channels
 //! (integer counts) hide such differences except with vanishing probability.
 
+pub mod band_noise;
 pub mod effects;
 pub mod lowpass;
 pub mod model_avar;
@@ -161,6 +162,7 @@ struct ChannelSim {
     flicker: Option<FlickerState>,
     gms: Vec<IntegratedGaussMarkov>,
     sins: Vec<SinusoidGen>,
+    bands: Vec<band_noise::BandNoiseGen>,
     warmup: Option<WarmupGen>,
     jumps: Option<BiasJumpsGen>,
     temp_coeff: f64,
@@ -206,6 +208,18 @@ impl ChannelSim {
             .iter()
             .map(|s| SinusoidGen::new(s.amplitude, s.frequency_hz, s.phase_rad, tau0_s))
             .collect();
+        // Drawn after every earlier generator's start, so that a model without bands draws
+        // exactly what it drew before.
+        let bands = c
+            .band_noise
+            .iter()
+            .filter(|b| b.sigma > 0.0)
+            .map(|b| {
+                let x = normal(&mut rng);
+                let y = normal(&mut rng);
+                band_noise::BandNoiseGen::new(b, tau0_s, x, y)
+            })
+            .collect();
         let warmup = c
             .warmup
             .map(|w| WarmupGen::new(w.amplitude, w.time_constant_s, tau0_s));
@@ -226,6 +240,7 @@ impl ChannelSim {
             flicker,
             gms,
             sins,
+            bands,
             warmup,
             jumps,
             temp_coeff: c.temperature_coefficient,
@@ -271,6 +286,10 @@ impl ChannelSim {
         }
         for s in &mut self.sins {
             d += s.step();
+        }
+        for b in &mut self.bands {
+            let (w1, w2) = (normal(rng), normal(rng));
+            d += b.step(w1, w2);
         }
         if let Some(w) = &mut self.warmup {
             d += w.step();

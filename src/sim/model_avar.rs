@@ -49,6 +49,12 @@ impl SimModel {
         for s in &c.sinusoids {
             v += gain(s.frequency_hz) * terms::sinusoid_avar(s.amplitude, s.frequency_hz, tau);
         }
+        // A band behind a filter: its gain at the centre (exact for a band narrow against the
+        // filter's response).
+        for b in &c.band_noise {
+            v += gain(b.frequency_hz)
+                * super::band_noise::band_noise_avar(b.sigma, b.frequency_hz, b.width_hz, tau0, m);
+        }
         if let Some(w) = c.warmup {
             v += terms::warmup_avar(w.amplitude, w.time_constant_s, tau0, m, n_increments);
         }

@@ -119,6 +119,15 @@ fn channel_toml(s: &mut String, c: &ChannelModel) {
             num(x.phase_rad)
         );
     }
+    for x in &c.band_noise {
+        let _ = writeln!(
+            s,
+            "[[channel.band_noise]]\nsigma = {}\nfrequency = {}\nwidth = {}",
+            num(x.sigma),
+            num(x.frequency_hz),
+            num(x.width_hz)
+        );
+    }
     if let Some(f) = c.output_filter {
         let _ = writeln!(
             s,
@@ -228,6 +237,7 @@ K = 2.5e-5
 R = -1.0e-9
 gauss_markov = [{ sigma = 0.1, tau_c = 2.0 }, { sigma = 0.01, tau_c = 300.0 }]
 sinusoid = [{ amplitude = 0.05, frequency = 1.3, phase = 0.25 }]
+band_noise = [{ sigma = 0.3, frequency = 20.7, width = 2.0 }, { sigma = 0.01, frequency = 49.0, width = 0.5 }]
 output_filter = { time_constant = 0.01 }
 warmup = { amplitude = -0.5, time_constant = 600.0 }
 bias_jumps = { mean_interval = 1800.0, rms_size = 0.01 }

@@ -49,6 +49,14 @@ fn known(kind: &str) -> Option<(&'static str, &'static [ParamSpec])> {
                 ("frequency", "frequency", Dim::Freq),
             ],
         ),
+        "band_noise" => (
+            "narrow-band random noise (resonance)",
+            &[
+                ("sigma", "rms", Dim::Rate),
+                ("frequency", "centre", Dim::Freq),
+                ("width", "width (half power)", Dim::Freq),
+            ],
+        ),
         "output_filter" => (
             "output low-pass filter",
             &[("time_constant", "time constant", Dim::Time)],

@@ -3,6 +3,7 @@
 //! One test binary per stage; each topic is a module of it.
 
 mod alternatives;
+mod band_noise;
 mod diagnosis;
 mod families;
 mod filter_tail;

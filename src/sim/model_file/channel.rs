@@ -1,11 +1,11 @@
 //! One `[[channel]]` table of a model file: its name and unit, the five terms, the flicker band,
-//! the axis, and every effect (temperature coefficient, Gauss-Markov, sinusoids, output filter
+//! the axis, and every effect (temperature coefficient, Gauss-Markov, sinusoids, narrow-band noise, output filter
 //! or another low-pass, warm-up, bias jumps, rate quantization, outliers), into a
 //! [`ChannelModel`].
 
 use super::keys::Keys;
 use super::{
-    BiasJumps, ChannelModel, FlickerBank, GaussMarkov, IncrementUnit, LowPass, Outliers,
+    BandNoise, BiasJumps, ChannelModel, FlickerBank, GaussMarkov, IncrementUnit, LowPass, Outliers,
     OutputFilterSpec, Sinusoid, Warmup, FLICKER_BAND_DECADES_DEFAULT,
 };
 use crate::toml_check::Collector;
@@ -159,6 +159,32 @@ pub(super) fn parse_channel(
             phase_rad,
         });
     }
+    let mut band_noise = Vec::new();
+    for (p, tt) in k.tables("band_noise", errs) {
+        let mut e = Keys::new(tt, &p);
+        let s = e.num_pos("sigma", false, errs);
+        let sigma = e.required("sigma", s, errs);
+        let f = e.num_pos("frequency", true, errs);
+        let frequency_hz = e.required("frequency", f, errs);
+        let w = e.num_pos("width", true, errs);
+        let width_hz = e.required("width", w, errs);
+        if f.is_some_and(|f| f >= 0.5 / tau0_s) {
+            errs.bad(
+                e.path("frequency"),
+                format!(
+                    "{} Hz is not below Nyquist ({} Hz at tau0 = {tau0_s} s); a band above it is seen at its alias",
+                    frequency_hz,
+                    0.5 / tau0_s
+                ),
+            );
+        }
+        e.finish(errs);
+        band_noise.push(BandNoise {
+            sigma,
+            frequency_hz,
+            width_hz,
+        });
+    }
     let output_filter = k.table("output_filter", errs).map(|(p, tt)| {
         let mut e = Keys::new(tt, &p);
         let tc = e.num_pos("time_constant", true, errs);
@@ -229,6 +255,7 @@ pub(super) fn parse_channel(
         temperature_coefficient,
         gauss_markov,
         sinusoids,
+        band_noise,
         output_filter,
         lowpass,
         warmup,

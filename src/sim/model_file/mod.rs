@@ -33,6 +33,7 @@
 //! temperature_coefficient = 0.01  # optional: u/s per degC of T(t) - reference_c
 //! gauss_markov = [{ sigma = 0.1, tau_c = 2.0 }]                     # u/s, s (table or list)
 //! sinusoid = [{ amplitude = 0.05, frequency = 1.3, phase = 0.0 }]   # u/s, Hz, rad (table or list)
+//! band_noise = [{ sigma = 0.3, frequency = 20.7, width = 2.0 }]     # u/s, Hz (< Nyquist), Hz
 //! output_filter = { time_constant = 0.01 }                          # s
 //! moving_average = { taps = 16, stages = 2 }     # or, in place of output_filter (one filter):
 //! second_order_filter = { natural_frequency = 20.0, damping = 0.7 }  # Hz, 1
@@ -52,6 +53,7 @@ use std::path::Path;
 
 use crate::toml_check::{Collector, ConfigErrors};
 
+pub use super::band_noise::BandNoise;
 use super::effects::TemperatureProfile;
 use super::noise::FlickerBank;
 use crate::model::lowpass::LowPass;
@@ -117,6 +119,8 @@ pub struct ChannelModel {
     pub temperature_coefficient: f64,
     pub gauss_markov: Vec<GaussMarkov>,
     pub sinusoids: Vec<Sinusoid>,
+    /// Narrow-band random noise terms ([`super::band_noise`]), added before the filter.
+    pub band_noise: Vec<BandNoise>,
     pub output_filter: Option<OutputFilterSpec>,
     /// A low-pass beyond first order (moving average, second order, zero phase), in place of
     /// `output_filter` ([`crate::model::lowpass`]; docs/gap.md, "Low-pass filters beyond first
