@@ -13,8 +13,10 @@ use std::f64::consts::PI;
 
 /// Longest moving average scanned (taps).
 pub const MAX_TAPS: u32 = 256;
-/// Stages of the moving average scanned: one (boxcar) and two (triangular, Bartlett).
-pub const STAGES: [u32; 2] = [1, 2];
+/// Stages of the moving average scanned: one (boxcar), two (triangular, Bartlett), three (the
+/// sinc^3 of a third-order CIC decimator, the commonest MEMS decimation filter) and four, all the
+/// model and the simulator take (docs/gap.md, "Low-pass filters beyond first order").
+pub const STAGES: [u32; 4] = [1, 2, 3, 4];
 /// Damping range of the second-order scan, and points per decade.
 pub const DAMPING_RANGE: (f64, f64) = (0.1, 5.0);
 const DAMPING_PER_DECADE: f64 = 6.0;

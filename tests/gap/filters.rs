@@ -55,6 +55,34 @@ fn moving_averages_are_named_with_taps_and_stages() {
     }
 }
 
+/// A third-order CIC decimator's sinc^3 (three cascaded moving averages of 4 taps) on white
+/// rate noise alone at 400 Hz for 1500 s (held3's session-11 `cicgyro` reproduction): the
+/// taps and stages exact, nothing else named, `explained`. On cfae409 the scan tried one and
+/// two stages only: `moving_average` 5x2 and a 37 Hz sinusoid, `unexplained`, G 26945 -> 210.
+#[test]
+fn a_sinc_cubed_decimator_is_three_stages() {
+    let tau0 = 0.0025;
+    let text = format!(
+        "tau0_s = {tau0}\n[[channel]]\nname = \"g\"\nunit = \"deg\"\nN = 0.005\n\
+         moving_average = {{ taps = 4, stages = 3 }}\n"
+    );
+    let m = SimModel::from_toml_str(&text, std::path::Path::new("<test>")).expect("model");
+    let mut sim = Simulator::new(&m, 11109);
+    let mut inc = vec![0.0; (1500.0 / tau0) as usize];
+    sim.fill_channel(0, &mut inc);
+    let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
+    let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
+    let named: Vec<EffectParams> = d.effects.iter().map(|e| e.params).collect();
+    assert_eq!(
+        named,
+        vec![EffectParams::MovingAverage { taps: 4, stages: 3 }],
+        "G {} -> {}",
+        d.gap_before,
+        d.gap_after
+    );
+    assert_eq!(d.verdict, allanscope::gap::Verdict::Explained);
+}
+
 /// An underdamped second-order low-pass (8 Hz, damping 0.3): natural frequency within 5%,
 /// damping within 10%.
 #[test]

@@ -11,6 +11,7 @@ mod filters;
 mod gm_or_filter;
 mod holdout_carry;
 mod limit_cycle;
+mod line_behind_filter;
 mod mixture;
 mod oracle;
 mod outliers;
