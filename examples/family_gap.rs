@@ -116,7 +116,7 @@
 //!   a constant input (gravity's projection) uniform in [-9.81, 9.81] m/s^2.
 //!
 //! Held-out families of session 11 (defined at 01:28 UTC on 2026-11-25 in the helpers' log,
-//! /work/notes/s11/diag-sync.md, before any run of them; `--families unseen11`; nothing tuned
+//! docs/repro/session11/helpers-log.md, before any run of them; `--families unseen11`; nothing tuned
 //! on them):
 //! - `mimu`: a consumer MEMS IMU gyro at an ODR of 1-2 kHz, ARW 0.15-1 deg/sqrt(h), flicker 3-30
 //!   deg/h, K 1-10 deg/h/sqrt(h), behind its digital low-pass (a `second_order_filter`, natural
