@@ -880,6 +880,25 @@ fn polish(
 /// A candidate that passed its threshold at a step: its parameters, its fit, its score.
 type Passed = (EffectParams, GlsFit, f64);
 
+/// Adds the effect `params` (fitted as `f`) to the search's model: recorded with the gap after
+/// it and its drop of `r' S^-1 r` from `cur`, then taken into `spec` and `cur`.
+fn take_step(
+    prob: &GapProblem,
+    effects: &mut Vec<AddedEffect>,
+    spec: &mut ModelSpec,
+    cur: &mut GlsFit,
+    params: EffectParams,
+    f: GlsFit,
+) {
+    effects.push(AddedEffect {
+        params,
+        gap_after: f.gap(),
+        delta_chi2: cur.chi2 - f.chi2,
+    });
+    *spec = prob.spec_with_params(spec, &params);
+    *cur = f;
+}
+
 /// One greedy search of [`add_stationary`]; `forced_first` (a candidate that passed at the
 /// first step, with its fit) is taken as the first step in place of the scan's choice. Also
 /// returns the candidates that passed at the first step, each with its fit and score.
@@ -901,13 +920,7 @@ fn greedy_stationary(
     let mut first: Option<FirstScan> = None;
     let mut passed_first: Vec<Passed> = Vec::new();
     if let Some((params, f, _)) = forced_first {
-        effects.push(AddedEffect {
-            params,
-            gap_after: f.gap(),
-            delta_chi2: cur.chi2 - f.chi2,
-        });
-        spec = prob.spec_with_params(&spec, &params);
-        cur = f;
+        take_step(prob, effects, &mut spec, &mut cur, params, f);
         added += 1;
     }
     while added < opts.max_effects && (cur.gap() > th.gap_crit || (lr_first && added == 0)) {
@@ -1045,13 +1058,7 @@ fn greedy_stationary(
         let Some((params, f, _)) = best else {
             break;
         };
-        effects.push(AddedEffect {
-            params,
-            gap_after: f.gap(),
-            delta_chi2: cur.chi2 - f.chi2,
-        });
-        spec = prob.spec_with_params(&spec, &params);
-        cur = f;
+        take_step(prob, effects, &mut spec, &mut cur, params, f);
         added += 1;
     }
     (spec, cur, first, passed_first)
