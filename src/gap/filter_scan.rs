@@ -186,12 +186,11 @@ fn scan_second_order(
         lf = golden(|x| fit(lp_of(x, lz)), lf - df, lf + df);
         lz = golden(|x| fit(lp_of(lf, x)), lz - dz, lz + dz);
     }
-    let lp = lp_of(lf, lz);
-    let best = better(best, lp, fit(lp));
     // The valley of r' S^-1 r runs diagonally in (ln f, ln zeta) (a lower frequency with a lower
     // damping keeps the resonance's shape), so narrow on a long precise curve that the golden
     // sections stop far from its floor (a consumer IMU's filter at 2 pi f tau0 ~ 1: G 45 at the
-    // polished point, 2.5 at the true one): a simplex follows it from there.
+    // polished point, 2.5 at the true one): a simplex follows it from there. Its best is never
+    // worse than the polished point it starts from, so that point needs no fit of its own here.
     let ([lf, lz], _) = nelder_mead_2d(
         |p| fit(lp_of(p[0], p[1])).map_or(f64::INFINITY, |r| r.chi2),
         [lf, lz],
