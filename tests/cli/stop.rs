@@ -104,13 +104,11 @@ fn spawn_logged(cmd: &mut std::process::Command, stdout: Stdio) -> (Child, mpsc:
     (child, rx)
 }
 
-/// Everything the child writes to its standard output, until it closes it.
-fn read_stdout(child: &mut Child) -> String {
+/// Everything written to one of the child's pipes (`child.stdout.take()` or
+/// `child.stderr.take()`), until the child closes it.
+fn read_pipe(pipe: Option<impl Read>) -> String {
     let mut text = String::new();
-    child
-        .stdout
-        .take()
-        .expect("stdout")
+    pipe.expect("a piped stream")
         .read_to_string(&mut text)
         .expect("read");
     text
@@ -148,7 +146,7 @@ fn replay_interims(pause: Duration) -> (Vec<f64>, usize) {
         .spawn()
         .expect("spawn");
     std::thread::sleep(pause);
-    let text = read_stdout(&mut child);
+    let text = read_pipe(child.stdout.take());
     assert!(child.wait().expect("wait").success());
     let recs = parse_lines(text.as_bytes());
     let t = recs
@@ -320,7 +318,7 @@ fn sigint_ends_a_replay_held_by_back_pressure() {
     let (mut child, _rx) = stalled_replay();
     signal(&child, "-INT");
     let t0 = Instant::now();
-    let text = read_stdout(&mut child);
+    let text = read_pipe(child.stdout.take());
     let (code, _) = wait_at_most(&mut child, Duration::from_secs(10));
     assert!(t0.elapsed() < Duration::from_secs(2), "{:?}", t0.elapsed());
     assert_eq!(code, Some(1));
@@ -453,18 +451,6 @@ fn fifo(name: &str) -> std::path::PathBuf {
     fifo
 }
 
-/// Standard error of a child that has ended.
-fn stderr_of(child: &mut Child) -> String {
-    let mut err = String::new();
-    child
-        .stderr
-        .take()
-        .expect("stderr")
-        .read_to_string(&mut err)
-        .expect("read");
-    err
-}
-
 #[cfg(unix)]
 #[test]
 fn the_first_sigint_ends_a_run_waiting_to_open_its_fifo() {
@@ -484,7 +470,7 @@ fn the_first_sigint_ends_a_run_waiting_to_open_its_fifo() {
         std::thread::sleep(Duration::from_millis(500));
         signal(&child, "-INT");
         let (code, took) = wait_at_most(&mut child, Duration::from_secs(15));
-        let err = stderr_of(&mut child);
+        let err = read_pipe(child.stderr.take());
         assert_eq!(code, Some(1), "{format:?}: {err}");
         assert!(took < Duration::from_secs(2), "{format:?}: {took:?}");
         assert!(
@@ -524,6 +510,6 @@ fn a_second_sigint_ends_a_run_blocked_reading_an_idle_fifo() {
     drop(writer);
     assert_eq!(code, Some(1));
     assert!(took < Duration::from_secs(8), "{took:?}");
-    let err = stderr_of(&mut child);
+    let err = read_pipe(child.stderr.take());
     assert!(err.contains("SIGINT twice"), "{err}");
 }
