@@ -60,20 +60,251 @@ pub fn filtered_sigma(lp: &LowPass, tau0_s: f64, n2: f64) -> f64 {
 }
 
 /// The AVAR (u^2/s^2) at each cluster size of `ms` of the error of rounding to the step
-/// `step` (u/s) the rate of a unit with white rate `N^2 = n2` (u^2/s) filtered by `lp` (see the
-/// module doc). Sums of `n` errors have variance `n R_0 + 2 sum_{0<k<n} (n - k) R_k` (in
-/// samples), and `AVAR(m) = (4 S(m) - S(2m)) / (2 m^2)`.
+/// `step` (u/s) the rate of a unit with white rate `N^2 = n2` (u^2/s) filtered by `lp`,
+/// averaged over where the unit's mean falls between two steps (see the module doc). Sums of `n`
+/// errors have variance `n R_0 + 2 sum_{0<k<n} (n - k) R_k` (in samples), and
+/// `AVAR(m) = (4 S(m) - S(2m)) / (2 m^2)`.
 pub fn rounding_avar(lp: &LowPass, tau0_s: f64, step: f64, n2: f64, ms: &[u64]) -> Vec<f64> {
+    rounding_avar_on_grid(lp, tau0_s, step, n2, None, ms)
+}
+
+/// Harmonics of the mean's position on the grid the model keeps: the `p`-th is damped by at
+/// least `exp(-x p^2 / 4)`, below 1e-12 of the step's square at `p = 8` once `x >= 1.7`
+/// (`sigma >= 0.21 L`), and [`MIN_SIGMA_STEPS_ON_GRID`] is above that.
+const GRID_HARMONICS: usize = 8;
+
+/// The filtered sample's noise, in steps, down to which the model is used when the run's block
+/// means say where its mean falls on the grid ([`grid_cosines`]): the mean-dependent terms are
+/// then in the model, which matches simulated runs within 1% at 0.25 steps and 2% at 0.2
+/// (docs/gap.md, "Rounding after a filter (session 12)"; docs/repro/session12/rr_grid.py).
+pub const MIN_SIGMA_STEPS_ON_GRID: f64 = 0.25;
+
+/// The largest variance, in steps squared, of a block mean's estimate of the mean's position,
+/// times `2 pi^2`, at which the block means are said to resolve it: the first harmonic's
+/// average is then damped by the estimate's noise by at most `exp(-0.25)` before it is
+/// corrected ([`grid_cosines`]).
+const MAX_GRID_BLUR: f64 = 0.25;
+
+/// Where a unit's mean falls on the rounding grid, as the run shows it: the mean rate of each
+/// block of the run (u/s, in time order) and the blocks' length (s). The mean may drift over
+/// the run; each block holds its own position ([`grid_cosines`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct GridPosition {
+    pub block_means: Vec<f64>,
+    pub block_s: f64,
+}
+
+/// `sum_{n >= 1} (-1)^n sin(2 pi n v) exp(-x n^2 / 2) / (pi n)` and its derivative in `v`:
+/// the mean rounding error, in steps, of a Gaussian sample of mean `v` steps
+/// (`x = 4 pi^2 sigma^2 / L^2`; the sawtooth's Fourier series, module doc).
+fn mean_error_steps(v: f64, x: f64) -> (f64, f64) {
+    let (mut e, mut de) = (0.0, 0.0);
+    for n in 1..=GRID_HARMONICS {
+        let nf = n as f64;
+        let w = (-0.5 * x * nf * nf).exp();
+        if w < 1e-16 {
+            break;
+        }
+        let sign = if n % 2 == 0 { 1.0 } else { -1.0 };
+        let a = 2.0 * PI * nf * v;
+        e += sign * a.sin() * w / (PI * nf);
+        de += sign * 2.0 * a.cos() * w;
+    }
+    (e, de)
+}
+
+/// The averages over the run's blocks of `cos(2 pi p mu_b / L)`, `p = 1..=GRID_HARMONICS`, with
+/// `mu_b` the mean of block `b` against the grid of step `L = step` (u/s), for a filtered
+/// sample noise `sigma = sqrt(sigma2)`: None when the block means do not resolve it.
+///
+/// A block's mean rate is `mu_b + E[e | mu_b]`, the rounding's mean error
+/// `(L / pi) sum_n (-1)^n sin(2 pi n mu / L) exp(-x n^2 / 2)` ([`mean_error_steps`]), which is
+/// increasing in `mu_b` (its derivative is a theta function, positive), so `mu_b` is found by
+/// Newton's method from the block's mean, modulo `L`. Each block mean carries the noise of a
+/// `T_b`-second average of the white rate, variance `N^2 / T_b`, that is `N^2 / (T_b f'^2)` on
+/// `mu_b` (`f'` the derivative above), which damps the average of `cos(p phi)` by
+/// `exp(-2 pi^2 p^2 var / L^2)`; that factor is taken back out, and the averages are clamped to
+/// [-1, 1]. Not resolved: no blocks, or the damping of the first harmonic in some block beyond
+/// `exp(-MAX_GRID_BLUR)`.
+pub fn grid_cosines(
+    grid: &GridPosition,
+    step: f64,
+    sigma2: f64,
+    n2: f64,
+) -> Option<[f64; GRID_HARMONICS]> {
+    if grid.block_means.is_empty() || !(grid.block_s > 0.0 && step > 0.0 && sigma2 > 0.0) {
+        return None;
+    }
+    let x = 4.0 * PI * PI * sigma2 / (step * step);
+    let var_mean = n2.max(0.0) / grid.block_s / (step * step);
+    let mut acc = [0.0; GRID_HARMONICS];
+    let mut count = 0usize;
+    for &m in &grid.block_means {
+        if !m.is_finite() {
+            continue;
+        }
+        let u = m / step - (m / step).round();
+        // Newton's method on the increasing f(v) = v + E[e](v) = u over [-1/2, 1/2], kept in
+        // the bracket (f(+-1/2) = +-1/2).
+        let (mut lo, mut hi, mut v) = (-0.5, 0.5, u);
+        let mut slope = 1.0;
+        for _ in 0..30 {
+            let (e, de) = mean_error_steps(v, x);
+            let f = v + e - u;
+            slope = 1.0 + de;
+            if f > 0.0 {
+                hi = v;
+            } else {
+                lo = v;
+            }
+            let next = v - f / slope.max(1e-12);
+            let next = if next > lo && next < hi {
+                next
+            } else {
+                0.5 * (lo + hi)
+            };
+            if (next - v).abs() < 1e-12 {
+                v = next;
+                break;
+            }
+            v = next;
+        }
+        let blur = 2.0 * PI * PI * var_mean / (slope * slope).max(1e-12);
+        if blur > MAX_GRID_BLUR {
+            return None;
+        }
+        for (p, a) in acc.iter_mut().enumerate() {
+            let pf = (p + 1) as f64;
+            *a += (2.0 * PI * pf * v).cos() * (blur * pf * pf).min(50.0).exp();
+        }
+        count += 1;
+    }
+    if count == 0 {
+        return None;
+    }
+    Some(acc.map(|a| (a / count as f64).clamp(-1.0, 1.0)))
+}
+
+/// The harmonic `p` of the mean-dependent part of the rounding error's autocovariance at a lag
+/// where the filtered samples' correlation is `r`:
+/// `sum_{n + m = p; n, m != 0} [exp(-x/2 (n^2 + m^2 + 2 n m r)) - exp(-x/2 (n^2 + m^2))] / (n m)`.
+/// The first exponent is `-x p^2 / 2 + x n m (1 - r)`, so for `n m < 0` the terms decay as
+/// `exp(-x |n m| (1 - r))`: the sum runs while that is above `e^-45`. At `r = 1` (lag 0) that
+/// part is `exp(-x p^2 / 2) sum 1 / (n m) = -2 exp(-x p^2 / 2) / p^2` (the Fourier coefficient
+/// of the squared sawtooth).
+fn pair_sum(p: usize, x: f64, r: f64) -> f64 {
+    let pi = p as i64;
+    let one_minus = (1.0 - r).max(0.0);
+    let lag0 = one_minus < 1e-12;
+    let reach = if lag0 {
+        0.0
+    } else {
+        (45.0 / (x * one_minus)).sqrt()
+    };
+    // the second exponent needs |n| up to sqrt(90 / x) at most
+    let nn = (reach.max((90.0 / x).sqrt()).ceil() as i64 + pi + 2).min(4000);
+    let top = -0.5 * x * (p * p) as f64;
+    let mut s = if lag0 {
+        -2.0 * top.exp() / (p * p) as f64
+    } else {
+        0.0
+    };
+    for n in -nn..=nn + pi {
+        let m = pi - n;
+        if n == 0 || m == 0 {
+            continue;
+        }
+        let nm = (n * m) as f64;
+        let e2 = (-0.5 * x * ((n * n + m * m) as f64)).exp();
+        let e1 = if lag0 {
+            0.0
+        } else {
+            (top + x * nm * one_minus).exp()
+        };
+        s += (e1 - e2) / nm;
+    }
+    s
+}
+
+/// The AVAR (u^2/s^2) at each cluster size of `ms` that the rounding to the step `step` (u/s)
+/// adds to the rate of a unit with white rate `N^2 = n2` (u^2/s) filtered by `lp`: the
+/// rounding error's own AVAR, and, when `grid` resolves where the unit's mean falls between
+/// two steps ([`grid_cosines`]), the terms that depend on it, so that the rounded output's AVAR
+/// is the filtered rate's plus this. None or unresolved: the error's AVAR averaged over the
+/// mean's position ([`rounding_avar`]).
+///
+/// With `s = mu + g`, `g` Gaussian of variance `sigma^2` and correlation `r_k` between samples
+/// `k` apart, and the error `e(s) = sum_{n != 0} c_n exp(i 2 pi n s / L)`,
+/// `c_n = L (-1)^n / (2 pi i n)` (the sawtooth), the pair's characteristic function gives
+/// (Widrow and Kollar 2008, ch. 4-6, for the method):
+/// - the error with the signal: `E[g_i e_j] = 2 sigma^2 r_k sum_{p >= 1} (-1)^p
+///   cos(2 pi p mu / L) exp(-x p^2 / 2)`, twice in the output's covariance (`e_i g_j` too), so
+///   a multiple `4 sum_p (-1)^p A_p exp(-x p^2 / 2)` of the filtered rate's own AVAR (with the
+///   mean on a step and `sigma = 0.35 L` that is -0.36: the dead band holds the output);
+/// - the error's covariance, `sum_{n, m} c_n c_m exp(i 2 pi (n + m) mu / L)
+///   [exp(-x/2 (n^2 + m^2 + 2 n m r_k)) - exp(-x/2 (n^2 + m^2))]`: the terms `n + m = 0` are
+///   the averaged model, and each `p = n + m != 0` adds `2 A_p (-L^2 (-1)^p / (4 pi^2))`
+///   times [`pair_sum`];
+///
+/// with `A_p` the run's average of `cos(2 pi p mu_b / L)` over its blocks ([`grid_cosines`]):
+/// every term is linear in `exp(i 2 pi p mu / L)`, so the blocks' mixture is the average of
+/// their covariances.
+pub fn rounding_avar_on_grid(
+    lp: &LowPass,
+    tau0_s: f64,
+    step: f64,
+    n2: f64,
+    grid: Option<&GridPosition>,
+    ms: &[u64],
+) -> Vec<f64> {
     let rho = lp.autocorrelation(tau0_s);
     let rho0 = rho.first().copied().unwrap_or(1.0);
     let sigma2 = n2.max(0.0) * rho0 / tau0_s;
     let x = 4.0 * PI * PI * sigma2 / (step * step);
     let c = step * step / (2.0 * PI * PI);
     let tail = theta_sum(x);
+    let cosines = grid.and_then(|g| grid_cosines(g, step, sigma2, n2));
+    // harmonics that matter: |A_p| exp(-x p^2 / 4) above 1e-12
+    let harmonics: Vec<(usize, f64)> = cosines
+        .map(|a| {
+            (1..=GRID_HARMONICS)
+                .map(|p| (p, a[p - 1]))
+                .filter(|&(p, a)| a.abs() * (-0.25 * x * (p * p) as f64).exp() > 1e-12)
+                .collect()
+        })
+        .unwrap_or_default();
     let r: Vec<f64> = rho
         .iter()
-        .map(|&v| c * (theta_sum(x * (1.0 - v / rho0).max(0.0)) - tail))
+        .map(|&v| {
+            let rk = v / rho0;
+            let mut cov = c * (theta_sum(x * (1.0 - rk).max(0.0)) - tail);
+            if rk.abs() > 1e-12 {
+                for &(p, a) in &harmonics {
+                    let sign = if p % 2 == 0 { 1.0 } else { -1.0 };
+                    cov -= 2.0 * a * sign * step * step / (4.0 * PI * PI) * pair_sum(p, x, rk);
+                }
+            }
+            cov
+        })
         .collect();
     // the errors' AVAR of averages of m samples (unit sample time: S(n) in samples)
-    avar_from_autocovariance(&r, 1.0, ms)
+    let mut out = avar_from_autocovariance(&r, 1.0, ms);
+    if !harmonics.is_empty() {
+        let cross: f64 = 4.0
+            * harmonics
+                .iter()
+                .map(|&(p, a)| {
+                    let sign = if p % 2 == 0 { 1.0 } else { -1.0 };
+                    sign * a * (-0.5 * x * (p * p) as f64).exp()
+                })
+                .sum::<f64>();
+        let signal: Vec<f64> = rho.iter().map(|&v| sigma2 * v / rho0).collect();
+        for (o, s) in out
+            .iter_mut()
+            .zip(avar_from_autocovariance(&signal, 1.0, ms))
+        {
+            *o += cross * s;
+        }
+    }
+    out
 }
