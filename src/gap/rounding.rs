@@ -85,6 +85,9 @@ pub const MIN_SIGMA_STEPS_ON_GRID: f64 = 0.25;
 /// corrected ([`grid_cosines`]).
 const MAX_GRID_BLUR: f64 = 0.25;
 
+/// Bins per step in which the blocks' positions on the grid are pooled ([`grid_cosines`]).
+const GRID_BINS: usize = 256;
+
 /// Where a unit's mean falls on the rounding grid, as the run shows it: the mean rate of each
 /// block of the run (u/s, in time order) and the blocks' length (s). The mean may drift over
 /// the run; each block holds its own position ([`grid_cosines`]).
@@ -96,19 +99,18 @@ pub struct GridPosition {
 
 /// `sum_{n >= 1} (-1)^n sin(2 pi n v) exp(-x n^2 / 2) / (pi n)` and its derivative in `v`:
 /// the mean rounding error, in steps, of a Gaussian sample of mean `v` steps
-/// (`x = 4 pi^2 sigma^2 / L^2`; the sawtooth's Fourier series, module doc).
-fn mean_error_steps(v: f64, x: f64) -> (f64, f64) {
+/// (`x = 4 pi^2 sigma^2 / L^2`; the sawtooth's Fourier series, module doc); `w[n - 1]` is
+/// `exp(-x n^2 / 2)`. The harmonics' sines and cosines by the angle-addition recurrence.
+fn mean_error_steps(v: f64, w: &[f64]) -> (f64, f64) {
+    let (s1, c1) = (2.0 * PI * v).sin_cos();
+    let (mut sn, mut cn) = (s1, c1);
     let (mut e, mut de) = (0.0, 0.0);
-    for n in 1..=GRID_HARMONICS {
-        let nf = n as f64;
-        let w = (-0.5 * x * nf * nf).exp();
-        if w < 1e-16 {
-            break;
-        }
-        let sign = if n % 2 == 0 { 1.0 } else { -1.0 };
-        let a = 2.0 * PI * nf * v;
-        e += sign * a.sin() * w / (PI * nf);
-        de += sign * 2.0 * a.cos() * w;
+    for (k, &wn) in w.iter().enumerate() {
+        let nf = (k + 1) as f64;
+        let sign = if k % 2 == 0 { -1.0 } else { 1.0 };
+        e += sign * sn * wn / (PI * nf);
+        de += sign * 2.0 * cn * wn;
+        (sn, cn) = (sn * c1 + cn * s1, cn * c1 - sn * s1);
     }
     (e, de)
 }
@@ -136,20 +138,34 @@ pub fn grid_cosines(
         return None;
     }
     let x = 4.0 * PI * PI * sigma2 / (step * step);
+    let w: Vec<f64> = (1..=GRID_HARMONICS)
+        .map(|n| (-0.5 * x * (n * n) as f64).exp())
+        .take_while(|&wn| wn > 1e-16)
+        .collect();
     let var_mean = n2.max(0.0) / grid.block_s / (step * step);
     let mut acc = [0.0; GRID_HARMONICS];
     let mut count = 0usize;
+    // The blocks' positions pooled in bins of 1/GRID_BINS step, each at its blocks' mean
+    // position (the inversion below is smooth, so that moves each average by the bin's
+    // spread squared at most), and inverted once per bin.
+    let mut bins = [(0.0f64, 0usize); GRID_BINS];
     for &m in &grid.block_means {
         if !m.is_finite() {
             continue;
         }
         let u = m / step - (m / step).round();
+        let b = (((u + 0.5) * GRID_BINS as f64) as usize).min(GRID_BINS - 1);
+        bins[b].0 += u;
+        bins[b].1 += 1;
+    }
+    for &(sum_u, n_b) in bins.iter().filter(|b| b.1 > 0) {
+        let u = sum_u / n_b as f64;
         // Newton's method on the increasing f(v) = v + E[e](v) = u over [-1/2, 1/2], kept in
         // the bracket (f(+-1/2) = +-1/2).
         let (mut lo, mut hi, mut v) = (-0.5, 0.5, u);
         let mut slope = 1.0;
         for _ in 0..30 {
-            let (e, de) = mean_error_steps(v, x);
+            let (e, de) = mean_error_steps(v, &w);
             let f = v + e - u;
             slope = 1.0 + de;
             if f > 0.0 {
@@ -173,11 +189,14 @@ pub fn grid_cosines(
         if blur > MAX_GRID_BLUR {
             return None;
         }
+        let (s1, c1) = (2.0 * PI * v).sin_cos();
+        let (mut sp, mut cp) = (s1, c1);
+        let damp = blur.exp();
         for (p, a) in acc.iter_mut().enumerate() {
-            let pf = (p + 1) as f64;
-            *a += (2.0 * PI * pf * v).cos() * (blur * pf * pf).min(50.0).exp();
+            *a += n_b as f64 * cp * damp.powi(((p + 1) * (p + 1)) as i32);
+            (sp, cp) = (sp * c1 + cp * s1, cp * c1 - sp * s1);
         }
-        count += 1;
+        count += n_b;
     }
     if count == 0 {
         return None;
@@ -185,43 +204,52 @@ pub fn grid_cosines(
     Some(acc.map(|a| (a / count as f64).clamp(-1.0, 1.0)))
 }
 
+/// Relative size below which a term of the mean-dependent part is left out: a harmonic whose
+/// weight `|A_p| exp(-x p^2 / 4)` is smaller, and lags whose correlation is smaller (each pair
+/// sum is of order `x r` there). The model's resolution is a few 1e-3 of the step's square.
+const GRID_NEGLIGIBLE: f64 = 1e-7;
+
 /// The harmonic `p` of the mean-dependent part of the rounding error's autocovariance at a lag
-/// where the filtered samples' correlation is `r`:
-/// `sum_{n + m = p; n, m != 0} [exp(-x/2 (n^2 + m^2 + 2 n m r)) - exp(-x/2 (n^2 + m^2))] / (n m)`.
-/// The first exponent is `-x p^2 / 2 + x n m (1 - r)`, so for `n m < 0` the terms decay as
-/// `exp(-x |n m| (1 - r))`: the sum runs while that is above `e^-45`. At `r = 1` (lag 0) that
-/// part is `exp(-x p^2 / 2) sum 1 / (n m) = -2 exp(-x p^2 / 2) / p^2` (the Fourier coefficient
-/// of the squared sawtooth).
-fn pair_sum(p: usize, x: f64, r: f64) -> f64 {
+/// where the filtered samples' correlation is `r` is
+/// `sum_{n + m = p; n, m != 0} [exp(-x/2 (n^2 + m^2 + 2 n m r)) - exp(-x/2 (n^2 + m^2))] / (n m)`,
+/// this function's first part less [`pair_sum_e2`]. The first exponent is
+/// `-x p^2 / 2 + x n m (1 - r)`, so for `n m < 0` the terms decay as `exp(-x |n m| (1 - r))`:
+/// the sum runs while that is above `e^-45`. At `r = 1` (lag 0) it is
+/// `exp(-x p^2 / 2) sum 1 / (n m) = -2 exp(-x p^2 / 2) / p^2` (the Fourier coefficient of the
+/// squared sawtooth).
+fn pair_sum_e1(p: usize, x: f64, r: f64) -> f64 {
     let pi = p as i64;
     let one_minus = (1.0 - r).max(0.0);
-    let lag0 = one_minus < 1e-12;
-    let reach = if lag0 {
-        0.0
-    } else {
-        (45.0 / (x * one_minus)).sqrt()
-    };
-    // the second exponent needs |n| up to sqrt(90 / x) at most
-    let nn = (reach.max((90.0 / x).sqrt()).ceil() as i64 + pi + 2).min(4000);
     let top = -0.5 * x * (p * p) as f64;
-    let mut s = if lag0 {
-        -2.0 * top.exp() / (p * p) as f64
-    } else {
-        0.0
-    };
+    if one_minus < 1e-12 {
+        return -2.0 * top.exp() / (p * p) as f64;
+    }
+    let nn = ((45.0 / (x * one_minus)).sqrt().ceil() as i64 + pi + 2).min(4000);
+    let mut s = 0.0;
     for n in -nn..=nn + pi {
         let m = pi - n;
         if n == 0 || m == 0 {
             continue;
         }
         let nm = (n * m) as f64;
-        let e2 = (-0.5 * x * ((n * n + m * m) as f64)).exp();
-        let e1 = if lag0 {
-            0.0
-        } else {
-            (top + x * nm * one_minus).exp()
-        };
-        s += (e1 - e2) / nm;
+        s += (top + x * nm * one_minus).exp() / nm;
+    }
+    s
+}
+
+/// `sum_{n + m = p; n, m != 0} exp(-x/2 (n^2 + m^2)) / (n m)`, the lag-independent part of the
+/// harmonic `p`'s pair sum ([`pair_sum_e1`]); `n^2 + m^2 >= 2 n^2 - 2 |n| p`, so `|n|` up to
+/// `sqrt(90 / x) + p` reaches `e^-45`.
+fn pair_sum_e2(p: usize, x: f64) -> f64 {
+    let pi = p as i64;
+    let nn = ((90.0 / x).sqrt().ceil() as i64 + pi + 2).min(4000);
+    let mut s = 0.0;
+    for n in -nn..=nn + pi {
+        let m = pi - n;
+        if n == 0 || m == 0 {
+            continue;
+        }
+        s += (-0.5 * x * ((n * n + m * m) as f64)).exp() / (n * m) as f64;
     }
     s
 }
@@ -244,7 +272,7 @@ fn pair_sum(p: usize, x: f64, r: f64) -> f64 {
 /// - the error's covariance, `sum_{n, m} c_n c_m exp(i 2 pi (n + m) mu / L)
 ///   [exp(-x/2 (n^2 + m^2 + 2 n m r_k)) - exp(-x/2 (n^2 + m^2))]`: the terms `n + m = 0` are
 ///   the averaged model, and each `p = n + m != 0` adds `2 A_p (-L^2 (-1)^p / (4 pi^2))`
-///   times [`pair_sum`];
+///   times the pair sum ([`pair_sum_e1`] less [`pair_sum_e2`]);
 ///
 /// with `A_p` the run's average of `cos(2 pi p mu_b / L)` over its blocks ([`grid_cosines`]):
 /// every term is linear in `exp(i 2 pi p mu / L)`, so the blocks' mixture is the average of
@@ -263,25 +291,35 @@ pub fn rounding_avar_on_grid(
     let x = 4.0 * PI * PI * sigma2 / (step * step);
     let c = step * step / (2.0 * PI * PI);
     let tail = theta_sum(x);
-    let cosines = grid.and_then(|g| grid_cosines(g, step, sigma2, n2));
-    // harmonics that matter: |A_p| exp(-x p^2 / 4) above 1e-12
-    let harmonics: Vec<(usize, f64)> = cosines
-        .map(|a| {
-            (1..=GRID_HARMONICS)
-                .map(|p| (p, a[p - 1]))
-                .filter(|&(p, a)| a.abs() * (-0.25 * x * (p * p) as f64).exp() > 1e-12)
-                .collect()
-        })
-        .unwrap_or_default();
+    // harmonics that matter: |A_p| exp(-x p^2 / 4) above GRID_NEGLIGIBLE (none once the
+    // filtered noise is above about 1.3 steps: the averaged model is then the whole of it)
+    let harmonics: Vec<(usize, f64)> = if (-0.25 * x).exp() > GRID_NEGLIGIBLE {
+        grid.and_then(|g| grid_cosines(g, step, sigma2, n2))
+            .map(|a| {
+                (1..=GRID_HARMONICS)
+                    .map(|p| (p, a[p - 1]))
+                    .filter(|&(p, a)| {
+                        a.abs() * (-0.25 * x * (p * p) as f64).exp() > GRID_NEGLIGIBLE
+                    })
+                    .collect()
+            })
+            .unwrap_or_default()
+    } else {
+        Vec::new()
+    };
+    // the lag-independent half of each harmonic's pair sum
+    let e2: Vec<f64> = harmonics.iter().map(|&(p, _)| pair_sum_e2(p, x)).collect();
     let r: Vec<f64> = rho
         .iter()
         .map(|&v| {
             let rk = v / rho0;
             let mut cov = c * (theta_sum(x * (1.0 - rk).max(0.0)) - tail);
-            if rk.abs() > 1e-12 {
-                for &(p, a) in &harmonics {
+            // at r = 0 each pair sum is 0; below GRID_NEGLIGIBLE it is of order x r
+            if rk.abs() > GRID_NEGLIGIBLE {
+                for (&(p, a), &e2p) in harmonics.iter().zip(&e2) {
                     let sign = if p % 2 == 0 { 1.0 } else { -1.0 };
-                    cov -= 2.0 * a * sign * step * step / (4.0 * PI * PI) * pair_sum(p, x, rk);
+                    cov -= 2.0 * a * sign * step * step / (4.0 * PI * PI)
+                        * (pair_sum_e1(p, x, rk) - e2p);
                 }
             }
             cov
