@@ -9,10 +9,7 @@ use super::diagnose::{DiagnoseError, DiagnoseOptions, Region};
 use super::effects::{canonical_lowpass, effect_column, EffectKind, EffectParams, Grid};
 use super::evidence::EvidenceSnapshot;
 use super::filter_cov::filter_cov_correction;
-use super::rounding::{
-    filtered_sigma, grid_cosines, rounding_avar_on_grid, GridPosition, MIN_SIGMA_STEPS,
-    MIN_SIGMA_STEPS_ON_GRID,
-};
+use super::rounding::{filtered_sigma, rounding_avar, MIN_SIGMA_STEPS};
 use crate::allan::CurvePoint;
 use crate::model::avar_cov::{AvarCovariance, CovPoint};
 use crate::model::fit::{fit, FitOptions};
@@ -53,10 +50,6 @@ pub struct GapProblem {
     /// the filtered N column ([`GapProblem::set_filter_floor`]; docs/gap.md, "Filters and
     /// Gauss-Markov terms", "Rounding after a filter"). None: no such part.
     pub filter_floor: Option<FilterFloor>,
-    /// Where the unit's mean falls on the grid of the rounding after the filter: the run's
-    /// block means ([`super::rounding::grid_cosines`]), from which the rounding's
-    /// mean-dependent terms are taken (docs/gap.md, "Rounding after a filter (session 12)").
-    pub grid: GridPosition,
 }
 
 /// The rate rounding after a unit's filter ([`GapProblem::filter_floor`]).
@@ -211,15 +204,6 @@ impl GapProblem {
             n_inc: n,
             c_init,
             filter_floor: None,
-            grid: GridPosition {
-                block_means: snap
-                    .block_means
-                    .iter()
-                    .copied()
-                    .filter(|m| m.is_finite())
-                    .collect(),
-                block_s: snap.block_len as f64 * tau0,
-            },
         })
     }
 
@@ -230,14 +214,7 @@ impl GapProblem {
     fn offset_of(&self, spec: &ModelSpec, coef: &[f64]) -> Vec<f64> {
         let mut off = spec.offset.clone().unwrap_or_else(|| vec![0.0; self.len()]);
         if let (Some(lp), Some(fl)) = (spec.filter, self.filter_floor) {
-            let r = rounding_avar_on_grid(
-                &lp,
-                self.tau0_s,
-                fl.step,
-                self.floor_n2(coef),
-                Some(&self.grid),
-                &self.ms,
-            );
+            let r = rounding_avar(&lp, self.tau0_s, fl.step, self.floor_n2(coef), &self.ms);
             for (o, f) in off.iter_mut().zip(&r) {
                 *o += f;
             }
@@ -301,16 +278,11 @@ impl GapProblem {
         let keep = match (&with, without) {
             (Some((p, w)), Some(wo)) if w.chi2 < wo => {
                 // The model holds while the filtered sample's noise is at least
-                // MIN_SIGMA_STEPS steps ([`super::rounding`]), or MIN_SIGMA_STEPS_ON_GRID
-                // when the block means say where the mean falls on the grid (the model then
-                // has the terms that depend on it): below, the rounding holds the output on
-                // one step (a dead band) and the model is not used.
+                // MIN_SIGMA_STEPS steps ([`super::rounding`]): below, the rounding holds the
+                // output on one step (a dead band) and neither model describes it.
                 let n2 = w.coef.get(1).copied().unwrap_or(0.0).max(0.0);
                 p.lowpass().is_some_and(|lp| {
-                    let sigma = filtered_sigma(&lp, self.tau0_s, n2);
-                    sigma >= MIN_SIGMA_STEPS * step
-                        || (sigma >= MIN_SIGMA_STEPS_ON_GRID * step
-                            && grid_cosines(&self.grid, step, sigma * sigma, n2).is_some())
+                    filtered_sigma(&lp, self.tau0_s, n2) >= MIN_SIGMA_STEPS * step
                 })
             }
             _ => false,

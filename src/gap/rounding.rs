@@ -73,10 +73,12 @@ pub fn rounding_avar(lp: &LowPass, tau0_s: f64, step: f64, n2: f64, ms: &[u64]) 
 /// (`sigma >= 0.21 L`), and [`MIN_SIGMA_STEPS_ON_GRID`] is above that.
 const GRID_HARMONICS: usize = 8;
 
-/// The filtered sample's noise, in steps, down to which the model is used when the run's block
-/// means say where its mean falls on the grid ([`grid_cosines`]): the mean-dependent terms are
-/// then in the model, which matches simulated runs within 1% at 0.25 steps and 2% at 0.2
-/// (docs/gap.md, "Rounding after a filter (session 12)"; docs/repro/session12/rr_grid.py).
+/// The filtered sample's noise, in steps, down to which [`rounding_avar_on_grid`] matches
+/// simulated runs when the block means say where the mean falls on the grid
+/// ([`grid_cosines`]): within 1% at 0.25 steps, 2% at 0.2 (docs/gap.md, "Rounding after a
+/// filter (session 12)"; docs/repro/session12/rr_grid.py). The diagnosis does not use the grid
+/// yet (`GapProblem::set_filter_floor` keeps [`MIN_SIGMA_STEPS`]; the measured attempt is in
+/// that section).
 pub const MIN_SIGMA_STEPS_ON_GRID: f64 = 0.25;
 
 /// The largest variance, in steps squared, of a block mean's estimate of the mean's position,
