@@ -167,7 +167,7 @@ impl Profile {
                 let ee: f64 = row.iter().zip(w.iter()).map(|(e, wi)| e * e * wi).sum();
                 let b = ew[ti];
                 let det = a * ee - b * b;
-                if !(det > 0.0) {
+                if det.is_nan() || det <= 0.0 {
                     // A column the drift already spans: no warm-up there.
                     per_t.push([f64::NAN; 3]);
                     continue;
