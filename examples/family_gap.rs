@@ -136,9 +136,35 @@
 //! - `fog5k`: a tactical FOG (tacfog's terms and LSB) at 5 kHz over 10-20 min (`--hours`
 //!   ignored).
 //!
-//! On `mimu` and `cicgyro` a clean run's false alarm is any named effect that is not a low-pass,
-//! or two or more low-passes (a second-order low-pass near critical damping and a zero-phase
-//! filter have the same `|H|^2`); the kind and its parameters are reported beside.
+//! Held-out families of session 12 (defined at 04:40 UTC on 2026-11-25 in the helpers' log,
+//! docs/repro/session12/helpers-log.md, before any run of them; `--families unseen12`; nothing
+//! tuned on them). Each carries a filter that is part of the unit as sold or as exported:
+//! - `kalgyro`: a consumer IMU gyro (BMI088 / ICM-42688 class) recorded static for a Kalibr
+//!   calibration: ODR 200 Hz over 3-11 h (`--hours` ignored; at most 7.92 M samples), ARW
+//!   0.15-1 deg/sqrt(h), flicker 2-20 deg/h, K 1-10 deg/h/sqrt(h), a turn-on bias uniform in
+//!   [-0.5, 0.5] deg/s, its digital low-pass (`second_order_filter`, natural frequency
+//!   ODR/10-ODR/4, damping 0.5-1), then each rate sample rounded at 0.2-2 of the filtered sample
+//!   noise `N sqrt(rho_0 / tau0)` (a 16-bit LSB over ranges of +-125 to +-2000 deg/s);
+//! - `kalacc`: the same IMU's accelerometer on that stand: VRW 0.03-0.15 m/s/sqrt(h), flicker
+//!   20-200 ug, K 1e-5-1e-4 m/s^2/sqrt(s), gravity's projection on the axis uniform in
+//!   [-9.81, 9.81] m/s^2 (the rounding grid sits anywhere), the same low-pass, rate samples
+//!   rounded at 0.1-1 of the filtered sample noise;
+//! - `cicacc`: a low-noise sigma-delta MEMS accelerometer (ADXL355 class) at 125-1000 Hz behind
+//!   its sinc^3 decimator (`moving_average`, 2-8 taps, 3 stages): VRW 20-80 ug/sqrt(Hz), flicker
+//!   2-20 ug, K 1e-6-1e-5 m/s^2/sqrt(s), gravity on the axis as `kalacc`, rate samples rounded
+//!   to the 20-bit LSB of its range (3.9, 7.8 or 15.6 ug), far below the noise;
+//! - `zpexp`: a post-processed export of a MEMS gyro (`memsgyro`'s terms, 100-1000 Hz),
+//!   zero-phase filtered (`zero_phase_filter`: first order forward and backward, time constant
+//!   1-10 tau0) and written as floats (no rounding after the filter);
+//! - `bartfog`: a tactical FOG (`tacfog`'s terms) at 200-1000 Hz whose DSP outputs a Bartlett
+//!   average (`moving_average`, 2-16 taps, 2 stages), the angle counted with carry at 0.1-1 of
+//!   the filtered per-sample angle noise `N sqrt(rho_0 tau0)`.
+//!
+//! On `mimu`, `cicgyro` and the session-12 families a clean run's false alarm is any named
+//! effect that is not a low-pass, or two or more low-passes (a second-order low-pass near
+//! critical damping and a zero-phase filter have the same `|H|^2`); the kind and its
+//! parameters are reported beside (a zero-phase filter's time constant within 25%, as a first
+//! order's).
 //!
 //! On the families with an intrinsic filter an `output_filter` (or other filter) draw replaces
 //! that filter (the simulator holds one); their detection cells are the other four effects on
@@ -203,10 +229,11 @@ static MODELS_DIR: OnceLock<String> = OnceLock::new();
 
 /// The families; the first six are the default list, `coarse` is drawn on request. New
 /// families go at the end: a draw's stream depends on the family's index.
-const FAMILIES: [&str; 28] = [
+const FAMILIES: [&str; 33] = [
     "navfog", "tacfog", "vog4", "memsgyro", "ma4", "memsacc", "coarse", "consmems", "fog2k",
     "accr", "kmems", "rfog", "hrmems", "qtzgyro", "servoacc", "short", "long", "adis", "adistemp",
     "rlg", "lowrate", "accfilt", "navacc", "mimu", "cicgyro", "hrg", "thermfog", "fog5k",
+    "kalgyro", "kalacc", "cicacc", "zpexp", "bartfog",
 ];
 /// The held-out families (`--families heldout`): defined before the calibration of issue 13's
 /// last round and run only for its final tables, so nothing was tuned on them.
@@ -217,6 +244,8 @@ const UNSEEN: [&str; 5] = ["hrmems", "qtzgyro", "servoacc", "short", "long"];
 const UNSEEN10: [&str; 6] = ["adis", "adistemp", "rlg", "lowrate", "accfilt", "navacc"];
 /// The held-out families of session 11 (`--families unseen11`), defined before any run of them.
 const UNSEEN11: [&str; 5] = ["mimu", "cicgyro", "hrg", "thermfog", "fog5k"];
+/// The held-out families of session 12 (`--families unseen12`), defined before any run of them.
+const UNSEEN12: [&str; 5] = ["kalgyro", "kalacc", "cicacc", "zpexp", "bartfog"];
 /// Importance samples and null draws of the fair jump ceiling (`oracle::JumpCeiling`).
 const JUMP_CEIL_SAMPLES: usize = 1000;
 const JUMP_CEIL_NULLS: usize = 199;
@@ -274,6 +303,8 @@ fn draw_unit(
         log_uniform(rng, 12.0, 24.0) * 3600.0
     } else if family == "fog5k" {
         log_uniform(rng, 10.0, 20.0) * 60.0
+    } else if family == "kalgyro" || family == "kalacc" {
+        log_uniform(rng, 3.0, 11.0) * 3600.0
     } else if let Some((a, b)) = hours {
         log_uniform(rng, a, b) * 3600.0
     } else if family == "hrmems" || family == "mimu" {
@@ -568,6 +599,86 @@ fn draw_unit(
                     log_uniform(rng, 0.005, 0.05) * DEG_H,
                 ]);
             }
+        }
+        "kalgyro" | "kalacc" => {
+            // A consumer IMU (BMI088 / ICM-42688 class) recorded static for hours at an ODR of
+            // 200 Hz, as for a Kalibr calibration: its digital low-pass (second order, natural
+            // frequency ODR/10-ODR/4), then each rate sample rounded to the 16-bit LSB of the
+            // range set, a share of the *filtered* sample noise `N sqrt(rho_0 / tau0)`. The gyro
+            // carries a turn-on bias, the accelerometer gravity's projection on its axis, so the
+            // rounding grid sits anywhere against the signal.
+            let lsb = if family == "kalgyro" {
+                u.c[1] = log_uniform(rng, 0.15, 1.0) * ARW;
+                u.c[2] = log_uniform(rng, 2.0, 20.0) * DEG_H;
+                u.c[3] = log_uniform(rng, 1.0, 10.0) * RRW;
+                u.bias = rng.random_range(-0.5..0.5);
+                (0.2, 2.0)
+            } else {
+                // m/s/sqrt(h) to m/s/sqrt(s); ug to m/s^2.
+                u.c[1] = log_uniform(rng, 0.03, 0.15) / 60.0;
+                u.c[2] = log_uniform(rng, 20.0, 200.0) * 9.81e-6;
+                u.c[3] = log_uniform(rng, 1e-5, 1e-4);
+                u.bias = rng.random_range(-9.81..9.81);
+                (0.1, 1.0)
+            };
+            u.tau0 = rate(rng, 200.0, 200.0);
+            let odr = 1.0 / u.tau0;
+            let filter = EffectParams::SecondOrderFilter {
+                natural_frequency_hz: log_uniform(rng, odr / 10.0, odr / 4.0),
+                damping: log_uniform(rng, 0.5, 1.0),
+            };
+            u.intrinsic = Some(filter);
+            let rho0 = filter
+                .lowpass()
+                .map_or(1.0, |lp| lp.autocorrelation(u.tau0)[0]);
+            u.rate_lsb = log_uniform(rng, lsb.0, lsb.1) * u.c[1] * (rho0 / u.tau0).sqrt();
+        }
+        "cicacc" => {
+            // A low-noise sigma-delta MEMS accelerometer (ADXL355 class) behind its sinc^3
+            // decimator (three cascaded moving averages of 2-8 output samples), gravity's
+            // projection on its axis, each rate sample rounded to the 20-bit LSB of its range
+            // (3.9, 7.8 or 15.6 ug), far below the noise. ug/sqrt(Hz) to m/s/sqrt(s).
+            u.c[1] = log_uniform(rng, 20.0, 80.0) * 9.81e-6;
+            u.c[2] = log_uniform(rng, 2.0, 20.0) * 9.81e-6;
+            u.c[3] = log_uniform(rng, 1e-6, 1e-5);
+            u.tau0 = rate(rng, 125.0, 1000.0);
+            u.intrinsic = Some(EffectParams::MovingAverage {
+                taps: rng.random_range(2..=8u32),
+                stages: 3,
+            });
+            u.bias = rng.random_range(-9.81..9.81);
+            u.rate_lsb = 3.9e-6 * 9.80665 * f64::from(1u32 << rng.random_range(0..=2u32));
+        }
+        "zpexp" => {
+            // A post-processed export: a MEMS gyro (memsgyro's terms) zero-phase filtered
+            // (first order forward and backward, time constant 1-10 tau0) and written as floats.
+            // The part's own fine rounding, before that filter, is white rate noise inside `N`
+            // (the simulator rounds after its filter, so it is left out).
+            u.c[1] = log_uniform(rng, 0.1, 1.0) * ARW;
+            u.c[2] = log_uniform(rng, 2.0, 20.0) * DEG_H;
+            u.c[3] = log_uniform(rng, 1.0, 10.0) * RRW;
+            u.tau0 = rate(rng, 100.0, 1000.0);
+            u.intrinsic = Some(EffectParams::ZeroPhaseFilter {
+                time_constant_s: log_uniform(rng, 1.0, 10.0) * u.tau0,
+            });
+        }
+        "bartfog" => {
+            // A tactical FOG whose DSP outputs a Bartlett average (two stages of a moving
+            // average of 2-16 samples), the angle counted with carry at 0.1-1 of the filtered
+            // per-sample angle noise `N sqrt(rho_0 tau0)`.
+            u.c[1] = log_uniform(rng, 0.01, 0.1) * ARW;
+            u.c[2] = log_uniform(rng, 0.05, 0.5) * DEG_H;
+            u.c[3] = log_uniform(rng, 0.01, 0.1) * RRW;
+            u.tau0 = rate(rng, 200.0, 1000.0);
+            let filter = EffectParams::MovingAverage {
+                taps: rng.random_range(2..=16u32),
+                stages: 2,
+            };
+            u.intrinsic = Some(filter);
+            let rho0 = filter
+                .lowpass()
+                .map_or(1.0, |lp| lp.autocorrelation(u.tau0)[0]);
+            u.lsb = log_uniform(rng, 0.1, 1.0) * u.c[1] * (rho0 * u.tau0).sqrt();
         }
         _ => unreachable!("family list"),
     }
@@ -1020,12 +1131,15 @@ fn part_of_unit(u: &Unit, p: &EffectParams) -> bool {
     }
 }
 
-/// The families of session 11 whose intrinsic filter may be named as any one low-pass kind on a
-/// clean run (their rule, fixed before any run: a second-order low-pass with damping near 1 and
-/// a zero-phase filter have the same `|H|^2`, hence the same AVAR); the kind named and its
-/// parameters are reported beside (`intrinsic_exact`).
+/// The families of sessions 11 and 12 whose intrinsic filter may be named as any one low-pass
+/// kind on a clean run (their rule, fixed before any run: a second-order low-pass with damping
+/// near 1 and a zero-phase filter have the same `|H|^2`, hence the same AVAR); the kind named
+/// and its parameters are reported beside (`intrinsic_exact`).
 fn any_filter_family(family: &str) -> bool {
-    matches!(family, "mimu" | "cicgyro")
+    matches!(
+        family,
+        "mimu" | "cicgyro" | "kalgyro" | "kalacc" | "cicacc" | "zpexp" | "bartfog"
+    )
 }
 
 /// A clean draw's false alarm (`any_filter_family`: any named effect that is not a low-pass, or
@@ -1045,8 +1159,8 @@ fn false_alarm(o: &Outcome) -> bool {
 }
 
 /// The intrinsic filter named with the right parameters: a moving average's taps and stages
-/// exactly, a first-order filter's time constant within 25%, a second-order filter's natural
-/// frequency within 25%.
+/// exactly, a first-order or zero-phase filter's time constant within 25%, a second-order
+/// filter's natural frequency within 25%.
 fn intrinsic_exact(o: &Outcome) -> bool {
     let Some(i) = o.unit.intrinsic else {
         return false;
@@ -1075,6 +1189,12 @@ fn intrinsic_exact(o: &Outcome) -> bool {
                 ..
             },
         ) => ((f2 - f) / f).abs() <= 0.25,
+        (
+            EffectParams::ZeroPhaseFilter { time_constant_s },
+            EffectParams::ZeroPhaseFilter {
+                time_constant_s: t2,
+            },
+        ) => ((t2 - time_constant_s) / time_constant_s).abs() <= 0.25,
         _ => false,
     })
 }
@@ -1365,6 +1485,7 @@ fn main() {
         .replace("heldout", &HELDOUT.join(","))
         .replace("unseen10", &UNSEEN10.join(","))
         .replace("unseen11", &UNSEEN11.join(","))
+        .replace("unseen12", &UNSEEN12.join(","))
         .replace("unseen", &UNSEEN.join(","));
     let fams: Vec<&'static str> = fams_arg
         .split(',')
