@@ -208,7 +208,8 @@ use allanscope::gap::effects::effect_column;
 use allanscope::gap::oracle::{self, BlockGls, JumpCeiling};
 use allanscope::gap::problem::{GapProblem, ModelSpec};
 use allanscope::gap::steps::forward_steps;
-use allanscope::gap::warmup::fit_warmup;
+use allanscope::gap::warmup::{fit_warmup, WARMUP_K_DELTA};
+use allanscope::gap::warmup_profile::fit_warmup_profiled;
 use allanscope::gap::{
     diagnose, DiagnoseOptions, EffectKind, EffectParams, EvidenceSnapshot, GapConfig, GapEvidence,
     Verdict,
@@ -906,6 +907,13 @@ struct Outcome {
     /// The p-value of the warm-up's `B` under the run's own Gaussian null
     /// (`WarmupFinding::p_value`).
     warm_p: f64,
+    /// The same on the base fit with `K^2` at the curve's upper bound (session 8's null), the
+    /// p-value with `K^2` profiled on the block means (`gap::warmup_profile`, session 12), the
+    /// bound `K^2` and the profiled null's `K^2` (u^2/s^3).
+    warm_p_up: f64,
+    warm_p_prof: f64,
+    warm_k_up: f64,
+    warm_k_null: f64,
 }
 
 /// The stationary candidates whose first-scan scores `--csv` writes (`lr_*` columns).
@@ -1010,6 +1018,24 @@ fn run_one(
     let warm_scale = warm.map_or(f64::NAN, |w| w.null_scale);
     let warm_b_scaled = warm.map_or(f64::NAN, |w| w.log_bf_scaled);
     let warm_p = warm.map_or(f64::NAN, |w| w.p_value);
+    let warm_k_up = match (base_prob.as_ref(), base_fit.as_ref()) {
+        (Some(p), Some(b)) => p
+            .upper_bound(&ModelSpec::default(), b, 3, WARMUP_K_DELTA)
+            .map_or(f64::NAN, |k| k.max(b.coef[3])),
+        _ => f64::NAN,
+    };
+    let t_run_s = snap.n_increments as f64 * unit.tau0;
+    let warm_p_up = base_c5
+        .and_then(|mut c5| {
+            c5[3] = warm_k_up;
+            fit_warmup(&snap.block_means, block_s, t_run_s, &c5, &[])
+        })
+        .map_or(f64::NAN, |w| w.p_value);
+    let prof = base_c5.and_then(|c5| {
+        fit_warmup_profiled(&snap.block_means, block_s, t_run_s, &c5, warm_k_up, &[])
+    });
+    let warm_p_prof = prof.map_or(f64::NAN, |w| w.0.p_value);
+    let warm_k_null = prof.map_or(f64::NAN, |w| w.1);
     let mut jump_z = [0.0; 3];
     if let Some(f) = base_c5.and_then(|c5| forward_steps(&snap.block_means, block_s, &c5, &[], 3.0))
     {
@@ -1086,6 +1112,10 @@ fn run_one(
         warm_scale,
         warm_b_scaled,
         warm_p,
+        warm_p_up,
+        warm_p_prof,
+        warm_k_up,
+        warm_k_null,
     }
 }
 
@@ -1540,7 +1570,7 @@ fn main() {
     }
     if !csv.is_empty() {
         let mut text = String::from(
-            "family,effect,draw,tau0,t_run,q,n,b,k,r,lsb,rate_lsb,rho,verdict,gap_before,gap_after,named,shape_true,amp_true,oracle_z,oracle_delta,null_z_gm,null_z_sin,null_z_filter,null_z_warmup,null_z_jumps,secs,qlim,warm_b,jump_z1,jump_z2,jump_z3,jceil_p,lr_gm,lr_sin,lr_filter,lr_ma,lr_second,lr_zero,galt_gm,galt_sin,galt_filter,galt_ma,galt_second,galt_zero,warm_scale,warm_b_scaled,warm_p,bias,intrinsic,false_alarm,intrinsic_exact,named_params\n",
+            "family,effect,draw,tau0,t_run,q,n,b,k,r,lsb,rate_lsb,rho,verdict,gap_before,gap_after,named,shape_true,amp_true,oracle_z,oracle_delta,null_z_gm,null_z_sin,null_z_filter,null_z_warmup,null_z_jumps,secs,qlim,warm_b,jump_z1,jump_z2,jump_z3,jceil_p,lr_gm,lr_sin,lr_filter,lr_ma,lr_second,lr_zero,galt_gm,galt_sin,galt_filter,galt_ma,galt_second,galt_zero,warm_scale,warm_b_scaled,warm_p,bias,intrinsic,false_alarm,intrinsic_exact,named_params,warm_p_up,warm_p_prof,warm_k_up,warm_k_null\n",
         );
         for (o, (_, _, i)) in res.iter().zip(&items) {
             let u = &o.unit;
@@ -1550,7 +1580,7 @@ fn main() {
             });
             let nz: Vec<String> = o.null_z.iter().map(|z| format!("{z:.4}")).collect();
             text += &format!(
-                "{},{},{},{},{:.0},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:.3},{:?},{:.4},{:.4},{},{:e},{:e},{:.4},{:.4},{},{:.3},{},{:.3},{:.3},{:.3},{:.3},{:.4},{},{},{:.4},{:.3},{:.4},{:e},{},{},{},{}\n",
+                "{},{},{},{},{:.0},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:.3},{:?},{:.4},{:.4},{},{:e},{:e},{:.4},{:.4},{},{:.3},{},{:.3},{:.3},{:.3},{:.3},{:.4},{},{},{:.4},{:.3},{:.4},{:e},{},{},{},{},{:.4},{:.4},{:e},{:e}\n",
                 u.family,
                 kind_name(o.truth_kind),
                 i,
@@ -1605,7 +1635,11 @@ fn main() {
                     .iter()
                     .map(|p| format!("{}:{:.4e}:{:.4e}", p.kind().name(), p.shape(), p.amplitude()))
                     .collect::<Vec<_>>()
-                    .join("+")
+                    .join("+"),
+                o.warm_p_up,
+                o.warm_p_prof,
+                o.warm_k_up,
+                o.warm_k_null
             );
         }
         std::fs::write(&csv, text).expect("csv");

@@ -118,6 +118,7 @@
 //!   filter_scan.rs         shape scans of the filter candidates
 //!   temperature.rs         a bias that follows the unit's temperature
 //!   warmup.rs              a warm-up found in time
+//!   warmup_profile.rs      the warm-up test with the random walk profiled on the block means
 //!   steps.rs               bias jumps found in time
 //!   jump_mixture.rs        spike-and-slab statistics of bias jumps
 //!   outliers.rs            isolated samples far outside the noise

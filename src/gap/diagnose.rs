@@ -53,6 +53,7 @@ use super::steps::{detect_steps, JumpFinding};
 use super::temperature::{enter_temperature, TEMPERATURE_Z};
 use super::thresholds::Thresholds;
 use super::warmup::{fit_warmup, WARMUP_K_DELTA};
+use super::warmup_profile::fit_warmup_profiled;
 use crate::model::terms;
 
 /// What to diagnose.
@@ -385,14 +386,21 @@ fn diagnose_curve_once(
     }
     if opts.candidates.contains(&EffectKind::Warmup) {
         let mut c5: [f64; 5] = std::array::from_fn(|i| cur.coef.get(i).copied().unwrap_or(0.0));
-        // The null's random walk at what the curve cannot exclude (docs/gap.md, "The warm-up's
-        // null level"): a K fitted low (often 0) leaves the block means' slow wander out of the
-        // covariance, and the scan over T reads it as a warm-up.
-        if let Some(k_up) = prob.upper_bound(&spec, &cur, 3, WARMUP_K_DELTA) {
-            c5[3] = c5[3].max(k_up);
-        }
+        // The null's random walk: a K fitted low (often 0) leaves the block means' slow wander
+        // out of the covariance, and the scan over T reads it as a warm-up (docs/gap.md, "The
+        // warm-up's null level"). K^2 is profiled on the block means under both hypotheses,
+        // up to the curve's upper bound (session 12); at that bound when the profile cannot be
+        // formed (session 8's rule).
+        let k_up = prob
+            .upper_bound(&spec, &cur, 3, WARMUP_K_DELTA)
+            .map_or(c5[3], |k| k.max(c5[3]));
         let stat_params: Vec<EffectParams> = effects.iter().map(|e| e.params).collect();
-        let warm = fit_warmup(&block_means, block_s, t_run, &c5, &stat_params);
+        let warm = fit_warmup_profiled(&block_means, block_s, t_run, &c5, k_up, &stat_params)
+            .map(|(w, _)| w)
+            .or_else(|| {
+                c5[3] = k_up;
+                fit_warmup(&block_means, block_s, t_run, &c5, &stat_params)
+            });
         if let Some(w) = warm.filter(|w| th.warmup_found(w)) {
             // Its AVAR, exact for the estimator on this record, enters as a fixed offset.
             let col = effect_column(

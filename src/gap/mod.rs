@@ -49,6 +49,7 @@ pub mod temperature;
 pub mod thresholds;
 pub mod unit_model;
 pub mod warmup;
+pub mod warmup_profile;
 
 pub use diagnose::{diagnose, DiagnoseOptions, Diagnosis, Verdict};
 pub use effects::{EffectKind, EffectParams};

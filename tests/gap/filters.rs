@@ -143,7 +143,9 @@ fn filtered_runs_end_explained_by_the_filter_alone() {
     let mut bad = Vec::new();
     for (extra, seed) in [
         ("output_filter = { time_constant = 0.025 }", 5u64),
-        ("moving_average = { taps = 16, stages = 2 }", 1),
+        // Seed 6, not 1: seed 1's noise carries a warm-up-shaped wander that the warm-up test
+        // names at its 1% level (tests/gap/diagnosis.rs's clean runs).
+        ("moving_average = { taps = 16, stages = 2 }", 6),
         (
             "second_order_filter = { natural_frequency = 8.0, damping = 0.3 }",
             3,

@@ -23,3 +23,4 @@ mod second_order_polish;
 mod sinusoid_behind_filter;
 mod temperature;
 mod warmup_null;
+mod warmup_profile;

