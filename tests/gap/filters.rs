@@ -83,6 +83,38 @@ fn a_sinc_cubed_decimator_is_three_stages() {
     assert_eq!(d.verdict, allanscope::gap::Verdict::Explained);
 }
 
+/// A Bartlett window of 12 taps (two stages of a 12-sample average) at 1 kHz, the angle counted
+/// with carry after it (session 12's `bartfog`, docs/repro/session12/bart12_lsb.toml): 12 is
+/// off the scan's tap grid, and the grid's best point is a 10-tap sinc^3 with nearly the same
+/// curve, so the whole-tap polish has to run for each stage count. Before it the run ended
+/// `unexplained` with 10 x 3 and a sinusoid; now the taps and stages are exact.
+#[test]
+fn a_bartlett_off_the_tap_grid_is_named_exactly() {
+    let tau0 = 0.001;
+    let text = format!(
+        "tau0_s = {tau0}\n[[channel]]\nname = \"x\"\nunit = \"deg\"\nN = 9.2e-4\n\
+         lsb = 2.0e-6\nmoving_average = {{ taps = 12, stages = 2 }}\n"
+    );
+    let m = SimModel::from_toml_str(&text, std::path::Path::new("<test>")).expect("model");
+    let mut sim = Simulator::new(&m, 3);
+    let mut inc = vec![0.0; (1200.0 / tau0) as usize];
+    sim.fill_channel(0, &mut inc);
+    let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
+    let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
+    let named: Vec<EffectParams> = d.effects.iter().map(|e| e.params).collect();
+    assert_eq!(
+        named,
+        vec![EffectParams::MovingAverage {
+            taps: 12,
+            stages: 2
+        }],
+        "G {} -> {}",
+        d.gap_before,
+        d.gap_after
+    );
+    assert_eq!(d.verdict, allanscope::gap::Verdict::Explained);
+}
+
 /// An underdamped second-order low-pass (8 Hz, damping 0.3): natural frequency within 5%,
 /// damping within 10%.
 #[test]
