@@ -113,3 +113,41 @@ fn a_line_behind_a_first_order_filter_is_the_filter_and_the_line() {
     };
     check(&d, EffectKind::OutputFilter, t30, 3.0, gain);
 }
+
+/// held4's session-12 repro (a DLPF-class MEMS part: white rate through a second-order low-pass
+/// at 25 Hz, damping 0.6, at 200 Hz, with a 0.012 deg/s line at 0.3 Hz; half an hour). The
+/// pair search found the line and the filter, but started from the line, whose model alone has
+/// a higher gap than the base's (its drop of `r' S^-1 r` is less than the shape parameter adds
+/// to the expectation on this curve), and the bookkeeping, taking the pair in that order,
+/// dropped the line: f372b34 named the filter alone, `unexplained`, G ~8500 -> 606-652 on seeds
+/// 1-3. With the pair taken in the bookkeeping's order ("Real recording (session 12)") the
+/// filter and the line are both kept: at 0.3 Hz the filter's gain is 1 within 1e-4, so the line
+/// comes out at its written amplitude.
+#[test]
+fn a_slow_line_beside_a_second_order_filter_is_kept_by_the_bookkeeping() {
+    let tau0 = 0.005;
+    let text = "tau0_s = 0.005\n[[channel]]\nname = \"x\"\nunit = \"deg\"\nN = 3.4e-3\n\
+                second_order_filter = { natural_frequency = 25.0, damping = 0.6 }\n\
+                sinusoid = { amplitude = 1.2e-2, frequency = 0.3, phase = 0.3 }\n";
+    let m = SimModel::from_toml_str(text, std::path::Path::new("<test>")).expect("model");
+    for seed in [1, 2] {
+        let mut sim = Simulator::new(&m, seed);
+        let mut inc = vec![0.0; (1800.0 / tau0) as usize];
+        sim.fill_channel(0, &mut inc);
+        let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
+        let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
+        let so = |p: &EffectParams| match *p {
+            EffectParams::SecondOrderFilter {
+                natural_frequency_hz,
+                damping,
+            } => {
+                (natural_frequency_hz / 25.0 - 1.0).abs() < 0.05
+                    && (damping / 0.6 - 1.0).abs() < 0.1
+            }
+            _ => false,
+        };
+        assert!(d.gap_after <= d.gap_before);
+        // the line is written at 0.012 deg/s: `AMP` is 0.3, so the gain asked of `check` is 0.04
+        check(&d, EffectKind::SecondOrderFilter, so, 0.3, 0.04);
+    }
+}

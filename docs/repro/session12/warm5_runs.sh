@@ -18,3 +18,4 @@ r c82b --families navfog,tacfog,memsgyro,memsacc,ma4 --effects none --no-oracle 
 r adis_n82 --families adistemp --effects none --no-oracle --seed 82 --hours 1,2 --draws 10
 r therm_n82 --families thermfog --effects none --no-oracle --seed 82 --draws 5
 r zp121 --families zpexp --effects none --no-oracle --seed 121 --draws 20
+r zph --families zpexp --effects none --no-oracle --seed 121 --hours 1,2 --draws 40
