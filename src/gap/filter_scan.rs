@@ -97,8 +97,12 @@ fn better(
 }
 
 /// Whole taps on a log grid from 2 to [`MAX_TAPS`] (no longer than a tenth of the curve's
-/// longest cluster), for each stage count; then every whole number between the best point's
-/// neighbours on the grid.
+/// longest cluster), for each stage count; then, for each stage count, every whole number between
+/// that count's best grid point's neighbours. The polish is per stage count because averages of
+/// different stage counts have nearly the same curve (a 12-tap Bartlett and a 10-tap sinc^3):
+/// polishing only the overall best count never tries a true 12 x 2 whose grid neighbours lost
+/// to 10 x 3 (a Bartlett of 12 taps, off the grid, with angle counting: docs/gap.md "Taps off
+/// the grid (session 12)").
 fn scan_moving_average(
     prob: &GapProblem,
     fit: &dyn Fn(LowPass) -> Option<GlsFit>,
@@ -117,29 +121,34 @@ fn scan_moving_average(
         return None;
     }
     let mut best: Option<(LowPass, GlsFit)> = None;
-    let mut best_i = 0;
+    // Each stage count's best grid index, by its own chi-squared.
+    let mut per_stage: Vec<(u32, usize)> = Vec::with_capacity(STAGES.len());
     for &stages in &STAGES {
+        let mut own: Option<(usize, f64)> = None;
         for (i, &t) in taps.iter().enumerate() {
             let lp = LowPass::MovingAverage { taps: t, stages };
-            let before = best.as_ref().map(|b| b.1.chi2);
-            best = better(best, lp, fit(lp));
-            if best.as_ref().map(|b| b.1.chi2) != before {
-                best_i = i;
+            let f = fit(lp);
+            if let Some(chi2) = f.as_ref().map(|f| f.chi2) {
+                if own.is_none_or(|(_, c)| chi2 < c) {
+                    own = Some((i, chi2));
+                }
             }
+            best = better(best, lp, f);
+        }
+        if let Some((i, _)) = own {
+            per_stage.push((stages, i));
         }
     }
-    let (LowPass::MovingAverage { stages, .. }, _) = best.as_ref()? else {
-        return best;
-    };
-    let stages = *stages;
-    let lo = taps[best_i.saturating_sub(1)];
-    let hi = taps[(best_i + 1).min(taps.len() - 1)];
-    for t in lo..=hi {
-        if taps.contains(&t) {
-            continue;
+    for (stages, best_i) in per_stage {
+        let lo = taps[best_i.saturating_sub(1)];
+        let hi = taps[(best_i + 1).min(taps.len() - 1)];
+        for t in lo..=hi {
+            if taps.contains(&t) {
+                continue;
+            }
+            let lp = LowPass::MovingAverage { taps: t, stages };
+            best = better(best, lp, fit(lp));
         }
-        let lp = LowPass::MovingAverage { taps: t, stages };
-        best = better(best, lp, fit(lp));
     }
     best
 }
