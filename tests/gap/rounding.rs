@@ -209,6 +209,28 @@ fn the_rounding_in_the_dead_band_follows_the_mean_on_the_grid() {
     }
 }
 
+/// 1800 s of the one-channel `model` at `tau0_s` (simulator seed `seed`) diagnosed with the
+/// defaults: the bookkeeping holds, the verdict is `explained` and one effect is named.
+fn explained_by_one_effect(model: &str, tau0_s: f64, seed: u64) -> allanscope::gap::Diagnosis {
+    use allanscope::gap::{diagnose, DiagnoseOptions, GapConfig, GapEvidence, Verdict};
+    use allanscope::sim::{SimModel, Simulator};
+    let m = SimModel::from_toml_str(model, std::path::Path::new("<test>")).expect("model");
+    let mut sim = Simulator::new(&m, seed);
+    let mut inc = vec![0.0; (1800.0 / tau0_s) as usize];
+    sim.fill_channel(0, &mut inc);
+    let mut ev = GapEvidence::from_increments(GapConfig::new(tau0_s), &inc);
+    let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
+    crate::diagnosis::assert_bookkeeping(&d);
+    assert_eq!(
+        d.verdict,
+        Verdict::Explained,
+        "seed {seed}: {:?}",
+        d.effects
+    );
+    assert_eq!(d.effects.len(), 1, "seed {seed}: {:?}", d.effects);
+    d
+}
+
 /// `family_gap --families kalgyro --seed 121` draw 19 (session 12's blind family: a consumer
 /// IMU gyro at 200 Hz behind its second-order digital low-pass, each rate sample rounded to a
 /// step of 1 / 0.56 filtered sigmas). The rounding floor was decided by scanning the first order
@@ -231,24 +253,9 @@ const KALG19: &str = "tau0_s = 0.005\n[[channel]]\nname = \"x\"\nunit = \"u\"\n\
 #[test]
 fn a_second_order_unit_keeps_its_rounding_floor() {
     use allanscope::gap::quantization::QuantKind;
-    use allanscope::gap::Verdict;
-    use allanscope::gap::{diagnose, DiagnoseOptions, EffectParams, GapConfig, GapEvidence};
-    use allanscope::sim::{SimModel, Simulator};
-    let m = SimModel::from_toml_str(KALG19, std::path::Path::new("<test>")).expect("model");
+    use allanscope::gap::EffectParams;
     for seed in [1, 2] {
-        let mut sim = Simulator::new(&m, seed);
-        let mut inc = vec![0.0; (1800.0 / 0.005) as usize];
-        sim.fill_channel(0, &mut inc);
-        let mut ev = GapEvidence::from_increments(GapConfig::new(0.005), &inc);
-        let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
-        crate::diagnosis::assert_bookkeeping(&d);
-        assert_eq!(
-            d.verdict,
-            Verdict::Explained,
-            "seed {seed}: {:?}",
-            d.effects
-        );
-        assert_eq!(d.effects.len(), 1, "seed {seed}: {:?}", d.effects);
+        let d = explained_by_one_effect(KALG19, 0.005, seed);
         let EffectParams::SecondOrderFilter {
             natural_frequency_hz,
             damping,
@@ -294,29 +301,14 @@ const ACCF29_T: f64 = 4.1453357056591464e-2;
 /// is held to 40%.
 #[test]
 fn the_dead_band_is_a_discrepancy_not_an_effect() {
-    use allanscope::gap::Verdict;
-    use allanscope::gap::{diagnose, DiagnoseOptions, EffectParams, GapConfig, GapEvidence};
-    use allanscope::sim::{SimModel, Simulator};
-    let m = SimModel::from_toml_str(ACCF29, std::path::Path::new("<test>")).expect("model");
+    use allanscope::gap::EffectParams;
     // sigma / L of the simulated unit: a first order's rho_0 = (1 - a) / (1 + a) per sample.
     let a = (-ACCF29_TAU0 / ACCF29_T).exp();
     let sigma = (1.6073054280352312e-3f64.powi(2) * (1.0 - a) / (1.0 + a) / ACCF29_TAU0).sqrt();
     let ratio = sigma / 1.4535586033795069e-2;
     assert!((ratio - 0.384).abs() < 0.001, "{ratio}");
     for seed in [1, 2] {
-        let mut sim = Simulator::new(&m, seed);
-        let mut inc = vec![0.0; (1800.0 / ACCF29_TAU0) as usize];
-        sim.fill_channel(0, &mut inc);
-        let mut ev = GapEvidence::from_increments(GapConfig::new(ACCF29_TAU0), &inc);
-        let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
-        crate::diagnosis::assert_bookkeeping(&d);
-        assert_eq!(
-            d.verdict,
-            Verdict::Explained,
-            "seed {seed}: {:?}",
-            d.effects
-        );
-        assert_eq!(d.effects.len(), 1, "seed {seed}: {:?}", d.effects);
+        let d = explained_by_one_effect(ACCF29, ACCF29_TAU0, seed);
         let EffectParams::OutputFilter { time_constant_s } = d.effects[0].params else {
             panic!("seed {seed}: named {:?}", d.effects);
         };
