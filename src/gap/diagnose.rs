@@ -79,6 +79,11 @@ pub struct DiagnoseOptions {
     /// filtered white rate ([`super::filter_cov`]) and the model it is normalised by takes the
     /// white and flicker rate through the filter ([`super::problem::GapProblem::new`]).
     pub cov_filter: Option<crate::model::lowpass::LowPass>,
+    /// The previous pass read the values' step as a counter with carry (white phase,
+    /// [`super::quantization::QuantKind::Angle`]): its quantization error is in the model, and
+    /// the covariance carries no rounding discrepancy ([`super::discrepancy`], which is for
+    /// rate samples rounded after the filter).
+    pub cov_counter: bool,
 }
 
 impl Default for DiagnoseOptions {
@@ -92,6 +97,7 @@ impl Default for DiagnoseOptions {
             min_m: 1,
             cov_coef: None,
             cov_filter: None,
+            cov_counter: false,
         }
     }
 }
@@ -295,7 +301,7 @@ fn diagnose_curve(
         let Some(lp) = d.effects.iter().find_map(|e| e.params.lowpass()) else {
             return Ok(d);
         };
-        if used.is_some_and(|u| std::mem::discriminant(&u) == std::mem::discriminant(&lp)) {
+        if used.is_some_and(|u| same_filter(&u, &lp, snap.lsb.is_some(), snap.tau0_s)) {
             return Ok(d);
         }
         // The covariance's five terms: the plain fit of the taus beyond ten memories of the
@@ -313,6 +319,9 @@ fn diagnose_curve(
         let next = DiagnoseOptions {
             cov_coef: Some(beyond.c_init),
             cov_filter: Some(lp),
+            cov_counter: d
+                .quantization
+                .is_some_and(|q| q.kind == super::quantization::QuantKind::Angle),
             ..opts.clone()
         };
         match diagnose_curve_once(snap, temperature, &next) {
@@ -322,6 +331,22 @@ fn diagnose_curve(
         used = Some(lp);
     }
     Ok(d)
+}
+
+/// Whether the filter named `b` is the one whose covariance was used, `a`: the same kind and,
+/// on a channel whose values show their step (whose covariance carries the rounding's
+/// discrepancy, set by the filter's memory: [`super::discrepancy`]), a memory within 25%.
+fn same_filter(
+    a: &crate::model::lowpass::LowPass,
+    b: &crate::model::lowpass::LowPass,
+    stepped: bool,
+    tau0_s: f64,
+) -> bool {
+    if std::mem::discriminant(a) != std::mem::discriminant(b) {
+        return false;
+    }
+    let r = b.memory_s(tau0_s) / a.memory_s(tau0_s);
+    !stepped || (0.8..=1.25).contains(&r)
 }
 
 fn diagnose_curve_once(
@@ -594,7 +619,7 @@ fn diagnose_curve_once(
         model_tau_s: prob.tau[..j].to_vec(),
         model_base_avar: base.model.clone(),
         model_final_avar: cur.model.clone(),
-        quantization_limited: None,
+        quantization_limited: dead_band_limit(&prob, snap),
         outliers: snap.outliers,
         quantization: snap
             .lsb
@@ -603,6 +628,22 @@ fn diagnose_curve_once(
         effect_intervals,
         first_scores,
         limit_cycles: Vec::new(),
+    })
+}
+
+/// A channel whose rate samples are rounded after its filter with the filtered noise below
+/// [`super::quant_limit::R_WHITE`] steps is quantization-limited too: its shortest taus, up to
+/// ten memories of the filter, carry the rounding model's known error in their covariance
+/// ([`super::discrepancy`]), and the record says so with the same numbers (the noise over the
+/// step as `ratio`, the tau where the discrepancy's full size ends as `tau_white`).
+fn dead_band_limit(prob: &GapProblem, snap: &EvidenceSnapshot) -> Option<QuantizationLimit> {
+    let d = prob.discrepancy?;
+    let lsb = snap.lsb?;
+    (d.sigma_steps < super::quant_limit::R_WHITE).then(|| QuantizationLimit {
+        lsb,
+        ratio: d.sigma_steps,
+        tau_white_s: d.tau_full_s,
+        m_white: (d.tau_full_s / snap.tau0_s).ceil().max(1.0) as u64,
     })
 }
 

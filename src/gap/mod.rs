@@ -25,6 +25,7 @@ pub mod alternatives;
 pub mod band_noise;
 pub mod block_cov;
 pub mod diagnose;
+pub mod discrepancy;
 pub mod effects;
 pub mod ensemble;
 pub mod evidence;

@@ -6,6 +6,7 @@
 //! [`super::diagnose`](mod@super::diagnose), [`super::holdout`] and [`super::oracle`].
 
 use super::diagnose::{DiagnoseError, DiagnoseOptions, Region};
+use super::discrepancy::{rounding_discrepancy, RoundingDiscrepancy};
 use super::effects::{canonical_lowpass, effect_column, EffectKind, EffectParams, Grid};
 use super::evidence::EvidenceSnapshot;
 use super::filter_cov::filter_cov_correction;
@@ -50,6 +51,12 @@ pub struct GapProblem {
     /// the filtered N column ([`GapProblem::set_filter_floor`]; docs/gap.md, "Filters and
     /// Gauss-Markov terms", "Rounding after a filter"). None: no such part.
     pub filter_floor: Option<FilterFloor>,
+    /// The rounding model's known error after the filter of the covariance
+    /// ([`super::discrepancy`]), carried in `S`; None: none carried.
+    pub discrepancy: Option<RoundingDiscrepancy>,
+    /// The filter found by an earlier pass whose covariance this problem carries
+    /// ([`DiagnoseOptions::cov_filter`]).
+    pub cov_filter: Option<LowPass>,
 }
 
 /// The rate rounding after a unit's filter ([`GapProblem::filter_floor`]).
@@ -177,6 +184,20 @@ impl GapProblem {
             .collect();
         let j = pts.len();
         let mut s = DMatrix::from_fn(j, j, |r, c| cov[(r, c)] / (a[r] * a[c]));
+        // Rate samples rounded after the filter found (not a counter with carry, as the
+        // previous pass read the step), coarsely against its noise: the
+        // rounding model's known error enters as a model discrepancy of ln AVAR
+        // ([`super::discrepancy`]; docs/gap.md, "The dead band as model discrepancy").
+        let discrepancy = match (opts.cov_filter, snap.lsb) {
+            (Some(lp), Some(lsb)) if !opts.cov_counter => {
+                rounding_discrepancy(&lp, tau0, lsb / tau0, c_cov[1])
+            }
+            _ => None,
+        };
+        if let Some(d) = &discrepancy {
+            let taus: Vec<f64> = pts.iter().map(|p| p.tau_s).collect();
+            s += d.covariance(&taus);
+        }
         let s_diag: Vec<f64> = (0..j).map(|i| s[(i, i)]).collect();
         if s_diag.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
             return Err(DiagnoseError::Covariance);
@@ -204,6 +225,8 @@ impl GapProblem {
             n_inc: n,
             c_init,
             filter_floor: None,
+            discrepancy,
+            cov_filter: opts.cov_filter,
         })
     }
 
@@ -254,8 +277,20 @@ impl GapProblem {
         let base = ModelSpec::default();
         // The first order and the moving average (the filters MEMS parts run), each scanned
         // without the rounding and with it; the best of each set decides.
+        // The filter of the covariance, when one was found and is of another kind, is scanned
+        // too: a second-order or zero-phase unit fits neither of the two well, and their
+        // comparison then says nothing about its rounding (docs/gap.md, "The dead band as model
+        // discrepancy (session 13)").
+        let found = self
+            .cov_filter
+            .map(|lp| EffectParams::from_lowpass(lp).kind())
+            .filter(|k| !matches!(k, EffectKind::OutputFilter | EffectKind::MovingAverage));
+        let kinds: Vec<EffectKind> = [EffectKind::OutputFilter, EffectKind::MovingAverage]
+            .into_iter()
+            .chain(found)
+            .collect();
         let best = |p: &Self| {
-            [EffectKind::OutputFilter, EffectKind::MovingAverage]
+            kinds
                 .iter()
                 .filter_map(|&k| p.scan_params(&base, k))
                 .min_by(|a, b| a.1.chi2.total_cmp(&b.1.chi2))

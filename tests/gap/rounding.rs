@@ -208,3 +208,121 @@ fn the_rounding_in_the_dead_band_follows_the_mean_on_the_grid() {
         }
     }
 }
+
+/// 1800 s of the one-channel `model` at `tau0_s` (simulator seed `seed`) diagnosed with the
+/// defaults: the bookkeeping holds, the verdict is `explained` and one effect is named.
+fn explained_by_one_effect(model: &str, tau0_s: f64, seed: u64) -> allanscope::gap::Diagnosis {
+    use allanscope::gap::{diagnose, DiagnoseOptions, GapConfig, GapEvidence, Verdict};
+    use allanscope::sim::{SimModel, Simulator};
+    let m = SimModel::from_toml_str(model, std::path::Path::new("<test>")).expect("model");
+    let mut sim = Simulator::new(&m, seed);
+    let mut inc = vec![0.0; (1800.0 / tau0_s) as usize];
+    sim.fill_channel(0, &mut inc);
+    let mut ev = GapEvidence::from_increments(GapConfig::new(tau0_s), &inc);
+    let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
+    crate::diagnosis::assert_bookkeeping(&d);
+    assert_eq!(
+        d.verdict,
+        Verdict::Explained,
+        "seed {seed}: {:?}",
+        d.effects
+    );
+    assert_eq!(d.effects.len(), 1, "seed {seed}: {:?}", d.effects);
+    d
+}
+
+/// `family_gap --families kalgyro --seed 121` draw 19 (session 12's blind family: a consumer
+/// IMU gyro at 200 Hz behind its second-order digital low-pass, each rate sample rounded to a
+/// step of 1 / 0.56 filtered sigmas). The rounding floor was decided by scanning the first order
+/// and the moving average only; neither fits a second-order unit, so the floor was dropped and
+/// the second order, fitted without its rounding, came out 10% high in frequency with a
+/// band invented at 12 Hz beside it (seeds 1-3 through the CLI on main 5c42e80). The filter the
+/// earlier pass found is now scanned with and without the floor too.
+const KALG19: &str = "tau0_s = 0.005\n[[channel]]\nname = \"x\"\nunit = \"u\"\n\
+                      N = 6.151372034169291e-3\nB = 1.208370899623152e-3\n\
+                      K = 1.3762697694221681e-5\n\
+                      flicker_band_s = [0.005, 2.3323595478756688e5]\n\
+                      bias = 3.526245040773406e-1\n\
+                      second_order_filter = { natural_frequency = 2.3707836501265064e1, \
+                      damping = 6.765986489939894e-1 }\n\
+                      rate_lsb = 8.475270101003542e-2\n";
+
+/// 1800 s, simulator seeds 1 and 2: the second order alone, `explained`, within 2% in natural
+/// frequency and 3% in damping; the values' step is read as rate rounding; `N` without the
+/// rounding is the unit's within 5%.
+#[test]
+fn a_second_order_unit_keeps_its_rounding_floor() {
+    use allanscope::gap::quantization::QuantKind;
+    use allanscope::gap::EffectParams;
+    for seed in [1, 2] {
+        let d = explained_by_one_effect(KALG19, 0.005, seed);
+        let EffectParams::SecondOrderFilter {
+            natural_frequency_hz,
+            damping,
+        } = d.effects[0].params
+        else {
+            panic!("seed {seed}: named {:?}", d.effects);
+        };
+        let ef = natural_frequency_hz / 2.3707836501265064e1 - 1.0;
+        let ez = damping / 6.765986489939894e-1 - 1.0;
+        assert!(ef.abs() < 0.02, "seed {seed}: f0 {natural_frequency_hz}");
+        assert!(ez.abs() < 0.03, "seed {seed}: damping {damping}");
+        let q = d.quantization.expect("the values show their step");
+        assert_eq!(q.kind, QuantKind::Rate, "seed {seed}: {q:?}");
+        assert!(
+            (q.n_unit / 6.151372034169291e-3 - 1.0).abs() < 0.05,
+            "seed {seed}: N {}",
+            q.n_unit
+        );
+    }
+}
+
+/// `family_gap --families accfilt --hours 1,2 --seed 107` draw 29: a MEMS accelerometer at 361
+/// Hz behind a first-order filter of 15 samples, each rate sample then rounded to a step of
+/// 1 / 0.384 filtered sigmas with the mean on a step (the dead band, where the rounding model
+/// averaged over the mean's position is 19-31% off at the short taus).
+const ACCF29: &str = "tau0_s = 0.002770083102493075\n[[channel]]\nname = \"x\"\nunit = \"u\"\n\
+                      N = 1.6073054280352312e-3\nB = 2.6048171847428513e-4\n\
+                      K = 8.350094600544586e-5\n\
+                      flicker_band_s = [0.002770083102493075, 3.9011756822523996e4]\n\
+                      output_filter = { time_constant = 4.1453357056591464e-2 }\n\
+                      rate_lsb = 1.4535586033795069e-2\n";
+const ACCF29_TAU0: f64 = 0.002770083102493075;
+const ACCF29_T: f64 = 4.1453357056591464e-2;
+
+/// The rounding model's known error enters the covariance as a model discrepancy
+/// (`gap::discrepancy`) instead of being read as effects. On main 5c42e80 the CLI's diagnosis of
+/// this unit (1800 s, seeds 1-3) was `unexplained` every time, with a Gauss-Markov term at the
+/// filter's own scale (tau_c 0.033-0.038 s) beside a second, short filter, and warm-ups,
+/// sinusoids or bands after them. Now: the first order alone, `explained`; the record says the
+/// channel is quantization-limited with the filtered noise over the step within 10% of the
+/// simulated 0.384. The time constant comes out 27-34% low here (the short taus weighted down
+/// by the discrepancy; docs/gap.md, "The dead band as model discrepancy (session 13)"), so it
+/// is held to 40%.
+#[test]
+fn the_dead_band_is_a_discrepancy_not_an_effect() {
+    use allanscope::gap::EffectParams;
+    // sigma / L of the simulated unit: a first order's rho_0 = (1 - a) / (1 + a) per sample.
+    let a = (-ACCF29_TAU0 / ACCF29_T).exp();
+    let sigma = (1.6073054280352312e-3f64.powi(2) * (1.0 - a) / (1.0 + a) / ACCF29_TAU0).sqrt();
+    let ratio = sigma / 1.4535586033795069e-2;
+    assert!((ratio - 0.384).abs() < 0.001, "{ratio}");
+    for seed in [1, 2] {
+        let d = explained_by_one_effect(ACCF29, ACCF29_TAU0, seed);
+        let EffectParams::OutputFilter { time_constant_s } = d.effects[0].params else {
+            panic!("seed {seed}: named {:?}", d.effects);
+        };
+        assert!(
+            (time_constant_s / ACCF29_T - 1.0).abs() < 0.4,
+            "seed {seed}: T {time_constant_s}"
+        );
+        let q = d
+            .quantization_limited
+            .expect("the dead band is quantization-limited");
+        assert!(
+            (q.ratio / ratio - 1.0).abs() < 0.1,
+            "seed {seed}: ratio {} against {ratio}",
+            q.ratio
+        );
+    }
+}
