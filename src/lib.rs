@@ -126,6 +126,7 @@
 //!   quantization.rs        which quantization the values show
 //!   quant_limit.rs         when quantization limits what can be told
 //!   rounding.rs            rate samples rounded after a filter, as AVAR
+//!   discrepancy.rs         the rounding model's known error, carried in the covariance
 //!   limit_cycle.rs         a named line that is the counter's limit cycle
 //!   segments.rs            homogeneity of the curve across the run's segments
 //!   simplex.rs             a two-parameter Nelder-Mead search (the second-order filter's polish)

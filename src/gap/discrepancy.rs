@@ -112,10 +112,10 @@ mod tests {
 
     #[test]
     fn the_bound_is_the_first_harmonic() {
-        // 4 exp(-2 pi^2 s^2): 0.356 at 0.35 steps, 0.0291 at 0.5 (docs/gap.md's -0.36 with the
+        // 4 exp(-2 pi^2 s^2): 0.356 at 0.35 steps, 0.0288 at 0.5 (docs/gap.md's -0.36 with the
         // mean on a step at sigma = 0.35 L).
         assert!((relative_bound(0.35) - 0.3562).abs() < 1e-3);
-        assert!((relative_bound(0.5) - 0.02896).abs() < 1e-4);
+        assert!((relative_bound(0.5) - 0.02877).abs() < 2e-5);
         assert_eq!(relative_bound(0.2), MAX_DISCREPANCY);
         assert_eq!(relative_bound(0.0), MAX_DISCREPANCY);
     }
