@@ -25,7 +25,21 @@
 //! already fits the covariance's five terms, where the error is white rate noise that the free
 //! `N` takes in) and falls as `1 / tau` beyond. A channel whose bound is below
 //! [`MIN_DISCREPANCY`] (the rounding fine against the noise) gets nothing.
+//!
+//! The error's terms are each linear in `exp(i 2 pi p mu / L)`, `mu` the unit's mean rate, so
+//! over a run whose mean moves on the grid (a turn-on bias anywhere between two steps, a drift,
+//! a warm-up, jumps) they are multiplied by the run's average `A_p` of `cos(2 pi p mu / L)`
+//! (docs/gap.md "Rounding after a filter (session 12)"). Where the model carries the rounding
+//! (`sigma >= MIN_SIGMA_STEPS L`) and the block means resolve where the mean falls
+//! ([`super::rounding::grid_cosines`]), the bound is therefore
+//! `4 (max(|A_1|, A_FLOOR) exp(-x / 2) + |A_2| exp(-2 x))` ([`GRID_FLOOR`]): a unit whose mean
+//! sits a quarter step off the grid, or wanders over several steps, needs little of it. Below
+//! `MIN_SIGMA_STEPS` the model leaves the rounding out and the whole bound is kept. The block
+//! means see the mean's position over whole blocks only; what moves it faster (a sinusoid, the
+//! unit's own noise) lowers the true `|A_p|` further, so the bound stays an upper one except
+//! where blocks at opposite positions differ in their spread, which the floor covers.
 
+use super::rounding::{grid_cosines, GridPosition, MIN_SIGMA_STEPS};
 use crate::model::lowpass::LowPass;
 use nalgebra::DMatrix;
 use std::f64::consts::PI;
@@ -39,6 +53,10 @@ pub const MAX_DISCREPANCY: f64 = 1.0;
 pub const LENGTH_OCTAVES: f64 = 1.0;
 /// The discrepancy's full size holds up to this many memories of the filter.
 const MEMORIES: f64 = 10.0;
+/// The smallest share of the first harmonic's bound kept when the block means place the mean
+/// on the grid (module doc): the blocks' positions are averages over each block, and the
+/// estimate of `|A_1|` from some 30-300 of them is uncertain by about this much.
+pub const GRID_FLOOR: f64 = 0.1;
 
 /// The discrepancy found for a channel: docs/records.md's `quantization_limited` reuses its
 /// numbers.
@@ -50,6 +68,9 @@ pub struct RoundingDiscrepancy {
     pub bound: f64,
     /// The tau (s) up to which the bound holds in full (ten memories of the filter).
     pub tau_full_s: f64,
+    /// `|A_1|`, the run's average of `cos(2 pi mu / L)` as the block means place the mean on
+    /// the grid, when it scaled the bound (module doc); None: the bound for the worst place.
+    pub grid_first_harmonic: Option<f64>,
 }
 
 /// The relative bound `4 exp(-2 pi^2 sigma_steps^2)` on the rounding model's error (module
@@ -61,21 +82,41 @@ pub fn relative_bound(sigma_steps: f64) -> f64 {
     (4.0 * (-2.0 * PI * PI * sigma_steps * sigma_steps).exp()).min(MAX_DISCREPANCY)
 }
 
+/// The relative bound when the run's averages of `cos(2 pi p mu / L)` are `a1` and `a2`:
+/// `4 (max(|a1|, GRID_FLOOR) exp(-x / 2) + |a2| exp(-2 x))`, `x = 4 pi^2 sigma_steps^2`
+/// (module doc), capped at [`MAX_DISCREPANCY`].
+pub fn relative_bound_on_grid(sigma_steps: f64, a1: f64, a2: f64) -> f64 {
+    if !sigma_steps.is_finite() || sigma_steps <= 0.0 {
+        return MAX_DISCREPANCY;
+    }
+    let x = 4.0 * PI * PI * sigma_steps * sigma_steps;
+    let a1 = if a1.is_finite() { a1.abs() } else { 1.0 };
+    let a2 = if a2.is_finite() { a2.abs() } else { 1.0 };
+    (4.0 * (a1.max(GRID_FLOOR) * (-0.5 * x).exp() + a2 * (-2.0 * x).exp())).min(MAX_DISCREPANCY)
+}
+
 /// The discrepancy of a channel whose rate samples, filtered by `lp` (white rate `N^2 = n2`,
-/// u^2/s, at `tau0_s`), are rounded to `step` (u/s): `None` when the bound is below
-/// [`MIN_DISCREPANCY`] or the inputs cannot say.
+/// u^2/s, at `tau0_s`), are rounded to `step` (u/s), with the run's block means `grid` when
+/// known: `None` when the bound is below [`MIN_DISCREPANCY`] or the inputs cannot say.
 pub fn rounding_discrepancy(
     lp: &LowPass,
     tau0_s: f64,
     step: f64,
     n2: f64,
+    grid: Option<&GridPosition>,
 ) -> Option<RoundingDiscrepancy> {
     if !(step > 0.0 && step.is_finite() && tau0_s > 0.0 && n2.is_finite() && n2 >= 0.0) {
         return None;
     }
     let sigma = super::rounding::filtered_sigma(lp, tau0_s, n2);
     let sigma_steps = sigma / step;
-    let bound = relative_bound(sigma_steps);
+    let harmonics = grid
+        .filter(|_| sigma_steps >= MIN_SIGMA_STEPS)
+        .and_then(|g| grid_cosines(g, step, sigma * sigma, n2));
+    let bound = match harmonics {
+        Some(a) => relative_bound_on_grid(sigma_steps, a[0], a[1]),
+        None => relative_bound(sigma_steps),
+    };
     if bound < MIN_DISCREPANCY {
         return None;
     }
@@ -83,6 +124,7 @@ pub fn rounding_discrepancy(
         sigma_steps,
         bound,
         tau_full_s: MEMORIES * lp.memory_s(tau0_s).max(tau0_s),
+        grid_first_harmonic: harmonics.map(|a| a[0].abs()),
     })
 }
 
@@ -131,8 +173,8 @@ mod tests {
         let a: f64 = (-tau0 / 0.05f64).exp();
         let n2 = 1e-4;
         let sigma = (n2 * (1.0 - a) / (1.0 + a) / tau0).sqrt();
-        assert!(rounding_discrepancy(&lp, tau0, sigma / 2.0, n2).is_none());
-        let d = rounding_discrepancy(&lp, tau0, sigma / 0.35, n2).expect("dead band");
+        assert!(rounding_discrepancy(&lp, tau0, sigma / 2.0, n2, None).is_none());
+        let d = rounding_discrepancy(&lp, tau0, sigma / 0.35, n2, None).expect("dead band");
         assert!((d.sigma_steps - 0.35).abs() < 0.01, "{}", d.sigma_steps);
         let full = d.tau_full_s;
         let sd = d.sd(&[full / 4.0, full, 4.0 * full]);
@@ -141,5 +183,36 @@ mod tests {
         let c = d.covariance(&[full / 2.0, full]);
         // One octave apart: correlation exp(-1/2).
         assert!((c[(0, 1)] / (sd[0] * sd[1]) - (-0.5f64).exp()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_mean_a_quarter_step_off_the_grid_needs_little_of_it() {
+        let lp = LowPass::FirstOrder {
+            time_constant_s: 0.05,
+        };
+        let tau0 = 0.005;
+        let a: f64 = (-tau0 / 0.05f64).exp();
+        let n2 = 1e-4;
+        let sigma = (n2 * (1.0 - a) / (1.0 + a) / tau0).sqrt();
+        let grid_at = |steps: f64, step: f64| GridPosition {
+            block_means: vec![steps * step; 64],
+            block_s: 100.0,
+        };
+        // 0.45 filtered sigmas per step: x = 4 pi^2 0.2025, exp(-x / 2) = 0.01838.
+        let step = sigma / 0.45;
+        let on = rounding_discrepancy(&lp, tau0, step, n2, Some(&grid_at(3.0, step)))
+            .expect("the mean on a step");
+        assert!((on.bound - 4.0 * 0.01838).abs() < 2e-4, "{}", on.bound);
+        assert!((on.grid_first_harmonic.unwrap() - 1.0).abs() < 1e-6);
+        // A quarter step off: the block mean holds the rounding's mean error, -(L / pi)
+        // exp(-x / 2) = -0.0059 steps, taken back out; |A_1| = |cos(2 pi 0.25)| = 0, kept at
+        // the floor, 4 * 0.1 * 0.01838 = 0.0074, below MIN_DISCREPANCY.
+        assert!(rounding_discrepancy(&lp, tau0, step, n2, Some(&grid_at(-2.25, step))).is_none());
+        // Below MIN_SIGMA_STEPS the model holds no rounding and the whole bound stays.
+        let step = sigma / 0.35;
+        let d = rounding_discrepancy(&lp, tau0, step, n2, Some(&grid_at(0.25, step)))
+            .expect("dead band");
+        assert_eq!(d.bound, relative_bound(d.sigma_steps));
+        assert!(d.grid_first_harmonic.is_none());
     }
 }

@@ -10,7 +10,7 @@ use super::discrepancy::{rounding_discrepancy, RoundingDiscrepancy};
 use super::effects::{canonical_lowpass, effect_column, EffectKind, EffectParams, Grid};
 use super::evidence::EvidenceSnapshot;
 use super::filter_cov::filter_cov_correction;
-use super::rounding::{filtered_sigma, rounding_avar, MIN_SIGMA_STEPS};
+use super::rounding::{filtered_sigma, rounding_avar, GridPosition, MIN_SIGMA_STEPS};
 use crate::allan::CurvePoint;
 use crate::model::avar_cov::{AvarCovariance, CovPoint};
 use crate::model::fit::{fit, FitOptions};
@@ -190,7 +190,12 @@ impl GapProblem {
         // ([`super::discrepancy`]; docs/gap.md, "The dead band as model discrepancy").
         let discrepancy = match (opts.cov_filter, snap.lsb) {
             (Some(lp), Some(lsb)) if !opts.cov_counter => {
-                rounding_discrepancy(&lp, tau0, lsb / tau0, c_cov[1])
+                // Where the mean falls on the grid, as the block means place it.
+                let grid = GridPosition {
+                    block_means: snap.block_means.clone(),
+                    block_s: snap.block_len as f64 * tau0,
+                };
+                rounding_discrepancy(&lp, tau0, lsb / tau0, c_cov[1], Some(&grid))
             }
             _ => None,
         };

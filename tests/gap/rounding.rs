@@ -326,3 +326,73 @@ fn the_dead_band_is_a_discrepancy_not_an_effect() {
         );
     }
 }
+
+/// The step (u/s) of [`grid_discrepancy`]'s unit: 1 / 0.45 filtered sigmas (a first order's
+/// `rho_0 = (1 - a) / (1 + a)` per sample).
+fn grid_step() -> f64 {
+    let n = 1.6073054280352312e-3f64;
+    let a = (-ACCF29_TAU0 / ACCF29_T).exp();
+    (n * n * (1.0 - a) / (1.0 + a) / ACCF29_TAU0).sqrt() / 0.45
+}
+
+/// A first order of 15 samples at 361 Hz, white rate only, each rate sample rounded to a step
+/// of 1 / 0.45 filtered sigmas ([`grid_step`]), with the constant input `bias_steps` steps off the grid and a
+/// rate random walk `k` (u/s/sqrt(s)): the discrepancy the diagnosis's last pass carries.
+fn grid_discrepancy(
+    bias_steps: f64,
+    k: f64,
+) -> Option<allanscope::gap::discrepancy::RoundingDiscrepancy> {
+    use allanscope::gap::problem::GapProblem;
+    use allanscope::gap::{DiagnoseOptions, GapConfig, GapEvidence};
+    use allanscope::model::lowpass::LowPass;
+    use allanscope::sim::{SimModel, Simulator};
+    let (tau0, t, n, step) = (ACCF29_TAU0, ACCF29_T, 1.6073054280352312e-3, grid_step());
+    let model = format!(
+        "tau0_s = {tau0}\n[[channel]]\nname = \"x\"\nunit = \"u\"\nN = {n}\nK = {k}\n\
+         bias = {}\noutput_filter = {{ time_constant = {t} }}\nrate_lsb = {step}\n",
+        bias_steps * step
+    );
+    let m = SimModel::from_toml_str(&model, std::path::Path::new("<test>")).expect("model");
+    let mut sim = Simulator::new(&m, 5);
+    let mut inc = vec![0.0; (1800.0 / tau0) as usize];
+    sim.fill_channel(0, &mut inc);
+    let snap = GapEvidence::from_increments(GapConfig::new(tau0), &inc).snapshot();
+    let beyond = DiagnoseOptions {
+        min_m: (10.0 * t / tau0).ceil() as u64,
+        ..DiagnoseOptions::default()
+    };
+    let opts = DiagnoseOptions {
+        cov_coef: Some(GapProblem::new(&snap, &beyond).expect("beyond").c_init),
+        cov_filter: Some(LowPass::FirstOrder { time_constant_s: t }),
+        ..DiagnoseOptions::default()
+    };
+    GapProblem::new(&snap, &opts).expect("problem").discrepancy
+}
+
+/// The rounding model's error scales with the run's average of `cos(2 pi mu / L)` (docs/gap.md
+/// "Rounding after a filter (session 12)"), which the block means measure: with the mean on a
+/// step the discrepancy is the worst case's, `4 exp(-x / 2)` (0.0735 at the simulated 0.45
+/// filtered sigmas per step; the fitted N sets sigma, within 10%); a quarter step off the grid
+/// it falls below MIN_DISCREPANCY and is not carried; with the mean wandering over several
+/// steps in the run (a random walk of 3 steps' rms over ten minutes) `|A_1|` is below 0.1 and
+/// the bound kept (the floor's, `GRID_FLOOR`) is below a fifth of the worst case's.
+#[test]
+fn the_discrepancy_follows_where_the_mean_falls_on_the_grid() {
+    use allanscope::gap::discrepancy::relative_bound;
+    let on = grid_discrepancy(3.0, 0.0).expect("the mean on a step");
+    assert!((on.sigma_steps / 0.45 - 1.0).abs() < 0.1, "{on:?}");
+    assert!(
+        (on.bound / relative_bound(on.sigma_steps) - 1.0).abs() < 0.02,
+        "{on:?}"
+    );
+    assert!(on.grid_first_harmonic.is_some_and(|a| a > 0.95), "{on:?}");
+    let off = grid_discrepancy(3.25, 0.0);
+    assert!(off.is_none(), "a quarter step off: {off:?}");
+    // K sqrt(600 s) = 3 steps.
+    let wander = grid_discrepancy(3.0, 3.0 * grid_step() / 600f64.sqrt());
+    assert!(
+        wander.is_none_or(|d| d.grid_first_harmonic.is_some_and(|a| a < 0.1)
+            && d.bound < 0.2 * relative_bound(d.sigma_steps)),
+        "a wandering mean: {wander:?}"
+    );
+}
