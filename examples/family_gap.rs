@@ -510,7 +510,7 @@ fn draw_unit(
             u.tau0 = rate(rng, 10.0, 50.0);
             u.rate_lsb = log_uniform(rng, 0.1, 1.0) * u.c[1] / u.tau0.sqrt();
         }
-        "accfilt" => {
+        "accfilt" | "accgrav" => {
             u.c[1] = log_uniform(rng, 0.02, 0.2) / 60.0;
             u.c[2] = log_uniform(rng, 20.0, 200.0) * 9.81e-6;
             u.c[3] = log_uniform(rng, 1e-5, 1e-4);
@@ -519,24 +519,17 @@ fn draw_unit(
             u.intrinsic = Some(EffectParams::OutputFilter {
                 time_constant_s: tf,
             });
-            u.rate_lsb = log_uniform(rng, 0.3, 3.0) * u.c[1] / (2.0 * tf).sqrt();
-        }
-        "accgrav" => {
-            // `accfilt`'s accelerometer with gravity's projection on its axis, so the mean
-            // falls anywhere on the rounding grid, rounded in or near the dead band: the step
-            // 1-4 filtered sample sigmas (a first order's rho_0 = (1 - a) / (1 + a)).
-            u.c[1] = log_uniform(rng, 0.02, 0.2) / 60.0;
-            u.c[2] = log_uniform(rng, 20.0, 200.0) * 9.81e-6;
-            u.c[3] = log_uniform(rng, 1e-5, 1e-4);
-            u.tau0 = rate(rng, 200.0, 1000.0);
-            let tf = log_uniform(rng, 5.0, 30.0) * u.tau0;
-            u.intrinsic = Some(EffectParams::OutputFilter {
-                time_constant_s: tf,
-            });
-            let a = (-u.tau0 / tf).exp();
-            let sigma = u.c[1] * ((1.0 - a) / (1.0 + a) / u.tau0).sqrt();
-            u.rate_lsb = log_uniform(rng, 1.0, 4.0) * sigma;
-            u.bias = rng.random_range(-9.81..9.81);
+            if family == "accfilt" {
+                u.rate_lsb = log_uniform(rng, 0.3, 3.0) * u.c[1] / (2.0 * tf).sqrt();
+            } else {
+                // `accgrav`: gravity's projection on the axis, so the mean falls anywhere on
+                // the rounding grid, rounded in or near the dead band: the step 1-4 filtered
+                // sample sigmas (a first order's rho_0 = (1 - a) / (1 + a)).
+                let a = (-u.tau0 / tf).exp();
+                let sigma = u.c[1] * ((1.0 - a) / (1.0 + a) / u.tau0).sqrt();
+                u.rate_lsb = log_uniform(rng, 1.0, 4.0) * sigma;
+                u.bias = rng.random_range(-9.81..9.81);
+            }
         }
         "navacc" => {
             // ug/sqrt(Hz) to m/s/sqrt(s); ug to m/s^2.

@@ -185,17 +185,19 @@ mod tests {
         assert_eq!(relative_bound(0.0), MAX_DISCREPANCY);
     }
 
+    /// A first order of 10 samples at 200 Hz on white rate `N^2 = 1e-4`: the filter, tau0 (s),
+    /// `N^2` and the filtered sample's sigma, `N sqrt(rho_0 / tau0)` with a first order's
+    /// `rho_0 = (1 - a) / (1 + a)`, `a = exp(-tau0 / T)`.
+    fn first_order_unit() -> (LowPass, f64, f64, f64) {
+        let (t, tau0, n2): (f64, f64, f64) = (0.05, 0.005, 1e-4);
+        let a = (-tau0 / t).exp();
+        let sigma = (n2 * (1.0 - a) / (1.0 + a) / tau0).sqrt();
+        (LowPass::FirstOrder { time_constant_s: t }, tau0, n2, sigma)
+    }
+
     #[test]
     fn a_fine_step_adds_nothing_and_a_coarse_one_holds_to_ten_memories() {
-        let lp = LowPass::FirstOrder {
-            time_constant_s: 0.05,
-        };
-        let tau0 = 0.005;
-        // sigma = N sqrt(rho_0 / tau0); rho_0 of a first order of a = exp(-tau0/T) is
-        // (1 - a) / (1 + a) per sample of unit white rate.
-        let a: f64 = (-tau0 / 0.05f64).exp();
-        let n2 = 1e-4;
-        let sigma = (n2 * (1.0 - a) / (1.0 + a) / tau0).sqrt();
+        let (lp, tau0, n2, sigma) = first_order_unit();
         assert!(rounding_discrepancy(&lp, tau0, sigma / 2.0, n2, None).is_none());
         let d = rounding_discrepancy(&lp, tau0, sigma / 0.35, n2, None).expect("dead band");
         assert!((d.sigma_steps - 0.35).abs() < 0.01, "{}", d.sigma_steps);
@@ -230,13 +232,7 @@ mod tests {
 
     #[test]
     fn the_mean_a_quarter_step_off_the_grid_needs_little_of_it() {
-        let lp = LowPass::FirstOrder {
-            time_constant_s: 0.05,
-        };
-        let tau0 = 0.005;
-        let a: f64 = (-tau0 / 0.05f64).exp();
-        let n2 = 1e-4;
-        let sigma = (n2 * (1.0 - a) / (1.0 + a) / tau0).sqrt();
+        let (lp, tau0, n2, sigma) = first_order_unit();
         let grid_at = |steps: f64, step: f64| GridPosition {
             block_means: vec![steps * step; 64],
             block_s: 100.0,
