@@ -160,6 +160,11 @@
 //!   average (`moving_average`, 2-16 taps, 2 stages), the angle counted with carry at 0.1-1 of
 //!   the filtered per-sample angle noise `N sqrt(rho_0 tau0)`.
 //!
+//! A development family of session 14 (tuned on: "The floor on the grid (session 14)"):
+//! - `accgrav`: `accfilt`'s accelerometer with gravity's projection on its axis uniform in
+//!   [-9.81, 9.81] m/s^2, each rate sample rounded at 1-4 filtered sample sigmas (the dead band
+//!   and just above it, the mean anywhere on the grid).
+//!
 //! On `mimu`, `cicgyro` and the session-12 families a clean run's false alarm is any named
 //! effect that is not a low-pass, or two or more low-passes (a second-order low-pass near
 //! critical damping and a zero-phase filter have the same `|H|^2`); the kind and its
@@ -230,11 +235,11 @@ static MODELS_DIR: OnceLock<String> = OnceLock::new();
 
 /// The families; the first six are the default list, `coarse` is drawn on request. New
 /// families go at the end: a draw's stream depends on the family's index.
-const FAMILIES: [&str; 33] = [
+const FAMILIES: [&str; 34] = [
     "navfog", "tacfog", "vog4", "memsgyro", "ma4", "memsacc", "coarse", "consmems", "fog2k",
     "accr", "kmems", "rfog", "hrmems", "qtzgyro", "servoacc", "short", "long", "adis", "adistemp",
     "rlg", "lowrate", "accfilt", "navacc", "mimu", "cicgyro", "hrg", "thermfog", "fog5k",
-    "kalgyro", "kalacc", "cicacc", "zpexp", "bartfog",
+    "kalgyro", "kalacc", "cicacc", "zpexp", "bartfog", "accgrav",
 ];
 /// The held-out families (`--families heldout`): defined before the calibration of issue 13's
 /// last round and run only for its final tables, so nothing was tuned on them.
@@ -505,7 +510,7 @@ fn draw_unit(
             u.tau0 = rate(rng, 10.0, 50.0);
             u.rate_lsb = log_uniform(rng, 0.1, 1.0) * u.c[1] / u.tau0.sqrt();
         }
-        "accfilt" => {
+        "accfilt" | "accgrav" => {
             u.c[1] = log_uniform(rng, 0.02, 0.2) / 60.0;
             u.c[2] = log_uniform(rng, 20.0, 200.0) * 9.81e-6;
             u.c[3] = log_uniform(rng, 1e-5, 1e-4);
@@ -514,7 +519,17 @@ fn draw_unit(
             u.intrinsic = Some(EffectParams::OutputFilter {
                 time_constant_s: tf,
             });
-            u.rate_lsb = log_uniform(rng, 0.3, 3.0) * u.c[1] / (2.0 * tf).sqrt();
+            if family == "accfilt" {
+                u.rate_lsb = log_uniform(rng, 0.3, 3.0) * u.c[1] / (2.0 * tf).sqrt();
+            } else {
+                // `accgrav`: gravity's projection on the axis, so the mean falls anywhere on
+                // the rounding grid, rounded in or near the dead band: the step 1-4 filtered
+                // sample sigmas (a first order's rho_0 = (1 - a) / (1 + a)).
+                let a = (-u.tau0 / tf).exp();
+                let sigma = u.c[1] * ((1.0 - a) / (1.0 + a) / u.tau0).sqrt();
+                u.rate_lsb = log_uniform(rng, 1.0, 4.0) * sigma;
+                u.bias = rng.random_range(-9.81..9.81);
+            }
         }
         "navacc" => {
             // ug/sqrt(Hz) to m/s/sqrt(s); ug to m/s^2.

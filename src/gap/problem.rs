@@ -6,11 +6,14 @@
 //! [`super::diagnose`](mod@super::diagnose), [`super::holdout`] and [`super::oracle`].
 
 use super::diagnose::{DiagnoseError, DiagnoseOptions, Region};
-use super::discrepancy::{rounding_discrepancy, RoundingDiscrepancy};
+use super::discrepancy::{floor_holds, rounding_discrepancy, RoundingDiscrepancy};
 use super::effects::{canonical_lowpass, effect_column, EffectKind, EffectParams, Grid};
 use super::evidence::EvidenceSnapshot;
 use super::filter_cov::filter_cov_correction;
-use super::rounding::{filtered_sigma, rounding_avar, GridPosition, MIN_SIGMA_STEPS};
+use super::rounding::{
+    filtered_sigma, grid_cosines, rounding_avar, GridPosition, MIN_SIGMA_STEPS,
+    MIN_SIGMA_STEPS_ON_GRID,
+};
 use crate::allan::CurvePoint;
 use crate::model::avar_cov::{AvarCovariance, CovPoint};
 use crate::model::fit::{fit, FitOptions};
@@ -57,6 +60,9 @@ pub struct GapProblem {
     /// The filter found by an earlier pass whose covariance this problem carries
     /// ([`DiagnoseOptions::cov_filter`]).
     pub cov_filter: Option<LowPass>,
+    /// Where the unit's mean falls on the rounding grid, as the run's block means show it
+    /// (None: the values show no step).
+    grid: Option<GridPosition>,
 }
 
 /// The rate rounding after a unit's filter ([`GapProblem::filter_floor`]).
@@ -188,14 +194,14 @@ impl GapProblem {
         // previous pass read the step), coarsely against its noise: the
         // rounding model's known error enters as a model discrepancy of ln AVAR
         // ([`super::discrepancy`]; docs/gap.md, "The dead band as model discrepancy").
+        // Where the mean falls on the grid, as the block means place it.
+        let grid = snap.lsb.map(|_| GridPosition {
+            block_means: snap.block_means.clone(),
+            block_s: snap.block_len as f64 * tau0,
+        });
         let discrepancy = match (opts.cov_filter, snap.lsb) {
             (Some(lp), Some(lsb)) if !opts.cov_counter => {
-                // Where the mean falls on the grid, as the block means place it.
-                let grid = GridPosition {
-                    block_means: snap.block_means.clone(),
-                    block_s: snap.block_len as f64 * tau0,
-                };
-                rounding_discrepancy(&lp, tau0, lsb / tau0, c_cov[1], Some(&grid))
+                rounding_discrepancy(&lp, tau0, lsb / tau0, c_cov[1], grid.as_ref())
             }
             _ => None,
         };
@@ -232,6 +238,7 @@ impl GapProblem {
             filter_floor: None,
             discrepancy,
             cov_filter: opts.cov_filter,
+            grid,
         })
     }
 
@@ -319,10 +326,23 @@ impl GapProblem {
             (Some((p, w)), Some(wo)) if w.chi2 < wo => {
                 // The model holds while the filtered sample's noise is at least
                 // MIN_SIGMA_STEPS steps ([`super::rounding`]): below, the rounding holds the
-                // output on one step (a dead band) and neither model describes it.
+                // output on one step (a dead band) and the averaged model does not describe
+                // it, unless the block means place the unit's mean where the dropped terms are
+                // small ([`floor_holds`]; docs/gap.md, "The floor on the grid (session 14)").
                 let n2 = w.coef.get(1).copied().unwrap_or(0.0).max(0.0);
                 p.lowpass().is_some_and(|lp| {
-                    filtered_sigma(&lp, self.tau0_s, n2) >= MIN_SIGMA_STEPS * step
+                    let sigma = filtered_sigma(&lp, self.tau0_s, n2);
+                    let steps = sigma / step;
+                    steps >= MIN_SIGMA_STEPS
+                        || floor_holds(
+                            steps,
+                            self.grid
+                                .as_ref()
+                                .filter(|_| steps >= MIN_SIGMA_STEPS_ON_GRID)
+                                .and_then(|g| grid_cosines(g, step, sigma * sigma, n2))
+                                .as_ref()
+                                .map(|a| &a[..]),
+                        )
                 })
             }
             _ => false,

@@ -76,9 +76,9 @@ const GRID_HARMONICS: usize = 8;
 /// The filtered sample's noise, in steps, down to which [`rounding_avar_on_grid`] matches
 /// simulated runs when the block means say where the mean falls on the grid
 /// ([`grid_cosines`]): within 1% at 0.25 steps, 2% at 0.2 (docs/gap.md, "Rounding after a
-/// filter (session 12)"; docs/repro/session12/rr_grid.py). The diagnosis does not use the grid
-/// yet (`GapProblem::set_filter_floor` keeps [`MIN_SIGMA_STEPS`]; the measured attempt is in
-/// that section).
+/// filter (session 12)"; docs/repro/session12/rr_grid.py). The diagnosis keeps the averaged
+/// model down to it where the block means place the mean so that what that model drops is
+/// small (`discrepancy::floor_holds`; docs/gap.md, "The floor on the grid (session 14)").
 pub const MIN_SIGMA_STEPS_ON_GRID: f64 = 0.25;
 
 /// The largest variance, in steps squared, of a block mean's estimate of the mean's position,

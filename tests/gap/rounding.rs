@@ -396,3 +396,36 @@ fn the_discrepancy_follows_where_the_mean_falls_on_the_grid() {
         "a wandering mean: {wander:?}"
     );
 }
+
+/// [`ACCF29`]'s unit rounded at 0.3 filtered sigmas per step (the dead band, below
+/// `MIN_SIGMA_STEPS`) with a constant input of 7.25 steps: the mean a quarter step off the grid,
+/// where the rounding model averaged over the mean's position drops almost nothing (within 3.5%
+/// of simulation at 0.3 steps: docs/gap.md, "The floor on the grid (session 14)").
+const ACC03Q: &str = "tau0_s = 0.002770083102493075\n[[channel]]\nname = \"x\"\nunit = \"u\"\n\
+                      N = 1.6073054280352312e-3\nB = 2.6048171847428513e-4\n\
+                      K = 8.350094600544586e-5\n\
+                      flicker_band_s = [0.002770083102493075, 3.9011756822523996e4]\n\
+                      output_filter = { time_constant = 4.1453357056591464e-2 }\n\
+                      rate_lsb = 1.8603793963662248e-2\nbias = 1.348775062365513e-1\n";
+
+/// The floor is kept below `MIN_SIGMA_STEPS` where the block means place the mean off the
+/// grid (`gap::discrepancy::floor_holds`): on main 9ebb8a8 the CLI's diagnosis of this unit
+/// (1800 s, seeds 1-3) named the first order 35-38% short (0.0258-0.0269 s against 0.0415),
+/// the floor dropped; now seeds 2 and 3 name it within 1% (seed 1, whose values' step is read
+/// as either kind, still 38% short). Held here to 10%, seeds 2 and 3, with the dead band said.
+#[test]
+fn the_floor_holds_in_the_dead_band_with_the_mean_off_the_grid() {
+    use allanscope::gap::EffectParams;
+    for seed in [2, 3] {
+        let d = explained_by_one_effect(ACC03Q, ACCF29_TAU0, seed);
+        let EffectParams::OutputFilter { time_constant_s } = d.effects[0].params else {
+            panic!("seed {seed}: named {:?}", d.effects);
+        };
+        assert!(
+            (time_constant_s / ACCF29_T - 1.0).abs() < 0.1,
+            "seed {seed}: T {time_constant_s}"
+        );
+        let q = d.quantization_limited.expect("the dead band is said");
+        assert!((q.ratio - 0.3).abs() < 0.03, "seed {seed}: {q:?}");
+    }
+}
