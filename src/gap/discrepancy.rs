@@ -32,16 +32,18 @@
 //! (docs/gap.md "Rounding after a filter (session 12)"). Where the model carries the rounding
 //! (`sigma >= MIN_SIGMA_STEPS L`) and the block means resolve where the mean falls
 //! ([`super::rounding::grid_cosines`]), the bound is therefore
-//! `4 (max(|A_1|, A_FLOOR) exp(-x / 2) + |A_2| exp(-2 x))` ([`GRID_FLOOR`]): a unit whose mean
-//! sits a quarter step off the grid, or wanders over several steps, needs little of it. Below
-//! `MIN_SIGMA_STEPS` the model carries the rounding only where that scaled bound is small
-//! ([`floor_holds`], down to `MIN_SIGMA_STEPS_ON_GRID`); elsewhere it leaves the rounding out
-//! and the whole bound is kept. The block
-//! means see the mean's position over whole blocks only; what moves it faster (a sinusoid, the
-//! unit's own noise) lowers the true `|A_p|` further, so the bound stays an upper one except
-//! where blocks at opposite positions differ in their spread, which the floor covers.
+//! `4 (max(|A_1|, GRID_FLOOR) exp(-x / 2) + |A_2| exp(-2 x))` ([`GRID_FLOOR`]): a unit whose
+//! mean sits a quarter step off the grid, or wanders over several steps, needs little of it.
+//! Below `MIN_SIGMA_STEPS` the model carries the rounding only where that scaled bound is
+//! small ([`floor_holds`], down to `MIN_SIGMA_STEPS_ON_GRID`); elsewhere it leaves the rounding
+//! out and the whole bound is kept. The block means see the mean's position over whole blocks
+//! only; what moves it faster (a sinusoid, the unit's own noise) lowers the true `|A_p|`
+//! further, so the bound stays an upper one except where blocks at opposite positions differ
+//! in their spread, which the floor covers.
 
-use super::rounding::{grid_cosines, GridPosition, MIN_SIGMA_STEPS, MIN_SIGMA_STEPS_ON_GRID};
+use super::rounding::{
+    grid_cosines, GridPosition, GRID_HARMONICS, MIN_SIGMA_STEPS, MIN_SIGMA_STEPS_ON_GRID,
+};
 use crate::model::lowpass::LowPass;
 use nalgebra::DMatrix;
 use std::f64::consts::PI;
@@ -117,6 +119,24 @@ pub fn floor_holds(sigma_steps: f64, harmonics: Option<&[f64]>) -> bool {
         })
 }
 
+/// The run's averages of `cos(2 pi p mu / L)` when the block means `grid` place the mean on
+/// the grid of step `step` (u/s) and the averaged model holds there ([`floor_holds`]) for a
+/// filtered sample noise `sigma` (u/s) of white rate `N^2 = n2` (u^2/s): the one decision
+/// behind both the floor (`GapProblem::set_filter_floor`) and the scaled bound
+/// ([`rounding_discrepancy`]). None: no grid, below [`MIN_SIGMA_STEPS_ON_GRID`], the position
+/// not resolved, or the floor does not hold.
+pub fn floor_harmonics(
+    grid: Option<&GridPosition>,
+    step: f64,
+    sigma: f64,
+    n2: f64,
+) -> Option<[f64; GRID_HARMONICS]> {
+    let sigma_steps = sigma / step;
+    grid.filter(|_| sigma_steps >= MIN_SIGMA_STEPS_ON_GRID)
+        .and_then(|g| grid_cosines(g, step, sigma * sigma, n2))
+        .filter(|a| floor_holds(sigma_steps, Some(a)))
+}
+
 /// The discrepancy of a channel whose rate samples, filtered by `lp` (white rate `N^2 = n2`,
 /// u^2/s, at `tau0_s`), are rounded to `step` (u/s), with the run's block means `grid` when
 /// known: `None` when the bound is below [`MIN_DISCREPANCY`] or the inputs cannot say.
@@ -132,10 +152,7 @@ pub fn rounding_discrepancy(
     }
     let sigma = super::rounding::filtered_sigma(lp, tau0_s, n2);
     let sigma_steps = sigma / step;
-    let harmonics = grid
-        .filter(|_| sigma_steps >= MIN_SIGMA_STEPS_ON_GRID)
-        .and_then(|g| grid_cosines(g, step, sigma * sigma, n2))
-        .filter(|a| floor_holds(sigma_steps, Some(a)));
+    let harmonics = floor_harmonics(grid, step, sigma, n2);
     let bound = match harmonics {
         Some(a) => relative_bound_on_grid(sigma_steps, a[0], a[1]),
         None => relative_bound(sigma_steps),

@@ -6,14 +6,11 @@
 //! [`super::diagnose`](mod@super::diagnose), [`super::holdout`] and [`super::oracle`].
 
 use super::diagnose::{DiagnoseError, DiagnoseOptions, Region};
-use super::discrepancy::{floor_holds, rounding_discrepancy, RoundingDiscrepancy};
+use super::discrepancy::{floor_harmonics, rounding_discrepancy, RoundingDiscrepancy};
 use super::effects::{canonical_lowpass, effect_column, EffectKind, EffectParams, Grid};
 use super::evidence::EvidenceSnapshot;
 use super::filter_cov::filter_cov_correction;
-use super::rounding::{
-    filtered_sigma, grid_cosines, rounding_avar, GridPosition, MIN_SIGMA_STEPS,
-    MIN_SIGMA_STEPS_ON_GRID,
-};
+use super::rounding::{filtered_sigma, rounding_avar, GridPosition, MIN_SIGMA_STEPS};
 use crate::allan::CurvePoint;
 use crate::model::avar_cov::{AvarCovariance, CovPoint};
 use crate::model::fit::{fit, FitOptions};
@@ -193,8 +190,8 @@ impl GapProblem {
         // Rate samples rounded after the filter found (not a counter with carry, as the
         // previous pass read the step), coarsely against its noise: the
         // rounding model's known error enters as a model discrepancy of ln AVAR
-        // ([`super::discrepancy`]; docs/gap.md, "The dead band as model discrepancy").
-        // Where the mean falls on the grid, as the block means place it.
+        // ([`super::discrepancy`]; docs/gap.md, "The dead band as model discrepancy"), scaled
+        // by where the block means place the unit's mean on the grid.
         let grid = snap.lsb.map(|_| GridPosition {
             block_means: snap.block_means.clone(),
             block_s: snap.block_len as f64 * tau0,
@@ -328,21 +325,12 @@ impl GapProblem {
                 // MIN_SIGMA_STEPS steps ([`super::rounding`]): below, the rounding holds the
                 // output on one step (a dead band) and the averaged model does not describe
                 // it, unless the block means place the unit's mean where the dropped terms are
-                // small ([`floor_holds`]; docs/gap.md, "The floor on the grid (session 14)").
+                // small ([`floor_harmonics`]; docs/gap.md, "The floor on the grid (session 14)").
                 let n2 = w.coef.get(1).copied().unwrap_or(0.0).max(0.0);
                 p.lowpass().is_some_and(|lp| {
                     let sigma = filtered_sigma(&lp, self.tau0_s, n2);
-                    let steps = sigma / step;
-                    steps >= MIN_SIGMA_STEPS
-                        || floor_holds(
-                            steps,
-                            self.grid
-                                .as_ref()
-                                .filter(|_| steps >= MIN_SIGMA_STEPS_ON_GRID)
-                                .and_then(|g| grid_cosines(g, step, sigma * sigma, n2))
-                                .as_ref()
-                                .map(|a| &a[..]),
-                        )
+                    sigma >= MIN_SIGMA_STEPS * step
+                        || floor_harmonics(self.grid.as_ref(), step, sigma, n2).is_some()
                 })
             }
             _ => false,

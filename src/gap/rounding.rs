@@ -71,7 +71,7 @@ pub fn rounding_avar(lp: &LowPass, tau0_s: f64, step: f64, n2: f64, ms: &[u64]) 
 /// Harmonics of the mean's position on the grid the model keeps: the `p`-th is damped by at
 /// least `exp(-x p^2 / 4)`, below 1e-12 of the step's square at `p = 8` once `x >= 1.7`
 /// (`sigma >= 0.21 L`), and [`MIN_SIGMA_STEPS_ON_GRID`] is above that.
-const GRID_HARMONICS: usize = 8;
+pub const GRID_HARMONICS: usize = 8;
 
 /// The filtered sample's noise, in steps, down to which [`rounding_avar_on_grid`] matches
 /// simulated runs when the block means say where the mean falls on the grid
