@@ -290,6 +290,7 @@ fn diagnose_curve(
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
     let mut d = diagnose_curve_once(snap, temperature, opts)?;
+    log_pass(1, &d);
     if opts.cov_coef.is_some() {
         return Ok(d);
     }
@@ -325,12 +326,28 @@ fn diagnose_curve(
             ..opts.clone()
         };
         match diagnose_curve_once(snap, temperature, &next) {
-            Ok(n) => d = n,
+            Ok(n) => {
+                d = n;
+                log_pass(2 + usize::from(used.is_some()), &d);
+            }
             Err(_) => return Ok(d),
         }
         used = Some(lp);
     }
     Ok(d)
+}
+
+/// One pass of [`diagnose_curve`] at debug level (`ALLANSCOPE_LOG=allanscope=debug`): its
+/// gaps, the effects it kept and the step's kind.
+fn log_pass(pass: usize, d: &Diagnosis) {
+    tracing::debug!(
+        pass,
+        gap_before = d.gap_before,
+        gap_after = d.gap_after,
+        effects = ?d.effects.iter().map(|e| (e.params, e.gap_after)).collect::<Vec<_>>(),
+        quantization = ?d.quantization.map(|q| q.kind),
+        "diagnosis pass"
+    );
 }
 
 /// Whether the filter named `b` is the one whose covariance was used, `a`: the same kind and,

@@ -29,21 +29,19 @@
 //! The error's terms are each linear in `exp(i 2 pi p mu / L)`, `mu` the unit's mean rate, so
 //! over a run whose mean moves on the grid (a turn-on bias anywhere between two steps, a drift,
 //! a warm-up, jumps) they are multiplied by the run's average `A_p` of `cos(2 pi p mu / L)`
-//! (docs/gap.md "Rounding after a filter (session 12)"). Where the model carries the rounding
-//! (`sigma >= MIN_SIGMA_STEPS L`) and the block means resolve where the mean falls
-//! ([`super::rounding::grid_cosines`]), the bound is therefore
-//! `4 (max(|A_1|, GRID_FLOOR) exp(-x / 2) + |A_2| exp(-2 x))` ([`GRID_FLOOR`]): a unit whose
-//! mean sits a quarter step off the grid, or wanders over several steps, needs little of it.
-//! Below `MIN_SIGMA_STEPS` the model carries the rounding only where that scaled bound is
-//! small ([`floor_holds`], down to `MIN_SIGMA_STEPS_ON_GRID`); elsewhere it leaves the rounding
-//! out and the whole bound is kept. The block means see the mean's position over whole blocks
-//! only; what moves it faster (a sinusoid, the unit's own noise) lowers the true `|A_p|`
-//! further, so the bound stays an upper one except where blocks at opposite positions differ
-//! in their spread, which the floor covers.
+//! (docs/gap.md "Rounding after a filter (session 12)"). Where the block means resolve where
+//! the mean falls ([`super::rounding::grid_cosines`]) and the filtered noise is at least
+//! [`MIN_SIGMA_STEPS_ON_GRID`] steps, the model holds those terms itself
+//! ([`super::rounding::rounding_avar_on_grid`], `GapProblem`'s floor; docs/gap.md, "The grid
+//! model wired (session 15)"), down into the dead band and wherever the mean sits. What is left
+//! is the error of the `A_p` estimated from some tens of block means, each an average over its
+//! block: [`grid_residual_bound`], the first harmonic's bound with `|A_1|` replaced by
+//! [`GRID_FLOOR`]. Elsewhere (no step read off the values, too few blocks, the mean moving
+//! faster than a block can place it, or deeper in the dead band) the model is the averaged one
+//! and the whole bound is kept; below [`super::rounding::MIN_SIGMA_STEPS`] it then leaves the
+//! rounding out altogether.
 
-use super::rounding::{
-    grid_cosines, GridPosition, GRID_HARMONICS, MIN_SIGMA_STEPS, MIN_SIGMA_STEPS_ON_GRID,
-};
+use super::rounding::{grid_cosines, GridPosition, GRID_HARMONICS, MIN_SIGMA_STEPS_ON_GRID};
 use crate::model::lowpass::LowPass;
 use nalgebra::DMatrix;
 use std::f64::consts::PI;
@@ -57,9 +55,10 @@ pub const MAX_DISCREPANCY: f64 = 1.0;
 pub const LENGTH_OCTAVES: f64 = 1.0;
 /// The discrepancy's full size holds up to this many memories of the filter.
 const MEMORIES: f64 = 10.0;
-/// The smallest share of the first harmonic's bound kept when the block means place the mean
-/// on the grid (module doc): the blocks' positions are averages over each block, and the
-/// estimate of `|A_1|` from some 30-300 of them is uncertain by about this much.
+/// The uncertainty of the run's `|A_1|` as the block means estimate it, as a share of the
+/// first harmonic's bound kept when the grid model holds the mean-dependent terms (module doc):
+/// the blocks' positions are averages over each block, and some 30-300 of them estimate `A_1`
+/// to about this.
 pub const GRID_FLOOR: f64 = 0.1;
 
 /// The discrepancy found for a channel: docs/records.md's `quantization_limited` reuses its
@@ -73,7 +72,9 @@ pub struct RoundingDiscrepancy {
     /// The tau (s) up to which the bound holds in full (ten memories of the filter).
     pub tau_full_s: f64,
     /// `|A_1|`, the run's average of `cos(2 pi mu / L)` as the block means place the mean on
-    /// the grid, when it scaled the bound (module doc); None: the bound for the worst place.
+    /// the grid, when the grid model holds the terms that depend on it and only the residual
+    /// bound is carried (module doc); None: the averaged model and the bound for the worst
+    /// place.
     pub grid_first_harmonic: Option<f64>,
 }
 
@@ -86,45 +87,24 @@ pub fn relative_bound(sigma_steps: f64) -> f64 {
     (4.0 * (-2.0 * PI * PI * sigma_steps * sigma_steps).exp()).min(MAX_DISCREPANCY)
 }
 
-/// The relative bound when the run's averages of `cos(2 pi p mu / L)` are `a1` and `a2`:
-/// `4 (max(|a1|, GRID_FLOOR) exp(-x / 2) + |a2| exp(-2 x))`, `x = 4 pi^2 sigma_steps^2`
-/// (module doc), capped at [`MAX_DISCREPANCY`].
-pub fn relative_bound_on_grid(sigma_steps: f64, a1: f64, a2: f64) -> f64 {
+/// The relative bound left when the grid model ([`super::rounding::rounding_avar_on_grid`])
+/// holds the terms that depend on where the mean falls: the first harmonic's,
+/// `4 GRID_FLOOR exp(-x / 2)`, `x = 4 pi^2 sigma_steps^2` (module doc), capped at
+/// [`MAX_DISCREPANCY`]. 0.068 at 0.3 filtered sigmas per step, 0.0074 at 0.45.
+pub fn grid_residual_bound(sigma_steps: f64) -> f64 {
     if !sigma_steps.is_finite() || sigma_steps <= 0.0 {
         return MAX_DISCREPANCY;
     }
     let x = 4.0 * PI * PI * sigma_steps * sigma_steps;
-    let a1 = if a1.is_finite() { a1.abs() } else { 1.0 };
-    let a2 = if a2.is_finite() { a2.abs() } else { 1.0 };
-    (4.0 * (a1.max(GRID_FLOOR) * (-0.5 * x).exp() + a2 * (-2.0 * x).exp())).min(MAX_DISCREPANCY)
-}
-
-/// Whether the rounding model averaged over the mean's position (the filter's floor,
-/// `GapProblem::set_filter_floor`) describes a channel with filtered noise `sigma_steps` steps
-/// whose block means give the run's averages `harmonics` of `cos(2 pi p mu / L)`: always from
-/// [`MIN_SIGMA_STEPS`] on; down to [`MIN_SIGMA_STEPS_ON_GRID`] when the bound on what it drops,
-/// scaled by where the mean falls ([`relative_bound_on_grid`]), is no larger than the worst
-/// case's at `MIN_SIGMA_STEPS` (docs/gap.md, "The floor on the grid (session 14)": with the
-/// mean a quarter step off the grid the averaged model is within 3.5% of simulation at 0.3
-/// filtered sigmas per step, and 20% off at a fifth of a step, where this bound is 0.21).
-pub fn floor_holds(sigma_steps: f64, harmonics: Option<&[f64]>) -> bool {
-    if sigma_steps >= MIN_SIGMA_STEPS {
-        return true;
-    }
-    sigma_steps >= MIN_SIGMA_STEPS_ON_GRID
-        && harmonics.is_some_and(|a| {
-            a.len() >= 2
-                && relative_bound_on_grid(sigma_steps, a[0], a[1])
-                    <= relative_bound(MIN_SIGMA_STEPS)
-        })
+    (4.0 * GRID_FLOOR * (-0.5 * x).exp()).min(MAX_DISCREPANCY)
 }
 
 /// The run's averages of `cos(2 pi p mu / L)` when the block means `grid` place the mean on
-/// the grid of step `step` (u/s) and the averaged model holds there ([`floor_holds`]) for a
-/// filtered sample noise `sigma` (u/s) of white rate `N^2 = n2` (u^2/s): the one decision
-/// behind both the floor (`GapProblem::set_filter_floor`) and the scaled bound
-/// ([`rounding_discrepancy`]). None: no grid, below [`MIN_SIGMA_STEPS_ON_GRID`], the position
-/// not resolved, or the floor does not hold.
+/// the grid of step `step` (u/s) for a filtered sample noise `sigma` (u/s) of white rate
+/// `N^2 = n2` (u^2/s) at or above [`MIN_SIGMA_STEPS_ON_GRID`] steps: the one decision behind
+/// the floor (`GapProblem::set_filter_floor` keeps the grid model there) and the residual
+/// bound ([`rounding_discrepancy`]). None: no grid, below `MIN_SIGMA_STEPS_ON_GRID`, or the
+/// position not resolved.
 pub fn floor_harmonics(
     grid: Option<&GridPosition>,
     step: f64,
@@ -134,7 +114,6 @@ pub fn floor_harmonics(
     let sigma_steps = sigma / step;
     grid.filter(|_| sigma_steps >= MIN_SIGMA_STEPS_ON_GRID)
         .and_then(|g| grid_cosines(g, step, sigma * sigma, n2))
-        .filter(|a| floor_holds(sigma_steps, Some(a)))
 }
 
 /// The discrepancy of a channel whose rate samples, filtered by `lp` (white rate `N^2 = n2`,
@@ -154,7 +133,7 @@ pub fn rounding_discrepancy(
     let sigma_steps = sigma / step;
     let harmonics = floor_harmonics(grid, step, sigma, n2);
     let bound = match harmonics {
-        Some(a) => relative_bound_on_grid(sigma_steps, a[0], a[1]),
+        Some(_) => grid_residual_bound(sigma_steps),
         None => relative_bound(sigma_steps),
     };
     if bound < MIN_DISCREPANCY {
@@ -228,56 +207,48 @@ mod tests {
     }
 
     #[test]
-    fn the_floor_holds_below_min_sigma_steps_only_where_the_grid_says_so() {
-        // 0.3 filtered sigmas per step: x = 3.553, exp(-x / 2) = 0.1693, exp(-2 x) = 0.00082.
-        // A quarter step off the grid (A_1 = 0, A_2 = -1): 4 (0.1 * 0.1693 + 0.00082) = 0.071,
-        // below the worst case at 0.4 steps, 4 exp(-2 pi^2 0.16) = 0.170.
-        let quarter = [0.0, -1.0];
-        assert!((relative_bound_on_grid(0.3, 0.0, -1.0) - 0.0710).abs() < 5e-4);
-        assert!((relative_bound(MIN_SIGMA_STEPS) - 0.1700).abs() < 5e-4);
-        assert!(floor_holds(0.3, Some(&quarter)));
-        // A fifth of a step off (A_1 = cos(0.4 pi) = 0.309, A_2 = -0.809): 0.212, where
-        // simulation has the averaged model 12-20% off (docs/gap.md).
-        let fifth = [(0.4 * PI).cos(), (0.8 * PI).cos()];
-        assert!((relative_bound_on_grid(0.3, fifth[0], fifth[1]) - 0.212).abs() < 2e-3);
-        assert!(!floor_holds(0.3, Some(&fifth)));
-        // Without the grid, or below MIN_SIGMA_STEPS_ON_GRID, only from MIN_SIGMA_STEPS on.
-        assert!(!floor_holds(0.3, None));
-        assert!(!floor_holds(0.2, Some(&quarter)));
-        assert!(floor_holds(0.45, None));
+    fn the_residual_on_the_grid_is_the_first_harmonic_at_the_grid_floor() {
+        // 4 GRID_FLOOR exp(-x / 2), x = 4 pi^2 s^2: at 0.3 steps x = 3.553, exp(-x / 2) =
+        // 0.1693, 0.0677 (the worst case's bound there is 0.677); at 0.45 steps 0.00735.
+        assert!((grid_residual_bound(0.3) - 0.0677).abs() < 5e-4);
+        assert!((relative_bound(0.3) - 0.677).abs() < 2e-3);
+        assert!((grid_residual_bound(0.45) - 0.00735).abs() < 5e-5);
+        assert_eq!(grid_residual_bound(0.0), MAX_DISCREPANCY);
+        assert_eq!(grid_residual_bound(f64::NAN), MAX_DISCREPANCY);
     }
 
     #[test]
-    fn the_mean_a_quarter_step_off_the_grid_needs_little_of_it() {
+    fn where_the_block_means_place_the_mean_only_the_residual_is_carried() {
         let (lp, tau0, n2, sigma) = first_order_unit();
         let grid_at = |steps: f64, step: f64| GridPosition {
             block_means: vec![steps * step; 64],
             block_s: 100.0,
         };
-        // 0.45 filtered sigmas per step: x = 4 pi^2 0.2025, exp(-x / 2) = 0.01838.
+        // 0.45 filtered sigmas per step: without the block means the worst case,
+        // 4 exp(-x / 2) = 0.0735 (x = 4 pi^2 0.2025); with them, on a step or a quarter step
+        // off, the grid model holds the rest and the residual 0.0074 is below MIN_DISCREPANCY.
         let step = sigma / 0.45;
-        let on = rounding_discrepancy(&lp, tau0, step, n2, Some(&grid_at(3.0, step)))
-            .expect("the mean on a step");
-        assert!((on.bound - 4.0 * 0.01838).abs() < 2e-4, "{}", on.bound);
-        assert!((on.grid_first_harmonic.unwrap() - 1.0).abs() < 1e-6);
-        // A quarter step off: the block mean holds the rounding's mean error, -(L / pi)
-        // exp(-x / 2) = -0.0059 steps, taken back out; |A_1| = |cos(2 pi 0.25)| = 0, kept at
-        // the floor, 4 * 0.1 * 0.01838 = 0.0074, below MIN_DISCREPANCY.
+        let worst = rounding_discrepancy(&lp, tau0, step, n2, None).expect("worst case");
+        assert!((worst.bound - 0.0735).abs() < 3e-4, "{}", worst.bound);
+        assert!(worst.grid_first_harmonic.is_none());
+        assert!(rounding_discrepancy(&lp, tau0, step, n2, Some(&grid_at(3.0, step))).is_none());
         assert!(rounding_discrepancy(&lp, tau0, step, n2, Some(&grid_at(-2.25, step))).is_none());
-        // At 0.35 steps, below MIN_SIGMA_STEPS: with the mean on a step the model holds no
-        // rounding and the whole bound stays (0.356); a quarter step off, the floor holds
-        // (`floor_holds`) and the bound is the grid's, 4 (0.1 exp(-x / 2) + exp(-2 x)) = 0.036
-        // (x = 4.836; the blocks hold the output's mean, 0.25 - exp(-x / 2) / pi = 0.222 steps,
-        // which the inversion takes back to the quarter step).
+        // At 0.35 steps, in the dead band: without the block means the whole bound, 0.356;
+        // with them the residual 4 * 0.1 exp(-x / 2) = 0.0356 (x = 4.836) wherever the mean
+        // falls, with |A_1| read as 1 on a step and 0 a quarter step off (the blocks hold the
+        // output's mean, 0.25 - exp(-x / 2) / pi = 0.222 steps, which the inversion takes back
+        // to the quarter step).
         let step = sigma / 0.35;
+        let d = rounding_discrepancy(&lp, tau0, step, n2, None).expect("dead band");
+        assert!((d.bound - 0.356).abs() < 2e-3, "{d:?}");
         let d = rounding_discrepancy(&lp, tau0, step, n2, Some(&grid_at(3.0, step)))
-            .expect("dead band");
-        assert_eq!(d.bound, relative_bound(d.sigma_steps));
-        assert!(d.grid_first_harmonic.is_none());
+            .expect("on a step");
+        assert!((d.bound - 0.0356).abs() < 2e-3, "{d:?}");
+        assert!(d.grid_first_harmonic.is_some_and(|a| a > 0.99), "{d:?}");
         let out = 0.25 - (-0.5 * 4.0 * PI * PI * 0.35f64.powi(2)).exp() / PI;
         let d = rounding_discrepancy(&lp, tau0, step, n2, Some(&grid_at(out, step)))
             .expect("a quarter step off");
-        assert!((d.bound - 0.0359).abs() < 2e-3, "{d:?}");
+        assert!((d.bound - 0.0356).abs() < 2e-3, "{d:?}");
         assert!(d.grid_first_harmonic.is_some_and(|a| a < 0.05), "{d:?}");
         // Below MIN_SIGMA_STEPS_ON_GRID the whole bound stays wherever the mean falls.
         let step = sigma / 0.2;

@@ -10,7 +10,7 @@ use super::discrepancy::{floor_harmonics, rounding_discrepancy, RoundingDiscrepa
 use super::effects::{canonical_lowpass, effect_column, EffectKind, EffectParams, Grid};
 use super::evidence::EvidenceSnapshot;
 use super::filter_cov::filter_cov_correction;
-use super::rounding::{filtered_sigma, rounding_avar, GridPosition, MIN_SIGMA_STEPS};
+use super::rounding::{filtered_sigma, rounding_avar_on_grid, GridPosition, MIN_SIGMA_STEPS};
 use crate::allan::CurvePoint;
 use crate::model::avar_cov::{AvarCovariance, CovPoint};
 use crate::model::fit::{fit, FitOptions};
@@ -23,6 +23,12 @@ use nalgebra::{DMatrix, DVector};
 pub const RIDGE: f64 = 0.05;
 /// Reweighting passes of each GLS fit (the model-weighted fit settles in 3-5).
 const GLS_PASSES: usize = 4;
+/// The most passes of [`GapProblem::gls`] when the model carries the rounding after its filter,
+/// whose curve depends on the fit's own `N` ([`GapProblem::floor_n2`]).
+const GLS_PASSES_FLOOR: usize = 8;
+/// The change of that `N^2`, relative to it or to the floor's starting value when it is
+/// smaller (a fit whose N column is at 0), below which those passes stop.
+const FLOOR_N2_TOL: f64 = 1e-4;
 
 /// The curve with its log covariance, ready for GLS fits.
 #[derive(Debug, Clone)]
@@ -60,6 +66,42 @@ pub struct GapProblem {
     /// Where the unit's mean falls on the rounding grid, as the run's block means show it
     /// (None: the values show no step).
     grid: Option<GridPosition>,
+}
+
+/// The search for the white rate `N^2` at which the rounding after the filter is computed in
+/// [`GapProblem::gls`]: the fixed point `n = g(n)` of the fit's `N^2` coefficient `g` with the
+/// rounding at `n`. The first pass (weighted by the data, not yet by the model) only gives the
+/// plain step `n = g`; from the second on, the secant through the last two passes on
+/// `h(n) = g(n) - n`. Plain iteration alone creeps toward the point where the rounding's share
+/// of the short taus rises with `N` (`g` increasing in `n`, slope 0.5-0.7: some 15 passes to
+/// 1e-4), swings about it where it falls, and between 0 and a large `N` for a candidate filter
+/// that does not fit (the fit at each end wants the other); the secant takes each to it in a
+/// few passes (each kept within a factor 2 of the last pass's `n` and `g`).
+#[derive(Debug, Default)]
+struct FloorN2Search {
+    /// The last pass after the first: `(n, h)`.
+    last: Option<(f64, f64)>,
+}
+
+impl FloorN2Search {
+    /// The next `n` after pass `pass` (from 0) at `n` whose fit gave `g`.
+    fn next(&mut self, pass: usize, n: f64, g: f64) -> f64 {
+        if pass == 0 {
+            return g;
+        }
+        let h = g - n;
+        let next = match self.last.replace((n, h)) {
+            Some((na, ha)) if ha != h => n - h * (n - na) / (h - ha),
+            _ => g,
+        };
+        // kept within a factor 2 of this pass's n and g: far from the point g is not linear
+        let (lo, hi) = (0.5 * n.min(g), 2.0 * n.max(g));
+        if next.is_finite() {
+            next.clamp(lo, hi)
+        } else {
+            g
+        }
+    }
 }
 
 /// The rate rounding after a unit's filter ([`GapProblem::filter_floor`]).
@@ -244,9 +286,15 @@ impl GapProblem {
     /// for the filtered noise of the model's own white rate `N^2 = coef[1]`
     /// ([`GapProblem::floor_n2`]).
     fn offset_of(&self, spec: &ModelSpec, coef: &[f64]) -> Vec<f64> {
+        self.offset_at(spec, self.floor_n2(coef))
+    }
+
+    /// [`GapProblem::offset_of`] with the rounding's white rate `N^2 = n2` (u^2/s) given.
+    fn offset_at(&self, spec: &ModelSpec, n2: f64) -> Vec<f64> {
         let mut off = spec.offset.clone().unwrap_or_else(|| vec![0.0; self.len()]);
         if let (Some(lp), Some(fl)) = (spec.filter, self.filter_floor) {
-            let r = rounding_avar(&lp, self.tau0_s, fl.step, self.floor_n2(coef), &self.ms);
+            let r =
+                rounding_avar_on_grid(&lp, self.tau0_s, fl.step, n2, self.grid.as_ref(), &self.ms);
             for (o, f) in off.iter_mut().zip(&r) {
                 *o += f;
             }
@@ -321,11 +369,13 @@ impl GapProblem {
         }
         let keep = match (&with, without) {
             (Some((p, w)), Some(wo)) if w.chi2 < wo => {
-                // The model holds while the filtered sample's noise is at least
+                // The averaged model holds while the filtered sample's noise is at least
                 // MIN_SIGMA_STEPS steps ([`super::rounding`]): below, the rounding holds the
-                // output on one step (a dead band) and the averaged model does not describe
-                // it, unless the block means place the unit's mean where the dropped terms are
-                // small ([`floor_harmonics`]; docs/gap.md, "The floor on the grid (session 14)").
+                // output on one step (a dead band) as the mean's position on the grid sets.
+                // Where the block means resolve that position the grid model
+                // (`rounding_avar_on_grid`, [`Self::offset_of`]) holds it, down to
+                // MIN_SIGMA_STEPS_ON_GRID ([`floor_harmonics`]; docs/gap.md, "The grid model
+                // wired (session 15)").
                 let n2 = w.coef.get(1).copied().unwrap_or(0.0).max(0.0);
                 p.lowpass().is_some_and(|lp| {
                     let sigma = filtered_sigma(&lp, self.tau0_s, n2);
@@ -437,14 +487,32 @@ impl GapProblem {
         let x = self.columns(spec);
         let k = x.ncols();
         // The rounding after the filter depends on the fit's own N (`floor_n2`): it starts at
-        // the floor's value and follows the coefficient from pass to pass.
+        // the floor's value and is solved for the fixed point where the N it is computed at is
+        // the N fitted with it. The grid model's share of the short taus grows with N (the
+        // error's correlation with the signal, `rounding_avar_on_grid`), so plain iteration
+        // swings about that point (by a factor near -0.4 a pass in the dead band); the secant
+        // on `h(n) = N^2_fitted(n) - n` reaches it in a few passes (docs/gap.md, "The grid
+        // model wired (session 15)").
         let floor_in = spec.filter.is_some() && self.filter_floor.is_some();
-        let mut off = self.offset_of(spec, &[]);
+        let n_start = self.floor_n2(&[]);
+        // below this N^2 (u^2/s) a raw rate sample's noise is under 0.03 steps: the fit holds
+        // no white rate the rounding could act on, and the search stops there
+        let n_none = self
+            .filter_floor
+            .map_or(0.0, |fl| 1e-3 * fl.step * fl.step * self.tau0_s);
+        let mut n_off = n_start;
+        let mut search = FloorN2Search::default();
+        let mut off = self.offset_at(spec, n_off);
+        let passes = if floor_in {
+            GLS_PASSES_FLOOR
+        } else {
+            GLS_PASSES
+        };
         let mut d: Vec<f64> = self.y.clone();
         let mut coef = DVector::zeros(k);
         let mut model = vec![0.0; j];
         let mut a_last = DMatrix::zeros(j, k);
-        for _ in 0..GLS_PASSES {
+        for pass in 0..passes {
             let xd = DMatrix::from_fn(j, k, |r, c| x[(r, c)] / d[r]);
             let yd = DVector::from_fn(j, |r, _| (self.y[r] - off[r]) / d[r]);
             let mut a = &self.linv * xd;
@@ -460,12 +528,25 @@ impl GapProblem {
             let sol = nnls(&a, &b).ok()?;
             a_last = a.clone();
             coef = DVector::from_fn(k, |c, _| sol.x[c] / norms[c]);
+            let mut done = false;
             if floor_in {
-                off = self.offset_of(spec, coef.as_slice());
+                let g = coef[1].max(0.0);
+                let converged = (g - n_off).abs() <= FLOOR_N2_TOL * g.max(n_off).max(n_start)
+                    || g.max(n_off) <= n_none;
+                done = converged && pass + 1 >= GLS_PASSES;
+                n_off = if converged || pass + 1 == passes {
+                    g
+                } else {
+                    search.next(pass, n_off, g)
+                };
+                off = self.offset_at(spec, n_off);
             }
             let mv = &x * &coef;
             for r in 0..j {
                 model[r] = mv[r] + off[r];
+            }
+            if done {
+                break;
             }
             // Floor the weights' model at a tiny fraction of the data (a term-less stretch).
             for r in 0..j {
@@ -789,5 +870,61 @@ pub(crate) fn golden_section(
         f1,
         x2,
         f2,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The passes [`FloorN2Search`] needs from `n0` to `|g(n) - n| <= 1e-4 max(g, n)`, at
+    /// most `max`, and the point it stops at.
+    fn passes_to_fixed_point(map: impl Fn(f64) -> f64, n0: f64, max: usize) -> (usize, f64) {
+        let mut search = FloorN2Search::default();
+        let mut n = n0;
+        for pass in 0..max {
+            let g = map(n);
+            if (g - n).abs() <= 1e-4 * g.max(n) {
+                return (pass + 1, n);
+            }
+            n = search.next(pass, n, g);
+        }
+        (max, n)
+    }
+
+    #[test]
+    fn the_floor_search_reaches_the_fixed_point_in_a_few_passes() {
+        // g rising with n, slope 0.6 (fixed point 1): plain iteration needs 20 passes from
+        // 0.5 to 1e-4; the secant is exact on a line from its third pass.
+        let (p, n) = passes_to_fixed_point(|n| 0.6 * n + 0.4, 0.5, 30);
+        assert!(p <= 4 && (n - 1.0).abs() < 1e-4, "{p} passes, {n}");
+        // g falling, slope -0.43: plain iteration swings about 1.
+        let (p, n) = passes_to_fixed_point(|n| 1.43 - 0.43 * n, 0.2, 30);
+        assert!(p <= 4 && (n - 1.0).abs() < 1e-4, "{p} passes, {n}");
+        // g = 2 exp(-3 n): slope -3 n < -1 at its fixed point (solved by Newton below), where
+        // plain iteration falls into a two-cycle.
+        let fixed = {
+            let mut x: f64 = 0.4;
+            for _ in 0..100 {
+                // Newton on 2 exp(-3 x) - x
+                let f = 2.0 * (-3.0 * x).exp() - x;
+                let d = -6.0 * (-3.0 * x).exp() - 1.0;
+                x -= f / d;
+            }
+            x
+        };
+        let (p, n) = passes_to_fixed_point(|n| 2.0 * (-3.0 * n).exp(), 1.0, 30);
+        assert!(
+            p <= 10 && (n / fixed - 1.0).abs() < 2e-4,
+            "{p} passes, {n} vs {fixed}"
+        );
+        let mut plain: f64 = 1.0;
+        for _ in 0..200 {
+            plain = 2.0 * (-3.0 * plain).exp();
+        }
+        assert!(
+            (plain / fixed - 1.0).abs() > 0.1,
+            "plain iteration converged: {plain}"
+        );
     }
 }

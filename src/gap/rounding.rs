@@ -70,15 +70,21 @@ pub fn rounding_avar(lp: &LowPass, tau0_s: f64, step: f64, n2: f64, ms: &[u64]) 
 
 /// Harmonics of the mean's position on the grid the model keeps: the `p`-th is damped by at
 /// least `exp(-x p^2 / 4)`, below 1e-12 of the step's square at `p = 8` once `x >= 1.7`
-/// (`sigma >= 0.21 L`), and [`MIN_SIGMA_STEPS_ON_GRID`] is above that.
+/// (`sigma >= 0.21 L`, [`GRID_MIN_X`]), and [`MIN_SIGMA_STEPS_ON_GRID`] is above that.
 pub const GRID_HARMONICS: usize = 8;
+
+/// The smallest `x = 4 pi^2 sigma^2 / L^2` at which [`rounding_avar_on_grid`] keeps the
+/// harmonics ([`GRID_HARMONICS`]); below, their truncated series says nothing (every one is
+/// kept undamped as `sigma -> 0`) and the model is the averaged one. A fit's search for its
+/// `N` passes through such values on the way.
+pub const GRID_MIN_X: f64 = 1.7;
 
 /// The filtered sample's noise, in steps, down to which [`rounding_avar_on_grid`] matches
 /// simulated runs when the block means say where the mean falls on the grid
 /// ([`grid_cosines`]): within 1% at 0.25 steps, 2% at 0.2 (docs/gap.md, "Rounding after a
-/// filter (session 12)"; docs/repro/session12/rr_grid.py). The diagnosis keeps the averaged
-/// model down to it where the block means place the mean so that what that model drops is
-/// small (`discrepancy::floor_holds`; docs/gap.md, "The floor on the grid (session 14)").
+/// filter (session 12)"; docs/repro/session12/rr_grid.py). The diagnosis uses it down to here
+/// wherever the block means resolve the mean's position (`discrepancy::floor_harmonics`;
+/// docs/gap.md, "The grid model wired (session 15)").
 pub const MIN_SIGMA_STEPS_ON_GRID: f64 = 0.25;
 
 /// The largest variance, in steps squared, of a block mean's estimate of the mean's position,
@@ -219,6 +225,12 @@ const GRID_NEGLIGIBLE: f64 = 1e-7;
 /// the sum runs while that is above `e^-45`. At `r = 1` (lag 0) it is
 /// `exp(-x p^2 / 2) sum 1 / (n m) = -2 exp(-x p^2 / 2) / p^2` (the Fourier coefficient of the
 /// squared sawtooth).
+///
+/// The terms are symmetric in `n <-> m`, so the half `n < p / 2` is summed twice (and the
+/// middle term `n = m = p / 2` once), from the largest term outward, and the exponent,
+/// quadratic in `n`, is stepped by the recurrence `e_{n-1} = e_n q_n`,
+/// `q_{n-1} = q_n exp(-2 x (1 - r))` (two products a term instead of an `exp`: this sum is most
+/// of the diagnosis's time on a rounded channel).
 fn pair_sum_e1(p: usize, x: f64, r: f64) -> f64 {
     let pi = p as i64;
     let one_minus = (1.0 - r).max(0.0);
@@ -226,17 +238,30 @@ fn pair_sum_e1(p: usize, x: f64, r: f64) -> f64 {
     if one_minus < 1e-12 {
         return -2.0 * top.exp() / (p * p) as f64;
     }
-    let nn = ((45.0 / (x * one_minus)).sqrt().ceil() as i64 + pi + 2).min(4000);
-    let mut s = 0.0;
-    for n in -nn..=nn + pi {
-        let m = pi - n;
-        if n == 0 || m == 0 {
-            continue;
+    let c = x * one_minus;
+    let nn = ((45.0 / c).sqrt().ceil() as i64 + pi + 2).min(4000);
+    // n from the last below p / 2 down to -nn; the exponent of n is top + c n (p - n), and
+    // from n to n - 1 it changes by c (2 n - p - 1)
+    let mut n = (pi - 1).div_euclid(2);
+    let mut e = (top + c * (n * (pi - n)) as f64).exp();
+    let mut q = (c * (2 * n - pi - 1) as f64).exp();
+    let damp = (-2.0 * c).exp();
+    let mut half = 0.0;
+    while n >= -nn && e > 0.0 {
+        if n != 0 {
+            half += e / (n * (pi - n)) as f64;
         }
-        let nm = (n * m) as f64;
-        s += (top + x * nm * one_minus).exp() / nm;
+        e *= q;
+        q *= damp;
+        n -= 1;
     }
-    s
+    let mid = if p.is_multiple_of(2) {
+        let h = (pi / 2) as f64;
+        (top + c * h * h).exp() / (h * h)
+    } else {
+        0.0
+    };
+    2.0 * half + mid
 }
 
 /// `sum_{n + m = p; n, m != 0} exp(-x/2 (n^2 + m^2)) / (n m)`, the lag-independent part of the
@@ -295,7 +320,7 @@ pub fn rounding_avar_on_grid(
     let tail = theta_sum(x);
     // harmonics that matter: |A_p| exp(-x p^2 / 4) above GRID_NEGLIGIBLE (none once the
     // filtered noise is above about 1.3 steps: the averaged model is then the whole of it)
-    let harmonics: Vec<(usize, f64)> = if (-0.25 * x).exp() > GRID_NEGLIGIBLE {
+    let harmonics: Vec<(usize, f64)> = if (-0.25 * x).exp() > GRID_NEGLIGIBLE && x >= GRID_MIN_X {
         grid.and_then(|g| grid_cosines(g, step, sigma2, n2))
             .map(|a| {
                 (1..=GRID_HARMONICS)
@@ -347,4 +372,40 @@ pub fn rounding_avar_on_grid(
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// [`pair_sum_e1`] term by term, each with its own `exp`.
+    fn pair_sum_e1_direct(p: usize, x: f64, r: f64) -> f64 {
+        let pi = p as i64;
+        let top = -0.5 * x * (p * p) as f64;
+        (-4000..=4000 + pi)
+            .filter(|&n| n != 0 && n != pi)
+            .map(|n| {
+                let nm = (n * (pi - n)) as f64;
+                (top + x * nm * (1.0 - r)).exp() / nm
+            })
+            .sum()
+    }
+
+    #[test]
+    fn the_pair_sum_by_recurrence_is_the_direct_sum() {
+        for p in 1..=GRID_HARMONICS {
+            for x in [1.7, 2.5, 4.8, 9.0, 30.0] {
+                for r in [0.999_99, 0.9, 0.5, 0.1, 1e-3, -0.3] {
+                    let (fast, direct) = (pair_sum_e1(p, x, r), pair_sum_e1_direct(p, x, r));
+                    let scale = (-0.25 * x * (p * p) as f64).exp();
+                    assert!(
+                        (fast - direct).abs() <= 1e-12 * scale.max(direct.abs()),
+                        "p {p} x {x} r {r}: {fast} against {direct}"
+                    );
+                }
+            }
+        }
+        // At r = 1 the closed form: -2 exp(-x p^2 / 2) / p^2.
+        assert!((pair_sum_e1(3, 2.0, 1.0) + 2.0 * (-9.0f64).exp() / 9.0).abs() < 1e-18);
+    }
 }
