@@ -488,11 +488,8 @@ impl GapProblem {
         let k = x.ncols();
         // The rounding after the filter depends on the fit's own N (`floor_n2`): it starts at
         // the floor's value and is solved for the fixed point where the N it is computed at is
-        // the N fitted with it. The grid model's share of the short taus grows with N (the
-        // error's correlation with the signal, `rounding_avar_on_grid`), so plain iteration
-        // swings about that point (by a factor near -0.4 a pass in the dead band); the secant
-        // on `h(n) = N^2_fitted(n) - n` reaches it in a few passes (docs/gap.md, "The grid
-        // model wired (session 15)").
+        // the N fitted with it ([`FloorN2Search`], which says why plain iteration does not
+        // reach it; docs/gap.md, "The grid model wired (session 15)").
         let floor_in = spec.filter.is_some() && self.filter_floor.is_some();
         let n_start = self.floor_n2(&[]);
         // below this N^2 (u^2/s) a raw rate sample's noise is under 0.03 steps: the fit holds

@@ -317,24 +317,40 @@ fn accf29_sigma() -> f64 {
     (ACCF29_N * ACCF29_N * (1.0 - a) / (1.0 + a) / ACCF29_TAU0).sqrt()
 }
 
-/// 1800 s of `model` (a unit at `ACCF29_TAU0` behind `ACCF29_T`'s first order) diagnosed with
-/// simulator seed `seed`: the first order alone, `explained`, its time constant within
-/// `rel_tol` of `ACCF29_T`, and the channel said to be quantization-limited.
+/// 1800 s of `model` (a unit at `tau0_s` behind a first order of `time_constant_s`) diagnosed
+/// with simulator seed `seed`: the first order alone, `explained`, its time constant within
+/// `rel_tol`.
+fn first_order_alone(
+    model: &str,
+    tau0_s: f64,
+    time_constant_s: f64,
+    seed: u64,
+    rel_tol: f64,
+) -> allanscope::gap::Diagnosis {
+    use allanscope::gap::EffectParams;
+    let d = explained_by_one_effect(model, tau0_s, seed);
+    let EffectParams::OutputFilter {
+        time_constant_s: named,
+    } = d.effects[0].params
+    else {
+        panic!("seed {seed}: named {:?}", d.effects);
+    };
+    assert!(
+        (named / time_constant_s - 1.0).abs() < rel_tol,
+        "seed {seed}: T {named}"
+    );
+    d
+}
+
+/// [`first_order_alone`] for a unit at `ACCF29_TAU0` behind `ACCF29_T`'s first order, and the
+/// channel said to be quantization-limited.
 fn dead_band_first_order(
     model: &str,
     seed: u64,
     rel_tol: f64,
 ) -> allanscope::gap::quant_limit::QuantizationLimit {
-    use allanscope::gap::EffectParams;
-    let d = explained_by_one_effect(model, ACCF29_TAU0, seed);
-    let EffectParams::OutputFilter { time_constant_s } = d.effects[0].params else {
-        panic!("seed {seed}: named {:?}", d.effects);
-    };
-    assert!(
-        (time_constant_s / ACCF29_T - 1.0).abs() < rel_tol,
-        "seed {seed}: T {time_constant_s}"
-    );
-    d.quantization_limited
+    first_order_alone(model, ACCF29_TAU0, ACCF29_T, seed, rel_tol)
+        .quantization_limited
         .unwrap_or_else(|| panic!("seed {seed}: the dead band is not said"))
 }
 
@@ -470,15 +486,13 @@ const ACCG17: &str = "tau0_s = 0.0024271844660194173\n[[channel]]\nname = \"x\"\
 /// warm-up, on main too). Seeds 2 and 3, held to 3%.
 #[test]
 fn the_dead_band_near_a_step_names_the_first_order_not_a_gauss_markov_term() {
-    use allanscope::gap::EffectParams;
     for seed in [2, 3] {
-        let d = explained_by_one_effect(ACCG17, 0.0024271844660194173, seed);
-        let EffectParams::OutputFilter { time_constant_s } = d.effects[0].params else {
-            panic!("seed {seed}: named {:?}", d.effects);
-        };
-        assert!(
-            (time_constant_s / 1.491873109264487e-2 - 1.0).abs() < 0.03,
-            "seed {seed}: T {time_constant_s}"
+        first_order_alone(
+            ACCG17,
+            0.0024271844660194173,
+            1.491873109264487e-2,
+            seed,
+            0.03,
         );
     }
 }
