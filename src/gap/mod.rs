@@ -24,6 +24,7 @@
 pub mod alternatives;
 pub mod band_noise;
 pub mod block_cov;
+pub mod column_memo;
 pub mod diagnose;
 pub mod discrepancy;
 pub mod effects;

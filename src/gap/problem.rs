@@ -5,6 +5,7 @@
 //! gap statistic `G`, the regions outside the band, and the scan of an effect's shape. Used by
 //! [`super::diagnose`](mod@super::diagnose), [`super::holdout`] and [`super::oracle`].
 
+use super::column_memo::ColumnMemo;
 use super::diagnose::{DiagnoseError, DiagnoseOptions, Region};
 use super::discrepancy::{floor_harmonics, rounding_discrepancy, RoundingDiscrepancy};
 use super::effects::{canonical_lowpass, effect_column, EffectKind, EffectParams, Grid};
@@ -66,6 +67,8 @@ pub struct GapProblem {
     /// Where the unit's mean falls on the rounding grid, as the run's block means show it
     /// (None: the values show no step).
     grid: Option<GridPosition>,
+    /// The filter columns and rounding floors already computed ([`ColumnMemo`]).
+    memo: ColumnMemo,
 }
 
 /// The search for the white rate `N^2` at which the rounding after the filter is computed in
@@ -278,6 +281,7 @@ impl GapProblem {
             discrepancy,
             cov_filter: opts.cov_filter,
             grid,
+            memo: ColumnMemo::default(),
         })
     }
 
@@ -293,9 +297,10 @@ impl GapProblem {
     fn offset_at(&self, spec: &ModelSpec, n2: f64) -> Vec<f64> {
         let mut off = spec.offset.clone().unwrap_or_else(|| vec![0.0; self.len()]);
         if let (Some(lp), Some(fl)) = (spec.filter, self.filter_floor) {
-            let r =
-                rounding_avar_on_grid(&lp, self.tau0_s, fl.step, n2, self.grid.as_ref(), &self.ms);
-            for (o, f) in off.iter_mut().zip(&r) {
+            let r = self.memo.floor(&lp, n2, fl.step, || {
+                rounding_avar_on_grid(&lp, self.tau0_s, fl.step, n2, self.grid.as_ref(), &self.ms)
+            });
+            for (o, f) in off.iter_mut().zip(r.iter()) {
                 *o += f;
             }
         }
@@ -442,20 +447,25 @@ impl GapProblem {
     fn columns(&self, spec: &ModelSpec) -> DMatrix<f64> {
         let j = self.len();
         let k = 5 + spec.extra.len();
-        let filt = spec.filter.map(|lp| match lp {
-            LowPass::FirstOrder { time_constant_s } => effect_column(
-                EffectKind::OutputFilter,
-                time_constant_s,
-                &self.ms,
-                self.tau0_s,
-                self.n_inc,
-            ),
-            other => other.white_rate_avar(self.tau0_s, &self.ms),
+        // The filter's white-rate column, and its flicker-rate column: the unit's filter
+        // smooths its flicker floor too (LowPass::flicker_rate_avar). Kept per filter.
+        let cols = spec.filter.map(|lp| {
+            self.memo.columns(&lp, || {
+                let white = match lp {
+                    LowPass::FirstOrder { time_constant_s } => effect_column(
+                        EffectKind::OutputFilter,
+                        time_constant_s,
+                        &self.ms,
+                        self.tau0_s,
+                        self.n_inc,
+                    ),
+                    other => other.white_rate_avar(self.tau0_s, &self.ms),
+                };
+                (white, lp.flicker_rate_avar(self.tau0_s, &self.ms))
+            })
         });
-        // The unit's filter smooths its flicker floor too (LowPass::flicker_rate_avar).
-        let filt_b = spec
-            .filter
-            .map(|lp| lp.flicker_rate_avar(self.tau0_s, &self.ms));
+        let filt = cols.as_ref().map(|c| &c.0);
+        let filt_b = cols.as_ref().map(|c| &c.1);
         DMatrix::from_fn(j, k, |r, c| {
             if c < 5 {
                 match (&filt, &filt_b, c) {

@@ -214,32 +214,38 @@ impl LowPass {
             .map_or(1, |i| i + 1);
         let one: Vec<f64> = rho[..cut].to_vec();
         let total = one[0] + 2.0 * one[1..].iter().sum::<f64>();
-        let g = |t: f64| {
-            if t == 0.0 {
-                0.0
-            } else {
-                t * t * t.abs().ln() / (2.0 * PI)
-            }
-        };
-        let f = |t: f64| -> f64 {
-            let mut s = one[0] * g(t);
-            for (q, r) in one.iter().enumerate().skip(1) {
-                let q = q as f64;
-                s += r * (g(t - q) + g(t + q));
-            }
-            s / total
-        };
         let m_exact = 200.0 * (self.memory_s(tau0_s) / tau0_s).max(cut as f64);
-        ms.iter()
-            .map(|&m| {
-                let mf = m as f64;
-                if mf > m_exact {
-                    plain
-                } else {
-                    ((6.0 * f(0.0) - 8.0 * f(mf) + 2.0 * f(2.0 * mf)) / (2.0 * mf * mf)).max(0.0)
+        // F(t) at whole lags t, with G_B read from the table where it reaches
+        let longest = ms
+            .iter()
+            .filter(|&&m| m as f64 <= m_exact)
+            .max()
+            .map_or(0, |&m| 2 * m as usize + cut);
+        flicker_phase_table(longest, |table| {
+            let g = |t: usize| match table {
+                Some(tab) => tab[t],
+                None => flicker_phase(t as f64),
+            };
+            let f = |t: usize| -> f64 {
+                let mut s = one[0] * g(t);
+                for (q, r) in one.iter().enumerate().skip(1) {
+                    s += r * (g(t.abs_diff(q)) + g(t + q));
                 }
-            })
-            .collect()
+                s / total
+            };
+            let f0 = f(0);
+            ms.iter()
+                .map(|&m| {
+                    let mf = m as f64;
+                    if mf > m_exact {
+                        plain
+                    } else {
+                        let m = m as usize;
+                        ((6.0 * f0 - 8.0 * f(m) + 2.0 * f(2 * m)) / (2.0 * mf * mf)).max(0.0)
+                    }
+                })
+                .collect()
+        })
     }
 
     /// Power gain `|H(f)|^2` at `frequency_hz`.
@@ -297,6 +303,42 @@ impl LowPass {
             }
         }
     }
+}
+
+/// The flicker rate's generalised phase covariance `G_B(t) = t^2 ln|t| / (2 pi)` (0 at 0; lags
+/// in samples, [`LowPass::flicker_rate_avar`]).
+fn flicker_phase(t: f64) -> f64 {
+    if t == 0.0 {
+        0.0
+    } else {
+        t * t * t.abs().ln() / (2.0 * PI)
+    }
+}
+
+/// Longest table of [`flicker_phase`] kept per thread (lags; 8 bytes each).
+const FLICKER_TABLE_MAX: usize = 1 << 22;
+
+thread_local! {
+    /// [`flicker_phase`] at the lags `0, 1, 2, ...`: the flicker column sums it over every lag of
+    /// a filter's autocorrelation at three points per cluster size, thousands of times in one
+    /// diagnosis, and a logarithm per term was most of that diagnosis's time (docs/gap.md,
+    /// "Speed (session 17)"). The same values as the function, bit for bit.
+    static FLICKER_TABLE: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// Runs `body` with the thread's table of [`flicker_phase`] grown to hold lags `0..=longest`, or
+/// with None when that is beyond [`FLICKER_TABLE_MAX`] (the function is then evaluated).
+fn flicker_phase_table<T>(longest: usize, body: impl FnOnce(Option<&[f64]>) -> T) -> T {
+    if longest >= FLICKER_TABLE_MAX {
+        return body(None);
+    }
+    FLICKER_TABLE.with(|cell| {
+        let mut table = cell.borrow_mut();
+        for k in table.len()..=longest {
+            table.push(flicker_phase(k as f64));
+        }
+        body(Some(&table[..]))
+    })
 }
 
 /// Lags kept for a geometric decay of ratio `r`.
@@ -511,6 +553,50 @@ mod tests {
             let r0 = lp.autocorrelation(tau0)[0];
             assert!((mean / r0 - 1.0).abs() < 1e-6, "{lp:?}: {mean} vs {r0}");
             assert!((lp.power_gain(tau0, 0.0) - 1.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn the_flicker_column_from_the_table_is_the_formula_term_by_term() {
+        let tau0 = 0.004;
+        let ms: Vec<u64> = (0..18).map(|k| 1u64 << k).collect();
+        for lp in [
+            LowPass::FirstOrder {
+                time_constant_s: 0.05,
+            },
+            LowPass::SecondOrder {
+                natural_frequency_hz: 3.0,
+                damping: 0.4,
+            },
+            LowPass::MovingAverage { taps: 7, stages: 2 },
+        ] {
+            let got = lp.flicker_rate_avar(tau0, &ms);
+            // the sum written out with a logarithm per term, as docs/gap.md states it
+            let rho = lp.autocorrelation(tau0);
+            let cut = rho
+                .iter()
+                .rposition(|v| v.abs() > 1e-9 * rho[0].abs())
+                .map_or(1, |i| i + 1);
+            let total = rho[0] + 2.0 * rho[1..cut].iter().sum::<f64>();
+            let f = |t: f64| {
+                (-(cut as i64 - 1)..cut as i64)
+                    .map(|q| rho[q.unsigned_abs() as usize] * flicker_phase(t - q as f64))
+                    .sum::<f64>()
+                    / total
+            };
+            let m_exact = 200.0 * (lp.memory_s(tau0) / tau0).max(cut as f64);
+            for (&m, g) in ms.iter().zip(&got) {
+                let mf = m as f64;
+                let want = if mf > m_exact {
+                    2.0 * std::f64::consts::LN_2 / PI
+                } else {
+                    (6.0 * f(0.0) - 8.0 * f(mf) + 2.0 * f(2.0 * mf)) / (2.0 * mf * mf)
+                };
+                assert!(
+                    (g - want).abs() <= 1e-9 * want.abs(),
+                    "{lp:?} m {m}: {g} against {want}"
+                );
+            }
         }
     }
 }
