@@ -636,7 +636,7 @@ fn diagnose_curve_once(
         model_tau_s: prob.tau[..j].to_vec(),
         model_base_avar: base.model.clone(),
         model_final_avar: cur.model.clone(),
-        quantization_limited: dead_band_limit(&prob, snap),
+        quantization_limited: dead_band_limit(&prob, snap, &final_spec, &cur),
         outliers: snap.outliers,
         quantization: snap
             .lsb
@@ -651,14 +651,29 @@ fn diagnose_curve_once(
 /// A channel whose rate samples are rounded after its filter with the filtered noise below
 /// [`super::quant_limit::R_WHITE`] steps is quantization-limited too: its shortest taus, up to
 /// ten memories of the filter, carry the rounding model's known error in their covariance
-/// ([`super::discrepancy`]), and the record says so with the same numbers (the noise over the
-/// step as `ratio`, the tau where the discrepancy's full size ends as `tau_white`).
-fn dead_band_limit(prob: &GapProblem, snap: &EvidenceSnapshot) -> Option<QuantizationLimit> {
+/// ([`super::discrepancy`]), and the record says so (the tau where the discrepancy's full size
+/// ends as `tau_white`). Its `ratio`, the filtered rate sample's noise over the step, is that of
+/// the final fit (its `N` through the filter it names, or through the covariance's filter when
+/// it names none): the covariance's own `N`, fitted beyond ten memories of the filter where the
+/// rounding's correlated error still lowers the curve, put it 11-17% low on the dead-band
+/// units of `tests/gap/rounding.rs` (docs/gap.md, "Speed (session 17)").
+fn dead_band_limit(
+    prob: &GapProblem,
+    snap: &EvidenceSnapshot,
+    final_spec: &ModelSpec,
+    fit: &GlsFit,
+) -> Option<QuantizationLimit> {
     let d = prob.discrepancy?;
     let lsb = snap.lsb?;
+    let ratio = match (final_spec.filter.or(prob.cov_filter), fit.coef.get(1)) {
+        (Some(lp), Some(&n2)) if n2 > 0.0 => {
+            super::rounding::filtered_sigma(&lp, snap.tau0_s, n2) * snap.tau0_s / lsb
+        }
+        _ => d.sigma_steps,
+    };
     (d.sigma_steps < super::quant_limit::R_WHITE).then(|| QuantizationLimit {
         lsb,
-        ratio: d.sigma_steps,
+        ratio,
         tau_white_s: d.tau_full_s,
         m_white: (d.tau_full_s / snap.tau0_s).ceil().max(1.0) as u64,
     })

@@ -363,8 +363,9 @@ fn dead_band_first_order(
 /// (`gap::rounding::rounding_avar_on_grid`, docs/gap.md "The grid model wired (session 15)")
 /// seeds 1-3 name it within 2.5% (0.0425, 0.0418, 0.0423 s against 0.0415); held to 6%. The
 /// record says the channel is quantization-limited with the filtered noise over the step
-/// within 15% of the simulated 0.384 (0.340 on seed 1: the covariance's N, fitted beyond ten
-/// memories of the filter, where the rounding's correlated error still lowers the curve).
+/// from the final fit: 0.3855, 0.3849, 0.3833 on seeds 1-3 against the simulated 0.3840 (the
+/// covariance's N, fitted beyond ten memories of the filter where the rounding's correlated
+/// error still lowers the curve, gave 0.340, 0.335, 0.348 until session 17); held to 2%.
 #[test]
 fn the_dead_band_is_a_discrepancy_not_an_effect() {
     let ratio = accf29_sigma() / 1.4535586033795069e-2;
@@ -372,7 +373,7 @@ fn the_dead_band_is_a_discrepancy_not_an_effect() {
     for seed in [1, 2] {
         let q = dead_band_first_order(ACCF29, seed, 0.06);
         assert!(
-            (q.ratio / ratio - 1.0).abs() < 0.15,
+            (q.ratio / ratio - 1.0).abs() < 0.02,
             "seed {seed}: ratio {} against {ratio}",
             q.ratio
         );
@@ -456,12 +457,14 @@ const ACC03Q: &str = "tau0_s = 0.002770083102493075\n[[channel]]\nname = \"x\"\n
 /// the floor dropped; session 14 (the averaged model kept where the grid said it held) named it
 /// within 1% on seeds 2 and 3 and 38% short on seed 1, whose random walk leaves the run's
 /// `|A_1|` at 0.33; with the grid model seeds 1-3 are within 3.4% (0.0429, 0.0418, 0.0412 s).
-/// Held here to 6%, seeds 1 and 2, with the dead band said.
+/// Held here to 6%, seeds 1 and 2, with the dead band said and its noise over the step read
+/// from the final fit (0.3022, 0.2993, 0.3016 on seeds 1-3 against 0.3; from the covariance's N
+/// until session 17, 0.281, 0.307, 0.329), held to 2%.
 #[test]
 fn the_floor_holds_in_the_dead_band_with_the_mean_off_the_grid() {
     for seed in [1, 2] {
         let q = dead_band_first_order(ACC03Q, seed, 0.06);
-        assert!((q.ratio - 0.3).abs() < 0.03, "seed {seed}: {q:?}");
+        assert!((q.ratio - 0.3).abs() < 0.006, "seed {seed}: {q:?}");
     }
 }
 
