@@ -113,6 +113,7 @@
 //!   evidence.rs            what one streaming pass over a channel gathers
 //!   effects.rs             candidate effects and their AVAR columns
 //!   block_cov.rs           covariance of block-mean differences under the model
+//!   column_memo.rs         a problem's filter columns and rounding floors, kept once computed
 //!   filter_cov.rs          covariance of filtered white rate, exact
 //!   problem.rs             the GLS problem on one measured curve
 //!   filter_scan.rs         shape scans of the filter candidates
