@@ -110,10 +110,11 @@ pub fn floor_harmonics(
     step: f64,
     sigma: f64,
     n2: f64,
+    memory_s: f64,
 ) -> Option<[f64; GRID_HARMONICS]> {
     let sigma_steps = sigma / step;
     grid.filter(|_| sigma_steps >= MIN_SIGMA_STEPS_ON_GRID)
-        .and_then(|g| grid_cosines(g, step, sigma * sigma, n2))
+        .and_then(|g| grid_cosines(g, step, sigma * sigma, n2, memory_s))
 }
 
 /// The discrepancy of a channel whose rate samples, filtered by `lp` (white rate `N^2 = n2`,
@@ -131,7 +132,7 @@ pub fn rounding_discrepancy(
     }
     let sigma = super::rounding::filtered_sigma(lp, tau0_s, n2);
     let sigma_steps = sigma / step;
-    let harmonics = floor_harmonics(grid, step, sigma, n2);
+    let harmonics = floor_harmonics(grid, step, sigma, n2, lp.memory_s(tau0_s));
     let bound = match harmonics {
         Some(_) => grid_residual_bound(sigma_steps),
         None => relative_bound(sigma_steps),
@@ -223,6 +224,7 @@ mod tests {
         let grid_at = |steps: f64, step: f64| GridPosition {
             block_means: vec![steps * step; 64],
             block_s: 100.0,
+            flicker_b2: 0.0,
         };
         // 0.45 filtered sigmas per step: without the block means the worst case,
         // 4 exp(-x / 2) = 0.0735 (x = 4 pi^2 0.2025); with them, on a step or a quarter step

@@ -237,9 +237,12 @@ impl GapProblem {
         // rounding model's known error enters as a model discrepancy of ln AVAR
         // ([`super::discrepancy`]; docs/gap.md, "The dead band as model discrepancy"), scaled
         // by where the block means place the unit's mean on the grid.
+        // The flicker that moves the mean within each block is the covariance's (fitted
+        // beyond ten memories of the filter on the later passes).
         let grid = snap.lsb.map(|_| GridPosition {
             block_means: snap.block_means.clone(),
             block_s: snap.block_len as f64 * tau0,
+            flicker_b2: c_cov[2].max(0.0),
         });
         let discrepancy = match (opts.cov_filter, snap.lsb) {
             (Some(lp), Some(lsb)) if !opts.cov_counter => {
@@ -385,7 +388,14 @@ impl GapProblem {
                 p.lowpass().is_some_and(|lp| {
                     let sigma = filtered_sigma(&lp, self.tau0_s, n2);
                     sigma >= MIN_SIGMA_STEPS * step
-                        || floor_harmonics(self.grid.as_ref(), step, sigma, n2).is_some()
+                        || floor_harmonics(
+                            self.grid.as_ref(),
+                            step,
+                            sigma,
+                            n2,
+                            lp.memory_s(self.tau0_s),
+                        )
+                        .is_some()
                 })
             }
             _ => false,

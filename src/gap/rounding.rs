@@ -98,11 +98,36 @@ const GRID_BINS: usize = 256;
 
 /// Where a unit's mean falls on the rounding grid, as the run shows it: the mean rate of each
 /// block of the run (u/s, in time order) and the blocks' length (s). The mean may drift over
-/// the run; each block holds its own position ([`grid_cosines`]).
+/// the run; each block holds its own position ([`grid_cosines`]). Within a block it still
+/// wanders with the unit's flicker rate noise `flicker_b2` (`B^2`, u^2/s^2; 0 when not known),
+/// which spreads the samples' positions about the block's ([`within_block_wander`]).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct GridPosition {
     pub block_means: Vec<f64>,
     pub block_s: f64,
+    pub flicker_b2: f64,
+}
+
+/// `ln(f_c T_b) + C` with the variance of flicker about its `T_b`-block mean behind a first
+/// order of cut-off `f_c`, `(B^2 / 2 pi) int_0^inf (1 - sinc^2(pi f T_b)) / (f (1 + (f /
+/// f_c)^2)) df`, equal to `(B^2 / 2 pi) (ln(f_c T_b) + C)` once `f_c T_b >= 10` (numerical
+/// quadrature: 0.9175 at 10, 0.9151 at 100 and 1000; docs/gap.md, "The mean wanders within a
+/// block (session 17)").
+const WANDER_LN_CONST: f64 = 0.915;
+
+/// The variance (u^2/s^2) of the unit's slow rate about its block mean within the blocks of
+/// `grid`, seen through a filter of memory `memory_s` (s): the flicker rate noise `B^2`
+/// (`S(f) = B^2 / (2 pi f)`, the five-term model's convention) between the block's frequency
+/// and the filter's cut-off `1 / (2 pi T)`, `(B^2 / 2 pi) max(0, ln(T_b / (2 pi T)) + C)`
+/// ([`WANDER_LN_CONST`]). Faster flicker is filtered with the white rate and is small beside it;
+/// the rate random walk's share, `K^2 T_b / 6`, is left out (the curve's `K` is the least
+/// certain of the five at the blocks' length, and a wrong one would erase the grid's terms).
+pub fn within_block_wander(grid: &GridPosition, memory_s: f64) -> f64 {
+    if !(grid.flicker_b2 > 0.0 && grid.block_s > 0.0 && memory_s > 0.0) {
+        return 0.0;
+    }
+    let span = (grid.block_s / (2.0 * PI * memory_s)).ln() + WANDER_LN_CONST;
+    grid.flicker_b2 / (2.0 * PI) * span.max(0.0)
 }
 
 /// `sum_{n >= 1} (-1)^n sin(2 pi n v) exp(-x n^2 / 2) / (pi n)` and its derivative in `v`:
@@ -141,6 +166,7 @@ pub fn grid_cosines(
     step: f64,
     sigma2: f64,
     n2: f64,
+    memory_s: f64,
 ) -> Option<[f64; GRID_HARMONICS]> {
     if grid.block_means.is_empty() || !(grid.block_s > 0.0 && step > 0.0 && sigma2 > 0.0) {
         return None;
@@ -218,7 +244,16 @@ pub fn grid_cosines(
     if count == 0 {
         return None;
     }
-    Some(acc.map(|a| (a / count as f64).clamp(-1.0, 1.0)))
+    // Each sample's position is its block's plus the slow wander within the block, Gaussian
+    // of variance `w2` steps^2: the average of cos(2 pi p mu) over the samples is the block's
+    // times exp(-2 pi^2 p^2 w2).
+    let w2 = within_block_wander(grid, memory_s) / (step * step);
+    let mut out = acc.map(|a| (a / count as f64).clamp(-1.0, 1.0));
+    for (p, o) in out.iter_mut().enumerate() {
+        let pf = (p + 1) as f64;
+        *o *= (-2.0 * PI * PI * pf * pf * w2).exp();
+    }
+    Some(out)
 }
 
 /// Relative size below which a term of the mean-dependent part is left out: a harmonic whose
@@ -330,7 +365,7 @@ pub fn rounding_avar_on_grid(
     // harmonics that matter: |A_p| exp(-x p^2 / 4) above GRID_NEGLIGIBLE (none once the
     // filtered noise is above about 1.3 steps: the averaged model is then the whole of it)
     let harmonics: Vec<(usize, f64)> = if (-0.25 * x).exp() > GRID_NEGLIGIBLE && x >= GRID_MIN_X {
-        grid.and_then(|g| grid_cosines(g, step, sigma2, n2))
+        grid.and_then(|g| grid_cosines(g, step, sigma2, n2, lp.memory_s(tau0_s)))
             .map(|a| {
                 (1..=GRID_HARMONICS)
                     .map(|p| (p, a[p - 1]))
@@ -461,11 +496,12 @@ mod tests {
         let grid = GridPosition {
             block_means,
             block_s: 40.0,
+            flicker_b2: 0.0,
         };
         for sigma_steps in [0.21, 0.3, 0.48] {
             let sigma2 = (sigma_steps * step) * (sigma_steps * step);
             let n2 = 1e-6;
-            let got = grid_cosines(&grid, step, sigma2, n2).expect("resolved");
+            let got = grid_cosines(&grid, step, sigma2, n2, 0.05).expect("resolved");
             let want = grid_cosines_by_bisection(&grid, step, sigma2, n2);
             for p in 0..GRID_HARMONICS {
                 // the pooling moves a block by at most a bin's width, 1/256 step, and each
@@ -479,5 +515,45 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn the_wander_within_a_block_is_the_filtered_flickers_variance_about_the_block_mean() {
+        // (B^2 / 2 pi) int_0^inf (1 - sinc^2(pi f T_b)) / (f (1 + (f / f_c)^2)) df by the
+        // midpoint rule in ln f, against the closed form with WANDER_LN_CONST, for a first
+        // order of memory T (f_c = 1 / (2 pi T)) and blocks 10^2-10^4 memories long
+        let b2 = 4e-6;
+        for (memory_s, block_s) in [(0.05f64, 8.0f64), (0.01, 30.0), (0.002, 20.0)] {
+            let fc = 1.0 / (2.0 * PI * memory_s);
+            let (lo, hi, n) = ((1e-6 / block_s).ln(), (1e4 * fc).ln(), 200_000);
+            let h = (hi - lo) / n as f64;
+            let quad: f64 = (0..n)
+                .map(|i| {
+                    let f = (lo + (i as f64 + 0.5) * h).exp();
+                    let x = PI * f * block_s;
+                    let sinc2 = if x > 1e-8 { (x.sin() / x).powi(2) } else { 1.0 };
+                    (1.0 - sinc2) / (1.0 + (f / fc).powi(2)) * h
+                })
+                .sum::<f64>()
+                * b2
+                / (2.0 * PI);
+            let grid = GridPosition {
+                block_means: vec![0.0],
+                block_s,
+                flicker_b2: b2,
+            };
+            let w = within_block_wander(&grid, memory_s);
+            assert!(
+                (w / quad - 1.0).abs() < 0.005,
+                "T {memory_s} T_b {block_s}: {w} against {quad}"
+            );
+        }
+        // no flicker, or a block within the filter's memory: no wander
+        let none = GridPosition {
+            block_means: vec![0.0],
+            block_s: 0.01,
+            flicker_b2: b2,
+        };
+        assert_eq!(within_block_wander(&none, 0.05), 0.0);
     }
 }
