@@ -62,17 +62,7 @@ impl ColumnMemo {
         lp: &LowPass,
         make: impl FnOnce() -> (Vec<f64>, Vec<f64>),
     ) -> FilterColumns {
-        let key = FilterKey::of(lp);
-        if let Some(c) = lock(&self.columns).get(&key) {
-            return Arc::clone(c);
-        }
-        let c = Arc::new(make());
-        let mut t = lock(&self.columns);
-        if t.len() >= MAX_COLUMNS {
-            t.clear();
-        }
-        t.insert(key, Arc::clone(&c));
-        c
+        kept_or_made(&self.columns, FilterKey::of(lp), MAX_COLUMNS, make)
     }
 
     /// The rounding floor after `lp` for the white rate `n2` (u^2/s) and the step `step` (u/s),
@@ -85,17 +75,28 @@ impl ColumnMemo {
         make: impl FnOnce() -> Vec<f64>,
     ) -> Arc<Vec<f64>> {
         let key = (FilterKey::of(lp), n2.to_bits(), step.to_bits());
-        if let Some(c) = lock(&self.floors).get(&key) {
-            return Arc::clone(c);
-        }
-        let c = Arc::new(make());
-        let mut t = lock(&self.floors);
-        if t.len() >= MAX_FLOORS {
-            t.clear();
-        }
-        t.insert(key, Arc::clone(&c));
-        c
+        kept_or_made(&self.floors, key, MAX_FLOORS, make)
     }
+}
+
+/// The value kept in `table` under `key`, or `make`'s, then kept (the table emptied first when
+/// it holds `cap` values).
+fn kept_or_made<K: std::hash::Hash + Eq, V>(
+    table: &Mutex<HashMap<K, Arc<V>>>,
+    key: K,
+    cap: usize,
+    make: impl FnOnce() -> V,
+) -> Arc<V> {
+    if let Some(v) = lock(table).get(&key) {
+        return Arc::clone(v);
+    }
+    let v = Arc::new(make());
+    let mut t = lock(table);
+    if t.len() >= cap {
+        t.clear();
+    }
+    t.insert(key, Arc::clone(&v));
+    v
 }
 
 /// The table, whether or not another thread panicked while holding it (a table is only ever
