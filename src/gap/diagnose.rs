@@ -298,8 +298,16 @@ fn diagnose_curve(
     // covariance was used (three passes at most: the first pass's covariance, without the
     // filter, can favour another filter of the family).
     let mut used: Option<crate::model::lowpass::LowPass> = None;
+    // A first pass that named a Gauss-Markov term and no filter, where the first scan's best
+    // filter fitted about as well: white rate through a first order is a Gauss-Markov process
+    // at its time constant, and the first pass's covariance, without the filter, cannot tell
+    // the two apart. The pass with that filter's covariance is tried, and kept only if it
+    // ends with a lower gap (docs/gap.md, "A Gauss-Markov term tied with a filter (session
+    // 17)").
+    let mut tied = tied_filter(&d.effects, &d.first_scores);
     for _ in 0..2 {
-        let Some(lp) = d.effects.iter().find_map(|e| e.params.lowpass()) else {
+        let trial = tied.take();
+        let Some(lp) = d.effects.iter().find_map(|e| e.params.lowpass()).or(trial) else {
             return Ok(d);
         };
         if used.is_some_and(|u| same_filter(&u, &lp, snap.lsb.is_some(), snap.tau0_s)) {
@@ -326,6 +334,13 @@ fn diagnose_curve(
             ..opts.clone()
         };
         match diagnose_curve_once(snap, temperature, &next) {
+            Ok(n)
+                if trial.is_some()
+                    && n.gap_after.partial_cmp(&d.gap_after) != Some(std::cmp::Ordering::Less) =>
+            {
+                log_pass(2, &n);
+                return Ok(d);
+            }
             Ok(n) => {
                 d = n;
                 log_pass(2 + usize::from(used.is_some()), &d);
@@ -335,6 +350,38 @@ fn diagnose_curve(
         used = Some(lp);
     }
     Ok(d)
+}
+
+/// The share by which the first scan's best filter may fit worse than the best candidate and
+/// still count as tied with it ([`tied_filter`]): its gap within 5%.
+const TIE_GAP_RATIO: f64 = 1.05;
+
+/// The filter tied with a Gauss-Markov term that a pass named in its place (see
+/// [`diagnose_curve`]), from the pass's `effects` and its first scan's `scores`: None when the
+/// pass named a filter, named no Gauss-Markov term, or the first scan's best filter's gap is
+/// above [`TIE_GAP_RATIO`] times the best candidate's.
+fn tied_filter(
+    effects: &[AddedEffect],
+    scores: &[CandidateScore],
+) -> Option<crate::model::lowpass::LowPass> {
+    if effects.iter().any(|e| e.params.lowpass().is_some())
+        || !effects
+            .iter()
+            .any(|e| e.params.kind() == EffectKind::GaussMarkov)
+    {
+        return None;
+    }
+    let best = scores
+        .iter()
+        .map(|c| c.gap_alt)
+        .filter(|g| g.is_finite())
+        .fold(f64::INFINITY, f64::min);
+    scores
+        .iter()
+        .filter(|c| c.gap_alt.is_finite() && c.gap_alt <= TIE_GAP_RATIO * best)
+        .filter_map(|c| c.params.lowpass().map(|lp| (c.gap_alt, lp)))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, lp)| lp)
 }
 
 /// One pass of [`diagnose_curve`] at debug level (`ALLANSCOPE_LOG=allanscope=debug`): its
@@ -1227,4 +1274,71 @@ fn describe(regions: &[Region]) -> String {
         "mixed"
     };
     format!("{kind}: {}", parts.join("; "))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::lowpass::LowPass;
+
+    fn score(params: EffectParams, gap_alt: f64) -> CandidateScore {
+        CandidateScore {
+            kind: params.kind(),
+            params,
+            score: 0.0,
+            crit: 0.0,
+            gap_alt,
+            score_tail: 0.0,
+        }
+    }
+
+    fn added(params: EffectParams) -> AddedEffect {
+        AddedEffect {
+            params,
+            gap_after: 2.5,
+            delta_chi2: 10.0,
+        }
+    }
+
+    /// accfilt s107 draw 26's first scan (family_gap's `galt_*`): the first order 3.38, the
+    /// Gauss-Markov term 3.44, the second order 3.34; the pass named the Gauss-Markov term and
+    /// a sinusoid. The tied filter is the best filter by its gap, the second order here.
+    #[test]
+    fn a_gauss_markov_term_named_in_a_filters_place_gives_the_tied_filter() {
+        let gm = EffectParams::GaussMarkov {
+            sigma: 5.8e-3,
+            tau_c_s: 0.0794,
+        };
+        let first = EffectParams::OutputFilter {
+            time_constant_s: 0.0798,
+        };
+        let second = EffectParams::SecondOrderFilter {
+            natural_frequency_hz: 2.0,
+            damping: 1.0,
+        };
+        let sin = EffectParams::Sinusoid {
+            amplitude: 6e-4,
+            frequency_hz: 1.34,
+        };
+        let scores = [score(gm, 3.44), score(first, 3.38), score(second, 3.34)];
+        let named = [added(gm), added(sin)];
+        assert_eq!(tied_filter(&named, &scores), second.lowpass());
+        // with the first order the only filter on the scan, it
+        let scores1 = [score(gm, 3.44), score(first, 3.38)];
+        assert_eq!(
+            tied_filter(&named, &scores1),
+            Some(LowPass::FirstOrder {
+                time_constant_s: 0.0798
+            })
+        );
+        // a filter more than 5% worse than the best candidate is not tied
+        let far = [score(gm, 3.0), score(first, 3.2)];
+        assert_eq!(tied_filter(&named, &far), None);
+        // within 5%: 3.12 against 3.0
+        let near = [score(gm, 3.0), score(first, 3.12)];
+        assert!(tied_filter(&named, &near).is_some());
+        // a filter named already, or no Gauss-Markov term named: nothing to try
+        assert_eq!(tied_filter(&[added(first)], &scores), None);
+        assert_eq!(tied_filter(&[added(sin)], &scores), None);
+    }
 }
