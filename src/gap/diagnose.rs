@@ -702,8 +702,8 @@ fn diagnose_curve_once(
 /// ends as `tau_white`). Its `ratio`, the filtered rate sample's noise over the step, is that of
 /// the final fit (its `N` through the filter it names, or through the covariance's filter when
 /// it names none): the covariance's own `N`, fitted beyond ten memories of the filter where the
-/// rounding's correlated error still lowers the curve, put it 11-17% low on the dead-band
-/// units of `tests/gap/rounding.rs` (docs/gap.md, "The grid model wired (session 15)", "The
+/// rounding's correlated error still lowers the curve, put it 9-13% low on the dead-band
+/// unit accf29 of `tests/gap/rounding.rs` (docs/gap.md, "The grid model wired (session 15)", "The
 /// record's ratio").
 fn dead_band_limit(
     prob: &GapProblem,

@@ -198,8 +198,8 @@ pub fn grid_cosines(
         let u = sum_u / n_b as f64;
         // Newton's method on the increasing f(v) = v + E[e](v) = u over [-1/2, 1/2], kept in
         // the bracket (f(+-1/2) = +-1/2), from the previous bin's solution carried along the
-        // tangent there (the bins come in increasing order; a start off the bracket is
-        // replaced by the bracket's middle at the first step)
+        // tangent there (the bins come in increasing order; a start outside the bracket is
+        // replaced by the bin's own position, the start before session 17)
         let (mut lo, mut hi) = (-0.5, 0.5);
         let mut v = prev.map_or(u, |(u0, v0, s0)| v0 + (u - u0) / s0.max(1e-12));
         if !(v > lo && v < hi) {

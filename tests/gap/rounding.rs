@@ -311,11 +311,17 @@ const ACCF29_TAU0: f64 = 0.002770083102493075;
 const ACCF29_T: f64 = 4.1453357056591464e-2;
 const ACCF29_N: f64 = 1.6073054280352312e-3;
 
-/// The filtered rate sample's sigma (u/s) of `ACCF29`'s unit: `N sqrt(rho_0 / tau0)` with a
-/// first order's `rho_0 = (1 - a) / (1 + a)` per sample, `a = exp(-tau0 / T)`.
+/// The filtered rate sample's sigma (u/s) of a unit of white rate `n` (u/sqrt(s)) at `tau0_s`
+/// behind a first order of `time_constant_s`: `N sqrt(rho_0 / tau0)` with the first order's
+/// `rho_0 = (1 - a) / (1 + a)` per sample, `a = exp(-tau0 / T)`.
+fn first_order_sigma(n: f64, time_constant_s: f64, tau0_s: f64) -> f64 {
+    let a = (-tau0_s / time_constant_s).exp();
+    n * ((1.0 - a) / (1.0 + a) / tau0_s).sqrt()
+}
+
+/// The filtered rate sample's sigma (u/s) of `ACCF29`'s unit ([`first_order_sigma`]).
 fn accf29_sigma() -> f64 {
-    let a = (-ACCF29_TAU0 / ACCF29_T).exp();
-    (ACCF29_N * ACCF29_N * (1.0 - a) / (1.0 + a) / ACCF29_TAU0).sqrt()
+    first_order_sigma(ACCF29_N, ACCF29_T, ACCF29_TAU0)
 }
 
 /// 1800 s of `model` (a unit at `tau0_s` behind a first order of `time_constant_s`) diagnosed
@@ -514,6 +520,10 @@ const ACCG4: &str = "tau0_s = 0.004132231404958678\n[[channel]]\nname = \"x\"\nu
                      bias = -6.358156708859486e0\n\
                      output_filter = { time_constant = 8.636734412459114e-2 }\n\
                      rate_lsb = 8.560865116489994e-3\n";
+const ACCG4_TAU0: f64 = 0.004132231404958678;
+const ACCG4_T: f64 = 8.636734412459114e-2;
+const ACCG4_N: f64 = 9.785249792282284e-4;
+const ACCG4_STEP: f64 = 8.560865116489994e-3;
 
 /// Without the wander the grid model takes the block means' positions for every sample's and
 /// the fit's N comes out low (at 3600 s, simulator seed 1: the filtered noise at 0.217 steps
@@ -527,20 +537,12 @@ const ACCG4: &str = "tau0_s = 0.004132231404958678\n[[channel]]\nname = \"x\"\nu
 /// time constant held to 6% and the noise over the step to 10%.
 #[test]
 fn the_mean_wandering_within_a_block_keeps_the_floor_and_names_the_first_order() {
-    let a = (-0.004132231404958678f64 / 8.636734412459114e-2).exp();
-    let sigma = 9.785249792282284e-4 * ((1.0 - a) / (1.0 + a) / 0.004132231404958678).sqrt();
-    let ratio = sigma / 8.560865116489994e-3;
+    let ratio = first_order_sigma(ACCG4_N, ACCG4_T, ACCG4_TAU0) / ACCG4_STEP;
     assert!((ratio - 0.275).abs() < 0.002, "{ratio}");
     for seed in [1, 3] {
-        let q = first_order_alone(
-            ACCG4,
-            0.004132231404958678,
-            8.636734412459114e-2,
-            seed,
-            0.06,
-        )
-        .quantization_limited
-        .unwrap_or_else(|| panic!("seed {seed}: the dead band is not said"));
+        let q = first_order_alone(ACCG4, ACCG4_TAU0, ACCG4_T, seed, 0.06)
+            .quantization_limited
+            .unwrap_or_else(|| panic!("seed {seed}: the dead band is not said"));
         assert!(
             (q.ratio / ratio - 1.0).abs() < 0.1,
             "seed {seed}: ratio {} against {ratio}",
