@@ -54,13 +54,13 @@ fn run(extra: &str, seed: u64) -> Diagnosis {
 }
 
 /// The bookkeeping (docs/gap.md, "Bookkeeping"): each effect's `gap_after` is the gap once it
-/// is added, below the one before, except a warm-up kept on its time-domain evidence alone,
-/// which leaves the gap as it was (and brings no drop of the curve's misfit); the last is the
-/// final gap, never above the base's.
+/// is added, below the one before, except a warm-up or jumps kept on their time-domain
+/// evidence alone, which leave the gap as it was (and bring no drop of the curve's misfit); the
+/// last is the final gap, never above the base's.
 pub(crate) fn assert_bookkeeping(d: &Diagnosis) {
     let mut prev = d.gap_before;
     for e in &d.effects {
-        let in_time = e.params.kind() == EffectKind::Warmup;
+        let in_time = matches!(e.params.kind(), EffectKind::Warmup | EffectKind::BiasJumps);
         assert!(
             e.gap_after < prev || (in_time && e.gap_after == prev && e.delta_chi2 == 0.0),
             "{e:?} did not lower the gap from {prev}"
@@ -243,6 +243,51 @@ fn injected_steps_are_located_and_sized() {
         },
         None => panic!("no bias_jumps in {:?}", d.effects),
     }
+}
+
+#[test]
+fn a_jump_the_curve_does_not_show_is_kept_on_its_time_domain_evidence() {
+    // One step of 1.6 arcsec/s at 1800.3 s on a clean one-hour run (seed 12): the step search
+    // scores it at z 9.3, far above the jump rule's one-step 4.5, while its AVAR is lost in the
+    // five terms' curve (the gap with it in is not lower). The jump rule is calibrated on
+    // clean runs as such (0.7% of seed 181's 600 clean runs, docs/gap.md, "Bookkeeping"), so
+    // the step is named with its time and size although the curve's gap does not fall; until
+    // session 18 the bookkeeping dropped it.
+    let (t_step, size) = (1800.3, 1.6);
+    let mut inc = simulate("", 12);
+    for (k, d) in inc.iter_mut().enumerate() {
+        let (t0, t1) = (k as f64 * TAU0, (k + 1) as f64 * TAU0);
+        if t1 > t_step {
+            *d += size * (t1 - t_step.max(t0));
+        }
+    }
+    let mut ev = GapEvidence::from_increments(GapConfig::new(TAU0), &inc);
+    let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
+    assert_bookkeeping(&d);
+    let j = d.jumps.as_ref().expect("jump search ran");
+    assert_eq!(j.sizes.len(), 1, "{j:?}");
+    assert!(
+        (j.times_s[0] - t_step).abs() <= j.block_s,
+        "time {:?}",
+        j.times_s
+    );
+    assert!(rel(j.sizes[0], size) < TOL_AMP, "size {:?}", j.sizes);
+    let e = d
+        .effects
+        .iter()
+        .find(|e| e.params.kind() == EffectKind::BiasJumps)
+        .unwrap_or_else(|| panic!("no bias_jumps in {:?}", d.effects));
+    match e.params {
+        EffectParams::BiasJumps { count, rms_size } => {
+            assert_eq!(count, 1);
+            assert!(rel(rms_size, size) < TOL_AMP, "rms {rms_size}");
+        }
+        p => panic!("{p:?}"),
+    }
+    // Kept on the time-domain evidence: the model and the gap are those before it.
+    assert_eq!((e.gap_after, e.delta_chi2), (d.gap_before, 0.0), "{e:?}");
+    assert_eq!(d.gap_after, d.gap_before);
+    assert_eq!(d.verdict, Verdict::Explained);
 }
 
 #[test]
