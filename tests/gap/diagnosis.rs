@@ -45,6 +45,19 @@ pub(crate) fn simulate(extra: &str, seed: u64) -> Vec<f64> {
     out
 }
 
+/// [`simulate`]`("", seed)` with one step of `size` (u/s) in the rate at `t_step` (s), exact
+/// within the increment it falls in.
+fn clean_with_step(seed: u64, t_step: f64, size: f64) -> Vec<f64> {
+    let mut inc = simulate("", seed);
+    for (k, d) in inc.iter_mut().enumerate() {
+        let (t0, t1) = (k as f64 * TAU0, (k + 1) as f64 * TAU0);
+        if t1 > t_step {
+            *d += size * (t1 - t_step.max(t0));
+        }
+    }
+    inc
+}
+
 fn run(extra: &str, seed: u64) -> Diagnosis {
     let inc = simulate(extra, seed);
     let mut ev = GapEvidence::from_increments(GapConfig::new(TAU0), &inc);
@@ -254,13 +267,7 @@ fn a_jump_the_curve_does_not_show_is_kept_on_its_time_domain_evidence() {
     // the step is named with its time and size although the curve's gap does not fall; until
     // session 18 the bookkeeping dropped it.
     let (t_step, size) = (1800.3, 1.6);
-    let mut inc = simulate("", 12);
-    for (k, d) in inc.iter_mut().enumerate() {
-        let (t0, t1) = (k as f64 * TAU0, (k + 1) as f64 * TAU0);
-        if t1 > t_step {
-            *d += size * (t1 - t_step.max(t0));
-        }
-    }
+    let inc = clean_with_step(12, t_step, size);
     let mut ev = GapEvidence::from_increments(GapConfig::new(TAU0), &inc);
     let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
     assert_bookkeeping(&d);
@@ -428,13 +435,7 @@ fn a_large_step_is_named_as_a_jump_not_as_a_slow_oscillation() {
     // first on this seed (and on seed 4; blind benchmark draws 281 and 383 likewise), with the
     // gap left at 1.03. The step is 16 times the block-difference noise.
     let (t_step, size) = (250.0, 4.0);
-    let mut inc = simulate("", 2);
-    for (k, d) in inc.iter_mut().enumerate() {
-        let (t0, t1) = (k as f64 * TAU0, (k + 1) as f64 * TAU0);
-        if t1 > t_step {
-            *d += size * (t1 - t_step.max(t0));
-        }
-    }
+    let inc = clean_with_step(2, t_step, size);
     let mut ev = GapEvidence::from_increments(GapConfig::new(TAU0), &inc);
     let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
     match first_of(&d, EffectKind::BiasJumps) {
