@@ -58,12 +58,16 @@ fn clean_with_step(seed: u64, t_step: f64, size: f64) -> Vec<f64> {
     inc
 }
 
-fn run(extra: &str, seed: u64) -> Diagnosis {
-    let inc = simulate(extra, seed);
-    let mut ev = GapEvidence::from_increments(GapConfig::new(TAU0), &inc);
+/// `inc` diagnosed with the default options, the bookkeeping's rules checked on the result.
+fn diagnosed(inc: &[f64]) -> Diagnosis {
+    let mut ev = GapEvidence::from_increments(GapConfig::new(TAU0), inc);
     let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
     assert_bookkeeping(&d);
     d
+}
+
+fn run(extra: &str, seed: u64) -> Diagnosis {
+    diagnosed(&simulate(extra, seed))
 }
 
 /// The bookkeeping (docs/gap.md, "Bookkeeping"): each effect's `gap_after` is the gap once it
@@ -233,8 +237,7 @@ fn injected_steps_are_located_and_sized() {
         }
         *d += add;
     }
-    let mut ev = GapEvidence::from_increments(GapConfig::new(TAU0), &inc);
-    let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
+    let d = diagnosed(&inc);
     let j = d.jumps.as_ref().expect("jump search ran");
     assert_eq!(j.sizes.len(), truth.len(), "{j:?}");
     for ((t, s), (tt, ts)) in j.times_s.iter().zip(&j.sizes).zip(truth) {
@@ -268,9 +271,7 @@ fn a_jump_the_curve_does_not_show_is_kept_on_its_time_domain_evidence() {
     // session 18 the bookkeeping dropped it.
     let (t_step, size) = (1800.3, 1.6);
     let inc = clean_with_step(12, t_step, size);
-    let mut ev = GapEvidence::from_increments(GapConfig::new(TAU0), &inc);
-    let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
-    assert_bookkeeping(&d);
+    let d = diagnosed(&inc);
     let j = d.jumps.as_ref().expect("jump search ran");
     assert_eq!(j.sizes.len(), 1, "{j:?}");
     assert!(
@@ -436,8 +437,7 @@ fn a_large_step_is_named_as_a_jump_not_as_a_slow_oscillation() {
     // gap left at 1.03. The step is 16 times the block-difference noise.
     let (t_step, size) = (250.0, 4.0);
     let inc = clean_with_step(2, t_step, size);
-    let mut ev = GapEvidence::from_increments(GapConfig::new(TAU0), &inc);
-    let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
+    let d = diagnosed(&inc);
     match first_of(&d, EffectKind::BiasJumps) {
         EffectParams::BiasJumps { count, rms_size } => {
             assert!((1..=2).contains(&count), "count {count}");
