@@ -1326,7 +1326,7 @@ mod tests {
         let scores = [score(gm, 3.44), score(first, 3.38), score(second, 3.34)];
         let named = [added(gm), added(sin)];
         assert_eq!(tied_filter(&named, &scores), second.lowpass());
-        // with the first order the only filter on the scan, it
+        // with the first order the only filter on the scan, the first order is the tied one
         let scores1 = [score(gm, 3.44), score(first, 3.38)];
         assert_eq!(
             tied_filter(&named, &scores1),
