@@ -1,10 +1,11 @@
 import csv,sys
-# usage: fa.py CSV [CSV2]: lists false alarms / differences
-def load(f): return {(r['family'],r['draw']):r for r in csv.DictReader(open(f))}
+# usage: fa.py CSV [CSV2]: lists false alarms / differences. Runs are keyed by family, effect
+# and draw (until session 18 by family and draw only, which mixed the effects of a detection set).
+def load(f): return {(r['family'],r['effect'],r['draw']):r for r in csv.DictReader(open(f))}
 a=load(sys.argv[1])
 b=load(sys.argv[2]) if len(sys.argv)>2 else None
 keys=['verdict','gap_after','named','named_params','qlim']
-for k,r in sorted(a.items(), key=lambda kv:(kv[0][0],int(kv[0][1]))):
+for k,r in sorted(a.items(), key=lambda kv:(kv[0][0],kv[0][1],int(kv[0][2]))):
     if b is None:
         if r['false_alarm'] in ('true','1'):
             print(k, r['verdict'], r['gap_before'], r['gap_after'], r['named_params'], 'qlim=',r['qlim'], 'intr=',r['intrinsic'])
