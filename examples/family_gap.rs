@@ -1486,6 +1486,15 @@ fn report_ceiling(res: &[&Outcome], alpha: f64) {
 }
 
 fn main() {
+    // The diagnosis's debug lines (`ALLANSCOPE_LOG=allanscope::gap=debug`, one run at a time
+    // with `--threads 1`) on standard error, as the binary writes them.
+    #[cfg(feature = "cli")]
+    if let Ok(f) = tracing_subscriber::EnvFilter::try_from_env("ALLANSCOPE_LOG") {
+        tracing_subscriber::fmt()
+            .with_writer(std::io::stderr)
+            .with_env_filter(f)
+            .init();
+    }
     let args: Vec<String> = std::env::args().collect();
     let get = |k: &str, d: &str| {
         args.iter()

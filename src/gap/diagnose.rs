@@ -157,6 +157,10 @@ pub struct Diagnosis {
     pub base_coef: [f64; 5],
     /// The five terms with the effects in.
     pub final_coef: [f64; 5],
+    /// The five terms `(Q, N, B, K, R)` whose analytic covariance is the `S` of `G`: the plain
+    /// fit's, or after a filter the previous pass's `final_coef` (docs/gap.md, "The
+    /// covariance's five terms after a filter (session 19)").
+    pub cov_coef: [f64; 5],
     /// Taus used and the number of them.
     pub tau_span_s: (f64, f64),
     pub n_taus: usize,
@@ -313,20 +317,34 @@ fn diagnose_curve(
         if used.is_some_and(|u| same_filter(&u, &lp, snap.lsb.is_some(), snap.tau0_s)) {
             return Ok(d);
         }
-        // The covariance's five terms: the plain fit of the taus beyond ten memories of the
-        // filter, where it no longer shows (on a clean curve that is the plain fit itself).
-        let m_cut = (10.0 * lp.memory_s(snap.tau0_s) / snap.tau0_s)
-            .ceil()
-            .max(1.0) as u64;
-        let cut = DiagnoseOptions {
-            min_m: opts.min_m.max(m_cut),
-            ..opts.clone()
+        // The covariance's five terms: those the pass fitted with the filter in its model (its
+        // N and B columns through the filter). Until session 19 they were the plain fit of the
+        // taus beyond ten memories of the filter, but ten memories out a filter still takes
+        // about a tenth off the white rate's AVAR, a dip the plain fit can only follow with B
+        // (three to twelve times B's true value on zpexp draws of seed 181), and `S` too
+        // loose or too tight with it (docs/gap.md, "The covariance's five terms after a
+        // filter (session 19)"). The plain fit beyond ten memories remains for a filter tried
+        // beside a Gauss-Markov term (`trial`: its five terms were fitted beside that term,
+        // not through the filter) and a pass whose fit has no white rate.
+        let fitted = d.final_coef.map(|c| c * c);
+        let c_cov = if trial.is_none() && fitted[1] > 0.0 && fitted.iter().all(|v| v.is_finite()) {
+            fitted
+        } else {
+            let m_cut = (10.0 * lp.memory_s(snap.tau0_s) / snap.tau0_s)
+                .ceil()
+                .max(1.0) as u64;
+            let cut = DiagnoseOptions {
+                min_m: opts.min_m.max(m_cut),
+                ..opts.clone()
+            };
+            let Ok(beyond) = GapProblem::new(snap, &cut) else {
+                return Ok(d);
+            };
+            beyond.c_init
         };
-        let Ok(beyond) = GapProblem::new(snap, &cut) else {
-            return Ok(d);
-        };
+        tracing::debug!(c_cov = ?c_cov.map(f64::sqrt), "the next pass's covariance: five terms (Q, N, B, K, R)");
         let next = DiagnoseOptions {
-            cov_coef: Some(beyond.c_init),
+            cov_coef: Some(c_cov),
             cov_filter: Some(lp),
             cov_counter: d
                 .quantization
@@ -345,7 +363,10 @@ fn diagnose_curve(
                 d = n;
                 log_pass(2 + usize::from(used.is_some()), &d);
             }
-            Err(_) => return Ok(d),
+            Err(e) => {
+                tracing::debug!(%e, "the pass with the filter's covariance failed; the previous pass stands");
+                return Ok(d);
+            }
         }
         used = Some(lp);
     }
@@ -674,6 +695,7 @@ fn diagnose_curve_once(
         effects,
         base_coef: coef5(&base.coef),
         final_coef: coef5(&cur.coef),
+        cov_coef: coef5(&prob.c_cov),
         tau_span_s: (prob.tau[0], prob.tau[j - 1]),
         n_taus: j,
         t_data_s: snap.n_increments as f64 * snap.tau0_s,

@@ -49,8 +49,11 @@ pub struct GapProblem {
     m_white: DMatrix<f64>,
     pub tau0_s: f64,
     pub n_inc: u64,
-    /// The plain five-term fit (the paper's model-weighted NNLS) that set the covariance.
+    /// The plain five-term fit (the paper's model-weighted NNLS) of the curve.
     pub c_init: [f64; 5],
+    /// The five terms `(Q^2, N^2, B^2, K^2, R^2)` whose analytic covariance is `S`: `c_init`,
+    /// or those given ([`DiagnoseOptions::cov_coef`]).
+    pub c_cov: [f64; 5],
     /// The rounding of each delivered rate sample after the unit's filter, which the filter
     /// does not smooth ([`super::rounding`]; white, `N_q^2 / tau` with
     /// `N_q^2 = lsb^2 / (12 tau0)`, when the step is fine against the filtered noise). When
@@ -262,7 +265,32 @@ impl GapProblem {
         for i in 0..j {
             s[(i, i)] *= 1.0 + RIDGE;
         }
-        let chol = s.cholesky().ok_or(DiagnoseError::Covariance)?;
+        // The analytic covariance of strided levels behind a filter can miss positive
+        // definiteness by more than the ridge (accfilt draw 4 of seed 181, a first order of 29
+        // samples: the correlation matrix's least eigenvalue -0.056, its vector on m = 20-48
+        // where the strides begin within the filter's memory). The ridge is then raised by the
+        // shortfall, as a model error of that size, rather than the pass with the filter's
+        // covariance given up (docs/gap.md, "The covariance's five terms after a filter
+        // (session 19)").
+        let chol = match s.clone().cholesky() {
+            Some(c) => c,
+            None => {
+                let corr = DMatrix::from_fn(j, j, |r, c| {
+                    s_plain[(r, c)] / (s_diag[r] * s_diag[c]).sqrt()
+                });
+                let least = corr.symmetric_eigenvalues().min();
+                let ridge = RIDGE + (-least).max(0.0);
+                for i in 0..j {
+                    s[(i, i)] = s_plain[(i, i)] * (1.0 + ridge);
+                }
+                tracing::debug!(
+                    least,
+                    ridge,
+                    "the covariance's ridge raised to make it positive definite"
+                );
+                s.cholesky().ok_or(DiagnoseError::Covariance)?
+            }
+        };
         let l = chol.l();
         let linv = l
             .solve_lower_triangular(&DMatrix::identity(j, j))
@@ -280,6 +308,7 @@ impl GapProblem {
             tau0_s: tau0,
             n_inc: n,
             c_init,
+            c_cov,
             filter_floor: None,
             discrepancy,
             cov_filter: opts.cov_filter,
@@ -410,7 +439,7 @@ impl GapProblem {
     }
 
     /// The unridged covariance `S` of `ln AVAR_hat` at the curve's taus (the analytic
-    /// covariance of the five-term fit `c_init`, docs/theory.md section 5).
+    /// covariance of the five terms `c_cov`, docs/theory.md section 5).
     pub fn log_covariance(&self) -> &DMatrix<f64> {
         &self.s_plain
     }
