@@ -272,7 +272,7 @@ impl GapProblem {
         // shortfall, as a model error of that size, rather than the pass with the filter's
         // covariance given up (docs/gap.md, "The covariance's five terms after a filter
         // (session 19)").
-        let chol = match s.clone().cholesky() {
+        let chol = match s.cholesky() {
             Some(c) => c,
             None => {
                 let corr = DMatrix::from_fn(j, j, |r, c| {
@@ -280,8 +280,9 @@ impl GapProblem {
                 });
                 let least = corr.symmetric_eigenvalues().min();
                 let ridge = RIDGE + (-least).max(0.0);
+                let mut s = s_plain.clone();
                 for i in 0..j {
-                    s[(i, i)] = s_plain[(i, i)] * (1.0 + ridge);
+                    s[(i, i)] *= 1.0 + ridge;
                 }
                 tracing::debug!(
                     least,

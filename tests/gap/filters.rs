@@ -238,14 +238,14 @@ fn the_covariance_after_a_filter_has_the_units_own_terms() {
         let lp = LowPass::ZeroPhase {
             time_constant_s: tc,
         };
-        // AVAR (deg^2/s^2) of the five terms `c` (Q, N, B, K, R) with N and B through the filter.
+        // AVAR (deg^2/s^2) of the five terms `c` (Q, N, B, K, R): the model's basis with the N
+        // and B columns through the filter, as the diagnosis normalises `S`.
         let avar = |c: [f64; 5], tau: f64| {
             let m = [(tau / tau0).round() as u64];
-            3.0 * (c[0] / tau).powi(2)
-                + c[1] * c[1] * lp.white_rate_avar(tau0, &m)[0]
-                + c[2] * c[2] * lp.flicker_rate_avar(tau0, &m)[0]
-                + c[3] * c[3] * tau / 3.0
-                + (c[4] * tau).powi(2) / 2.0
+            let mut col = allanscope::model::terms::basis(tau);
+            col[1] = lp.white_rate_avar(tau0, &m)[0];
+            col[2] = lp.flicker_rate_avar(tau0, &m)[0];
+            col.iter().zip(c).map(|(x, c)| x * c * c).sum::<f64>()
         };
         let worst = d
             .model_tau_s
