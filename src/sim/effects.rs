@@ -197,8 +197,9 @@ impl BiasJumpsGen {
 }
 
 /// The unit's own first-order low-pass on its output increments,
-/// `y_k = a y_{k-1} + (1 - a) d_k` with `a = e^{-tau0/T}` (DC gain 1). Starts at the first
-/// input, so a large constant (gravity) causes no transient.
+/// `y_k = a y_{k-1} + (1 - a) d_k` with `a = e^{-tau0/T}` (DC gain 1). Starts in its input's
+/// stationary state ([`OutputFilter::start_stationary`]; at the first input when not called), so
+/// a large constant (gravity) causes no transient.
 #[derive(Debug, Clone)]
 pub struct OutputFilter {
     a: f64,
@@ -214,6 +215,27 @@ impl OutputFilter {
             one_minus_a: -(-x).exp_m1(),
             state: None,
         }
+    }
+
+    /// Starts the filter in the stationary state of the input `level + white_sd * e_k` (u per
+    /// step, `e_k` standard normal): the output's mean `level` plus its white part,
+    /// `white_sd sqrt((1 - a) / (1 + a))` times one draw of `normal` (the variance of
+    /// `sum_j (1 - a) a^j e_j`). No-op when the filter has started already. See
+    /// [`super::lowpass::LowPassGen::start_stationary`] for why.
+    pub fn start_stationary(&mut self, level: f64, white_sd: f64, mut normal: impl FnMut() -> f64) {
+        if self.state.is_none() {
+            let sd = white_sd * (self.one_minus_a / (1.0 + self.a)).sqrt();
+            self.state = Some(if sd != 0.0 {
+                level + sd * normal()
+            } else {
+                level
+            });
+        }
+    }
+
+    /// Whether the filter has had its first input.
+    pub fn is_started(&self) -> bool {
+        self.state.is_some()
     }
 
     #[inline]

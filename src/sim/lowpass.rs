@@ -3,8 +3,9 @@
 //! a zero-phase (forward-backward) first-order filter. Their AVAR on white rate is
 //! [`LowPass::white_rate_avar`] (docs/gap.md, "Low-pass filters beyond first order").
 //!
-//! Each filter starts as if its input had always been the first value, so a large constant
-//! (gravity) causes no transient. The zero-phase filter needs the future: it is run as its
+//! Each filter starts in the stationary state of the first input's level plus white noise
+//! ([`LowPassGen::start_stationary`]), so a large constant such as gravity causes no transient
+//! and the record's first samples are as noisy as the later ones. The zero-phase filter needs the future: it is run as its
 //! symmetric impulse response `(1 - a)/(1 + a) a^|k|` truncated at `a^L < 1e-14` (weights
 //! renormalised to sum 1), so the output is the zero-phase filtered stream delayed by `L`
 //! steps, as a unit filtering in blocks delivers it.
@@ -93,24 +94,121 @@ impl LowPassGen {
         }
     }
 
+    /// Whether the filter has had its first input (or [`Self::start_at`]).
+    pub fn is_started(&self) -> bool {
+        match self {
+            LowPassGen::MovingAverage { started, .. }
+            | LowPassGen::SecondOrder { started, .. }
+            | LowPassGen::ZeroPhase { started, .. } => *started,
+        }
+    }
+
+    /// Steps after which the filter's output no longer depends on its state before them: the
+    /// moving average's `taps * stages`, the zero-phase window's `2L + 1`, and for the
+    /// second-order recursion the steps its slower pole takes to fall below 1e-12.
+    pub fn memory_steps(&self) -> usize {
+        match self {
+            LowPassGen::MovingAverage { taps, stages, .. } => taps * stages.len(),
+            LowPassGen::ZeroPhase { weights, .. } => 2 * (weights.len() - 1) + 1,
+            LowPassGen::SecondOrder { a1, a2, .. } => {
+                // poles: roots of z^2 - a1 z - a2
+                let disc = a1 * a1 + 4.0 * a2;
+                let r = if disc < 0.0 {
+                    (-a2).sqrt()
+                } else {
+                    (a1.abs() + disc.sqrt()) / 2.0
+                };
+                if r <= 0.0 {
+                    2
+                } else if r >= 1.0 {
+                    1 << 22
+                } else {
+                    ((1e-12f64.ln() / r.ln()).ceil() as usize).clamp(2, 1 << 22)
+                }
+            }
+        }
+    }
+
+    /// Starts the filter in the stationary state of its input `level + white_sd * e_k` (`e_k`
+    /// standard normal from `normal`; u per step), as a unit whose filter ran before the record
+    /// began: `start_at(level)` and then [`Self::memory_steps`] such inputs, their outputs
+    /// dropped. No-op when the filter has started already.
+    ///
+    /// The simulator passes the first input without its white rate noise as `level` and the
+    /// white rate's per-step standard deviation as `white_sd`. Before session 20 the first input
+    /// itself was copied into the filter's past: a white sample is independent of every earlier
+    /// one, so that put one sample's noise, weighted by the filter's whole memory (for the
+    /// zero-phase filter 2L + 1 copies, about 32 time constants), into the start of the record,
+    /// a transient no running unit shows (a zpexp unit, 300 seeds: the first difference of
+    /// 22.6-s block means had 1.37 times the standard deviation of the next one; 1.08 with the
+    /// level alone, which leaves the first L outputs without noise). The slower processes
+    /// (flicker, random walk, Gauss-Markov) keep their first value over the filter's memory,
+    /// which is near what they had.
+    pub fn start_stationary(&mut self, level: f64, white_sd: f64, mut normal: impl FnMut() -> f64) {
+        if self.is_started() {
+            return;
+        }
+        self.start_at(level);
+        if white_sd != 0.0 {
+            for _ in 0..self.memory_steps() {
+                self.step(level + white_sd * normal());
+            }
+        }
+    }
+
+    /// Starts the filter as if its input had always been `level` (u per step), unless it has
+    /// started already. Without this call the first input is that level.
+    pub fn start_at(&mut self, level: f64) {
+        match self {
+            LowPassGen::MovingAverage {
+                taps,
+                stages,
+                started,
+                ..
+            } => {
+                if !*started {
+                    *started = true;
+                    for (buf, sum) in stages.iter_mut() {
+                        buf.extend(std::iter::repeat_n(level, *taps));
+                        *sum = level * *taps as f64;
+                    }
+                }
+            }
+            LowPassGen::SecondOrder {
+                y1, y2, started, ..
+            } => {
+                if !*started {
+                    *started = true;
+                    *y1 = level;
+                    *y2 = level;
+                }
+            }
+            LowPassGen::ZeroPhase {
+                weights,
+                window,
+                started,
+            } => {
+                if !*started {
+                    *started = true;
+                    // the newest slot is taken by the first input's push
+                    window.extend(std::iter::repeat_n(level, 2 * (weights.len() - 1) + 1));
+                }
+            }
+        }
+    }
+
     /// The filtered increment for input `d`.
     #[inline]
     pub fn step(&mut self, d: f64) -> f64 {
+        self.start_at(d);
         match self {
             LowPassGen::MovingAverage {
                 taps,
                 stages,
                 since_exact,
-                started,
+                ..
             } => {
                 let m = *taps;
-                if !*started {
-                    *started = true;
-                    for (buf, sum) in stages.iter_mut() {
-                        buf.extend(std::iter::repeat_n(d, m));
-                        *sum = d * m as f64;
-                    }
-                }
                 *since_exact += 1;
                 let exact = *since_exact >= m;
                 if exact {
@@ -129,33 +227,17 @@ impl LowPassGen {
                 x
             }
             LowPassGen::SecondOrder {
-                a1,
-                a2,
-                g,
-                y1,
-                y2,
-                started,
+                a1, a2, g, y1, y2, ..
             } => {
-                if !*started {
-                    *started = true;
-                    *y1 = d;
-                    *y2 = d;
-                }
                 let y = *a1 * *y1 + *a2 * *y2 + *g * d;
                 *y2 = *y1;
                 *y1 = y;
                 y
             }
             LowPassGen::ZeroPhase {
-                weights,
-                window,
-                started,
+                weights, window, ..
             } => {
                 let l = weights.len() - 1;
-                if !*started {
-                    *started = true;
-                    window.extend(std::iter::repeat_n(d, 2 * l + 1));
-                }
                 window.pop_front();
                 window.push_back(d);
                 let (a, b) = window.as_slices();

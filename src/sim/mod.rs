@@ -269,8 +269,10 @@ impl ChannelSim {
         let mut local = self.rng.clone();
         let rng = &mut local;
         let mut d = self.const_inc;
+        let mut white = 0.0;
         if self.white_rate != 0.0 {
-            d += self.white_rate * normal(rng);
+            white = self.white_rate * normal(rng);
+            d += white;
         }
         if let Some(g) = &mut self.rrw {
             d += g.step(normal(rng));
@@ -299,6 +301,20 @@ impl ChannelSim {
         }
         if self.temp_coeff != 0.0 {
             d += self.temp_coeff * temp_integral;
+        }
+        // The filters start in the stationary state of this input's level and the white rate
+        // (LowPassGen::start_stationary), from a side stream of this channel's generator (a
+        // long jump away: the channels are plain jumps apart), so the main stream draws what
+        // it drew before.
+        if let Some(f) = self.filter.as_mut().filter(|f| !f.is_started()) {
+            let mut side = self.rng.clone();
+            side.long_jump();
+            f.start_stationary(d - white, self.white_rate, || normal(&mut side));
+        }
+        if let Some(f) = self.lowpass.as_mut().filter(|f| !f.is_started()) {
+            let mut side = self.rng.clone();
+            side.long_jump();
+            f.start_stationary(d - white, self.white_rate, || normal(&mut side));
         }
         if let Some(f) = &mut self.filter {
             d = f.step(d);
