@@ -961,17 +961,22 @@ fn run_one(
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream);
     let unit = draw_unit(&mut rng, family, hours);
     let drawn = kind.map(|k| draw_effect(&mut rng, &unit, k));
+    let sim_seed = rng.random::<u64>();
     if let Some(dir) = MODELS_DIR.get() {
         let mut toml = model_toml(&unit, drawn.map(|d| d.0));
         if unit.rate_lsb > 0.0 {
             toml += &format!("rate_lsb = {:e}\n", unit.rate_lsb);
         }
         let name = format!("{dir}/{family}_{}_{i}.toml", kind_name(kind));
-        std::fs::write(&name, format!("# family_gap --seed {seed}: {name}\n{toml}"))
-            .expect("--models");
+        // the simulator's seed too, so that a test can run this very draw (Simulator::new)
+        std::fs::write(
+            &name,
+            format!("# family_gap --seed {seed}: {name}, simulator seed {sim_seed}\n{toml}"),
+        )
+        .expect("--models");
     }
     let t = Instant::now();
-    let (inc, truth, jumps) = simulate(&unit, drawn.map(|d| d.0), rng.random::<u64>());
+    let (inc, truth, jumps) = simulate(&unit, drawn.map(|d| d.0), sim_seed);
     let mut ev = GapEvidence::from_increments(GapConfig::new(unit.tau0), &inc);
     let snap = ev.snapshot();
     let d = diagnose(&snap, &DiagnoseOptions::default());

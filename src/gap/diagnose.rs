@@ -511,6 +511,20 @@ fn diagnose_curve_once(
                 c5[3] = k_up;
                 fit_warmup(&block_means, block_s, t_run, &c5, &stat_params)
             });
+        if let Some(w) = &warm {
+            tracing::debug!(
+                p_value = w.p_value,
+                log_bf = w.log_bf,
+                null_scale = w.null_scale,
+                amplitude = w.amplitude,
+                time_constant_s = w.time_constant_s,
+                k_up,
+                ?c5,
+                block_s,
+                blocks = block_means.len(),
+                "the warm-up test"
+            );
+        }
         if let Some(w) = warm.filter(|w| th.warmup_found(w)) {
             // Its AVAR, exact for the estimator on this record, enters as a fixed offset.
             let col = effect_column(
