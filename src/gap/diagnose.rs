@@ -352,23 +352,17 @@ fn diagnose_curve(
             ..opts.clone()
         };
         match diagnose_curve_once(snap, temperature, &next) {
+            // Kept only if it ends lower: the tied filter's trial pass, and a pass that, with
+            // the covariance of a filter the previous pass named in place of the first pass's,
+            // names no filter at all (accgrav seed 191 draw 18: the first order alone at G 0.81,
+            // then a Gauss-Markov term at its time constant, G 1.22).
             Ok(n)
-                if trial.is_some()
+                if (trial.is_some()
+                    || (used.is_some()
+                        && n.effects.iter().all(|e| e.params.lowpass().is_none())))
                     && n.gap_after.partial_cmp(&d.gap_after) != Some(std::cmp::Ordering::Less) =>
             {
-                log_pass(2, &n);
-                return Ok(d);
-            }
-            // The previous pass, with one filter's covariance, named another filter, and this
-            // pass, with that other filter's covariance, names no filter at all (accgrav seed 191 draw 18:
-            // the first order alone at G 0.81, then a Gauss-Markov term at its time constant,
-            // G 1.22): kept only if it ends lower, as the tied filter's trial pass is.
-            Ok(n)
-                if used.is_some()
-                    && n.effects.iter().all(|e| e.params.lowpass().is_none())
-                    && n.gap_after.partial_cmp(&d.gap_after) != Some(std::cmp::Ordering::Less) =>
-            {
-                log_pass(3, &n);
+                log_pass(2 + usize::from(used.is_some()), &n);
                 return Ok(d);
             }
             Ok(n) => {

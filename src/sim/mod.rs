@@ -302,19 +302,23 @@ impl ChannelSim {
         if self.temp_coeff != 0.0 {
             d += self.temp_coeff * temp_integral;
         }
-        // The filters start in the stationary state of this input's level and the white rate
-        // (LowPassGen::start_stationary), from a side stream of this channel's generator (a
-        // long jump away: the channels are plain jumps apart), so the main stream draws what
-        // it drew before.
-        if let Some(f) = self.filter.as_mut().filter(|f| !f.is_started()) {
+        // The filter (at most one per channel in a model file) starts in the stationary state
+        // of this input's level and the white rate (LowPassGen::start_stationary), from a side
+        // stream of this channel's generator (a long jump away: the channels are plain jumps
+        // apart), so the main stream draws what it drew before.
+        if self.filter.as_ref().is_some_and(|f| !f.is_started())
+            || self.lowpass.as_ref().is_some_and(|f| !f.is_started())
+        {
             let mut side = self.rng.clone();
             side.long_jump();
-            f.start_stationary(d - white, self.white_rate, || normal(&mut side));
-        }
-        if let Some(f) = self.lowpass.as_mut().filter(|f| !f.is_started()) {
-            let mut side = self.rng.clone();
-            side.long_jump();
-            f.start_stationary(d - white, self.white_rate, || normal(&mut side));
+            let mut draw = || normal(&mut side);
+            let level = d - white;
+            if let Some(f) = &mut self.filter {
+                f.start_stationary(level, self.white_rate, &mut draw);
+            }
+            if let Some(f) = &mut self.lowpass {
+                f.start_stationary(level, self.white_rate, &mut draw);
+            }
         }
         if let Some(f) = &mut self.filter {
             d = f.step(d);

@@ -119,8 +119,7 @@ fn check_ensemble_sized(
     };
     for i in 0..j {
         let vals: Vec<f64> = runs.iter().map(|r| r[i]).collect();
-        let mean = vals.iter().sum::<f64>() / seeds as f64;
-        let var = vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (seeds - 1) as f64;
+        let (mean, var) = mean_var(&vals);
         e.mean.push(mean);
         e.sd.push(var.sqrt());
     }
@@ -142,6 +141,14 @@ fn check_ensemble_sized(
     println!("{name}: worst |z| {worst:.2}");
     assert!(worst < limit, "{name}: worst |z| {worst:.2} >= {limit:.2}");
     e
+}
+
+/// Sample mean and variance (divisor `n - 1`) of `v`.
+fn mean_var(v: &[f64]) -> (f64, f64) {
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, var)
 }
 
 /// Two-sided Student-t quantile at a family-wise 95% level over `j` taus (Bonferroni).
@@ -307,12 +314,6 @@ fn filters_start_in_their_stationary_state() {
             first.push(d[..WINDOW].iter().sum::<f64>());
             later.push(d[LATER..].iter().sum::<f64>());
         }
-        let mean_var = |v: &[f64]| {
-            let n = v.len() as f64;
-            let mean = v.iter().sum::<f64>() / n;
-            let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-            (mean, var)
-        };
         let (m1, v1) = mean_var(&first);
         let (_, v2) = mean_var(&later);
         let ratio = v1 / v2;
