@@ -604,7 +604,6 @@ fn diagnose_curve_once(
             }
         }
     }
-    let _ = &spec;
 
     // 3. Bias jumps, in time (after the warm-up is taken out of the block means).
     let jumps = if opts.candidates.contains(&EffectKind::BiasJumps) {
@@ -623,7 +622,13 @@ fn diagnose_curve_once(
                 )
             })
             .collect();
-        detect_steps(&resid, block_s, &c5, &stat_params, &th.jump_z)
+        // The null's random walk, as the warm-up's: K^2 is also read off the block means,
+        // up to the curve's upper bound (steps.rs, `detect_steps`; docs/gap.md, "The jump
+        // test's random walk (session 21)").
+        let k_up = prob
+            .upper_bound(&spec, &cur, 3, WARMUP_K_DELTA)
+            .map_or(c5[3], |k| k.max(c5[3]));
+        detect_steps(&resid, block_s, &c5, &stat_params, &th.jump_z, k_up)
     } else {
         None
     };

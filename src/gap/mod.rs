@@ -35,6 +35,7 @@ pub mod filter_scan;
 pub mod holdout;
 pub mod intervals;
 pub mod jump_mixture;
+pub mod k_profile;
 pub mod limit_cycle;
 pub mod lsb;
 pub mod oracle;

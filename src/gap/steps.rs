@@ -5,6 +5,7 @@
 
 use super::block_cov::{block_diff_covariance, usable_block_means};
 use super::effects::EffectParams;
+use super::k_profile::profile_k2;
 use nalgebra::{DMatrix, DVector};
 
 /// Bias jumps found in the block means.
@@ -49,6 +50,26 @@ impl JumpFinding {
         (positions, merged.iter().map(|g| g.2).collect())
     }
 
+    /// `block_means` (u/s, blocks of [`Self::block_s`]) with these steps taken out: a step of
+    /// size `s` at time `t` lowers each block after it by `s` and the block it falls in by `s`
+    /// times the share of that block after `t`.
+    pub fn remove_from(&self, block_means: &[f64]) -> Vec<f64> {
+        let bs = self.block_s;
+        block_means
+            .iter()
+            .enumerate()
+            .map(|(i, &b)| {
+                let end = (i + 1) as f64 * bs;
+                b - self
+                    .times_s
+                    .iter()
+                    .zip(&self.sizes)
+                    .map(|(&t, &s)| s * ((end - t) / bs).clamp(0.0, 1.0))
+                    .sum::<f64>()
+            })
+            .collect()
+    }
+
     /// The jumps that pass the rule "at least `k` jumps with `z >= z_crit[k - 1]`" for the
     /// largest `k` it holds for (`z_crit` non-increasing): those with `z >= z_crit[k - 1]`.
     /// None pass when the rule holds for no `k`.
@@ -81,30 +102,47 @@ impl JumpFinding {
 /// `z_crit`, with all the sizes refitted jointly each time. The jumps kept are those of
 /// [`JumpFinding::accepted`]: at least `k` of them at `z >= z_crit[k - 1]` (one strong jump, or
 /// several moderate ones: a test of the jumps as a whole, since with small jumps one at a time
-/// none may stand out). As jumps are kept, their share of the random walk (`sum s^2 / T_run`,
-/// which the curve's `K` has absorbed) is taken out of `K` and the search is run again (twice
-/// at most). Returns `None` when the series is too short or `z_crit` is empty. (Mixture
-/// statistics for the presence test, [`jump_mixture_stat`](super::jump_mixture::jump_mixture_stat) and [`jump_forward_mixture_stat`](super::jump_mixture::jump_forward_mixture_stat),
-/// were measured against this rule and not adopted: docs/gap.md, "Mixture statistics".)
+/// none may stand out).
+///
+/// The random walk's `K^2` (`c[3]`, the curve's fit) is the null's nuisance. The curve's fit
+/// absorbs the jumps (their share is `sum s^2 / T_run`), and it can also leave `K` out (often at
+/// 0, a rate ramp or the flicker taking its place), where the search reads the block means' own
+/// wander as steps. So the `K^2` of each search is the larger of the curve's less the kept
+/// jumps' share (at least a quarter of the curve's) and the block means' own maximum likelihood
+/// value with the kept jumps taken out ([`profile_k2`], on `[0, k_hi]`; `k_hi` the curve's upper
+/// bound, 0 to leave the profile out); the search is run again while that `K^2` moves (twice at
+/// most). Returns `None` when the series is too short or `z_crit` is empty. (Mixture statistics
+/// for the presence test, [`jump_mixture_stat`](super::jump_mixture::jump_mixture_stat) and
+/// [`jump_forward_mixture_stat`](super::jump_mixture::jump_forward_mixture_stat), were measured
+/// against this rule and not adopted: docs/gap.md, "Mixture statistics".)
 pub fn detect_steps(
     block_means: &[f64],
     block_s: f64,
     c: &[f64; 5],
     effects: &[EffectParams],
     z_crit: &[f64],
+    k_hi: f64,
 ) -> Option<JumpFinding> {
     if !usable_block_means(block_means) {
         return None;
     }
     let z_min = *z_crit.last()?;
     let t_run = block_means.len() as f64 * block_s;
+    let k2_curve = c[3];
+    let k2_blocks = |found: &JumpFinding| -> f64 {
+        if k_hi <= 0.0 {
+            return 0.0;
+        }
+        let rest = found.remove_from(block_means);
+        profile_k2(&rest, block_s, c, effects, k_hi).unwrap_or(0.0)
+    };
     let mut c = *c;
-    let k2_total = c[3];
+    c[3] = k2_curve.max(k2_blocks(&JumpFinding::default()));
     let mut found = step_search(block_means, block_s, &c, effects, z_min)?.accepted(z_crit);
     for _ in 0..2 {
         let kj2: f64 = found.sizes.iter().map(|s| s * s).sum::<f64>() / t_run;
-        let k2 = (k2_total - kj2).max(0.25 * k2_total);
-        if (k2 - c[3]).abs() <= 0.02 * k2_total {
+        let k2 = (k2_curve - kj2).max(0.25 * k2_curve).max(k2_blocks(&found));
+        if (k2 - c[3]).abs() <= 0.02 * k2.max(c[3]) {
             break;
         }
         c[3] = k2;

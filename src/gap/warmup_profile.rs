@@ -14,27 +14,16 @@
 //! than the ratio at a fixed value does, so the plug-in null holds its level where the fixed
 //! bound had to be the worst case.
 //!
-//! The covariance of the differences is linear in `K^2`: `C(k) = C0 + k C1` (`C0` the other
-//! terms and stationary effects, `C1` the random walk's per unit `K^2`, [`block_diff_covariance`]).
-//! With `C0 = L L'` and `L^-1 C1 L^-T = U diag(lambda) U'`, the rotated differences
-//! `z = U' L^-1 d` have the diagonal covariance `I + k diag(lambda)` for every `k`, so the
-//! Gaussian log likelihood at any `k` is a weighted least-squares fit,
-//! `-2 l = sum ln(1 + k lambda_i) + sum (z_i - x_i' beta)^2 / (1 + k lambda_i)`, cheap enough to
-//! profile `k` on a grid for each bootstrap draw.
+//! The covariance of the differences is linear in `K^2`, and one rotation makes it diagonal for
+//! every `K^2` ([`KRotation`]): the Gaussian log likelihood at any `k` is then a weighted
+//! least-squares fit, cheap enough to profile `k` on a grid for each bootstrap draw.
 
-use super::block_cov::{block_diff_covariance, usable_block_means};
+use super::block_cov::usable_block_means;
 use super::effects::{EffectParams, Grid};
+use super::k_profile::KRotation;
 use super::warmup::{log_mean_exp, warmup_block_shape, WarmupFinding, WARMUP_NULL_DRAWS};
 use nalgebra::{DMatrix, DVector};
 
-/// Grid points per decade of `K^2` in the profile (a step of a factor 1.47; the same grid for
-/// the observed run and its bootstrap draws).
-const K_PER_DECADE: f64 = 6.0;
-/// The profile's grid ends where the random walk's largest whitened share `k lambda_max` is this
-/// small (it then changes the likelihood by far less than one unit); `k = 0` is always on it.
-const K_FLOOR_SHARE: f64 = 1e-3;
-/// At most this many nonzero grid points of `K^2`.
-const K_MAX_POINTS: usize = 60;
 /// Seed of the bootstrap draws (fixed: the same evidence gives the same p-value).
 const PROFILE_NULL_SEED: u64 = 0x5e55_1012;
 
@@ -59,20 +48,8 @@ pub fn fit_warmup_profiled(
     }
     let nb = block_means.len();
     let n = nb - 1;
-    let mut c0 = *c;
-    c0[3] = 0.0;
-    let chol = block_diff_covariance(nb, block_s, &c0, effects)?.cholesky()?;
-    let c1 = block_diff_covariance(nb, block_s, &[0.0, 0.0, 0.0, 1.0, 0.0], &[])?;
-    let l = chol.l();
-    // L^-1 C1 L^-T, symmetrised against rounding.
-    let a = l.solve_lower_triangular(&c1)?;
-    let m = l.solve_lower_triangular(&a.transpose())?;
-    let m = (&m + m.transpose()) * 0.5;
-    let eig = m.symmetric_eigen();
-    let lambda: Vec<f64> = eig.eigenvalues.iter().map(|v| v.max(0.0)).collect();
-    let ut = eig.eigenvectors.transpose();
-    let rotate =
-        |v: DVector<f64>| -> Option<DVector<f64>> { Some(&ut * l.solve_lower_triangular(&v)?) };
+    let rot = KRotation::new(nb, block_s, c, effects)?;
+    let rotate = |v: DVector<f64>| rot.rotate(v);
     let d: Vec<f64> = block_means.windows(2).map(|p| p[1] - p[0]).collect();
     let z = rotate(DVector::from_column_slice(&d))?;
     let u1 = rotate(DVector::from_element(n, 1.0))?;
@@ -93,7 +70,7 @@ pub fn fit_warmup_profiled(
         return None;
     }
     let e_rows = DMatrix::from_fn(ts.len(), n, |i, j| rows[i][j]);
-    let prof = Profile::new(&lambda, u1, e_rows, k_hi)?;
+    let prof = Profile::new(&rot, u1, e_rows, k_hi)?;
     let obs = prof.evaluate(&z);
     let half_w: Vec<f64> = obs.w.iter().map(|w| w / 2.0).collect();
     let log_bf = log_mean_exp(&half_w);
@@ -101,7 +78,7 @@ pub fn fit_warmup_profiled(
     let null_scale = obs.rss0 / (n.max(2) - 1) as f64;
     let scaled: Vec<f64> = half_w.iter().map(|h| h / null_scale.max(1.0)).collect();
     let best = (0..ts.len()).max_by(|&i, &j| obs.w[i].total_cmp(&obs.w[j]))?;
-    let p_value = prof.p_value(&lambda, k_null, log_bf);
+    let p_value = prof.p_value(&rot.lambda, k_null, log_bf);
     Some((
         WarmupFinding {
             amplitude: obs.amp[best],
@@ -143,17 +120,9 @@ struct Evaluated {
 }
 
 impl Profile {
-    fn new(lambda: &[f64], u1: DVector<f64>, e_rows: DMatrix<f64>, k_hi: f64) -> Option<Self> {
-        let lmax = lambda.iter().copied().fold(0.0, f64::max);
-        let mut k = vec![0.0];
-        if k_hi > 0.0 && lmax > 0.0 {
-            let step = 10f64.powf(-1.0 / K_PER_DECADE);
-            let mut v = k_hi;
-            while v * lmax >= K_FLOOR_SHARE && k.len() <= K_MAX_POINTS {
-                k.push(v);
-                v *= step;
-            }
-        }
+    fn new(rot: &KRotation, u1: DVector<f64>, e_rows: DMatrix<f64>, k_hi: f64) -> Option<Self> {
+        let lambda = &rot.lambda;
+        let k = rot.grid(k_hi);
         let (mut weights, mut log_det, mut s11, mut inv) = (vec![], vec![], vec![], vec![]);
         for &kv in &k {
             let w =

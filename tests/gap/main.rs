@@ -10,6 +10,7 @@ mod filter_tail;
 mod filters;
 mod gm_or_filter;
 mod holdout_carry;
+mod jump_null;
 mod limit_cycle;
 mod line_behind_filter;
 mod mixture;
