@@ -21,7 +21,8 @@
 //! - Effects: for each candidate, its shape parameter on a log grid (NNLS at each), the best one
 //!   polished by golden section; the candidate with the largest drop in `r' S^-1 r` is added if
 //!   the drop exceeds [`Thresholds::add_chi2`] per parameter, and effects are added while `G`
-//!   stays above [`Thresholds::gap_crit`]. A candidate also flags the model on its own when its
+//!   stays above [`Thresholds::gap_crit`] ([`Thresholds::gap_crit_filtered`] once a low-pass
+//!   filter is among them). A candidate also flags the model on its own when its
 //!   drop per parameter exceeds its own [`Thresholds::lr_crit`] (a likelihood-ratio test
 //!   against the named alternatives, which catches bumps that the omnibus `G` misses).
 //! - Bias jumps have the second-order law of a rate random walk (K absorbs them on the curve),
@@ -352,14 +353,14 @@ fn diagnose_curve(
             ..opts.clone()
         };
         match diagnose_curve_once(snap, temperature, &next) {
-            // Kept only if it ends lower: the tied filter's trial pass, and a pass that, with
-            // the covariance of a filter the previous pass named in place of the first pass's,
-            // names no filter at all (accgrav seed 191 draw 18: the first order alone at G 0.81,
-            // then a Gauss-Markov term at its time constant, G 1.22).
+            // Kept only if it ends lower: the tied filter's trial pass, and a third pass (with
+            // the covariance of a filter the second pass named in place of the first pass's).
+            // Session 20 kept a third pass that names no filter only so (accgrav seed 191 draw
+            // 18: the first order alone at G 0.81, then a Gauss-Markov term at its time
+            // constant, G 1.22); since session 21 any third pass (the same draw, with
+            // `gap_crit_filtered`: the first order at G 2.97 and a sinusoid beside it, G 2.15).
             Ok(n)
-                if (trial.is_some()
-                    || (used.is_some()
-                        && n.effects.iter().all(|e| e.params.lowpass().is_none())))
+                if (trial.is_some() || used.is_some())
                     && n.gap_after.partial_cmp(&d.gap_after) != Some(std::cmp::Ordering::Less) =>
             {
                 log_pass(2 + usize::from(used.is_some()), &n);
@@ -566,7 +567,7 @@ fn diagnose_curve_once(
                 delta_chi2: base.chi2 - f.chi2,
             });
             cur = f;
-            if cur.gap() > th.gap_crit {
+            if cur.gap() > th.gap_crit_given(has_filter(&effects)) {
                 let (sp, c2, _) = add_stationary(
                     &prob,
                     &stationary,
@@ -696,7 +697,7 @@ fn diagnose_curve_once(
         } else {
             Verdict::Consistent
         }
-    } else if gap_after <= th.gap_crit {
+    } else if gap_after <= th.gap_crit_given(has_filter(&effects)) {
         Verdict::Explained
     } else {
         Verdict::Unexplained
@@ -838,6 +839,12 @@ fn kept_in_time(kind: EffectKind) -> bool {
     matches!(kind, EffectKind::Warmup | EffectKind::BiasJumps)
 }
 
+/// Whether `effects` hold a low-pass filter (the model's `G` is then judged against
+/// [`Thresholds::gap_crit_filtered`](super::thresholds::Thresholds::gap_crit_filtered)).
+fn has_filter(effects: &[AddedEffect]) -> bool {
+    effects.iter().any(|e| e.params.kind().is_filter())
+}
+
 /// The stationary effects of `effects` still needed once `offset` (a warm-up's or jumps' exact
 /// AVAR) is in the model, by the rules of the forward search: each must lower `r' S^-1 r` per
 /// parameter by `add_chi2` while the model without it is flagged by `G`, by its own
@@ -859,13 +866,14 @@ fn still_needed(
         let others: Vec<AddedEffect> = effects.iter().filter(|o| *o != e).copied().collect();
         let without = prob.gls(&spec_from(prob, &others, offset));
         if let (Some(a), Some(b)) = (with.as_ref(), without) {
-            let crit = if b.gap() > th.gap_crit {
+            let flagged = b.gap() > th.gap_crit_given(has_filter(&others));
+            let crit = if flagged {
                 th.add_chi2
             } else {
                 th.lr_crit_of(e.params.kind())
             };
             let score = (b.chi2 - a.chi2) / e.params.kind().n_params() as f64;
-            let stat = if b.gap() > th.gap_crit {
+            let stat = if flagged {
                 score
             } else {
                 th.lr_stat(score, a.gap())
@@ -922,7 +930,7 @@ fn add_stationary(
         lr_first,
         None,
     );
-    if cur.gap() <= opts.thresholds.gap_crit || opts.max_effects < 2 {
+    if cur.gap() <= opts.thresholds.gap_crit_given(has_filter(effects)) || opts.max_effects < 2 {
         return (spec, cur, first);
     }
     match other_first_steps(
@@ -1131,10 +1139,13 @@ fn greedy_stationary(
         take_step(prob, effects, &mut spec, &mut cur, params, f);
         added += 1;
     }
-    while added < opts.max_effects && (cur.gap() > th.gap_crit || (lr_first && added == 0)) {
+    while added < opts.max_effects
+        && (cur.gap() > th.gap_crit_given(has_filter(effects)) || (lr_first && added == 0))
+    {
         // Below gap_crit only a candidate's own likelihood-ratio threshold can add (the
-        // first) effect; among those that pass, the largest drop per parameter wins.
-        let flagged_g = cur.gap() > th.gap_crit;
+        // first) effect; among those that pass, the largest drop per parameter wins. Beside a
+        // filter the model's G is judged against `gap_crit_filtered`.
+        let flagged_g = cur.gap() > th.gap_crit_given(has_filter(effects));
         let mut best: Option<(EffectParams, GlsFit, f64)> = None;
         let mut scores: Vec<CandidateScore> = Vec::new();
         let mut passed: Vec<(EffectParams, GlsFit, f64)> = Vec::new();
