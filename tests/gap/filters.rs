@@ -268,6 +268,39 @@ fn the_covariance_after_a_filter_has_the_units_own_terms() {
     assert!(bad.is_empty(), "{}", bad.join("\n"));
 }
 
+/// A family_gap unit (`--effects none`) rebuilt from its `--models` file: one accelerometer
+/// channel of white rate `n`, flicker `b`, random walk `k` and gravity's `bias` behind a
+/// first-order filter of `tc_s` seconds, at `tau0` for `seconds`, simulated with `sim_seed` (the
+/// seed the file's header gives), each rate sample rounded to `rate_lsb` u/s after the
+/// simulator as family_gap does, and diagnosed with the defaults.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn family_gap_accgrav(
+    tau0: f64,
+    seconds: f64,
+    [n, b, k]: [f64; 3],
+    flicker_hi_s: f64,
+    bias: f64,
+    tc_s: f64,
+    rate_lsb: f64,
+    sim_seed: u64,
+) -> Diagnosis {
+    let text = format!(
+        "tau0_s = {tau0}\n[[channel]]\nname = \"x\"\nunit = \"u\"\nN = {n:e}\nB = {b:e}\n\
+         K = {k:e}\nflicker_band_s = [{tau0}, {flicker_hi_s:e}]\nbias = {bias}\n\
+         output_filter = {{ time_constant = {tc_s:e} }}\n"
+    );
+    let m = SimModel::from_toml_str(&text, std::path::Path::new("<test>")).expect("model");
+    let mut sim = Simulator::new(&m, sim_seed);
+    let mut inc = vec![0.0; (seconds / tau0) as usize];
+    sim.fill_channel(0, &mut inc);
+    let step = rate_lsb * tau0;
+    for v in inc.iter_mut() {
+        *v = (*v / step).round() * step;
+    }
+    let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
+    diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis")
+}
+
 /// A later pass that names no filter does not replace one that named the unit's filter unless
 /// it ends lower (src/gap/diagnose.rs, `diagnose_curve`). The unit is family_gap's accgrav,
 /// seed 191 draw 18 (its `--models` file and simulator seed): an accelerometer at 364 Hz with
@@ -282,24 +315,20 @@ fn the_covariance_after_a_filter_has_the_units_own_terms() {
 /// sinusoid beside it (G 2.15).
 #[test]
 fn a_later_pass_without_the_filter_is_kept_only_if_it_ends_lower() {
-    let tau0 = 0.0027472527472527475;
-    let text = format!(
-        "tau0_s = {tau0}\n[[channel]]\nname = \"x\"\nunit = \"u\"\nN = 4.5687428416785035e-4\n\
-         B = 1.0243030955786755e-3\nK = 1.5428174598886325e-5\n\
-         flicker_band_s = [{tau0}, 3.755548860536509e4]\nbias = 6.8311833459513505\n\
-         output_filter = {{ time_constant = 3.222463566107317e-2 }}\n"
+    let d = family_gap_accgrav(
+        0.0027472527472527475,
+        3756.0,
+        [
+            4.5687428416785035e-4,
+            1.0243030955786755e-3,
+            1.5428174598886325e-5,
+        ],
+        3.755548860536509e4,
+        6.8311833459513505,
+        3.222463566107317e-2,
+        6.618008886011412e-3,
+        9059699591346933835,
     );
-    let m = SimModel::from_toml_str(&text, std::path::Path::new("<test>")).expect("model");
-    let mut sim = Simulator::new(&m, 9059699591346933835);
-    let mut inc = vec![0.0; (3756.0 / tau0) as usize];
-    sim.fill_channel(0, &mut inc);
-    // family_gap rounds each rate sample after the simulator
-    let step = 6.618008886011412e-3 * tau0;
-    for v in inc.iter_mut() {
-        *v = (*v / step).round() * step;
-    }
-    let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
-    let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
     let named: Vec<EffectParams> = d.effects.iter().map(|e| e.params).collect();
     let tc = named.iter().find_map(|p| match p {
         EffectParams::OutputFilter { time_constant_s } => Some(*time_constant_s),
@@ -328,24 +357,20 @@ fn a_later_pass_without_the_filter_is_kept_only_if_it_ends_lower() {
 /// (measured: 57.7 ms, G 2.07).
 #[test]
 fn a_filter_alone_within_its_own_null_is_not_given_a_second_effect() {
-    let tau0 = 0.002386634844868735;
-    let text = format!(
-        "tau0_s = {tau0}\n[[channel]]\nname = \"x\"\nunit = \"u\"\nN = 2.3225719491959305e-3\n\
-         B = 3.455697313633037e-4\nK = 1.9219929928514056e-5\n\
-         flicker_band_s = [{tau0}, 6.2972900777680195e4]\nbias = -5.418824183919247\n\
-         output_filter = {{ time_constant = 5.746418298107361e-2 }}\n"
+    let d = family_gap_accgrav(
+        0.002386634844868735,
+        6297.0,
+        [
+            2.3225719491959305e-3,
+            3.455697313633037e-4,
+            1.9219929928514056e-5,
+        ],
+        6.2972900777680195e4,
+        -5.418824183919247,
+        5.746418298107361e-2,
+        8.357012511634898e-3,
+        9701044561044614338,
     );
-    let m = SimModel::from_toml_str(&text, std::path::Path::new("<test>")).expect("model");
-    let mut sim = Simulator::new(&m, 9701044561044614338);
-    let mut inc = vec![0.0; (6297.0 / tau0) as usize];
-    sim.fill_channel(0, &mut inc);
-    // family_gap rounds each rate sample after the simulator
-    let step = 8.357012511634898e-3 * tau0;
-    for v in inc.iter_mut() {
-        *v = (*v / step).round() * step;
-    }
-    let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
-    let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
     let named: Vec<EffectParams> = d.effects.iter().map(|e| e.params).collect();
     eprintln!("named {named:?}, G {:.4}, {:?}", d.gap_after, d.verdict);
     let crit = allanscope::gap::Thresholds::default().gap_crit_filtered;

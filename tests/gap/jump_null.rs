@@ -11,13 +11,12 @@
 //! - on family_gap's accgrav seed 201 draw 0 (a filtered, rounded accelerometer whose curve
 //!   fit has `K = 0`), the diagnosis names the filter and no jumps (four were named before).
 
-use allanscope::gap::block_cov::block_diff_covariance;
+use super::filters::family_gap_accgrav;
+use super::warmup_profile::gaussian_block_means;
 use allanscope::gap::k_profile::profile_k2;
 use allanscope::gap::steps::{forward_steps, JumpFinding};
 use allanscope::gap::thresholds::Thresholds;
-use allanscope::gap::{diagnose, DiagnoseOptions, EffectParams, GapConfig, GapEvidence};
-use allanscope::sim::{SimModel, Simulator};
-use nalgebra::DVector;
+use allanscope::gap::EffectParams;
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -30,21 +29,6 @@ const N2: f64 = 1.8e-6;
 const B2: f64 = 4.4e-7;
 const K2: f64 = 2.1e-9;
 
-fn series(rng: &mut Xoshiro256PlusPlus) -> Vec<f64> {
-    let l = block_diff_covariance(N_BLOCKS, BLOCK_S, &[0.0, N2, B2, K2, 0.0], &[])
-        .expect("covariance")
-        .cholesky()
-        .expect("positive definite")
-        .l();
-    let x = DVector::from_fn(N_BLOCKS - 1, |_, _| StandardNormal.sample(rng));
-    let d = l * x;
-    let mut b = vec![0.0; N_BLOCKS];
-    for i in 1..N_BLOCKS {
-        b[i] = b[i - 1] + d[i - 1];
-    }
-    b
-}
-
 #[test]
 fn profiled_random_walk_holds_the_step_rule_on_clean_series() {
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(2101);
@@ -54,7 +38,7 @@ fn profiled_random_walk_holds_the_step_rule_on_clean_series() {
     let (mut flag_zero, mut flag_prof) = (0, 0);
     let mut ratio = Vec::with_capacity(runs);
     for _ in 0..runs {
-        let b = series(&mut rng);
+        let b = gaussian_block_means(&mut rng, N_BLOCKS, BLOCK_S, &[0.0, N2, B2, K2, 0.0]);
         let k = profile_k2(&b, BLOCK_S, &c0, &[], 100.0 * K2).expect("profile");
         ratio.push(k / K2);
         let mut ck = c0;
@@ -145,24 +129,20 @@ fn steps_taken_out_of_block_means_leave_the_series_without_them() {
 /// and the final gap below 1.2 (measured: 20.7 ms, G 0.886).
 #[test]
 fn the_random_walk_a_curve_fit_left_out_is_not_read_as_jumps() {
-    let tau0 = 0.0014104372355430183;
-    let text = format!(
-        "tau0_s = {tau0}\n[[channel]]\nname = \"x\"\nunit = \"u\"\nN = 1.3535297153964574e-3\n\
-         B = 6.628552947237644e-4\nK = 4.635328742233535e-5\n\
-         flicker_band_s = [{tau0}, 6.341784786887896e4]\nbias = 5.09823466739639\n\
-         output_filter = {{ time_constant = 2.113638444885531e-2 }}\n"
+    let d = family_gap_accgrav(
+        0.0014104372355430183,
+        6342.0,
+        [
+            1.3535297153964574e-3,
+            6.628552947237644e-4,
+            4.635328742233535e-5,
+        ],
+        6.341784786887896e4,
+        5.09823466739639,
+        2.113638444885531e-2,
+        1.5498076061885507e-2,
+        10154296964026332684,
     );
-    let m = SimModel::from_toml_str(&text, std::path::Path::new("<test>")).expect("model");
-    let mut sim = Simulator::new(&m, 10154296964026332684);
-    let mut inc = vec![0.0; (6342.0 / tau0) as usize];
-    sim.fill_channel(0, &mut inc);
-    // family_gap rounds each rate sample after the simulator
-    let step = 1.5498076061885507e-2 * tau0;
-    for v in inc.iter_mut() {
-        *v = (*v / step).round() * step;
-    }
-    let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
-    let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
     let named: Vec<EffectParams> = d.effects.iter().map(|e| e.params).collect();
     let tc = named.iter().find_map(|p| match p {
         EffectParams::OutputFilter { time_constant_s } => Some(*time_constant_s),

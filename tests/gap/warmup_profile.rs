@@ -26,21 +26,32 @@ const K2: f64 = 1e-7;
 /// The profile's upper end, as the curve's bound of a short run: 1000 times the truth.
 const K_HI: f64 = 1e-4;
 
-/// One series of block means: Gaussian differences of the model's covariance, summed, plus a
-/// warm-up `amp e^{-t/T}` (u/s).
-fn series(rng: &mut Xoshiro256PlusPlus, amp: f64, t_s: f64) -> Vec<f64> {
-    let c = [0.0, N2, 0.0, K2, 0.0];
-    let l = block_diff_covariance(N_BLOCKS, BLOCK_S, &c, &[])
+/// `n_blocks` block means (u/s) of `block_s` seconds whose first differences are Gaussian with
+/// the covariance of the five terms `c` ([`block_diff_covariance`]), summed from 0.
+pub(super) fn gaussian_block_means(
+    rng: &mut Xoshiro256PlusPlus,
+    n_blocks: usize,
+    block_s: f64,
+    c: &[f64; 5],
+) -> Vec<f64> {
+    let l = block_diff_covariance(n_blocks, block_s, c, &[])
         .expect("covariance")
         .cholesky()
         .expect("positive definite")
         .l();
-    let x = DVector::from_fn(N_BLOCKS - 1, |_, _| StandardNormal.sample(rng));
+    let x = DVector::from_fn(n_blocks - 1, |_, _| StandardNormal.sample(rng));
     let d = l * x;
-    let mut b = vec![0.0; N_BLOCKS];
-    for i in 1..N_BLOCKS {
+    let mut b = vec![0.0; n_blocks];
+    for i in 1..n_blocks {
         b[i] = b[i - 1] + d[i - 1];
     }
+    b
+}
+
+/// One series of block means of white rate plus a random walk, plus a warm-up `amp e^{-t/T}`
+/// (u/s).
+fn series(rng: &mut Xoshiro256PlusPlus, amp: f64, t_s: f64) -> Vec<f64> {
+    let mut b = gaussian_block_means(rng, N_BLOCKS, BLOCK_S, &[0.0, N2, 0.0, K2, 0.0]);
     for (i, v) in b.iter_mut().enumerate() {
         *v += amp * warmup_block_shape(i, BLOCK_S, t_s);
     }
