@@ -501,6 +501,9 @@ fn diagnose_curve_once(
     if let Some(t) = &temp_in {
         time_offsets.push((EffectKind::Temperature, t.curve_offset()));
     }
+    // The curve's upper bound on K^2 for the model found so far, kept while that model stands
+    // (the warm-up test and the jump search both take it).
+    let mut k_up_kept: Option<f64> = None;
     if opts.candidates.contains(&EffectKind::Warmup) {
         let mut c5: [f64; 5] = std::array::from_fn(|i| cur.coef.get(i).copied().unwrap_or(0.0));
         // The null's random walk: a K fitted low (often 0) leaves the block means' slow wander
@@ -508,9 +511,8 @@ fn diagnose_curve_once(
         // warm-up's null level"). K^2 is profiled on the block means under both hypotheses,
         // up to the curve's upper bound (session 12); at that bound when the profile cannot be
         // formed (session 8's rule).
-        let k_up = prob
-            .upper_bound(&spec, &cur, 3, WARMUP_K_DELTA)
-            .map_or(c5[3], |k| k.max(c5[3]));
+        let k_up = k2_upper(&prob, &spec, &cur);
+        k_up_kept = Some(k_up);
         let stat_params: Vec<EffectParams> = effects.iter().map(|e| e.params).collect();
         let warm = fit_warmup_profiled(&block_means, block_s, t_run, &c5, k_up, &stat_params)
             .map(|(w, _)| w)
@@ -546,6 +548,7 @@ fn diagnose_curve_once(
                 *o += c;
             }
             time_offsets.push((EffectKind::Warmup, warm_offset));
+            k_up_kept = None;
             // Keep only the stationary effects still needed beside it, then look again.
             let kept = still_needed(&prob, &effects, &offset, opts);
             let prev = cur.clone();
@@ -626,9 +629,7 @@ fn diagnose_curve_once(
         // The null's random walk, as the warm-up's: K^2 is also read off the block means,
         // up to the curve's upper bound (steps.rs, `detect_steps`; docs/gap.md, "The jump
         // test's random walk (session 21)").
-        let k_up = prob
-            .upper_bound(&spec, &cur, 3, WARMUP_K_DELTA)
-            .map_or(c5[3], |k| k.max(c5[3]));
+        let k_up = k_up_kept.unwrap_or_else(|| k2_upper(&prob, &spec, &cur));
         detect_steps(&resid, block_s, &c5, &stat_params, &th.jump_z, k_up)
     } else {
         None
@@ -837,6 +838,15 @@ fn settle(
 /// fair jump ceiling's 35 (docs/gap.md, "Bookkeeping", "Jumps kept in time (session 18)").
 fn kept_in_time(kind: EffectKind) -> bool {
     matches!(kind, EffectKind::Warmup | EffectKind::BiasJumps)
+}
+
+/// The curve's upper profile bound on `K^2` (u^2/s^3) at `WARMUP_K_DELTA` for the model `spec`
+/// fitted as `fit`, never below the fit's own `K^2`; the fit's `K^2` when the bound cannot be
+/// formed. The null's random walk of the time-domain tests goes up to it.
+fn k2_upper(prob: &GapProblem, spec: &ModelSpec, fit: &GlsFit) -> f64 {
+    let k2 = fit.coef.get(3).copied().unwrap_or(0.0);
+    prob.upper_bound(spec, fit, 3, WARMUP_K_DELTA)
+        .map_or(k2, |k| k.max(k2))
 }
 
 /// Whether `effects` hold a low-pass filter (the model's `G` is then judged against

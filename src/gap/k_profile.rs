@@ -18,7 +18,7 @@ use super::problem::golden_section;
 use nalgebra::{DMatrix, DVector};
 
 /// Grid points per decade of `K^2` (a step of a factor 1.47).
-pub const K_PER_DECADE: f64 = 6.0;
+const K_PER_DECADE: f64 = 6.0;
 /// The grid ends where the random walk's largest whitened share `k lambda_max` is this small (it
 /// then changes the likelihood by far less than one unit); `k = 0` is always on it.
 const K_FLOOR_SHARE: f64 = 1e-3;
@@ -87,10 +87,9 @@ impl KRotation {
 
 /// The maximum likelihood `K^2` (u^2/s^3) on `[0, k_hi]` of the first differences of
 /// `block_means` (u/s, blocks of `block_s` s) with a drift (a constant difference) fitted, the
-/// other four terms `c` (its `c[3]` is not used) and the stationary `effects` fixed (module doc).
-/// The grid's best point is polished by golden section in `ln K^2` between its neighbours.
-/// `None` when the series is too short or not finite, or the covariance is not positive
-/// definite.
+/// other four terms `c` (its `c[3]` is not used) and the stationary `effects` fixed (module doc;
+/// [`KRotation::max_likelihood_k2`] on the rotation of `c` and `effects`). `None` when the series
+/// is too short or not finite, or the covariance is not positive definite.
 pub fn profile_k2(
     block_means: &[f64],
     block_s: f64,
@@ -101,32 +100,44 @@ pub fn profile_k2(
     if !usable_block_means(block_means) {
         return None;
     }
-    let n = block_means.len() - 1;
-    let rot = KRotation::new(block_means.len(), block_s, c, effects)?;
-    let d = DVector::from_iterator(n, block_means.windows(2).map(|p| p[1] - p[0]));
-    let z = rot.rotate(d)?;
-    let u = rot.rotate(DVector::from_element(n, 1.0))?;
-    // -2 l(k), the drift profiled out.
-    let m2l = |k: f64| -> f64 {
-        let (mut szz, mut suz, mut suu, mut logdet) = (0.0, 0.0, 0.0, 0.0);
-        for ((zi, ui), li) in z.iter().zip(u.iter()).zip(&rot.lambda) {
-            let v = 1.0 + k * li;
-            szz += zi * zi / v;
-            suz += ui * zi / v;
-            suu += ui * ui / v;
-            logdet += (k * li).ln_1p();
+    KRotation::new(block_means.len(), block_s, c, effects)?.max_likelihood_k2(block_means, k_hi)
+}
+
+impl KRotation {
+    /// The maximum likelihood `K^2` (u^2/s^3) on `[0, k_hi]` of the first differences of
+    /// `block_means` (as many as the rotation was built for) with a drift fitted (module doc).
+    /// The grid's best point is polished by golden section in `ln K^2` between its neighbours.
+    /// `None` when the series does not match the rotation or is not finite.
+    pub fn max_likelihood_k2(&self, block_means: &[f64], k_hi: f64) -> Option<f64> {
+        let n = self.lambda.len();
+        if block_means.len() != n + 1 || !usable_block_means(block_means) {
+            return None;
         }
-        logdet + szz - if suu > 0.0 { suz * suz / suu } else { 0.0 }
-    };
-    let grid = rot.grid(k_hi);
-    let vals: Vec<f64> = grid.iter().map(|&k| m2l(k)).collect();
-    let best = (0..grid.len()).min_by(|&a, &b| vals[a].total_cmp(&vals[b]))?;
-    // The grid runs down from k_hi: neighbours at best - 1 (larger) and best + 1 (smaller).
-    if best == 0 || best + 1 >= grid.len() || grid[best + 1] <= 0.0 {
-        return Some(grid[best]);
+        let d = DVector::from_iterator(n, block_means.windows(2).map(|p| p[1] - p[0]));
+        let z = self.rotate(d)?;
+        let u = self.rotate(DVector::from_element(n, 1.0))?;
+        // -2 l(k), the drift profiled out.
+        let m2l = |k: f64| -> f64 {
+            let (mut szz, mut suz, mut suu, mut logdet) = (0.0, 0.0, 0.0, 0.0);
+            for ((zi, ui), li) in z.iter().zip(u.iter()).zip(&self.lambda) {
+                let v = 1.0 + k * li;
+                szz += zi * zi / v;
+                suz += ui * zi / v;
+                suu += ui * ui / v;
+                logdet += (k * li).ln_1p();
+            }
+            logdet + szz - if suu > 0.0 { suz * suz / suu } else { 0.0 }
+        };
+        let grid = self.grid(k_hi);
+        let vals: Vec<f64> = grid.iter().map(|&k| m2l(k)).collect();
+        let best = (0..grid.len()).min_by(|&a, &b| vals[a].total_cmp(&vals[b]))?;
+        // The grid runs down from k_hi: neighbours at best - 1 (larger) and best + 1 (smaller).
+        if best == 0 || best + 1 >= grid.len() || grid[best + 1] <= 0.0 {
+            return Some(grid[best]);
+        }
+        let (lo, hi) = (grid[best + 1].ln(), grid[best - 1].ln());
+        let x = golden_section(|x| m2l(x.exp()), lo, hi, K_POLISH_STEPS).best();
+        let k = x.exp();
+        Some(if m2l(k) <= vals[best] { k } else { grid[best] })
     }
-    let (lo, hi) = (grid[best + 1].ln(), grid[best - 1].ln());
-    let x = golden_section(|x| m2l(x.exp()), lo, hi, K_POLISH_STEPS).best();
-    let k = x.exp();
-    Some(if m2l(k) <= vals[best] { k } else { grid[best] })
 }

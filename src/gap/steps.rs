@@ -5,7 +5,7 @@
 
 use super::block_cov::{block_diff_covariance, usable_block_means};
 use super::effects::EffectParams;
-use super::k_profile::profile_k2;
+use super::k_profile::KRotation;
 use nalgebra::{DMatrix, DVector};
 
 /// Bias jumps found in the block means.
@@ -109,7 +109,7 @@ impl JumpFinding {
 /// 0, a rate ramp or the flicker taking its place), where the search reads the block means' own
 /// wander as steps. So the `K^2` of each search is the larger of the curve's less the kept
 /// jumps' share (at least a quarter of the curve's) and the block means' own maximum likelihood
-/// value with the kept jumps taken out ([`profile_k2`], on `[0, k_hi]`; `k_hi` the curve's upper
+/// value with the kept jumps taken out ([`KRotation::max_likelihood_k2`], on `[0, k_hi]`; `k_hi` the curve's upper
 /// bound, 0 to leave the profile out); the search is run again while that `K^2` moves (twice at
 /// most). Returns `None` when the series is too short or `z_crit` is empty. (Mixture statistics
 /// for the presence test, [`jump_mixture_stat`](super::jump_mixture::jump_mixture_stat) and
@@ -129,12 +129,14 @@ pub fn detect_steps(
     let z_min = *z_crit.last()?;
     let t_run = block_means.len() as f64 * block_s;
     let k2_curve = c[3];
+    // The rotation depends on the model and the effects only: one for every re-search.
+    let rot = (k_hi > 0.0)
+        .then(|| KRotation::new(block_means.len(), block_s, c, effects))
+        .flatten();
     let k2_blocks = |found: &JumpFinding| -> f64 {
-        if k_hi <= 0.0 {
-            return 0.0;
-        }
-        let rest = found.remove_from(block_means);
-        profile_k2(&rest, block_s, c, effects, k_hi).unwrap_or(0.0)
+        rot.as_ref()
+            .and_then(|r| r.max_likelihood_k2(&found.remove_from(block_means), k_hi))
+            .unwrap_or(0.0)
     };
     let mut c = *c;
     c[3] = k2_curve.max(k2_blocks(&JumpFinding::default()));

@@ -49,10 +49,9 @@ pub fn fit_warmup_profiled(
     let nb = block_means.len();
     let n = nb - 1;
     let rot = KRotation::new(nb, block_s, c, effects)?;
-    let rotate = |v: DVector<f64>| rot.rotate(v);
     let d: Vec<f64> = block_means.windows(2).map(|p| p[1] - p[0]).collect();
-    let z = rotate(DVector::from_column_slice(&d))?;
-    let u1 = rotate(DVector::from_element(n, 1.0))?;
+    let z = rot.rotate(DVector::from_column_slice(&d))?;
+    let u1 = rot.rotate(DVector::from_element(n, 1.0))?;
     let grid = Grid {
         lo: block_s / 2.0,
         hi: t_run_s / 4.0,
@@ -63,7 +62,7 @@ pub fn fit_warmup_profiled(
     for t in grid.points() {
         let e: Vec<f64> = (0..=n).map(|i| warmup_block_shape(i, block_s, t)).collect();
         let de = DVector::from_iterator(n, e.windows(2).map(|p| p[1] - p[0]));
-        rows.push(rotate(de)?);
+        rows.push(rot.rotate(de)?);
         ts.push(t);
     }
     if ts.is_empty() {
