@@ -191,7 +191,9 @@
 //! same draws as one run). Jump draws (and clean draws, for the level) also get the
 //! fair jump ceiling: the most powerful test told the count and rms but not the times
 //! (`oracle::JumpCeiling`), its p-value from 199 draws of the Gaussian null. `--resid FILE`
-//! writes the base fit's standardized residuals per tau of the clean draws. Prints, per family: the false alarms (clean runs whose
+//! writes the base fit's standardized residuals per tau of the clean draws, from the first tau
+//! the diagnosis reads (a quantization-limited unit's `tau_white`; so do the `--csv` columns
+//! computed from the base fit). Prints, per family: the false alarms (clean runs whose
 //! verdict is not `consistent`), the confusion matrix (truth against the first effect named),
 //! detection (the true effect named anywhere) against the oracle at 5% and at the share each
 //! test of the diagnosis spends (`--shares`, in percent, per effect in the order
@@ -201,7 +203,8 @@
 //! above the base gap (the bookkeeping rule says none). Shares carry 95% Wilson intervals.
 //! `--csv` writes one row per draw, with the statistics each test of the diagnosis decides on
 //! (the base `G`, each stationary candidate's first-scan score `lr_*` and the gap with it in
-//! `galt_*`, the warm-up's `B` and its block-mean scale, the step z scores), so that the null
+//! `galt_*`, the warm-up's `B` and its block-mean scale, the step z scores, the base `G`'s
+//! effective degrees of freedom `nu` and the number of taus `n_taus`), so that the null
 //! distribution of each test can be read off clean runs. `--no-oracle` leaves out the clean
 //! draws' oracle statistics and jump ceiling (a null study of the diagnosis alone). `--models
 //! DIR` writes each draw's model file, which `allanscope simulate --model` reads, for
@@ -929,6 +932,9 @@ struct Outcome {
     warm_p_prof: f64,
     warm_k_up: f64,
     warm_k_null: f64,
+    /// The base model's effective degrees of freedom and the number of taus diagnosed.
+    nu: f64,
+    n_taus: usize,
 }
 
 /// The stationary candidates whose first-scan scores `--csv` writes (`lr_*` columns).
@@ -1004,13 +1010,29 @@ fn run_one(
             })
             .map_or(f64::NAN, |p| p.0)
     };
-    let base_prob = GapProblem::new(&snap, &DiagnoseOptions::default()).ok();
+    let min_m = d
+        .as_ref()
+        .ok()
+        .and_then(|d| d.quantization_limited.map(|q| q.m_white))
+        .unwrap_or(DiagnoseOptions::default().min_m);
+    let base_prob = GapProblem::new(
+        &snap,
+        &DiagnoseOptions {
+            min_m,
+            ..DiagnoseOptions::default()
+        },
+    )
+    .ok();
     let base_fit = base_prob
         .as_ref()
         .and_then(|p| p.gls(&ModelSpec::default()));
     let base_c5: Option<[f64; 5]> = base_fit
         .as_ref()
         .map(|b| std::array::from_fn(|i| b.coef[i]));
+    let (nu, n_taus) = match (base_prob.as_ref(), base_fit.as_ref()) {
+        (Some(p), Some(b)) => (p.effective_dof(&ModelSpec::default(), b), p.len()),
+        _ => (f64::NAN, 0),
+    };
     let mut resid = Vec::new();
     if let (None, Some(p), Some(b)) = (kind, base_prob.as_ref(), base_fit.as_ref()) {
         let t_run = snap.n_increments as f64 * unit.tau0;
@@ -1136,6 +1158,8 @@ fn run_one(
         warm_p_prof,
         warm_k_up,
         warm_k_null,
+        nu,
+        n_taus,
     }
 }
 
@@ -1599,7 +1623,7 @@ fn main() {
     }
     if !csv.is_empty() {
         let mut text = String::from(
-            "family,effect,draw,tau0,t_run,q,n,b,k,r,lsb,rate_lsb,rho,verdict,gap_before,gap_after,named,shape_true,amp_true,oracle_z,oracle_delta,null_z_gm,null_z_sin,null_z_filter,null_z_warmup,null_z_jumps,secs,qlim,warm_b,jump_z1,jump_z2,jump_z3,jceil_p,lr_gm,lr_sin,lr_filter,lr_ma,lr_second,lr_zero,galt_gm,galt_sin,galt_filter,galt_ma,galt_second,galt_zero,warm_scale,warm_b_scaled,warm_p,bias,intrinsic,false_alarm,intrinsic_exact,named_params,warm_p_up,warm_p_prof,warm_k_up,warm_k_null\n",
+            "family,effect,draw,tau0,t_run,q,n,b,k,r,lsb,rate_lsb,rho,verdict,gap_before,gap_after,named,shape_true,amp_true,oracle_z,oracle_delta,null_z_gm,null_z_sin,null_z_filter,null_z_warmup,null_z_jumps,secs,qlim,warm_b,jump_z1,jump_z2,jump_z3,jceil_p,lr_gm,lr_sin,lr_filter,lr_ma,lr_second,lr_zero,galt_gm,galt_sin,galt_filter,galt_ma,galt_second,galt_zero,warm_scale,warm_b_scaled,warm_p,bias,intrinsic,false_alarm,intrinsic_exact,named_params,warm_p_up,warm_p_prof,warm_k_up,warm_k_null,nu,n_taus\n",
         );
         for (o, (_, _, i)) in res.iter().zip(&items) {
             let u = &o.unit;
@@ -1609,7 +1633,7 @@ fn main() {
             });
             let nz: Vec<String> = o.null_z.iter().map(|z| format!("{z:.4}")).collect();
             text += &format!(
-                "{},{},{},{},{:.0},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:.3},{:?},{:.4},{:.4},{},{:e},{:e},{:.4},{:.4},{},{:.3},{},{:.3},{:.3},{:.3},{:.3},{:.4},{},{},{:.4},{:.3},{:.4},{:e},{},{},{},{},{:.4},{:.4},{:e},{:e}\n",
+                "{},{},{},{},{:.0},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:.3},{:?},{:.4},{:.4},{},{:e},{:e},{:.4},{:.4},{},{:.3},{},{:.3},{:.3},{:.3},{:.3},{:.4},{},{},{:.4},{:.3},{:.4},{:e},{},{},{},{},{:.4},{:.4},{:e},{:e},{:.2},{}\n",
                 u.family,
                 kind_name(o.truth_kind),
                 i,
@@ -1668,7 +1692,9 @@ fn main() {
                 o.warm_p_up,
                 o.warm_p_prof,
                 o.warm_k_up,
-                o.warm_k_null
+                o.warm_k_null,
+                o.nu,
+                o.n_taus
             );
         }
         std::fs::write(&csv, text).expect("csv");

@@ -515,7 +515,11 @@ fn diagnose_curve_once(
         k_up_kept = Some(k_up);
         let stat_params: Vec<EffectParams> = effects.iter().map(|e| e.params).collect();
         let warm = fit_warmup_profiled(&block_means, block_s, t_run, &c5, k_up, &stat_params)
-            .map(|(w, _)| w)
+            .map(|(w, k_null)| {
+                // at k_up when the block means want more wander than the curve allows
+                tracing::debug!(k_null, "the warm-up profile's K^2 under the null");
+                w
+            })
             .or_else(|| {
                 c5[3] = k_up;
                 fit_warmup(&block_means, block_s, t_run, &c5, &stat_params)

@@ -621,6 +621,48 @@ impl GapProblem {
         })
     }
 
+    /// The whitened residual projection `P = I - A (A'A)^-1 A'` of the fit `fit` of `spec`:
+    /// `A` the whitened design of its active columns, weighted by the fit's own model. The
+    /// misfit `r' S^-1 r` of a right model is `z' P z` with `z ~ N(0, M)`, `M` the covariance
+    /// seen through the whitening.
+    fn residual_projection(&self, spec: &ModelSpec, fit: &GlsFit) -> DMatrix<f64> {
+        let j = self.len();
+        let x = self.columns(spec);
+        let active: Vec<usize> = (0..x.ncols().min(fit.coef.len()))
+            .filter(|&c| fit.coef[c] > 0.0)
+            .collect();
+        let mut p = DMatrix::<f64>::identity(j, j);
+        if !active.is_empty() {
+            let xd = DMatrix::from_fn(j, active.len(), |r, c| {
+                x[(r, active[c])] / fit.model[r].max(1e-6 * self.y[r])
+            });
+            let a = &self.linv * xd;
+            if let Some(inv) = (a.transpose() * &a).try_inverse() {
+                p -= &a * inv * a.transpose();
+            }
+        }
+        p
+    }
+
+    /// The effective degrees of freedom of `r' S^-1 r` at the fit `fit` of `spec`: with
+    /// `B = P M P` ([`GapProblem::residual_projection`]) the misfit of a right model has mean
+    /// `tr B` and variance `2 tr B^2`, and Satterthwaite's `nu = tr(B)^2 / tr(B^2)` makes
+    /// `G` about `chi2_nu / nu` (F. E. Satterthwaite, "An approximate distribution of
+    /// estimates of variance components", Biometrics Bulletin 2(6), 1946). Used to read the
+    /// null `G` of clean runs per family (docs/gap.md, "Every family on one commit (session
+    /// 22)").
+    pub fn effective_dof(&self, spec: &ModelSpec, fit: &GlsFit) -> f64 {
+        let p = self.residual_projection(spec, fit);
+        let b = &p * &self.m_white * &p;
+        let t1 = b.trace();
+        let t2 = (&b * &b).trace();
+        if t2 > 0.0 {
+            t1 * t1 / t2
+        } else {
+            f64::NAN
+        }
+    }
+
     /// One-sided upper profile bound on the five-term coefficient `term` (`Q^2 .. R^2`) of the
     /// fit `fit` of `spec`: the least `k >= fit.coef[term]` at which holding the coefficient at
     /// `k` or above (a fixed offset `k x_term`, the column itself still free) raises `r' S^-1 r`
@@ -972,6 +1014,72 @@ mod tests {
         assert!(
             (plain / fixed - 1.0).abs() > 0.1,
             "plain iteration converged: {plain}"
+        );
+    }
+
+    /// A VOG4-like gyro (config/models/vog4.toml's N, B, K), 30 minutes at 4 ms, simulated.
+    fn vog4_problem() -> (GapProblem, GlsFit) {
+        use crate::gap::{GapConfig, GapEvidence};
+        use crate::sim::{SimModel, Simulator};
+        let text = "tau0_s = 0.004\n[[channel]]\nname = \"g\"\nunit = \"arcsec\"\nN = 0.254\nB = 0.225\nK = 1.826e-2\nflicker_band_s = [0.004, 1.0e5]\n";
+        let m = SimModel::from_toml_str(text, std::path::Path::new("<test>")).expect("model");
+        let mut sim = Simulator::new(&m, 7);
+        let mut inc = vec![0.0; (1800.0 / 0.004) as usize];
+        sim.fill_channel(0, &mut inc);
+        let mut ev = GapEvidence::from_increments(GapConfig::new(0.004), &inc);
+        let prob = GapProblem::new(&ev.snapshot(), &DiagnoseOptions::default()).expect("problem");
+        let fit = prob.gls(&ModelSpec::default()).expect("fit");
+        (prob, fit)
+    }
+
+    #[test]
+    fn the_effective_dof_is_that_of_the_misfit_of_a_right_model() {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let (prob, fit) = vog4_problem();
+        let spec = ModelSpec::default();
+        let j = prob.len();
+        let p = prob.residual_projection(&spec, &fit);
+        // a projection: symmetric, idempotent, of rank j less the active columns
+        assert!((&p * &p - &p).amax() < 1e-9 && (&p - p.transpose()).amax() < 1e-12);
+        let active = fit.coef.iter().filter(|c| **c > 0.0).count();
+        assert!(
+            (p.trace() - (j - active) as f64).abs() < 1e-6,
+            "{}",
+            p.trace()
+        );
+        // tr(P M P) is the expectation gls computes its own way (weights of its last pass)
+        let b = &p * &prob.m_white * &p;
+        assert!(
+            (b.trace() / fit.expected - 1.0).abs() < 0.02,
+            "{} vs {}",
+            b.trace(),
+            fit.expected
+        );
+        let nu = prob.effective_dof(&spec, &fit);
+        assert!(nu > 1.0 && nu <= (j - active) as f64 + 1e-9, "nu {nu}");
+        // Monte Carlo of z' P z, z ~ N(0, M): mean tr B, and 2 mean^2 / var = nu
+        let l = prob.m_white.clone().cholesky().expect("M").l();
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(3);
+        let n = 20_000;
+        let qs: Vec<f64> = (0..n)
+            .map(|_| {
+                let g = DVector::from_fn(j, |_, _| StandardNormal.sample(&mut rng));
+                let z = &l * g;
+                (z.transpose() * &p * &z)[(0, 0)]
+            })
+            .collect();
+        let mean = qs.iter().sum::<f64>() / n as f64;
+        let var = qs.iter().map(|q| (q - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+        let nu_mc = 2.0 * mean * mean / var;
+        assert!(
+            (mean / b.trace() - 1.0).abs() < 0.02,
+            "{mean} vs {}",
+            b.trace()
+        );
+        assert!(
+            (nu_mc / nu - 1.0).abs() < 0.05,
+            "Monte Carlo {nu_mc} vs {nu}"
         );
     }
 }
