@@ -645,12 +645,12 @@ impl GapProblem {
     }
 
     /// The effective degrees of freedom of `r' S^-1 r` at the fit `fit` of `spec`: with
-    /// `B = P M P` ([`GapProblem::residual_projection`]) the misfit of a right model has mean
+    /// `B = P M P` (`P` the whitened residual projection, `residual_projection`) the misfit of a right model has mean
     /// `tr B` and variance `2 tr B^2`, and Satterthwaite's `nu = tr(B)^2 / tr(B^2)` makes
     /// `G` about `chi2_nu / nu` (F. E. Satterthwaite, "An approximate distribution of
     /// estimates of variance components", Biometrics Bulletin 2(6), 1946). Used to read the
-    /// null `G` of clean runs per family (docs/gap.md, "Every family on one commit (session
-    /// 22)").
+    /// null `G` of clean runs per family (docs/gap.md, "Every family on one commit, and the
+    /// base `G`'s tail (session 22)").
     pub fn effective_dof(&self, spec: &ModelSpec, fit: &GlsFit) -> f64 {
         let p = self.residual_projection(spec, fit);
         let b = &p * &self.m_white * &p;
