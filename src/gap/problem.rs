@@ -645,8 +645,9 @@ impl GapProblem {
     }
 
     /// The effective degrees of freedom of `r' S^-1 r` at the fit `fit` of `spec`: with
-    /// `B = P M P` (`P` the whitened residual projection, `residual_projection`) the misfit of a right model has mean
-    /// `tr B` and variance `2 tr B^2`, and Satterthwaite's `nu = tr(B)^2 / tr(B^2)` makes
+    /// `B = P M P` (`P` the whitened residual projection, `residual_projection`) the misfit
+    /// of a right model has mean `tr B` and variance `2 tr B^2`, and Satterthwaite's
+    /// `nu = tr(B)^2 / tr(B^2)` makes
     /// `G` about `chi2_nu / nu` (F. E. Satterthwaite, "An approximate distribution of
     /// estimates of variance components", Biometrics Bulletin 2(6), 1946). Used to read the
     /// null `G` of clean runs per family (docs/gap.md, "Every family on one commit, and the
