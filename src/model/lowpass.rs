@@ -215,12 +215,14 @@ impl LowPass {
         let one: Vec<f64> = rho[..cut].to_vec();
         let total = one[0] + 2.0 * one[1..].iter().sum::<f64>();
         let m_exact = 200.0 * (self.memory_s(tau0_s) / tau0_s).max(cut as f64);
-        // F(t) at whole lags t, with G_B read from the table where it reaches
+        // F(t) at whole lags t, with G_B read from the table where it reaches: F(0) needs
+        // lags up to the cut even when every m is beyond m_exact (the table is per thread, and
+        // a fresh one holds a single entry)
         let longest = ms
             .iter()
             .filter(|&&m| m as f64 <= m_exact)
             .max()
-            .map_or(0, |&m| 2 * m as usize + cut);
+            .map_or(cut, |&m| 2 * m as usize + cut);
         flicker_phase_table(longest, |table| {
             let g = |t: usize| match table {
                 Some(tab) => tab[t],
@@ -385,6 +387,24 @@ pub fn avar_from_autocovariance(cov: &[f64], tau0_s: f64, ms: &[u64]) -> Vec<f64
 mod tests {
     use super::*;
     use crate::model::terms;
+
+    /// Cluster sizes all beyond 200 memories, asked first on a fresh thread (whose flicker
+    /// table is empty): the unfiltered flicker AVAR `2 ln 2 / pi`, not an index out of the
+    /// table (it panicked there in session 22, family_gap's rlg on a quantization-limited cut).
+    #[test]
+    fn flicker_beyond_the_filter_memory_on_a_fresh_thread_is_the_plain_value() {
+        let lp = LowPass::FirstOrder {
+            time_constant_s: 0.02,
+        };
+        let got = std::thread::spawn(move || lp.flicker_rate_avar(0.004, &[50_000, 400_000]))
+            .join()
+            .expect("no panic");
+        let plain = 2.0 * std::f64::consts::LN_2 / PI;
+        assert!(
+            got.iter().all(|v| (v / plain - 1.0).abs() < 1e-12),
+            "{got:?}"
+        );
+    }
 
     /// The memory is the slowest pole's time constant: the autocorrelation's decay per lag far
     /// out is `exp(-tau0 / memory)`, overdamped (where `1 / (zeta w)` was 50 times too short at
