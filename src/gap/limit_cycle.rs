@@ -27,6 +27,10 @@ pub const AMPLITUDE_SLACK: f64 = 1.25;
 /// may be narrower than the offset of the run's mean rate from the rate the line follows).
 pub const MIN_REL_WINDOW: f64 = 0.01;
 
+/// The widest line, relative to its frequency, whose half-width ([`line_half_width`]) widens
+/// the window: beyond it the random walk has spread the counter's tone into noise.
+pub const MAX_REL_LINE_WIDTH: f64 = 0.1;
+
 /// A named sinusoid attributed to the counter's limit cycle.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LimitCycle {
@@ -39,6 +43,18 @@ pub struct LimitCycle {
     /// The run's mean rate (u/s) and the counter's LSB (u) it was computed from.
     pub mean_rate: f64,
     pub lsb: f64,
+}
+
+/// Half-width at half maximum (Hz) of the counter's `n`-th harmonic line broadened by the
+/// angle's random walk (white rate noise `N`, u/sqrt(s)): the line's phase `2 pi n theta / LSB`
+/// diffuses, `E exp(i 2 pi n (theta(t) - theta(0)) / LSB) = exp(-2 pi^2 n^2 N^2 t / LSB^2)`,
+/// so the line is a Lorentzian of half-width `pi n^2 N^2 / LSB^2` (the phase-diffusion
+/// linewidth of an oscillator, e.g. Rubiola, "Phase Noise and Frequency Stability in
+/// Oscillators", 2009, section 1.4). A sinusoid fitted to it sits within about that of its
+/// centre.
+pub fn line_half_width(n: u32, n_arw: f64, lsb: f64) -> f64 {
+    let x = n as f64 * n_arw / lsb;
+    std::f64::consts::PI * x * x
 }
 
 /// `f` folded into `[0, 1 / (2 tau0)]` (sampling at `1 / tau0`).
@@ -68,7 +84,9 @@ fn rate_stats(snap: &EvidenceSnapshot) -> Option<(f64, f64)> {
 /// The limit cycles among `d`'s named sinusoids: the values are whole multiples of an LSB
 /// (`snap.lsb`) and not rate samples rounded on their own (`d.quantization` not `rate`: only a
 /// counter with carry cycles), a sinusoid's frequency is within its 95% interval (widened to
-/// [`MIN_REL_WINDOW`]) of an aliased harmonic `n |mean rate| / LSB` (`n <= MAX_HARMONIC`), the
+/// [`MIN_REL_WINDOW`], plus the line's half-width [`line_half_width`] at the fitted `N` when it
+/// is at most [`MAX_REL_LINE_WIDTH`] of the frequency) of an
+/// aliased harmonic `n |mean rate| / LSB` (`n <= MAX_HARMONIC`), the
 /// rate's spread over the run (the block means' standard deviation `sd`) keeps that harmonic
 /// inside the same window (`n sd / LSB`: a wandering rate smears the counter's line, and a sharp
 /// line there is not it), and its amplitude is at most [`AMPLITUDE_SLACK`] times the
@@ -105,7 +123,16 @@ pub fn find(d: &Diagnosis, snap: &EvidenceSnapshot) -> Vec<LimitCycle> {
         let hit = (1..=MAX_HARMONIC).find_map(|n| {
             let nf = n as f64;
             let expected = alias(nf * mean / lsb, tau0);
-            let window = half_iv.max(MIN_REL_WINDOW * expected);
+            // the line's own width, where the angle's random walk leaves a line at all
+            // (`line_half_width`; a half-width beyond MAX_REL_LINE_WIDTH of its frequency is
+            // noise, not a tone, and widens nothing)
+            let hw = line_half_width(n, d.final_coef[1], lsb);
+            let widen = if hw <= MAX_REL_LINE_WIDTH * expected {
+                hw
+            } else {
+                0.0
+            };
+            let window = half_iv.max(MIN_REL_WINDOW * expected) + widen;
             // The line is sharp only while the rate holds still: the block means' spread
             // (its slow wander, with their white noise an upper bound) moves it by `n sd / LSB`.
             let sharp = nf * sd / lsb <= window;
