@@ -87,7 +87,8 @@ fn rate_stats(snap: &EvidenceSnapshot) -> Option<(f64, f64)> {
 /// [`MIN_REL_WINDOW`], plus the line's half-width [`line_half_width`] at the fitted `N` when it
 /// is at most [`MAX_REL_LINE_WIDTH`] of the frequency) of an
 /// aliased harmonic `n |mean rate| / LSB` (`n <= MAX_HARMONIC`), the
-/// rate's spread over the run (the block means' standard deviation `sd`) keeps that harmonic
+/// rate's slow spread over the run (the block means' standard deviation `sd` beyond their white
+/// noise at the fitted `N` and `Q`) keeps that harmonic
 /// inside the same window (`n sd / LSB`: a wandering rate smears the counter's line, and a sharp
 /// line there is not it), and its amplitude is at most [`AMPLITUDE_SLACK`] times the
 /// `2 f_a LSB / n` the counter can make there.
@@ -102,6 +103,17 @@ pub fn find(d: &Diagnosis, snap: &EvidenceSnapshot) -> Vec<LimitCycle> {
         return Vec::new();
     };
     let tau0 = snap.tau0_s;
+    // The block means' spread beyond their own white noise (the fitted white rate `N` and white
+    // angle `Q` over a block): the slow wander that smears the line. The white rate's share
+    // widens the line as its phase diffusion does, which `line_half_width` carries.
+    let block_s = snap.block_len as f64 * tau0;
+    let [q, n_arw] = [d.final_coef[0], d.final_coef[1]];
+    let white_var = if block_s > 0.0 {
+        n_arw * n_arw / block_s + 2.0 * q * q / (block_s * block_s)
+    } else {
+        0.0
+    };
+    let sd = (sd * sd - white_var).max(0.0).sqrt();
     let mut out = Vec::new();
     for (i, e) in d.effects.iter().enumerate() {
         let EffectParams::Sinusoid {
@@ -133,10 +145,20 @@ pub fn find(d: &Diagnosis, snap: &EvidenceSnapshot) -> Vec<LimitCycle> {
                 0.0
             };
             let window = half_iv.max(MIN_REL_WINDOW * expected) + widen;
-            // The line is sharp only while the rate holds still: the block means' spread
-            // (its slow wander, with their white noise an upper bound) moves it by `n sd / LSB`.
+            // The line is sharp only while the rate holds still: the block means' slow wander
+            // moves it by `n sd / LSB`.
             let sharp = nf * sd / lsb <= window;
             let max_amp = AMPLITUDE_SLACK * 2.0 * expected * lsb / nf;
+            tracing::debug!(
+                n,
+                frequency_hz,
+                expected,
+                window,
+                spread_hz = nf * sd / lsb,
+                amplitude,
+                max_amp,
+                "the counter's limit cycle: a named line against harmonic n"
+            );
             (sharp && (frequency_hz - expected).abs() <= window && amplitude <= max_amp).then_some(
                 LimitCycle {
                     effect: i,
