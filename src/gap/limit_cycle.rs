@@ -138,7 +138,7 @@ pub fn find(d: &Diagnosis, snap: &EvidenceSnapshot) -> Vec<LimitCycle> {
             // the line's own width, where the angle's random walk leaves a line at all
             // (`line_half_width`; a half-width beyond MAX_REL_LINE_WIDTH of its frequency is
             // noise, not a tone, and widens nothing)
-            let hw = line_half_width(n, d.final_coef[1], lsb);
+            let hw = line_half_width(n, n_arw, lsb);
             let widen = if hw <= MAX_REL_LINE_WIDTH * expected {
                 hw
             } else {

@@ -38,9 +38,15 @@ pub(crate) fn model(extra: &str) -> String {
 
 /// [`DURATION_S`] of increments of [`model`]`(extra)`.
 pub(crate) fn simulate(extra: &str, seed: u64) -> Vec<f64> {
-    let m = SimModel::from_toml_str(&model(extra), Path::new("<test>")).expect("model");
+    simulate_text(&model(extra), TAU0, DURATION_S, seed)
+}
+
+/// `seconds` of increments at `tau0` of the first channel of the model file `text`, simulated
+/// with `seed`.
+pub(crate) fn simulate_text(text: &str, tau0: f64, seconds: f64, seed: u64) -> Vec<f64> {
+    let m = SimModel::from_toml_str(text, Path::new("<test>")).expect("model");
     let mut sim = Simulator::new(&m, seed);
-    let mut out = vec![0.0; (DURATION_S / TAU0) as usize];
+    let mut out = vec![0.0; (seconds / tau0) as usize];
     sim.fill_channel(0, &mut out);
     out
 }

@@ -289,10 +289,7 @@ pub(super) fn family_gap_accgrav(
          K = {k:e}\nflicker_band_s = [{tau0}, {flicker_hi_s:e}]\nbias = {bias}\n\
          output_filter = {{ time_constant = {tc_s:e} }}\n"
     );
-    let m = SimModel::from_toml_str(&text, std::path::Path::new("<test>")).expect("model");
-    let mut sim = Simulator::new(&m, sim_seed);
-    let mut inc = vec![0.0; (seconds / tau0) as usize];
-    sim.fill_channel(0, &mut inc);
+    let mut inc = super::diagnosis::simulate_text(&text, tau0, seconds, sim_seed);
     let step = rate_lsb * tau0;
     for v in inc.iter_mut() {
         *v = (*v / step).round() * step;

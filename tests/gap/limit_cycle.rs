@@ -10,8 +10,6 @@ use allanscope::gap::{
     diagnose, DiagnoseOptions, Diagnosis, DiagnosisRecord, EffectKind, EffectParams, GapConfig,
     GapEvidence, Verdict,
 };
-use allanscope::sim::{SimModel, Simulator};
-use std::path::Path;
 
 const TAU0: f64 = 0.004;
 const LSB: f64 = 1.22;
@@ -22,10 +20,7 @@ fn run(extra: &str, seed: u64) -> Diagnosis {
         "tau0_s = {TAU0}\n[[channel]]\nname = \"r\"\nunit = \"arcsec\"\nlsb = {LSB}\n\
          bias = {RATE}\nQ = 0.255\nN = 0.083\nB = 0.002\nK = 5e-7\n{extra}\n"
     );
-    let m = SimModel::from_toml_str(&text, Path::new("<test>")).expect("model");
-    let mut sim = Simulator::new(&m, seed);
-    let mut out = vec![0.0; (3600.0 / TAU0) as usize];
-    sim.fill_channel(0, &mut out);
+    let out = super::diagnosis::simulate_text(&text, TAU0, 3600.0, seed);
     let snap = GapEvidence::from_increments(GapConfig::new(TAU0), &out).snapshot();
     diagnose(&snap, &DiagnoseOptions::default()).expect("diagnosis")
 }
@@ -102,25 +97,24 @@ fn a_real_vibration_of_a_counter_unit_is_not_attributed() {
 /// the half-width at the fitted `N` within 20% of the truth's, the verdict `consistent`.
 #[test]
 fn a_line_the_random_walk_widened_is_still_the_counters() {
-    let tau0 = 0.004219409282700422;
-    let t_run = 4044.022614565478;
     let (lsb, rate, n_arw) = (
         7.219788328363145e-1,
         3.142572633311266,
         1.0842341581741755e-1,
     );
-    let text = format!(
-        "tau0_s = {tau0}\n[[channel]]\nname = \"x\"\nunit = \"u\"\nQ = 2.1461220438304413e-1\n\
-         N = {n_arw:e}\nB = 1.4349865980341286e-3\nK = 1.0373250818259063e-6\n\
-         flicker_band_s = [{tau0}, {:e}]\nbias = {rate:e}\nlsb = {lsb:e}\n",
-        10.0 * t_run
+    let d = family_gap_rlg(
+        0.004219409282700422,
+        4044.022614565478,
+        [
+            2.1461220438304413e-1,
+            n_arw,
+            1.4349865980341286e-3,
+            1.0373250818259063e-6,
+        ],
+        rate,
+        lsb,
+        8287166162592586687,
     );
-    let m = SimModel::from_toml_str(&text, Path::new("<test>")).expect("model");
-    let mut sim = Simulator::new(&m, 8287166162592586687);
-    let mut out = vec![0.0; (t_run / tau0) as usize];
-    sim.fill_channel(0, &mut out);
-    let snap = GapEvidence::from_increments(GapConfig::new(tau0), &out).snapshot();
-    let d = diagnose(&snap, &DiagnoseOptions::default()).expect("diagnosis");
     let s = sinusoids(&d);
     let f_lc = rate / lsb;
     assert!(
@@ -154,10 +148,7 @@ fn family_gap_rlg(
          B = {b:e}\nK = {k:e}\nflicker_band_s = [{tau0}, {:e}]\nbias = {rate:e}\nlsb = {lsb:e}\n",
         10.0 * t_run
     );
-    let m = SimModel::from_toml_str(&text, Path::new("<test>")).expect("model");
-    let mut sim = Simulator::new(&m, sim_seed);
-    let mut out = vec![0.0; (t_run / tau0) as usize];
-    sim.fill_channel(0, &mut out);
+    let out = super::diagnosis::simulate_text(&text, tau0, t_run, sim_seed);
     let snap = GapEvidence::from_increments(GapConfig::new(tau0), &out).snapshot();
     diagnose(&snap, &DiagnoseOptions::default()).expect("diagnosis")
 }
