@@ -130,6 +130,7 @@
 //!   rounding.rs            rate samples rounded after a filter, as AVAR
 //!   discrepancy.rs         the rounding model's known error, carried in the covariance
 //!   limit_cycle.rs         a named line that is the counter's limit cycle
+//!   sawtooth.rs            the counter's whole sawtooth, in the base model
 //!   segments.rs            homogeneity of the curve across the run's segments
 //!   simplex.rs             a two-parameter Nelder-Mead search (the second-order filter's polish)
 //!   thresholds.rs          the decision thresholds, calibrated by simulation

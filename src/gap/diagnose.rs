@@ -199,6 +199,9 @@ pub struct Diagnosis {
     /// Named sinusoids that are the counter's limit cycle, not an effect of the unit
     /// ([`super::limit_cycle`]).
     pub limit_cycles: Vec<super::limit_cycle::LimitCycle>,
+    /// The counter's sawtooth, when the base model carries it ([`super::sawtooth`]): part of
+    /// every model of the curve, not an effect of the unit.
+    pub sawtooth: Option<super::sawtooth::Sawtooth>,
 }
 
 /// Five-term `(Q, N, B, K, R)` from `c`.
@@ -449,6 +452,7 @@ fn diagnose_curve_once(
     let mut prob = GapProblem::new(snap, opts)?;
     if let Some(lsb) = snap.lsb {
         prob.set_filter_floor(lsb);
+        prob = prob.with_sawtooth(snap, opts, true)?;
     }
     let prob = prob;
     let th = opts.thresholds;
@@ -745,6 +749,7 @@ fn diagnose_curve_once(
         effect_intervals,
         first_scores,
         limit_cycles: Vec::new(),
+        sawtooth: prob.sawtooth.as_ref().map(|(st, _)| *st),
     })
 }
 

@@ -64,7 +64,7 @@ pub fn holdout_gap(
     snap: &EvidenceSnapshot,
     opts: &DiagnoseOptions,
 ) -> Result<HoldoutGap, DiagnoseError> {
-    let prob = GapProblem::new(snap, opts)?;
+    let prob = GapProblem::new(snap, opts)?.with_sawtooth(snap, opts, false)?;
     let j = prob.len();
     let base = prob
         .gls(&ModelSpec::default())

@@ -65,7 +65,7 @@ pub fn alias(f_hz: f64, tau0_s: f64) -> f64 {
 }
 
 /// The run's mean rate (u/s) and the spread of its block means (u/s), from the evidence.
-fn rate_stats(snap: &EvidenceSnapshot) -> Option<(f64, f64)> {
+pub(crate) fn rate_stats(snap: &EvidenceSnapshot) -> Option<(f64, f64)> {
     let v: Vec<f64> = snap
         .block_means
         .iter()

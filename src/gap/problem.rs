@@ -12,6 +12,11 @@ use super::effects::{canonical_lowpass, effect_column, EffectKind, EffectParams,
 use super::evidence::EvidenceSnapshot;
 use super::filter_cov::filter_cov_correction;
 use super::rounding::{filtered_sigma, rounding_avar_on_grid, GridPosition, MIN_SIGMA_STEPS};
+use super::sawtooth::{
+    golden_min, Sawtooth, SAWTOOTH_DITHER_STEPS, SAWTOOTH_FREQ_SPAN, SAWTOOTH_GOLDEN_STEPS,
+    SAWTOOTH_GRID_DROP, SAWTOOTH_GRID_SHARE, SAWTOOTH_MAX_DITHER, SAWTOOTH_MAX_GAP,
+    SAWTOOTH_MIN_DROP, SAWTOOTH_MIN_SHARE, SAWTOOTH_ROUNDS, SAWTOOTH_ROUND_TOL, SAWTOOTH_SHAPES,
+};
 use crate::allan::CurvePoint;
 use crate::model::avar_cov::{AvarCovariance, CovPoint};
 use crate::model::fit::{fit, FitOptions};
@@ -72,6 +77,9 @@ pub struct GapProblem {
     grid: Option<GridPosition>,
     /// The filter columns and rounding floors already computed ([`ColumnMemo`]).
     memo: ColumnMemo,
+    /// The counter's sawtooth and its AVAR at `ms`, a fixed part of every model when set
+    /// ([`GapProblem::set_sawtooth`]; [`super::sawtooth`]).
+    pub sawtooth: Option<(Sawtooth, Vec<f64>)>,
 }
 
 /// The search for the white rate `N^2` at which the rounding after the filter is computed in
@@ -315,6 +323,7 @@ impl GapProblem {
             cov_filter: opts.cov_filter,
             grid,
             memo: ColumnMemo::default(),
+            sawtooth: None,
         })
     }
 
@@ -329,6 +338,11 @@ impl GapProblem {
     /// [`GapProblem::offset_of`] with the rounding's white rate `N^2 = n2` (u^2/s) given.
     fn offset_at(&self, spec: &ModelSpec, n2: f64) -> Vec<f64> {
         let mut off = spec.offset.clone().unwrap_or_else(|| vec![0.0; self.len()]);
+        if let Some((_, col)) = &self.sawtooth {
+            for (o, c) in off.iter_mut().zip(col) {
+                *o += c;
+            }
+        }
         if let (Some(lp), Some(fl)) = (spec.filter, self.filter_floor) {
             let r = self.memo.floor(&lp, n2, fl.step, || {
                 rounding_avar_on_grid(&lp, self.tau0_s, fl.step, n2, self.grid.as_ref(), &self.ms)
@@ -433,6 +447,174 @@ impl GapProblem {
         if !keep {
             self.filter_floor = None;
         }
+    }
+
+    /// This problem with the counter's sawtooth decided ([`GapProblem::set_sawtooth`]). The
+    /// plain fit whose five terms set the covariance took the counter's line into its terms
+    /// (its `N` up to ten times the unit's on rlg units): when the sawtooth is kept and no
+    /// covariance was given, the problem is built again with the covariance of the five terms
+    /// fitted beside it (the rounding after a filter decided again with it when `floor`: the
+    /// diagnosis decides it, the held-out run does not), and the sawtooth fitted again with
+    /// that covariance (docs/gap.md, "The counter's sawtooth in
+    /// the base model (session 23)").
+    pub fn with_sawtooth(
+        mut self,
+        snap: &EvidenceSnapshot,
+        opts: &DiagnoseOptions,
+        floor: bool,
+    ) -> Result<Self, DiagnoseError> {
+        self.set_sawtooth(snap);
+        if self.sawtooth.is_none() || opts.cov_coef.is_some() {
+            return Ok(self);
+        }
+        let Some(fit) = self.gls(&ModelSpec::default()) else {
+            return Ok(self);
+        };
+        let o = DiagnoseOptions {
+            cov_coef: Some(std::array::from_fn(|i| fit.coef[i].max(0.0))),
+            ..opts.clone()
+        };
+        let mut again = GapProblem::new(snap, &o)?;
+        if let (Some(lsb), true) = (snap.lsb, floor) {
+            again.set_filter_floor(lsb);
+        }
+        again.set_sawtooth(snap);
+        Ok(again)
+    }
+
+    /// Decides whether every model of the curve carries the counter's sawtooth
+    /// ([`super::sawtooth`]): for values that are whole multiples of an LSB (`snap.lsb`) and a
+    /// rate whose block means have a mean, the sawtooth at the line `|mean| / LSB` is fitted in
+    /// the base model over its four shape parameters: the dither (a grid from 0 to
+    /// [`SAWTOOTH_MAX_DITHER`] LSB, then refined), the frequency (within
+    /// [`SAWTOOTH_FREQ_SPAN`] of the line: the mean's own error) and the rate's wander (up to
+    /// the block means' spread beyond their white noise at the fit's `N` and `Q`), by rounds of
+    /// golden-section searches on one parameter at a time ([`SAWTOOTH_ROUNDS`] at most). The
+    /// white rate `N` of its width is the fit's own, set at the start of each round (the plain
+    /// fit's is raised by the line itself, up to ten times on rlg units). It is kept when it lowers the base model's `r' S^-1 r`
+    /// by at least [`SAWTOOTH_MIN_DROP`].
+    pub fn set_sawtooth(&mut self, snap: &EvidenceSnapshot) {
+        self.sawtooth = None;
+        let t_start = std::time::Instant::now();
+        let Some(lsb) = snap.lsb.filter(|l| *l > 0.0 && l.is_finite()) else {
+            return;
+        };
+        let Some((mean, sd)) = super::limit_cycle::rate_stats(snap) else {
+            return;
+        };
+        let f0 = mean.abs() / lsb;
+        // A pass with a filter's covariance is diagnosing a unit with a filter, whose five
+        // terms alone miss the curve for that reason; the sawtooth is decided without one.
+        if !(f0 > 0.0 && f0.is_finite()) || self.is_empty() || self.cov_filter.is_some() {
+            return;
+        }
+        let base = ModelSpec::default();
+        let Some(plain) = self.gls(&base) else {
+            return;
+        };
+        let block_s = snap.block_len as f64 * self.tau0_s;
+        let wander_of = |coef: &[f64]| {
+            let (q2, n2) = (coef[0].max(0.0), coef[1].max(0.0));
+            let white = if block_s > 0.0 {
+                n2 / block_s + 2.0 * q2 / (block_s * block_s)
+            } else {
+                0.0
+            };
+            (sd * sd - white).max(0.0).sqrt()
+        };
+        let chi2_at = |p: &mut Self, st: Sawtooth| {
+            p.sawtooth = Some((st, st.avar(p.tau0_s, &p.ms)));
+            p.gls(&base).map_or(f64::INFINITY, |f| f.chi2)
+        };
+        let mut st = Sawtooth {
+            lsb,
+            frequency_hz: f0,
+            dither: 0.0,
+            n_arw: plain.coef[1].max(0.0).sqrt(),
+            rate_wander: 0.0,
+        };
+        // The dither on a grid first (the curve's misfit has many minima in it far from the
+        // line's own), then each parameter in turn.
+        let mut chi2 = f64::INFINITY;
+        for i in 0..=SAWTOOTH_DITHER_STEPS {
+            let trial = Sawtooth {
+                dither: i as f64 / SAWTOOTH_DITHER_STEPS as f64 * SAWTOOTH_MAX_DITHER * lsb,
+                ..st
+            };
+            let c = chi2_at(self, trial);
+            if c < chi2 {
+                (chi2, st) = (c, trial);
+            }
+        }
+        let step = SAWTOOTH_MAX_DITHER * lsb / SAWTOOTH_DITHER_STEPS as f64;
+        // No dither on the grid makes any line at all (a unit whose values are rate samples
+        // rounded on their own, a counter dithered by its white phase noise), or only a small
+        // share of the base model's misfit: nothing to refine.
+        let excess = (plain.chi2 - plain.expected).max(0.0);
+        let rounds = if plain.chi2 - chi2 < SAWTOOTH_GRID_DROP.max(SAWTOOTH_GRID_SHARE * excess) {
+            0
+        } else {
+            SAWTOOTH_ROUNDS
+        };
+        for _ in 0..rounds {
+            let start = chi2;
+            // The width's N is the fit's own: the rounds step toward the fixed point where the
+            // N the sawtooth is widened by is the N fitted beside it.
+            self.sawtooth = Some((st, st.avar(self.tau0_s, &self.ms)));
+            let coef = self.gls(&base).map_or(plain.coef.clone(), |f| f.coef);
+            let w_max = wander_of(&coef);
+            st.n_arw = coef[1].max(0.0).sqrt();
+            chi2 = chi2_at(self, st);
+            type Set = fn(&mut Sawtooth, f64);
+            let searches: [(f64, f64, Set); 3] = [
+                ((st.dither - step).max(0.0), st.dither + step, |s, v| {
+                    s.dither = v
+                }),
+                (
+                    f0 * (1.0 - SAWTOOTH_FREQ_SPAN),
+                    f0 * (1.0 + SAWTOOTH_FREQ_SPAN),
+                    |s, v| s.frequency_hz = v,
+                ),
+                (0.0, w_max, |s, v| s.rate_wander = v),
+            ];
+            for (lo, hi, set) in searches {
+                if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
+                    continue;
+                }
+                let eval = |p: &mut Self, v: f64| {
+                    let mut t = st;
+                    set(&mut t, v);
+                    (chi2_at(p, t), t)
+                };
+                let (c, t) = golden_min(self, lo, hi, SAWTOOTH_GOLDEN_STEPS, eval);
+                if c < chi2 {
+                    (chi2, st) = (c, t);
+                }
+            }
+            if (start - chi2).abs() <= SAWTOOTH_ROUND_TOL * chi2 {
+                break;
+            }
+        }
+        self.sawtooth = Some((st, st.avar(self.tau0_s, &self.ms)));
+        let gap_with = self.gls(&base).map_or(f64::INFINITY, |f| f.gap());
+        let keep = plain.chi2 - chi2 >= SAWTOOTH_MIN_DROP.max(SAWTOOTH_MIN_SHARE * excess)
+            && gap_with <= SAWTOOTH_MAX_GAP
+            && st.dither < SAWTOOTH_MAX_DITHER * lsb;
+        tracing::debug!(
+            f0,
+            frequency_hz = st.frequency_hz,
+            dither_lsb = st.dither / lsb,
+            n_arw = st.n_arw,
+            rate_wander = st.rate_wander,
+            drop = plain.chi2 - chi2,
+            plain_chi2 = plain.chi2,
+            plain_expected = plain.expected,
+            gap_with,
+            keep,
+            secs = t_start.elapsed().as_secs_f64(),
+            "the counter's sawtooth in the base model"
+        );
+        self.sawtooth = keep.then(|| (st, st.avar(self.tau0_s, &self.ms)));
     }
 
     pub fn len(&self) -> usize {
@@ -611,7 +793,13 @@ impl GapProblem {
                 expected -= (inv * xa.transpose() * &self.m_white * &xa).trace();
             }
         }
-        let n_shape = spec.extra.len() + spec.filter.map_or(0, |f| f.n_shape());
+        let n_shape = spec.extra.len()
+            + spec.filter.map_or(0, |f| f.n_shape())
+            + if self.sawtooth.is_some() {
+                SAWTOOTH_SHAPES
+            } else {
+                0
+            };
         expected -= n_shape as f64 * tr_m / j as f64;
         Some(GlsFit {
             coef: coef.iter().copied().collect(),

@@ -231,6 +231,22 @@ pub struct DiagnosisRecord {
     /// With `diagnose --ensemble N` only.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub ensemble: Option<EnsembleRecord>,
+    /// Present when the base model carries the counter's sawtooth (a unit counting with carry
+    /// at a steady rate; docs/gap.md, "The counter's sawtooth in the base model (session 23)").
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub counter_sawtooth: Option<SawtoothRecord>,
+}
+
+/// The extra field `counter_sawtooth`: the counter's LSB (u), the line's frequency (Hz, before
+/// aliasing), the dither before the counter (u, standard deviation), the white rate `N`
+/// (u/sqrt(s)) and the rate's wander (u/s) that widen it ([`super::sawtooth::Sawtooth`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SawtoothRecord {
+    pub lsb: f64,
+    pub frequency: f64,
+    pub dither: f64,
+    pub width_n: f64,
+    pub wander: f64,
 }
 
 /// The extra field `ensemble` (`diagnose --ensemble N`; docs/gap.md, "The ensemble band"): at
@@ -376,6 +392,13 @@ impl DiagnosisRecord {
                 tau_white: q.tau_white_s,
             }),
             ensemble: None,
+            counter_sawtooth: d.sawtooth.map(|s| SawtoothRecord {
+                lsb: s.lsb,
+                frequency: s.frequency_hz,
+                dither: s.dither,
+                width_n: s.n_arw,
+                wander: s.rate_wander,
+            }),
         }
     }
 

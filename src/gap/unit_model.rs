@@ -7,7 +7,8 @@
 //! jumps become a Poisson process with the run's mean interval (`t_run / count`) and the
 //! record's rms size, outliers a spike process with the run's rate and the simulator's size law
 //! fitted to the record's rms size, rounded rate samples (`rate_lsb`) in place of a counter when
-//! the curve says so (the rounding's white rate taken out of N), the flicker band is the simulator's default (six decades from `tau0`).
+//! the curve says so (the rounding's white rate taken out of N), the counter's dither as the
+//! white angle noise when the base model carries its sawtooth, the flicker band is the simulator's default (six decades from `tau0`).
 //!
 //! A sinusoid is named as the curve sees it, at the output, after the unit's filter; the
 //! simulator writes its sinusoids before the filter, so the model file carries the named
@@ -59,9 +60,13 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
     };
     // The fitted Q holds the quantization's white phase (LSB / sqrt(12)); the model file adds
     // it back from `lsb`, so only the excess is written.
-    let q_model = match lsb {
-        Some(l) => (q * q - terms::quantization_q(l).powi(2)).max(0.0).sqrt(),
-        None => q,
+    // A counter whose sawtooth the base model carries: its white angle noise before the counter
+    // is the sawtooth's dither, which sets how far the twin's counter cycles (the fitted Q holds
+    // the dither and the counter's incoherent share less its coherent one).
+    let q_model = match (lsb, d.sawtooth) {
+        (Some(_), Some(st)) => st.dither,
+        (Some(l), None) => (q * q - terms::quantization_q(l).powi(2)).max(0.0).sqrt(),
+        (None, _) => q,
     };
     let band = (tau0_s, tau0_s * 10f64.powf(FLICKER_BAND_DECADES_DEFAULT));
     let mut ch = ChannelModel {
