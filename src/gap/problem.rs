@@ -455,7 +455,8 @@ impl GapProblem {
     /// covariance was given, the problem is built again with the covariance of the five terms
     /// fitted beside it (the rounding after a filter decided again with it when `floor`: the
     /// diagnosis decides it, the held-out run does not), and the sawtooth fitted again with
-    /// that covariance (docs/gap.md, "The counter's sawtooth in
+    /// that covariance; it is kept if it leaves the base model's gap at most
+    /// [`SAWTOOTH_MAX_GAP`] there, else this problem is returned without it (docs/gap.md, "The counter's sawtooth in
     /// the base model (session 23)").
     pub fn with_sawtooth(
         mut self,
@@ -479,6 +480,21 @@ impl GapProblem {
             again.set_filter_floor(lsb);
         }
         again.set_sawtooth(snap);
+        // The counter's line must be most of what the five terms missed: with its covariance
+        // the base model is left at most SAWTOOTH_MAX_GAP, or the sawtooth is not kept (a unit's
+        // filter, which it cannot mend, leaves thousands).
+        let gap_with = again
+            .gls(&ModelSpec::default())
+            .map_or(f64::INFINITY, |f| f.gap());
+        tracing::debug!(
+            gap_with,
+            kept = again.sawtooth.is_some(),
+            "the sawtooth with its covariance"
+        );
+        if again.sawtooth.is_none() || gap_with > SAWTOOTH_MAX_GAP {
+            self.sawtooth = None;
+            return Ok(self);
+        }
         Ok(again)
     }
 
@@ -595,10 +611,7 @@ impl GapProblem {
                 break;
             }
         }
-        self.sawtooth = Some((st, st.avar(self.tau0_s, &self.ms)));
-        let gap_with = self.gls(&base).map_or(f64::INFINITY, |f| f.gap());
         let keep = plain.chi2 - chi2 >= SAWTOOTH_MIN_DROP.max(SAWTOOTH_MIN_SHARE * excess)
-            && gap_with <= SAWTOOTH_MAX_GAP
             && st.dither < SAWTOOTH_MAX_DITHER * lsb;
         tracing::debug!(
             f0,
@@ -609,7 +622,6 @@ impl GapProblem {
             drop = plain.chi2 - chi2,
             plain_chi2 = plain.chi2,
             plain_expected = plain.expected,
-            gap_with,
             keep,
             secs = t_start.elapsed().as_secs_f64(),
             "the counter's sawtooth in the base model"

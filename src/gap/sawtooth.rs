@@ -61,8 +61,10 @@ pub const SAWTOOTH_GRID_DROP: f64 = 1.0;
 /// miss the filter, 1-40% (session 23, docs/gap.md).
 pub const SAWTOOTH_GRID_SHARE: f64 = 0.1;
 pub const SAWTOOTH_MIN_SHARE: f64 = 0.75;
-/// The largest gap `G` the base model may keep with the sawtooth in for it to be kept: on rlg
-/// units 0.8-1.9; a filtered unit's five terms, which the sawtooth cannot mend, stay in the
+/// The largest gap `G` the base model may keep with the sawtooth in, with the covariance of the
+/// five terms fitted beside it, for it to be kept: on rlg units 0.8-1.9 (with the plain fit's
+/// covariance 17-51 on draws 37 and 39 of seed 221, which is why it is read after the
+/// rebuild); a filtered unit's five terms, which the sawtooth cannot mend, stay in the
 /// thousands (bartfog seed 221 draw 8, in its pass with the filter's covariance: 80% of a
 /// misfit of 19 million taken, `G` about 2e5 left).
 pub const SAWTOOTH_MAX_GAP: f64 = 10.0;
