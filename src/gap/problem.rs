@@ -501,14 +501,20 @@ impl GapProblem {
     /// Decides whether every model of the curve carries the counter's sawtooth
     /// ([`super::sawtooth`]): for values that are whole multiples of an LSB (`snap.lsb`) and a
     /// rate whose block means have a mean, the sawtooth at the line `|mean| / LSB` is fitted in
-    /// the base model over its four shape parameters: the dither (a grid from 0 to
+    /// the base model over its three shape parameters: the dither (a grid from 0 to
     /// [`SAWTOOTH_MAX_DITHER`] LSB, then refined), the frequency (within
     /// [`SAWTOOTH_FREQ_SPAN`] of the line: the mean's own error) and the rate's wander (up to
     /// the block means' spread beyond their white noise at the fit's `N` and `Q`), by rounds of
     /// golden-section searches on one parameter at a time ([`SAWTOOTH_ROUNDS`] at most). The
     /// white rate `N` of its width is the fit's own, set at the start of each round (the plain
-    /// fit's is raised by the line itself, up to ten times on rlg units). It is kept when it lowers the base model's `r' S^-1 r`
-    /// by at least [`SAWTOOTH_MIN_DROP`].
+    /// fit's is raised by the line itself, up to ten times on rlg units). It is kept when it
+    /// lowers the base model's `r' S^-1 r` by at least [`SAWTOOTH_MIN_DROP`] and by at least
+    /// [`SAWTOOTH_MIN_SHARE`] of the base model's excess over its expectation: the counter's
+    /// line is then most of what the five terms miss, where a unit's filter they miss by
+    /// thousands would otherwise lend a sawtooth the small part of it one can follow
+    /// ([`GapProblem::with_sawtooth`] also asks that it leave the base model's gap at most
+    /// [`SAWTOOTH_MAX_GAP`] with its covariance). Not in a pass with a filter's covariance
+    /// ([`DiagnoseOptions::cov_filter`]).
     pub fn set_sawtooth(&mut self, snap: &EvidenceSnapshot) {
         self.sawtooth = None;
         let t_start = std::time::Instant::now();
