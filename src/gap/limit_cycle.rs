@@ -81,6 +81,19 @@ pub(crate) fn rate_stats(snap: &EvidenceSnapshot) -> Option<(f64, f64)> {
     Some((mean, sd))
 }
 
+/// The block means' spread `sd` (u/s) beyond their own white noise at white angle `Q^2 = q2`
+/// and white rate `N^2 = n2` (`N^2 / T_b + 2 Q^2 / T_b^2` over a block of `T_b` s): the rate's
+/// slow wander (u/s), which smears the counter's line.
+pub(crate) fn slow_spread(snap: &EvidenceSnapshot, sd: f64, q2: f64, n2: f64) -> f64 {
+    let block_s = snap.block_len as f64 * snap.tau0_s;
+    let white_var = if block_s > 0.0 {
+        n2 / block_s + 2.0 * q2 / (block_s * block_s)
+    } else {
+        0.0
+    };
+    (sd * sd - white_var).max(0.0).sqrt()
+}
+
 /// The limit cycles among `d`'s named sinusoids: the values are whole multiples of an LSB
 /// (`snap.lsb`) and not rate samples rounded on their own (`d.quantization` not `rate`: only a
 /// counter with carry cycles), a sinusoid's frequency is within its 95% interval (widened to
@@ -106,14 +119,8 @@ pub fn find(d: &Diagnosis, snap: &EvidenceSnapshot) -> Vec<LimitCycle> {
     // The block means' spread beyond their own white noise (the fitted white rate `N` and white
     // angle `Q` over a block): the slow wander that smears the line. The white rate's share
     // widens the line as its phase diffusion does, which `line_half_width` carries.
-    let block_s = snap.block_len as f64 * tau0;
     let [q, n_arw] = [d.final_coef[0], d.final_coef[1]];
-    let white_var = if block_s > 0.0 {
-        n_arw * n_arw / block_s + 2.0 * q * q / (block_s * block_s)
-    } else {
-        0.0
-    };
-    let sd = (sd * sd - white_var).max(0.0).sqrt();
+    let sd = slow_spread(snap, sd, q * q, n_arw * n_arw);
     let mut out = Vec::new();
     for (i, e) in d.effects.iter().enumerate() {
         let EffectParams::Sinusoid {

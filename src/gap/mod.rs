@@ -11,7 +11,8 @@
 //! them and decides ([`Diagnosis`]) by [`thresholds`]; [`holdout`] judges a held-out run;
 //! [`oracle`] bounds what any test could do; [`quant_limit`] tells a unit whose coarse LSB
 //! is not white phase noise; [`limit_cycle`] tells a named line that is the counter's limit
-//! cycle, [`sawtooth`] carries the counter's whole sawtooth in the base model; [`record`] writes docs/records.md's `diagnosis` record;
+//! cycle, [`sawtooth`] carries the counter's whole sawtooth in the base model; [`record`]
+//! writes docs/records.md's `diagnosis` record;
 //! [`unit_model`] turns a diagnosis into the simulator model of the fitted unit (with the LSB
 //! that [`lsb`] reads off the values).
 //! Everything is pure and synchronous.

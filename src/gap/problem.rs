@@ -456,8 +456,8 @@ impl GapProblem {
     /// fitted beside it (the rounding after a filter decided again with it when `floor`: the
     /// diagnosis decides it, the held-out run does not), and the sawtooth fitted again with
     /// that covariance; it is kept if it leaves the base model's gap at most
-    /// [`SAWTOOTH_MAX_GAP`] there, else this problem is returned without it (docs/gap.md, "The counter's sawtooth in
-    /// the base model (session 23)").
+    /// [`SAWTOOTH_MAX_GAP`] there, else this problem is returned without it (docs/gap.md, "The
+    /// counter's sawtooth in the base model (session 23)").
     pub fn with_sawtooth(
         mut self,
         snap: &EvidenceSnapshot,
@@ -534,15 +534,8 @@ impl GapProblem {
         let Some(plain) = self.gls(&base) else {
             return;
         };
-        let block_s = snap.block_len as f64 * self.tau0_s;
         let wander_of = |coef: &[f64]| {
-            let (q2, n2) = (coef[0].max(0.0), coef[1].max(0.0));
-            let white = if block_s > 0.0 {
-                n2 / block_s + 2.0 * q2 / (block_s * block_s)
-            } else {
-                0.0
-            };
-            (sd * sd - white).max(0.0).sqrt()
+            super::limit_cycle::slow_spread(snap, sd, coef[0].max(0.0), coef[1].max(0.0))
         };
         let chi2_at = |p: &mut Self, st: Sawtooth| {
             p.sawtooth = Some((st, st.avar(p.tau0_s, &p.ms)));

@@ -44,8 +44,9 @@ pub struct Sawtooth {
     pub rate_wander: f64,
 }
 
-/// Shape parameters fitted (dither, frequency, wander; the width's `N` is the fit's); each costs the fit's
-/// expectation a share, as a candidate's shape does ([`super::problem::GlsFit::expected`]).
+/// Shape parameters fitted (dither, frequency, wander; the width's `N` is the fit's); each
+/// costs the fit's expectation a share, as a candidate's shape does
+/// ([`super::problem::GlsFit::expected`]).
 pub const SAWTOOTH_SHAPES: usize = 3;
 /// The dither's grid, 0 to this many LSB (beyond, `A_1` is under `e^-8` of its undamped
 /// value: no line is left), in this many steps; each round refines it within a step.
@@ -72,7 +73,7 @@ pub const SAWTOOTH_MAX_GAP: f64 = 10.0;
 pub const SAWTOOTH_FREQ_SPAN: f64 = 5e-3;
 /// Evaluations of each golden-section search.
 pub const SAWTOOTH_GOLDEN_STEPS: usize = 14;
-/// Rounds of the four searches at most, and the relative drop of `r' S^-1 r` under which a
+/// Rounds of the three searches at most, and the relative drop of `r' S^-1 r` under which a
 /// round ends them.
 pub const SAWTOOTH_ROUNDS: usize = 4;
 pub const SAWTOOTH_ROUND_TOL: f64 = 1e-3;

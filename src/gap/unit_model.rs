@@ -8,7 +8,8 @@
 //! record's rms size, outliers a spike process with the run's rate and the simulator's size law
 //! fitted to the record's rms size, rounded rate samples (`rate_lsb`) in place of a counter when
 //! the curve says so (the rounding's white rate taken out of N), the counter's dither as the
-//! white angle noise when the base model carries its sawtooth, the flicker band is the simulator's default (six decades from `tau0`).
+//! white angle noise when the base model carries its sawtooth, the flicker band is the
+//! simulator's default (six decades from `tau0`).
 //!
 //! A sinusoid is named as the curve sees it, at the output, after the unit's filter; the
 //! simulator writes its sinusoids before the filter, so the model file carries the named
