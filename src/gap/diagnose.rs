@@ -223,8 +223,10 @@ pub fn diagnose(
 ///
 /// When the increments are quantized with an LSB so coarse against the per-sample noise that
 /// the quantization error is not white ([`quantization_limit`]), the diagnosis says so
-/// (`quantization_limited`) and reads the curve only from the tau where the error is white
-/// again (when enough of it is left; otherwise the whole curve, still flagged).
+/// (`quantization_limited`). It reads the whole curve when the counter's sawtooth in the base
+/// model ([`super::sawtooth`]) describes it (the base model's gap at most `gap_crit` with it;
+/// since session 24), and otherwise only from the tau where the error is white again (when
+/// enough of it is left; otherwise the whole curve, still flagged).
 pub fn diagnose_with_temperature(
     snap: &EvidenceSnapshot,
     temperature: Option<&EvidenceSnapshot>,
@@ -244,6 +246,25 @@ fn diagnose_quantized(
     let Some(limit) = check_quantization(snap, opts) else {
         return diagnose_curve(snap, temperature, opts);
     };
+    // The counter's sawtooth in the base model is the quantization error's own autocovariance
+    // (super::sawtooth): where the base model with it describes the whole curve (`G <=
+    // gap_crit`), the short taus are read too. Without the sawtooth kept the whole curve is not
+    // read, even when the five terms alone fit it: the error's structure at the short taus is
+    // then left to the candidates (docs/gap.md, "The whole curve of a quantization-limited
+    // counter (session 24)").
+    if let Ok(mut d) = diagnose_curve(snap, temperature, opts) {
+        let whole = d.sawtooth.is_some() && d.gap_before <= opts.thresholds.gap_crit;
+        tracing::debug!(
+            sawtooth = d.sawtooth.is_some(),
+            gap_before = d.gap_before,
+            whole,
+            "a quantization-limited unit's whole curve"
+        );
+        if whole {
+            d.quantization_limited = Some(limit);
+            return Ok(d);
+        }
+    }
     let restricted = DiagnoseOptions {
         min_m: opts.min_m.max(limit.m_white),
         ..opts.clone()

@@ -16,6 +16,7 @@ use super::sawtooth::{
     golden_min, Sawtooth, SAWTOOTH_DITHER_STEPS, SAWTOOTH_FREQ_SPAN, SAWTOOTH_GOLDEN_STEPS,
     SAWTOOTH_GRID_DROP, SAWTOOTH_GRID_SHARE, SAWTOOTH_MAX_DITHER, SAWTOOTH_MAX_GAP,
     SAWTOOTH_MIN_DROP, SAWTOOTH_MIN_SHARE, SAWTOOTH_ROUNDS, SAWTOOTH_ROUND_TOL, SAWTOOTH_SHAPES,
+    SAWTOOTH_WANDER_SPAN,
 };
 use crate::allan::CurvePoint;
 use crate::model::avar_cov::{AvarCovariance, CovPoint};
@@ -471,8 +472,18 @@ impl GapProblem {
         let Some(fit) = self.gls(&ModelSpec::default()) else {
             return Ok(self);
         };
+        // The sawtooth's own variance is white phase noise to the covariance: beyond its
+        // correlation time its AVAR is `3 R(0) / tau^2`, the Q column's at `Q^2 = R(0)`
+        // (without it, where the sawtooth is most of the angle error, as on a counter with no
+        // dither, the covariance at the short taus is too tight: servoacc's quantization-
+        // limited runs read `G` 1.22 at the median, 1.00 with it; docs/gap.md, "The whole
+        // curve of a quantization-limited counter (session 24)").
+        let mut cc: [f64; 5] = std::array::from_fn(|i| fit.coef[i].max(0.0));
+        if let Some((st, _)) = &self.sawtooth {
+            cc[0] += st.coherent_variance();
+        }
         let o = DiagnoseOptions {
-            cov_coef: Some(std::array::from_fn(|i| fit.coef[i].max(0.0))),
+            cov_coef: Some(cc),
             ..opts.clone()
         };
         let mut again = GapProblem::new(snap, &o)?;
@@ -504,7 +515,8 @@ impl GapProblem {
     /// the base model over its three shape parameters: the dither (a grid from 0 to
     /// [`SAWTOOTH_MAX_DITHER`] LSB, then refined), the frequency (within
     /// [`SAWTOOTH_FREQ_SPAN`] of the line: the mean's own error) and the rate's wander (up to
-    /// the block means' spread beyond their white noise at the fit's `N` and `Q`), by rounds of
+    /// [`SAWTOOTH_WANDER_SPAN`] times the block means' spread beyond their white noise at the
+    /// fit's `N` and `Q` with the flicker's between the sample and the block), by rounds of
     /// golden-section searches on one parameter at a time ([`SAWTOOTH_ROUNDS`] at most). The
     /// white rate `N` of its width is the fit's own, set at the start of each round (the plain
     /// fit's is raised by the line itself, up to ten times on rlg units). It is kept when it
@@ -534,8 +546,18 @@ impl GapProblem {
         let Some(plain) = self.gls(&base) else {
             return;
         };
+        // The wander's search reaches twice the rate's spread at the scales a block mean
+        // hides: the block means' own beyond their white noise, and the flicker rate's
+        // between the sample and the block (its PSD `B^2 / (2 pi f)`, IEEE Std 952's bias
+        // instability: `B^2 / (2 pi) ln(T_b / (2 tau0))` of variance), which moves the angle
+        // within the lags the counter's line lives over.
+        let block_s = snap.block_len as f64 * self.tau0_s;
+        let octaves = (block_s / (2.0 * self.tau0_s)).max(1.0).ln();
         let wander_of = |coef: &[f64]| {
-            super::limit_cycle::slow_spread(snap, sd, coef[0].max(0.0), coef[1].max(0.0))
+            let slow =
+                super::limit_cycle::slow_spread(snap, sd, coef[0].max(0.0), coef[1].max(0.0));
+            let flicker = coef[2].max(0.0) / (2.0 * std::f64::consts::PI) * octaves;
+            SAWTOOTH_WANDER_SPAN * (slow * slow + flicker).sqrt()
         };
         let chi2_at = |p: &mut Self, st: Sawtooth| {
             p.sawtooth = Some((st, st.avar(p.tau0_s, &p.ms)));

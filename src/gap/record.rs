@@ -267,9 +267,10 @@ pub struct EnsembleRecord {
 
 /// The extra field `quantization_limited`: the increments' LSB (u), the per-sample rms change
 /// of the phase over it (`ratio`, below 0.5), and the shortest tau (s) where the quantization
-/// error is white again; for rate samples rounded after the unit's filter in the dead band
-/// (session 13, [`super::discrepancy`]), the filtered rate's rms over the step and the tau up
-/// to which the rounding model's error is carried in full.
+/// error is white again (the curve is diagnosed from there on, or whole when the base model
+/// carries the counter's sawtooth); for rate samples rounded after the unit's filter in the
+/// dead band (session 13, [`super::discrepancy`]), the filtered rate's rms over the step and
+/// the tau up to which the rounding model's error is carried in full.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct QuantizationRecord {
     pub lsb: f64,

@@ -23,7 +23,13 @@
 //! standard deviation `sigma` multiplies the `n`-th by its characteristic function
 //! `exp(-2 pi^2 n^2 sigma^2 / LSB^2)` in each of the two samples), `gamma_n = 2 pi^2 n^2 N^2 /
 //! LSB^2` (the phase diffusion of [`super::limit_cycle::line_half_width`]) and `s` the rate's
-//! slow wander over the LSB (Hz; a Gaussian spread of the line's frequency over the run). The
+//! wander over the LSB (Hz; a Gaussian spread of the line's frequency over the run: the slow
+//! rate's and the flicker's between the sample and the block, which move the angle within the
+//! lags the line lives over). With the rate near zero or wandering over many LSB per second the
+//! same `R` is the quantization error of a counter whose per-sample change is small against its
+//! LSB, the quantization-limited case ([`super::quant_limit`]): since session 24 it lets such a
+//! unit's curve be read whole (docs/gap.md, "The whole curve of a quantization-limited counter
+//! (session 24)"). The
 //! AVAR of a phase process of autocovariance `R` is
 //! `(6 R(0) - 8 R(tau) + 2 R(2 tau)) / (2 tau^2)` (IEEE Std 1139 / NIST SP 1065 eq. 10's
 //! second difference, taken in expectation).
@@ -40,7 +46,8 @@ pub struct Sawtooth {
     pub dither: f64,
     /// The white rate `N` (u/sqrt(s)) whose random walk of the angle widens each harmonic.
     pub n_arw: f64,
-    /// The rate's slow wander over the run, standard deviation (u/s).
+    /// The rate's wander over the run, standard deviation (u/s): the slow rate's and the flicker's
+    /// between the sample and the block mean.
     pub rate_wander: f64,
 }
 
@@ -69,6 +76,9 @@ pub const SAWTOOTH_MIN_SHARE: f64 = 0.75;
 /// thousands (bartfog seed 221 draw 8, in its pass with the filter's covariance: 80% of a
 /// misfit of 19 million taken, `G` about 2e5 left).
 pub const SAWTOOTH_MAX_GAP: f64 = 10.0;
+/// The rate's wander is searched up to this many times its spread over the scales a block mean
+/// hides and beyond ([`GapProblem::set_sawtooth`](super::problem::GapProblem::set_sawtooth)).
+pub const SAWTOOTH_WANDER_SPAN: f64 = 2.0;
 /// The line's frequency is searched within this share of `|mean rate| / LSB`.
 pub const SAWTOOTH_FREQ_SPAN: f64 = 5e-3;
 /// Evaluations of each golden-section search.
