@@ -255,13 +255,28 @@ fn the_block_means_white_noise_does_not_make_the_line_unsharp() {
     assert_eq!(d.verdict, Verdict::Consistent, "{:?}", d.effects);
 }
 
+/// A quantization-limited unit read over its whole curve (from `tau0_s`) with the counter's
+/// sawtooth in its base model, nothing named and `consistent`: the sawtooth.
+fn read_whole(d: &Diagnosis, tau0_s: f64) -> allanscope::gap::sawtooth::Sawtooth {
+    assert!(d.quantization_limited.is_some(), "{d:?}");
+    let st = d.sawtooth.expect("the sawtooth in the base model");
+    assert!(
+        (d.tau_span_s.0 / tau0_s - 1.0).abs() < 1e-9,
+        "{:?}",
+        d.tau_span_s
+    );
+    assert!(d.effects.is_empty(), "{:?}", d.effects);
+    assert_eq!(d.verdict, Verdict::Consistent, "G {}", d.gap_before);
+    st
+}
+
 /// A quantization-limited counter read whole (docs/gap.md, "The whole curve of a quantization-
 /// limited counter (session 24)"). family_gap's rlg, seed 221 draw 11: a counter at 1.186
 /// arcsec, 277 Hz, input 6.87 arcsec/s (the line at 5.80 Hz), white angle noise 0.298 arcsec
-/// (0.25 LSB) before the counter, N 0.078 arcsec/sqrt(s), 1.6 h. The per-sample change of the
-/// angle is a fifth of the LSB, so the counter's error is not white below 88 s; until session
-/// 24 the curve was read from there on only, and its 12 taus left `G` 2.23 and the run
-/// `unexplained`. Asserted: quantization-limited, the base model carries the sawtooth, the
+/// (0.25 LSB) before the counter, N 0.078 arcsec/sqrt(s), 1.6 h. The angle's change between
+/// samples, the dither's included, is under half the LSB, so the counter's error is not white
+/// below 88 s; until session 24 the curve was read from there on only, and its 12 taus left
+/// `G` 2.23 and the run `unexplained`. Asserted: quantization-limited, the base model carries the sawtooth, the
 /// curve is read from its shortest tau, the dither within 5% of the unit's white angle noise
 /// and the width's `N` within 20% of its `N`, no effect named, `consistent`.
 #[test]
@@ -279,17 +294,9 @@ fn a_quantization_limited_counter_is_read_whole_with_its_sawtooth() {
         1.1859826621792098,
         5385844760902777697,
     );
-    assert!(d.quantization_limited.is_some(), "{d:?}");
-    let st = d.sawtooth.expect("the sawtooth in the base model");
-    assert!(
-        (d.tau_span_s.0 / tau0 - 1.0).abs() < 1e-9,
-        "{:?}",
-        d.tau_span_s
-    );
+    let st = read_whole(&d, tau0);
     assert!((st.dither / q - 1.0).abs() < 0.05, "{st:?}");
     assert!((st.n_arw / n - 1.0).abs() < 0.2, "{st:?}");
-    assert!(d.effects.is_empty(), "{:?}", d.effects);
-    assert_eq!(d.verdict, Verdict::Consistent, "G {}", d.gap_before);
 }
 
 /// The same for a counter with no dither at all whose rate wanders: family_gap's servoacc,
@@ -299,7 +306,7 @@ fn a_quantization_limited_counter_is_read_whole_with_its_sawtooth() {
 /// sawtooth's width is set by the rate's wander at the scales a block mean hides (the flicker
 /// between the sample and the block), and its covariance by the sawtooth's own variance
 /// (with the wander searched up to the block means' spread only, or without that variance,
-/// the whole curve was left at `G` 14; from 88 s on, `G` 2.05, `unexplained`). Asserted:
+/// the whole curve was left at `G` 14; from 0.16 s on, `G` 2.05, `unexplained`). Asserted:
 /// quantization-limited, the sawtooth with next to no dither (under 0.05 LSB), the curve read
 /// from its shortest tau, the width's `N` within 10% of the unit's, no effect, `consistent`.
 #[test]
@@ -313,15 +320,7 @@ fn an_undithered_counter_whose_rate_wanders_is_read_whole() {
         lsb,
         11619271462232854471,
     );
-    assert!(d.quantization_limited.is_some(), "{d:?}");
-    let st = d.sawtooth.expect("the sawtooth in the base model");
-    assert!(
-        (d.tau_span_s.0 / tau0 - 1.0).abs() < 1e-9,
-        "{:?}",
-        d.tau_span_s
-    );
+    let st = read_whole(&d, tau0);
     assert!(st.dither < 0.05 * lsb, "{st:?}");
     assert!((st.n_arw / n - 1.0).abs() < 0.1, "{st:?}");
-    assert!(d.effects.is_empty(), "{:?}", d.effects);
-    assert_eq!(d.verdict, Verdict::Consistent, "G {}", d.gap_before);
 }
