@@ -1010,19 +1010,27 @@ fn run_one(
             })
             .map_or(f64::NAN, |p| p.0)
     };
+    // The base problem the diagnosis read: with the counter's sawtooth when it carried one
+    // (then over the whole curve, also for a quantization-limited unit: session 24), else from
+    // `tau_white` for a quantization-limited unit.
+    let sawtooth = d.as_ref().is_ok_and(|d| d.sawtooth.is_some());
     let min_m = d
         .as_ref()
         .ok()
+        .filter(|_| !sawtooth)
         .and_then(|d| d.quantization_limited.map(|q| q.m_white))
         .unwrap_or(DiagnoseOptions::default().min_m);
-    let base_prob = GapProblem::new(
-        &snap,
-        &DiagnoseOptions {
-            min_m,
-            ..DiagnoseOptions::default()
-        },
-    )
-    .ok();
+    let base_opts = DiagnoseOptions {
+        min_m,
+        ..DiagnoseOptions::default()
+    };
+    let base_prob = GapProblem::new(&snap, &base_opts).ok().and_then(|p| {
+        if sawtooth {
+            p.with_sawtooth(&snap, &base_opts, false).ok()
+        } else {
+            Some(p)
+        }
+    });
     let base_fit = base_prob
         .as_ref()
         .and_then(|p| p.gls(&ModelSpec::default()));
