@@ -466,7 +466,10 @@ impl GapProblem {
         floor: bool,
     ) -> Result<Self, DiagnoseError> {
         self.set_sawtooth(snap);
-        if self.sawtooth.is_none() || opts.cov_coef.is_some() {
+        let Some(st) = self.sawtooth.as_ref().map(|(st, _)| *st) else {
+            return Ok(self);
+        };
+        if opts.cov_coef.is_some() {
             return Ok(self);
         }
         let Some(fit) = self.gls(&ModelSpec::default()) else {
@@ -479,9 +482,7 @@ impl GapProblem {
         // limited runs read `G` 1.22 at the median, 1.00 with it; docs/gap.md, "The whole
         // curve of a quantization-limited counter (session 24)").
         let mut cc: [f64; 5] = std::array::from_fn(|i| fit.coef[i].max(0.0));
-        if let Some((st, _)) = &self.sawtooth {
-            cc[0] += st.coherent_variance();
-        }
+        cc[0] += st.coherent_variance();
         let o = DiagnoseOptions {
             cov_coef: Some(cc),
             ..opts.clone()
