@@ -371,9 +371,12 @@ fn diagnose_curve(
         let next = DiagnoseOptions {
             cov_coef: Some(c_cov),
             cov_filter: Some(lp),
-            cov_counter: d
-                .quantization
-                .is_some_and(|q| q.kind == super::quantization::QuantKind::Angle),
+            // A pass that kept a counter's sawtooth read a counter (behind the filter, its
+            // quantization is neither floor: docs/gap.md, "The counter behind a filter
+            // (session 25)"), which has no rate rounding after the filter.
+            cov_counter: d.sawtooth.is_some()
+                || d.quantization
+                    .is_some_and(|q| q.kind == super::quantization::QuantKind::Angle),
             ..opts.clone()
         };
         match diagnose_curve_once(snap, temperature, &next) {

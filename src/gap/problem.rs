@@ -36,6 +36,17 @@ const GLS_PASSES_FLOOR: usize = 8;
 /// The change of that `N^2`, relative to it or to the floor's starting value when it is
 /// smaller (a fit whose N column is at 0), below which those passes stop.
 const FLOOR_N2_TOL: f64 = 1e-4;
+/// The least gap of a first pass's five terms alone at which a counter's sawtooth behind a
+/// low-pass is looked for ([`GapProblem::counter_filter`]): a unit with a filter the five
+/// terms miss by thousands; a clean unit is not scanned.
+const COUNTER_FILTER_MIN_GAP: f64 = 2.0;
+/// The span of the filter's memory, as factors of the scan's, searched with the counter's
+/// sawtooth behind it ([`GapProblem::filter_behind_counter`]), and the golden section's steps.
+const BEHIND_MEMORY_SPAN: (f64, f64) = (0.3, 1.5);
+const BEHIND_GOLDEN_STEPS: usize = 12;
+/// Fixed-point passes of the width's `N` before a sawtooth behind a filter is fitted
+/// ([`GapProblem::set_sawtooth`]).
+const BEHIND_N_PASSES: usize = 4;
 
 /// The curve with its log covariance, ready for GLS fits.
 #[derive(Debug, Clone)]
@@ -450,6 +461,84 @@ impl GapProblem {
         }
     }
 
+    /// The low-pass a counter's sawtooth may sit behind ([`GapProblem::with_sawtooth`]): the
+    /// filter of the covariance on a later pass whose previous pass read a counter
+    /// (`counter`, [`DiagnoseOptions::cov_counter`]); on a first pass whose five terms miss the
+    /// curve (`G > 2`), the best first order, moving average or second order the curve
+    /// shows. None when the angle's change per sample behind it is not small against the LSB
+    /// (`r >= R_WHITE` of [`super::quant_limit`], the error then white: nothing to model), or
+    /// there is no LSB.
+    fn counter_filter(&self, snap: &EvidenceSnapshot, counter: bool) -> Option<LowPass> {
+        let lsb = snap.lsb.filter(|l| *l > 0.0 && l.is_finite())?;
+        let base = ModelSpec::default();
+        let (lp, coef) = match self.cov_filter {
+            // A later pass looks behind its filter only when the pass before read a counter
+            // (a counter's sawtooth kept, or the angle's quantization floor): a unit that
+            // rounds its rate samples after the filter has its own floor there.
+            Some(_) if !counter => return None,
+            Some(lp) => {
+                let spec = ModelSpec {
+                    filter: Some(lp),
+                    ..ModelSpec::default()
+                };
+                (lp, self.gls(&spec)?.coef)
+            }
+            None => {
+                if self.gls(&base)?.gap() <= COUNTER_FILTER_MIN_GAP {
+                    return None;
+                }
+                let (p, f) = [EffectKind::OutputFilter]
+                    .into_iter()
+                    .filter_map(|k| self.scan_params(&base, k))
+                    .min_by(|a, b| a.1.chi2.total_cmp(&b.1.chi2))?;
+                (p.lowpass()?, f.coef)
+            }
+        };
+        let rho0 = lp.autocorrelation(self.tau0_s).first().copied()?;
+        let qx2 = (coef[0] - lsb * lsb / 12.0).max(0.0);
+        let v1 = coef[1].max(0.0) * self.tau0_s * rho0 + 2.0 * qx2;
+        let ratio = v1.sqrt() / lsb;
+        tracing::debug!(?lp, ratio, "a counter behind a filter?");
+        (ratio < super::quant_limit::R_WHITE).then_some(lp)
+    }
+
+    /// The low-pass `lp` of a first pass's scan refitted with the counter's sawtooth behind
+    /// it: the scan, without the sawtooth, reads the error's correlation at the short taus as
+    /// more smoothing (navfog seed 183's output-filter draw 1: 33 ms for the unit's 20 ms). Its
+    /// memory is searched over [`BEHIND_MEMORY_SPAN`] of the scan's (golden section on its
+    /// log; the time constant of a first order or zero-phase filter, the taps of a moving
+    /// average, the period of a second order), the sawtooth fitted at each
+    /// ([`GapProblem::set_sawtooth`]).
+    fn filter_behind_counter(&mut self, snap: &EvidenceSnapshot, lp: LowPass) -> LowPass {
+        let scaled = |g: f64| match lp {
+            LowPass::FirstOrder { time_constant_s } => LowPass::FirstOrder {
+                time_constant_s: time_constant_s * g,
+            },
+            LowPass::ZeroPhase { time_constant_s } => LowPass::ZeroPhase {
+                time_constant_s: time_constant_s * g,
+            },
+            LowPass::MovingAverage { taps, stages } => LowPass::MovingAverage {
+                taps: (taps as f64 * g).round().max(1.0) as u32,
+                stages,
+            },
+            LowPass::SecondOrder {
+                natural_frequency_hz,
+                damping,
+            } => LowPass::SecondOrder {
+                natural_frequency_hz: natural_frequency_hz / g,
+                damping,
+            },
+        };
+        let (lo, hi) = BEHIND_MEMORY_SPAN;
+        let (_, best) = golden_min(self, lo.ln(), hi.ln(), BEHIND_GOLDEN_STEPS, |p, lg| {
+            let f = scaled(lg.exp());
+            (p.set_sawtooth(snap, Some(f)), f)
+        });
+        tracing::debug!(scanned = ?lp, refitted = ?best, "the filter behind the counter");
+        self.sawtooth = None;
+        best
+    }
+
     /// This problem with the counter's sawtooth decided ([`GapProblem::set_sawtooth`]). The
     /// plain fit whose five terms set the covariance took the counter's line into its terms
     /// (its `N` up to ten times the unit's on rlg units): when the sawtooth is kept and no
@@ -465,7 +554,41 @@ impl GapProblem {
         opts: &DiagnoseOptions,
         floor: bool,
     ) -> Result<Self, DiagnoseError> {
-        self.set_sawtooth(snap);
+        self.set_sawtooth(snap, None);
+        if self.sawtooth.is_none() {
+            // A counter behind a filter: the filter of the covariance, or on a first pass
+            // the best low-pass the curve shows (docs/gap.md, "The counter behind a filter
+            // (session 25)").
+            if let Some(lp) = self.counter_filter(snap, opts.cov_counter) {
+                // A counter has no rate rounding after its filter: the floor decided for
+                // rate samples is set aside while the sawtooth is fitted, and the sawtooth is
+                // kept only if the filter fits better with it than with that floor.
+                let floor = self.filter_floor.take();
+                let lp = self.filter_behind_counter(snap, lp);
+                let chi2 = self.set_sawtooth(snap, Some(lp));
+                if floor.is_some() && self.sawtooth.is_some() {
+                    let saw = self.sawtooth.take();
+                    self.filter_floor = floor;
+                    let spec = ModelSpec {
+                        filter: Some(lp),
+                        ..ModelSpec::default()
+                    };
+                    let with_floor = self.gls(&spec).map_or(f64::INFINITY, |f| f.chi2);
+                    tracing::debug!(
+                        chi2,
+                        with_floor,
+                        "the sawtooth behind the filter against the rate rounding's floor"
+                    );
+                    if chi2 < with_floor {
+                        self.filter_floor = None;
+                        self.sawtooth = saw;
+                    }
+                } else if self.sawtooth.is_none() {
+                    self.filter_floor = floor;
+                }
+            }
+            return Ok(self);
+        }
         let Some(st) = self.sawtooth.as_ref().map(|(st, _)| *st) else {
             return Ok(self);
         };
@@ -491,7 +614,7 @@ impl GapProblem {
         if let (Some(lsb), true) = (snap.lsb, floor) {
             again.set_filter_floor(lsb);
         }
-        again.set_sawtooth(snap);
+        again.set_sawtooth(snap, None);
         // The counter's line must be most of what the five terms missed: with its covariance
         // the base model is left at most SAWTOOTH_MAX_GAP, or the sawtooth is not kept (a unit's
         // filter, which it cannot mend, leaves thousands).
@@ -527,25 +650,36 @@ impl GapProblem {
     /// thousands would otherwise lend a sawtooth the small part of it one can follow
     /// ([`GapProblem::with_sawtooth`] also asks that it leave the base model's gap at most
     /// [`SAWTOOTH_MAX_GAP`] with its covariance). Not in a pass with a filter's covariance
-    /// ([`DiagnoseOptions::cov_filter`]).
-    pub fn set_sawtooth(&mut self, snap: &EvidenceSnapshot) {
+    /// ([`DiagnoseOptions::cov_filter`]) unless `behind`: the sawtooth of a counter behind
+    /// that low-pass, whose base model is then the five terms through it (the walk of
+    /// [`super::sawtooth`]'s filtered rate; docs/gap.md, "The counter behind a filter
+    /// (session 25)"), kept by the same rules against that model's misfit and when it leaves
+    /// that model's gap at most [`SAWTOOTH_MAX_GAP`]. Returns the base model's `r' S^-1 r`
+    /// with the sawtooth fitted, kept or not (infinite when none could be fitted).
+    pub fn set_sawtooth(&mut self, snap: &EvidenceSnapshot, behind: Option<LowPass>) -> f64 {
         self.sawtooth = None;
         let t_start = std::time::Instant::now();
         let Some(lsb) = snap.lsb.filter(|l| *l > 0.0 && l.is_finite()) else {
-            return;
+            return f64::INFINITY;
         };
         let Some((mean, sd)) = super::limit_cycle::rate_stats(snap) else {
-            return;
+            return f64::INFINITY;
         };
         let f0 = mean.abs() / lsb;
         // A pass with a filter's covariance is diagnosing a unit with a filter, whose five
         // terms alone miss the curve for that reason; the sawtooth is decided without one.
-        if !(f0 > 0.0 && f0.is_finite()) || self.is_empty() || self.cov_filter.is_some() {
-            return;
+        if !(f0 > 0.0 && f0.is_finite())
+            || self.is_empty()
+            || (self.cov_filter.is_some() && behind.is_none())
+        {
+            return f64::INFINITY;
         }
-        let base = ModelSpec::default();
+        let base = ModelSpec {
+            filter: behind,
+            ..ModelSpec::default()
+        };
         let Some(plain) = self.gls(&base) else {
-            return;
+            return f64::INFINITY;
         };
         // The wander's search reaches twice the rate's spread at the scales a block mean
         // hides: the block means' own beyond their white noise, and the flicker rate's
@@ -570,7 +704,19 @@ impl GapProblem {
             dither: 0.0,
             n_arw: plain.coef[1].max(0.0).sqrt(),
             rate_wander: 0.0,
+            filter: behind,
         };
+        // Behind a filter the five terms alone fit an `N` lowered by the error's correlation
+        // at the short taus (navfog seed 183's output-filter draw 1: 6.0e-5 for 7.8e-5), at
+        // which the sawtooth is far too correlated to fit at any dither: the width's `N` is
+        // first brought to the fixed point with an undithered counter.
+        if behind.is_some() {
+            for _ in 0..BEHIND_N_PASSES {
+                self.sawtooth = Some((st, st.avar(self.tau0_s, &self.ms)));
+                let Some(f) = self.gls(&base) else { break };
+                st.n_arw = f.coef[1].max(0.0).sqrt();
+            }
+        }
         // The dither on a grid first (the curve's misfit has many minima in it far from the
         // line's own), then each parameter in turn.
         let mut chi2 = f64::INFINITY;
@@ -633,8 +779,15 @@ impl GapProblem {
                 break;
             }
         }
-        let keep = plain.chi2 - chi2 >= SAWTOOTH_MIN_DROP.max(SAWTOOTH_MIN_SHARE * excess)
+        let mut keep = plain.chi2 - chi2 >= SAWTOOTH_MIN_DROP.max(SAWTOOTH_MIN_SHARE * excess)
             && st.dither < SAWTOOTH_MAX_DITHER * lsb;
+        // Behind a filter no covariance is rebuilt for it (the pass's is the filter's, or the
+        // plain fit's on a first pass): its base model must be left at a gap of at most
+        // SAWTOOTH_MAX_GAP here.
+        if keep && behind.is_some() {
+            self.sawtooth = Some((st, st.avar(self.tau0_s, &self.ms)));
+            keep = self.gls(&base).is_some_and(|f| f.gap() <= SAWTOOTH_MAX_GAP);
+        }
         tracing::debug!(
             f0,
             frequency_hz = st.frequency_hz,
@@ -645,10 +798,12 @@ impl GapProblem {
             plain_chi2 = plain.chi2,
             plain_expected = plain.expected,
             keep,
+            behind = ?behind,
             secs = t_start.elapsed().as_secs_f64(),
             "the counter's sawtooth in the base model"
         );
         self.sawtooth = keep.then(|| (st, st.avar(self.tau0_s, &self.ms)));
+        chi2
     }
 
     pub fn len(&self) -> usize {

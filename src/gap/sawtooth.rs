@@ -33,6 +33,17 @@
 //! AVAR of a phase process of autocovariance `R` is
 //! `(6 R(0) - 8 R(tau) + 2 R(2 tau)) / (2 tau^2)` (IEEE Std 1139 / NIST SP 1065 eq. 10's
 //! second difference, taken in expectation).
+//!
+//! Behind a low-pass (a unit that filters its rate before it counts the angle) the random walk
+//! that widens each harmonic is that of the *filtered* rate: its variance over a lag of `k`
+//! samples is `N^2 S(k)`, `S(k) = tau0 (k rho_0 + 2 sum_{0<j<k} (k - j) rho_j)` with the
+//! filter's autocorrelation `rho` ([`LowPass::autocorrelation`]), in place of `N^2 k tau0`:
+//! `gamma_n t` becomes `2 pi^2 n^2 N^2 S(t / tau0) / LSB^2`. Over lags short against the
+//! filter's memory the angle hardly moves, and the error stays correlated for many samples
+//! though the unfiltered per-sample change is an LSB or more (docs/gap.md, "The counter behind
+//! a filter (session 25)").
+
+use crate::model::lowpass::LowPass;
 
 /// The counter's sawtooth at one line frequency and dither.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -49,6 +60,9 @@ pub struct Sawtooth {
     /// The rate's wander over the run, standard deviation (u/s): the slow rate's and the flicker's
     /// between the sample and the block mean.
     pub rate_wander: f64,
+    /// The unit's low-pass before the counter, through which the white rate walks the angle
+    /// (None: no filter, the walk's variance `N^2 t`).
+    pub filter: Option<LowPass>,
 }
 
 /// Shape parameters fitted (dither, frequency, wander; the width's `N` is the fit's); each
@@ -120,15 +134,22 @@ impl Sawtooth {
         (1..=self.n_max()).map(|n| self.power(n)).sum()
     }
 
-    /// The angle error's autocovariance at lag `t_s > 0` (u^2), the module's `R(t)`.
+    /// The angle error's autocovariance at lag `t_s > 0` (u^2), the module's `R(t)`, for a
+    /// unit without a filter (the white rate's walk `N^2 t_s`).
     pub fn autocovariance(&self, t_s: f64) -> f64 {
+        self.autocovariance_walked(t_s, t_s)
+    }
+
+    /// `R(t_s)` with the white rate's walk of the angle over the lag `N^2 walk_s` (u^2; `walk_s`
+    /// in s: `t_s` without a filter, `S(t_s / tau0)` behind one).
+    fn autocovariance_walked(&self, t_s: f64, walk_s: f64) -> f64 {
         let pi = std::f64::consts::PI;
         let diff = 2.0 * pi * pi * (self.n_arw / self.lsb).powi(2);
         let spread = 2.0 * pi * pi * (self.rate_wander / self.lsb).powi(2);
         (1..=self.n_max())
             .map(|n| {
                 let nf = n as f64;
-                let damp = (-(diff * nf * nf * t_s) - spread * nf * nf * t_s * t_s).exp();
+                let damp = (-(diff * nf * nf * walk_s) - spread * nf * nf * t_s * t_s).exp();
                 self.power(n) * (2.0 * pi * nf * self.frequency_hz * t_s).cos() * damp
             })
             .sum()
@@ -137,14 +158,55 @@ impl Sawtooth {
     /// The sawtooth's AVAR (u^2/s^2) at cluster sizes `ms` of `tau0_s`.
     pub fn avar(&self, tau0_s: f64, ms: &[u64]) -> Vec<f64> {
         let r0 = self.coherent_variance();
+        let walk = Walk::new(self.filter, tau0_s);
         ms.iter()
             .map(|&m| {
                 let tau = m as f64 * tau0_s;
-                let v = 6.0 * r0 - 8.0 * self.autocovariance(tau)
-                    + 2.0 * self.autocovariance(2.0 * tau);
+                let v = 6.0 * r0 - 8.0 * self.autocovariance_walked(tau, walk.at(m))
+                    + 2.0 * self.autocovariance_walked(2.0 * tau, walk.at(2 * m));
                 (v / (2.0 * tau * tau)).max(0.0)
             })
             .collect()
+    }
+}
+
+/// The variance (per unit `N^2`, in s) of the angle's change over `k` samples from white rate
+/// through a unit's low-pass: `S(k) = tau0 (k rho_0 + 2 sum_{0<j<k} (k - j) rho_j)`, the
+/// variance of a sum of `k` filtered increments ([`LowPass::white_rate_avar`]'s `S`), with
+/// prefix sums of `rho_j` and `j rho_j` so that each lag is one lookup; `k tau0` without a
+/// filter.
+struct Walk {
+    tau0_s: f64,
+    rho0: f64,
+    /// `sum_{0<j<=i} rho_j` and `sum_{0<j<=i} j rho_j` at index `i` (empty without a filter).
+    p0: Vec<f64>,
+    p1: Vec<f64>,
+}
+
+impl Walk {
+    fn new(filter: Option<LowPass>, tau0_s: f64) -> Self {
+        let rho = filter.map_or_else(Vec::new, |lp| lp.autocorrelation(tau0_s));
+        let (mut p0, mut p1) = (vec![0.0; rho.len()], vec![0.0; rho.len()]);
+        for j in 1..rho.len() {
+            p0[j] = p0[j - 1] + rho[j];
+            p1[j] = p1[j - 1] + j as f64 * rho[j];
+        }
+        Walk {
+            tau0_s,
+            rho0: rho.first().copied().unwrap_or(1.0),
+            p0,
+            p1,
+        }
+    }
+
+    /// `S(k)` (s).
+    fn at(&self, k: u64) -> f64 {
+        let kf = k as f64;
+        if self.p0.is_empty() {
+            return kf * self.tau0_s;
+        }
+        let i = (k.saturating_sub(1) as usize).min(self.p0.len() - 1);
+        self.tau0_s * (kf * self.rho0 + 2.0 * (kf * self.p0[i] - self.p1[i]))
     }
 }
 
@@ -211,6 +273,7 @@ mod tests {
             dither: 0.0,
             n_arw: 0.0,
             rate_wander: 0.0,
+            filter: None,
         };
         // sum_{n >= 1} 1 / n^2 = pi^2 / 6
         let pi2 = std::f64::consts::PI.powi(2);
@@ -235,6 +298,7 @@ mod tests {
             dither: (30.0f64 / (12.0 * std::f64::consts::PI.powi(2))).sqrt(),
             n_arw: 0.0,
             rate_wander: 0.0,
+            filter: None,
         };
         let a1 = s.power(1);
         let tau0 = 0.01;
@@ -242,5 +306,54 @@ mod tests {
         assert!(v[1] < 1e-12 * a1);
         let want = 8.0 * a1 / (0.1f64 * 0.1);
         assert!((v[0] - want).abs() < 1e-6 * want, "{} {}", v[0], want);
+    }
+    /// A counter behind a first-order filter, simulated: white rate (unit `N`, `tau0` 1 s)
+    /// through `y_k = a y_{k-1} + (1 - a) w_k` with `T` = 8 samples, its sum counted with
+    /// carry at 1.1 unfiltered per-sample noise (the filtered angle moves 0.23 LSB a
+    /// sample). The error's autocovariance at lags 1-32 is the sawtooth's `R` with the
+    /// filtered walk within 4 standard errors; with the unfiltered walk `N^2 k tau0` it is
+    /// far off (lag 1: the error correlated at a fifth of its variance, the plain walk's
+    /// model at 1e-7 of it).
+    #[test]
+    fn behind_a_filter_the_walk_is_the_filtered_rates() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(25);
+        let (tau0, t_f, lsb): (f64, f64, f64) = (1.0, 8.0, 1.1);
+        let a = (-tau0 / t_f).exp();
+        let n = 400_000;
+        let (mut y, mut theta) = (0.0f64, 0.0f64);
+        let e: Vec<f64> = (0..n)
+            .map(|_| {
+                let (u1, u2) = (rng.random::<f64>().max(1e-300), rng.random::<f64>());
+                let w = (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
+                y = a * y + (1.0 - a) * w;
+                theta += y * tau0;
+                (theta / lsb).round() * lsb - theta
+            })
+            .collect();
+        let st = Sawtooth {
+            lsb,
+            frequency_hz: 0.0,
+            dither: 0.0,
+            n_arw: 1.0,
+            rate_wander: 0.0,
+            filter: Some(LowPass::FirstOrder {
+                time_constant_s: t_f,
+            }),
+        };
+        let walk = Walk::new(st.filter, tau0);
+        let c0 = lsb * lsb / 12.0;
+        for k in [1u64, 2, 4, 8, 16, 32] {
+            let ku = k as usize;
+            let c: f64 = (0..n - ku).map(|i| e[i] * e[i + ku]).sum::<f64>() / (n - ku) as f64;
+            let want = st.autocovariance_walked(k as f64 * tau0, walk.at(k));
+            // The error decorrelates over some 40 samples here: ~n / 80 independent.
+            let se = c0 / ((n / 80) as f64).sqrt();
+            assert!((c - want).abs() < 4.0 * se, "lag {k}: {c} vs {want}");
+            if k == 1 {
+                let plain = st.autocovariance(k as f64 * tau0);
+                assert!(c > 0.2 * c0 && plain < 1e-6 * c0, "{c} {plain}");
+            }
+        }
     }
 }
