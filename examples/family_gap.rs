@@ -160,6 +160,12 @@
 //!   average (`moving_average`, 2-16 taps, 2 stages), the angle counted with carry at 0.1-1 of
 //!   the filtered per-sample angle noise `N sqrt(rho_0 tau0)`.
 //!
+//! A development family of session 25 (tuned on: "The counter behind a filter (session 25)"):
+//! - `cntfog`: a tactical FOG (`tacfog`'s terms) at 200-1000 Hz behind a first order of 3-20
+//!   tau0 or a Bartlett average of 4-16 taps, its angle counted with carry at 2-6 times the
+//!   filtered per-sample angle motion `N sqrt(rho_0 tau0)`, an input rate of 0-15 deg/h; its
+//!   clean runs follow the session-12 families' rule (one low-pass of any kind).
+//!
 //! A development family of session 14 (tuned on: "The floor on the grid (session 14)"):
 //! - `accgrav`: `accfilt`'s accelerometer with gravity's projection on its axis uniform in
 //!   [-9.81, 9.81] m/s^2, each rate sample rounded at 1-4 filtered sample sigmas (the dead band
@@ -238,11 +244,11 @@ static MODELS_DIR: OnceLock<String> = OnceLock::new();
 
 /// The families; the first six are the default list, `coarse` is drawn on request. New
 /// families go at the end: a draw's stream depends on the family's index.
-const FAMILIES: [&str; 34] = [
+const FAMILIES: [&str; 35] = [
     "navfog", "tacfog", "vog4", "memsgyro", "ma4", "memsacc", "coarse", "consmems", "fog2k",
     "accr", "kmems", "rfog", "hrmems", "qtzgyro", "servoacc", "short", "long", "adis", "adistemp",
     "rlg", "lowrate", "accfilt", "navacc", "mimu", "cicgyro", "hrg", "thermfog", "fog5k",
-    "kalgyro", "kalacc", "cicacc", "zpexp", "bartfog", "accgrav",
+    "kalgyro", "kalacc", "cicacc", "zpexp", "bartfog", "accgrav", "cntfog",
 ];
 /// The held-out families (`--families heldout`): defined before the calibration of issue 13's
 /// last round and run only for its final tables, so nothing was tuned on them.
@@ -698,6 +704,34 @@ fn draw_unit(
                 .lowpass()
                 .map_or(1.0, |lp| lp.autocorrelation(u.tau0)[0]);
             u.lsb = log_uniform(rng, 0.1, 1.0) * u.c[1] * (rho0 * u.tau0).sqrt();
+        }
+        "cntfog" => {
+            // A tactical FOG (tacfog's terms) at 200-1000 Hz that filters its rate (a first
+            // order of 3-20 tau0 or a Bartlett average of 4-16 taps) and counts the filtered
+            // angle with carry at 2-6 times its per-sample motion `N sqrt(rho_0 tau0)` (an LSB
+            // about the unfiltered per-sample noise): the counter's error is correlated over
+            // the filter's memory (docs/gap.md, "The counter behind a filter (session 25)"). An
+            // input rate of 0-15 deg/h (the Earth's on the axis) sets the counter's line.
+            u.c[1] = log_uniform(rng, 0.01, 0.1) * ARW;
+            u.c[2] = log_uniform(rng, 0.05, 0.5) * DEG_H;
+            u.c[3] = log_uniform(rng, 0.01, 0.1) * RRW;
+            u.tau0 = rate(rng, 200.0, 1000.0);
+            let filter = if rng.random::<f64>() < 0.5 {
+                EffectParams::OutputFilter {
+                    time_constant_s: log_uniform(rng, 3.0, 20.0) * u.tau0,
+                }
+            } else {
+                EffectParams::MovingAverage {
+                    taps: rng.random_range(4..=16u32),
+                    stages: 2,
+                }
+            };
+            u.intrinsic = Some(filter);
+            let rho0 = filter
+                .lowpass()
+                .map_or(1.0, |lp| lp.autocorrelation(u.tau0)[0]);
+            u.lsb = log_uniform(rng, 2.0, 6.0) * u.c[1] * (rho0 * u.tau0).sqrt();
+            u.bias = rng.random_range(0.0..15.0) * DEG_H;
         }
         _ => unreachable!("family list"),
     }
@@ -1220,7 +1254,7 @@ fn part_of_unit(u: &Unit, p: &EffectParams) -> bool {
 fn any_filter_family(family: &str) -> bool {
     matches!(
         family,
-        "mimu" | "cicgyro" | "kalgyro" | "kalacc" | "cicacc" | "zpexp" | "bartfog"
+        "mimu" | "cicgyro" | "kalgyro" | "kalacc" | "cicacc" | "zpexp" | "bartfog" | "cntfog"
     )
 }
 
