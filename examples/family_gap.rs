@@ -590,9 +590,7 @@ fn draw_unit(
                 }
             };
             u.intrinsic = Some(filter);
-            let rho0 = filter
-                .lowpass()
-                .map_or(1.0, |lp| lp.autocorrelation(u.tau0)[0]);
+            let rho0 = rho0_of(filter, u.tau0);
             u.rate_lsb = log_uniform(rng, lsb.0, lsb.1) * u.c[1] * (rho0 / u.tau0).sqrt();
         }
         "hrg" => {
@@ -653,9 +651,7 @@ fn draw_unit(
                 damping: log_uniform(rng, 0.5, 1.0),
             };
             u.intrinsic = Some(filter);
-            let rho0 = filter
-                .lowpass()
-                .map_or(1.0, |lp| lp.autocorrelation(u.tau0)[0]);
+            let rho0 = rho0_of(filter, u.tau0);
             u.rate_lsb = log_uniform(rng, lsb.0, lsb.1) * u.c[1] * (rho0 / u.tau0).sqrt();
         }
         "cicacc" => {
@@ -700,9 +696,7 @@ fn draw_unit(
                 stages: 2,
             };
             u.intrinsic = Some(filter);
-            let rho0 = filter
-                .lowpass()
-                .map_or(1.0, |lp| lp.autocorrelation(u.tau0)[0]);
+            let rho0 = rho0_of(filter, u.tau0);
             u.lsb = log_uniform(rng, 0.1, 1.0) * u.c[1] * (rho0 * u.tau0).sqrt();
         }
         "cntfog" => {
@@ -727,15 +721,21 @@ fn draw_unit(
                 }
             };
             u.intrinsic = Some(filter);
-            let rho0 = filter
-                .lowpass()
-                .map_or(1.0, |lp| lp.autocorrelation(u.tau0)[0]);
+            let rho0 = rho0_of(filter, u.tau0);
             u.lsb = log_uniform(rng, 2.0, 6.0) * u.c[1] * (rho0 * u.tau0).sqrt();
             u.bias = rng.random_range(0.0..15.0) * DEG_H;
         }
         _ => unreachable!("family list"),
     }
     u
+}
+
+/// `rho_0` of a unit's intrinsic filter at `tau0` (1 without one): the filtered white rate's
+/// per-sample variance against the unfiltered (`LowPass::autocorrelation`).
+fn rho0_of(filter: EffectParams, tau0: f64) -> f64 {
+    filter
+        .lowpass()
+        .map_or(1.0, |lp| lp.autocorrelation(tau0)[0])
 }
 
 /// The kinds a benchmark draws (`None`: a clean run), by name.
