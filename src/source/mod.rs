@@ -89,7 +89,8 @@ pub enum SourceEvent {
     Data { bytes: Bytes, at: Instant },
     /// One UDP datagram (whole frames), as it arrived at `at`.
     Datagram { bytes: Bytes, at: Instant },
-    /// The source went quiet (no datagram for a while): frames held for reordering can go.
+    /// The source went quiet (no datagram or byte for a while): frames held for reordering, and
+    /// reads held as the possible first pieces of a backlog, can go.
     Idle,
     /// The port came back after an outage: bytes before and after it are not contiguous.
     Reconnected { outage_s: f64 },

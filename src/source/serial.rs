@@ -21,6 +21,11 @@ use super::{SourceContext, SourceEvent, BACKOFF_FIRST, BACKOFF_MAX};
 /// anything arrived, so this bounds the chunk, not the latency.
 const READ_BLOCK: usize = 4096;
 
+/// After this long without a byte the source reports [`SourceEvent::Idle`] (once), so reads the
+/// decode stage holds while they may be the first pieces of a backlog are decided without
+/// waiting for the next byte. The pieces of one backlog follow each other within a millisecond.
+pub const IDLE_AFTER: std::time::Duration = std::time::Duration::from_millis(50);
+
 fn open(path: &Path, baud: u32) -> std::io::Result<tokio_serial::SerialStream> {
     tokio_serial::new(path.to_string_lossy(), baud)
         .data_bits(tokio_serial::DataBits::Eight)
@@ -47,16 +52,28 @@ pub async fn run(path: &Path, baud: u32, ctx: &mut SourceContext) -> Result<()> 
     tracing::info!("reading serial port {} at {baud} baud", path.display());
     loop {
         // Read until the port fails or reports its end.
+        let mut idle_at = None;
         let lost_at = loop {
             let mut buf = BytesMut::with_capacity(READ_BLOCK);
             let r = tokio::select! {
                 biased;
                 _ = ctx.shutdown.cancelled() => return Ok(()),
+                // Cancel-safe: bytes are only taken by a read that completes.
                 r = port.read_buf(&mut buf) => r,
+                _ = tokio::time::sleep_until(idle_at.unwrap_or_else(tokio::time::Instant::now)),
+                    if idle_at.is_some() =>
+                {
+                    idle_at = None;
+                    if ctx.tx.send(SourceEvent::Idle).await.is_err() {
+                        return Ok(());
+                    }
+                    continue;
+                }
             };
             match r {
                 Ok(0) => break Instant::now(),
                 Ok(_) => {
+                    idle_at = Some(tokio::time::Instant::now() + IDLE_AFTER);
                     let ev = SourceEvent::Data {
                         bytes: buf.freeze(),
                         at: Instant::now(),
