@@ -37,8 +37,9 @@ fn wait_until(what: &str, f: impl Fn() -> bool) {
 
 /// A pause of the test's own writer longer than this (the host did not run it) makes the
 /// played stream unlike a unit's: the frames of the pause leave in one burst. The listener
-/// reads such a burst as a backlog, not a silence, but a burst the pseudo-terminal hands over
-/// in pieces can still look like one, so a scenario with such a pause is played again. A pause
+/// reads such a burst as a backlog, not a silence, also when the pseudo-terminal hands it over
+/// in pieces (since session 25: the pieces' reads are held together); the scenario is still
+/// played again, as its stream is not a unit's. A pause
 /// shorter than this cannot: it is below the 64 ms silence (half of kvh1750's counter period at
 /// 1 kHz) that makes an outage.
 const WRITER_STALL: Duration = Duration::from_millis(50);
