@@ -464,8 +464,9 @@ impl GapProblem {
     /// The low-pass a counter's sawtooth may sit behind ([`GapProblem::with_sawtooth`]): the
     /// filter of the covariance on a later pass whose previous pass read a counter
     /// (`counter`, [`DiagnoseOptions::cov_counter`]); on a first pass whose five terms miss the
-    /// curve (`G > 2`), the best first order, moving average or second order the curve
-    /// shows. None when the angle's change per sample behind it is not small against the LSB
+    /// curve (`G > 2`), the scan's best first order (whose memory
+    /// [`GapProblem::filter_behind_counter`] then refits; a unit's moving average is read
+    /// through a first order of that memory until a later pass names it). None when the angle's change per sample behind it is not small against the LSB
     /// (`r >= R_WHITE` of [`super::quant_limit`], the error then white: nothing to model), or
     /// there is no LSB.
     fn counter_filter(&self, snap: &EvidenceSnapshot, counter: bool) -> Option<LowPass> {
@@ -487,10 +488,7 @@ impl GapProblem {
                 if self.gls(&base)?.gap() <= COUNTER_FILTER_MIN_GAP {
                     return None;
                 }
-                let (p, f) = [EffectKind::OutputFilter]
-                    .into_iter()
-                    .filter_map(|k| self.scan_params(&base, k))
-                    .min_by(|a, b| a.1.chi2.total_cmp(&b.1.chi2))?;
+                let (p, f) = self.scan_params(&base, EffectKind::OutputFilter)?;
                 (p.lowpass()?, f.coef)
             }
         };
@@ -502,8 +500,8 @@ impl GapProblem {
         (ratio < super::quant_limit::R_WHITE).then_some(lp)
     }
 
-    /// The low-pass `lp` of a first pass's scan refitted with the counter's sawtooth behind
-    /// it: the scan, without the sawtooth, reads the error's correlation at the short taus as
+    /// The low-pass `lp` ([`GapProblem::counter_filter`]'s) refitted with the counter's
+    /// sawtooth behind it: the scan, without the sawtooth, reads the error's correlation at the short taus as
     /// more smoothing (navfog seed 183's output-filter draw 1: 33 ms for the unit's 20 ms). Its
     /// memory is searched over [`BEHIND_MEMORY_SPAN`] of the scan's (golden section on its
     /// log; the time constant of a first order or zero-phase filter, the taps of a moving

@@ -531,28 +531,9 @@ mod tests {
     /// Feeds `reads` (first frame, end frame, arrival in ms after t0) to a live kvh1750 stage:
     /// (good frames, frames recorded as lost, outages).
     fn live_run(reads: &[(usize, usize, u64)]) -> (u64, u64, u64) {
-        let desc = FrameDescriptor::load("kvh1750").expect("kvh1750");
-        assert_eq!(desc.frame_len(), 36);
-        let mut stage = DecodeStage::new(desc, true);
-        let mut out: Vec<crate::frame::FrameEvent> = Vec::new();
-        let t0 = Instant::now();
-        let mut frames = 0;
-        for &(from, to, ms) in reads {
-            let ev = SourceEvent::Data {
-                bytes: kvh(from, to),
-                at: t0 + Duration::from_millis(ms),
-            };
-            frames += stage.push(ev, &mut out);
-        }
-        frames += stage.finish(&mut out);
-        let lost = out
-            .iter()
-            .map(|e| match e {
-                crate::frame::FrameEvent::Gap { missing } => *missing,
-                crate::frame::FrameEvent::Frame(_) => 0,
-            })
-            .sum();
-        (frames, lost, stage.outage.outages)
+        let reads: Vec<(usize, usize, f64)> =
+            reads.iter().map(|&(a, b, ms)| (a, b, ms as f64)).collect();
+        live_run_f(&reads)
     }
 
     /// Reads of 10 frames, each arriving when its last frame is due (1 ms per frame).
@@ -599,9 +580,10 @@ mod tests {
             .collect()
     }
 
-    /// Like [`live_run`], arrivals in fractional ms.
+    /// [`live_run`] with arrivals in fractional ms.
     fn live_run_f(reads: &[(usize, usize, f64)]) -> (u64, u64, u64) {
         let desc = FrameDescriptor::load("kvh1750").expect("kvh1750");
+        assert_eq!(desc.frame_len(), 36);
         let mut stage = DecodeStage::new(desc, true);
         let mut out: Vec<crate::frame::FrameEvent> = Vec::new();
         let t0 = Instant::now();
