@@ -252,11 +252,20 @@ fn diagnose_quantized(
     // read, even when the five terms alone fit it: the error's structure at the short taus is
     // then left to the candidates (docs/gap.md, "The whole curve of a quantization-limited
     // counter (session 24)").
+    //
+    // A counter behind a filter (session 25) has no base model that fits: its model is the
+    // filter with the sawtooth behind it. The whole curve is read when that model describes
+    // it, the gap right after the filter at most `gap_crit_filtered` (docs/gap.md, "The whole
+    // curve of a filtered counter (session 26)").
     if let Ok(mut d) = diagnose_curve(snap, temperature, opts) {
-        let whole = d.sawtooth.is_some() && d.gap_before <= opts.thresholds.gap_crit;
+        let behind = behind_filter_gap(&d);
+        let whole = d.sawtooth.is_some()
+            && (d.gap_before <= opts.thresholds.gap_crit
+                || behind.is_some_and(|g| g <= opts.thresholds.gap_crit_filtered));
         tracing::debug!(
             sawtooth = d.sawtooth.is_some(),
             gap_before = d.gap_before,
+            behind_filter = behind,
             whole,
             "a quantization-limited unit's whole curve"
         );
@@ -275,6 +284,19 @@ fn diagnose_quantized(
     };
     d.quantization_limited = Some(limit);
     Ok(d)
+}
+
+/// The gap of a diagnosis's model right after the low-pass its sawtooth is behind
+/// ([`super::sawtooth::Sawtooth::filter`]): the first filter among the effects (each effect's
+/// gap is of the model with every effect up to it; the sawtooth's copy of the filter may have
+/// been fitted apart from the effect's). None without a sawtooth behind a filter named among
+/// the effects.
+fn behind_filter_gap(d: &Diagnosis) -> Option<f64> {
+    d.sawtooth.as_ref()?.filter?;
+    d.effects
+        .iter()
+        .find(|e| e.params.lowpass().is_some())
+        .map(|e| e.gap_after)
 }
 
 /// The quantization check of [`diagnose_with_temperature`]. The five-term fit of the whole

@@ -239,7 +239,11 @@ pub struct DiagnosisRecord {
 
 /// The extra field `counter_sawtooth`: the counter's LSB (u), the line's frequency (Hz, before
 /// aliasing), the dither before the counter (u, standard deviation), the white rate `N`
-/// (u/sqrt(s)) and the rate's wander (u/s) that widen it ([`super::sawtooth::Sawtooth`]).
+/// (u/sqrt(s)) and the rate's wander (u/s) that widen it ([`super::sawtooth::Sawtooth`]); when
+/// the unit counts behind its own low-pass (session 25), that filter as the sawtooth's model
+/// holds it (`behind_filter`, `{kind, params}` as an effect; the filtered rate's walk widens
+/// the harmonics, and the sawtooth is then part of every model with that filter, not of the
+/// five terms alone).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SawtoothRecord {
     pub lsb: f64,
@@ -247,6 +251,8 @@ pub struct SawtoothRecord {
     pub dither: f64,
     pub width_n: f64,
     pub wander: f64,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub behind_filter: Option<RecordedEffect>,
 }
 
 /// The extra field `ensemble` (`diagnose --ensemble N`; docs/gap.md, "The ensemble band"): at
@@ -399,6 +405,9 @@ impl DiagnosisRecord {
                 dither: s.dither,
                 width_n: s.n_arw,
                 wander: s.rate_wander,
+                behind_filter: s
+                    .filter
+                    .map(|lp| RecordedEffect::Known(EffectParams::from_lowpass(lp))),
             }),
         }
     }

@@ -369,3 +369,47 @@ fn a_counter_behind_a_filter_is_the_filter_with_its_sawtooth() {
     assert_eq!(d.verdict, Verdict::Explained, "G {}", d.gap_after);
     assert!(d.gap_after <= 1.9, "G {}", d.gap_after);
 }
+
+/// cntfog seed 251 clean draw 22 (`examples/family_gap.rs`, from its model file and simulator
+/// seed): a tactical FOG behind a first order of 12.60 ms (5.6 samples), its angle counted at
+/// an LSB of 0.43 of the filtered per-sample motion: quantization-limited (`tau_white` 3 tau0).
+/// The filter with the sawtooth behind it describes the whole curve, so the whole curve is read
+/// (docs/gap.md, "The whole curve of a filtered counter (session 26)"); until session 26 it was
+/// read from `tau_white` on, the same filter named there (12.58 ms).
+#[test]
+fn a_quantization_limited_counter_behind_a_filter_is_read_whole() {
+    let (tau0, t_run, t_f) = (
+        0.002242152466367713,
+        3662.8112368477186,
+        1.2596097360895408e-2,
+    );
+    let text = format!(
+        "tau0_s = {tau0}\n[[channel]]\nname = \"x\"\nunit = \"u\"\nQ = 0\n\
+         N = 1.7921091513986337e-4\nB = 1.1800778781652275e-4\nK = 1.5704693454086803e-7\n\
+         flicker_band_s = [{tau0}, {:e}]\nbias = 2.0191862133523836e-3\n\
+         lsb = 7.3510259454972244e-6\noutput_filter = {{ time_constant = {t_f:e} }}\n",
+        10.0 * t_run
+    );
+    let out = super::diagnosis::simulate_text(&text, tau0, t_run, 16640419162551672452);
+    let snap = GapEvidence::from_increments(GapConfig::new(tau0), &out).snapshot();
+    let d = diagnose(&snap, &DiagnoseOptions::default()).expect("diagnosis");
+    let limit = d.quantization_limited.expect("quantization-limited");
+    assert!(limit.tau_white_s > 2.5 * tau0, "{limit:?}");
+    // The whole curve: from the first cluster size, not from tau_white.
+    assert!((d.tau_span_s.0 / tau0 - 1.0).abs() < 1e-9, "{:?}", d.tau_span_s);
+    let [e] = d.effects.as_slice() else {
+        panic!("{:?}", d.effects)
+    };
+    let EffectParams::OutputFilter { time_constant_s } = e.params else {
+        panic!("{:?}", e.params)
+    };
+    assert!(
+        (time_constant_s / t_f - 1.0).abs() < 0.01,
+        "{time_constant_s}"
+    );
+    let st = d.sawtooth.expect("the counter's sawtooth");
+    assert!(st.filter.is_some(), "{st:?}");
+    assert!((st.n_arw / 1.7921091513986337e-4 - 1.0).abs() < 0.05, "{st:?}");
+    assert_eq!(d.verdict, Verdict::Explained, "G {}", d.gap_after);
+    assert!(d.gap_after <= 2.2, "G {}", d.gap_after);
+}
