@@ -396,7 +396,11 @@ fn a_quantization_limited_counter_behind_a_filter_is_read_whole() {
     let limit = d.quantization_limited.expect("quantization-limited");
     assert!(limit.tau_white_s > 2.5 * tau0, "{limit:?}");
     // The whole curve: from the first cluster size, not from tau_white.
-    assert!((d.tau_span_s.0 / tau0 - 1.0).abs() < 1e-9, "{:?}", d.tau_span_s);
+    assert!(
+        (d.tau_span_s.0 / tau0 - 1.0).abs() < 1e-9,
+        "{:?}",
+        d.tau_span_s
+    );
     let [e] = d.effects.as_slice() else {
         panic!("{:?}", d.effects)
     };
@@ -409,7 +413,10 @@ fn a_quantization_limited_counter_behind_a_filter_is_read_whole() {
     );
     let st = d.sawtooth.expect("the counter's sawtooth");
     assert!(st.filter.is_some(), "{st:?}");
-    assert!((st.n_arw / 1.7921091513986337e-4 - 1.0).abs() < 0.05, "{st:?}");
+    assert!(
+        (st.n_arw / 1.7921091513986337e-4 - 1.0).abs() < 0.05,
+        "{st:?}"
+    );
     assert_eq!(d.verdict, Verdict::Explained, "G {}", d.gap_after);
     assert!(d.gap_after <= 2.2, "G {}", d.gap_after);
 }
