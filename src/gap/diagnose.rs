@@ -1275,16 +1275,19 @@ fn greedy_stationary(
             .filter(|p| p.0.kind().is_filter())
             .max_by(|a, b| aic(a).total_cmp(&aic(b)))
             .map(|p| p.0.kind());
-        // The first order is the second order's limit at large damping (nested): the second
-        // order is named over it only when its Akaike criterion is better by more than
-        // AIC_MARGIN (docs/gap.md, "Rounding after a filter (session 11)").
+        // The first order is the reference low-pass: another kind is named over it only when
+        // its Akaike criterion is better by more than AIC_MARGIN. The second order nests it
+        // (its limit at large damping; docs/gap.md, "Rounding after a filter (session 11)");
+        // a moving average or a zero-phase filter of the same memory differs from it only in
+        // the shape of the shortest taus, which white phase noise can hide (MA4's Q up to
+        // tens of seconds): within the margin the curve does not tell them apart, and the
+        // other kind is listed as an alternative (docs/gap.md, "The first order when the
+        // kinds tie (session 26)").
         let passed_kind = |k: EffectKind| passed.iter().find(|p| p.0.kind() == k);
-        if let (Some(EffectKind::SecondOrderFilter), Some(so), Some(fo)) = (
-            best_filter,
-            passed_kind(EffectKind::SecondOrderFilter),
-            passed_kind(EffectKind::OutputFilter),
-        ) {
-            if aic(so) <= aic(fo) + AIC_MARGIN {
+        if let (Some(k), Some(fo)) = (best_filter, passed_kind(EffectKind::OutputFilter)) {
+            if k != EffectKind::OutputFilter
+                && passed_kind(k).is_some_and(|b| aic(b) <= aic(fo) + AIC_MARGIN)
+            {
                 best_filter = Some(EffectKind::OutputFilter);
             }
         }
