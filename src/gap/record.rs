@@ -241,9 +241,8 @@ pub struct DiagnosisRecord {
 /// aliasing), the dither before the counter (u, standard deviation), the white rate `N`
 /// (u/sqrt(s)) and the rate's wander (u/s) that widen it ([`super::sawtooth::Sawtooth`]); when
 /// the unit counts behind its own low-pass (session 25), that filter as the sawtooth's model
-/// holds it (`behind_filter`, `{kind, params}` as an effect; the filtered rate's walk widens
-/// the harmonics, and the sawtooth is then part of every model with that filter, not of the
-/// five terms alone).
+/// holds it (`behind_filter`, `{kind, params}` as an effect): the filtered rate's walk widens
+/// the harmonics. The sawtooth so widened stays a fixed part of every model of the curve.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SawtoothRecord {
     pub lsb: f64,
