@@ -537,6 +537,43 @@ impl GapProblem {
         best
     }
 
+    /// A counter behind a filter, when no plain sawtooth is kept ([`GapProblem::with_sawtooth`]):
+    /// the filter of the covariance, or on a first pass the best low-pass the curve shows
+    /// ([`GapProblem::counter_filter`]), refitted with the sawtooth behind it (docs/gap.md,
+    /// "The counter behind a filter (session 25)"). A counter has no rate rounding after its
+    /// filter: the floor decided for rate samples is set aside while the sawtooth is fitted,
+    /// and the sawtooth is kept only if the filter fits better with it than with that floor.
+    fn set_sawtooth_behind_filter(&mut self, snap: &EvidenceSnapshot, counter: bool) {
+        let Some(lp) = self.counter_filter(snap, counter) else {
+            return;
+        };
+        let floor = self.filter_floor.take();
+        let lp = self.filter_behind_counter(snap, lp);
+        let chi2 = self.set_sawtooth(snap, Some(lp));
+        if self.sawtooth.is_none() {
+            self.filter_floor = floor;
+            return;
+        }
+        if floor.is_some() {
+            let saw = self.sawtooth.take();
+            self.filter_floor = floor;
+            let spec = ModelSpec {
+                filter: Some(lp),
+                ..ModelSpec::default()
+            };
+            let with_floor = self.gls(&spec).map_or(f64::INFINITY, |f| f.chi2);
+            tracing::debug!(
+                chi2,
+                with_floor,
+                "the sawtooth behind the filter against the rate rounding's floor"
+            );
+            if chi2 < with_floor {
+                self.filter_floor = None;
+                self.sawtooth = saw;
+            }
+        }
+    }
+
     /// This problem with the counter's sawtooth decided ([`GapProblem::set_sawtooth`]). The
     /// plain fit whose five terms set the covariance took the counter's line into its terms
     /// (its `N` up to ten times the unit's on rlg units): when the sawtooth is kept and no
@@ -553,41 +590,8 @@ impl GapProblem {
         floor: bool,
     ) -> Result<Self, DiagnoseError> {
         self.set_sawtooth(snap, None);
-        if self.sawtooth.is_none() {
-            // A counter behind a filter: the filter of the covariance, or on a first pass
-            // the best low-pass the curve shows (docs/gap.md, "The counter behind a filter
-            // (session 25)").
-            if let Some(lp) = self.counter_filter(snap, opts.cov_counter) {
-                // A counter has no rate rounding after its filter: the floor decided for
-                // rate samples is set aside while the sawtooth is fitted, and the sawtooth is
-                // kept only if the filter fits better with it than with that floor.
-                let floor = self.filter_floor.take();
-                let lp = self.filter_behind_counter(snap, lp);
-                let chi2 = self.set_sawtooth(snap, Some(lp));
-                if floor.is_some() && self.sawtooth.is_some() {
-                    let saw = self.sawtooth.take();
-                    self.filter_floor = floor;
-                    let spec = ModelSpec {
-                        filter: Some(lp),
-                        ..ModelSpec::default()
-                    };
-                    let with_floor = self.gls(&spec).map_or(f64::INFINITY, |f| f.chi2);
-                    tracing::debug!(
-                        chi2,
-                        with_floor,
-                        "the sawtooth behind the filter against the rate rounding's floor"
-                    );
-                    if chi2 < with_floor {
-                        self.filter_floor = None;
-                        self.sawtooth = saw;
-                    }
-                } else if self.sawtooth.is_none() {
-                    self.filter_floor = floor;
-                }
-            }
-            return Ok(self);
-        }
         let Some(st) = self.sawtooth.as_ref().map(|(st, _)| *st) else {
+            self.set_sawtooth_behind_filter(snap, opts.cov_counter);
             return Ok(self);
         };
         if opts.cov_coef.is_some() {

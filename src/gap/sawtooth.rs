@@ -43,7 +43,7 @@
 //! though the unfiltered per-sample change is an LSB or more (docs/gap.md, "The counter behind
 //! a filter (session 25)").
 
-use crate::model::lowpass::LowPass;
+use crate::model::lowpass::{LowPass, SumVariance};
 
 /// The counter's sawtooth at one line frequency and dither.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -172,41 +172,28 @@ impl Sawtooth {
 
 /// The variance (per unit `N^2`, in s) of the angle's change over `k` samples from white rate
 /// through a unit's low-pass: `S(k) = tau0 (k rho_0 + 2 sum_{0<j<k} (k - j) rho_j)`, the
-/// variance of a sum of `k` filtered increments ([`LowPass::white_rate_avar`]'s `S`), with
-/// prefix sums of `rho_j` and `j rho_j` so that each lag is one lookup; `k tau0` without a
-/// filter.
+/// variance of a sum of `k` filtered increments ([`SumVariance`] of the filter's
+/// autocorrelation, [`LowPass::white_rate_avar`]'s `S`); `k tau0` without a filter.
 struct Walk {
     tau0_s: f64,
-    rho0: f64,
-    /// `sum_{0<j<=i} rho_j` and `sum_{0<j<=i} j rho_j` at index `i` (empty without a filter).
-    p0: Vec<f64>,
-    p1: Vec<f64>,
+    filtered: Option<SumVariance>,
 }
 
 impl Walk {
     fn new(filter: Option<LowPass>, tau0_s: f64) -> Self {
-        let rho = filter.map_or_else(Vec::new, |lp| lp.autocorrelation(tau0_s));
-        let (mut p0, mut p1) = (vec![0.0; rho.len()], vec![0.0; rho.len()]);
-        for j in 1..rho.len() {
-            p0[j] = p0[j - 1] + rho[j];
-            p1[j] = p1[j - 1] + j as f64 * rho[j];
-        }
-        Walk {
-            tau0_s,
-            rho0: rho.first().copied().unwrap_or(1.0),
-            p0,
-            p1,
-        }
+        let filtered = filter
+            .map(|lp| lp.autocorrelation(tau0_s))
+            .filter(|rho| !rho.is_empty())
+            .map(|rho| SumVariance::new(&rho, tau0_s));
+        Walk { tau0_s, filtered }
     }
 
     /// `S(k)` (s).
     fn at(&self, k: u64) -> f64 {
-        let kf = k as f64;
-        if self.p0.is_empty() {
-            return kf * self.tau0_s;
+        match &self.filtered {
+            Some(s) => s.at(k),
+            None => k as f64 * self.tau0_s,
         }
-        let i = (k.saturating_sub(1) as usize).min(self.p0.len() - 1);
-        self.tau0_s * (kf * self.rho0 + 2.0 * (kf * self.p0[i] - self.p1[i]))
     }
 }
 

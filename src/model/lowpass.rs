@@ -359,28 +359,52 @@ fn first_order_gain(time_constant_s: f64, tau0_s: f64, w: f64) -> f64 {
 
 /// AVAR at each cluster size of `ms` of a stationary sequence whose lag-`k` autocovariance is
 /// `cov[k]` (zero beyond the slice; `cov` not empty): `(4 S(m) - S(2m)) / (2 m^2 tau0^2)` with
-/// `S(n) = tau0 (n c_0 + 2 sum_{0<k<n} (n - k) c_k)` the variance of a sum of `n` of its samples
-/// scaled by `tau0_s` (prefix sums of `c_k` and `k c_k` make each `S(n)` one lookup). With
-/// `tau0_s = 1` it is the AVAR of averages of `m` samples, in the samples' units squared.
+/// `S(n)` the variance of a sum of `n` of its samples scaled by `tau0_s` ([`SumVariance`]).
+/// With `tau0_s = 1` it is the AVAR of averages of `m` samples, in the samples' units squared.
 pub fn avar_from_autocovariance(cov: &[f64], tau0_s: f64, ms: &[u64]) -> Vec<f64> {
-    // prefix sums over k = 1..=K of c_k and k c_k
-    let mut p0 = vec![0.0; cov.len()];
-    let mut p1 = vec![0.0; cov.len()];
-    for k in 1..cov.len() {
-        p0[k] = p0[k - 1] + cov[k];
-        p1[k] = p1[k - 1] + k as f64 * cov[k];
-    }
-    let s = |n: u64| -> f64 {
-        let kk = ((n.saturating_sub(1)) as usize).min(cov.len() - 1);
-        let nf = n as f64;
-        tau0_s * (nf * cov[0] + 2.0 * (nf * p0[kk] - p1[kk]))
-    };
+    let s = SumVariance::new(cov, tau0_s);
     ms.iter()
         .map(|&m| {
             let mf = m as f64;
-            ((4.0 * s(m) - s(2 * m)) / (2.0 * mf * mf * tau0_s * tau0_s)).max(0.0)
+            ((4.0 * s.at(m) - s.at(2 * m)) / (2.0 * mf * mf * tau0_s * tau0_s)).max(0.0)
         })
         .collect()
+}
+
+/// `S(n) = tau0 (n c_0 + 2 sum_{0<k<n} (n - k) c_k)`: the variance of a sum of `n` samples of a
+/// stationary sequence whose lag-`k` autocovariance is `cov[k]` (zero beyond the slice; `cov`
+/// not empty), scaled by `tau0_s`. Prefix sums of `c_k` and `k c_k` make each `S(n)` one
+/// lookup.
+pub struct SumVariance {
+    tau0_s: f64,
+    c0: f64,
+    /// `sum_{0<k<=i} c_k` and `sum_{0<k<=i} k c_k` at index `i`.
+    p0: Vec<f64>,
+    p1: Vec<f64>,
+}
+
+impl SumVariance {
+    pub fn new(cov: &[f64], tau0_s: f64) -> Self {
+        let mut p0 = vec![0.0; cov.len()];
+        let mut p1 = vec![0.0; cov.len()];
+        for k in 1..cov.len() {
+            p0[k] = p0[k - 1] + cov[k];
+            p1[k] = p1[k - 1] + k as f64 * cov[k];
+        }
+        SumVariance {
+            tau0_s,
+            c0: cov[0],
+            p0,
+            p1,
+        }
+    }
+
+    /// `S(n)`.
+    pub fn at(&self, n: u64) -> f64 {
+        let kk = (n.saturating_sub(1) as usize).min(self.p0.len() - 1);
+        let nf = n as f64;
+        self.tau0_s * (nf * self.c0 + 2.0 * (nf * self.p0[kk] - self.p1[kk]))
+    }
 }
 
 #[cfg(test)]
