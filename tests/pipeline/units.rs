@@ -9,6 +9,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crate::common::pipeline::*;
+use allanscope::pipeline::checkpoint::unix_now_s;
 use allanscope::pipeline::units::{run_units, UnitRun, UnitsControl};
 use allanscope::pipeline::{RecordWriter, RunControl};
 use allanscope::sink::unit_record::untag;
@@ -31,15 +32,7 @@ const TIMEOUT: Duration = Duration::from_secs(60);
 /// every 10 ms; the rest is the listener's scheduling on a loaded host).
 const RECEIVE_LATENCY_S: f64 = 0.25;
 
-/// Seconds since the Unix epoch (the clock of the `outage` records' `at_unix_s`).
-fn unix_now() -> f64 {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .expect("clock")
-        .as_secs_f64()
-}
-
-/// The wall-time span (`unix_now` before and after) of each round a sender wrote to a unit.
+/// The wall-time span (`unix_now_s` before and after; the clock of the `outage` records' `at_unix_s`) of each round a sender wrote to a unit.
 type Rounds = Vec<(f64, f64)>;
 
 /// The `quiet` records of healthy live unit `name`, each one checked against what its sender
@@ -238,9 +231,9 @@ fn each_unit_equals_its_frames_alone_and_outages_are_recorded() {
         let mut master = master;
         let mut sent = Rounds::new();
         for round in slices2[3].chunks(PER_ROUND * FRAME_LEN) {
-            let t = unix_now();
+            let t = unix_now_s();
             rt.block_on(master.write_all(round)).expect("write pty");
-            sent.push((t, unix_now()));
+            sent.push((t, unix_now_s()));
             std::thread::sleep(ROUND);
         }
         (master, sent)
@@ -248,7 +241,7 @@ fn each_unit_equals_its_frames_alone_and_outages_are_recorded() {
     let rounds = UNIT_FRAMES.div_ceil(PER_ROUND);
     let mut udp_sent = Rounds::new();
     for r in 0..rounds {
-        let t = unix_now();
+        let t = unix_now_s();
         for (k, p) in ports.iter().enumerate() {
             let end = ((r + 1) * PER_ROUND).min(UNIT_FRAMES) * FRAME_LEN;
             let round = &slices[k][r * PER_ROUND * FRAME_LEN..end];
@@ -256,7 +249,7 @@ fn each_unit_equals_its_frames_alone_and_outages_are_recorded() {
                 sock.send_to(d, ("127.0.0.1", *p)).expect("send");
             }
         }
-        udp_sent.push((t, unix_now()));
+        udp_sent.push((t, unix_now_s()));
         std::thread::sleep(ROUND);
     }
     let (_master, tty_sent) = serial.join().expect("serial sender");
