@@ -230,8 +230,9 @@ use allanscope::gap::{
 };
 use allanscope::model::terms;
 use common::{
-    draw_effect_params, draw_jumps, effect_toml, jumps_rms, log_uniform, par_map, quantile, share,
-    simulate_channel, std_normal_cdf, std_normal_quantile,
+    draw_effect_params, draw_jumps, effect_toml, gm_sigma, jumps_rms, log_uniform, par_map,
+    quantile, share, simulate_channel, sinusoid_amplitude, std_normal_cdf, std_normal_quantile,
+    warmup_amplitude, FILTER_TAU_PRIOR, GM_TAU_C_PRIOR, SIN_FREQ_PRIOR, WARMUP_T_PRIOR,
 };
 use rand::{RngExt, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -912,6 +913,115 @@ fn oracle_z(
     }
 }
 
+/// Grid points per decade of the shape prior in [`shape_ceiling_p`].
+const SHAPE_CEIL_PER_DECADE: f64 = 16.0;
+/// The sinusoid's grid is finer: its signature oscillates in the frequency.
+const SIN_CEIL_PER_DECADE: f64 = 100.0;
+/// Null draws of the shape ceiling's p-value.
+const SHAPE_CEIL_NULLS: usize = 1999;
+
+/// A log-spaced grid over `[lo, hi]`, `per_decade` points per decade, both ends included.
+fn log_grid(lo: f64, hi: f64, per_decade: f64) -> Vec<f64> {
+    let n = ((hi / lo).log10() * per_decade).ceil().max(1.0) as usize;
+    (0..=n)
+        .map(|k| lo * (hi / lo).powf(k as f64 / n as f64))
+        .collect()
+}
+
+/// The fair ceiling of a stationary effect or a warm-up (`oracle::ShapeCeiling`): told the kind
+/// and the peak ratio `rho` the draw was made with, not the shape (`tau_c`, the frequency, the
+/// filter's time constant, the warm-up's `T`), which is spread over the generator's own prior
+/// (`draw_effect_params`) on a log grid. Returns its p-value in the Gaussian model of the
+/// evidence (the curve linearised at the base fit; the block means with the base fit's five
+/// terms, as the warm-up oracle); NaN for other kinds.
+fn shape_ceiling_p(
+    kind: EffectKind,
+    rho: f64,
+    u: &Unit,
+    snap: &EvidenceSnapshot,
+    seed: u64,
+) -> f64 {
+    let Ok(prob) = GapProblem::new(snap, &DiagnoseOptions::default()) else {
+        return f64::NAN;
+    };
+    let col = |kind, shape| effect_column(kind, shape, &prob.ms, prob.tau0_s, prob.n_inc);
+    let adev = |tau: f64| u.adev(tau);
+    let curve = |signals: Vec<Vec<f64>>| oracle::ShapeCeiling::on_curve(&prob, &signals);
+    let ceiling = match kind {
+        EffectKind::GaussMarkov => curve(
+            log_grid(
+                GM_TAU_C_PRIOR.0 * u.tau0,
+                u.t_run / GM_TAU_C_PRIOR.1,
+                SHAPE_CEIL_PER_DECADE,
+            )
+            .into_iter()
+            .map(|tc| {
+                let s2 = gm_sigma(rho, tc, &adev).powi(2);
+                col(EffectKind::GaussMarkov, tc)
+                    .iter()
+                    .map(|g| s2 * g)
+                    .collect()
+            })
+            .collect(),
+        ),
+        EffectKind::Sinusoid => curve(
+            log_grid(
+                SIN_FREQ_PRIOR.0 / u.t_run,
+                SIN_FREQ_PRIOR.1 / u.tau0,
+                SIN_CEIL_PER_DECADE,
+            )
+            .into_iter()
+            .map(|f| {
+                let a2 = sinusoid_amplitude(rho, f, &adev).powi(2);
+                col(EffectKind::Sinusoid, f)
+                    .iter()
+                    .map(|g| a2 * g)
+                    .collect()
+            })
+            .collect(),
+        ),
+        EffectKind::OutputFilter => {
+            // The filter acts on the simulated white rate (N), as in `oracle_z`.
+            let n2 = u.c[1] * u.c[1];
+            curve(
+                log_grid(u.tau0, FILTER_TAU_PRIOR * u.tau0, SHAPE_CEIL_PER_DECADE)
+                    .into_iter()
+                    .map(|tc| {
+                        col(EffectKind::OutputFilter, tc)
+                            .iter()
+                            .zip(&prob.tau)
+                            .map(|(g, t)| n2 * (g - 1.0 / t))
+                            .collect()
+                    })
+                    .collect(),
+            )
+        }
+        EffectKind::Warmup => {
+            let Some(base) = prob.gls(&ModelSpec::default()) else {
+                return f64::NAN;
+            };
+            let c_fit: [f64; 5] = std::array::from_fn(|i| base.coef[i]);
+            let block_s = snap.block_len as f64 * u.tau0;
+            BlockGls::new(&snap.block_means, block_s, &c_fit).and_then(|g| {
+                let profiles: Vec<Vec<f64>> = log_grid(
+                    WARMUP_T_PRIOR.0,
+                    u.t_run / WARMUP_T_PRIOR.1,
+                    SHAPE_CEIL_PER_DECADE,
+                )
+                .into_iter()
+                .map(|t| {
+                    let a = warmup_amplitude(rho, t, u.tau0, u.t_run, &adev);
+                    g.warmup_profile(t).iter().map(|v| a * v).collect()
+                })
+                .collect();
+                oracle::ShapeCeiling::on_block_means(&g, &profiles)
+            })
+        }
+        _ => None,
+    };
+    ceiling.map_or(f64::NAN, |c| c.p_value(SHAPE_CEIL_NULLS, seed).0)
+}
+
 struct Outcome {
     family: &'static str,
     truth_kind: Option<EffectKind>,
@@ -946,6 +1056,12 @@ struct Outcome {
     /// draws: at the count and rms of the null stream's jump draw (its share below `alpha`
     /// checks the level on clean runs).
     jceil_p: f64,
+    /// The fair ceiling of a stationary curve effect (`shape_ceiling_p`: the kind and `rho` told,
+    /// the shape not): effect draws at the truth; clean draws at the null stream's Gauss-Markov
+    /// draw (its share below `alpha` checks the level). NaN for other kinds.
+    cceil_p: f64,
+    /// Clean draws: the warm-up's fair ceiling at the null stream's warm-up draw (its level).
+    wceil_p: f64,
     /// The first stationary scan's drop of `r' S^-1 r` per parameter of each candidate against
     /// the base model (`Diagnosis::first_scores`), in the order of `LR_KINDS` (NaN: not scanned).
     lr: [f64; 6],
@@ -1133,11 +1249,26 @@ fn run_one(
     if let (Some(EffectParams::BiasJumps { count, rms_size }), Some(c5)) = (truth, base_c5) {
         jceil_p = ceiling(count, rms_size, &c5, stream);
     }
+    let ceil_seed = stream ^ 0x0c_e11;
+    let mut cceil_p = match (kind, drawn) {
+        (Some(k), Some((_, r))) if !no_oracle => shape_ceiling_p(k, r, &unit, &snap, ceil_seed),
+        _ => f64::NAN,
+    };
+    let mut wceil_p = f64::NAN;
     let mut null_z = [f64::NAN; 5];
     if kind.is_none() && !no_oracle {
         let mut nrng = Xoshiro256PlusPlus::seed_from_u64(stream ^ 0x6a_c1e5);
         for (k, (_, kk)) in KINDS[1..].iter().enumerate() {
-            let (p, _) = draw_effect(&mut nrng, &unit, kk.expect("effect kind"));
+            let (p, r) = draw_effect(&mut nrng, &unit, kk.expect("effect kind"));
+            match p.kind() {
+                EffectKind::GaussMarkov => {
+                    cceil_p = shape_ceiling_p(p.kind(), r, &unit, &snap, ceil_seed)
+                }
+                EffectKind::Warmup => {
+                    wceil_p = shape_ceiling_p(p.kind(), r, &unit, &snap, ceil_seed)
+                }
+                _ => {}
+            }
             let js = match p {
                 EffectParams::BiasJumps { count, rms_size } => {
                     draw_jumps(count, rms_size, unit.t_run, nrng.random::<u64>())
@@ -1191,6 +1322,8 @@ fn run_one(
         jump_z,
         resid,
         jceil_p,
+        cceil_p,
+        wceil_p,
         lr,
         galt,
         warm_scale,
@@ -1665,7 +1798,7 @@ fn main() {
     }
     if !csv.is_empty() {
         let mut text = String::from(
-            "family,effect,draw,tau0,t_run,q,n,b,k,r,lsb,rate_lsb,rho,verdict,gap_before,gap_after,named,shape_true,amp_true,oracle_z,oracle_delta,null_z_gm,null_z_sin,null_z_filter,null_z_warmup,null_z_jumps,secs,qlim,warm_b,jump_z1,jump_z2,jump_z3,jceil_p,lr_gm,lr_sin,lr_filter,lr_ma,lr_second,lr_zero,galt_gm,galt_sin,galt_filter,galt_ma,galt_second,galt_zero,warm_scale,warm_b_scaled,warm_p,bias,intrinsic,false_alarm,intrinsic_exact,named_params,warm_p_up,warm_p_prof,warm_k_up,warm_k_null,nu,n_taus\n",
+            "family,effect,draw,tau0,t_run,q,n,b,k,r,lsb,rate_lsb,rho,verdict,gap_before,gap_after,named,shape_true,amp_true,oracle_z,oracle_delta,null_z_gm,null_z_sin,null_z_filter,null_z_warmup,null_z_jumps,secs,qlim,warm_b,jump_z1,jump_z2,jump_z3,jceil_p,lr_gm,lr_sin,lr_filter,lr_ma,lr_second,lr_zero,galt_gm,galt_sin,galt_filter,galt_ma,galt_second,galt_zero,warm_scale,warm_b_scaled,warm_p,bias,intrinsic,false_alarm,intrinsic_exact,named_params,warm_p_up,warm_p_prof,warm_k_up,warm_k_null,nu,n_taus,cceil_p,wceil_p\n",
         );
         for (o, (_, _, i)) in res.iter().zip(&items) {
             let u = &o.unit;
@@ -1675,7 +1808,7 @@ fn main() {
             });
             let nz: Vec<String> = o.null_z.iter().map(|z| format!("{z:.4}")).collect();
             text += &format!(
-                "{},{},{},{},{:.0},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:.3},{:?},{:.4},{:.4},{},{:e},{:e},{:.4},{:.4},{},{:.3},{},{:.3},{:.3},{:.3},{:.3},{:.4},{},{},{:.4},{:.3},{:.4},{:e},{},{},{},{},{:.4},{:.4},{:e},{:e},{:.2},{}\n",
+                "{},{},{},{},{:.0},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:.3},{:?},{:.4},{:.4},{},{:e},{:e},{:.4},{:.4},{},{:.3},{},{:.3},{:.3},{:.3},{:.3},{:.4},{},{},{:.4},{:.3},{:.4},{:e},{},{},{},{},{:.4},{:.4},{:e},{:e},{:.2},{},{:.4},{:.4}\n",
                 u.family,
                 kind_name(o.truth_kind),
                 i,
@@ -1736,7 +1869,9 @@ fn main() {
                 o.warm_k_up,
                 o.warm_k_null,
                 o.nu,
-                o.n_taus
+                o.n_taus,
+                o.cceil_p,
+                o.wceil_p
             );
         }
         std::fs::write(&csv, text).expect("csv");

@@ -259,6 +259,47 @@ pub fn quantize_with_carry(inc: &mut [f64], lsb: f64) {
     }
 }
 
+/// The Gauss-Markov prior: `tau_c` log-uniform in `[.0 tau0, T_run / .1]`.
+pub const GM_TAU_C_PRIOR: (f64, f64) = (20.0, 50.0);
+/// The sinusoid prior: the frequency log-uniform in `[.0 / T_run, .1 / tau0]` Hz.
+pub const SIN_FREQ_PRIOR: (f64, f64) = (30.0, 0.1);
+/// The output filter prior: the time constant log-uniform in `[tau0, this tau0]`.
+pub const FILTER_TAU_PRIOR: f64 = 10.0;
+/// The warm-up prior: `T` log-uniform in `[.0 s, T_run / .1]`.
+pub const WARMUP_T_PRIOR: (f64, f64) = (60.0, 5.0);
+
+/// The Gauss-Markov `sigma` whose peak ADEV is `rho` times the base's there: peak ADEV 0.6174
+/// sigma at tau = 1.893 tau_c (docs/theory.md section 3).
+pub fn gm_sigma(rho: f64, tau_c: f64, base_adev: &dyn Fn(f64) -> f64) -> f64 {
+    rho * base_adev(1.893 * tau_c) / 0.6174
+}
+
+/// The sinusoid's amplitude whose first ADEV maximum is `rho` times the base's there: the
+/// first maximum of `sin^2(x) / x` at `x = pi 0.371`, 0.725 A.
+pub fn sinusoid_amplitude(rho: f64, f_hz: f64, base_adev: &dyn Fn(f64) -> f64) -> f64 {
+    rho * base_adev(0.371 / f_hz) / 0.725
+}
+
+/// The warm-up amplitude whose ADEV is at most `rho` times the base's over the dense taus of
+/// a record of `t_run` s (`warmup_avar` is exact for the estimator on this record).
+pub fn warmup_amplitude(
+    rho: f64,
+    t_s: f64,
+    tau0: f64,
+    t_run: f64,
+    base_adev: &dyn Fn(f64) -> f64,
+) -> f64 {
+    let n_inc = (t_run / tau0) as u64;
+    let peak = allanscope::gap::evidence::dense_ms(4, n_inc / 10)
+        .iter()
+        .map(|&m| {
+            let tau = m as f64 * tau0;
+            terms::warmup_avar(1.0, t_s, tau0, m, n_inc).sqrt() / base_adev(tau)
+        })
+        .fold(0.0, f64::max);
+    rho / peak
+}
+
 /// The parameters of an effect of `kind` whose peak ADEV is `rho` times the base model's
 /// (`base_adev`, u/s at tau s) on a run of `t_run` s at `tau0`, drawn from the benchmarks'
 /// priors (examples/family_gap.rs's module doc; docs/gap.md, "Blind benchmark"): the
@@ -280,38 +321,26 @@ pub fn draw_effect_params(
 ) -> EffectParams {
     match kind {
         EffectKind::GaussMarkov => {
-            let tau_c = log_uniform(rng, 20.0 * tau0, t_run / 50.0);
-            // Peak ADEV 0.6174 sigma at tau = 1.893 tau_c (docs/theory.md section 3).
+            let tau_c = log_uniform(rng, GM_TAU_C_PRIOR.0 * tau0, t_run / GM_TAU_C_PRIOR.1);
             EffectParams::GaussMarkov {
-                sigma: rho * base_adev(1.893 * tau_c) / 0.6174,
+                sigma: gm_sigma(rho, tau_c, base_adev),
                 tau_c_s: tau_c,
             }
         }
         EffectKind::Sinusoid => {
-            let f = log_uniform(rng, 30.0 / t_run, 0.1 / tau0);
-            // First maximum of sin^2(x)/x at x = pi 0.371: 0.725 A.
+            let f = log_uniform(rng, SIN_FREQ_PRIOR.0 / t_run, SIN_FREQ_PRIOR.1 / tau0);
             EffectParams::Sinusoid {
-                amplitude: rho * base_adev(0.371 / f) / 0.725,
+                amplitude: sinusoid_amplitude(rho, f, base_adev),
                 frequency_hz: f,
             }
         }
         EffectKind::OutputFilter => EffectParams::OutputFilter {
-            time_constant_s: log_uniform(rng, tau0, 10.0 * tau0),
+            time_constant_s: log_uniform(rng, tau0, FILTER_TAU_PRIOR * tau0),
         },
         EffectKind::Warmup => {
-            let tc = log_uniform(rng, 60.0, t_run / 5.0);
-            let n_inc = (t_run / tau0) as u64;
-            // The amplitude for the drawn peak ratio over the dense taus (`warmup_avar` is
-            // exact for the estimator on this record).
-            let peak = allanscope::gap::evidence::dense_ms(4, n_inc / 10)
-                .iter()
-                .map(|&m| {
-                    let tau = m as f64 * tau0;
-                    terms::warmup_avar(1.0, tc, tau0, m, n_inc).sqrt() / base_adev(tau)
-                })
-                .fold(0.0, f64::max);
+            let tc = log_uniform(rng, WARMUP_T_PRIOR.0, t_run / WARMUP_T_PRIOR.1);
             EffectParams::Warmup {
-                amplitude: rho / peak,
+                amplitude: warmup_amplitude(rho, tc, tau0, t_run, base_adev),
                 time_constant_s: tc,
             }
         }
@@ -331,7 +360,7 @@ pub fn draw_effect_params(
             damping: log_uniform(rng, 0.2, 2.0),
         },
         EffectKind::ZeroPhaseFilter => EffectParams::ZeroPhaseFilter {
-            time_constant_s: log_uniform(rng, tau0, 10.0 * tau0),
+            time_constant_s: log_uniform(rng, tau0, FILTER_TAU_PRIOR * tau0),
         },
         EffectKind::Temperature => EffectParams::Temperature {
             coefficient: 0.0,

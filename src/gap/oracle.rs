@@ -111,22 +111,142 @@ pub fn gm_oracle(prob: &GapProblem, sigma: f64, tau_c_s: f64) -> Option<GmOracle
 /// its noncentrality `|u|` (the most powerful invariant test at a known shape and amplitude,
 /// to first order; module doc). `None` when the base fit fails.
 pub fn curve_known_z(prob: &GapProblem, signal_avar: &[f64]) -> Option<(f64, f64)> {
-    let base = prob.gls(&ModelSpec::default())?;
-    let j = prob.len();
-    let a = &base.model;
-    let r = DVector::from_fn(j, |i, _| prob.ln_avar()[i] - a[i].max(1e-300).ln());
-    let rw = prob.whiten(&r);
-    let nuis: Vec<DVector<f64>> = (0..5)
-        .filter(|&c| base.coef[c] > 0.0)
-        .map(|c| prob.whiten(&DVector::from_fn(j, |i, _| basis(prob.tau[i])[c] / a[i])))
-        .collect();
-    let q = orthonormal(&nuis);
-    let sig = prob.whiten(&DVector::from_fn(j, |i, _| {
-        signal_avar.get(i).copied().unwrap_or(0.0) / a[i]
-    }));
-    let u = project_off(&sig, &q);
+    let lin = CurveLinearisation::new(prob)?;
+    let u = lin.signature(signal_avar);
     let delta = u.norm();
-    Some((if delta > 0.0 { u.dot(&rw) / delta } else { 0.0 }, delta))
+    Some((
+        if delta > 0.0 {
+            u.dot(&lin.rw) / delta
+        } else {
+            0.0
+        },
+        delta,
+    ))
+}
+
+/// The base five-term fit of a [`GapProblem`] linearised for the known-signal tests of
+/// [`curve_known_z`] and [`ShapeCeiling`]: the whitened residual and the orthonormal basis of
+/// the whitened active five-term columns.
+struct CurveLinearisation<'a> {
+    prob: &'a GapProblem,
+    /// The base fit's AVAR at each cluster size (u^2/s^2).
+    model: Vec<f64>,
+    /// The whitened residual `r_w` of `ln AVAR_hat - ln AVAR`.
+    rw: DVector<f64>,
+    /// Orthonormal basis of the whitened nuisance columns `b_i / AVAR` (active terms).
+    q: Vec<DVector<f64>>,
+}
+
+impl<'a> CurveLinearisation<'a> {
+    fn new(prob: &'a GapProblem) -> Option<Self> {
+        let base = prob.gls(&ModelSpec::default())?;
+        let j = prob.len();
+        let a = &base.model;
+        let r = DVector::from_fn(j, |i, _| prob.ln_avar()[i] - a[i].max(1e-300).ln());
+        let rw = prob.whiten(&r);
+        let nuis: Vec<DVector<f64>> = (0..5)
+            .filter(|&c| base.coef[c] > 0.0)
+            .map(|c| prob.whiten(&DVector::from_fn(j, |i, _| basis(prob.tau[i])[c] / a[i])))
+            .collect();
+        Some(Self {
+            prob,
+            model: a.clone(),
+            rw,
+            q: orthonormal(&nuis),
+        })
+    }
+
+    /// The whitened signature `signal / AVAR` (`ln AVAR` linearised) projected off the nuisance.
+    fn signature(&self, signal_avar: &[f64]) -> DVector<f64> {
+        let a = &self.model;
+        let sig = self.prob.whiten(&DVector::from_fn(self.prob.len(), |i, _| {
+            signal_avar.get(i).copied().unwrap_or(0.0) / a[i]
+        }));
+        project_off(&sig, &self.q)
+    }
+}
+
+/// The fair ceiling of an effect whose amplitude law is known and whose shape is not: the log
+/// mixture likelihood ratio `ln (1/m) sum_k exp(u_k' y - |u_k|^2 / 2)` over `m` fully known
+/// alternatives `k` (a grid over the shape prior, each with its amplitude), `u_k` the whitened
+/// signal off the nuisance and `y` the whitened evidence; each term is the known-signal ratio
+/// of one alternative ([`curve_known_z`], [`BlockGls::z_known`]). By Neyman-Pearson the mixture
+/// ratio is the most powerful test against the prior that puts weight `1/m` on each
+/// alternative (Lehmann and Romano, ch. 3): no detector that uses this evidence, told the
+/// amplitude law but not the shape, has a higher power averaged over that prior at the same
+/// level, in the Gaussian model of the evidence (on the curve, to first order). The stationary
+/// effects' and the warm-up's analogue of [`JumpCeiling`] (docs/gap.md, "Fair ceilings of the
+/// stationary effects and the warm-up (session 27)").
+#[derive(Debug, Clone)]
+pub struct ShapeCeiling {
+    /// The whitened signatures `u_k`, projected off the nuisance.
+    us: Vec<DVector<f64>>,
+    /// `|u_k|^2 / 2`.
+    half_sq: Vec<f64>,
+    /// The run's whitened evidence off the nuisance.
+    y: DVector<f64>,
+}
+
+impl ShapeCeiling {
+    /// On the curve: `signals[k]` is the AVAR (u^2/s^2) alternative `k` adds at each of
+    /// `prob`'s cluster sizes, as for [`curve_known_z`] (`ln AVAR` linearised at the base
+    /// fit). `None` when the base fit fails or `signals` is empty.
+    pub fn on_curve(prob: &GapProblem, signals: &[Vec<f64>]) -> Option<Self> {
+        let lin = CurveLinearisation::new(prob)?;
+        let us = signals.iter().map(|s| lin.signature(s)).collect();
+        Self::new(us, lin.rw)
+    }
+
+    /// On the block means: `profiles[k]` is the rate (u/s) alternative `k` adds to each block
+    /// mean (a warm-up: `A` times [`BlockGls::warmup_profile`]), the drift the nuisance.
+    pub fn on_block_means(gls: &BlockGls, profiles: &[Vec<f64>]) -> Option<Self> {
+        let us = profiles
+            .iter()
+            .map(|p| gls.whitened_perp(&BlockGls::diff(p)))
+            .collect();
+        Self::new(us, project_off(&gls.yw, std::slice::from_ref(&gls.q_drift)))
+    }
+
+    fn new(us: Vec<DVector<f64>>, y: DVector<f64>) -> Option<Self> {
+        if us.is_empty() {
+            return None;
+        }
+        let half_sq = us
+            .iter()
+            .map(|u: &DVector<f64>| 0.5 * u.norm_squared())
+            .collect();
+        Some(Self { us, half_sq, y })
+    }
+
+    /// The log mixture ratio for the whitened evidence `w`.
+    pub fn log_lr(&self, w: &DVector<f64>) -> f64 {
+        let terms: Vec<f64> = self
+            .us
+            .iter()
+            .zip(&self.half_sq)
+            .map(|(u, h)| u.dot(w) - h)
+            .collect();
+        super::warmup::log_mean_exp(&terms)
+    }
+
+    /// The run's log mixture ratio and its p-value under the null of the same model (the
+    /// whitened evidence off the nuisance `N(0, I)`; only its components along the `u_k`
+    /// matter, and those are already off the nuisance), from `n_null` draws: `(1 + #{null >=
+    /// run}) / (1 + n_null)`.
+    pub fn p_value(&self, n_null: usize, seed: u64) -> (f64, f64) {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let obs = self.log_lr(&self.y);
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
+        let n = self.y.len();
+        let above = (0..n_null)
+            .filter(|_| {
+                let e = DVector::from_fn(n, |_, _| StandardNormal.sample(&mut rng));
+                self.log_lr(&e) >= obs
+            })
+            .count();
+        ((1 + above) as f64 / (1 + n_null) as f64, obs)
+    }
 }
 
 /// Cramér-Rao bound of the Gauss-Markov parameters on the curve.

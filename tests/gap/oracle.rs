@@ -7,7 +7,10 @@
 //! Runs of one hour at tau0 = 4 ms of the VOG4-like base of tests/gap/diagnosis.rs, ten seeds
 //! each. Tolerances come from the sampling error of ten draws (stated at each assert).
 
-use allanscope::gap::oracle::{gm_curve_crb, gm_oracle, warmup_crb, warmup_oracle, BlockGls};
+use allanscope::gap::effects::effect_column;
+use allanscope::gap::oracle::{
+    curve_known_z, gm_curve_crb, gm_oracle, warmup_crb, warmup_oracle, BlockGls, ShapeCeiling,
+};
 use allanscope::gap::problem::{GapProblem, ModelSpec};
 use allanscope::gap::{DiagnoseOptions, EffectKind, EvidenceSnapshot, GapConfig, GapEvidence};
 use allanscope::model::terms;
@@ -107,6 +110,86 @@ fn gauss_markov_oracle_drop_and_crb_match_simulation() {
     );
 }
 
+/// The Gauss-Markov column of `prob` at `tau_c_s` scaled by `sigma^2`: the AVAR the term adds.
+fn gm_signal(prob: &GapProblem, sigma: f64, tau_c_s: f64) -> Vec<f64> {
+    effect_column(
+        EffectKind::GaussMarkov,
+        tau_c_s,
+        &prob.ms,
+        prob.tau0_s,
+        prob.n_inc,
+    )
+    .iter()
+    .map(|g| sigma * sigma * g)
+    .collect()
+}
+
+#[test]
+fn the_curve_ceiling_is_the_known_signal_test_mixed_over_the_shapes() {
+    use statrs::distribution::{ContinuousCDF, Normal};
+    let opts = DiagnoseOptions::default();
+    let phi = Normal::new(0.0, 1.0).expect("normal");
+    // A clean run: with one alternative the mixture ratio is `z delta - delta^2 / 2`, increasing
+    // in `z`, so its p-value in the model's own null is `1 - Phi(z)`. 1999 null draws: the
+    // p-value's Monte Carlo sd is at most 0.011; tolerance 0.035.
+    let clean = GapProblem::new(&snapshot("", 11), &opts).expect("problem");
+    let one = [gm_signal(&clean, 0.1, 2.0)];
+    let (z, delta) = curve_known_z(&clean, &one[0]).expect("z");
+    let ceil = ShapeCeiling::on_curve(&clean, &one).expect("ceiling");
+    let (p, obs) = ceil.p_value(1999, 7);
+    assert!(
+        (obs - (z * delta - delta * delta / 2.0)).abs() < 1e-9 * (1.0 + obs.abs()),
+        "one alternative: ln LR {obs} against z delta - delta^2/2 = {}",
+        z * delta - delta * delta / 2.0
+    );
+    let p_z = 1.0 - phi.cdf(z);
+    assert!(
+        (p - p_z).abs() < 0.035,
+        "one alternative: p {p:.4} against 1 - Phi(z = {z:.3}) = {p_z:.4}"
+    );
+    // Over a grid of tau_c (0.1-50 s, 8 per decade) the ratio is the mean of the single-shape
+    // ratios, each from its own known-signal test.
+    let grid: Vec<f64> = (0..=22).map(|k| 0.1 * 10f64.powf(k as f64 / 8.0)).collect();
+    let mixture = |prob: &GapProblem| {
+        let signals: Vec<Vec<f64>> = grid.iter().map(|&t| gm_signal(prob, 0.3, t)).collect();
+        let terms: Vec<f64> = signals
+            .iter()
+            .map(|s| {
+                let (z, d) = curve_known_z(prob, s).expect("z");
+                z * d - d * d / 2.0
+            })
+            .collect();
+        let m = terms.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let direct =
+            m + (terms.iter().map(|t| (t - m).exp()).sum::<f64>() / terms.len() as f64).ln();
+        (
+            ShapeCeiling::on_curve(prob, &signals).expect("ceiling"),
+            direct,
+        )
+    };
+    let (ceil, direct) = mixture(&clean);
+    let (p_clean, obs) = ceil.p_value(1999, 7);
+    assert!(
+        (obs - direct).abs() < 1e-9 * (1.0 + direct.abs()),
+        "mixture ln LR {obs} against the mean of the single ratios {direct}"
+    );
+    // The run with the hump of the test above (peak ADEV about 1.2 times the base's, known
+    // z about 8) is far beyond the clean draws: the smallest p-value 1999 draws give.
+    let bump = GapProblem::new(
+        &snapshot("gauss_markov = { sigma = 0.3, tau_c = 2.0 }", 11),
+        &opts,
+    )
+    .expect("problem");
+    let (ceil, _) = mixture(&bump);
+    let (p_bump, _) = ceil.p_value(1999, 7);
+    eprintln!("curve ceiling: one shape p {p:.4} (1 - Phi(z) {p_z:.4}); grid: clean p {p_clean:.4}, hump p {p_bump:.4}");
+    assert!(p_bump <= 1.0 / 2000.0 + 1e-12, "hump: p {p_bump}");
+    assert!(
+        p_clean > 0.01,
+        "clean run flagged by the ceiling at 1%: p {p_clean}"
+    );
+}
+
 /// Maximum-likelihood `ln T` of a warm-up with the block GLS's covariance: the `T` whose column
 /// brings the largest drop (golden section in `ln T` over a factor 3 either side of `t0`).
 fn ml_time_constant(gls: &BlockGls, t0: f64) -> f64 {
@@ -165,5 +248,57 @@ fn warmup_oracle_z_and_crb_match_simulation() {
     assert!(
         (SD_RATIO.0..SD_RATIO.1).contains(&ratio),
         "sd of the ML ln T {s_ln:.3} against CRB {m_crb:.3} (ratio {ratio:.2})"
+    );
+}
+
+#[test]
+fn the_warmup_ceiling_is_the_known_signal_test_mixed_over_the_time_constants() {
+    use statrs::distribution::{ContinuousCDF, Normal};
+    let phi = Normal::new(0.0, 1.0).expect("normal");
+    let gls_of = |extra: &str| {
+        let snap = snapshot(extra, 11);
+        let block_s = snap.block_len as f64 * TAU0;
+        BlockGls::new(&snap.block_means, block_s, &c_true()).expect("gls")
+    };
+    let profile = |gls: &BlockGls, amp: f64, t: f64| -> Vec<f64> {
+        gls.warmup_profile(t).iter().map(|v| amp * v).collect()
+    };
+    // One alternative on a clean run: the ratio is `z delta - delta^2 / 2` of the warm-up
+    // oracle's known-signal test and its p-value `1 - Phi(z)` (Monte Carlo sd at most 0.011
+    // with 1999 null draws; tolerance 0.035).
+    let clean = gls_of("");
+    let (amp, t_c) = (2.0, 300.0);
+    let (_, z, delta) = warmup_oracle(&clean, amp, t_c);
+    let one = ShapeCeiling::on_block_means(&clean, &[profile(&clean, amp, t_c)]).expect("ceiling");
+    let (p, obs) = one.p_value(1999, 5);
+    let expect = z * delta - delta * delta / 2.0;
+    assert!(
+        (obs - expect).abs() < 1e-9 * (1.0 + expect.abs()),
+        "one time constant: ln LR {obs} against z delta - delta^2/2 = {expect}"
+    );
+    let p_z = 1.0 - phi.cdf(z);
+    assert!(
+        (p - p_z).abs() < 0.035,
+        "one time constant: p {p:.4} against 1 - Phi(z = {z:.3}) = {p_z:.4}"
+    );
+    // Over T of 60-900 s (8 per decade) at 15 arcsec/s: the strong warm-up of the test above
+    // reaches the smallest p-value 1999 draws give; the clean run does not pass at 1%.
+    let grid: Vec<f64> = (0..=9).map(|k| 60.0 * 10f64.powf(k as f64 / 8.0)).collect();
+    let mixed = |gls: &BlockGls| {
+        let profiles: Vec<Vec<f64>> = grid.iter().map(|&t| profile(gls, 15.0, t)).collect();
+        ShapeCeiling::on_block_means(gls, &profiles)
+            .expect("ceiling")
+            .p_value(1999, 5)
+            .0
+    };
+    let p_clean = mixed(&clean);
+    let p_warm = mixed(&gls_of(
+        "warmup = { amplitude = 15.0, time_constant = 300.0 }",
+    ));
+    eprintln!("warm-up ceiling: one T p {p:.4} (1 - Phi(z) {p_z:.4}); grid: clean p {p_clean:.4}, warm-up p {p_warm:.4}");
+    assert!(p_warm <= 1.0 / 2000.0 + 1e-12, "warm-up: p {p_warm}");
+    assert!(
+        p_clean > 0.01,
+        "clean run flagged by the ceiling at 1%: p {p_clean}"
     );
 }
