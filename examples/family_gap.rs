@@ -211,7 +211,11 @@
 //! (the base `G`, each stationary candidate's first-scan score `lr_*` and the gap with it in
 //! `galt_*`, the warm-up's `B` and its block-mean scale, the step z scores, the base `G`'s
 //! effective degrees of freedom `nu` and the number of taus `n_taus`), so that the null
-//! distribution of each test can be read off clean runs. `--no-oracle` leaves out the clean
+//! distribution of each test can be read off clean runs; `cceil_p` is the fair shape ceiling
+//! (`oracle::ShapeCeiling`: told the kind and `rho`, not the shape) of a Gauss-Markov,
+//! sinusoid, output-filter or warm-up draw, and on clean draws its level at the null stream's
+//! Gauss-Markov draw (`wceil_p`: its warm-up draw); `alt_kinds` the effect kinds the record
+//! lists among its alternatives. `--no-oracle` leaves out the clean
 //! draws' oracle statistics and jump ceiling (a null study of the diagnosis alone). `--models
 //! DIR` writes each draw's model file, which `allanscope simulate --model` reads, for
 //! reproducing a run through the command line (another noise stream, the same unit).
@@ -1062,6 +1066,8 @@ struct Outcome {
     cceil_p: f64,
     /// Clean draws: the warm-up's fair ceiling at the null stream's warm-up draw (its level).
     wceil_p: f64,
+    /// The effect kinds among the record's `alternatives`.
+    alt_kinds: Vec<&'static str>,
     /// The first stationary scan's drop of `r' S^-1 r` per parameter of each candidate against
     /// the base model (`Diagnosis::first_scores`), in the order of `LR_KINDS` (NaN: not scanned).
     lr: [f64; 6],
@@ -1291,6 +1297,17 @@ fn run_one(
             }
         }
     }
+    // The kinds the record lists among its alternatives (a tie said out loud).
+    let alt_kinds: Vec<&'static str> = d.as_ref().map_or(Vec::new(), |d| {
+        let mut k: Vec<&'static str> = d
+            .alternatives
+            .iter()
+            .flat_map(|a| a.effects.iter().map(|e| e.kind().name()))
+            .collect();
+        k.sort_unstable();
+        k.dedup();
+        k
+    });
     let (verdict, gap_before, gap_after, named, qlim) = match d {
         Ok(d) => (
             d.verdict,
@@ -1324,6 +1341,7 @@ fn run_one(
         jceil_p,
         cceil_p,
         wceil_p,
+        alt_kinds,
         lr,
         galt,
         warm_scale,
@@ -1798,7 +1816,7 @@ fn main() {
     }
     if !csv.is_empty() {
         let mut text = String::from(
-            "family,effect,draw,tau0,t_run,q,n,b,k,r,lsb,rate_lsb,rho,verdict,gap_before,gap_after,named,shape_true,amp_true,oracle_z,oracle_delta,null_z_gm,null_z_sin,null_z_filter,null_z_warmup,null_z_jumps,secs,qlim,warm_b,jump_z1,jump_z2,jump_z3,jceil_p,lr_gm,lr_sin,lr_filter,lr_ma,lr_second,lr_zero,galt_gm,galt_sin,galt_filter,galt_ma,galt_second,galt_zero,warm_scale,warm_b_scaled,warm_p,bias,intrinsic,false_alarm,intrinsic_exact,named_params,warm_p_up,warm_p_prof,warm_k_up,warm_k_null,nu,n_taus,cceil_p,wceil_p\n",
+            "family,effect,draw,tau0,t_run,q,n,b,k,r,lsb,rate_lsb,rho,verdict,gap_before,gap_after,named,shape_true,amp_true,oracle_z,oracle_delta,null_z_gm,null_z_sin,null_z_filter,null_z_warmup,null_z_jumps,secs,qlim,warm_b,jump_z1,jump_z2,jump_z3,jceil_p,lr_gm,lr_sin,lr_filter,lr_ma,lr_second,lr_zero,galt_gm,galt_sin,galt_filter,galt_ma,galt_second,galt_zero,warm_scale,warm_b_scaled,warm_p,bias,intrinsic,false_alarm,intrinsic_exact,named_params,warm_p_up,warm_p_prof,warm_k_up,warm_k_null,nu,n_taus,cceil_p,wceil_p,alt_kinds\n",
         );
         for (o, (_, _, i)) in res.iter().zip(&items) {
             let u = &o.unit;
@@ -1808,7 +1826,7 @@ fn main() {
             });
             let nz: Vec<String> = o.null_z.iter().map(|z| format!("{z:.4}")).collect();
             text += &format!(
-                "{},{},{},{},{:.0},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:.3},{:?},{:.4},{:.4},{},{:e},{:e},{:.4},{:.4},{},{:.3},{},{:.3},{:.3},{:.3},{:.3},{:.4},{},{},{:.4},{:.3},{:.4},{:e},{},{},{},{},{:.4},{:.4},{:e},{:e},{:.2},{},{:.4},{:.4}\n",
+                "{},{},{},{},{:.0},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:.3},{:?},{:.4},{:.4},{},{:e},{:e},{:.4},{:.4},{},{:.3},{},{:.3},{:.3},{:.3},{:.3},{:.4},{},{},{:.4},{:.3},{:.4},{:e},{},{},{},{},{:.4},{:.4},{:e},{:e},{:.2},{},{:.4},{:.4},{}\n",
                 u.family,
                 kind_name(o.truth_kind),
                 i,
@@ -1871,7 +1889,8 @@ fn main() {
                 o.nu,
                 o.n_taus,
                 o.cceil_p,
-                o.wceil_p
+                o.wceil_p,
+                o.alt_kinds.join("+")
             );
         }
         std::fs::write(&csv, text).expect("csv");
