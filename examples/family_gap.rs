@@ -951,38 +951,34 @@ fn shape_ceiling_p(
     let col = |kind, shape| effect_column(kind, shape, &prob.ms, prob.tau0_s, prob.n_inc);
     let adev = |tau: f64| u.adev(tau);
     let curve = |signals: Vec<Vec<f64>>| oracle::ShapeCeiling::on_curve(&prob, &signals);
+    // An effect whose AVAR is its amplitude squared times its column: the column at each
+    // shape of the grid, scaled by the amplitude `rho` gives there.
+    let scaled = |grid: Vec<f64>, amplitude: &dyn Fn(f64) -> f64| {
+        curve(
+            grid.into_iter()
+                .map(|x| {
+                    let a2 = amplitude(x).powi(2);
+                    col(kind, x).iter().map(|g| a2 * g).collect()
+                })
+                .collect(),
+        )
+    };
     let ceiling = match kind {
-        EffectKind::GaussMarkov => curve(
+        EffectKind::GaussMarkov => scaled(
             log_grid(
                 GM_TAU_C_PRIOR.0 * u.tau0,
                 u.t_run / GM_TAU_C_PRIOR.1,
                 SHAPE_CEIL_PER_DECADE,
-            )
-            .into_iter()
-            .map(|tc| {
-                let s2 = gm_sigma(rho, tc, &adev).powi(2);
-                col(EffectKind::GaussMarkov, tc)
-                    .iter()
-                    .map(|g| s2 * g)
-                    .collect()
-            })
-            .collect(),
+            ),
+            &|tc| gm_sigma(rho, tc, &adev),
         ),
-        EffectKind::Sinusoid => curve(
+        EffectKind::Sinusoid => scaled(
             log_grid(
                 SIN_FREQ_PRIOR.0 / u.t_run,
                 SIN_FREQ_PRIOR.1 / u.tau0,
                 SIN_CEIL_PER_DECADE,
-            )
-            .into_iter()
-            .map(|f| {
-                let a2 = sinusoid_amplitude(rho, f, &adev).powi(2);
-                col(EffectKind::Sinusoid, f)
-                    .iter()
-                    .map(|g| a2 * g)
-                    .collect()
-            })
-            .collect(),
+            ),
+            &|f| sinusoid_amplitude(rho, f, &adev),
         ),
         EffectKind::OutputFilter => {
             // The filter acts on the simulated white rate (N), as in `oracle_z`.

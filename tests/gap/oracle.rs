@@ -124,11 +124,21 @@ fn gm_signal(prob: &GapProblem, sigma: f64, tau_c_s: f64) -> Vec<f64> {
     .collect()
 }
 
+/// Asserts that a ceiling's Monte Carlo p-value `p` (1999 null draws: sd at most 0.011) is the
+/// normal tail `1 - Phi(z)` within 0.035, and returns that tail.
+fn assert_normal_tail(p: f64, z: f64, what: &str) -> f64 {
+    use statrs::distribution::{ContinuousCDF, Normal};
+    let p_z = 1.0 - Normal::new(0.0, 1.0).expect("normal").cdf(z);
+    assert!(
+        (p - p_z).abs() < 0.035,
+        "{what}: p {p:.4} against 1 - Phi(z = {z:.3}) = {p_z:.4}"
+    );
+    p_z
+}
+
 #[test]
 fn the_curve_ceiling_is_the_known_signal_test_mixed_over_the_shapes() {
-    use statrs::distribution::{ContinuousCDF, Normal};
     let opts = DiagnoseOptions::default();
-    let phi = Normal::new(0.0, 1.0).expect("normal");
     // A clean run and one weak alternative (sigma 0.1 at tau_c 2 s). The run's ratio is half
     // the drop of `r' S^-1 r` with the known AVAR as an offset (the Gauss-Markov oracle's
     // `drop_fixed`), which the linearised `z delta - delta^2 / 2` approximates (`z` within
@@ -150,11 +160,7 @@ fn the_curve_ceiling_is_the_known_signal_test_mixed_over_the_shapes() {
         (z_obs - z).abs() < 0.05,
         "linearised: z {z:.4} against the refitted ratio's {z_obs:.4}"
     );
-    let p_z = 1.0 - phi.cdf(z_obs);
-    assert!(
-        (p - p_z).abs() < 0.035,
-        "one alternative: p {p:.4} against 1 - Phi(z' = {z_obs:.3}) = {p_z:.4}"
-    );
+    let p_z = assert_normal_tail(p, z_obs, "one alternative");
     // Over a grid of tau_c (0.1-50 s, 8 per decade) the ratio is the mean of the single-shape
     // ratios, each from its own refitted drop.
     let grid: Vec<f64> = (0..=22).map(|k| 0.1 * 10f64.powf(k as f64 / 8.0)).collect();
@@ -264,8 +270,6 @@ fn warmup_oracle_z_and_crb_match_simulation() {
 
 #[test]
 fn the_warmup_ceiling_is_the_known_signal_test_mixed_over_the_time_constants() {
-    use statrs::distribution::{ContinuousCDF, Normal};
-    let phi = Normal::new(0.0, 1.0).expect("normal");
     let gls_of = |extra: &str| {
         let snap = snapshot(extra, 11);
         let block_s = snap.block_len as f64 * TAU0;
@@ -287,11 +291,7 @@ fn the_warmup_ceiling_is_the_known_signal_test_mixed_over_the_time_constants() {
         (obs - expect).abs() < 1e-9 * (1.0 + expect.abs()),
         "one time constant: ln LR {obs} against z delta - delta^2/2 = {expect}"
     );
-    let p_z = 1.0 - phi.cdf(z);
-    assert!(
-        (p - p_z).abs() < 0.035,
-        "one time constant: p {p:.4} against 1 - Phi(z = {z:.3}) = {p_z:.4}"
-    );
+    let p_z = assert_normal_tail(p, z, "one time constant");
     // Over T of 60-900 s (8 per decade) at 15 arcsec/s: the strong warm-up of the test above
     // reaches the smallest p-value 1999 draws give; the clean run does not pass at 1%.
     let grid: Vec<f64> = (0..=9).map(|k| 60.0 * 10f64.powf(k as f64 / 8.0)).collect();
