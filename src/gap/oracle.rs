@@ -204,8 +204,9 @@ pub struct ShapeCeiling {
 impl ShapeCeiling {
     /// On the curve: `signals[k]` is the AVAR (u^2/s^2) alternative `k` adds at each of
     /// `prob`'s cluster sizes, as for [`curve_known_z`], taken as the shift it makes in
-    /// `ln AVAR` at the base fit, `ln(1 + signal / AVAR)` (the five terms' amplitudes
-    /// linearised as nuisance). `signal / AVAR`, the first-order shift, was tried first: a
+    /// `ln AVAR` at the base fit (`CurveLinearisation::log_signature`: `ln(1 + signal /
+    /// AVAR)` where it adds AVAR, first order where it takes AVAR away; the five terms'
+    /// amplitudes linearised as nuisance). `signal / AVAR` everywhere was tried first: a
     /// strong line's true alternative then has a ratio far below one (its `|u|^2 / 2` is many
     /// times `u' y`), and the sinusoid's ceiling fell below the diagnosis. A refitted drop
     /// per alternative was tried next: its null is not the linear model's (17% of clean runs

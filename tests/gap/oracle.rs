@@ -165,9 +165,7 @@ fn the_curve_ceiling_is_the_known_signal_test_mixed_over_the_shapes() {
                 c.p_value(0, 0).1
             })
             .collect();
-        let m = terms.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let direct =
-            m + (terms.iter().map(|t| (t - m).exp()).sum::<f64>() / terms.len() as f64).ln();
+        let direct = allanscope::gap::warmup::log_mean_exp(&terms);
         (
             ShapeCeiling::on_curve(prob, &signals).expect("ceiling"),
             direct,
