@@ -225,7 +225,9 @@ mod common;
 use allanscope::gap::effects::effect_column;
 use allanscope::gap::oracle::{self, BlockGls, JumpCeiling};
 use allanscope::gap::problem::{GapProblem, ModelSpec};
+use allanscope::gap::step_null;
 use allanscope::gap::steps::forward_steps;
+use allanscope::gap::thresholds::Thresholds;
 use allanscope::gap::warmup::{fit_warmup, WARMUP_K_DELTA};
 use allanscope::gap::warmup_profile::fit_warmup_profiled;
 use allanscope::gap::{
@@ -1064,6 +1066,11 @@ struct Outcome {
     wceil_p: f64,
     /// The effect kinds among the record's `alternatives`.
     alt_kinds: Vec<&'static str>,
+    /// The diagnosis's jump procedure at the base fit's terms (`gap::step_null::JumpNull`): the
+    /// rule's excess over `jump_z` at its own `K^2`, and the shift that sets the rule at
+    /// `jump_alpha` on the run's Gaussian null; the procedure finds jumps when the excess reaches the shift.
+    jump_excess: f64,
+    jump_shift: f64,
     /// The first stationary scan's drop of `r' S^-1 r` per parameter of each candidate against
     /// the base model (`Diagnosis::first_scores`), in the order of `LR_KINDS` (NaN: not scanned).
     lr: [f64; 6],
@@ -1247,6 +1254,19 @@ fn run_one(
             *o = z;
         }
     }
+    // The jump procedure of the diagnosis (`gap::step_null`) at the base fit's terms: its
+    // excess and its shift at the diagnosis's `jump_alpha` (found in time when the excess
+    // reaches the shift).
+    let (jump_excess, jump_shift) = base_c5
+        .and_then(|c5| {
+            let z = Thresholds::default().jump_z;
+            let mut null =
+                step_null::JumpNull::new(snap.block_means.len(), block_s, &c5, &[], &z, warm_k_up)?;
+            let st = null.statistic(&null.rotate(&snap.block_means)?);
+            let alpha = Thresholds::default().jump_alpha;
+            Some((st.excess, null.shift(st.k0, alpha)?))
+        })
+        .unwrap_or((f64::NAN, f64::NAN));
     let mut jceil_p = f64::NAN;
     if let (Some(EffectParams::BiasJumps { count, rms_size }), Some(c5)) = (truth, base_c5) {
         jceil_p = ceiling(count, rms_size, &c5, stream);
@@ -1338,6 +1358,8 @@ fn run_one(
         cceil_p,
         wceil_p,
         alt_kinds,
+        jump_excess,
+        jump_shift,
         lr,
         galt,
         warm_scale,
@@ -1812,7 +1834,7 @@ fn main() {
     }
     if !csv.is_empty() {
         let mut text = String::from(
-            "family,effect,draw,tau0,t_run,q,n,b,k,r,lsb,rate_lsb,rho,verdict,gap_before,gap_after,named,shape_true,amp_true,oracle_z,oracle_delta,null_z_gm,null_z_sin,null_z_filter,null_z_warmup,null_z_jumps,secs,qlim,warm_b,jump_z1,jump_z2,jump_z3,jceil_p,lr_gm,lr_sin,lr_filter,lr_ma,lr_second,lr_zero,galt_gm,galt_sin,galt_filter,galt_ma,galt_second,galt_zero,warm_scale,warm_b_scaled,warm_p,bias,intrinsic,false_alarm,intrinsic_exact,named_params,warm_p_up,warm_p_prof,warm_k_up,warm_k_null,nu,n_taus,cceil_p,wceil_p,alt_kinds\n",
+            "family,effect,draw,tau0,t_run,q,n,b,k,r,lsb,rate_lsb,rho,verdict,gap_before,gap_after,named,shape_true,amp_true,oracle_z,oracle_delta,null_z_gm,null_z_sin,null_z_filter,null_z_warmup,null_z_jumps,secs,qlim,warm_b,jump_z1,jump_z2,jump_z3,jceil_p,lr_gm,lr_sin,lr_filter,lr_ma,lr_second,lr_zero,galt_gm,galt_sin,galt_filter,galt_ma,galt_second,galt_zero,warm_scale,warm_b_scaled,warm_p,bias,intrinsic,false_alarm,intrinsic_exact,named_params,warm_p_up,warm_p_prof,warm_k_up,warm_k_null,nu,n_taus,cceil_p,wceil_p,alt_kinds,jump_excess,jump_shift\n",
         );
         for (o, (_, _, i)) in res.iter().zip(&items) {
             let u = &o.unit;
@@ -1822,7 +1844,7 @@ fn main() {
             });
             let nz: Vec<String> = o.null_z.iter().map(|z| format!("{z:.4}")).collect();
             text += &format!(
-                "{},{},{},{},{:.0},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:.3},{:?},{:.4},{:.4},{},{:e},{:e},{:.4},{:.4},{},{:.3},{},{:.3},{:.3},{:.3},{:.3},{:.4},{},{},{:.4},{:.3},{:.4},{:e},{},{},{},{},{:.4},{:.4},{:e},{:e},{:.2},{},{:.4},{:.4},{}\n",
+                "{},{},{},{},{:.0},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:.3},{:?},{:.4},{:.4},{},{:e},{:e},{:.4},{:.4},{},{:.3},{},{:.3},{:.3},{:.3},{:.3},{:.4},{},{},{:.4},{:.3},{:.4},{:e},{},{},{},{},{:.4},{:.4},{:e},{:e},{:.2},{},{:.4},{:.4},{},{:.3},{:.3}\n",
                 u.family,
                 kind_name(o.truth_kind),
                 i,
@@ -1886,7 +1908,9 @@ fn main() {
                 o.n_taus,
                 o.cceil_p,
                 o.wceil_p,
-                o.alt_kinds.join("+")
+                o.alt_kinds.join("+"),
+                o.jump_excess,
+                o.jump_shift
             );
         }
         std::fs::write(&csv, text).expect("csv");

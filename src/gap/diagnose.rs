@@ -684,7 +684,15 @@ fn diagnose_curve_once(
         // up to the curve's upper bound (steps.rs, `detect_steps`; docs/gap.md, "The jump
         // test's random walk (session 21)").
         let k_up = k_up_kept.unwrap_or_else(|| k2_upper(&prob, &spec, &cur));
-        detect_steps(&resid, block_s, &c5, &stat_params, &th.jump_z, k_up)
+        detect_steps(
+            &resid,
+            block_s,
+            &c5,
+            &stat_params,
+            &th.jump_z,
+            k_up,
+            th.jump_alpha,
+        )
     } else {
         None
     };

@@ -63,6 +63,12 @@ impl KRotation {
         })
     }
 
+    /// `U' L^-1` (`n x n`, `n` the differences): the rotation as a matrix.
+    pub fn matrix(&self) -> Option<DMatrix<f64>> {
+        let n = self.lambda.len();
+        Some(&self.ut * self.l.solve_lower_triangular(&DMatrix::identity(n, n))?)
+    }
+
     /// `U' L^-1 v` for a vector of `n_blocks - 1` differences.
     pub fn rotate(&self, v: DVector<f64>) -> Option<DVector<f64>> {
         Some(&self.ut * self.l.solve_lower_triangular(&v)?)
@@ -116,6 +122,17 @@ impl KRotation {
         let d = DVector::from_iterator(n, block_means.windows(2).map(|p| p[1] - p[0]));
         let z = self.rotate(d)?;
         let u = self.rotate(DVector::from_element(n, 1.0))?;
+        self.max_likelihood_k2_rotated(&z, &u, k_hi)
+    }
+
+    /// [`Self::max_likelihood_k2`] of differences already rotated, `z = U' L^-1 d`, with the
+    /// drift column rotated the same way (`u = U' L^-1 1`).
+    pub fn max_likelihood_k2_rotated(
+        &self,
+        z: &DVector<f64>,
+        u: &DVector<f64>,
+        k_hi: f64,
+    ) -> Option<f64> {
         // -2 l(k), the drift profiled out.
         let m2l = |k: f64| -> f64 {
             let (mut szz, mut suz, mut suu, mut logdet) = (0.0, 0.0, 0.0, 0.0);

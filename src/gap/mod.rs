@@ -49,6 +49,7 @@ pub mod rounding;
 pub mod sawtooth;
 pub mod segments;
 pub(crate) mod simplex;
+pub mod step_null;
 pub mod steps;
 pub mod temperature;
 pub mod thresholds;

@@ -6,6 +6,7 @@
 use super::block_cov::{block_diff_covariance, usable_block_means};
 use super::effects::EffectParams;
 use super::k_profile::KRotation;
+use super::step_null::JumpNull;
 use nalgebra::{DMatrix, DVector};
 
 /// Bias jumps found in the block means.
@@ -111,7 +112,13 @@ impl JumpFinding {
 /// jumps' share (at least a quarter of the curve's) and the block means' own maximum likelihood
 /// value with the kept jumps taken out ([`KRotation::max_likelihood_k2`], on `[0, k_hi]`; `k_hi` the curve's upper
 /// bound, 0 to leave the profile out); the search is run again while that `K^2` moves (twice at
-/// most). Returns `None` when the series is too short or `z_crit` is empty. (Mixture statistics
+/// most). With `alpha > 0` (since session 28) the first search's `K^2` already has the
+/// strongest candidates taken out, as many as `z_crit` has entries, as if kept (both the
+/// curve's `K^2` and the block means' own take up the jumps' share, which hid them), and
+/// `z_crit` is shifted to the level `alpha` by a parametric bootstrap of that procedure
+/// ([`JumpNull`]; docs/gap.md, "The jump rule on its own run (session 28)"); `alpha = 0` is the
+/// rule of sessions 21-27. Returns `None` when the series is too short or `z_crit` is empty.
+/// (Mixture statistics
 /// for the presence test, [`jump_mixture_stat`](super::jump_mixture::jump_mixture_stat) and
 /// [`jump_forward_mixture_stat`](super::jump_mixture::jump_forward_mixture_stat), were measured
 /// against this rule and not adopted: docs/gap.md, "Mixture statistics".)
@@ -122,11 +129,12 @@ pub fn detect_steps(
     effects: &[EffectParams],
     z_crit: &[f64],
     k_hi: f64,
+    alpha: f64,
 ) -> Option<JumpFinding> {
     if !usable_block_means(block_means) {
         return None;
     }
-    let z_min = *z_crit.last()?;
+    z_crit.last()?;
     let t_run = block_means.len() as f64 * block_s;
     let k2_curve = c[3];
     // The rotation depends on the model and the effects only: one for every re-search.
@@ -138,12 +146,34 @@ pub fn detect_steps(
             .and_then(|r| r.max_likelihood_k2(&found.remove_from(block_means), k_hi))
             .unwrap_or(0.0)
     };
+    // K^2 with the jumps `found` taken out: the larger of the curve's less their share (at
+    // least a quarter of the curve's) and the block means' own without them.
+    let k2_without = |found: &JumpFinding| -> f64 {
+        let kj2: f64 = found.sizes.iter().map(|s| s * s).sum::<f64>() / t_run;
+        (k2_curve - kj2).max(0.25 * k2_curve).max(k2_blocks(found))
+    };
     let mut c = *c;
     c[3] = k2_curve.max(k2_blocks(&JumpFinding::default()));
+    // With `alpha`, the procedure of `step_null`: the first search's K^2 with the strongest
+    // candidates taken out (both the curve's K^2 and the block means' own take up the jumps'
+    // share and hid them), and the rule shifted to its level on the run's own null.
+    let mut shift = 0.0;
+    if alpha > 0.0 {
+        if let Some(mut null) = JumpNull::new(block_means.len(), block_s, &c, effects, z_crit, k_hi)
+        {
+            if let Some(z) = null.rotate(block_means) {
+                let st = null.statistic(&z);
+                c[3] = st.k1;
+                shift = null.shift(st.k0, alpha).unwrap_or(0.0);
+            }
+        }
+    }
+    let z_crit: Vec<f64> = z_crit.iter().map(|z| z + shift).collect();
+    let z_crit = z_crit.as_slice();
+    let z_min = *z_crit.last()?;
     let mut found = step_search(block_means, block_s, &c, effects, z_min)?.accepted(z_crit);
     for _ in 0..2 {
-        let kj2: f64 = found.sizes.iter().map(|s| s * s).sum::<f64>() / t_run;
-        let k2 = (k2_curve - kj2).max(0.25 * k2_curve).max(k2_blocks(&found));
+        let k2 = k2_without(&found);
         if (k2 - c[3]).abs() <= 0.02 * k2.max(c[3]) {
             break;
         }
@@ -164,10 +194,8 @@ pub fn step_standard_errors(
     c: &[f64; 5],
     effects: &[EffectParams],
 ) -> Option<Vec<f64>> {
-    let sigma = block_diff_covariance(n_blocks, block_s, c, effects)?;
-    let n = sigma.nrows();
-    let chol = sigma.cholesky()?;
-    let linv = chol.l().solve_lower_triangular(&DMatrix::identity(n, n))?;
+    let linv = whitening(n_blocks, block_s, c, effects)?;
+    let n = linv.nrows();
     let ones = &linv * DVector::from_element(n, 1.0);
     let q = &ones / ones.norm();
     Some(
@@ -182,9 +210,9 @@ pub fn step_standard_errors(
 }
 
 /// The steps forward selection finds down to `z_min`, with their z scores, on the covariance of
-/// `c` as given (no acceptance rule, no re-estimation of `K`): the first pass of
-/// [`detect_steps`]. A run is flagged by [`detect_steps`] exactly when these pass
-/// [`JumpFinding::accepted`], which is how the rule is calibrated (docs/gap.md).
+/// `c` as given (no acceptance rule, no re-estimation of `K`, no shift of the rule): the first
+/// pass of [`detect_steps`] when `c` holds that pass's `K^2`, which is how the rule was
+/// calibrated (docs/gap.md).
 pub fn forward_steps(
     block_means: &[f64],
     block_s: f64,
@@ -319,6 +347,22 @@ pub fn step_scan(
     Some(out)
 }
 
+/// `L^-1`, with `L L'` the covariance of the differences of `n_blocks` block means under the
+/// model ([`block_diff_covariance`]).
+fn whitening(
+    n_blocks: usize,
+    block_s: f64,
+    c: &[f64; 5],
+    effects: &[EffectParams],
+) -> Option<DMatrix<f64>> {
+    let sigma = block_diff_covariance(n_blocks, block_s, c, effects)?;
+    let n = sigma.nrows();
+    sigma
+        .cholesky()?
+        .l()
+        .solve_lower_triangular(&DMatrix::identity(n, n))
+}
+
 /// The block-mean differences whitened by the model covariance ([`block_diff_covariance`]):
 /// `(L^-1, L^-1 d, L^-1 1)`, with `L L'` the covariance and `1` the drift column.
 fn whitened_block_diffs(
@@ -327,12 +371,8 @@ fn whitened_block_diffs(
     c: &[f64; 5],
     effects: &[EffectParams],
 ) -> Option<(DMatrix<f64>, DVector<f64>, DVector<f64>)> {
-    let sigma = block_diff_covariance(block_means.len(), block_s, c, effects)?;
-    let n = sigma.nrows();
-    let linv = sigma
-        .cholesky()?
-        .l()
-        .solve_lower_triangular(&DMatrix::identity(n, n))?;
+    let linv = whitening(block_means.len(), block_s, c, effects)?;
+    let n = linv.nrows();
     let d = DVector::from_iterator(n, block_means.windows(2).map(|p| p[1] - p[0]));
     let yw = &linv * d;
     let ones = &linv * DVector::from_element(n, 1.0);
@@ -342,7 +382,9 @@ fn whitened_block_diffs(
 /// The step candidates' whitened columns with their jump times in blocks: a spike (a jump at
 /// the boundary after block k, time k + 1) and, from the second block on, a half over two
 /// differences (a jump inside block k, time k + 0.5).
-fn step_candidates(linv: &DMatrix<f64>) -> impl Iterator<Item = (DVector<f64>, f64)> + '_ {
+pub(super) fn step_candidates(
+    linv: &DMatrix<f64>,
+) -> impl Iterator<Item = (DVector<f64>, f64)> + '_ {
     (0..linv.ncols()).flat_map(move |k| {
         let spike = (linv.column(k).into_owned(), k as f64 + 1.0);
         let half = (k > 0).then(|| ((linv.column(k - 1) + linv.column(k)) * 0.5, k as f64 + 0.5));
