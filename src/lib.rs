@@ -122,6 +122,7 @@
 //!   warmup.rs              a warm-up found in time
 //!   warmup_profile.rs      the warm-up test with the random walk profiled on the block means
 //!   steps.rs               bias jumps found in time
+//!   step_null.rs           the jump rule's level on its own run (bootstrap)
 //!   jump_mixture.rs        spike-and-slab statistics of bias jumps
 //!   outliers.rs            isolated samples far outside the noise
 //!   lsb.rs                 the quantization step read off the values
