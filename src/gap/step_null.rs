@@ -8,20 +8,22 @@
 //! walk's `K^2`, read as the larger of the curve's and the block means' own maximum likelihood
 //! value. Both take up the jumps' share (`sum s^2 / T_run`) when jumps are there, and the
 //! jumps then hide in the very wander they add. So the procedure here is:
-//! 1. `k0`: the larger of the curve's `K^2` and the block means' own;
+//! 1. `k0`: the larger of the reference `K^2` (`c[3]` of [`JumpNull::new`]; `detect_steps`
+//!    passes the run's first `K^2`, the larger of the curve's and the block means' own) and the
+//!    block means' own;
 //! 2. forward selection of as many steps as the rule looks at (`z_crit.len()`), at `k0`, with
 //!    their sizes fitted jointly with the drift;
-//! 3. `k1`: the larger of the curve's `K^2` less those steps' share (at least a quarter of the
-//!    curve's) and the block means' own with those steps taken out, the rule the re-search of
-//!    kept jumps has used since session 21;
+//! 3. `k1`: the larger of the reference `K^2` less those steps' share (at least a quarter of
+//!    it) and the block means' own with those steps taken out, the rule the re-search of kept
+//!    jumps has used since session 21 (with the curve's `K^2` there);
 //! 4. forward selection at `k1`; the rule's excess `S = max_k (z_(k) - z_crit[k - 1])` (`z_(k)`
 //!    the `k`-th largest z; the fixed rule holds when `S >= 0`).
 //!
 //! Step 3 lowers `K^2` on clean runs too (the strongest steps of pure noise are taken out), so
 //! the fixed rule at `k1` flags more clean runs than at `k0`. The shift `d` of the rule is the
 //! `1 - alpha` quantile of `S` over runs drawn from the fitted model at `k0` (Davison and Hinkley
-//! 1997, section 4.2: a parametric bootstrap through the same estimation of `K^2`), and the run's
-//! rule is `z_crit + d`.
+//! 1997, section 4.2: a parametric bootstrap through the same estimation of `K^2`, the
+//! reference held at the run's), and the run's rule is `z_crit + d`.
 //!
 //! Everything is computed in the rotation of [`KRotation`], where the covariance of the
 //! differences is `I + k diag(lambda)` for every `K^2 = k`: inner products at `k` carry the
@@ -81,6 +83,7 @@ pub struct JumpNull {
     drift: DVector<f64>,
     /// The rule's `z_crit` (non-increasing).
     z_crit: Vec<f64>,
+    /// The reference `K^2` (u^2/s^3).
     k2_curve: f64,
     /// Upper end of the block means' own `K^2` (0: not read off the block means).
     k_hi: f64,
@@ -102,7 +105,7 @@ pub struct JumpStat {
 
 impl JumpNull {
     /// The procedure for `n_blocks` block means of `block_s` seconds under the five terms `c`
-    /// (`c[3]` the curve's `K^2`) plus the stationary `effects`, the rule `z_crit`, and the
+    /// (`c[3]` the reference `K^2`, module doc) plus the stationary `effects`, the rule `z_crit`, and the
     /// block means' own `K^2` read on `[0, k_hi]` (0: not read). `None` when the covariance is
     /// not positive definite, there are fewer than 3 blocks or `z_crit` is empty.
     pub fn new(
