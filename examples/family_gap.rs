@@ -1259,12 +1259,17 @@ fn run_one(
     // reaches the shift).
     let (jump_excess, jump_shift) = base_c5
         .and_then(|c5| {
-            let z = Thresholds::default().jump_z;
-            let mut null =
-                step_null::JumpNull::new(snap.block_means.len(), block_s, &c5, &[], &z, warm_k_up)?;
+            let th = Thresholds::default();
+            let mut null = step_null::JumpNull::new(
+                snap.block_means.len(),
+                block_s,
+                &c5,
+                &[],
+                &th.jump_z,
+                warm_k_up,
+            )?;
             let st = null.statistic(&null.rotate(&snap.block_means)?);
-            let alpha = Thresholds::default().jump_alpha;
-            Some((st.excess, null.shift(st.k0, alpha)?))
+            Some((st.excess, null.shift(st.k0, th.jump_alpha)?))
         })
         .unwrap_or((f64::NAN, f64::NAN));
     let mut jceil_p = f64::NAN;

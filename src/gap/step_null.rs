@@ -37,6 +37,7 @@
 
 use super::effects::EffectParams;
 use super::k_profile::KRotation;
+use super::steps::k2_with_steps_out;
 use nalgebra::{DMatrix, DVector};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
@@ -116,26 +117,47 @@ impl JumpNull {
         z_crit: &[f64],
         k_hi: f64,
     ) -> Option<Self> {
-        if z_crit.is_empty() {
-            return None;
-        }
         let rot = KRotation::new(n_blocks, block_s, c, effects)?;
-        let m_rot = rot.matrix()?;
+        Self::with_rotation(rot, n_blocks, block_s, c[3], z_crit, k_hi).ok()
+    }
+
+    /// [`Self::new`] on a rotation already built for the model ([`KRotation::new`] of the same
+    /// `n_blocks`, `block_s`, terms and effects), with the reference `K^2` `k2_ref`. The
+    /// rotation is handed back when the procedure cannot be formed (`z_crit` empty).
+    pub fn with_rotation(
+        rot: KRotation,
+        n_blocks: usize,
+        block_s: f64,
+        k2_ref: f64,
+        z_crit: &[f64],
+        k_hi: f64,
+    ) -> Result<Self, KRotation> {
+        if z_crit.is_empty() {
+            return Err(rot);
+        }
+        let Some(m_rot) = rot.matrix() else {
+            return Err(rot);
+        };
         let n = m_rot.ncols();
         let (cols, pos): (Vec<DVector<f64>>, Vec<f64>) =
             super::steps::step_candidates(&m_rot).unzip();
         let drift = &m_rot * DVector::from_element(n, 1.0);
-        Some(Self {
+        Ok(Self {
             rot,
             cand: DMatrix::from_columns(&cols),
             pos,
             drift,
             z_crit: z_crit.to_vec(),
-            k2_curve: c[3].max(0.0),
+            k2_curve: k2_ref.max(0.0),
             k_hi,
             t_run: n_blocks as f64 * block_s,
             weighted: HashMap::new(),
         })
+    }
+
+    /// The rotation the procedure works in.
+    pub fn rotation(&self) -> &KRotation {
+        &self.rot
     }
 
     /// The rotated differences of `block_means` (as many as the procedure was built for).
@@ -238,16 +260,16 @@ impl JumpNull {
         let steps = self.z_crit.len();
         let (top, _) = self.forward(k0, z, steps);
         let sizes = self.sizes(k0, z, &top).unwrap_or_default();
-        let kj2: f64 = sizes.iter().map(|s| s * s).sum::<f64>() / self.t_run;
         let mut rest = z.clone();
         for (&i, s) in top.iter().zip(&sizes) {
             rest -= self.cand.column(i) * *s;
         }
-        let k1 = snap(
-            (self.k2_curve - kj2)
-                .max(0.25 * self.k2_curve)
-                .max(self.k2_blocks(&rest)),
-        );
+        let k1 = snap(k2_with_steps_out(
+            self.k2_curve,
+            &sizes,
+            self.t_run,
+            self.k2_blocks(&rest),
+        ));
         let (_, zs) = self.forward(k1, z, steps);
         JumpStat {
             k0,

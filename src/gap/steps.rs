@@ -137,37 +137,42 @@ pub fn detect_steps(
     z_crit.last()?;
     let t_run = block_means.len() as f64 * block_s;
     let k2_curve = c[3];
-    // The rotation depends on the model and the effects only: one for every re-search.
-    let rot = (k_hi > 0.0)
+    // The rotation depends on the model and the effects only: one for every re-search, and
+    // the jump procedure's (`alpha`) works in it too.
+    let mut rot = (k_hi > 0.0 || alpha > 0.0)
         .then(|| KRotation::new(block_means.len(), block_s, c, effects))
         .flatten();
-    let k2_blocks = |found: &JumpFinding| -> f64 {
-        rot.as_ref()
+    let k2_blocks = |rot: Option<&KRotation>, found: &JumpFinding| -> f64 {
+        rot.filter(|_| k_hi > 0.0)
             .and_then(|r| r.max_likelihood_k2(&found.remove_from(block_means), k_hi))
             .unwrap_or(0.0)
     };
-    // K^2 with the jumps `found` taken out: the larger of the curve's less their share (at
-    // least a quarter of the curve's) and the block means' own without them.
-    let k2_without = |found: &JumpFinding| -> f64 {
-        let kj2: f64 = found.sizes.iter().map(|s| s * s).sum::<f64>() / t_run;
-        (k2_curve - kj2).max(0.25 * k2_curve).max(k2_blocks(found))
-    };
     let mut c = *c;
-    c[3] = k2_curve.max(k2_blocks(&JumpFinding::default()));
+    c[3] = k2_curve.max(k2_blocks(rot.as_ref(), &JumpFinding::default()));
     // With `alpha`, the procedure of `step_null`: the first search's K^2 with the strongest
     // candidates taken out (both the curve's K^2 and the block means' own take up the jumps'
     // share and hid them), and the rule shifted to its level on the run's own null.
     let mut shift = 0.0;
+    let mut null = None;
     if alpha > 0.0 {
-        if let Some(mut null) = JumpNull::new(block_means.len(), block_s, &c, effects, z_crit, k_hi)
-        {
-            if let Some(z) = null.rotate(block_means) {
-                let st = null.statistic(&z);
-                c[3] = st.k1;
-                shift = null.shift(st.k0, alpha).unwrap_or(0.0);
+        if let Some(r) = rot.take() {
+            match JumpNull::with_rotation(r, block_means.len(), block_s, c[3], z_crit, k_hi) {
+                Ok(mut n) => {
+                    if let Some(z) = n.rotate(block_means) {
+                        let st = n.statistic(&z);
+                        c[3] = st.k1;
+                        shift = n.shift(st.k0, alpha).unwrap_or(0.0);
+                    }
+                    null = Some(n);
+                }
+                Err(r) => rot = Some(r),
             }
         }
     }
+    let rot = null.as_ref().map(JumpNull::rotation).or(rot.as_ref());
+    let k2_without = |found: &JumpFinding| {
+        k2_with_steps_out(k2_curve, &found.sizes, t_run, k2_blocks(rot, found))
+    };
     let z_crit: Vec<f64> = z_crit.iter().map(|z| z + shift).collect();
     let z_crit = z_crit.as_slice();
     let z_min = *z_crit.last()?;
@@ -181,6 +186,15 @@ pub fn detect_steps(
         found = step_search(block_means, block_s, &c, effects, z_min)?.accepted(z_crit);
     }
     Some(found)
+}
+
+/// The random walk's `K^2` (u^2/s^3) with steps of `sizes` (u/s) taken out of a run of
+/// `t_run_s`: the larger of `k2_ref` less their share `sum s^2 / T_run` (at least a quarter of
+/// `k2_ref`) and `k2_blocks`, the block means' own maximum likelihood value without them
+/// (session 21's rule for kept jumps; [`JumpNull`] applies it before the first search).
+pub(super) fn k2_with_steps_out(k2_ref: f64, sizes: &[f64], t_run_s: f64, k2_blocks: f64) -> f64 {
+    let share: f64 = sizes.iter().map(|s| s * s).sum::<f64>() / t_run_s;
+    (k2_ref - share).max(0.25 * k2_ref).max(k2_blocks)
 }
 
 /// Standard error (u/s) of the GLS estimate of a single step at each block boundary, with the
