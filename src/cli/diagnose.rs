@@ -218,6 +218,15 @@ fn gather(
                     }
                 }
             }
+            let invalid = reader.position().invalid_values;
+            if invalid > 0 {
+                tracing::warn!(
+                    "{input}: {invalid} values infinite, above {:e} or non-zero below {:e} in \
+                     magnitude: each taken as a gap of its channel",
+                    allanscope::ranges::MAX_ABS_VALUE,
+                    allanscope::ranges::MIN_ABS_VALUE
+                );
+            }
             if reader.samples() == 0 {
                 return Err(anyhow::Error::new(allanscope::error::UsageError::Input {
                     file: path.into(),
@@ -297,6 +306,18 @@ fn gather(
                 if n == 0 {
                     break;
                 }
+            }
+            let h = stage.health();
+            if h.crc_errors + h.missing + h.invalid_values + h.bytes_skipped > 0 {
+                tracing::warn!(
+                    "{input}: {} frames decoded; {} failed their check, {} missing (gaps), {} \
+                     values out of range (gaps), {} bytes skipped",
+                    h.frames,
+                    h.crc_errors,
+                    h.missing,
+                    h.invalid_values,
+                    h.bytes_skipped
+                );
             }
         }
     }

@@ -112,6 +112,12 @@ pub enum DiagnoseError {
     Fit(String),
     #[error("diagnose: the covariance of the curve is not positive definite")]
     Covariance,
+    /// Every increment received was the same value, given here as a rate (u/s).
+    #[error(
+        "diagnose: every sample is the same, a rate of {0} u/s throughout: the channel does not \
+         move (stuck, saturated or not connected?), so it has no noise to diagnose"
+    )]
+    Constant(f64),
 }
 
 /// The verdict of docs/records.md's `diagnosis` record.
@@ -232,6 +238,11 @@ pub fn diagnose_with_temperature(
     temperature: Option<&EvidenceSnapshot>,
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
+    // Its curve would be the rounding of the running sum (1e-19 of the rate, say), which no
+    // noise model describes.
+    if let Some(d) = snap.constant {
+        return Err(DiagnoseError::Constant(d / snap.tau0_s));
+    }
     let mut d = diagnose_quantized(snap, temperature, opts)?;
     super::limit_cycle::attribute(&mut d, snap);
     Ok(d)

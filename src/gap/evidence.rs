@@ -154,6 +154,10 @@ pub struct EvidenceSnapshot {
     /// The step of the increments as received (u), when they are whole multiples of one
     /// ([`super::lsb`]; None for floating values, or for evidence restored from a checkpoint).
     pub lsb: Option<f64>,
+    /// The increment (u) every received one had, when none differed: the channel does not
+    /// move, and its curve is rounding ([`super::lsb::LsbEstimator::constant`]; None when they
+    /// vary, or for evidence restored from a checkpoint).
+    pub constant: Option<f64>,
 }
 
 /// The streaming evidence of one channel.
@@ -487,6 +491,11 @@ impl GapEvidence {
             block_means,
             outliers: self.despike.as_ref().map(|d| d.found).unwrap_or_default(),
             lsb: self.lsb.estimate(),
+            // A restored run's estimator has seen only the increments since the restore.
+            constant: self
+                .lsb
+                .constant()
+                .filter(|_| self.lsb.count() >= self.n_received),
         }
     }
 }

@@ -19,6 +19,9 @@ pub struct LsbEstimator {
     last: Option<f64>,
     min_step: f64,
     n: u64,
+    /// The first finite value, and whether any later one differed from it.
+    first: Option<f64>,
+    varies: bool,
 }
 
 impl LsbEstimator {
@@ -36,6 +39,10 @@ impl LsbEstimator {
             return;
         }
         self.n += 1;
+        match self.first {
+            None => self.first = Some(v),
+            Some(f) => self.varies |= v != f,
+        }
         if self.kept.len() < KEEP {
             self.kept.push(v);
         }
@@ -46,6 +53,19 @@ impl LsbEstimator {
             }
         }
         self.last = Some(v);
+    }
+
+    /// The value every one of at least two finite values had, bit for bit (a channel that
+    /// does not move: stuck, saturated or not connected); `None` when they vary.
+    pub fn constant(&self) -> Option<f64> {
+        (self.n >= 2 && !self.varies)
+            .then_some(self.first)
+            .flatten()
+    }
+
+    /// Finite values seen.
+    pub fn count(&self) -> u64 {
+        self.n
     }
 
     /// The step (same unit as the values) when every kept value is a whole multiple of the

@@ -241,3 +241,56 @@ fn a_temperature_logged_slowly_is_held_between_its_values() {
         "{d}"
     );
 }
+
+/// A recording with a channel that never moves (a stuck or unconnected axis: every rate sample
+/// 1.25) and a cell that reads `inf`: the stuck channel is not diagnosed, and the warning says
+/// why with its rate (its curve is the rounding of the running sum, which was diagnosed
+/// `unexplained` with invented sinusoids and `G` of 3e8 before); the `inf` is counted as a gap
+/// and said; the moving channels are diagnosed from the same rows.
+#[test]
+fn a_stuck_channel_is_said_and_not_diagnosed() {
+    let p = tmp("stuck.csv");
+    let mut text = String::from("time,g,stuck,h\n");
+    let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
+    for i in 0..20_000u64 {
+        // Two uniform draws per row from a 64-bit LCG (deterministic white noise).
+        let mut u = || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let (a, b) = (u(), u());
+        let h = if i == 777 {
+            "inf".to_string()
+        } else {
+            format!("{b:.6}")
+        };
+        text += &format!("{:.2},{a:.6},1.25,{h}\n", i as f64 * 0.01);
+    }
+    std::fs::write(&p, text).unwrap();
+    let out = exe()
+        .args(["diagnose", p.to_str().unwrap(), "--rate", "--json"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{out:?}");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("channel stuck") && err.contains("a rate of 1.25 u/s throughout"),
+        "{err}"
+    );
+    assert!(err.contains("1 values infinite"), "{err}");
+    let recs = crate::common::pipeline::parse_lines(&out.stdout);
+    let chans: Vec<&str> = recs
+        .iter()
+        .filter(|r| r["type"] == "diagnosis")
+        .map(|r| r["channel"].as_str().unwrap())
+        .collect();
+    assert_eq!(chans, ["g", "h"]);
+    // White rate of uniform samples: its curve is the five terms' N alone, sd 1/sqrt(12) per
+    // sample of 10 ms, N^2 = sd^2 tau0: N within 5% of sqrt(0.01 / 12) = 0.02887 u/sqrt(s).
+    for r in recs.iter().filter(|r| r["type"] == "diagnosis") {
+        let n = r["base_coef"][1].as_f64().unwrap();
+        assert!((n / (0.01f64 / 12.0).sqrt() - 1.0).abs() < 0.05, "{r}");
+    }
+}
