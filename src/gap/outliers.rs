@@ -31,6 +31,9 @@ pub const CHUNK: usize = 4096;
 pub const OUTLIER_Z: f64 = 6.0;
 /// The rms scale counts the differences within this many median-based deviations.
 const TRIM: f64 = 8.0;
+/// The median non-zero difference, in steps (the smallest non-zero difference), above which
+/// zero differences are not a counter's but a stuck stretch's, and the scale leaves them out.
+const FINE_STEPS: f64 = 8.0;
 /// `Phi^-1(3/4)`: the median of `|e|` over the standard deviation of a normal `e`.
 const MAD_NORMAL: f64 = 0.674_489_750_196_081_7;
 
@@ -132,6 +135,19 @@ impl Despiker {
             .filter(|v| *v > 0.0)
             .fold(f64::INFINITY, f64::min);
         let floor = if floor.is_finite() { floor } else { 0.0 };
+        // Zero differences are a counter's own when its step is near the noise. Where the
+        // non-zero ones are many steps wide, a run of zeros is a stretch where the channel did
+        // not move (stuck, saturated): the noise's scale is read without them, else a chunk
+        // half stuck got the scale of its zeros and had its ordinary samples taken for spikes.
+        let nz = e.iter().filter(|v| **v > 0.0).count();
+        if nz >= 16 && nz < e.len() {
+            let mut nonzero: Vec<f64> = e.iter().copied().filter(|v| *v > 0.0).collect();
+            let m = nonzero.len() / 2;
+            let med_nz = *nonzero.select_nth_unstable_by(m, |a, b| a.total_cmp(b)).1;
+            if med_nz > FINE_STEPS * floor {
+                e = nonzero;
+            }
+        }
         let mid = e.len() / 2;
         let med = *e.select_nth_unstable_by(mid, |a, b| a.total_cmp(b)).1;
         // The median of a counter's differences is a whole number of counts, which can be half
@@ -232,6 +248,31 @@ mod tests {
             .filter(|(a, b)| (*a - *b).abs() > 5.0)
             .count();
         assert_eq!(moved, 0, "every spike replaced by a value within the noise");
+    }
+
+    /// White noise (sd 1, six decimals) with a stretch of 3000 samples stuck at one value
+    /// across a chunk boundary: no outlier (the chunks half stuck had the scale of their zeros,
+    /// and 1288 of their ordinary samples were replaced as spikes), and 10 spikes of 30 sd
+    /// placed in the noisy half of those chunks are still found.
+    #[test]
+    fn a_stuck_stretch_is_not_a_run_of_spikes() {
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(11);
+        let mut x: Vec<f64> = (0..40_000)
+            .map(|i| {
+                let z: f64 = StandardNormal.sample(&mut rng);
+                if (10_000..13_000).contains(&i) {
+                    0.37
+                } else {
+                    (z * 1e6).round() / 1e6
+                }
+            })
+            .collect();
+        assert_eq!(run(&x).1.count, 0);
+        for k in 0..10 {
+            x[13_100 + 150 * k] += if k % 2 == 0 { 30.0 } else { -30.0 };
+        }
+        let found = run(&x).1;
+        assert_eq!(found.count, 10, "{found:?}");
     }
 
     /// A counter whose increments are mostly one value (differences mostly zero) has no
