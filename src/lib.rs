@@ -125,6 +125,7 @@
 //!   step_null.rs           the jump rule's level on its own run (bootstrap)
 //!   jump_mixture.rs        spike-and-slab statistics of bias jumps
 //!   outliers.rs            isolated samples far outside the noise
+//!   stuck.rs               stretches where the channel did not move, taken out as gaps
 //!   lsb.rs                 the quantization step read off the values
 //!   quantization.rs        which quantization the values show
 //!   quant_limit.rs         when quantization limits what can be told

@@ -360,6 +360,18 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
                 continue;
             }
         };
+        if let Some(st) = diag.stuck {
+            tracing::warn!(
+                "{}: channel {name}: {} stretch(es) where every sample was the same, far longer \
+                 than its noise allows (stuck, saturated or a repeated sample?): {:.3} s in all, \
+                 the longest {:.3} s, the first at {:.3} s; taken out as gaps",
+                a.input,
+                st.stretches,
+                st.seconds,
+                st.longest_s,
+                st.first_at_s
+            );
+        }
         let holdout = held.as_mut().and_then(|h| {
             let j = h.names.iter().position(|n| n == name)?;
             let snap2 = h.evidence[j].snapshot();

@@ -189,6 +189,9 @@ pub struct Diagnosis {
     /// Outliers found and replaced in the stream before the curve was computed
     /// ([`super::outliers`]).
     pub outliers: OutlierCount,
+    /// Stretches where the channel did not move, taken out as gaps before the curve was
+    /// computed ([`super::stuck`]); `None` when there is none.
+    pub stuck: Option<super::stuck::StuckSpan>,
     /// What the values' step does to the curve, when they are whole multiples of one
     /// ([`super::quantization`]).
     pub quantization: Option<QuantizationFinding>,
@@ -807,6 +810,7 @@ fn diagnose_curve_once(
         model_final_avar: cur.model.clone(),
         quantization_limited: dead_band_limit(&prob, snap, &final_spec, &cur),
         outliers: snap.outliers,
+        stuck: snap.stuck.span(snap.tau0_s),
         quantization: snap
             .lsb
             .and_then(|l| judge_quantization(&prob, &final_spec, &cur, l)),

@@ -18,6 +18,7 @@
 
 use super::lsb::LsbEstimator;
 use super::outliers::{Despiker, OutlierCount, CHUNK};
+use super::stuck::{Release, StuckCount, StuckFilter};
 use crate::allan::accum::{AccumConfig, Engine, FloatRepr, Overlap, StatSet, TauSpec};
 
 /// Segment length (increments) of the doubling scheme before the first merge.
@@ -154,6 +155,9 @@ pub struct EvidenceSnapshot {
     /// The step of the increments as received (u), when they are whole multiples of one
     /// ([`super::lsb`]; None for floating values, or for evidence restored from a checkpoint).
     pub lsb: Option<f64>,
+    /// Stretches where the channel did not move, taken out as gaps ([`super::stuck`]; counts
+    /// in samples).
+    pub stuck: StuckCount,
     /// The increment (u) every received one had, when none differed: the channel does not
     /// move, and its curve is rounding ([`super::lsb::LsbEstimator::constant`]; None when they
     /// vary, or for evidence restored from a checkpoint).
@@ -181,6 +185,10 @@ pub struct GapEvidence {
     /// evidence restored from a checkpoint written before it existed).
     #[serde(default)]
     despike: Option<Despiker>,
+    /// The stuck-stretch filter in front of the outlier filter (a checkpoint written before it
+    /// existed restores an empty one).
+    #[serde(default)]
+    stuck: StuckFilter,
     /// Cleaned increments released by the filter, waiting to be fed.
     #[serde(skip)]
     released: Vec<f64>,
@@ -236,6 +244,7 @@ impl GapEvidence {
             n_increments: 0,
             n_received: 0,
             despike: Some(Despiker::new(cfg_tau0)),
+            stuck: StuckFilter::new(),
             released: Vec::new(),
             lsb: LsbEstimator::new(),
         }
@@ -299,6 +308,7 @@ impl GapEvidence {
                 self.done.len()
             ));
         }
+        self.stuck.check_restored()?;
         let main = accum_cfg(tau0_s, TauSpec::List(self.cfg.dense_cluster_sizes()));
         let seg = accum_cfg(tau0_s, TauSpec::List(segment_ms(self.seg_len)));
         if self.main.config() != &main || self.seg_engine.config() != &seg {
@@ -310,11 +320,33 @@ impl GapEvidence {
             .map_err(|e| format!("evidence: {e}"))
     }
 
-    /// Feeds one increment `d_k` in u (through the outlier filter: it reaches the
-    /// accumulators when its chunk is judged, or at the next gap or snapshot).
+    /// Feeds one increment `d_k` in u (through the stuck-stretch and outlier filters: it
+    /// reaches the accumulators when its run of equal values ends and its chunk is judged, or
+    /// at the next gap or snapshot).
     #[inline]
     pub fn push_increment(&mut self, d: f64) {
         self.lsb.push(d);
+        if let Some(r) = self.stuck.push(d) {
+            self.take(r);
+        }
+    }
+
+    /// What the stuck-stretch filter releases: values on to the outlier filter, a stuck
+    /// stretch as a gap.
+    #[inline]
+    fn take(&mut self, r: Release) {
+        match r {
+            Release::Values(v, n) => {
+                for _ in 0..n {
+                    self.despike_push(v);
+                }
+            }
+            Release::Stuck(n) => self.gap_inner(n),
+        }
+    }
+
+    #[inline]
+    fn despike_push(&mut self, d: f64) {
         match self.despike.as_mut() {
             None => self.feed(d),
             Some(ds) => {
@@ -356,6 +388,17 @@ impl GapEvidence {
 
     /// Feeds `missing` lost increments.
     pub fn push_gap(&mut self, missing: u64) {
+        if missing == 0 {
+            return;
+        }
+        if let Some(r) = self.stuck.gap(missing) {
+            self.take(r);
+        }
+        self.gap_inner(missing);
+    }
+
+    /// A gap past the stuck-stretch filter.
+    fn gap_inner(&mut self, missing: u64) {
         if missing == 0 {
             return;
         }
@@ -435,6 +478,9 @@ impl GapEvidence {
 
     /// Everything gathered so far (the accumulators are read, not reset).
     pub fn snapshot(&mut self) -> EvidenceSnapshot {
+        if let Some(r) = self.stuck.flush() {
+            self.take(r);
+        }
         self.release(true, false);
         let tau0 = self.cfg.tau0_s;
         let curve = self
@@ -490,6 +536,7 @@ impl GapEvidence {
             block_len: self.block_len,
             block_means,
             outliers: self.despike.as_ref().map(|d| d.found).unwrap_or_default(),
+            stuck: self.stuck.found,
             lsb: self.lsb.estimate(),
             // A restored run's estimator has seen only the increments since the restore.
             constant: self

@@ -51,6 +51,7 @@ pub mod segments;
 pub(crate) mod simplex;
 pub mod step_null;
 pub mod steps;
+pub mod stuck;
 pub mod temperature;
 pub mod thresholds;
 pub mod unit_model;

@@ -207,6 +207,11 @@ pub struct DiagnosisRecord {
     /// Outliers found and replaced before the curve was computed (docs/gap.md, "Outliers").
     #[serde(default)]
     pub outliers: OutliersRecord,
+    /// Stretches where the channel did not move (one value repeated far beyond its noise),
+    /// taken out as gaps before the curve was computed (docs/gap.md, "Stuck stretches"):
+    /// absent when there is none.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub stuck: Option<super::stuck::StuckSpan>,
     /// What the values' step does to the curve (docs/gap.md, "Rate-sample quantization"):
     /// absent when the values are not whole multiples of one step.
     #[serde(skip_serializing_if = "Option::is_none", default)]
@@ -388,6 +393,7 @@ impl DiagnosisRecord {
                 rms_size: d.outliers.rms_size(),
                 max_size: d.outliers.max_size,
             },
+            stuck: d.stuck,
             quantization: d.quantization,
             alternatives: d.alternatives.iter().map(AlternativeRecord::new).collect(),
             run: None,

@@ -294,3 +294,63 @@ fn a_stuck_channel_is_said_and_not_diagnosed() {
         assert!((n / (0.01f64 / 12.0).sqrt() - 1.0).abs() < 0.05, "{r}");
     }
 }
+
+/// A channel that froze at 0.37 for 60 s of a 20-minute run, beside the same noise unfrozen:
+/// the stretch is found and taken out as a gap (`stuck`: one stretch of 60 s at 600 s), and the
+/// frozen channel is diagnosed as its twin (the same white rate within 2%, `consistent`, no
+/// effect). Before, the frozen stretch was named three bias jumps (`explained`).
+#[test]
+fn a_frozen_stretch_is_taken_out_as_a_gap() {
+    let p = tmp("frozen.csv");
+    let mut text = String::from("time,g,f\n");
+    let mut state: u64 = 0x2545_f491_4f6c_dd1d;
+    for i in 0..120_000u64 {
+        // The sum of four uniform draws (near-Gaussian white noise, sd 1/sqrt(3)).
+        let mut x = 0.0;
+        for _ in 0..4 {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            x += (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+        }
+        let f = if (60_000..66_000).contains(&i) {
+            "0.370000".to_string()
+        } else {
+            format!("{x:.6}")
+        };
+        text += &format!("{:.2},{x:.6},{f}\n", i as f64 * 0.01);
+    }
+    std::fs::write(&p, text).unwrap();
+    let out = exe()
+        .args(["diagnose", p.to_str().unwrap(), "--rate", "--json"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{out:?}");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("channel f: 1 stretch(es)"), "{err}");
+    let recs = crate::common::pipeline::parse_lines(&out.stdout);
+    let rec = |c: &str| {
+        recs.iter()
+            .find(|r| r["type"] == "diagnosis" && r["channel"] == c)
+            .unwrap_or_else(|| panic!("no record of {c}"))
+            .clone()
+    };
+    let (g, f) = (rec("g"), rec("f"));
+    assert!(g.get("stuck").is_none(), "{g}");
+    let st = &f["stuck"];
+    assert_eq!(st["stretches"], 1, "{f}");
+    assert!(
+        (st["seconds"].as_f64().unwrap() - 60.0).abs() < 0.02,
+        "{st}"
+    );
+    assert!(
+        (st["first_at_s"].as_f64().unwrap() - 600.0).abs() < 0.02,
+        "{st}"
+    );
+    for r in [&g, &f] {
+        assert_eq!(r["verdict"], "consistent", "{r}");
+        assert_eq!(r["effects"].as_array().unwrap().len(), 0, "{r}");
+    }
+    let n = |r: &serde_json::Value| r["base_coef"][1].as_f64().unwrap();
+    assert!((n(&f) / n(&g) - 1.0).abs() < 0.02, "{} vs {}", n(&f), n(&g));
+}

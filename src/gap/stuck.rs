@@ -1,0 +1,301 @@
+//! Stuck stretches: runs of one value repeated far longer than the channel's noise allows (an
+//! axis that froze, a saturated input, a driver that re-sent its last sample), taken out of the
+//! diagnosis's evidence as gaps, counted and reported (docs/gap.md, "Stuck stretches").
+//!
+//! A frozen stretch adds nothing to the Allan variance of its own differences and a step at
+//! each end, so left in it lowers the curve where it covers most of a cluster and can pose as
+//! bias jumps; the stretch was not measured, so it is a gap.
+//!
+//! # Rule
+//!
+//! Runs of bit-identical increments are held (their value and length only: O(1) memory) until
+//! a different value, a gap or a snapshot ends them. With `p` the share of equal consecutive
+//! increments in what the filter has passed on (`(equal + 1) / (pairs + 2)`), a run of `L`
+//! equal values holds `L - 1` equal pairs, which under independent samples has probability
+//! `p^(L-1)` at a given start. The run is stuck when it is at least [`MIN_STUCK`] long and
+//! `n p^(L-1) <` [`STUCK_P`] with `n` the pairs seen (a Bonferroni bound over the starts), and
+//! only on a channel where equal neighbours are rare, `p <` [`MAX_EQUAL_SHARE`]: a counter whose
+//! step is near its noise repeats values by nature, in runs whose lengths its carry pattern and
+//! the wander of its rate set, not a geometric law, so such a channel is never judged (a
+//! counter's neighbours are equal with probability about `0.4 / sigma_e` for a difference of
+//! `sigma_e` steps rms, so 5% takes at least 8 steps of noise, where the values are near
+//! continuous). Nor is a
+//! run before [`MIN_PAIRS`] pairs have been passed on, when `p` is not known yet; a channel
+//! constant throughout is said by [`super::lsb::LsbEstimator::constant`].
+
+/// Shortest run judged (samples).
+pub const MIN_STUCK: u64 = 16;
+/// Bound on the chance of any run this long among the run's pairs under independent samples.
+pub const STUCK_P: f64 = 1e-9;
+/// Share of equal neighbours at or above which a channel's runs are not judged.
+pub const MAX_EQUAL_SHARE: f64 = 0.05;
+/// Pairs passed on before any run is judged.
+pub const MIN_PAIRS: u64 = 1000;
+
+/// What was found (durations in samples).
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub struct StuckCount {
+    /// Stuck stretches taken out as gaps.
+    pub stretches: u64,
+    /// Samples in them.
+    pub samples: u64,
+    /// The longest, in samples.
+    pub longest: u64,
+    /// Where the first one began, in samples from the start (gaps included).
+    pub first_at: u64,
+}
+
+impl StuckCount {
+    /// The same in seconds, `None` when there is no stretch.
+    pub fn span(&self, tau0_s: f64) -> Option<StuckSpan> {
+        (self.stretches > 0).then_some(StuckSpan {
+            stretches: self.stretches,
+            seconds: self.samples as f64 * tau0_s,
+            longest_s: self.longest as f64 * tau0_s,
+            first_at_s: self.first_at as f64 * tau0_s,
+        })
+    }
+}
+
+/// The diagnosis record's `stuck` object: how many stretches, their total and longest duration
+/// (s), and where the first began (s from the start of the run, gaps included).
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub struct StuckSpan {
+    pub stretches: u64,
+    pub seconds: f64,
+    pub longest_s: f64,
+    pub first_at_s: f64,
+}
+
+/// What the filter passes on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Release {
+    /// `n` increments of this value.
+    Values(f64, u64),
+    /// `n` increments taken out as a stuck stretch.
+    Stuck(u64),
+}
+
+/// The streaming stuck-stretch filter of one channel (module doc).
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
+pub struct StuckFilter {
+    /// The run being held: its value and length.
+    value: Option<f64>,
+    len: u64,
+    /// The held run continues one already judged stuck (its start was taken out at a
+    /// snapshot): it is stuck whatever its length.
+    continues_stuck: bool,
+    /// Consecutive pairs passed on, and how many were equal.
+    pairs: u64,
+    equal: u64,
+    /// Samples of the held run's value already passed on, and taken out, at earlier
+    /// snapshots (the run is judged on its whole length).
+    passed: u64,
+    taken: u64,
+    /// The last run was passed on, with no gap since.
+    last_passed: bool,
+    /// Samples accounted for (passed on, taken out, or lost in gaps), for `first_at`.
+    position: u64,
+    pub found: StuckCount,
+}
+
+impl StuckFilter {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// One increment `d` (u); returns what the run it ends releases.
+    #[inline]
+    pub fn push(&mut self, d: f64) -> Option<Release> {
+        let mut out = None;
+        match self.value {
+            Some(v) if v.to_bits() == d.to_bits() => {
+                // The equal pair joining a run passed on at a snapshot to its continuation.
+                if self.len == 0 && self.last_passed {
+                    self.pairs += 1;
+                    self.equal += 1;
+                }
+                self.len += 1;
+            }
+            Some(_) => {
+                out = self.end_run();
+                // The pair joining the new run to the one passed on before it (unequal).
+                if self.last_passed {
+                    self.pairs += 1;
+                }
+                self.value = Some(d);
+                self.len = 1;
+            }
+            None => {
+                self.value = Some(d);
+                self.len = 1;
+            }
+        }
+        out
+    }
+
+    /// A gap of `missing` increments: the held run ends (it is judged), and the pairs start
+    /// again after the gap.
+    pub fn gap(&mut self, missing: u64) -> Option<Release> {
+        let out = self.end_run();
+        self.value = None;
+        self.last_passed = false;
+        self.position += missing;
+        out
+    }
+
+    /// Releases the held run at a snapshot: judged as it stands; a stuck one stays stuck as it
+    /// goes on (its value is kept, so the pairs' count sees no break).
+    pub fn flush(&mut self) -> Option<Release> {
+        if self.len == 0 {
+            return None;
+        }
+        let stuck = self.is_stuck();
+        let out = self.release(stuck);
+        self.continues_stuck = stuck;
+        out
+    }
+
+    /// Checks a filter read back from a checkpoint: the held run at most 2^32 samples (50 days
+    /// at 1 kHz; it is released sample by sample) and no more equal pairs than pairs.
+    pub fn check_restored(&self) -> Result<(), String> {
+        if self.len + self.passed > 1 << 32 || self.equal > self.pairs {
+            return Err(format!(
+                "stuck-stretch filter out of range (a run of {} held, {} of {} pairs equal)",
+                self.len + self.passed,
+                self.equal,
+                self.pairs
+            ));
+        }
+        Ok(())
+    }
+
+    /// The share of equal neighbours so far, `(equal + 1) / (pairs + 2)`.
+    pub fn equal_share(&self) -> f64 {
+        (self.equal + 1) as f64 / (self.pairs + 2) as f64
+    }
+
+    fn is_stuck(&self) -> bool {
+        if self.continues_stuck {
+            return true;
+        }
+        let p = self.equal_share();
+        let len = self.len + self.passed;
+        if len < MIN_STUCK || self.pairs < MIN_PAIRS || p >= MAX_EQUAL_SHARE {
+            return false;
+        }
+        let n = (self.pairs + len) as f64;
+        // n p^(L-1) < STUCK_P, in logarithms.
+        n.ln() + (len - 1) as f64 * p.ln() < STUCK_P.ln()
+    }
+
+    fn end_run(&mut self) -> Option<Release> {
+        let mut out = None;
+        if self.len > 0 {
+            let stuck = self.is_stuck();
+            out = self.release(stuck);
+        }
+        self.continues_stuck = false;
+        self.passed = 0;
+        self.taken = 0;
+        out
+    }
+
+    fn release(&mut self, stuck: bool) -> Option<Release> {
+        let n = self.len;
+        let mut out = None;
+        if stuck {
+            if !self.continues_stuck {
+                if self.found.stretches == 0 {
+                    self.found.first_at = self.position;
+                }
+                self.found.stretches += 1;
+            }
+            self.found.samples += n;
+            self.taken += n;
+            self.found.longest = self.found.longest.max(self.taken);
+            out = Some(Release::Stuck(n));
+        } else if let Some(v) = self.value {
+            self.pairs += n - 1;
+            self.equal += n - 1;
+            self.passed += n;
+            out = Some(Release::Values(v, n));
+        }
+        self.last_passed = !stuck;
+        self.position += n;
+        self.len = 0;
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, StandardNormal};
+
+    fn run(x: &[f64], snapshot_every: Option<usize>) -> (Vec<Option<f64>>, StuckCount) {
+        let mut f = StuckFilter::new();
+        let mut out = Vec::new();
+        let mut sink = |r: Release| match r {
+            Release::Values(v, n) => out.extend(std::iter::repeat_n(Some(v), n as usize)),
+            Release::Stuck(n) => out.extend(std::iter::repeat_n(None, n as usize)),
+        };
+        for (i, &v) in x.iter().enumerate() {
+            f.push(v).map(&mut sink);
+            if snapshot_every.is_some_and(|k| i % k == k - 1) {
+                f.flush().map(&mut sink);
+            }
+        }
+        f.flush().map(&mut sink);
+        (out, f.found)
+    }
+
+    /// White noise at six decimals with 3000 samples frozen at 0.37 from sample 10000 and 40
+    /// at 0 from 30000: both taken out, every other sample passed on unchanged, with or without
+    /// snapshots every 777 samples; the same noise without them loses nothing.
+    #[test]
+    fn frozen_stretches_are_taken_out_and_nothing_else() {
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(5);
+        let clean: Vec<f64> = (0..40_000)
+            .map(|_| {
+                let z: f64 = StandardNormal.sample(&mut rng);
+                (z * 1e6).round() / 1e6
+            })
+            .collect();
+        let mut x = clean.clone();
+        x[10_000..13_000].iter_mut().for_each(|v| *v = 0.37);
+        x[30_000..30_040].iter_mut().for_each(|v| *v = 0.0);
+        for snap in [None, Some(777)] {
+            let (out, found) = run(&x, snap);
+            assert_eq!(out.len(), x.len());
+            assert_eq!(found.stretches, 2, "{found:?}");
+            assert_eq!(found.samples, 3040);
+            assert_eq!(found.longest, 3000);
+            assert_eq!(found.first_at, 10_000);
+            for (i, o) in out.iter().enumerate() {
+                let frozen = (10_000..13_000).contains(&i) || (30_000..30_040).contains(&i);
+                assert_eq!(o.is_none(), frozen, "sample {i}");
+                if let Some(v) = o {
+                    assert_eq!(*v, x[i]);
+                }
+            }
+        }
+        let (out, found) = run(&clean, Some(777));
+        assert_eq!(found, StuckCount::default());
+        assert_eq!(out.iter().flatten().count(), clean.len());
+    }
+
+    /// A counter whose values are mostly one count (equal neighbours the rule) keeps its runs,
+    /// even one of 5000.
+    #[test]
+    fn a_counter_keeps_its_runs() {
+        let mut x: Vec<f64> = (0..50_000)
+            .map(|i| if i % 7 == 0 { 3.0 } else { 2.0 })
+            .collect();
+        x[20_000..25_000].iter_mut().for_each(|v| *v = 2.0);
+        let (out, found) = run(&x, None);
+        assert_eq!(found.stretches, 0, "{found:?}");
+        assert_eq!(out.iter().flatten().count(), x.len());
+    }
+}
