@@ -170,6 +170,7 @@ impl RunAnalysis {
             backwards: t.backwards,
             irregular: t.irregular,
             discontinuities: t.discontinuities,
+            duplicates: t.duplicates,
         });
     }
 

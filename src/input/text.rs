@@ -348,6 +348,8 @@ pub struct TextReader<R> {
     gap_left: u64,
     /// The time column's account was logged (at the end of the input).
     time_reported: bool,
+    /// The values and stamp of the last row handed out, to tell a row written twice.
+    last_row: Option<(Vec<f64>, f64)>,
     line: Vec<u8>,
     bad_rows: u64,
     /// Values infinite or beyond `MAX_ABS_VALUE`, read as gaps.
@@ -607,6 +609,7 @@ impl<R: BufRead> TextReader<R> {
                 time,
                 gap_left: 0,
                 time_reported: false,
+                last_row: None,
                 line: raw,
                 bad_rows: 0,
                 invalid_values: 0,
@@ -634,6 +637,7 @@ impl<R: BufRead> TextReader<R> {
             time,
             gap_left: 0,
             time_reported: false,
+            last_row: None,
             line: Vec::new(),
             bad_rows: pos.bad_rows,
             invalid_values: pos.invalid_values,
@@ -728,18 +732,27 @@ impl<R: BufRead> TextReader<R> {
                 n += k as usize;
                 continue;
             }
-            let row = match self.pending.take() {
+            let (row, stamp) = match self.pending.take() {
                 Some((row, t)) => {
                     // The first row, or the row after a gap: the clock is set to its stamp.
                     if let Some(c) = &mut self.time {
                         c.handed_out(t);
                     }
-                    row
+                    (row, t)
                 }
                 None => {
                     let Some(p) = self.next_row()? else {
                         break;
                     };
+                    if self.is_repeat(&p) {
+                        // The same stamp and values as the row before: a record written twice
+                        // (a logger or a driver's repeat), not a sample. Taken as one, it
+                        // would put the clock a step ahead of every stamp after it.
+                        if let Some(c) = &mut self.time {
+                            c.duplicate(&self.path, self.line_no);
+                        }
+                        continue;
+                    }
                     let gap = match &mut self.time {
                         Some(c) => c.missing_before(p.1, &self.path, self.line_no),
                         None => 0,
@@ -749,9 +762,18 @@ impl<R: BufRead> TextReader<R> {
                         self.pending = Some(p);
                         continue;
                     }
-                    p.0
+                    p
                 }
             };
+            match (&row, &mut self.last_row) {
+                (Ok(v), Some((lv, lt))) => {
+                    lv.clear();
+                    lv.extend_from_slice(v);
+                    *lt = stamp;
+                }
+                (Ok(v), last) => *last = Some((v.clone(), stamp)),
+                (Err(_), last) => *last = None,
+            }
             self.push_row(out, row);
             n += 1;
         }
@@ -762,6 +784,21 @@ impl<R: BufRead> TextReader<R> {
             }
         }
         Ok(n)
+    }
+
+    /// Whether `p` repeats the last row handed out, stamp and values (NaN equal to NaN), where
+    /// a time column is in use (without one a repeated row cannot be told from a channel whose
+    /// value stood still).
+    fn is_repeat(&self, p: &Row) -> bool {
+        let (Some(c), Some((lv, lt)), Ok(v)) = (&self.time, &self.last_row, &p.0) else {
+            return false;
+        };
+        let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
+        c.in_use()
+            && p.1.is_finite()
+            && p.1 == *lt
+            && v.len() == lv.len()
+            && v.iter().zip(lv).all(|(a, b)| same(*a, *b))
     }
 
     /// The next row of the input, `None` at its end (comment lines skipped).

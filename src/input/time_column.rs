@@ -42,6 +42,9 @@ pub struct TimeColumn {
     pub backwards: u64,
     pub irregular: u64,
     pub discontinuities: u64,
+    /// Rows that repeated the row before them, stamp and values, dropped (a record written
+    /// twice is not a sample).
+    pub duplicates: u64,
 }
 
 /// Where a time column stands, for a checkpoint (`TextPosition`), and what it found so far (the
@@ -65,6 +68,9 @@ pub struct TimeState {
     pub irregular: u64,
     #[serde(default)]
     pub discontinuities: u64,
+    /// Rows dropped as written twice (see [`TimeColumn`]).
+    #[serde(default)]
+    pub duplicates: u64,
 }
 
 impl TimeState {
@@ -93,6 +99,7 @@ impl TimeColumn {
             backwards: 0,
             irregular: 0,
             discontinuities: 0,
+            duplicates: 0,
         }
     }
 
@@ -107,6 +114,7 @@ impl TimeColumn {
             backwards: self.backwards,
             irregular: self.irregular,
             discontinuities: self.discontinuities,
+            duplicates: self.duplicates,
         }
     }
 
@@ -118,6 +126,19 @@ impl TimeColumn {
         self.backwards = s.backwards;
         self.irregular = s.irregular;
         self.discontinuities = s.discontinuities;
+        self.duplicates = s.duplicates;
+    }
+
+    /// A row at `line` repeated the row before it, stamp and values, and was dropped.
+    pub fn duplicate(&mut self, file: &std::path::Path, line: u64) {
+        self.duplicates += 1;
+        if self.duplicates <= LOGGED {
+            tracing::warn!(
+                "{}: line {line}: the row repeats the one before it, time stamp and values; \
+                 dropped as written twice",
+                file.display()
+            );
+        }
     }
 
     /// Whether the column is used to find gaps (false once its first step ruled it out).
@@ -241,20 +262,24 @@ impl TimeColumn {
         if !self.in_use() {
             return;
         }
-        if self.jumps + self.backwards + self.irregular + self.discontinuities == 0 {
+        if self.jumps + self.backwards + self.irregular + self.discontinuities + self.duplicates
+            == 0
+        {
             tracing::debug!("{}: time column `{}`: uniform", file.display(), self.name);
             return;
         }
         tracing::warn!(
             "{}: time column `{}`: {} jumps, {} missing samples counted as gaps; {} steps \
-             backwards or repeated, {} not a whole number of tau0, {} discontinuities",
+             backwards or repeated, {} not a whole number of tau0, {} discontinuities; {} rows \
+             written twice dropped",
             file.display(),
             self.name,
             self.jumps,
             self.missing,
             self.backwards,
             self.irregular,
-            self.discontinuities
+            self.discontinuities,
+            self.duplicates
         );
     }
 }

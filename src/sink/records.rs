@@ -271,7 +271,8 @@ pub struct SummaryRecord {
 /// whether it was used to find gaps (`false`: its first step was not tau0 in s, ms, us or ns,
 /// and it was only skipped), its unit, the jumps taken as gaps and the samples they stood for
 /// (rows absent from the file, read as gaps), and the steps that went backwards or repeated, were
-/// not a whole number of tau0, or were too large to fill (each row then read as the next sample).
+/// not a whole number of tau0, or were too large to fill (each row then read as the next sample),
+/// and the rows dropped as written twice (the same stamp and values as the row before).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TimeColumnRecord {
     pub name: String,
@@ -283,6 +284,9 @@ pub struct TimeColumnRecord {
     pub backwards: u64,
     pub irregular: u64,
     pub discontinuities: u64,
+    /// Rows that repeated the row before them, stamp and values, dropped.
+    #[serde(default)]
+    pub duplicates: u64,
 }
 
 /// `aggregate`: run-to-run statistics of one coefficient of one channel (the seed paper's

@@ -300,6 +300,52 @@ fn a_time_column_that_goes_backwards_or_is_not_uniform_is_reported() {
     assert_eq!((t.used, t.unit.as_deref(), t.gaps), (false, None, 0));
 }
 
+/// Rows written twice (stamp and values repeated, as a logger or driver repeats a record) are
+/// dropped and counted, and a later jump of the time column is still the gap it stands for:
+/// the file with rows 50, 120, 121 and 150 doubled and rows 200..210 missing reads as the same
+/// file without the doubles (the same curves to the last bit, 10 missing samples). Before, each
+/// double put the clock a step ahead: 153 later rows counted "backwards" and the gap came out
+/// 4 samples short (6 for 10).
+#[test]
+fn rows_written_twice_are_dropped_and_later_gaps_keep_their_size() {
+    let single = stamped("time", 1.0, 200..210);
+    let mut doubled = String::new();
+    for (i, line) in single.lines().enumerate() {
+        doubled += line;
+        doubled += "\n";
+        // Line 0 is the header: line i + 1 holds row i.
+        if [51, 121, 122, 151].contains(&i) {
+            doubled += line;
+            doubled += "\n";
+        }
+    }
+    let (c1, s1) = parsed(&analyze(&write("single.csv", single.as_bytes()), &[]));
+    let out = analyze(&write("doubled.csv", doubled.as_bytes()), &[]);
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    let (c2, s2) = parsed(&out);
+    assert!(err.contains("4 rows written twice dropped"), "{err}");
+    let t = s2.time_column.as_ref().expect("summary.time_column");
+    assert_eq!(
+        (
+            t.duplicates,
+            t.gaps,
+            t.missing_samples,
+            t.backwards,
+            t.irregular
+        ),
+        (4, 1, 10, 0, 0)
+    );
+    assert_eq!((s2.t_data, &s2.samples), (s1.t_data, &s1.samples));
+    assert_eq!(c1.len(), c2.len());
+    for (x, y) in c1.iter().zip(&c2) {
+        assert_eq!(
+            (&x.channel, &x.tau, &x.count),
+            (&y.channel, &y.tau, &y.count)
+        );
+        assert_eq!(x.sigma, y.sigma);
+    }
+}
+
 /// `analyze` with the given arguments and no `--tau0`.
 fn analyze_no_tau0(path: &Path, extra: &[&str]) -> Output {
     exe()

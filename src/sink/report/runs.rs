@@ -45,11 +45,12 @@ pub(super) fn time_column_note(tc: &TimeColumnRecord) -> String {
         format!("time column `{name}` not used: its step is not &tau;0")
     } else {
         format!(
-            "time column `{name}`: {} jumps = {} missing samples (gaps), {} steps backwards, {} off-step",
+            "time column `{name}`: {} jumps = {} missing samples (gaps), {} steps backwards, {} off-step, {} rows written twice dropped",
             tc.gaps,
             tc.missing_samples,
             tc.backwards,
-            tc.irregular + tc.discontinuities
+            tc.irregular + tc.discontinuities,
+            tc.duplicates
         )
     };
     format!(

@@ -164,13 +164,16 @@ pub(super) fn run_heading(h: &mut String, res: &Results, k: RunKey, style: &Tabl
                 notes.push(style.yellow(&format!(
                     "time column `{name}` not used: its step is not tau0"
                 )));
-            } else if tc.gaps + tc.backwards + tc.irregular + tc.discontinuities > 0 {
+            } else if tc.gaps + tc.backwards + tc.irregular + tc.discontinuities + tc.duplicates > 0
+            {
                 notes.push(format!(
-                    "time column `{name}`: {} jumps = {} missing samples, {} backwards, {} off-step",
+                    "time column `{name}`: {} jumps = {} missing samples, {} backwards, {} off-step, \
+                     {} rows written twice dropped",
                     tc.gaps,
                     tc.missing_samples,
                     tc.backwards,
-                    tc.irregular + tc.discontinuities
+                    tc.irregular + tc.discontinuities,
+                    tc.duplicates
                 ));
             }
         }
