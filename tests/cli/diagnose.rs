@@ -242,6 +242,26 @@ fn a_temperature_logged_slowly_is_held_between_its_values() {
     );
 }
 
+/// A uniform draw in [-0.5, 0.5) from a 64-bit LCG (deterministic white noise).
+fn uniform(state: &mut u64) -> f64 {
+    *state = state
+        .wrapping_mul(6_364_136_223_846_793_005)
+        .wrapping_add(1_442_695_040_888_963_407);
+    (*state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+}
+
+/// Writes `text` to `p` and diagnoses it as rate samples; the output and its standard error.
+fn diagnose_rates(p: &std::path::Path, text: &str) -> (std::process::Output, String) {
+    std::fs::write(p, text).unwrap();
+    let out = exe()
+        .args(["diagnose", p.to_str().unwrap(), "--rate", "--json"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{out:?}");
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    (out, err)
+}
+
 /// A recording with a channel that never moves (a stuck or unconnected axis: every rate sample
 /// 1.25) and a cell that reads `inf`: the stuck channel is not diagnosed, and the warning says
 /// why with its rate (its curve is the rounding of the running sum, which was diagnosed
@@ -253,14 +273,7 @@ fn a_stuck_channel_is_said_and_not_diagnosed() {
     let mut text = String::from("time,g,stuck,h\n");
     let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
     for i in 0..20_000u64 {
-        // Two uniform draws per row from a 64-bit LCG (deterministic white noise).
-        let mut u = || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
-        let (a, b) = (u(), u());
+        let (a, b) = (uniform(&mut state), uniform(&mut state));
         let h = if i == 777 {
             "inf".to_string()
         } else {
@@ -268,13 +281,7 @@ fn a_stuck_channel_is_said_and_not_diagnosed() {
         };
         text += &format!("{:.2},{a:.6},1.25,{h}\n", i as f64 * 0.01);
     }
-    std::fs::write(&p, text).unwrap();
-    let out = exe()
-        .args(["diagnose", p.to_str().unwrap(), "--rate", "--json"])
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{out:?}");
-    let err = String::from_utf8_lossy(&out.stderr);
+    let (out, err) = diagnose_rates(&p, &text);
     assert!(
         err.contains("channel stuck") && err.contains("a rate of 1.25 u/s throughout"),
         "{err}"
@@ -306,13 +313,7 @@ fn a_frozen_stretch_is_taken_out_as_a_gap() {
     let mut state: u64 = 0x2545_f491_4f6c_dd1d;
     for i in 0..120_000u64 {
         // The sum of four uniform draws (near-Gaussian white noise, sd 1/sqrt(3)).
-        let mut x = 0.0;
-        for _ in 0..4 {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            x += (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
-        }
+        let x: f64 = (0..4).map(|_| uniform(&mut state)).sum();
         let f = if (60_000..66_000).contains(&i) {
             "0.370000".to_string()
         } else {
@@ -320,13 +321,7 @@ fn a_frozen_stretch_is_taken_out_as_a_gap() {
         };
         text += &format!("{:.2},{x:.6},{f}\n", i as f64 * 0.01);
     }
-    std::fs::write(&p, text).unwrap();
-    let out = exe()
-        .args(["diagnose", p.to_str().unwrap(), "--rate", "--json"])
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{out:?}");
-    let err = String::from_utf8_lossy(&out.stderr);
+    let (out, err) = diagnose_rates(&p, &text);
     assert!(err.contains("channel f: 1 stretch(es)"), "{err}");
     let recs = crate::common::pipeline::parse_lines(&out.stdout);
     let rec = |c: &str| {
