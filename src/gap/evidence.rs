@@ -185,10 +185,10 @@ pub struct GapEvidence {
     /// evidence restored from a checkpoint written before it existed).
     #[serde(default)]
     despike: Option<Despiker>,
-    /// The stuck-stretch filter in front of the outlier filter (a checkpoint written before it
-    /// existed restores an empty one).
+    /// The stuck-stretch filter in front of the outlier filter (None: off, as for a
+    /// temperature, or evidence restored from a checkpoint written before it existed).
     #[serde(default)]
-    stuck: StuckFilter,
+    stuck: Option<StuckFilter>,
     /// Cleaned increments released by the filter, waiting to be fed.
     #[serde(skip)]
     released: Vec<f64>,
@@ -244,16 +244,18 @@ impl GapEvidence {
             n_increments: 0,
             n_received: 0,
             despike: Some(Despiker::new(cfg_tau0)),
-            stuck: StuckFilter::new(),
+            stuck: Some(StuckFilter::new()),
             released: Vec::new(),
             lsb: LsbEstimator::new(),
         }
     }
 
-    /// The same evidence without the outlier filter (for a smooth signal such as the unit's
-    /// temperature, whose printed rounding is all it has of noise).
+    /// The same evidence without the outlier and stuck-stretch filters (for a smooth signal
+    /// such as the unit's temperature, whose printed rounding is all it has of noise and whose
+    /// plateaus are real; it must also see every step the channels see).
     pub fn without_outlier_filter(mut self) -> Self {
         self.despike = None;
+        self.stuck = None;
         self
     }
 
@@ -308,7 +310,9 @@ impl GapEvidence {
                 self.done.len()
             ));
         }
-        self.stuck.check_restored()?;
+        if let Some(f) = &self.stuck {
+            f.check_restored()?;
+        }
         let main = accum_cfg(tau0_s, TauSpec::List(self.cfg.dense_cluster_sizes()));
         let seg = accum_cfg(tau0_s, TauSpec::List(segment_ms(self.seg_len)));
         if self.main.config() != &main || self.seg_engine.config() != &seg {
@@ -326,8 +330,13 @@ impl GapEvidence {
     #[inline]
     pub fn push_increment(&mut self, d: f64) {
         self.lsb.push(d);
-        if let Some(r) = self.stuck.push(d) {
-            self.take(r);
+        match self.stuck.as_mut() {
+            None => self.despike_push(d),
+            Some(f) => {
+                if let Some(r) = f.push(d) {
+                    self.take(r);
+                }
+            }
         }
     }
 
@@ -391,7 +400,7 @@ impl GapEvidence {
         if missing == 0 {
             return;
         }
-        if let Some(r) = self.stuck.gap(missing) {
+        if let Some(r) = self.stuck.as_mut().and_then(|f| f.gap(missing)) {
             self.take(r);
         }
         self.gap_inner(missing);
@@ -478,7 +487,7 @@ impl GapEvidence {
 
     /// Everything gathered so far (the accumulators are read, not reset).
     pub fn snapshot(&mut self) -> EvidenceSnapshot {
-        if let Some(r) = self.stuck.flush() {
+        if let Some(r) = self.stuck.as_mut().and_then(StuckFilter::flush) {
             self.take(r);
         }
         self.release(true, false);
@@ -536,7 +545,7 @@ impl GapEvidence {
             block_len: self.block_len,
             block_means,
             outliers: self.despike.as_ref().map(|d| d.found).unwrap_or_default(),
-            stuck: self.stuck.found,
+            stuck: self.stuck.as_ref().map(|f| f.found).unwrap_or_default(),
             lsb: self.lsb.estimate(),
             // A restored run's estimator has seen only the increments since the restore.
             constant: self
