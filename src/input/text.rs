@@ -765,7 +765,10 @@ impl<R: BufRead> TextReader<R> {
                     p
                 }
             };
+            // Kept only where a repeat can be told (`is_repeat`): a time column in use.
+            let keep = self.time.as_ref().is_some_and(TimeColumn::in_use);
             match (&row, &mut self.last_row) {
+                (Ok(_), last) if !keep => *last = None,
                 (Ok(v), Some((lv, lt))) => {
                     lv.clear();
                     lv.extend_from_slice(v);
