@@ -118,6 +118,18 @@ pub(super) fn channel_reports(
             // with a fresh computation only to ~1e-11).
             ch.fitter = Fitter::new();
         }
+        if let Some(d) = ch.acc.constant_increment().filter(|_| final_) {
+            // docs/robustness.md: a channel that never moves has curves of exactly 0, so
+            // nothing to fit; said once, at the end, with the rate it is stuck at.
+            tracing::warn!(
+                "{}: every sample is the same, a rate of {} {}/s throughout: its curves are \
+                 exactly 0 and nothing is fitted (the channel does not move: stuck, saturated \
+                 or not connected?)",
+                ch.setup.name,
+                d / opts.accum.tau0_s,
+                ch.setup.unit
+            );
+        }
         let (curves, fit) = analyze_channel(ch, opts);
         let readouts = fit.as_ref().and_then(|_| {
             curves

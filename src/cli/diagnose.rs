@@ -152,6 +152,7 @@ fn gather(
     let mut settings = a.data.settings()?;
     if a.channel.is_some() {
         settings.channels = a.channel.clone();
+        settings.text.channels = a.channel.clone();
     }
     // Diagnose reads the input once: no checkpoints (refused in `run`).
     let req = UnitRequest::default();

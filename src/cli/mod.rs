@@ -289,6 +289,7 @@ impl DataArgs {
             columns: self.columns.clone(),
             // Text columns need --tau0; with it, jumps of the time column are gaps.
             tau0_s: self.tau0,
+            channels: self.channels.clone(),
         }
     }
 }
@@ -353,7 +354,12 @@ fn text_tau0(d: &mut DataArgs, inputs: &[&str]) -> Result<()> {
             tau0_s: None,
             ..d.text_options()
         };
-        let step = allanscope::input::sampling_step::infer_tau0(src, Path::new(input), &opts)
+        // The run reads the input again and logs what it finds (a column without a name, a
+        // label column): this look at its start says nothing, so nothing is said twice.
+        let step =
+            tracing::subscriber::with_default(tracing::subscriber::NoSubscriber::default(), || {
+                allanscope::input::sampling_step::infer_tau0(src, Path::new(input), &opts)
+            })
             .map_err(anyhow::Error::new)?;
         match &found {
             Some((first, s)) if (s.tau0_s - step.tau0_s).abs() > 1e-9 * s.tau0_s => {

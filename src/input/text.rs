@@ -3,7 +3,9 @@
 //! before it is dropped, duplicate names are refused), `#` lines skipped (docs/records.md). A `#`
 //! line just before the first data row that names as many columns as the row has (`#timestamp
 //! [ns],w_RS_S_x [rad s^-1],...`, as EuRoC and TUM datasets write) is that header. A column
-//! named `time`, `t`, `timestamp`, `time_s` (any case, a unit after it such as `timestamp [ns]`,
+//! whose first data row holds text (`imu_link`, `OK`) is a label and no channel unless the run
+//! names it. A column named `time`, `t`, `timestamp`, `time_s` (any case, after a `#` or ROS's
+//! `%`, a unit after it such as `timestamp [ns]`,
 //! `time (s)` or `t_ns` allowed: [`time_column_unit`]) or the one [`TextOptions::time_column`]
 //! names is a time stamp, not a channel: with the sampling step ([`TextOptions::tau0_s`]) its
 //! jumps become gaps of the missing samples ([`super::time_column`]), else it is skipped;
@@ -103,7 +105,7 @@ const TIME_UNITS: [(&str, f64); 6] = [
 pub fn time_column_unit(name: &str) -> Option<Option<f64>> {
     let n = name
         .trim()
-        .trim_start_matches('#')
+        .trim_start_matches(['#', '%'])
         .trim()
         .to_ascii_lowercase();
     let unit_of = |u: &str| {
@@ -165,6 +167,10 @@ pub struct TextOptions {
     /// The sampling step (s): with it, jumps of the time column become gaps
     /// ([`super::time_column`]); without it the time column is only skipped.
     pub tau0_s: Option<f64>,
+    /// The channels the run analyses (`--channels`), when it picks some: a cell that is not a
+    /// number in any other column is no reason to lose the row (it is read as a gap of a column
+    /// nobody looks at). `None`: every column is a channel the run may analyse.
+    pub channels: Option<Vec<String>>,
 }
 
 /// Which input columns are read, and under which names.
@@ -176,6 +182,9 @@ struct Layout {
     sep: Sep,
     /// Input column (0-based) of each channel.
     keep: Vec<usize>,
+    /// Per channel: whether a cell that is not a number makes its row a bad row (a channel the
+    /// run analyses), or is only a gap of that channel (one `--channels` leaves out).
+    strict: Vec<bool>,
     /// Input column names (header or `c1..cn`).
     source_names: Vec<String>,
     /// Channel names.
@@ -275,14 +284,78 @@ impl Layout {
         if keep.is_empty() {
             return Err(err("no data column (only a time column)".into()));
         }
+        let strict = names
+            .iter()
+            .map(|n| opts.channels.as_ref().is_none_or(|c| c.contains(n)))
+            .collect();
         Ok(Layout {
             width_in: source_names.len(),
             sep,
             keep,
+            strict,
             source_names,
             names,
             time,
         })
+    }
+
+    /// The layout without the columns whose cell in the first data row `t` is text, not a
+    /// number: a ROS `rostopic echo -p` export's `field.header.frame_id` (`imu_link`), a
+    /// logger's status word. Such a column holds labels, not samples; it is left out, said in
+    /// the log, unless the run named it (`--columns`, or `--channels`), which is an error as
+    /// before. Columns `--channels` leaves out are kept: their cells are never needed.
+    fn without_label_columns(
+        mut self,
+        t: &str,
+        opts: &TextOptions,
+        path: &Path,
+        line: u64,
+    ) -> Result<Layout, UsageError> {
+        let fields = self.split(t);
+        let mut k = 0;
+        while k < self.keep.len() {
+            let i = self.keep[k];
+            let cell = fields[i].trim();
+            if !self.strict[k] || parse_field(cell).is_ok() {
+                k += 1;
+                continue;
+            }
+            let named = opts.columns.is_some()
+                || opts
+                    .channels
+                    .as_ref()
+                    .is_some_and(|c| c.contains(&self.names[k]));
+            let only_text = cell.bytes().any(|b| b.is_ascii_alphabetic() || b == b'_');
+            if named || !only_text {
+                return Err(input_error(
+                    path,
+                    line,
+                    format!(
+                        "the first data row: column {} `{}`: `{cell}` is not a number",
+                        i + 1,
+                        self.source_names[i]
+                    ),
+                ));
+            }
+            tracing::warn!(
+                "{}: line {line}: column {} `{}` holds text (`{cell}`), not numbers: left out, \
+                 not a channel",
+                path.display(),
+                i + 1,
+                self.source_names[i]
+            );
+            self.keep.remove(k);
+            self.names.remove(k);
+            self.strict.remove(k);
+        }
+        if self.keep.is_empty() {
+            return Err(input_error(
+                path,
+                line,
+                "no data column: the first data row holds text in every column but the time".into(),
+            ));
+        }
+        Ok(self)
     }
 
     /// The channel values of a row and its time stamp (NaN without a time column or where the
@@ -299,8 +372,14 @@ impl Layout {
         let values = self
             .keep
             .iter()
-            .map(|&i| {
-                parse_field(fields[i]).map_err(|()| {
+            .zip(&self.strict)
+            .map(|(&i, &strict)| {
+                let v = parse_field(fields[i]);
+                if !strict {
+                    // A column the run does not analyse: what is not a number is a gap.
+                    return Ok(v.unwrap_or(f64::NAN));
+                }
+                v.map_err(|()| {
                     format!(
                         "column {} `{}`: `{}` is not a number",
                         i + 1,
@@ -479,8 +558,9 @@ impl<R: BufRead> TextReader<R> {
     /// Opens the stream and reads up to the first data row (taking a header row if present).
     /// Fails with a usage error (exit status 2) when there is no data row at all, when the
     /// header names a column twice, when `opts` names a column the input does not have, or when
-    /// a channel of the first data row is not a number (a text column such as a status flag;
-    /// a row of the wrong width is a counted bad row, as later).
+    /// a column the run names (`--columns`, `--channels`) is not a number in the first data row
+    /// (a row of the wrong width is a counted bad row, as later). A column the run does not
+    /// name whose first cell is text (`imu_link`, `OK`) is left out as a label column, logged.
     pub fn with_options(mut src: R, path: &Path, opts: &TextOptions) -> Result<Self, UsageError> {
         let mut raw = Vec::new();
         let mut line_no = 0u64;
@@ -559,12 +639,12 @@ impl<R: BufRead> TextReader<R> {
                     Ok((v, time)) => ((Ok(v), time), l),
                     // A row of the wrong width is a bad row, as later ones are.
                     Err(problem) if l.split(t).len() != l.width_in => ((Err(problem), f64::NAN), l),
-                    Err(problem) => {
-                        return Err(input_error(
-                            path,
-                            line_no,
-                            format!("the first data row: {problem}"),
-                        ))
+                    Err(_) => {
+                        let l = l.without_label_columns(t, opts, path, line_no)?;
+                        let (v, time) = l.parse(t).map_err(|p| {
+                            input_error(path, line_no, format!("the first data row: {p}"))
+                        })?;
+                        ((Ok(v), time), l)
                     }
                 },
                 None => {
@@ -845,12 +925,13 @@ impl<R: BufRead> TextReader<R> {
                 // `inf`, `1e308`, `1e-300`: counted, and a gap like `nan`.
                 let start = out.len();
                 out.extend_from_slice(&v);
-                for x in &mut out[start..] {
+                // Only the columns the run analyses are counted (`--channels`).
+                for (x, &counted) in out[start..].iter_mut().zip(&self.layout.strict) {
                     if super::plausible(*x).is_none() {
                         *x = f64::NAN;
-                        self.invalid_values += 1;
+                        self.invalid_values += u64::from(counted);
                     } else if !x.is_nan() {
-                        self.samples += 1;
+                        self.samples += u64::from(counted);
                     }
                 }
             }
@@ -906,6 +987,61 @@ mod tests {
         assert_eq!((out[0], out[2]), (1.0, 3.0));
         assert!(out[1].is_nan());
         assert_eq!(r.bad_rows(), 1);
+    }
+
+    /// A ROS `rostopic echo -p` export: a label column (`frame_id`) is left out, not a reason
+    /// to refuse the file; with `--channels`, a cell that is not a number in a column the run
+    /// does not analyse loses no row and is not counted, and its huge stamps are not counted
+    /// invalid; a label column the run names is refused.
+    #[test]
+    fn label_columns_and_columns_the_run_leaves_out() {
+        let text = "%time,field.header.stamp,field.header.frame_id,field.w.x,field.w.y\n\
+                    1,1700000000000000000,imu_link,0.5,1.5\n\
+                    2,1700000000005000000,imu_link,n/a,2.5\n\
+                    3,1700000000010000000,imu_link,0.25,3.5\n";
+        let read = |opts: &TextOptions| {
+            let mut r = TextReader::with_options(text.as_bytes(), Path::new("r.csv"), opts)?;
+            let mut out = Vec::new();
+            while r.read_rows(&mut out, 8).unwrap() > 0 {}
+            Ok::<_, UsageError>((r.names().to_vec(), out, r.bad_rows(), r.invalid_values))
+        };
+        // Every column: the label column is no channel, the `n/a` row is a bad row (a gap of
+        // every channel), the stamps beyond 1e15 are counted invalid; `%time` is the time.
+        let (names, v, bad, invalid) = read(&TextOptions::default()).unwrap();
+        assert_eq!(names, ["field.header.stamp", "field.w.x", "field.w.y"]);
+        assert_eq!((v.len(), bad, invalid), (9, 1, 2));
+        assert_eq!((v[1], v[2], v[7], v[8]), (0.5, 1.5, 0.25, 3.5));
+        assert!(v[3..6].iter().all(|x| x.is_nan()));
+        // `--channels field.w.y`: the row with `n/a` in field.w.x is read, nothing counted.
+        let opts = TextOptions {
+            channels: Some(vec!["field.w.y".into()]),
+            ..TextOptions::default()
+        };
+        let (_, v, bad, invalid) = read(&opts).unwrap();
+        assert_eq!((bad, invalid), (0, 0));
+        // The columns the run leaves out stay in the rows (read as gaps where not numbers).
+        let y: Vec<f64> = v.chunks(4).map(|r| r[3]).collect();
+        assert_eq!(y, [1.5, 2.5, 3.5]);
+        // Named, the label column is an error saying what it holds.
+        for opts in [
+            TextOptions {
+                channels: Some(vec!["field.header.frame_id".into()]),
+                ..TextOptions::default()
+            },
+            TextOptions {
+                columns: Some(vec![
+                    "field.w.x".parse().unwrap(),
+                    "field.header.frame_id".parse().unwrap(),
+                ]),
+                ..TextOptions::default()
+            },
+        ] {
+            let e = read(&opts).unwrap_err().to_string();
+            assert!(
+                e.contains("column 3 `field.header.frame_id`: `imu_link` is not a number"),
+                "{e}"
+            );
+        }
     }
 
     #[test]

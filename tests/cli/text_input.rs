@@ -173,27 +173,144 @@ fn bad_headers_and_columns_are_usage_errors_naming_them() {
     );
 }
 
+/// A column of text (a status word, a ROS export's `frame_id`) is a label, not a channel: left
+/// out with a warning, the other columns read as the file without it. Named (`--columns`,
+/// `--channels`), or a cell that is not a number and not text (`1.2.3`), it is an error; so is
+/// an input without one sample.
 #[test]
-fn a_text_column_and_an_input_without_samples_are_usage_errors() {
+fn a_text_column_is_left_out_unless_named_and_an_input_without_samples_is_an_error() {
     let p = write(
         "status.csv",
-        b"# log\ngx,status,gy\n0.1,OK,0.2\n0.3,OK,0.4\n",
+        b"# log\ngx,status,gy\n0.1,OK,0.2\n0.3,OK,0.4\n0.5,FAIL,0.25\n",
     );
+    let out = analyze(&p, &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("line 3: column 2 `status` holds text (`OK`), not numbers: left out"),
+        "{err}"
+    );
+    let (c, s) = parsed(&out);
+    assert_eq!(
+        (s.channels.clone(), s.samples.clone(), s.bad_rows),
+        (vec!["gx".to_string(), "gy".into()], vec![4, 4], 0)
+    );
+    let (c2, _) = parsed(&analyze(&p, &["--columns", "gx,gy"]));
+    assert_eq!(c.len(), c2.len());
+    for (x, y) in c.iter().zip(&c2) {
+        assert_eq!((&x.channel, &x.sigma), (&y.channel, &y.sigma));
+    }
+    for named in [["--columns", "gx,status"], ["--channels", "status"]] {
+        usage_error(
+            &analyze(&p, &named),
+            &[
+                "status.csv",
+                "line 3",
+                "column 2 `status`: `OK` is not a number",
+            ],
+        );
+    }
+    let p = write("dotted.csv", b"gx,gy\n0.1,1.2.3\n0.3,0.4\n");
     usage_error(
         &analyze(&p, &[]),
         &[
-            "status.csv",
-            "line 3",
-            "column 2 `status`: `OK` is not a number",
+            "dotted.csv",
+            "line 2",
+            "column 2 `gy`: `1.2.3` is not a number",
         ],
     );
-    // Picking the numeric columns reads it.
-    let (_, s) = parsed(&analyze(&p, &["--columns", "gx,gy"]));
-    assert_eq!(s.samples, [3, 3]);
     let p = write("empty_values.csv", b"gx,gy\nnan,nan\n,\nnan,\n");
     usage_error(&analyze(&p, &[]), &["empty_values.csv", "no samples"]);
     let p = write("header_only.csv", b"gx,gy\n");
     usage_error(&analyze(&p, &[]), &["header_only.csv", "no data rows"]);
+}
+
+/// A ROS 1 `rostopic echo -p` export as robotics users make it: `%time` in ns since 1970, a
+/// `frame_id` label column, orientation and covariance columns that never change, a cell that
+/// is not a number in a column the run does not analyse. With `--rate --channels`, no `--tau0`:
+/// the step is read off `%time`, nothing is lost, and the curves are those of the same rates in
+/// a plain file, to the last bit.
+#[test]
+fn a_rostopic_export_reads_as_the_plain_file() {
+    let (a, b) = columns();
+    let mut text = String::from(
+        "%time,field.header.seq,field.header.stamp,field.header.frame_id,field.orientation.w,\
+         field.angular_velocity.x,field.angular_velocity.y\n",
+    );
+    let mut plain = String::from("wx,wy\n");
+    for i in 0..a.len() {
+        let ns = 1_700_000_000_000_000_000u64 + i as u64 * 10_000_000;
+        let w = if i == 123 { "n/a" } else { "1" };
+        text += &format!("{},{i},{ns},imu_link,{w},{:e},{:e}\n", ns + 137, a[i], b[i]);
+        plain += &format!("{:e},{:e}\n", a[i], b[i]);
+    }
+    let p = write("rostopic.csv", text.as_bytes());
+    let q = write("rostopic_plain.csv", plain.as_bytes());
+    let out = analyze_no_tau0(
+        &p,
+        &[
+            "--rate",
+            "--channels",
+            "field.angular_velocity.x,field.angular_velocity.y",
+        ],
+    );
+    let (c, s) = parsed(&out);
+    let (pc, ps) = parsed(&analyze(&q, &["--rate"]));
+    assert_eq!((s.tau0, s.bad_rows, s.invalid_values), (0.01, 0, 0));
+    assert_eq!(s.samples, ps.samples);
+    assert_eq!(c.len(), pc.len());
+    for (x, y) in c.iter().zip(&pc) {
+        assert_eq!(x.sigma, y.sigma);
+    }
+}
+
+/// A channel that never moves (a rate of 1.25 throughout, an orientation's `w` of 1): its
+/// curves are exactly 0, nothing is fitted, and a warning says so with the rate. Before, the
+/// rounding of the running sums (about 1e-19 u/s) was fitted as a "determined" noise term.
+#[test]
+fn a_constant_channel_has_curves_of_zero_and_no_fit() {
+    let (a, _) = columns();
+    let mut text = String::from("g,stuck\n");
+    for x in &a {
+        text += &format!("{x:e},1.25\n");
+    }
+    let p = write("constant.csv", text.as_bytes());
+    let out = exe()
+        .args([
+            "analyze",
+            p.to_str().unwrap(),
+            "--tau0",
+            "0.01",
+            "--rate",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("stuck: every sample is the same, a rate of 1.25 u/s throughout"),
+        "{err}"
+    );
+    assert!(!err.contains("g: every sample"), "{err}");
+    let (c, _) = parsed(&out);
+    let stuck: Vec<&CurveRecord> = c.iter().filter(|c| c.channel == "stuck").collect();
+    assert_eq!(stuck.len(), 3);
+    for c in &stuck {
+        assert!(
+            !c.sigma.is_empty() && c.sigma.iter().all(|&s| s == 0.0),
+            "{:?}",
+            c.sigma
+        );
+    }
+    assert!(c
+        .iter()
+        .any(|c| c.channel == "g" && c.sigma.iter().all(|&s| s > 1e-4)));
+    let fits: Vec<String> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .filter(|r| r["type"] == "fit")
+        .map(|r| r["channel"].as_str().unwrap().to_string())
+        .collect();
+    assert_eq!(fits, ["g"]);
 }
 
 /// The two columns with a time column (`scale` units per second), rows `skip` left out.

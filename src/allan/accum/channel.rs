@@ -128,6 +128,17 @@ impl ChannelAccumulator {
         }
     }
 
+    /// The increment (u) every increment so far has been, when all are the same
+    /// ([`Engine::constant_increment`]).
+    pub fn constant_increment(&self) -> Option<f64> {
+        match self {
+            ChannelAccumulator::Counts { engine, scale } => {
+                engine.constant_increment().map(|d| d as f64 * scale)
+            }
+            ChannelAccumulator::Real(e) => e.constant_increment(),
+        }
+    }
+
     /// Readings in u^2/s^2 (counts scaled).
     pub fn read(&mut self) -> Vec<LevelReading> {
         match self {

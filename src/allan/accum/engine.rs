@@ -182,7 +182,8 @@ pub struct Engine<R: Repr> {
     /// `spread + 1 >= |d - first|` for each of them: MVAR's inner sum at
     /// cluster m is at most `2 m^2 (spread + 1)` in magnitude (each of its m second differences is a
     /// difference of two sums of m increments, and a constant offset cancels), which decides
-    /// when its third difference of the running sum fits in 64 bits.
+    /// when its third difference of the running sum fits in 64 bits. `spread` is 0 exactly when
+    /// every increment so far equals the first ([`Engine::constant_increment`]).
     pub(super) first_inc: Option<R::Inc>,
     pub(super) spread: u64,
     /// Scratch for the moving sums of phase at m = 2, 4, 8, ... (integer input); rebuilt at
@@ -292,6 +293,13 @@ impl<R: Repr> Engine<R> {
     /// Number of contiguous segments so far.
     pub fn segments(&self) -> u64 {
         self.segments
+    }
+
+    /// The increment every increment so far has been, when they are all the same (a channel
+    /// that does not move: stuck, saturated, or a constant such as an unused field); `None`
+    /// before the first or once one differs. Phase points fed directly are not looked at.
+    pub fn constant_increment(&self) -> Option<R::Inc> {
+        self.first_inc.filter(|_| self.spread == 0)
     }
 
     /// Feeds one increment `d_k` (docs/theory.md section 1).
@@ -548,13 +556,21 @@ impl<R: Repr> Engine<R> {
         }
         let tau0 = self.cfg.tau0_s;
         let stats = self.cfg.stats;
+        // Equal increments make a straight line of phase, whose second and third differences
+        // are 0: the variances are exactly 0, not the rounding of the running sums (about 1e-38
+        // of the squared rate in double-double, which a fit would read as a noise term).
+        let exact_zero = self.constant_increment().is_some();
         self.levels
             .iter()
             .map(|lv| {
                 let tau = lv.m as f64 * tau0;
                 let stride = self.streams[lv.stream].stride;
                 let fin = |q: &SqSum, on: bool, denom: f64| {
-                    (on && q.count > 0).then(|| (q.sum.value() / (denom * q.count as f64), q.count))
+                    let mean = |q: &SqSum| match exact_zero {
+                        true => 0.0,
+                        false => q.sum.value() / (denom * q.count as f64),
+                    };
+                    (on && q.count > 0).then(|| (mean(q), q.count))
                 };
                 let mf = lv.m as f64;
                 LevelReading {

@@ -81,11 +81,10 @@ pub trait Repr: 'static {
         Self::d3(a, b, c, d)
     }
     /// A whole number of counts `v` with `v + 1 >= |d - reference|`, whose bitwise OR over many
-    /// increments is again such a bound for each (so it is kept with `|=`, which vectorizes);
-    /// 0 where not needed (floats).
-    fn deviation(_d: Self::Inc, _reference: Self::Inc) -> u64 {
-        0
-    }
+    /// increments is again such a bound for each (so it is kept with `|=`, which vectorizes),
+    /// and 0 exactly when `d == reference`. Floats, which need no bound, give only the last:
+    /// 1 where `d` differs, so the OR is 0 only while every increment equals the first.
+    fn deviation(d: Self::Inc, reference: Self::Inc) -> u64;
     /// The phase points as wrapping 64-bit integers, for the integer kernels
     /// ([`second_differences`], the moving-sum MVAR); `None` for representations without them.
     #[inline(always)]
@@ -232,5 +231,9 @@ impl Repr for FloatRepr {
     #[inline(always)]
     fn c3(a: Dd, b: Dd, c: Dd, d: Dd) -> f64 {
         dd_d3(a, b, c, d)
+    }
+    #[inline(always)]
+    fn deviation(d: f64, reference: f64) -> u64 {
+        u64::from(d != reference)
     }
 }
