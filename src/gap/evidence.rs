@@ -120,6 +120,12 @@ impl SegmentCurve {
     }
 }
 
+/// The share of its samples a block at the start of the run needs for the block tests
+/// ([`EvidenceSnapshot::block_first`]): a first block 90% full has a mean's variance at most
+/// 1.11 times a whole block's. Before (session 29), a first block holding 24 of its 1024
+/// samples after a 10-s leading gap, its mean's sd 6.5 times a block's, was read as a warm-up.
+pub const LEAD_BLOCK_FILL: f64 = 0.9;
+
 /// One point of the main curve.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DensePoint {
@@ -150,6 +156,11 @@ pub struct EvidenceSnapshot {
     /// no data), in time order.
     pub block_len: u64,
     pub block_means: Vec<f64>,
+    /// Blocks left out at the start: `block_means[0]` is block `block_first` of the run. A
+    /// leading gap (a recording that began before the unit sent data, or its first run taken
+    /// out as stuck) leaves blocks short, whose means have the variance of the few samples they
+    /// hold, not a block's; the block tests start at the first block [`LEAD_BLOCK_FILL`] full.
+    pub block_first: usize,
     /// Outliers found and replaced before the evidence saw them ([`super::outliers`]).
     pub outliers: OutlierCount,
     /// The step of the increments as received (u), when they are whole multiples of one
@@ -335,8 +346,17 @@ impl GapEvidence {
             Some(f) => {
                 if let Some(r) = f.push(d) {
                     self.take(r);
+                    self.take_queued();
                 }
             }
+        }
+    }
+
+    /// What the stuck-stretch filter has waiting after a release (what followed a first run
+    /// it held: `super::stuck`'s module doc).
+    fn take_queued(&mut self) {
+        while let Some(r) = self.stuck.as_mut().and_then(StuckFilter::queued) {
+            self.take(r);
         }
     }
 
@@ -402,6 +422,7 @@ impl GapEvidence {
         }
         if let Some(r) = self.stuck.as_mut().and_then(|f| f.gap(missing)) {
             self.take(r);
+            self.take_queued();
         }
         self.gap_inner(missing);
     }
@@ -489,6 +510,7 @@ impl GapEvidence {
     pub fn snapshot(&mut self) -> EvidenceSnapshot {
         if let Some(r) = self.stuck.as_mut().and_then(StuckFilter::flush) {
             self.take(r);
+            self.take_queued();
         }
         self.release(true, false);
         let tau0 = self.cfg.tau0_s;
@@ -535,6 +557,13 @@ impl GapEvidence {
         if self.cur_block.1 > 0 && self.block_pos * 2 >= self.block_len {
             block_means.push(self.cur_block.0 / (self.cur_block.1 as f64 * tau0));
         }
+        let block_first = self
+            .blocks
+            .iter()
+            .take_while(|b| (b.1 as f64) < LEAD_BLOCK_FILL * self.block_len as f64)
+            .count()
+            .min(block_means.len());
+        block_means.drain(..block_first);
         EvidenceSnapshot {
             tau0_s: tau0,
             n_increments: self.n_increments,
@@ -544,6 +573,7 @@ impl GapEvidence {
             segments,
             block_len: self.block_len,
             block_means,
+            block_first,
             outliers: self.despike.as_ref().map(|d| d.found).unwrap_or_default(),
             stuck: self.stuck.as_ref().map(|f| f.found).unwrap_or_default(),
             lsb: self.lsb.estimate(),

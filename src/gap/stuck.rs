@@ -20,8 +20,12 @@
 //! counter's neighbours are equal with probability about `0.4 / sigma_e` for a difference of
 //! `sigma_e` steps rms, so 5% takes at least 8 steps of noise, where the values are near
 //! continuous). Nor is a
-//! run before [`MIN_PAIRS`] pairs have been passed on, when `p` is not known yet; a channel
-//! constant throughout is said by [`super::lsb::LsbEstimator::constant`].
+//! run before [`MIN_PAIRS`] pairs have been passed on, when `p` is not known yet, with one
+//! exception: the channel's first run (a recording that begins before the unit sends data, its
+//! rows 0 until then). When it is [`MIN_STUCK`] or longer it is held, with what follows it
+//! (at most [`MIN_PAIRS`] + 1 runs, bounded memory), until the pairs after it give `p`, and
+//! judged by the same rule; a gap or a snapshot before that judges it with what there is. A
+//! channel constant throughout is said by [`super::lsb::LsbEstimator::constant`].
 
 /// Shortest run judged (samples).
 pub const MIN_STUCK: u64 = 16;
@@ -68,7 +72,7 @@ pub struct StuckSpan {
 }
 
 /// What the filter passes on.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Release {
     /// `n` increments of this value.
     Values(f64, u64),
@@ -96,7 +100,23 @@ pub struct StuckFilter {
     last_passed: bool,
     /// Samples accounted for (passed on, taken out, or lost in gaps), for `first_at`.
     position: u64,
+    /// The channel's first run, held until the pairs after it can judge it (module doc).
+    #[serde(default)]
+    lead: Option<Lead>,
+    /// Releases waiting to be taken, in order ([`StuckFilter::queued`]): what followed the
+    /// first run, once it is judged.
+    #[serde(default)]
+    queue: std::collections::VecDeque<Release>,
     pub found: StuckCount,
+}
+
+/// A first run held for judgement: its value and length, and what the filter released after
+/// it, in order.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+struct Lead {
+    value: f64,
+    len: u64,
+    after: Vec<Release>,
 }
 
 impl StuckFilter {
@@ -104,7 +124,9 @@ impl StuckFilter {
         Self::default()
     }
 
-    /// One increment `d` (u); returns what the run it ends releases.
+    /// One increment `d` (u); returns what the run it ends releases. Whenever this, [`Self::gap`]
+    /// or [`Self::flush`] returns something, more may wait in [`Self::queued`], to be taken
+    /// after it and before anything else.
     #[inline]
     pub fn push(&mut self, d: f64) -> Option<Release> {
         let mut out = None;
@@ -138,27 +160,73 @@ impl StuckFilter {
     /// again after the gap.
     pub fn gap(&mut self, missing: u64) -> Option<Release> {
         let out = self.end_run();
+        let out = self.settle_lead(out);
         self.value = None;
         self.last_passed = false;
         self.position += missing;
         out
     }
 
+    /// The next release waiting after one [`Self::push`], [`Self::gap`] or [`Self::flush`]
+    /// returned.
+    #[inline]
+    pub fn queued(&mut self) -> Option<Release> {
+        self.queue.pop_front()
+    }
+
+    /// Judges a first run still held (before a gap or a snapshot) with the pairs there are.
+    fn settle_lead(&mut self, out: Option<Release>) -> Option<Release> {
+        match (out, self.lead.is_some()) {
+            (None, true) => self.judge_lead(),
+            (out, _) => out,
+        }
+    }
+
+    /// Judges the held first run by the rule of [`Self::is_stuck`] with `p` from the pairs after
+    /// it; returns its release and queues what followed it.
+    fn judge_lead(&mut self) -> Option<Release> {
+        let lead = self.lead.take()?;
+        let len = lead.len;
+        let p = self.equal_share();
+        let n = (self.pairs + len) as f64;
+        let stuck = self.pairs >= MIN_PAIRS
+            && p < MAX_EQUAL_SHARE
+            && n.ln() + (len - 1) as f64 * p.ln() < STUCK_P.ln();
+        let out = if stuck {
+            self.found.first_at = 0;
+            self.found.stretches += 1;
+            self.found.samples += len;
+            self.found.longest = self.found.longest.max(len);
+            Release::Stuck(len)
+        } else {
+            // Its pairs, and the unequal one joining it to what followed, if anything did.
+            self.pairs += len - 1 + u64::from(!lead.after.is_empty());
+            self.equal += len - 1;
+            Release::Values(lead.value, len)
+        };
+        self.queue.extend(lead.after);
+        Some(out)
+    }
+
     /// Releases the held run at a snapshot: judged as it stands; a stuck one stays stuck as it
     /// goes on (its value is kept, so the pairs' count sees no break).
     pub fn flush(&mut self) -> Option<Release> {
         if self.len == 0 {
-            return None;
+            return self.settle_lead(None);
         }
         let stuck = self.is_stuck();
         let out = self.release(stuck);
         self.continues_stuck = stuck;
-        out
+        self.settle_lead(out)
     }
 
     /// Checks a filter read back from a checkpoint: the held run at most 2^32 samples (50 days
     /// at 1 kHz; it is released sample by sample) and no more equal pairs than pairs.
     pub fn check_restored(&self) -> Result<(), String> {
+        let held = self.lead.as_ref().map_or(0, |l| l.after.len()) + self.queue.len();
+        if held > 2 * MIN_PAIRS as usize + 2 {
+            return Err(format!("stuck-stretch filter holds {held} runs"));
+        }
         if self.len + self.passed > 1 << 32 || self.equal > self.pairs {
             return Err(format!(
                 "stuck-stretch filter out of range (a run of {} held, {} of {} pairs equal)",
@@ -193,7 +261,19 @@ impl StuckFilter {
         let mut out = None;
         if self.len > 0 {
             let stuck = self.is_stuck();
-            out = self.release(stuck);
+            if !stuck && self.position == 0 && self.passed == 0 && self.len >= MIN_STUCK {
+                // The channel's first run, too early to judge: held (module doc).
+                self.lead = self.value.map(|value| Lead {
+                    value,
+                    len: self.len,
+                    after: Vec::new(),
+                });
+                self.position += self.len;
+                self.len = 0;
+                self.last_passed = false;
+            } else {
+                out = self.release(stuck);
+            }
         }
         self.continues_stuck = false;
         self.passed = 0;
@@ -224,7 +304,18 @@ impl StuckFilter {
         self.last_passed = !stuck;
         self.position += n;
         self.len = 0;
-        out
+        match (&mut self.lead, out) {
+            (Some(lead), Some(r)) => {
+                // After a held first run: kept in order until the run is judged.
+                lead.after.push(r);
+                if self.pairs >= MIN_PAIRS {
+                    self.judge_lead()
+                } else {
+                    None
+                }
+            }
+            (_, out) => out,
+        }
     }
 }
 
@@ -241,13 +332,24 @@ mod tests {
             Release::Values(v, n) => out.extend(std::iter::repeat_n(Some(v), n as usize)),
             Release::Stuck(n) => out.extend(std::iter::repeat_n(None, n as usize)),
         };
+        let mut take = |f: &mut StuckFilter, r: Option<Release>| {
+            if let Some(r) = r {
+                sink(r);
+                while let Some(q) = f.queued() {
+                    sink(q);
+                }
+            }
+        };
         for (i, &v) in x.iter().enumerate() {
-            f.push(v).map(&mut sink);
+            let r = f.push(v);
+            take(&mut f, r);
             if snapshot_every.is_some_and(|k| i % k == k - 1) {
-                f.flush().map(&mut sink);
+                let r = f.flush();
+                take(&mut f, r);
             }
         }
-        f.flush().map(&mut sink);
+        let r = f.flush();
+        take(&mut f, r);
         (out, f.found)
     }
 
@@ -284,6 +386,47 @@ mod tests {
         let (out, found) = run(&clean, Some(777));
         assert_eq!(found, StuckCount::default());
         assert_eq!(out.iter().flatten().count(), clean.len());
+    }
+
+    /// A recording that begins before the unit sends data: 300 samples of 0, then white noise.
+    /// The first run is held until the pairs after it judge it, and taken out (`first_at` 0);
+    /// everything after it is passed on unchanged and in order, with snapshots every 5000
+    /// samples or none. A counter's first run of 300 is kept, and so is a first run followed by
+    /// fewer than MIN_PAIRS pairs before the end.
+    #[test]
+    fn a_first_run_is_judged_by_what_follows_it() {
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(8);
+        let mut x: Vec<f64> = (0..20_000)
+            .map(|_| {
+                let z: f64 = StandardNormal.sample(&mut rng);
+                (z * 1e6).round() / 1e6
+            })
+            .collect();
+        x[..300].iter_mut().for_each(|v| *v = 0.0);
+        for snap in [None, Some(5000)] {
+            let (out, found) = run(&x, snap);
+            assert_eq!(out.len(), x.len());
+            assert_eq!(
+                (found.stretches, found.samples, found.first_at),
+                (1, 300, 0),
+                "{found:?}"
+            );
+            assert!(out[..300].iter().all(Option::is_none));
+            assert!(out[300..]
+                .iter()
+                .zip(&x[300..])
+                .all(|(o, v)| *o == Some(*v)));
+        }
+        let (out, found) = run(&x[..800], None);
+        assert_eq!(found.stretches, 0);
+        assert_eq!(out.iter().flatten().count(), 800);
+        let mut counter: Vec<f64> = (0..20_000)
+            .map(|i| if i % 7 == 0 { 3.0 } else { 2.0 })
+            .collect();
+        counter[..300].iter_mut().for_each(|v| *v = 2.0);
+        let (out, found) = run(&counter, None);
+        assert_eq!(found.stretches, 0, "{found:?}");
+        assert_eq!(out.iter().flatten().count(), counter.len());
     }
 
     /// A counter whose values are mostly one count (equal neighbours the rule) keeps its runs,

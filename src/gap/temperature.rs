@@ -85,9 +85,19 @@ impl TemperatureFinding {
     }
 }
 
-/// The temperature's block means (degC) from its evidence (fed `T tau0` per step).
-pub fn temperature_blocks(temp: &EvidenceSnapshot) -> Vec<f64> {
-    temp.block_means.clone()
+/// The temperature's block means (degC) from its evidence (fed `T tau0` per step), over the
+/// channel's blocks in `snap` (each evidence leaves out its own short blocks at the start:
+/// [`EvidenceSnapshot::block_first`]); NaN where the temperature has none.
+pub fn temperature_blocks(snap: &EvidenceSnapshot, temp: &EvidenceSnapshot) -> Vec<f64> {
+    (0..snap.block_means.len())
+        .map(|j| {
+            (snap.block_first + j)
+                .checked_sub(temp.block_first)
+                .and_then(|i| temp.block_means.get(i))
+                .copied()
+                .unwrap_or(f64::NAN)
+        })
+        .collect()
 }
 
 /// The AVAR (degC^2) of the temperature at each cluster size of `ms`, from its evidence; `None`
@@ -157,7 +167,7 @@ pub fn enter_temperature(
     z_crit: f64,
 ) -> Option<(TemperatureInModel, GlsFit)> {
     let block_s = snap.block_len as f64 * snap.tau0_s;
-    let blocks_c = temperature_blocks(temp);
+    let blocks_c = temperature_blocks(snap, temp);
     let avar_c2 = temperature_avar(temp, &prob.ms)?;
     let first = fit_temperature(
         &snap.block_means,

@@ -302,6 +302,53 @@ fn a_stuck_channel_is_said_and_not_diagnosed() {
     }
 }
 
+/// A recording that begins before the unit sends data: white noise of mean 0.5 whose first 10 s
+/// are rows of 0 (`g`) or empty cells (`h`), 20 minutes at 100 Hz. Both are `consistent`, with
+/// no effect, the white rate within 5% of the closed form; `g`'s zeros are a stuck stretch at 0 s.
+/// Before (session 29), both were a warm-up (`g` with bias jumps): the zeros came before the
+/// stuck filter's first 1000 pairs, and the first block of the time tests held 24 of its 512
+/// samples, its mean's sd 4.6 times a block's.
+#[test]
+fn a_recording_that_begins_before_the_data_is_not_a_warm_up() {
+    let p = tmp("late_start.csv");
+    let mut text = String::from("time,g,h\n");
+    let mut state: u64 = 0x2545_f491_4f6c_dd1d;
+    for i in 0..120_000u64 {
+        let x: f64 = (0..4).map(|_| uniform(&mut state)).sum::<f64>() + 0.5;
+        if i < 1000 {
+            text += &format!("{:.2},0.000000,\n", i as f64 * 0.01);
+        } else {
+            text += &format!("{:.2},{x:.6},{x:.6}\n", i as f64 * 0.01);
+        }
+    }
+    let (out, err) = diagnose_rates(&p, &text);
+    assert!(err.contains("channel g: 1 stretch(es)"), "{err}");
+    let recs = crate::common::pipeline::parse_lines(&out.stdout);
+    for c in ["g", "h"] {
+        let r = recs
+            .iter()
+            .find(|r| r["type"] == "diagnosis" && r["channel"] == c)
+            .unwrap_or_else(|| panic!("no record of {c}"));
+        assert_eq!(r["verdict"], "consistent", "{r}");
+        assert_eq!(r["effects"].as_array().map(Vec::len), Some(0), "{r}");
+        // Four uniform draws: sd 1/sqrt(3) per 10-ms sample, N = sd sqrt(tau0).
+        let n = r["base_coef"][1].as_f64().unwrap();
+        assert!((n / (0.01f64 / 3.0).sqrt() - 1.0).abs() < 0.05, "{r}");
+        let stuck = &r["stuck"];
+        match c {
+            "g" => {
+                assert_eq!(stuck["stretches"], 1, "{r}");
+                assert_eq!(stuck["first_at_s"], 0.0, "{r}");
+                assert!(
+                    (stuck["seconds"].as_f64().unwrap() - 10.0).abs() < 1e-9,
+                    "{r}"
+                );
+            }
+            _ => assert!(stuck.is_null(), "{r}"),
+        }
+    }
+}
+
 /// A channel that froze at 0.37 for 60 s of a 20-minute run, beside the same noise unfrozen:
 /// the stretch is found and taken out as a gap (`stuck`: one stretch of 60 s at 600 s), and the
 /// frozen channel is diagnosed as its twin (the same white rate within 2%, `consistent`, no
