@@ -650,7 +650,13 @@ impl<R: BufRead> TextReader<R> {
                 None => {
                     let sep = Sep::of(t);
                     let fields = sep.split(t);
-                    if fields.iter().all(|f| parse_field(f).is_ok()) {
+                    // A row most of whose fields are numbers is data, not names: ROS 2's
+                    // `ros2 topic echo --csv` writes no header, and a `frame_id` among numbers.
+                    let numbers = fields
+                        .iter()
+                        .filter(|f| !f.trim().is_empty() && parse_field(f).is_ok())
+                        .count();
+                    if fields.iter().all(|f| parse_field(f).is_ok()) || 2 * numbers > fields.len() {
                         let commented = hash_line
                             .as_deref()
                             .and_then(|h| commented_header(h, fields.len()));
@@ -658,7 +664,10 @@ impl<R: BufRead> TextReader<R> {
                         let names = commented.unwrap_or_else(|| {
                             (1..=fields.len()).map(|i| format!("c{i}")).collect()
                         });
-                        let l = Layout::new(names, header, sep, opts, path, line_no)?;
+                        let mut l = Layout::new(names, header, sep, opts, path, line_no)?;
+                        if l.parse(t).is_err() {
+                            l = l.without_label_columns(t, opts, path, line_no)?;
+                        }
                         let (v, time) = l.parse(t).map_err(|p| input_error(path, line_no, p))?;
                         ((Ok(v), time), l)
                     } else {
@@ -1042,6 +1051,28 @@ mod tests {
                 "{e}"
             );
         }
+    }
+
+    /// ROS 2's `ros2 topic echo --csv` writes no header and a `frame_id` among the numbers: the
+    /// first row is data, its text column a label left out; the other columns keep their
+    /// numbers as names (`c4` is the fourth column).
+    #[test]
+    fn a_row_of_numbers_with_a_label_is_data_not_a_header() {
+        let (names, v, bad) = read_all(
+            "1664780446,971418804,imu_link,0.0,0.25\n1664780446,981418804,imu_link,0.0,0.5\n",
+        );
+        assert_eq!(names, ["c1", "c2", "c4", "c5"]);
+        assert_eq!(bad, 0);
+        assert_eq!((v[3], v[7]), (0.25, 0.5));
+        // A row of names with a number among them is still a header.
+        let (names, v, _) = read_all("gx,gy,1\n0.5,0.25,2\n");
+        assert_eq!(
+            (names, v),
+            (
+                vec!["gx".to_string(), "gy".into(), "1".into()],
+                vec![0.5, 0.25, 2.0]
+            )
+        );
     }
 
     #[test]
