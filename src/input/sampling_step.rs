@@ -131,8 +131,14 @@ pub fn infer_tau0<R: BufRead>(
         },
     };
     // The shortest decimal step within the stamps' resolution: stamps read as f64 (a clock
-    // since 1970 in ns is resolved to 256 ns) make 5,000,000 ns steps look like 4,999,936.
-    let resolution = 2.0 * first.abs() * f64::EPSILON;
+    // since 1970 in ns is resolved to 256 ns) make 5,000,000 ns steps look like 4,999,936, and
+    // seconds from 0 printed to the ms make 0.005 s steps 0.00499999999999989 by 18 s. The
+    // resolution is that of the largest stamp looked at (the first alone is 0 on such a clock).
+    let largest = stamps
+        .iter()
+        .filter(|t| t.is_finite())
+        .fold(0.0f64, |a, t| a.max(t.abs()));
+    let resolution = 2.0 * largest * f64::EPSILON;
     let step = (1..=15)
         .map(|digits| round_significant(median, digits))
         .find(|r| (r - median).abs() <= resolution)
@@ -195,6 +201,13 @@ mod tests {
         assert_eq!(s.unit_s, 1.0);
         let s = infer("t_ms,gx\n0,1\n4,1\n8,1\n12,1\n").unwrap();
         assert_eq!(s.tau0_s, 0.004);
+        // Seconds from 0 printed to the ms: by 18 s a 5-ms step reads 0.00499999999999989 as
+        // f64 (the first stamp, 0, has no rounding to judge by); the step is 0.005.
+        let mut t = String::from("time,gx\n");
+        for k in 0..4000u64 {
+            t.push_str(&format!("{:.3},1\n", k as f64 * 0.005));
+        }
+        assert_eq!(infer(&t).unwrap().tau0_s, 0.005);
     }
 
     /// What is refused: no time column, an irregular one, and one whose step is not a sampling
