@@ -10,7 +10,11 @@
 //! steps that go backwards or repeat (`dt <= 0`) and steps that are not whole multiples of
 //! `tau0` (more than a quarter step off) are counted and reported with their line numbers; a
 //! row stamped backwards is taken as the next sample (the clock moves on one step from where it
-//! was) and inserts nothing.
+//! was) and inserts nothing. When the row after it steps on by one `tau0` from that backward
+//! stamp, the clock was reset or wrapped (a 32-bit microsecond counter every 71.6 minutes): the
+//! backward step is counted as a discontinuity, not a backward step, and the clock restarts
+//! there, so the gaps after it are found again. Before (session 29), every row after a reset
+//! was counted backwards and no later gap was found.
 
 /// Seconds per unit tried for the column, in order: s, ms, us, ns.
 const SCALES: [(f64, &str); 4] = [(1.0, "s"), (1e-3, "ms"), (1e-6, "us"), (1e-9, "ns")];
@@ -45,6 +49,9 @@ pub struct TimeColumn {
     /// Rows that repeated the row before them, stamp and values, dropped (a record written
     /// twice is not a sample).
     pub duplicates: u64,
+    /// The stamp of the last row, when it went backwards: a restart of the clock if the next
+    /// row steps on from it by one tau0 (module doc).
+    restart: Option<f64>,
 }
 
 /// Where a time column stands, for a checkpoint (`TextPosition`), and what it found so far (the
@@ -71,6 +78,9 @@ pub struct TimeState {
     /// Rows dropped as written twice (see [`TimeColumn`]).
     #[serde(default)]
     pub duplicates: u64,
+    /// A backward stamp waiting to be told a clock restart (see [`TimeColumn`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub restart: Option<f64>,
 }
 
 impl TimeState {
@@ -100,6 +110,7 @@ impl TimeColumn {
             irregular: 0,
             discontinuities: 0,
             duplicates: 0,
+            restart: None,
         }
     }
 
@@ -115,6 +126,7 @@ impl TimeColumn {
             irregular: self.irregular,
             discontinuities: self.discontinuities,
             duplicates: self.duplicates,
+            restart: self.restart,
         }
     }
 
@@ -127,6 +139,7 @@ impl TimeColumn {
         self.irregular = s.irregular;
         self.discontinuities = s.discontinuities;
         self.duplicates = s.duplicates;
+        self.restart = s.restart;
     }
 
     /// A row at `line` repeated the row before it, stamp and values, and was dropped.
@@ -206,6 +219,21 @@ impl TimeColumn {
             }
         };
         let steps = dt * scale / self.tau0_s;
+        if let Some(back) = self.restart.take() {
+            if ((t - back) * scale / self.tau0_s - 1.0).abs() <= STEP_TOLERANCE {
+                // The row before went back and this one steps on from it: the clock restarted.
+                self.backwards -= 1;
+                self.discontinuities += 1;
+                tracing::warn!(
+                    "{}: line {}: the time column `{}` restarts at {back} (a clock reset or a \
+                     counter's wrap); read on from there, no gap inserted",
+                    file.display(),
+                    line - 1,
+                    self.name
+                );
+                return 0;
+            }
+        }
         if dt <= 0.0 {
             self.backwards += 1;
             if self.backwards <= LOGGED {
@@ -217,9 +245,11 @@ impl TimeColumn {
                 );
             }
             // The row is taken as the next sample: the clock moves on one step from where it
-            // was, so one bad stamp makes no gap (and after a clock reset every row is counted
-            // here, none inserts anything).
+            // was, so one bad stamp makes no gap; the next row tells a restart (module doc).
             self.last = Some(last + self.tau0_s / scale);
+            if dt < 0.0 {
+                self.restart = Some(t);
+            }
             return 0;
         }
         let k = steps.round();
@@ -336,5 +366,39 @@ mod tests {
         let mut r = TimeColumn::new("t", 0.01);
         r.restore(c.state());
         assert_eq!(r.missing_before(0.11, p, 4), 5);
+    }
+
+    /// A 32-bit microsecond counter wraps (every 71.6 minutes at 10 ms steps): the clock
+    /// restarts at the wrapped stamp, counted as one discontinuity, and a gap of 2 samples after
+    /// it is found. Before, every row after the wrap was counted backwards and the gap was lost.
+    /// A single stamp that goes back (a glitch) is still one backward step, no restart.
+    #[test]
+    fn a_clock_that_wraps_or_resets_restarts_and_a_glitch_does_not() {
+        let p = Path::new("x.csv");
+        // As the reader does: the gap steps, then the row after them sets the clock.
+        let run = |c: &mut TimeColumn, stamps: &[f64]| -> Vec<u64> {
+            let mut got = Vec::new();
+            for (i, &t) in stamps.iter().enumerate() {
+                let m = c.missing_before(t, p, i as u64 + 2);
+                if m > 0 {
+                    for _ in 0..m {
+                        c.step_inserted();
+                    }
+                    c.handed_out(t);
+                }
+                got.push(m);
+            }
+            got
+        };
+        let mut c = TimeColumn::new("t_us", 0.01);
+        let b = 4_294_967_296.0 - 25_000.0;
+        let wrap = [b, b + 1e4, b + 2e4, 5e3, 15e3, 45e3, 55e3];
+        assert_eq!(run(&mut c, &wrap), [0, 0, 0, 0, 0, 2, 0]);
+        assert_eq!((c.backwards, c.discontinuities, c.missing), (0, 1, 2));
+        // A glitch: the stamp after it is on the old clock (0.04, one step after 0.03).
+        let mut g = TimeColumn::new("t", 0.01);
+        let glitch = [0.0, 0.01, 0.02, 0.005, 0.04, 0.05, 0.07];
+        assert_eq!(run(&mut g, &glitch), [0, 0, 0, 0, 0, 0, 1]);
+        assert_eq!((g.backwards, g.discontinuities, g.missing), (1, 0, 1));
     }
 }
