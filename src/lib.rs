@@ -60,6 +60,7 @@
 //!   time_column.rs         the time column: gaps found from the sampling step
 //!   sampling_step.rs       the sampling step read off the time column (no --tau0)
 //!   header_unit.rs         a data column's unit in its header (`[rad s^-1]`), without --unit
+//!   temperature_column.rs  the unit's temperature column (`temp [degC]`): not a channel
 //! frame/                   frames (pure: no I/O)                          bytes -> FrameEvent
 //!   descriptor/            the descriptor language (TOML) and its checked types
 //!     parse.rs             the top level, sync, checks across message kinds, interleave

@@ -37,8 +37,9 @@ impl InputKind {
     }
 }
 
-/// Text columns that are not channels: the simulator's temperature column (degC), which
-/// `diagnose` reads as the unit's temperature.
+/// The simulator's temperature column (degC), which `diagnose` reads as the unit's
+/// temperature. Any temperature column is left out of the channels
+/// ([`crate::input::temperature_column`]: `temp [degC]`, `imu_temp`, ...).
 pub const AUXILIARY_COLUMNS: [&str; 1] = ["temperature_c"];
 
 /// One channel as the input describes it.
@@ -69,13 +70,13 @@ impl ChannelSetup {
             .collect()
     }
 
-    /// The channels of text columns with header `names` ([`AUXILIARY_COLUMNS`] left out), each
-    /// in `unit`.
+    /// The channels of text columns with header `names` (temperature columns left out:
+    /// [`crate::input::temperature_column`]), each in `unit`.
     pub fn for_text(names: &[String], unit: &str) -> Vec<ChannelSetup> {
         names
             .iter()
             .enumerate()
-            .filter(|(_, n)| !AUXILIARY_COLUMNS.contains(&n.as_str()))
+            .filter(|(_, n)| crate::input::temperature_column::temperature_column(n).is_none())
             .map(|(i, n)| ChannelSetup {
                 name: n.clone(),
                 unit: unit.to_string(),

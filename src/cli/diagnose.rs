@@ -16,6 +16,7 @@ use allanscope::gap::temperature::settling_profile;
 use allanscope::gap::unit_model::{fitted_channel, fitted_unit, ChannelFacts};
 use allanscope::gap::EffectParams;
 use allanscope::gap::{holdout_gap, DiagnoseOptions, DiagnosisRecord, GapConfig, GapEvidence};
+use allanscope::input::temperature_column::temperature_column;
 use allanscope::input::text::{TextReader, BATCH_ROWS};
 use allanscope::pipeline::decode::DecodeStage;
 use allanscope::plan::unit::{InputPlan, UnitPlan, UnitRequest};
@@ -185,8 +186,15 @@ fn gather(
                 g.add_channel(&c.name, &c.unit, &cfg);
             }
             let columns: Vec<usize> = plan.channels.iter().map(|c| c.column).collect();
-            // The temperature column (docs/records.md's `temperature_c`), read here only.
-            let temp_col = reader.names().iter().position(|n| n == "temperature_c");
+            // The temperature column (docs/records.md's `temperature_c`, or one a logger
+            // names: `temp [degC]`), read here only, in degC; the first if there are several.
+            let temp = reader
+                .names()
+                .iter()
+                .enumerate()
+                .find_map(|(i, n)| temperature_column(n).map(|t| (i, t)));
+            let temp_col = temp.map(|(i, _)| i);
+            let temp_scale = temp.map(|(_, t)| t);
             if temp_col.is_some() {
                 g.temperature = Some(GapEvidence::new(cfg.clone()).without_outlier_filter());
             }
@@ -215,7 +223,10 @@ fn gather(
                     // The temperature follows the steps of the channels (a first phase row
                     // gives none), so both evidences see the same steps.
                     if stepped || columns.is_empty() {
-                        g.push_temperature(temp_col.map(|c| row[c]), tau0);
+                        g.push_temperature(
+                            temp_col.zip(temp_scale).map(|(c, t)| t.to_c(row[c])),
+                            tau0,
+                        );
                     }
                 }
             }

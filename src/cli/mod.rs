@@ -30,6 +30,7 @@ use allanscope::analysis::{AnalysisOptions, InputKind};
 use allanscope::error::UsageError;
 use allanscope::frame::FrameDescriptor;
 use allanscope::input::header_unit::{header_unit, units_from_headers};
+use allanscope::input::temperature_column::temperature_column;
 use allanscope::input::text::{ColumnPick, TextOptions, TextReader};
 use allanscope::model::fit::FitMethod;
 use allanscope::plan::checkpoint_setup::CheckpointRequest;
@@ -590,6 +591,24 @@ impl DataArgs {
         settings: &DataSettings,
     ) -> Result<(Vec<ChannelSetup>, InputKind)> {
         let mut setups = ChannelSetup::for_text(reader.names(), &settings.unit);
+        // Temperature columns are not channels; `diagnose` reads the first.
+        let temps = reader
+            .names()
+            .iter()
+            .filter_map(|n| temperature_column(n).map(|t| (n, t)));
+        for (k, (n, t)) in temps.enumerate() {
+            let how = if t.named {
+                format!("in {}", t.unit)
+            } else {
+                "read as degC: no unit in its name".to_string()
+            };
+            let role = if k == 0 {
+                "the unit's temperature, which diagnose fits the bias against"
+            } else {
+                "another temperature, left out (diagnose reads the first)"
+            };
+            tracing::info!("{input}: column `{n}` holds {role} ({how}); not a channel");
+        }
         let columns = reader.channel_columns();
         let ours: Vec<(usize, &str)> = setups.iter().map(|c| columns[c.column]).collect();
         if self.unit.is_some() {

@@ -4,6 +4,7 @@
 
 pub mod header_unit;
 pub mod sampling_step;
+pub mod temperature_column;
 pub mod text;
 pub mod time_column;
 

@@ -177,6 +177,24 @@ fn a_temperature_coefficient_survives_the_round_trip() {
     );
     assert!(rel(c, 0.2) < 0.10, "coefficient {c}");
     assert!(lo < c && c < hi && hi - lo < 0.2, "[{lo}, {hi}]");
+    // The same run as a logger writes it, the temperature in degF under `Temp (°F)`: read as
+    // the unit's temperature, not a channel, and the same coefficient per degC (session 29:
+    // the unit `°F` stopped the run with exit 2).
+    let csv = std::fs::read_to_string(&run).unwrap();
+    let mut f_text = String::from("g4,Temp (\u{b0}F)\n");
+    for line in csv.lines().skip(1) {
+        let (g, t) = line.split_once(',').unwrap();
+        let t: f64 = t.parse().unwrap();
+        f_text += &format!("{g},{:.9}\n", t * 1.8 + 32.0);
+    }
+    let f_run = tmp("temp-run-degf.csv");
+    std::fs::write(&f_run, f_text).unwrap();
+    let f = diagnose(&f_run, &tmp("temp-twin-degf.toml"));
+    assert_eq!(f["channel"], "g4", "{f}");
+    assert!(
+        rel(param(&f, "temperature", "coefficient"), c) < 1e-4,
+        "{f}"
+    );
     let text = std::fs::read_to_string(&twin).unwrap();
     let m = allanscope::sim::SimModel::from_toml_str(&text, Path::new("twin.toml")).unwrap();
     assert_eq!(m.channels[0].temperature_coefficient, c, "{text}");
