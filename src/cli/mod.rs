@@ -610,7 +610,17 @@ impl DataArgs {
             tracing::info!("{input}: column `{n}` holds {role} ({how}); not a channel");
         }
         let columns = reader.channel_columns();
-        let ours: Vec<(usize, &str)> = setups.iter().map(|c| columns[c.column]).collect();
+        // A column renamed with a unit (`--columns "c17=wx [rad/s]"`) is in that unit when its
+        // own header gives none.
+        let ours: Vec<(usize, &str)> = setups
+            .iter()
+            .map(|c| match columns[c.column] {
+                (i, src) if header_unit(src).is_none() && header_unit(&c.name).is_some() => {
+                    (i, c.name.as_str())
+                }
+                col => col,
+            })
+            .collect();
         if self.unit.is_some() {
             let carried: Vec<String> = ours
                 .iter()

@@ -5,6 +5,9 @@
 //! ([`units_from_headers`]). The time column's unit (`timestamp [ns]`) is
 //! [`super::text::time_column_unit`]'s; this module reads the data columns'.
 //!
+//! A ROS `sensor_msgs/Imu` field without brackets (`field.angular_velocity.x`,
+//! `linear_acceleration.z`) is in the unit its message fixes: rad/s, m/s^2 (`ros_imu_field`).
+//!
 //! A header unit is read as a product of atoms with powers, `/` dividing (`rad/s`, `rad s^-1`,
 //! `m/s^2`, `m.s-2`, `deg/sec`, `°/s`, `dps`), and classed by its one physical atom and its power
 //! of time: an angle (rad, mrad, urad, deg, arcsec) is an increment, per second a rate; a
@@ -32,7 +35,7 @@ pub fn header_unit(name: &str) -> Option<Result<HeaderUnit, String>> {
     let (open, close) = match n.chars().last()? {
         ']' => ('[', ']'),
         ')' => ('(', ')'),
-        _ => return None,
+        _ => return ros_imu_field(n).map(Ok),
     };
     let start = n.rfind(open)?;
     let inner = n[start + open.len_utf8()..n.len() - close.len_utf8()].trim();
@@ -41,6 +44,29 @@ pub fn header_unit(name: &str) -> Option<Result<HeaderUnit, String>> {
         return None;
     }
     Some(parse(inner).ok_or_else(|| inner.to_string()))
+}
+
+/// A ROS `sensor_msgs/Imu` field, whose unit the message fixes (REP 103): `angular_velocity.x`
+/// in rad/s, `linear_acceleration.x` in m/s^2, as exports name them (`rostopic echo -p`'s
+/// `field.angular_velocity.x`, a rosbag2 export's `angular_velocity.x`, PlotJuggler's
+/// `/imu/angular_velocity/x`).
+fn ros_imu_field(name: &str) -> Option<HeaderUnit> {
+    let mut parts = name.rsplit(['.', '/']);
+    let axis = parts.next()?;
+    let field = parts.next()?;
+    if !matches!(axis, "x" | "y" | "z") {
+        return None;
+    }
+    let (unit, text) = match field {
+        "angular_velocity" => ("rad", "rad/s, by sensor_msgs/Imu"),
+        "linear_acceleration" => ("m/s", "m/s^2, by sensor_msgs/Imu"),
+        _ => return None,
+    };
+    Some(HeaderUnit {
+        unit: unit.into(),
+        rate: true,
+        text: text.into(),
+    })
 }
 
 /// The physical atoms a header unit may hold: the name, the increment unit it gives, the power
@@ -255,6 +281,30 @@ mod tests {
             u.unit
         );
         (u.unit, u.rate)
+    }
+
+    /// ROS `sensor_msgs/Imu` fields carry their units by the message: rad/s and m/s^2 rates.
+    #[test]
+    fn ros_imu_fields_are_rates_in_the_message_units() {
+        for name in [
+            "field.angular_velocity.x",
+            "angular_velocity.z",
+            "/imu/data/angular_velocity/y",
+        ] {
+            assert_eq!(unit(name), ("rad".to_string(), true), "{name}");
+        }
+        assert_eq!(
+            unit("field.linear_acceleration.y"),
+            ("m/s".to_string(), true)
+        );
+        for name in [
+            "field.angular_velocity_covariance0",
+            "field.orientation.x",
+            "field.magnetic_field.x",
+            "angular_velocity",
+        ] {
+            assert!(header_unit(name).is_none(), "{name}");
+        }
     }
 
     #[test]

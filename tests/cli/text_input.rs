@@ -228,7 +228,7 @@ fn a_text_column_is_left_out_unless_named_and_an_input_without_samples_is_an_err
 /// `frame_id` label column, orientation and covariance columns that never change, a cell that
 /// is not a number in a column the run does not analyse. With `--rate --channels`, no `--tau0`:
 /// the step is read off `%time`, nothing is lost, and the curves are those of the same rates in
-/// a plain file, to the last bit.
+/// a plain file, to the last bit; without `--rate` too, in rad by the message's units.
 #[test]
 fn a_rostopic_export_reads_as_the_plain_file() {
     let (a, b) = columns();
@@ -260,6 +260,26 @@ fn a_rostopic_export_reads_as_the_plain_file() {
     assert_eq!(c.len(), pc.len());
     for (x, y) in c.iter().zip(&pc) {
         assert_eq!(x.sigma, y.sigma);
+    }
+    // Without --rate or --unit: sensor_msgs/Imu's angular velocity is a rate in rad/s by the
+    // message, so the records are in rad, the same numbers.
+    let out = analyze_no_tau0(
+        &p,
+        &[
+            "--channels",
+            "field.angular_velocity.x,field.angular_velocity.y",
+        ],
+    );
+    let (c, _) = parsed(&out);
+    assert_eq!(c.len(), pc.len());
+    for (x, y) in c.iter().zip(&pc) {
+        assert_eq!((x.unit.as_str(), &x.sigma), ("rad", &y.sigma));
+    }
+    // A column renamed with a unit (`--columns "wx=wx [deg/s]"`) is in that unit.
+    let out = analyze(&q, &["--columns", "wx=wx [deg/s],wy=wy [deg/s]"]);
+    let (c, _) = parsed(&out);
+    for (x, y) in c.iter().zip(&pc) {
+        assert_eq!((x.unit.as_str(), &x.sigma), ("deg", &y.sigma));
     }
 }
 
