@@ -175,6 +175,7 @@
 //!   status_area.rs         the terminal line kept for a live run's status
 //!   effect_text.rs         an effect of a diagnosis as a person reads it
 //!   band_words.rs          how far a measured curve leaves the ensemble bands, in words
+//!   taken_out.rs           what a diagnosis set aside (outliers, stuck stretches), in words
 //!   results.rs             the records `plot` and `report` read, labelled
 //!   plot/                  Allan-deviation figures (SVG)
 //!     panel.rs             one panel per unit: curves, heading, legend

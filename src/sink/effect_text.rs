@@ -141,9 +141,7 @@ pub fn effect_parts(
         }
     };
     let u = if unit.is_empty() { "u" } else { unit };
-    // A rate in datasheet units: the factor and unit of the bias-instability coefficient (u/s).
-    let ds =
-        IncrementUnit::parse(u).map(|iu| (datasheet_factors(&iu)[2], datasheet_units(iu.kind)[2]));
+    let ds = datasheet_rate(u);
     // `lo`, `hi` (a kind with one rate, e.g. temperature): that rate's 95% interval.
     let bounds = (param("lo"), param("hi"));
     let rate = |v: f64, per: &str| -> String {
@@ -210,6 +208,22 @@ pub fn effect_parts(
         }
     }
     (name.to_string(), out)
+}
+
+/// A rate in datasheet units: the factor and unit of the bias-instability coefficient (u/s),
+/// when `unit` is one `model::units` knows.
+fn datasheet_rate(unit: &str) -> Option<(f64, &'static str)> {
+    IncrementUnit::parse(unit).map(|iu| (datasheet_factors(&iu)[2], datasheet_units(iu.kind)[2]))
+}
+
+/// A rate `v` (u/s) in the channel's datasheet unit beside the native one, `2.10 deg/h
+/// (5.83e-4 deg/s)`, or in u/s alone when `unit` is not known.
+pub fn rate_words(v: f64, unit: &str, number: &dyn Fn(f64) -> String) -> String {
+    let u = if unit.is_empty() { "u" } else { unit };
+    match datasheet_rate(u) {
+        Some((f, du)) => format!("{} {du} ({} {u}/s)", number(v * f), number(v)),
+        None => format!("{} {u}/s", number(v)),
+    }
 }
 
 /// `name: p1 = v1, p2 = v2` in one line.

@@ -28,4 +28,5 @@ pub mod report;
 pub mod results;
 pub mod status_area;
 pub mod table;
+pub mod taken_out;
 pub mod unit_record;

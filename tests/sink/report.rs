@@ -266,7 +266,12 @@ fn effects_are_named_with_units_and_only_the_final_diagnosis_is_in_the_main_tabl
                         {"kind": "gauss_markov", "params": {"sigma": 0.5, "tau_c": 2.0}, "gap_after": 0.8}]})
     };
     files[0].records.push(d(1800.0, false, 0.7));
-    files[0].records.push(d(3600.0, true, 0.8));
+    // What the final diagnosis set aside: said under its verdict, rates in deg/h (x 1 from
+    // arcsec/s).
+    let mut fin = d(3600.0, true, 0.8);
+    fin["outliers"] = json!({"count": 2, "rate": 0.001, "rms_size": 0.5, "max_size": 0.7});
+    fin["stuck"] = json!({"stretches": 2, "seconds": 90.0, "longest_s": 60.0, "first_at_s": 600.0});
+    files[0].records.push(fin);
     let html = render_html(&files, "t", "now");
     let main = &html[html.find("<table class=\"diagnosis\"").unwrap()..];
     let main = &main[..main.find("</table>").unwrap()];
@@ -279,6 +284,14 @@ fn effects_are_named_with_units_and_only_the_final_diagnosis_is_in_the_main_tabl
     assert!(main.contains(
         "correlated (Gauss-Markov) noise: sigma = 0.5 deg/h (0.5 arcsec/s), correlation time = 2 s"
     ));
+    assert!(
+        main.contains(
+            "set aside before the curve: 2 outliers replaced (rms 0.5 deg/h (0.5 arcsec/s), the \
+             largest 0.7 deg/h (0.7 arcsec/s)); 2 stuck stretches taken out as gaps (90 s in all, \
+             the longest 60 s, the first at 600 s)"
+        ),
+        "{main}"
+    );
     assert!(
         !main.contains("0.7 Hz"),
         "the interim diagnosis is not in the main table"

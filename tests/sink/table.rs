@@ -336,11 +336,14 @@ fn the_diagnose_table_gives_effect_parameters_in_datasheet_units() {
                {"kind": "temperature", "params": {"coefficient": 4.903325e-6, "lo": 2.4516625e-6,
                 "hi": 9.80665e-6}, "gap_after": 1.0}]),
     );
-    let g1 = rec(
+    let mut g1 = rec(
         "g1",
         "deg",
         json!([{"kind": "sinusoid", "params": {"amplitude": 0.001, "frequency": 0.5}, "gap_after": 1.0}]),
     );
+    // What the diagnosis set aside, said after the effects: 0.001 deg/s is 3.6 deg/h.
+    g1["outliers"] = json!({"count": 3, "rate": 0.005, "rms_size": 0.001, "max_size": 0.002});
+    g1["stuck"] = json!({"stretches": 1, "seconds": 60.0, "longest_s": 60.0, "first_at_s": 600.0});
     writeln!(w, "{a1}\n{g1}").unwrap();
     drop(w);
     let t = out.text();
@@ -354,6 +357,15 @@ fn the_diagnose_table_gives_effect_parameters_in_datasheet_units() {
         "{a}"
     );
     let g = row(&t, "g1 [deg]  diagnosis:");
+    assert!(
+        g.contains(
+            "; set aside: 3 outliers replaced (rms 3.60 deg/h (0.00100 deg/s), the largest 7.20 \
+             deg/h (0.00200 deg/s)); 1 stuck stretch taken out as a gap (60.0 s in all, the first \
+             at 600 s)"
+        ),
+        "{g}"
+    );
+    assert!(!row(&t, "a1 [m/s]  diagnosis:").contains("set aside"));
     assert!(
         g.contains(
             "sinusoid [amplitude 3.60 deg/h (0.00100 deg/s), frequency 0.500 Hz (period 2.00 s)]"

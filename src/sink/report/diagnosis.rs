@@ -111,7 +111,7 @@ pub(super) fn diagnosis(h: &mut String, res: &Results) {
             .ok()
             .and_then(|v| v.as_str().map(String::from))
             .unwrap_or_default();
-        let shape = d
+        let mut shape = d
             .residual_shape
             .as_ref()
             .map(|s| {
@@ -121,6 +121,13 @@ pub(super) fn diagnosis(h: &mut String, res: &Results) {
                 )
             })
             .unwrap_or_default();
+        if let Some(w) = crate::sink::taken_out::taken_out_words(d, &unit, &tick) {
+            let _ = write!(
+                shape,
+                "<br><span class=\"small\">set aside before the curve: {}</span>",
+                esc(&w)
+            );
+        }
         let _ = writeln!(
             h,
             "<tr>{}<td class=\"l\">{}</td><td class=\"l\"><b>{}</b>{shape}</td><td>{:.2}</td><td>{:.2}</td><td class=\"l\">{}</td><td class=\"l\">{}</td></tr>",
