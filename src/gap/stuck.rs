@@ -353,18 +353,23 @@ mod tests {
         (out, f.found)
     }
 
+    /// `n` samples of white noise (sd 1) written to six decimals, as a logger would.
+    fn six_decimals(seed: u64, n: usize) -> Vec<f64> {
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
+        (0..n)
+            .map(|_| {
+                let z: f64 = StandardNormal.sample(&mut rng);
+                (z * 1e6).round() / 1e6
+            })
+            .collect()
+    }
+
     /// White noise at six decimals with 3000 samples frozen at 0.37 from sample 10000 and 40
     /// at 0 from 30000: both taken out, every other sample passed on unchanged, with or without
     /// snapshots every 777 samples; the same noise without them loses nothing.
     #[test]
     fn frozen_stretches_are_taken_out_and_nothing_else() {
-        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(5);
-        let clean: Vec<f64> = (0..40_000)
-            .map(|_| {
-                let z: f64 = StandardNormal.sample(&mut rng);
-                (z * 1e6).round() / 1e6
-            })
-            .collect();
+        let clean = six_decimals(5, 40_000);
         let mut x = clean.clone();
         x[10_000..13_000].iter_mut().for_each(|v| *v = 0.37);
         x[30_000..30_040].iter_mut().for_each(|v| *v = 0.0);
@@ -395,13 +400,7 @@ mod tests {
     /// fewer than MIN_PAIRS pairs before the end.
     #[test]
     fn a_first_run_is_judged_by_what_follows_it() {
-        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(8);
-        let mut x: Vec<f64> = (0..20_000)
-            .map(|_| {
-                let z: f64 = StandardNormal.sample(&mut rng);
-                (z * 1e6).round() / 1e6
-            })
-            .collect();
+        let mut x = six_decimals(8, 20_000);
         x[..300].iter_mut().for_each(|v| *v = 0.0);
         for snap in [None, Some(5000)] {
             let (out, found) = run(&x, snap);
