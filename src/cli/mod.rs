@@ -591,7 +591,21 @@ impl DataArgs {
         settings: &DataSettings,
     ) -> Result<(Vec<ChannelSetup>, InputKind)> {
         let mut setups = ChannelSetup::for_text(reader.names(), &settings.unit);
-        // Temperature columns are not channels; `diagnose` reads the first.
+        // Temperature columns are not channels, unless --channels names one (its Allan
+        // deviation is wanted too); `diagnose` reads the first as the temperature either way.
+        if let Some(wanted) = &settings.channels {
+            for (i, n) in reader.names().iter().enumerate() {
+                if wanted.contains(n) && temperature_column(n).is_some() {
+                    setups.push(ChannelSetup {
+                        name: n.clone(),
+                        unit: settings.unit.clone(),
+                        column: i,
+                        counts_lsb: None,
+                    });
+                }
+            }
+            setups.sort_by_key(|c| c.column);
+        }
         let temps = reader
             .names()
             .iter()
@@ -607,7 +621,13 @@ impl DataArgs {
             } else {
                 "another temperature, left out (diagnose reads the first)"
             };
-            tracing::info!("{input}: column `{n}` holds {role} ({how}); not a channel");
+            let named = settings.channels.as_ref().is_some_and(|w| w.contains(n));
+            let channel = if named {
+                "a channel too, as --channels names it"
+            } else {
+                "not a channel"
+            };
+            tracing::info!("{input}: column `{n}` holds {role} ({how}); {channel}");
         }
         let columns = reader.channel_columns();
         // A column renamed with a unit (`--columns "c17=wx [rad/s]"`) is in that unit when its

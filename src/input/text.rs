@@ -13,7 +13,8 @@
 //!
 //! Streams: rows are read line by line and handed on in batches; the file is never held in
 //! memory. An empty row, or a row whose every field is empty or `nan`, is a gap for every
-//! channel; an empty or `nan` field is a gap for its channel. A row that cannot be read (a
+//! channel; an empty or `nan` field (or `N/A`, `null`, `-`: [`MISSING`]) is a gap for its
+//! channel. A row that cannot be read (a
 //! token that is not a number, or the wrong number of fields) is counted in `bad_rows`, logged
 //! with its line number, and treated as a gap, so nothing already measured is lost.
 
@@ -460,13 +461,17 @@ pub struct TextPosition {
     pub time: Option<TimeState>,
 }
 
+/// Cells that mark a value as missing, read as gaps like an empty cell (any case): a logger's
+/// `N/A` before its sensor is ready is not text that makes its column a label.
+const MISSING: [&str; 7] = ["nan", "n/a", "na", "null", "none", "-", "--"];
+
 fn parse_field(t: &str) -> Result<f64, ()> {
     let mut t = t.trim();
     // `"0.25"`: a spreadsheet that quotes every field.
     if let Some(q) = t.strip_prefix('"').and_then(|q| q.strip_suffix('"')) {
         t = q.trim();
     }
-    if t.is_empty() || t.eq_ignore_ascii_case("nan") {
+    if t.is_empty() || MISSING.iter().any(|m| t.eq_ignore_ascii_case(m)) {
         return Ok(f64::NAN);
     }
     t.parse::<f64>()
@@ -1006,7 +1011,7 @@ mod tests {
     fn label_columns_and_columns_the_run_leaves_out() {
         let text = "%time,field.header.stamp,field.header.frame_id,field.w.x,field.w.y\n\
                     1,1700000000000000000,imu_link,0.5,1.5\n\
-                    2,1700000000005000000,imu_link,n/a,2.5\n\
+                    2,1700000000005000000,imu_link,ERR,2.5\n\
                     3,1700000000010000000,imu_link,0.25,3.5\n";
         let read = |opts: &TextOptions| {
             let mut r = TextReader::with_options(text.as_bytes(), Path::new("r.csv"), opts)?;
@@ -1014,14 +1019,14 @@ mod tests {
             while r.read_rows(&mut out, 8).unwrap() > 0 {}
             Ok::<_, UsageError>((r.names().to_vec(), out, r.bad_rows(), r.invalid_values))
         };
-        // Every column: the label column is no channel, the `n/a` row is a bad row (a gap of
+        // Every column: the label column is no channel, the `ERR` row is a bad row (a gap of
         // every channel), the stamps beyond 1e15 are counted invalid; `%time` is the time.
         let (names, v, bad, invalid) = read(&TextOptions::default()).unwrap();
         assert_eq!(names, ["field.header.stamp", "field.w.x", "field.w.y"]);
         assert_eq!((v.len(), bad, invalid), (9, 1, 2));
         assert_eq!((v[1], v[2], v[7], v[8]), (0.5, 1.5, 0.25, 3.5));
         assert!(v[3..6].iter().all(|x| x.is_nan()));
-        // `--channels field.w.y`: the row with `n/a` in field.w.x is read, nothing counted.
+        // `--channels field.w.y`: the row with `ERR` in field.w.x is read, nothing counted.
         let opts = TextOptions {
             channels: Some(vec!["field.w.y".into()]),
             ..TextOptions::default()
@@ -1073,6 +1078,15 @@ mod tests {
                 vec![0.5, 0.25, 2.0]
             )
         );
+    }
+
+    /// `N/A`, `null`, `-` in a data column are gaps like an empty cell, not a label's text.
+    #[test]
+    fn missing_value_markers_are_gaps() {
+        let (names, v, bad) = read_all("gx,gy\nN/A,0.5\n0.25,NULL\n-,1\n");
+        assert_eq!((names, bad), (vec!["gx".to_string(), "gy".into()], 0));
+        let shown: Vec<String> = v.iter().map(|x| format!("{x}")).collect();
+        assert_eq!(shown, ["NaN", "0.5", "0.25", "NaN", "NaN", "1"]);
     }
 
     #[test]

@@ -283,6 +283,43 @@ fn a_rostopic_export_reads_as_the_plain_file() {
     }
 }
 
+/// A temperature column (`temp [degC]`) is the unit's temperature, not a channel, and the log
+/// says so; named in --channels it is analysed as one too (with --unit, its header's unit being
+/// no inertial one). Before, its unit stopped every run with exit 2.
+#[test]
+fn a_temperature_column_is_not_a_channel_unless_named() {
+    let (a, _) = columns();
+    let mut text = String::from("gx,temp [degC]\n");
+    for (i, x) in a.iter().enumerate() {
+        text += &format!("{x:e},{}\n", 20.0 + i as f64 * 0.01);
+    }
+    let p = write("with_temp.csv", text.as_bytes());
+    let out = analyze(&p, &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("column `temp [degC]` holds the unit's temperature")
+            && err.contains("not a channel"),
+        "{err}"
+    );
+    let (_, s) = parsed(&out);
+    assert_eq!(s.channels, ["gx"]);
+    let (c, s) = parsed(&analyze(&p, &["--channels", "temp [degC]", "--unit", "C"]));
+    assert_eq!(
+        (s.channels.clone(), s.samples.clone()),
+        (vec!["temp [degC]".to_string()], vec![401])
+    );
+    // Increments 20 + 0.01 i every 10 ms: a rate ramp of 100 u/s^2, whose Allan deviation is
+    // 100 tau / sqrt(2) (THEORY.md section 2, the R term).
+    assert!(!c[0].sigma.is_empty());
+    for (t, s) in c[0].tau.iter().zip(&c[0].sigma) {
+        assert!(
+            (s / (100.0 * t / 2f64.sqrt()) - 1.0).abs() < 1e-9,
+            "{:?}",
+            c[0].sigma
+        );
+    }
+}
+
 /// A channel that never moves (a rate of 1.25 throughout, an orientation's `w` of 1): its
 /// curves are exactly 0, nothing is fitted, and a warning says so with the rate. Before, the
 /// rounding of the running sums (about 1e-19 u/s) was fitted as a "determined" noise term.
