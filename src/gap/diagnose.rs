@@ -716,7 +716,11 @@ fn diagnose_curve_once(
         // their own shape on this record's curve, which a stationary candidate may have taken
         // (a slow sinusoid, typically). Their exact AVAR on the record enters as a fixed offset,
         // as a warm-up's does; the stationary effects must then pass the forward rules again.
-        let (positions, sizes) = f.merged_steps(prob.tau0_s);
+        let (mut positions, sizes) = f.merged_steps(prob.tau0_s);
+        // The block tests' time 0 is the first block they kept (`EvidenceSnapshot::block_first`:
+        // short blocks at the start are left out); the record's is its first sample.
+        let lead = snap.block_first as u64 * snap.block_len;
+        positions.iter_mut().for_each(|p| *p += lead);
         let jump_offset: Vec<f64> = prob
             .ms
             .iter()

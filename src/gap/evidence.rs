@@ -120,9 +120,9 @@ impl SegmentCurve {
     }
 }
 
-/// The share of its samples a block at the start of the run needs for the block tests
-/// ([`EvidenceSnapshot::block_first`]): a first block 90% full has a mean's variance at most
-/// 1.11 times a whole block's. Before (session 29), a first block holding 24 of its 1024
+/// The share of the run's typical block (the median count of samples) a block at the start of
+/// the run needs for the block tests ([`EvidenceSnapshot::block_first`]): a first block 90% as
+/// full has a mean's variance at most 1.11 times a typical block's. Before (session 29), a first block holding 24 of its 1024
 /// samples after a 10-s leading gap, its mean's sd 6.5 times a block's, was read as a warm-up.
 pub const LEAD_BLOCK_FILL: f64 = 0.9;
 
@@ -159,7 +159,8 @@ pub struct EvidenceSnapshot {
     /// Blocks left out at the start: `block_means[0]` is block `block_first` of the run. A
     /// leading gap (a recording that began before the unit sent data, or its first run taken
     /// out as stuck) leaves blocks short, whose means have the variance of the few samples they
-    /// hold, not a block's; the block tests start at the first block [`LEAD_BLOCK_FILL`] full.
+    /// hold, not a block's; the block tests start at the first block [`LEAD_BLOCK_FILL`] as full
+    /// as the run's typical one.
     pub block_first: usize,
     /// Outliers found and replaced before the evidence saw them ([`super::outliers`]).
     pub outliers: OutlierCount,
@@ -557,10 +558,16 @@ impl GapEvidence {
         if self.cur_block.1 > 0 && self.block_pos * 2 >= self.block_len {
             block_means.push(self.cur_block.0 / (self.cur_block.1 as f64 * tau0));
         }
+        // Short against the run's typical block (its median count), not a whole one: a run
+        // that loses samples steadily (a merged multi-rate file, every other row empty) has
+        // every block short alike, and keeps them all.
+        let mut counts: Vec<u64> = self.blocks.iter().map(|b| b.1).collect();
+        counts.sort_unstable();
+        let typical = counts.get(counts.len() / 2).copied().unwrap_or(0) as f64;
         let block_first = self
             .blocks
             .iter()
-            .take_while(|b| (b.1 as f64) < LEAD_BLOCK_FILL * self.block_len as f64)
+            .take_while(|b| (b.1 as f64) < LEAD_BLOCK_FILL * typical)
             .count()
             .min(block_means.len());
         block_means.drain(..block_first);
@@ -615,5 +622,34 @@ mod tests {
         let total: u64 = snap.segments.iter().map(|s| s.len).sum();
         assert_eq!(total, n);
         assert_eq!(snap.n_increments, n);
+    }
+
+    /// The block tests leave out the short blocks a leading gap makes, and only those: a run
+    /// that loses every 7th sample (each block 6/7 full) keeps all its blocks. Before the
+    /// threshold was taken against the typical block, such a run kept none (its blocks were
+    /// all under 90% of a whole one) and the time tests were skipped without a word.
+    #[test]
+    fn short_blocks_are_left_out_only_at_the_start() {
+        let feed = |lead_gap: u64, every: u64| {
+            let mut ev = GapEvidence::new(GapConfig::new(0.01));
+            ev.push_gap(lead_gap);
+            for k in 0..200_000u64 {
+                if k % every == every - 1 {
+                    ev.push_gap(1);
+                } else {
+                    ev.push_increment(((k * 7919) % 13) as f64 - 6.0);
+                }
+            }
+            ev.snapshot()
+        };
+        let lossy = feed(0, 7);
+        assert_eq!(lossy.block_first, 0);
+        assert!(lossy.block_means.len() >= 24, "{}", lossy.block_means.len());
+        // A leading gap of 2.6 blocks: the two empty blocks and the one 40% full are left out.
+        let clean = feed(0, u64::MAX);
+        let late = feed(clean.block_len * 26 / 10, u64::MAX);
+        assert_eq!(late.block_len, clean.block_len);
+        assert_eq!(late.block_first, 3);
+        assert!(late.block_means.iter().all(|m| m.is_finite()));
     }
 }

@@ -12,7 +12,8 @@ use nalgebra::{DMatrix, DVector};
 /// Bias jumps found in the block means.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct JumpFinding {
-    /// Times of the jumps (s from the start).
+    /// Times of the jumps (s from the first block the block tests kept: the run's start unless
+    /// short blocks at its start were left out, `EvidenceSnapshot::block_first`).
     pub times_s: Vec<f64>,
     /// Estimated sizes (u/s).
     pub sizes: Vec<f64>,

@@ -80,6 +80,15 @@ pub enum Release {
     Stuck(u64),
 }
 
+impl Release {
+    /// Its increments.
+    pub fn samples(&self) -> u64 {
+        match *self {
+            Release::Values(_, n) | Release::Stuck(n) => n,
+        }
+    }
+}
+
 /// The streaming stuck-stretch filter of one channel (module doc).
 #[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct StuckFilter {
@@ -226,6 +235,17 @@ impl StuckFilter {
         let held = self.lead.as_ref().map_or(0, |l| l.after.len()) + self.queue.len();
         if held > 2 * MIN_PAIRS as usize + 2 {
             return Err(format!("stuck-stretch filter holds {held} runs"));
+        }
+        // Every run held is 1 to 2^32 samples long (a 0 would underflow, a huge one stall).
+        let lens = self
+            .lead
+            .iter()
+            .flat_map(|l| std::iter::once(l.len).chain(l.after.iter().map(Release::samples)));
+        if let Some(n) = lens
+            .chain(self.queue.iter().map(Release::samples))
+            .find(|&n| n == 0 || n > 1 << 32)
+        {
+            return Err(format!("stuck-stretch filter holds a run of {n} samples"));
         }
         if self.len + self.passed > 1 << 32 || self.equal > self.pairs {
             return Err(format!(

@@ -133,12 +133,16 @@ pub fn infer_tau0<R: BufRead>(
     // The shortest decimal step within the stamps' resolution: stamps read as f64 (a clock
     // since 1970 in ns is resolved to 256 ns) make 5,000,000 ns steps look like 4,999,936, and
     // seconds from 0 printed to the ms make 0.005 s steps 0.00499999999999989 by 18 s. The
-    // resolution is that of the largest stamp looked at (the first alone is 0 on such a clock).
-    let largest = stamps
+    // resolution is that of the stamps looked at (the first alone is 0 on such a clock): their
+    // 90th percentile in size, so that one wild stamp does not coarsen it.
+    let mut sizes: Vec<f64> = stamps
         .iter()
         .filter(|t| t.is_finite())
-        .fold(0.0f64, |a, t| a.max(t.abs()));
-    let resolution = 2.0 * largest * f64::EPSILON;
+        .map(|t| t.abs())
+        .collect();
+    sizes.sort_by(f64::total_cmp);
+    let large = sizes.get(sizes.len() * 9 / 10).copied().unwrap_or(0.0);
+    let resolution = 2.0 * large * f64::EPSILON;
     let step = (1..=15)
         .map(|digits| round_significant(median, digits))
         .find(|r| (r - median).abs() <= resolution)

@@ -462,8 +462,23 @@ pub struct TextPosition {
 }
 
 /// Cells that mark a value as missing, read as gaps like an empty cell (any case): a logger's
-/// `N/A` before its sensor is ready is not text that makes its column a label.
-const MISSING: [&str; 7] = ["nan", "n/a", "na", "null", "none", "-", "--"];
+/// `N/A` before its sensor is ready, and the NaN of C runtimes (`-nan`, MSVC's `-nan(ind)`,
+/// `1.#QNAN`), are not text that makes a column a label.
+const MISSING: [&str; 13] = [
+    "nan",
+    "n/a",
+    "na",
+    "null",
+    "none",
+    "-",
+    "--",
+    "-nan",
+    "nan(ind)",
+    "-nan(ind)",
+    "1.#qnan",
+    "1.#ind",
+    "-1.#ind",
+];
 
 fn parse_field(t: &str) -> Result<f64, ()> {
     let mut t = t.trim();
@@ -661,7 +676,15 @@ impl<R: BufRead> TextReader<R> {
                         .iter()
                         .filter(|f| !f.trim().is_empty() && parse_field(f).is_ok())
                         .count();
-                    if fields.iter().all(|f| parse_field(f).is_ok()) || 2 * numbers > fields.len() {
+                    // (Unless a text cell names a time column: `time,0,1,2` is pandas' header
+                    // of integer-labelled columns.)
+                    let names_time = fields.iter().any(|f| {
+                        parse_field(f).is_err()
+                            && time_column_unit(f.trim().trim_matches('"')).is_some()
+                    });
+                    if fields.iter().all(|f| parse_field(f).is_ok())
+                        || (2 * numbers > fields.len() && !names_time)
+                    {
                         let commented = hash_line
                             .as_deref()
                             .and_then(|h| commented_header(h, fields.len()));
@@ -1069,6 +1092,10 @@ mod tests {
         assert_eq!(names, ["c1", "c2", "c4", "c5"]);
         assert_eq!(bad, 0);
         assert_eq!((v[3], v[7]), (0.25, 0.5));
+        // pandas' header of integer-labelled columns after a time column is a header.
+        let (names, v, _) = read_all("time,0,1\n0.0,0.5,0.25\n0.01,1,2\n");
+        assert_eq!(names, ["0", "1"]);
+        assert_eq!(v, [0.5, 0.25, 1.0, 2.0]);
         // A row of names with a number among them is still a header.
         let (names, v, _) = read_all("gx,gy,1\n0.5,0.25,2\n");
         assert_eq!(

@@ -10,8 +10,8 @@
 //! steps that go backwards or repeat (`dt <= 0`) and steps that are not whole multiples of
 //! `tau0` (more than a quarter step off) are counted and reported with their line numbers; a
 //! row stamped backwards is taken as the next sample (the clock moves on one step from where it
-//! was) and inserts nothing. When the row after it steps on by one `tau0` from that backward
-//! stamp, the clock was reset or wrapped (a 32-bit microsecond counter every 71.6 minutes): the
+//! was) and inserts nothing. When it went back by more than a step and the row after it steps
+//! on by one `tau0` from that backward stamp, the clock was reset or wrapped (a 32-bit microsecond counter every 71.6 minutes): the
 //! backward step is counted as a discontinuity, not a backward step, and the clock restarts
 //! there, so the gaps after it are found again. Before (session 29), every row after a reset
 //! was counted backwards and no later gap was found.
@@ -225,10 +225,9 @@ impl TimeColumn {
                 self.backwards -= 1;
                 self.discontinuities += 1;
                 tracing::warn!(
-                    "{}: line {}: the time column `{}` restarts at {back} (a clock reset or a \
-                     counter's wrap); read on from there, no gap inserted",
+                    "{}: line {line}: the time column `{}` restarted at the row before, at {back} \
+                     (a clock reset or a counter's wrap); read on from there, no gap inserted",
                     file.display(),
-                    line - 1,
                     self.name
                 );
                 return 0;
@@ -247,7 +246,8 @@ impl TimeColumn {
             // The row is taken as the next sample: the clock moves on one step from where it
             // was, so one bad stamp makes no gap; the next row tells a restart (module doc).
             self.last = Some(last + self.tau0_s / scale);
-            if dt < 0.0 {
+            // More than a step back (jitter or a swapped pair goes back less).
+            if dt * scale < -self.tau0_s {
                 self.restart = Some(t);
             }
             return 0;

@@ -367,3 +367,40 @@ fn chunked_integer_pushes_long_run_with_a_late_large_count() {
     let cuts: Vec<usize> = (1..60).map(|k| k * 4999 + (k * k) % 97).collect();
     chunked_int_case(&incs, &cuts, 16);
 }
+
+/// A channel whose every increment is the same is constant: its variances are exactly 0 (a
+/// straight line of phase), counts or floats. A counts channel stepping between two
+/// neighbouring counts, the larger first (3, 2, 3, 3, 2, ...: a quantized rate at rest), is
+/// not: its AVAR at m = 1 equals the batch formula. Before session 30 the integer `deviation`
+/// was 0 for a step of -1 too, and such a channel read as constant.
+#[test]
+fn constant_channels_read_zero_and_neighbouring_counts_do_not() {
+    let c = cfg(0.01, Overlap::Full);
+    let toggling: Vec<i64> = (0..4000).map(|i| if i % 3 == 1 { 2 } else { 3 }).collect();
+    let mut e: Engine<IntRepr> = Engine::new(c.clone());
+    e.push_increments(&toggling);
+    assert_eq!(e.constant_increment(), None);
+    let phase = phase_from_increments(&toggling.iter().map(|&v| v as f64).collect::<Vec<_>>());
+    let want = oavar(&[&phase], 1, 0.01).unwrap().var;
+    let got = e.read()[0].avar.unwrap().0;
+    assert!(
+        want > 0.0 && (got / want - 1.0).abs() < 1e-12,
+        "{got} vs {want}"
+    );
+    let mut k: Engine<IntRepr> = Engine::new(c.clone());
+    k.push_increments(&[5; 4000]);
+    assert_eq!(k.constant_increment(), Some(5));
+    assert!(k
+        .read()
+        .iter()
+        .all(|r| r.avar == Some((0.0, r.avar.unwrap().1))));
+    let mut f: Engine<FloatRepr> = Engine::new(c);
+    f.push_increments(&[0.0125; 4000]);
+    assert_eq!(f.constant_increment(), Some(0.0125));
+    assert!(f
+        .read()
+        .iter()
+        .all(|r| r.avar.unwrap().0 == 0.0 && r.mvar.unwrap().0 == 0.0));
+    f.push_increments(&[0.0126]);
+    assert_eq!(f.constant_increment(), None);
+}

@@ -186,6 +186,10 @@ pub struct Engine<R: Repr> {
     /// every increment so far equals the first ([`Engine::constant_increment`]).
     pub(super) first_inc: Option<R::Inc>,
     pub(super) spread: u64,
+    /// `spread` is 0 only while every increment equals the first (false for a state saved
+    /// before session 30, whose `spread` did not say that: such a run never reads constant).
+    #[serde(default)]
+    pub(super) spread_exact: bool,
     /// Scratch for the moving sums of phase at m = 2, 4, 8, ... (integer input); rebuilt at
     /// every block, so a saved state leaves it out.
     #[serde(skip)]
@@ -266,6 +270,7 @@ impl<R: Repr> Engine<R> {
             segments: 0,
             first_inc: None,
             spread: 0,
+            spread_exact: true,
             pyramid: Vec::new(),
             scratch: Vec::new(),
         }
@@ -299,7 +304,8 @@ impl<R: Repr> Engine<R> {
     /// that does not move: stuck, saturated, or a constant such as an unused field); `None`
     /// before the first or once one differs. Phase points fed directly are not looked at.
     pub fn constant_increment(&self) -> Option<R::Inc> {
-        self.first_inc.filter(|_| self.spread == 0)
+        self.first_inc
+            .filter(|_| self.spread == 0 && self.spread_exact)
     }
 
     /// Feeds one increment `d_k` (docs/theory.md section 1).

@@ -87,6 +87,8 @@ mod tests {
                 let dist = (d as i128 - r as i128).unsigned_abs();
                 let v = IntRepr::deviation(d, r);
                 assert!(v as u128 + 1 >= dist, "d={d} r={r} v={v}");
+                // 0 exactly when equal (a channel's constancy is read off it).
+                assert_eq!(v == 0, d == r, "d={d} r={r}");
                 if dist < 1 << 63 {
                     assert!(v as u128 <= 2 * dist, "d={d} r={r} v={v}");
                 } else if dist > 1 << 63 {

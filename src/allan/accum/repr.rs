@@ -144,11 +144,13 @@ impl Repr for IntRepr {
     }
     #[inline(always)]
     fn deviation(d: i64, reference: i64) -> u64 {
-        // One's-complement magnitude of d - reference (|t| - 1 for negative t), or all ones when
-        // the wrapping difference overflowed (operands of opposite signs, result sign flipped).
+        // The magnitude of d - reference, 0 only when they are equal (the one's complement used
+        // before session 30 was 0 for d = reference - 1 too, so a channel stepping between two
+        // neighbouring counts read as constant), or all ones when the wrapping difference
+        // overflowed (operands of opposite signs, result sign flipped).
         let t = d.wrapping_sub(reference);
         let overflow = ((d ^ reference) & (d ^ t)) >> 63;
-        ((t ^ (t >> 63)) | overflow) as u64
+        t.unsigned_abs() | overflow as u64
     }
     #[inline(always)]
     fn d2_narrow(a: i64, b: i64, c: i64) -> f64 {
