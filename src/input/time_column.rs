@@ -11,9 +11,9 @@
 //! `tau0` (more than a quarter step off) are counted and reported with their line numbers; a
 //! row stamped backwards is taken as the next sample (the clock moves on one step from where it
 //! was) and inserts nothing. When it went back by more than a step and the row after it steps
-//! on by one `tau0` from that backward stamp, the clock was reset or wrapped (a 32-bit microsecond counter every 71.6 minutes): the
-//! backward step is counted as a discontinuity, not a backward step, and the clock restarts
-//! there, so the gaps after it are found again. Before (session 29), every row after a reset
+//! on by one `tau0` from that backward stamp, the clock was reset or wrapped (a 32-bit
+//! microsecond counter every 71.6 minutes): the backward step is counted as a discontinuity,
+//! not a backward step, and the clock restarts there, so the gaps after it are found again. Before (session 29), every row after a reset
 //! was counted backwards and no later gap was found.
 
 /// Seconds per unit tried for the column, in order: s, ms, us, ns.
