@@ -118,6 +118,14 @@ pub enum DiagnoseError {
          move (stuck, saturated or not connected?), so it has no noise to diagnose"
     )]
     Constant(f64),
+    /// Too few curve points because the samples come one or two at a time between gaps: the
+    /// samples received and the stretches they come in.
+    #[error(
+        "diagnose: its {0} samples come in {1} stretches, one or two samples each (a value on \
+         every other row: a channel logged slower than the file's rows?), so no differences are \
+         left for a curve; put it in its own file with its own --tau0"
+    )]
+    Scattered(u64, u64),
 }
 
 /// The verdict of docs/records.md's `diagnosis` record.
@@ -246,7 +254,15 @@ pub fn diagnose_with_temperature(
     if let Some(d) = snap.constant {
         return Err(DiagnoseError::Constant(d / snap.tau0_s));
     }
-    let mut d = diagnose_quantized(snap, temperature, opts)?;
+    let mut d = diagnose_quantized(snap, temperature, opts).map_err(|e| match e {
+        // Not a short run: a channel on a slower clock than the rows (docs/robustness.md).
+        DiagnoseError::TooFewPoints(..)
+            if snap.n_received >= 16 && snap.n_received < 2 * snap.n_stretches =>
+        {
+            DiagnoseError::Scattered(snap.n_received, snap.n_stretches)
+        }
+        e => e,
+    })?;
     super::limit_cycle::attribute(&mut d, snap);
     Ok(d)
 }

@@ -349,6 +349,38 @@ fn a_recording_that_begins_before_the_data_is_not_a_warm_up() {
     }
 }
 
+/// A channel logged at half the file's rate (a value on every other row, as a merged file of a
+/// 100-Hz gyro and a 50-Hz accelerometer has): no curve can be made, and the warning says why
+/// with the counts (10000 samples in 10000 stretches) instead of "run too short?"; the
+/// full-rate channel beside it is diagnosed.
+#[test]
+fn a_channel_on_every_other_row_is_said_not_called_short() {
+    let p = tmp("half_rate.csv");
+    let mut text = String::from("time,g,h\n");
+    let mut state: u64 = 0x51f1_5e5d_1234_abcd;
+    for i in 0..20_000u64 {
+        let x = uniform(&mut state);
+        let h = if i % 2 == 0 {
+            format!("{x:.6}")
+        } else {
+            String::new()
+        };
+        text += &format!("{:.2},{x:.6},{h}\n", i as f64 * 0.01);
+    }
+    let (out, err) = diagnose_rates(&p, &text);
+    assert!(
+        err.contains("channel h: diagnose: its 10000 samples come in 10000 stretches"),
+        "{err}"
+    );
+    let recs = crate::common::pipeline::parse_lines(&out.stdout);
+    let chans: Vec<&str> = recs
+        .iter()
+        .filter(|r| r["type"] == "diagnosis")
+        .map(|r| r["channel"].as_str().unwrap())
+        .collect();
+    assert_eq!(chans, ["g"]);
+}
+
 /// A channel that froze at 0.37 for 60 s of a 20-minute run, beside the same noise unfrozen:
 /// the stretch is found and taken out as a gap (`stuck`: one stretch of 60 s at 600 s), and the
 /// frozen channel is diagnosed as its twin (the same white rate within 2%, `consistent`, no
