@@ -131,6 +131,23 @@ pub(super) fn channel_reports(
             );
         }
         let (curves, fit) = analyze_channel(ch, opts);
+        let (points, stretches) = (ch.acc.phase_points(), ch.acc.segments());
+        if final_
+            && points > 16
+            && 3 * stretches > points
+            && curves.iter().all(|c| c.points.is_empty())
+        {
+            // A merged multi-rate file read with the faster channels: said, not left as an
+            // empty curve.
+            tracing::warn!(
+                "{}: its {points} samples come in {stretches} stretches, one or two each (a value \
+                 on every other row: a channel logged slower than the file's rows?), so it has \
+                 no curve; analyse it alone (--channels {}: with a time column its rows are \
+                 then its samples)",
+                ch.setup.name,
+                ch.setup.name
+            );
+        }
         let readouts = fit.as_ref().and_then(|_| {
             curves
                 .iter()

@@ -73,10 +73,25 @@ impl ChannelSetup {
     /// The channels of text columns with header `names` (temperature columns left out:
     /// [`crate::input::temperature_column`]), each in `unit`.
     pub fn for_text(names: &[String], unit: &str) -> Vec<ChannelSetup> {
+        let temperature: Vec<bool> = names
+            .iter()
+            .map(|n| crate::input::temperature_column::temperature_column(n).is_some())
+            .collect();
+        Self::for_text_columns(names, &temperature, unit)
+    }
+
+    /// [`ChannelSetup::for_text`] with the temperature columns given (`temperature[i]`: the
+    /// column `names[i]` holds a temperature, as [`crate::input::text::TextReader::temperatures`]
+    /// tells from the input's names and the run's).
+    pub fn for_text_columns(
+        names: &[String],
+        temperature: &[bool],
+        unit: &str,
+    ) -> Vec<ChannelSetup> {
         names
             .iter()
             .enumerate()
-            .filter(|(_, n)| crate::input::temperature_column::temperature_column(n).is_none())
+            .filter(|(i, _)| !temperature.get(*i).copied().unwrap_or(false))
             .map(|(i, n)| ChannelSetup {
                 name: n.clone(),
                 unit: unit.to_string(),

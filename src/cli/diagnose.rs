@@ -16,7 +16,6 @@ use allanscope::gap::temperature::settling_profile;
 use allanscope::gap::unit_model::{fitted_channel, fitted_unit, ChannelFacts};
 use allanscope::gap::EffectParams;
 use allanscope::gap::{holdout_gap, DiagnoseOptions, DiagnosisRecord, GapConfig, GapEvidence};
-use allanscope::input::temperature_column::temperature_column;
 use allanscope::input::text::{TextReader, BATCH_ROWS};
 use allanscope::pipeline::decode::DecodeStage;
 use allanscope::plan::unit::{InputPlan, UnitPlan, UnitRequest};
@@ -189,10 +188,10 @@ fn gather(
             // The temperature column (docs/records.md's `temperature_c`, or one a logger
             // names: `temp [degC]`), read here only, in degC; the first if there are several.
             let temp = reader
-                .names()
-                .iter()
+                .temperatures()
+                .into_iter()
                 .enumerate()
-                .find_map(|(i, n)| temperature_column(n).map(|t| (i, t)));
+                .find_map(|(i, t)| t.map(|t| (i, t)));
             let temp_col = temp.map(|(i, _)| i);
             let temp_scale = temp.map(|(_, t)| t);
             if temp_col.is_some() {

@@ -30,7 +30,6 @@ use allanscope::analysis::{AnalysisOptions, InputKind};
 use allanscope::error::UsageError;
 use allanscope::frame::FrameDescriptor;
 use allanscope::input::header_unit::{header_unit, units_from_headers};
-use allanscope::input::temperature_column::temperature_column;
 use allanscope::input::text::{ColumnPick, TextOptions, TextReader};
 use allanscope::model::fit::FitMethod;
 use allanscope::plan::checkpoint_setup::CheckpointRequest;
@@ -196,6 +195,11 @@ pub struct DataArgs {
     /// `gx` as channel `g1` and `gy` as `gy`.
     #[arg(long, value_delimiter = ',', value_name = "NAME[=NEW],...")]
     pub columns: Option<Vec<ColumnPick>>,
+    /// Found, not given: the channels analysed hold values on every k-th row only (a merged
+    /// multi-rate file), so rows where they are all empty are no samples
+    /// (`TextOptions::sparse_rows`).
+    #[arg(skip)]
+    pub sparse_rows: bool,
     /// `full` (exact, memory grows with the run) or L (bounded memory, stride max(1, m/L)).
     #[arg(long, default_value_t = DEFAULT_L.to_string())]
     pub overlap: String,
@@ -291,6 +295,7 @@ impl DataArgs {
             // Text columns need --tau0; with it, jumps of the time column are gaps.
             tau0_s: self.tau0,
             channels: self.channels.clone(),
+            sparse_rows: self.sparse_rows,
         }
     }
 }
@@ -334,7 +339,32 @@ where
 /// Text columns given no `--tau0`: the sampling step read off each input's time column
 /// ([`allanscope::input::sampling_step`]), logged; every input must show the same step.
 fn text_tau0(d: &mut DataArgs, inputs: &[&str]) -> Result<()> {
-    if d.format != "csv" || d.tau0.is_some() {
+    if d.format != "csv" {
+        return Ok(());
+    }
+    if d.tau0.is_some() {
+        // Given the step, the look at the start only finds a merged multi-rate file's rows.
+        for &input in inputs {
+            if input == "-" || read_once(input) {
+                continue;
+            }
+            let Ok(src) = open_input(input).map(std::io::BufReader::new) else {
+                continue;
+            };
+            let look = tracing::subscriber::with_default(
+                tracing::subscriber::NoSubscriber::default(),
+                || {
+                    allanscope::input::sampling_step::infer_tau0(
+                        src,
+                        Path::new(input),
+                        &d.text_options(),
+                    )
+                },
+            );
+            if let Ok(step) = look {
+                say_rows(input, &step, d);
+            }
+        }
         return Ok(());
     }
     let mut found: Option<(&str, allanscope::input::sampling_step::InferredStep)> = None;
@@ -371,12 +401,35 @@ fn text_tau0(d: &mut DataArgs, inputs: &[&str]) -> Result<()> {
             Some(_) => {}
             None => {
                 tracing::info!("{input}: {step}");
+                if let Some(doubt) = &step.doubt {
+                    tracing::warn!("{input}: {doubt}");
+                }
+                say_rows(input, &step, d);
                 found = Some((input, step));
             }
         }
     }
     d.tau0 = found.map(|(_, s)| s.tau0_s);
     Ok(())
+}
+
+/// What the look at an input's start found of its rows: the channels analysed on every k-th
+/// row only (their rows are the samples: `sparse_rows`), or some channels on every k-th row
+/// beside others on every row (no curve for them in this run: said, with how to get one).
+fn say_rows(input: &str, step: &allanscope::input::sampling_step::InferredStep, d: &mut DataArgs) {
+    use allanscope::input::sampling_step::ordinal;
+    if step.every > 1 {
+        d.sparse_rows = true;
+    }
+    for (name, k) in &step.slow {
+        tracing::warn!(
+            "{input}: channel `{name}` holds a value on every {} row only (a stream logged at 1/{k} \
+             of the rate of the others?): analysed with them its samples are one-sample \
+             stretches and it has no curve; analyse it alone (--channels {name}): its rows are then \
+             its samples, spaced by the time column",
+            ordinal(*k)
+        );
+    }
 }
 
 /// Where a command's JSON lines go: `out` (a result file, opened as [`OutputFile`] explains: an
@@ -590,12 +643,14 @@ impl DataArgs {
         reader: &TextReader<R>,
         settings: &DataSettings,
     ) -> Result<(Vec<ChannelSetup>, InputKind)> {
-        let mut setups = ChannelSetup::for_text(reader.names(), &settings.unit);
+        let temperatures = reader.temperatures();
+        let is_temp: Vec<bool> = temperatures.iter().map(Option::is_some).collect();
+        let mut setups = ChannelSetup::for_text_columns(reader.names(), &is_temp, &settings.unit);
         // Temperature columns are not channels, unless --channels names one (its Allan
         // deviation is wanted too); `diagnose` reads the first as the temperature either way.
         if let Some(wanted) = &settings.channels {
             for (i, n) in reader.names().iter().enumerate() {
-                if wanted.contains(n) && temperature_column(n).is_some() {
+                if wanted.contains(n) && is_temp[i] {
                     setups.push(ChannelSetup {
                         name: n.clone(),
                         unit: settings.unit.clone(),
@@ -609,7 +664,8 @@ impl DataArgs {
         let temps = reader
             .names()
             .iter()
-            .filter_map(|n| temperature_column(n).map(|t| (n, t)));
+            .zip(&temperatures)
+            .filter_map(|(n, t)| t.as_ref().map(|t| (n, t)));
         for (k, (n, t)) in temps.enumerate() {
             let how = if t.named {
                 format!("in {}", t.unit)

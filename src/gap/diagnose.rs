@@ -123,7 +123,8 @@ pub enum DiagnoseError {
     #[error(
         "diagnose: its {0} samples come in {1} stretches, one or two samples each (a value on \
          every other row: a channel logged slower than the file's rows?), so no differences are \
-         left for a curve; put it in its own file with its own --tau0"
+         left for a curve; analyse it alone (--channels NAME: with a time column its rows are \
+         then its samples)"
     )]
     Scattered(u64, u64),
 }

@@ -32,6 +32,10 @@ pub struct HeaderUnit {
 /// name carries no unit in brackets.
 pub fn header_unit(name: &str) -> Option<Result<HeaderUnit, String>> {
     let n = name.trim();
+    // `gyro_rad[0]`: an array's index in brackets (PX4's CSV export), not a unit.
+    if let Some(base) = array_element(n) {
+        return px4_field(base).map(Ok);
+    }
     let (open, close) = match n.chars().last()? {
         ']' => ('[', ']'),
         ')' => ('(', ')'),
@@ -65,6 +69,33 @@ fn ros_imu_field(name: &str) -> Option<HeaderUnit> {
     Some(HeaderUnit {
         unit: unit.into(),
         rate: true,
+        text: text.into(),
+    })
+}
+
+/// The name of the array a column is an element of (`gyro_rad` for `gyro_rad[0]`), when its
+/// brackets hold only an index.
+pub fn array_element(name: &str) -> Option<&str> {
+    let inner = name.strip_suffix(']')?;
+    let open = inner.rfind('[')?;
+    let index = &inner[open + 1..];
+    (!index.is_empty() && index.bytes().all(|b| b.is_ascii_digit())).then(|| inner[..open].trim())
+}
+
+/// A PX4 uORB field whose unit its message fixes, as its CSV export (`ulog2csv`) names it:
+/// `sensor_combined`'s `gyro_rad` (rad/s) and `accelerometer_m_s2` (m/s^2), `vehicle_imu`'s
+/// `delta_angle` (rad) and `delta_velocity` (m/s) increments.
+fn px4_field(base: &str) -> Option<HeaderUnit> {
+    let (unit, rate, text) = match base {
+        "gyro_rad" => ("rad", true, "rad/s, by PX4's sensor_combined"),
+        "accelerometer_m_s2" => ("m/s", true, "m/s^2, by PX4's sensor_combined"),
+        "delta_angle" => ("rad", false, "rad, by PX4's vehicle_imu"),
+        "delta_velocity" => ("m/s", false, "m/s, by PX4's vehicle_imu"),
+        _ => return None,
+    };
+    Some(HeaderUnit {
+        unit: unit.into(),
+        rate,
         text: text.into(),
     })
 }
@@ -402,5 +433,19 @@ mod tests {
             "{e}"
         );
         assert_eq!(units_from_headers(&[(1, "gx")], false, false), Ok(None));
+    }
+
+    /// PX4's CSV export: an index in brackets is no unit; the fields whose unit the message
+    /// fixes are read in it; other arrays carry none.
+    #[test]
+    fn px4_arrays() {
+        let g = header_unit("gyro_rad[0]").unwrap().unwrap();
+        assert_eq!((g.unit.as_str(), g.rate), ("rad", true));
+        let a = header_unit("accelerometer_m_s2[2]").unwrap().unwrap();
+        assert_eq!((a.unit.as_str(), a.rate), ("m/s", true));
+        let d = header_unit("delta_velocity[1]").unwrap().unwrap();
+        assert_eq!((d.unit.as_str(), d.rate), ("m/s", false));
+        assert!(header_unit("magnetometer_ga[0]").is_none());
+        assert!(header_unit("acc_x[g]").unwrap().is_ok());
     }
 }

@@ -33,11 +33,21 @@ pub struct InferredStep {
     /// Steps looked at, and those within [`TOLERANCE`] of the median.
     pub steps: usize,
     pub regular: usize,
+    /// The channels the run analyses hold values on every `every`-th row only (1: on every
+    /// row): rows where all are empty are no samples ([`TextOptions::sparse_rows`]), and the
+    /// step is read between the others.
+    pub every: usize,
+    /// Channels with values on every k-th row only beside channels with values on every row
+    /// (name, k): analysed together with those, they have one-sample stretches and no curve.
+    pub slow: Vec<(String, usize)>,
+    /// A doubt about the unit, to be said with the step: stamps that are whole numbers
+    /// stepping by 2 or more, read as seconds for want of a unit, may count ms or us.
+    pub doubt: Option<String>,
 }
 
 impl std::fmt::Display for InferredStep {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let unit = [(1e-9, "ns"), (1e-6, "us"), (1e-3, "ms")]
+        let unit = [(1e-9, "ns"), (1e-6, "us"), (1e-4, "100us"), (1e-3, "ms")]
             .into_iter()
             .find(|(u, _)| *u == self.unit_s)
             .map_or("s", |(_, name)| name);
@@ -51,8 +61,27 @@ impl std::fmt::Display for InferredStep {
             self.regular,
             TOLERANCE * 100.0,
             self.unit_from
-        )
+        )?;
+        if self.every > 1 {
+            write!(
+                f,
+                "; the channels hold a value on every {} row only: the rows between are no samples",
+                ordinal(self.every)
+            )?;
+        }
+        Ok(())
     }
+}
+
+/// `2nd`, `3rd`, `4th`, ...
+pub fn ordinal(k: usize) -> String {
+    let suffix = match (k % 10, k % 100) {
+        (1, x) if x != 11 => "st",
+        (2, x) if x != 12 => "nd",
+        (3, x) if x != 13 => "rd",
+        _ => "th",
+    };
+    format!("{k}{suffix}")
 }
 
 /// The unit a clock since 1970 has for a stamp of this size, if it looks like one.
@@ -88,9 +117,33 @@ pub fn infer_tau0<R: BufRead>(
                 .into(),
         ));
     };
-    let stamps = reader
+    let rows = reader
         .take_stamps(LOOK_ROWS)
         .map_err(|e| usage(e.to_string()))?;
+    // A file that merges a slower stream with faster ones: channels with a value on every k-th
+    // row only. When every channel the run analyses is such (`--channels ax` of a merged file)
+    // the rows where all are empty are no samples and the step is read between the others.
+    let names = reader.names().to_vec();
+    let width = names.len();
+    let strides: Vec<usize> = (0..width)
+        .map(|c| row_stride(rows.iter().map(|(_, p)| p[c])))
+        .collect();
+    let every = row_stride(rows.iter().map(|(_, p)| p.iter().any(|&x| x)));
+    let slow: Vec<(String, usize)> = if every == 1 {
+        names
+            .iter()
+            .zip(&strides)
+            .filter(|(_, &k)| k > 1)
+            .map(|(n, &k)| (n.clone(), k))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let stamps: Vec<f64> = rows
+        .iter()
+        .filter(|(_, p)| every == 1 || p.iter().any(|&x| x))
+        .map(|(t, _)| *t)
+        .collect();
     let mut steps: Vec<f64> = stamps
         .windows(2)
         .map(|w| w[1] - w[0])
@@ -143,6 +196,19 @@ pub fn infer_tau0<R: BufRead>(
     sizes.sort_by(f64::total_cmp);
     let large = sizes.get(sizes.len() * 9 / 10).copied().unwrap_or(0.0);
     let resolution = 2.0 * large * f64::EPSILON;
+    // A clock with jitter (a phone's, a host's stamps: 0.0025 s steps +- 20 us) gives a median
+    // step such as 0.002499751 whose last digits are noise: the step is then the shortest
+    // decimal within three standard errors of the median (1.25 sd / sqrt(n) for a median of
+    // n steps of standard deviation sd, the regular steps'), 0.0025 there.
+    let near: Vec<f64> = steps
+        .iter()
+        .copied()
+        .filter(|d| ((d - median) / median).abs() <= TOLERANCE)
+        .collect();
+    let n = near.len() as f64;
+    let mean = near.iter().sum::<f64>() / n;
+    let sd = (near.iter().map(|d| (d - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0)).sqrt();
+    let resolution = resolution.max(3.0 * 1.25 * sd / n.sqrt());
     let step = (1..=15)
         .map(|digits| round_significant(median, digits))
         .find(|r| (r - median).abs() <= resolution)
@@ -155,6 +221,20 @@ pub fn infer_tau0<R: BufRead>(
             crate::ranges::show(tau0_s)
         )));
     }
+    // Whole-number stamps read as seconds for want of a unit (a counter of ms since boot
+    // stepping by 4 reads as tau0 4 s): said, since seconds may be right (a clock read each
+    // 2 s), with how to say otherwise.
+    let whole = stamps
+        .iter()
+        .filter(|t| t.is_finite())
+        .all(|t| t.fract() == 0.0);
+    let doubt = (unit_from == "no unit given: seconds" && whole && tau0_s >= 2.0).then(|| {
+        format!(
+            "the time column `{column}` holds whole numbers stepping by {}, read as seconds: if \
+             they count ms or us, name the unit (`{column} [ms]`) or give --tau0",
+            crate::ranges::show(tau0_s)
+        )
+    });
     Ok(InferredStep {
         tau0_s,
         column,
@@ -162,7 +242,34 @@ pub fn infer_tau0<R: BufRead>(
         unit_from,
         steps: steps.len(),
         regular,
+        every,
+        slow,
+        doubt,
     })
+}
+
+/// Every how many rows a column holds a value, from whether it does in each row looked at:
+/// `k >= 2` when at least nine in ten of the steps between its values are `k` rows (a stream
+/// logged at 1/k of the file's row rate), else 1 (a value on every row, or gaps that come as
+/// stretches). Fewer than 16 values say 1.
+pub fn row_stride(present: impl Iterator<Item = bool>) -> usize {
+    let at: Vec<usize> = present
+        .enumerate()
+        .filter(|(_, p)| *p)
+        .map(|(i, _)| i)
+        .collect();
+    if at.len() < 16 {
+        return 1;
+    }
+    let mut steps: Vec<usize> = at.windows(2).map(|w| w[1] - w[0]).collect();
+    steps.sort_unstable();
+    let k = steps[steps.len() / 2];
+    let at_k = steps.iter().filter(|&&d| d == k).count();
+    if k >= 2 && 10 * at_k >= 9 * steps.len() {
+        k
+    } else {
+        1
+    }
 }
 
 #[cfg(test)]
@@ -228,5 +335,83 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("not a sampling step"), "{e}");
+    }
+
+    /// A merged multi-rate file: `ax` on every other row beside `gx` on every row is said to be
+    /// slow; analysed alone, its rows are the samples and the step is read between them.
+    #[test]
+    fn a_stream_on_every_other_row() {
+        let mut t = String::from("time,gx,ax\n");
+        for k in 0..400 {
+            let ax = if k % 2 == 0 { "0.5" } else { "" };
+            t.push_str(&format!("{:.3},1,{ax}\n", k as f64 * 0.005));
+        }
+        let s = infer(&t).unwrap();
+        assert_eq!((s.tau0_s, s.every), (0.005, 1));
+        assert_eq!(s.slow, [("ax".to_string(), 2)]);
+        let opts = TextOptions {
+            channels: Some(vec!["ax".into()]),
+            ..TextOptions::default()
+        };
+        let s = infer_tau0(t.as_bytes(), Path::new("m.csv"), &opts).unwrap();
+        assert_eq!((s.tau0_s, s.every, s.slow.len()), (0.01, 2, 0));
+        // Read so, its 200 values are 200 samples, no gap; a missing one is a gap.
+        let read = |t: &str| {
+            let opts = TextOptions {
+                channels: Some(vec!["ax".into()]),
+                tau0_s: Some(0.01),
+                sparse_rows: true,
+                ..TextOptions::default()
+            };
+            let mut r = TextReader::with_options(t.as_bytes(), Path::new("m.csv"), &opts).unwrap();
+            let mut out = Vec::new();
+            while r.read_rows(&mut out, 64).unwrap() > 0 {}
+            out.chunks(2).map(|c| c[1]).collect::<Vec<f64>>()
+        };
+        let ax = read(&t);
+        assert_eq!(ax.len(), 200);
+        assert!(ax.iter().all(|&x| x == 0.5));
+        let cut = t.replacen("0.500,1,0.5\n", "0.500,1,\n", 1);
+        let ax = read(&cut);
+        assert_eq!(ax.len(), 200);
+        assert_eq!(ax.iter().filter(|x| x.is_nan()).count(), 1);
+        // Stretches of empty rows are gaps, not a slower stream.
+        assert_eq!(row_stride((0..100).map(|i| !(40..60).contains(&i))), 1);
+        assert_eq!(row_stride((0..100).map(|i| i % 3 == 0)), 3);
+        assert_eq!(row_stride((0..10).map(|i| i % 2 == 0)), 1);
+    }
+
+    /// Whole-number stamps stepping by 4 read as seconds are doubted aloud; a 1-s clock is not.
+    #[test]
+    fn whole_number_stamps_are_doubted() {
+        let s = infer("time,gx\n1000,1\n1004,2\n1008,1\n1012,2\n").unwrap();
+        assert_eq!(s.tau0_s, 4.0);
+        assert!(s.doubt.unwrap().contains("`time [ms]`"));
+        let s = infer("time,gx\n0,1\n1,2\n2,1\n3,2\n").unwrap();
+        assert_eq!((s.tau0_s, s.doubt), (1.0, None));
+        let s = infer("time_ms,gx\n0,1\n4,2\n8,1\n12,2\n").unwrap();
+        assert_eq!((s.tau0_s, s.doubt), (0.004, None));
+    }
+
+    /// Stamps of a clock with jitter: the step is the nominal one the jitter cannot tell from
+    /// the median, not the median's noisy digits; a rate truly off the round number (0.00251 s)
+    /// beyond three standard errors is kept.
+    #[test]
+    fn a_jittery_clock_gives_its_nominal_step() {
+        let jittered = |step: f64| {
+            let mut t = String::from("Time (s),gx\n");
+            let mut x = 0.0;
+            for k in 0..4000u64 {
+                // A deterministic jitter of +-20 us (a Weyl sequence), no generator needed.
+                let u = ((k as f64 * 0.618_033_988_75) % 1.0) - 0.5;
+                x += step + 4e-5 * u;
+                t.push_str(&format!("{x:.9},1\n"));
+            }
+            t
+        };
+        assert_eq!(infer(&jittered(0.0025)).unwrap().tau0_s, 0.0025);
+        let s = infer(&jittered(0.00251)).unwrap();
+        assert!((s.tau0_s - 0.00251).abs() < 2e-6, "{}", s.tau0_s);
+        assert_ne!(s.tau0_s, 0.0025);
     }
 }

@@ -18,6 +18,7 @@
 //! token that is not a number, or the wrong number of fields) is counted in `bad_rows`, logged
 //! with its line number, and treated as a gap, so nothing already measured is lost.
 
+use std::collections::VecDeque;
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
@@ -87,52 +88,147 @@ pub fn no_samples_problem(invalid: u64) -> String {
 /// How many bad rows are logged one by one before the rest are only counted.
 const BAD_ROWS_LOGGED: u64 = 10;
 
-/// Header names taken as a time column when no `--time-column` is given (case-insensitive).
+/// Header names taken as a time column when no `--time-column` is given (case-insensitive),
+/// before any other name [`time_column_unit`] reads as a time's.
 pub const TIME_COLUMN_NAMES: [&str; 4] = ["time", "t", "timestamp", "time_s"];
 
-/// Seconds per unit of the time units a column name may carry.
-const TIME_UNITS: [(&str, f64); 6] = [
-    ("s", 1.0),
-    ("sec", 1.0),
-    ("ms", 1e-3),
-    ("us", 1e-6),
-    ("\u{b5}s", 1e-6),
-    ("ns", 1e-9),
+/// Words that make a column a time column wherever they stand in its name, split at anything
+/// not a letter or digit: `gps_time`, `field.header.stamp`, `Zeit [s]`, `elapsed (ms)`,
+/// `sample_time_us`. Other languages' word for time are here as spreadsheets there write them.
+const TIME_WORDS: [&str; 16] = [
+    "time",
+    "timestamp",
+    "stamp",
+    "datetime",
+    "date",
+    "datum",
+    "fecha",
+    "utc",
+    "elapsed",
+    "sec",
+    "secs",
+    "seconds",
+    "zeit",
+    "tiempo",
+    "tijd",
+    "czas",
 ];
 
-/// Whether `name` names a time column by itself ([`TIME_COLUMN_NAMES`], any case, with or
-/// without a unit: `timestamp [ns]`, `time (s)`, `t_ns`), and the unit's seconds when it gives
-/// one (`Some(None)`: a time column without a unit; `None`: not a time column's name).
+/// Words that make a name with a time word in it something else: a step between samples
+/// (`delta_time`, `dt`), a filter's time constant, not a clock.
+const NOT_TIME_WORDS: [&str; 6] = ["delta", "dt", "diff", "interval", "period", "constant"];
+
+/// What a time column's brackets may hold besides a unit: the clock's scale (`Timestamp (UTC)`).
+const TIME_SCALES: [&str; 7] = ["utc", "gps", "tai", "local", "unix", "epoch", "iso"];
+
+/// Seconds per unit of the time units a column name may carry.
+const TIME_UNITS: [(&str, f64); 11] = [
+    ("s", 1.0),
+    ("sec", 1.0),
+    ("secs", 1.0),
+    ("seconds", 1.0),
+    ("ms", 1e-3),
+    ("msec", 1e-3),
+    ("us", 1e-6),
+    ("usec", 1e-6),
+    ("\u{b5}s", 1e-6),
+    ("ns", 1e-9),
+    ("nsec", 1e-9),
+];
+
+/// Whether `name` names a time column by itself and the unit's seconds when it gives one
+/// (`Some(None)`: a time column without a unit; `None`: not a time column's name). A time
+/// column's name is one of [`TIME_COLUMN_NAMES`] (any case), or holds one of [`TIME_WORDS`]
+/// and none of [`NOT_TIME_WORDS`]; a unit may follow in brackets (`timestamp [ns]`, `time (s)`,
+/// `Zeit [s]`) or as the last word (`t_ns`, `time_ms`, `sample_time_us`). Brackets that hold
+/// another unit (`time [deg]`) make it no time column.
 pub fn time_column_unit(name: &str) -> Option<Option<f64>> {
-    let n = name
-        .trim()
-        .trim_start_matches(['#', '%'])
-        .trim()
-        .to_ascii_lowercase();
+    time_name(name).map(|(_, unit)| unit)
+}
+
+/// `name` with a `_` where a lower-case letter meets an upper-case one (`GpsTime` ->
+/// `Gps_Time`), so that the words of a camel-case name are words.
+fn camel_words(name: &str) -> String {
+    let mut out = String::with_capacity(name.len() + 4);
+    let mut prev_lower = false;
+    for c in name.chars() {
+        if prev_lower && c.is_uppercase() {
+            out.push('_');
+        }
+        prev_lower = c.is_lowercase() || c.is_ascii_digit();
+        out.push(c);
+    }
+    out
+}
+
+/// Words that make a column a counter of samples or packets (`PacketCounter`,
+/// `field.header.seq`, `frame_count`), not a channel: it steps by one and wraps.
+const COUNTER_WORDS: [&str; 7] = ["counter", "count", "cnt", "seq", "sequence", "index", "idx"];
+
+/// Whether `name` names a counter of samples or packets ([`COUNTER_WORDS`]).
+pub fn counter_column(name: &str) -> bool {
+    let n = camel_words(name.trim().trim_start_matches(['#', '%'])).to_ascii_lowercase();
+    n.split(|c: char| !c.is_alphanumeric())
+        .any(|w| COUNTER_WORDS.contains(&w))
+}
+
+/// [`time_column_unit`], and whether the name is one of [`TIME_COLUMN_NAMES`] (preferred
+/// when several columns are named as time columns: `gps_time,time` reads `time`).
+fn time_name(name: &str) -> Option<(bool, Option<f64>)> {
+    let original = name.trim().trim_start_matches(['#', '%']).trim();
+    // Xsens MT Manager's `SampleTimeFine` counts 100 us.
+    if original.eq_ignore_ascii_case("sampletimefine") {
+        return Some((false, Some(1e-4)));
+    }
+    let n = camel_words(original).to_ascii_lowercase();
     let unit_of = |u: &str| {
         let u = u.trim();
         TIME_UNITS.iter().find(|(x, _)| *x == u).map(|(_, s)| *s)
     };
     // `timestamp [ns]`, `time (s)`: the unit in brackets.
-    if let Some(open) = n.find(['[', '(']) {
-        let (base, rest) = n.split_at(open);
-        let close = if rest.starts_with('[') { ']' } else { ')' };
-        let inner = rest[1..].strip_suffix(close)?;
-        let base = base.trim();
-        return (TIME_COLUMN_NAMES.contains(&base) && base != "time_s")
-            .then(|| unit_of(inner))
-            .flatten()
-            .map(Some);
+    let (base, bracket) = match n.find(['[', '(']) {
+        Some(open) => {
+            let (base, rest) = n.split_at(open);
+            let close = if rest.starts_with('[') { ']' } else { ')' };
+            let inner = rest[1..].strip_suffix(close)?.trim();
+            let unit = match unit_of(inner) {
+                Some(u) => Some(u),
+                None if TIME_SCALES.contains(&inner) => None,
+                None => return None,
+            };
+            (base.trim(), Some(unit))
+        }
+        None => (n.as_str(), None),
+    };
+    if let Some(unit) = bracket {
+        if base == "time_s" {
+            return None;
+        }
+        if TIME_COLUMN_NAMES.contains(&base) {
+            return Some((true, unit));
+        }
+    } else if TIME_COLUMN_NAMES.contains(&base) {
+        return Some((true, (base == "time_s").then_some(1.0)));
     }
-    if TIME_COLUMN_NAMES.contains(&n.as_str()) {
-        return Some((n == "time_s").then_some(1.0));
+    let words: Vec<&str> = base
+        .split(|c: char| !c.is_alphanumeric())
+        .filter(|w| !w.is_empty())
+        .collect();
+    // `t_ns`, `time_ms`, `timestamp_us`, `sample_time_us`: the unit as the last word.
+    let (words, unit) = match (bracket, words.split_last()) {
+        (Some(unit), _) => (&words[..], unit),
+        (None, Some((last, rest))) if !rest.is_empty() && unit_of(last).is_some() => {
+            (rest, unit_of(last))
+        }
+        _ => (&words[..], None),
+    };
+    if words == ["t"] && unit.is_some() {
+        return Some((true, unit));
     }
-    // `t_ns`, `time_ms`, `timestamp_us`.
-    let (base, unit) = n.rsplit_once('_')?;
-    (["t", "time", "timestamp"].contains(&base))
-        .then(|| unit_of(unit))
-        .flatten()
-        .map(Some)
+    let timeish = words.iter().any(|w| TIME_WORDS.contains(w))
+        && !words.iter().any(|w| NOT_TIME_WORDS.contains(w));
+    let plain = words.len() == 1 && TIME_COLUMN_NAMES.contains(&words[0]);
+    timeish.then_some((plain, unit))
 }
 
 /// One `--columns` item: the input column `source`, called `name` in the analysis
@@ -172,6 +268,11 @@ pub struct TextOptions {
     /// number in any other column is no reason to lose the row (it is read as a gap of a column
     /// nobody looks at). `None`: every column is a channel the run may analyse.
     pub channels: Option<Vec<String>>,
+    /// The channels the run analyses hold values on every k-th row only (k >= 2: a file that
+    /// merges a slower stream with faster ones, [`super::sampling_step`] finds it): a row where
+    /// they are all empty is no sample, and the time column spaces the others (a missing one is
+    /// a gap, as ever). Without a time column it does nothing.
+    pub sparse_rows: bool,
 }
 
 /// Which input columns are read, and under which names.
@@ -236,23 +337,46 @@ impl Layout {
                 )));
             }
         }
-        let find = |n: &str| source_names.iter().position(|m| m == n);
+        // A name as the header writes it, or without its unit when that is unambiguous
+        // (`--columns gx` for `gx [deg/s]`).
+        let find = |n: &str| {
+            source_names.iter().position(|m| m == n).or_else(|| {
+                let mut by_base = source_names
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, m)| base_name(m) == n);
+                match (by_base.next(), by_base.next()) {
+                    (Some((i, _)), None) => Some(i),
+                    _ => None,
+                }
+            })
+        };
         let time = match &opts.time_column {
-            Some(t) if !header => {
-                return Err(err(format!(
-                    "--time-column `{t}`: the input has no header row"
-                )))
-            }
             Some(t) => Some(find(t).ok_or_else(|| {
                 err(format!(
                     "--time-column `{t}`: no such column (the header has {})",
                     source_names.join(", ")
                 ))
             })?),
+            // A column named `time` before one whose name only holds a time word.
             None if header => source_names
                 .iter()
-                .position(|n| time_column_unit(n).is_some()),
+                .position(|n| time_name(n).is_some_and(|(plain, _)| plain))
+                .or_else(|| source_names.iter().position(|n| time_name(n).is_some())),
             None => None,
+        };
+        // Every other column named as a time column (ROS's `field.header.stamp` beside `%time`)
+        // is a clock too, not a channel, unless the run names it.
+        let named = |n: &str| {
+            opts.channels
+                .as_ref()
+                .is_some_and(|c| c.iter().any(|x| x == n))
+        };
+        let other_clock = |i: usize| {
+            Some(i) != time
+                && ((time.is_some() && time_name(&source_names[i]).is_some())
+                    || counter_column(&source_names[i]))
+                && !named(&source_names[i])
         };
         let (keep, names) = match &opts.columns {
             Some(picks) => {
@@ -277,10 +401,28 @@ impl Layout {
                 }
                 (keep, names)
             }
-            None => (0..source_names.len())
-                .filter(|&i| Some(i) != time && !(trailing_empty && i == last))
-                .map(|i| (i, source_names[i].clone()))
-                .unzip(),
+            None => {
+                for i in (0..source_names.len()).filter(|&i| other_clock(i)) {
+                    let what = if counter_column(&source_names[i]) {
+                        "a counter"
+                    } else {
+                        "a second time column"
+                    };
+                    tracing::info!(
+                        "{}: column {} `{}` is {what}: not a channel (name it in --channels to \
+                         analyse it)",
+                        path.display(),
+                        i + 1,
+                        source_names[i]
+                    );
+                }
+                (0..source_names.len())
+                    .filter(|&i| {
+                        Some(i) != time && !(trailing_empty && i == last) && !other_clock(i)
+                    })
+                    .map(|i| (i, source_names[i].clone()))
+                    .unzip()
+            }
         };
         if keep.is_empty() {
             return Err(err("no data column (only a time column)".into()));
@@ -300,14 +442,66 @@ impl Layout {
         })
     }
 
+    /// The layout with a row of units under the header read (`units`, one per input column):
+    /// each column's name takes its unit in brackets (`gx` -> `gx [deg/s]`, where the header
+    /// gave none), so that it is read as a unit in the header is, and a column in seconds named
+    /// as a time column is the time column; the channels keep the names the header gives.
+    fn with_units(
+        self,
+        units: &[String],
+        opts: &TextOptions,
+        path: &Path,
+        line: u64,
+    ) -> Result<Layout, UsageError> {
+        let bare = self.source_names.clone();
+        let named: Vec<String> = bare
+            .iter()
+            .zip(units)
+            .map(|(n, u)| {
+                if u.is_empty() || base_name(n) != n.trim() {
+                    n.clone()
+                } else {
+                    format!("{n} [{u}]")
+                }
+            })
+            .collect();
+        let mut l = Layout::new(named, true, self.sep, opts, path, line)?;
+        if opts.columns.is_none() {
+            l.names = l.keep.iter().map(|&i| bare[i].clone()).collect();
+            l.strict = l
+                .names
+                .iter()
+                .map(|n| opts.channels.as_ref().is_none_or(|c| c.contains(n)))
+                .collect();
+        }
+        Ok(l)
+    }
+
+    /// Whether a column the run analyses holds in the first data row `t` a cell that is not a
+    /// number (nor empty or a missing-value marker): a label column, or a channel whose first
+    /// sample is flagged, told apart by the rows after it ([`Layout::without_label_columns`]).
+    fn has_text_cells(&self, t: &str) -> bool {
+        let fields = self.split(t);
+        fields.len() == self.width_in
+            && self
+                .keep
+                .iter()
+                .zip(&self.strict)
+                .any(|(&i, &strict)| strict && parse_field(fields[i]).is_err())
+    }
+
     /// The layout without the columns whose cell in the first data row `t` is text, not a
-    /// number: a ROS `rostopic echo -p` export's `field.header.frame_id` (`imu_link`), a
+    /// number, and which hold no number in the rows read ahead (`ahead`, the next lines of the
+    /// input): a ROS `rostopic echo -p` export's `field.header.frame_id` (`imu_link`), a
     /// logger's status word. Such a column holds labels, not samples; it is left out, said in
     /// the log, unless the run named it (`--columns`, or `--channels`), which is an error as
-    /// before. Columns `--channels` leaves out are kept: their cells are never needed.
+    /// before. A column with numbers ahead is a channel whose first cell is flagged (`ERR`: a
+    /// gap of it) or damaged (a bad row). Columns `--channels` leaves out are kept: their cells
+    /// are never needed.
     fn without_label_columns(
         mut self,
         t: &str,
+        ahead: &[String],
         opts: &TextOptions,
         path: &Path,
         line: u64,
@@ -318,6 +512,14 @@ impl Layout {
             let i = self.keep[k];
             let cell = fields[i].trim();
             if !self.strict[k] || parse_field(cell).is_ok() {
+                k += 1;
+                continue;
+            }
+            let numbers_ahead = ahead.iter().any(|row| {
+                let f = self.split(row.trim());
+                f.len() == self.width_in && parse_field(f[i]).is_ok_and(|v| !v.is_nan())
+            });
+            if numbers_ahead {
                 k += 1;
                 continue;
             }
@@ -380,7 +582,14 @@ impl Layout {
                     // A column the run does not analyse: what is not a number is a gap.
                     return Ok(v.unwrap_or(f64::NAN));
                 }
-                v.map_err(|()| {
+                v.or_else(|()| {
+                    if word_cell(fields[i]) {
+                        Ok(f64::from_bits(WORD_CELL_BITS))
+                    } else {
+                        Err(())
+                    }
+                })
+                .map_err(|()| {
                     format!(
                         "column {} `{}`: `{}` is not a number",
                         i + 1,
@@ -392,7 +601,7 @@ impl Layout {
             .collect::<Result<Vec<f64>, String>>()?;
         let time = self
             .time
-            .and_then(|i| parse_field(fields[i]).ok())
+            .and_then(|i| parse_field(fields[i]).ok().or_else(|| date_time(fields[i])))
             .unwrap_or(f64::NAN);
         Ok((values, time))
     }
@@ -411,6 +620,50 @@ impl Layout {
     }
 }
 
+/// Lines read past the first data row when a column holds text there, to see whether it
+/// holds numbers later (a flagged first sample) or never (a label).
+const AHEAD_LINES: usize = 256;
+
+/// The next `n` lines of `src` as [`TextReader::ahead`] holds them.
+fn read_ahead<R: BufRead>(
+    src: &mut R,
+    n: usize,
+) -> std::io::Result<VecDeque<(Vec<u8>, usize, bool)>> {
+    let mut ahead = VecDeque::new();
+    while ahead.len() < n {
+        let mut buf = Vec::new();
+        let (got, long) = read_line_bounded(src, &mut buf, MAX_LINE_BYTES)?;
+        if got == 0 {
+            break;
+        }
+        ahead.push_back((buf, got, long));
+    }
+    Ok(ahead)
+}
+
+/// The data lines among lines read ahead (comments and empty lines left out).
+fn ahead_text(ahead: &VecDeque<(Vec<u8>, usize, bool)>) -> Vec<String> {
+    ahead
+        .iter()
+        .map(|(b, _, _)| String::from_utf8_lossy(b).trim().to_string())
+        .filter(|t| !t.is_empty() && !t.starts_with('#') && !t.starts_with("//"))
+        .collect()
+}
+
+/// A column's name without the unit in brackets at its end (`gx [deg/s]` -> `gx`).
+fn base_name(n: &str) -> &str {
+    let n = n.trim();
+    let open = match n.chars().last() {
+        Some(']') => n.rfind('['),
+        Some(')') => n.rfind('('),
+        _ => None,
+    };
+    match open {
+        Some(o) if !n[..o].trim().is_empty() => n[..o].trim(),
+        _ => n,
+    }
+}
+
 /// A row as read: its values or what is wrong with it, and its time stamp (NaN if none).
 type Row = (Result<Vec<f64>, String>, f64);
 
@@ -423,6 +676,17 @@ pub struct TextReader<R> {
     /// The next row to hand out: the first data row, read while looking for a header, or the
     /// row after a jump of the time column, held while the gap steps before it go out.
     pending: Option<Row>,
+    /// [`TextOptions::sparse_rows`].
+    sparse: bool,
+    /// The header's fields (and a units row's): a line that repeats one later is skipped (logs
+    /// joined into one file), counted.
+    header_rows: Vec<Vec<String>>,
+    header_repeats: u64,
+    /// Lines read ahead of the first data row to tell label columns from channels: each line's
+    /// bytes (at most [`MAX_LINE_BYTES`]), the bytes it took in the input, whether it was longer.
+    ahead: VecDeque<(Vec<u8>, usize, bool)>,
+    /// Cells of channels that held a word, not a number (`ERR`), read as gaps.
+    words: u64,
     /// The time column used to find gaps, and the gap steps still to hand out.
     time: Option<TimeColumn>,
     gap_left: u64,
@@ -456,6 +720,9 @@ pub struct TextPosition {
     /// Values infinite or beyond [`super::MAX_ABS_VALUE`], read as gaps.
     #[serde(default)]
     pub invalid_values: u64,
+    /// Cells that held a word, not a number (`ERR`), read as gaps.
+    #[serde(default)]
+    pub words: u64,
     /// The time column's clock, when it is used to find gaps.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub time: Option<TimeState>,
@@ -491,7 +758,151 @@ fn parse_field(t: &str) -> Result<f64, ()> {
     }
     t.parse::<f64>()
         .or_else(|e| decimal_comma(t).ok_or(e))
+        .or_else(|e| fortran_exponent(t).ok_or(e))
         .map_err(|_| ())
+}
+
+/// `1.5D-03` read as `1.5e-03`: Fortran's double-precision exponent, as Fortran programs and
+/// some MathCad and instrument exports write it. Only a `D` (or `d`) after a digit or point and
+/// before a digit or sign is taken, once.
+fn fortran_exponent(t: &str) -> Option<f64> {
+    let at = t.find(['D', 'd'])?;
+    let before = t[..at].bytes().last()?;
+    let after = *t.as_bytes().get(at + 1)?;
+    let fits = (before.is_ascii_digit() || before == b'.')
+        && (after.is_ascii_digit() || after == b'-' || after == b'+')
+        && !t[at + 1..].contains(['D', 'd', 'e', 'E']);
+    fits.then(|| format!("{}e{}", &t[..at], &t[at + 1..]).parse().ok())
+        .flatten()
+}
+
+/// A time stamp written as a date and time, in seconds since 1970-01-01 00:00 UTC: ISO 8601
+/// (`2026-12-03T01:02:03.456Z`, `2026-12-03 01:02:03.456+01:00`), with slashes
+/// (`2026/12/03 01:02:03`), or day first with points (`03.12.2026 01:02:03,456`); without a
+/// zone the clock's own time, read as UTC (only steps matter). A time of day alone
+/// (`01:02:03.456`) is seconds since its midnight. `None` for anything else.
+fn date_time(t: &str) -> Option<f64> {
+    let t = t.trim().trim_matches('"').trim();
+    let (date, time) = match t.split_once(['T', ' ']) {
+        Some((d, rest)) => (Some(d), rest.trim()),
+        None => (None, t),
+    };
+    let days = match date {
+        Some(d) => {
+            let parts: Vec<&str> = d.split(['-', '/', '.']).collect();
+            let [a, b, c] = parts[..] else { return None };
+            let num = |x: &str| {
+                (!x.is_empty() && x.bytes().all(|b| b.is_ascii_digit()))
+                    .then(|| x.parse::<i64>().ok())
+                    .flatten()
+            };
+            let (y, m, dd) = if a.len() == 4 {
+                (num(a)?, num(b)?, num(c)?)
+            } else if c.len() == 4 && d.contains('.') {
+                (num(c)?, num(b)?, num(a)?)
+            } else {
+                return None;
+            };
+            if !(1..=12).contains(&m) || !(1..=31).contains(&dd) {
+                return None;
+            }
+            days_since_1970(y, m, dd)
+        }
+        None => 0,
+    };
+    // The zone: `Z`, `+01:00`, `-0500` after the seconds.
+    let (clock, offset_s) = match time.find(['Z', 'z', '+']).or_else(|| {
+        // A `-` after the seconds (not in a date: the date is split off).
+        time.rfind('-')
+    }) {
+        Some(at) => {
+            let zone = &time[at..];
+            let off = if zone.eq_ignore_ascii_case("z") {
+                0.0
+            } else {
+                let sign = if zone.starts_with('-') { -1.0 } else { 1.0 };
+                let digits: String = zone[1..].chars().filter(|c| *c != ':').collect();
+                if digits.len() != 4 && digits.len() != 2 {
+                    return None;
+                }
+                let h: f64 = digits[..2].parse().ok()?;
+                let mm: f64 = if digits.len() == 4 {
+                    digits[2..].parse().ok()?
+                } else {
+                    0.0
+                };
+                sign * (h * 3600.0 + mm * 60.0)
+            };
+            (&time[..at], off)
+        }
+        None => (time, 0.0),
+    };
+    let parts: Vec<&str> = clock.split(':').collect();
+    let [h, m, sec] = parts[..] else { return None };
+    let int = |x: &str, max: i64| {
+        (!x.is_empty() && x.len() <= 2 && x.bytes().all(|b| b.is_ascii_digit()))
+            .then(|| x.parse::<i64>().ok())
+            .flatten()
+            .filter(|v| *v <= max)
+    };
+    let (h, m) = (int(h, 24)?, int(m, 59)?);
+    let sec = sec.replacen(',', ".", 1);
+    let digits_and_point = sec.bytes().next().is_some_and(|b| b.is_ascii_digit())
+        && sec.bytes().all(|b| b.is_ascii_digit() || b == b'.');
+    if !digits_and_point {
+        return None;
+    }
+    let sec: f64 = sec.parse().ok().filter(|s: &f64| *s < 61.0)?;
+    Some(days as f64 * 86_400.0 + (h * 3600 + m * 60) as f64 + sec - offset_s)
+}
+
+/// Days from 1970-01-01 to the proleptic Gregorian date `y-m-d`: the days of the years before
+/// (365 each and a leap day every 4th year but centuries not divisible by 400), counted from
+/// March so that the leap day falls last, as Hinnant's `days_from_civil` reasons.
+fn days_since_1970(y: i64, m: i64, d: i64) -> i64 {
+    // Years begin in March: January and February belong to the year before.
+    let y = if m <= 2 { y - 1 } else { y };
+    let era = y.div_euclid(400);
+    let year_of_era = y - era * 400;
+    // Days from March 1 to the first of month m (153 days per five months from March).
+    let month_from_march = (m + 9) % 12;
+    let day_of_year = (153 * month_from_march + 2) / 5 + d - 1;
+    let day_of_era = year_of_era * 365 + year_of_era / 4 - year_of_era / 100 + day_of_year;
+    // 719468: days from 0000-03-01 to 1970-01-01.
+    era * 146_097 + day_of_era - 719_468
+}
+
+/// The NaN a word in a data column is read as (`ERR`, `OVF`, `#N/A`, `Error`: a logger's flag
+/// where the sample is not valid): a gap of that channel only, told from an empty cell by its
+/// bits so that [`TextReader`] counts and logs it, then an ordinary NaN.
+const WORD_CELL_BITS: u64 = 0x7ff8_0000_0000_5707;
+
+/// Whether a cell that is not a number is a word, not a damaged number: letters and no digit
+/// (`ERR`, `#VALUE!`, `Sensor fault`). `12a` or `0.1.2` is damage: its row is a bad row.
+fn word_cell(t: &str) -> bool {
+    let t = t.trim().trim_matches('"');
+    t.chars().any(char::is_alphabetic) && !t.chars().any(|c| c.is_ascii_digit())
+}
+
+/// Whether a row's fields are a row of units under the header (`s;deg/s;g`, as spreadsheets and
+/// some loggers write them): no number among them, and at least half of the cells that are not
+/// empty a unit of time, of an inertial quantity or of temperature.
+fn units_row(fields: &[&str]) -> bool {
+    let cells: Vec<&str> = fields
+        .iter()
+        .map(|f| f.trim().trim_matches('"').trim())
+        .filter(|f| !f.is_empty())
+        .collect();
+    let known = |u: &str| {
+        TIME_UNITS.iter().any(|(x, _)| x.eq_ignore_ascii_case(u))
+            || matches!(
+                super::header_unit::header_unit(&format!("x [{u}]")),
+                Some(Ok(_))
+            )
+            || super::temperature_column::temperature_column(&format!("temp [{u}]")).is_some()
+    };
+    let units = cells.iter().filter(|c| known(c)).count();
+    !cells.is_empty() && cells.iter().all(|c| parse_field(c).is_err()) && 2 * units >= cells.len()
 }
 
 /// `0,25` or `-1,5e-3` read as `0.25`, `-1.5e-3`: a decimal comma, as spreadsheets in many
@@ -589,6 +1000,12 @@ impl<R: BufRead> TextReader<R> {
         // The last `#` line before the first data row (a commented header, see the module doc).
         let mut hash_line: Option<String> = None;
         let mut latin1_logged = false;
+        // A row of units under the header was read (only the first row after it may be one).
+        let mut units_read = false;
+        // The header's (and units row's) fields: found again later, files joined into one.
+        let mut header_rows: Vec<Vec<String>> = Vec::new();
+        // Lines read past the first data row to tell label columns (handed out as rows later).
+        let mut ahead = VecDeque::new();
         loop {
             let (n, long) = read_line_bounded(&mut src, &mut raw, MAX_LINE_BYTES)
                 .map_err(|e| input_error(path, line_no + 1, e.to_string()))?;
@@ -654,19 +1071,42 @@ impl<R: BufRead> TextReader<R> {
                 }
                 continue;
             }
+            // `// Update Rate: 100.0Hz`: an exporter's notes (Xsens MT Manager), comments too.
+            if t.starts_with("//") {
+                continue;
+            }
             let (values, layout) = match layout.take() {
-                Some(l) => match l.parse(t) {
-                    Ok((v, time)) => ((Ok(v), time), l),
-                    // A row of the wrong width is a bad row, as later ones are.
-                    Err(problem) if l.split(t).len() != l.width_in => ((Err(problem), f64::NAN), l),
-                    Err(_) => {
-                        let l = l.without_label_columns(t, opts, path, line_no)?;
-                        let (v, time) = l.parse(t).map_err(|p| {
-                            input_error(path, line_no, format!("the first data row: {p}"))
-                        })?;
-                        ((Ok(v), time), l)
+                Some(l) => {
+                    let fields = l.split(t);
+                    if !units_read && fields.len() == l.width_in && units_row(&fields) {
+                        // `s;deg/s;g` under `time;gx;ax`: each column's unit, as if in brackets.
+                        units_read = true;
+                        let units: Vec<String> = fields
+                            .iter()
+                            .map(|f| f.trim().trim_matches('"').trim().to_string())
+                            .collect();
+                        header_rows.push(units.clone());
+                        tracing::info!(
+                            "{}: line {line_no}: a row of units under the header ({})",
+                            path.display(),
+                            units.join(", ")
+                        );
+                        layout = Some(l.with_units(&units, opts, path, line_no)?);
+                        continue;
                     }
-                },
+                    let l = if l.has_text_cells(t) {
+                        ahead = read_ahead(&mut src, AHEAD_LINES)
+                            .map_err(|e| input_error(path, line_no + 1, e.to_string()))?;
+                        l.without_label_columns(t, &ahead_text(&ahead), opts, path, line_no)?
+                    } else {
+                        l
+                    };
+                    // A row of the wrong width, or a damaged number, is a bad row, as later.
+                    match l.parse(t) {
+                        Ok((v, time)) => ((Ok(v), time), l),
+                        Err(problem) => ((Err(problem), f64::NAN), l),
+                    }
+                }
                 None => {
                     let sep = Sep::of(t);
                     let fields = sep.split(t);
@@ -674,7 +1114,10 @@ impl<R: BufRead> TextReader<R> {
                     // `ros2 topic echo --csv` writes no header, and a `frame_id` among numbers.
                     let numbers = fields
                         .iter()
-                        .filter(|f| !f.trim().is_empty() && parse_field(f).is_ok())
+                        .filter(|f| {
+                            !f.trim().is_empty()
+                                && (parse_field(f).is_ok() || date_time(f).is_some())
+                        })
                         .count();
                     // (Unless a text cell names a time column: `time,0,1,2` is pandas' header
                     // of integer-labelled columns.)
@@ -693,16 +1136,27 @@ impl<R: BufRead> TextReader<R> {
                             (1..=fields.len()).map(|i| format!("c{i}")).collect()
                         });
                         let mut l = Layout::new(names, header, sep, opts, path, line_no)?;
-                        if l.parse(t).is_err() {
-                            l = l.without_label_columns(t, opts, path, line_no)?;
+                        if l.has_text_cells(t) {
+                            ahead = read_ahead(&mut src, AHEAD_LINES)
+                                .map_err(|e| input_error(path, line_no + 1, e.to_string()))?;
+                            l = l.without_label_columns(
+                                t,
+                                &ahead_text(&ahead),
+                                opts,
+                                path,
+                                line_no,
+                            )?;
                         }
-                        let (v, time) = l.parse(t).map_err(|p| input_error(path, line_no, p))?;
-                        ((Ok(v), time), l)
+                        match l.parse(t) {
+                            Ok((v, time)) => ((Ok(v), time), l),
+                            Err(problem) => ((Err(problem), f64::NAN), l),
+                        }
                     } else {
-                        let names = fields
+                        let names: Vec<String> = fields
                             .iter()
                             .map(|f| f.trim().trim_matches('"').trim().to_string())
                             .collect();
+                        header_rows.push(names.clone());
                         layout = Some(Layout::new(names, true, sep, opts, path, line_no)?);
                         continue;
                     }
@@ -723,6 +1177,11 @@ impl<R: BufRead> TextReader<R> {
                 names: layout.names.clone(),
                 layout,
                 pending: Some(values),
+                header_rows,
+                header_repeats: 0,
+                sparse: opts.sparse_rows,
+                ahead,
+                words: 0,
                 time,
                 gap_left: 0,
                 time_reported: false,
@@ -751,6 +1210,11 @@ impl<R: BufRead> TextReader<R> {
             names: self.names,
             layout: self.layout,
             pending: None,
+            header_rows: self.header_rows,
+            header_repeats: 0,
+            sparse: self.sparse,
+            ahead: VecDeque::new(),
+            words: pos.words,
             time,
             gap_left: 0,
             time_reported: false,
@@ -774,6 +1238,7 @@ impl<R: BufRead> TextReader<R> {
             bad_rows: self.bad_rows,
             samples: self.samples,
             invalid_values: self.invalid_values,
+            words: self.words,
             time: self.time.as_ref().map(TimeColumn::state),
         }
     }
@@ -790,20 +1255,80 @@ impl<R: BufRead> TextReader<R> {
             .map(|i| self.layout.source_names[i].as_str())
     }
 
-    /// The time stamps of the next `max_rows` rows (NaN where a row has none), consuming them:
-    /// for a look at the start of an input (`super::sampling_step`), not for a run.
-    pub fn take_stamps(&mut self, max_rows: usize) -> std::io::Result<Vec<f64>> {
-        let mut stamps = Vec::new();
-        if let Some((_, t)) = self.pending.take() {
-            stamps.push(t);
+    /// The time stamps of the next `max_rows` rows (NaN where a row has none), and for each
+    /// row which channels the run analyses hold a value there (in the order of
+    /// [`TextReader::names`]; a bad row holds none), consuming them: for a look at the start of
+    /// an input (`super::sampling_step`), not for a run.
+    pub fn take_stamps(&mut self, max_rows: usize) -> std::io::Result<Vec<(f64, Vec<bool>)>> {
+        let present = |row: &Result<Vec<f64>, String>, strict: &[bool]| match row {
+            Ok(v) => v
+                .iter()
+                .zip(strict)
+                .map(|(x, &s)| s && !x.is_nan())
+                .collect(),
+            Err(_) => vec![false; strict.len()],
+        };
+        let mut rows = Vec::new();
+        if let Some((row, t)) = self.pending.take() {
+            rows.push((t, present(&row, &self.layout.strict)));
         }
-        while stamps.len() < max_rows {
+        while rows.len() < max_rows {
             match self.next_row()? {
-                Some((_, t)) => stamps.push(t),
+                Some((row, t)) => rows.push((t, present(&row, &self.layout.strict))),
                 None => break,
             }
         }
-        Ok(stamps)
+        Ok(rows)
+    }
+
+    /// Whether the line `t` is the header (or the row of units under it) again.
+    fn repeats_header(&self, t: &str) -> bool {
+        let t = t.trim_start_matches('\u{feff}');
+        if self.header_rows.is_empty() || t.starts_with(|c: char| c.is_ascii_digit()) {
+            return false;
+        }
+        let fields = self.layout.split(t);
+        self.header_rows.iter().any(|h| {
+            h.len() == fields.len()
+                && h.iter()
+                    .zip(&fields)
+                    .all(|(a, b)| a == b.trim().trim_matches('"').trim())
+        })
+    }
+
+    /// Whether the row `p` is no sample of this run: rows where every channel it analyses is
+    /// empty, in a file whose channels hold values on every k-th row only
+    /// ([`TextOptions::sparse_rows`]); the time column spaces the rows kept.
+    fn not_a_sample(&self, p: &Row) -> bool {
+        let Ok(v) = &p.0 else { return false };
+        self.sparse
+            && self.time.is_some()
+            && p.1.is_finite()
+            && v.iter()
+                .zip(&self.layout.strict)
+                .all(|(x, &s)| !s || (x.is_nan() && x.to_bits() != WORD_CELL_BITS))
+    }
+
+    /// Each channel's temperature scale where it holds the unit's temperature
+    /// ([`super::temperature_column`]): read off its name in the input (`board_temp (K)`, or
+    /// `Temp [K]` with a row of units) or the name the run gives it (`--columns
+    /// "c9=temp [degF]"`), the one that names a unit first; `None` for the other channels.
+    pub fn temperatures(&self) -> Vec<Option<super::temperature_column::TemperatureScale>> {
+        use super::temperature_column::temperature_column;
+        self.layout
+            .keep
+            .iter()
+            .zip(&self.names)
+            .map(|(&i, name)| {
+                let source = temperature_column(&self.layout.source_names[i]);
+                let given = temperature_column(name);
+                match (source, given) {
+                    (Some(s), _) if s.named => Some(s),
+                    (_, Some(g)) if g.named => Some(g),
+                    (s, g) => g.or(s),
+                }
+            })
+            .collect()
     }
 
     /// Channel names, from the header row or `c1..cn`.
@@ -861,6 +1386,9 @@ impl<R: BufRead> TextReader<R> {
                     let Some(p) = self.next_row()? else {
                         break;
                     };
+                    if self.not_a_sample(&p) {
+                        continue;
+                    }
                     if self.is_repeat(&p) {
                         // The same stamp and values as the row before: a record written twice
                         // (a logger or a driver's repeat), not a sample. Taken as one, it
@@ -899,6 +1427,14 @@ impl<R: BufRead> TextReader<R> {
         }
         if n == 0 && !self.time_reported {
             self.time_reported = true;
+            if self.words > BAD_ROWS_LOGGED {
+                tracing::warn!(
+                    "{}: {} cells held a word, not a number (the first {BAD_ROWS_LOGGED} logged \
+                     above): gaps of their channels",
+                    self.path.display(),
+                    self.words
+                );
+            }
             if let Some(c) = &self.time {
                 c.report(&self.path);
             }
@@ -925,7 +1461,13 @@ impl<R: BufRead> TextReader<R> {
     fn next_row(&mut self) -> std::io::Result<Option<Row>> {
         let width = self.names.len();
         loop {
-            let (got, long) = read_line_bounded(&mut self.src, &mut self.line, MAX_LINE_BYTES)?;
+            let (got, long) = match self.ahead.pop_front() {
+                Some((bytes, got, long)) => {
+                    self.line = bytes;
+                    (got, long)
+                }
+                None => read_line_bounded(&mut self.src, &mut self.line, MAX_LINE_BYTES)?,
+            };
             if got == 0 {
                 return Ok(None);
             }
@@ -941,7 +1483,19 @@ impl<R: BufRead> TextReader<R> {
                 return Ok(Some((Err("not UTF-8 text".to_string()), f64::NAN)));
             };
             let t = text.trim();
-            if t.starts_with('#') {
+            if t.starts_with('#') || t.starts_with("//") {
+                continue;
+            }
+            if self.repeats_header(t) {
+                self.header_repeats += 1;
+                if self.header_repeats == 1 {
+                    tracing::warn!(
+                        "{}: line {}: the header again (files joined into one?): skipped, not a \
+                         row",
+                        self.path.display(),
+                        self.line_no
+                    );
+                }
                 continue;
             }
             return Ok(Some(if t.is_empty() {
@@ -963,8 +1517,27 @@ impl<R: BufRead> TextReader<R> {
                 let start = out.len();
                 out.extend_from_slice(&v);
                 // Only the columns the run analyses are counted (`--channels`).
-                for (x, &counted) in out[start..].iter_mut().zip(&self.layout.strict) {
-                    if super::plausible(*x).is_none() {
+                for (k, (x, &counted)) in
+                    out[start..].iter_mut().zip(&self.layout.strict).enumerate()
+                {
+                    if x.to_bits() == WORD_CELL_BITS {
+                        *x = f64::NAN;
+                        self.words += 1;
+                        if self.words <= BAD_ROWS_LOGGED {
+                            let i = self.layout.keep[k];
+                            let text = String::from_utf8_lossy(&self.line);
+                            let fields = self.layout.split(text.trim());
+                            let cell = fields.get(i).map_or("", |f| f.trim());
+                            tracing::warn!(
+                                "{}: line {}: column {} `{}` holds `{cell}`, not a number: a gap \
+                                 of that channel",
+                                self.path.display(),
+                                self.line_no,
+                                i + 1,
+                                self.layout.source_names[i]
+                            );
+                        }
+                    } else if super::plausible(*x).is_none() {
                         *x = f64::NAN;
                         self.invalid_values += u64::from(counted);
                     } else if !x.is_nan() {
@@ -1000,11 +1573,14 @@ mod tests {
 
     #[test]
     fn header_separators_gaps_and_bad_rows() {
-        let (names, v, bad) = read_all("# c\ngx, gy\n1,2\n\n3,nan\n4 5\nx,6\n7,\n");
+        let (names, v, bad) = read_all("# c\ngx, gy\n1,2\n\n3,nan\n4 5\nx,6\n2.5.1,8\n7,\n");
         assert_eq!(names, ["gx", "gy"]);
-        // rows: (1,2) (gap) (3,-) (4,5: spaces also separate) (bad: x) (7,-)
+        // rows: (1,2) (gap) (3,-) (4,5: spaces also separate) (-,6: the word `x` a gap of gx)
+        // (bad: `2.5.1` a damaged number) (7,-)
         let nan = f64::NAN;
-        let expected = [1.0, 2.0, nan, nan, 3.0, nan, 4.0, 5.0, nan, nan, 7.0, nan];
+        let expected = [
+            1.0, 2.0, nan, nan, 3.0, nan, 4.0, 5.0, nan, 6.0, nan, nan, 7.0, nan,
+        ];
         assert_eq!(v.len(), expected.len());
         for (a, b) in v.iter().zip(expected) {
             assert!(a == &b || (a.is_nan() && b.is_nan()), "{v:?}");
@@ -1042,23 +1618,36 @@ mod tests {
             while r.read_rows(&mut out, 8).unwrap() > 0 {}
             Ok::<_, UsageError>((r.names().to_vec(), out, r.bad_rows(), r.invalid_values))
         };
-        // Every column: the label column is no channel, the `ERR` row is a bad row (a gap of
-        // every channel), the stamps beyond 1e15 are counted invalid; `%time` is the time.
+        // Every column: the label column is no channel, nor `field.header.stamp` (a second
+        // time column; `%time` is the time); `ERR` is a gap of its channel alone, counted.
         let (names, v, bad, invalid) = read(&TextOptions::default()).unwrap();
-        assert_eq!(names, ["field.header.stamp", "field.w.x", "field.w.y"]);
-        assert_eq!((v.len(), bad, invalid), (9, 1, 2));
-        assert_eq!((v[1], v[2], v[7], v[8]), (0.5, 1.5, 0.25, 3.5));
-        assert!(v[3..6].iter().all(|x| x.is_nan()));
-        // `--channels field.w.y`: the row with `ERR` in field.w.x is read, nothing counted.
+        assert_eq!(names, ["field.w.x", "field.w.y"]);
+        assert_eq!((v.len(), bad, invalid), (6, 0, 0));
+        assert_eq!((v[0], v[1], v[3], v[4], v[5]), (0.5, 1.5, 2.5, 0.25, 3.5));
+        assert!(v[2].is_nan());
+        let mut r = TextReader::new(text.as_bytes(), Path::new("r.csv")).unwrap();
+        while r.read_rows(&mut Vec::new(), 8).unwrap() > 0 {}
+        assert_eq!(r.position().words, 1);
+        // `--channels field.w.y`: nothing counted; the columns the run leaves out stay in the
+        // rows (read as gaps where not numbers).
         let opts = TextOptions {
             channels: Some(vec!["field.w.y".into()]),
             ..TextOptions::default()
         };
-        let (_, v, bad, invalid) = read(&opts).unwrap();
+        let (names, v, bad, invalid) = read(&opts).unwrap();
+        assert_eq!(names, ["field.header.frame_id", "field.w.x", "field.w.y"]);
         assert_eq!((bad, invalid), (0, 0));
-        // The columns the run leaves out stay in the rows (read as gaps where not numbers).
-        let y: Vec<f64> = v.chunks(4).map(|r| r[3]).collect();
+        let y: Vec<f64> = v.chunks(3).map(|r| r[2]).collect();
         assert_eq!(y, [1.5, 2.5, 3.5]);
+        // Named in --channels, the second time column is read (its huge stamps counted
+        // invalid, gaps).
+        let opts = TextOptions {
+            channels: Some(vec!["field.header.stamp".into()]),
+            ..TextOptions::default()
+        };
+        let (names, _, _, invalid) = read(&opts).unwrap();
+        assert_eq!(names[0], "field.header.stamp");
+        assert_eq!(invalid, 3);
         // Named, the label column is an error saying what it holds.
         for opts in [
             TextOptions {
@@ -1126,5 +1715,210 @@ mod tests {
     #[test]
     fn empty_input_is_a_usage_error() {
         assert!(TextReader::new("# only a comment\n".as_bytes(), Path::new("e.csv")).is_err());
+    }
+
+    /// Numbers as Fortran writes them, and stamps as dates and times, against values worked
+    /// out by hand (Python's `datetime(...).timestamp()` agrees).
+    #[test]
+    fn fortran_exponents_and_dates_and_times() {
+        assert_eq!(parse_field("1.5D-03"), Ok(1.5e-3));
+        assert_eq!(parse_field("-2.25d+02"), Ok(-225.0));
+        assert!(parse_field("D-03").is_err());
+        assert!(parse_field("1.5D-03D").is_err());
+        for (text, secs) in [
+            ("2026-12-03T01:02:03.5Z", 1_796_259_723.5),
+            ("2026-12-03 01:02:03.500", 1_796_259_723.5),
+            ("2026/12/03 01:02:03.5", 1_796_259_723.5),
+            ("03.12.2026 01:02:03,5", 1_796_259_723.5),
+            ("2000-02-29T23:59:59", 951_868_799.0),
+            ("1969-12-31T00:00:00Z", -86_400.0),
+            ("2024-03-01T12:00:00+01:00", 1_709_290_800.0),
+            ("2024-03-01T12:00:00+0100", 1_709_290_800.0),
+            ("2024-03-01T05:00:00-05", 1_709_290_800.0 - 3600.0),
+            ("01:02:03.25", 3723.25),
+        ] {
+            let got = date_time(text).unwrap_or_else(|| panic!("{text}"));
+            assert!((got - secs).abs() < 1e-6, "{text}: {got} vs {secs}");
+        }
+        for text in [
+            "12.5",
+            "2026-13-03 01:02:03",
+            "01:62:03",
+            "1:2",
+            "abc",
+            "2026-12-03",
+        ] {
+            assert!(date_time(text).is_none(), "{text}");
+        }
+        // A time column of dates: the steps are the sampling step.
+        let (names, v, bad) =
+            read_all("timestamp,gx\n2026-12-03 23:59:59.995,1\n2026-12-04 00:00:00.000,2\n");
+        assert_eq!((names, v, bad), (vec!["gx".to_string()], vec![1.0, 2.0], 0));
+        let mut r = TextReader::with_options(
+            "stamp,gx\n2026-12-03 23:59:59.990,0\n2026-12-03 23:59:59.995,1\n\
+             2026-12-04 00:00:00.005,2\n"
+                .as_bytes(),
+            Path::new("d.csv"),
+            &TextOptions {
+                tau0_s: Some(0.005),
+                ..TextOptions::default()
+            },
+        )
+        .unwrap();
+        let mut out = Vec::new();
+        while r.read_rows(&mut out, 8).unwrap() > 0 {}
+        // A step of 10 ms across midnight: one sample of 5 ms missing there.
+        assert_eq!(out.len(), 4);
+        assert!(out[2].is_nan());
+    }
+
+    /// The names of time columns beyond `time`: a word for time anywhere in the name, in other
+    /// languages too, with its unit; a step or a time constant is no clock; `time` is preferred
+    /// to `gps_time`; a headerless file's time column is named by its number.
+    #[test]
+    fn time_columns_by_the_words_in_their_names() {
+        for (name, unit) in [
+            ("Zeit [s]", Some(1.0)),
+            ("elapsed (ms)", Some(1e-3)),
+            ("sample_time_us", Some(1e-6)),
+            ("gps_time", None),
+            ("field.header.stamp", None),
+            ("Timestamp (UTC)", None),
+            ("time (seconds)", Some(1.0)),
+            ("t_ns", Some(1e-9)),
+            ("time_s", Some(1.0)),
+        ] {
+            assert_eq!(time_column_unit(name), Some(unit), "{name}");
+        }
+        for name in [
+            "delta_time",
+            "dt",
+            "time [deg]",
+            "gx",
+            "temp",
+            "tc_constant_time",
+            "acc_t",
+        ] {
+            assert_eq!(time_column_unit(name), None, "{name}");
+        }
+        let (names, _, _) = read_all("gps_time,time,gx\n1,0.0,5\n2,0.01,6\n");
+        assert_eq!(names, ["gx"]);
+        let mut r =
+            TextReader::new("gps_time,time,gx\n1,0.0,5\n".as_bytes(), Path::new("g.csv")).unwrap();
+        assert_eq!(r.time_column_name(), Some("time"));
+        assert_eq!(r.read_rows(&mut Vec::new(), 1).unwrap(), 1);
+        let r = TextReader::with_options(
+            "0.0 1.0D-02\n0.005 2.0D-02\n".as_bytes(),
+            Path::new("f.dat"),
+            &TextOptions {
+                time_column: Some("c1".into()),
+                ..TextOptions::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(
+            (r.names(), r.time_column_name()),
+            (&["c2".to_string()][..], Some("c1"))
+        );
+    }
+
+    /// A row of units under the header: the columns' units as if in brackets, the channels
+    /// named as the header names them, `--columns` by the header's names, the time column by
+    /// its unit; a row of words that are not units is a first data row, as before.
+    #[test]
+    fn a_row_of_units_under_the_header() {
+        let text = "Zeit;Gyro X;Acc X;Temp\ns;deg/s;g;degC\n0,000;0,5;0,25;20\n0,005;1,5;0,5;21\n";
+        let r = TextReader::new(text.as_bytes(), Path::new("u.csv")).unwrap();
+        assert_eq!(r.names(), ["Gyro X", "Acc X", "Temp"]);
+        assert_eq!(r.time_column_name(), Some("Zeit [s]"));
+        let cols: Vec<&str> = r.channel_columns().into_iter().map(|(_, n)| n).collect();
+        assert_eq!(cols, ["Gyro X [deg/s]", "Acc X [g]", "Temp [degC]"]);
+        let r = TextReader::with_options(
+            text.as_bytes(),
+            Path::new("u.csv"),
+            &TextOptions {
+                columns: Some(vec!["Acc X=ax".parse().unwrap()]),
+                ..TextOptions::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(r.names(), ["ax"]);
+        assert_eq!(r.channel_columns()[0], (3, "Acc X [g]"));
+        // `ok;ok` is no units row: a first data row of text, an error naming it.
+        let e = TextReader::new("a;b\nok;ok\n1;2\n".as_bytes(), Path::new("w.csv"));
+        assert!(e.is_ok_and(|r| r.names() == ["a", "b"]));
+    }
+
+    /// A word in a channel's first cell (`ERR`) makes it no label column when numbers follow:
+    /// the word is a gap of that channel alone; a checkpoint taken while the rows read ahead
+    /// to tell this are still to come resumes to the same rows.
+    #[test]
+    fn a_flagged_first_sample_is_a_gap_not_a_label() {
+        let mut text = String::from("time,gx,ax,frame\n0.000,0.5,ERR,imu\n");
+        for i in 1..300 {
+            text.push_str(&format!("{:.3},{i},{},imu\n", i as f64 * 0.005, 2 * i));
+        }
+        let (names, v, bad) = read_all(&text);
+        assert_eq!(names, ["gx", "ax"]);
+        assert_eq!(bad, 0);
+        assert_eq!((v[0], v[2], v[3], v.len()), (0.5, 1.0, 2.0, 600));
+        assert!(v[1].is_nan());
+        // Stopped after 5 rows (its position inside the rows read ahead), resumed.
+        let mut r = TextReader::new(text.as_bytes(), Path::new("e.csv")).unwrap();
+        let mut head = Vec::new();
+        r.read_rows(&mut head, 5).unwrap();
+        let pos = r.position();
+        let rest_src = &text.as_bytes()[pos.offset as usize..];
+        let mut r2 = r.resume(rest_src, &pos);
+        let mut tail = Vec::new();
+        while r2.read_rows(&mut tail, 64).unwrap() > 0 {}
+        head.extend(tail);
+        assert_eq!(head.len(), v.len());
+        assert!(head
+            .iter()
+            .zip(&v)
+            .all(|(a, b)| a == b || (a.is_nan() && b.is_nan())));
+        assert_eq!(r2.position().words, 1);
+    }
+
+    /// Logs joined into one file: the header (and its row of units) found again is skipped,
+    /// no row and no gap.
+    #[test]
+    fn the_header_again_is_skipped() {
+        let (names, v, bad) =
+            read_all("time,gx\n0,1\n0.01,2\ntime,gx\n0.02,3\n\u{feff}time,gx\n0.03,4\n");
+        assert_eq!(
+            (names, v, bad),
+            (vec!["gx".to_string()], vec![1.0, 2.0, 3.0, 4.0], 0)
+        );
+        let (_, v, _) = read_all("t;gx\ns;deg/s\n0;1\nt;gx\ns;deg/s\n0,005;2\n");
+        assert_eq!(v, [1.0, 2.0]);
+    }
+
+    /// Xsens MT Manager's export: `//` notes before a tab header, a packet counter that wraps
+    /// (no channel), `SampleTimeFine` in 100 us (the time column, gaps found in it); camel-case
+    /// names' words are words (`GpsTime` is a clock).
+    #[test]
+    fn an_xsens_export() {
+        let text = "// General information:\n//  MT Manager version: 2022.0.0\n\
+                    // Update Rate: 100.0Hz\n\
+                    PacketCounter\tSampleTimeFine\tAcc_X\tGyr_X\n\
+                    65534\t1000000\t0.5\t0.25\n65535\t1000100\t0.5\t0.25\n\
+                    0\t1000200\t0.5\t0.25\n2\t1000400\t0.5\t0.25\n";
+        let opts = TextOptions {
+            tau0_s: Some(0.01),
+            ..TextOptions::default()
+        };
+        let mut r = TextReader::with_options(text.as_bytes(), Path::new("x.txt"), &opts).unwrap();
+        assert_eq!(r.names(), ["Acc_X", "Gyr_X"]);
+        assert_eq!(r.time_column_name(), Some("SampleTimeFine"));
+        let mut out = Vec::new();
+        while r.read_rows(&mut out, 8).unwrap() > 0 {}
+        // Four rows and the one missing between 1000200 and 1000400.
+        assert_eq!(out.len(), 10);
+        assert!(out[6].is_nan() && out[7].is_nan());
+        assert_eq!(time_column_unit("GpsTime"), Some(None));
+        assert!(counter_column("field.header.seq") && counter_column("frame_count"));
+        assert!(!counter_column("gyro_x_counts") && !counter_column("gx"));
     }
 }

@@ -17,7 +17,13 @@
 //! was counted backwards and no later gap was found.
 
 /// Seconds per unit tried for the column, in order: s, ms, us, ns.
-const SCALES: [(f64, &str); 4] = [(1.0, "s"), (1e-3, "ms"), (1e-6, "us"), (1e-9, "ns")];
+const SCALES: [(f64, &str); 5] = [
+    (1.0, "s"),
+    (1e-3, "ms"),
+    (1e-4, "100us"),
+    (1e-6, "us"),
+    (1e-9, "ns"),
+];
 
 /// How far a step may be from a whole number of `tau0` before it is counted irregular.
 const STEP_TOLERANCE: f64 = 0.25;

@@ -248,7 +248,7 @@ fn bad_input_exits_2_with_a_message_and_bad_rows_are_counted() {
     // A damaged row becomes a gap and is counted; the rest is analyzed.
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines: Vec<&str> = text.lines().collect();
-    lines.insert(50, "not-a-number");
+    lines.insert(50, "1.2.3");
     std::fs::write(&csv, lines.join("\n")).unwrap();
     let recs = records(
         &exe()

@@ -195,6 +195,38 @@ fn a_temperature_coefficient_survives_the_round_trip() {
         rel(param(&f, "temperature", "coefficient"), c) < 1e-4,
         "{f}"
     );
+    // Its unit in a row of units under the header (`board_temp` then `degF`), and in the
+    // header of a column the run renames (`--columns "g4,board_temp (°F)=temp"`): read in degF
+    // both ways (session 31: the unit was lost to the bare or the new name, read as degC).
+    let rows = |head: &str, file: &str| {
+        let mut t = String::from(head);
+        for line in csv.lines().skip(1) {
+            let (g, c) = line.split_once(',').unwrap();
+            let c: f64 = c.parse().unwrap();
+            t += &format!("{g},{:.9}\n", c * 1.8 + 32.0);
+        }
+        let p = tmp(file);
+        std::fs::write(&p, t).unwrap();
+        p
+    };
+    let u_run = rows("g4,board_temp\narcsec,degF\n", "temp-run-units-row.csv");
+    let u = diagnose(&u_run, &tmp("temp-twin-units-row.toml"));
+    assert!(
+        rel(param(&u, "temperature", "coefficient"), c) < 1e-4,
+        "{u}"
+    );
+    let r_run = rows("g4,board_temp (\u{b0}F)\n", "temp-run-renamed.csv");
+    let r = first_record(
+        exe()
+            .arg("diagnose")
+            .arg(&r_run)
+            .args(["--tau0", "0.004", "--unit", "arcsec"])
+            .args(["--columns", "g4,board_temp (\u{b0}F)=temp"]),
+    );
+    assert!(
+        rel(param(&r, "temperature", "coefficient"), c) < 1e-4,
+        "{r}"
+    );
     let text = std::fs::read_to_string(&twin).unwrap();
     let m = allanscope::sim::SimModel::from_toml_str(&text, Path::new("twin.toml")).unwrap();
     assert_eq!(m.channels[0].temperature_coefficient, c, "{text}");

@@ -132,9 +132,24 @@ fn a_named_time_column_and_columns_picked_and_renamed() {
     let (c, s) = parsed(&analyze(&p, &["--time-column", "stamp"]));
     assert_eq!(s.channels, ["gx", "gy"]);
     assert_eq!(c[1].sigma, pc[1].sigma);
-    // Without --time-column, `stamp` is a channel like any other.
+    // Without --time-column, `stamp` is a time column by its name too; `counter` is a
+    // counter, no channel either unless --channels names it; `level` is a channel.
     let (_, s) = parsed(&analyze(&p, &[]));
-    assert_eq!(s.channels, ["stamp", "gx", "gy"]);
+    assert_eq!(s.channels, ["gx", "gy"]);
+    for (name, channels) in [
+        ("counter", vec!["gx", "gy"]),
+        ("level", vec!["level", "gx", "gy"]),
+    ] {
+        let q = write(
+            &format!("{name}.csv"),
+            format!("{name},gx,gy\n{}", rows(",", true)).as_bytes(),
+        );
+        let (_, s) = parsed(&analyze(&q, &[]));
+        assert_eq!(s.channels, channels);
+    }
+    let q = tmp("counter.csv");
+    let (_, s) = parsed(&analyze(&q, &["--channels", "counter,gx"]));
+    assert_eq!(s.channels, ["counter", "gx"]);
     // Picked in another order, one renamed.
     let (c, s) = parsed(&analyze(&p, &["--columns", "gy,gx=g1"]));
     assert_eq!(s.channels, ["gy", "g1"]);
@@ -209,7 +224,8 @@ fn a_text_column_is_left_out_unless_named_and_an_input_without_samples_is_an_err
             ],
         );
     }
-    let p = write("dotted.csv", b"gx,gy\n0.1,1.2.3\n0.3,0.4\n");
+    // A column of cells that are neither numbers nor words (version strings, addresses).
+    let p = write("dotted.csv", b"gx,gy\n0.1,1.2.3\n0.3,1.2.4\n");
     usage_error(
         &analyze(&p, &[]),
         &[
@@ -218,6 +234,10 @@ fn a_text_column_is_left_out_unless_named_and_an_input_without_samples_is_an_err
             "column 2 `gy`: `1.2.3` is not a number",
         ],
     );
+    // One damaged first cell of a column of numbers: a bad row, as any later one.
+    let p = write("dotted_first.csv", b"gx,gy\n0.1,1.2.3\n0.3,0.4\n0.5,0.6\n");
+    let (_, s) = parsed(&analyze(&p, &[]));
+    assert_eq!((s.bad_rows, s.samples.clone()), (1, vec![3, 3]));
     let p = write("empty_values.csv", b"gx,gy\nnan,nan\n,\nnan,\n");
     usage_error(&analyze(&p, &[]), &["empty_values.csv", "no samples"]);
     let p = write("header_only.csv", b"gx,gy\n");
@@ -594,4 +614,80 @@ fn no_tau0_without_a_usable_time_column_is_a_usage_error() {
         .output()
         .unwrap();
     usage_error(&out, &["standard input"]);
+}
+
+/// A merged multi-rate file (`ax` logged at half the rate of `gx`, empty cells between): read
+/// with `gx`, `ax` has no curve and the log says why and what to do; read alone
+/// (`--channels ax`, no `--tau0`), its rows are its samples, 0.01 s apart, and its curve is
+/// that of the same numbers written alone; a row of units and a word in a cell on the way.
+#[test]
+fn a_slower_stream_merged_into_the_rows_is_read_at_its_own_rate() {
+    let (a, b) = columns();
+    let mut merged = String::from("Zeit;gx;ax\ns;deg/s;g\n");
+    let mut alone = String::from("gx\n");
+    for i in 0..800 {
+        let ax = if i % 2 == 0 {
+            format!("{}", b[i / 2]).replace('.', ",")
+        } else {
+            String::new()
+        };
+        let gx = if i == 7 {
+            "OVF".to_string()
+        } else {
+            format!("{}", a[i % 400]).replace('.', ",")
+        };
+        merged.push_str(&format!(
+            "{};{gx};{ax}\n",
+            format!("{:.3}", i as f64 * 0.005).replace('.', ",")
+        ));
+    }
+    for x in &b {
+        alone.push_str(&format!("{x}\n"));
+    }
+    let p = write("merged.csv", merged.as_bytes());
+    let run = |args: &[&str]| {
+        exe()
+            .args([
+                "analyze",
+                p.to_str().unwrap(),
+                "--fit",
+                "none",
+                "--stats",
+                "avar",
+            ])
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let out = run(&[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("channel `ax` holds a value on every 2nd row only"),
+        "{err}"
+    );
+    assert!(
+        err.contains("column 2 `gx [deg/s]` holds `OVF`, not a number"),
+        "{err}"
+    );
+    let (c, s) = parsed(&out);
+    assert_eq!(s.channels, ["gx", "ax"]);
+    assert_eq!(s.tau0, 0.005);
+    assert!(c.iter().any(|c| c.channel == "gx" && !c.sigma.is_empty()));
+    assert!(c.iter().any(|c| c.channel == "ax" && c.sigma.is_empty()));
+    let (c, s) = parsed(&run(&["--channels", "ax"]));
+    assert_eq!((s.tau0, s.samples.clone()), (0.01, vec![401]));
+    let reference = exe()
+        .args(["analyze"])
+        .arg(write("ax_alone.csv", alone.as_bytes()))
+        .args([
+            "--tau0", "0.01", "--rate", "--unit", "g", "--fit", "none", "--stats", "avar",
+        ])
+        .output()
+        .unwrap();
+    let (r, _) = parsed(&reference);
+    assert_eq!(c[0].tau, r[0].tau);
+    assert_eq!(c[0].unit, "g");
+    for (x, y) in c[0].sigma.iter().zip(&r[0].sigma) {
+        assert!((x - y).abs() <= 1e-12 * y, "{x} vs {y}");
+    }
 }
