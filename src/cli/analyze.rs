@@ -389,6 +389,11 @@ pub(crate) fn sniff(input: &str, frames: Option<&FrameDescriptor>) -> Result<()>
             }
         )));
     }
+    if let Some((what, how)) = container(&head).filter(|_| !frames_found) {
+        return Err(usage(format!(
+            "{input}: {what}, not text columns or a capture of frames; {how}"
+        )));
+    }
     if head.starts_with(&[0xff, 0xfe]) || head.starts_with(&[0xfe, 0xff]) {
         return Err(usage(format!(
             "{input}: UTF-16 text (as Windows tools write it); convert it to UTF-8 first, e.g. \
@@ -429,6 +434,71 @@ pub(crate) fn sniff(input: &str, frames: Option<&FrameDescriptor>) -> Result<()>
         }
     }
     Ok(())
+}
+
+/// The kind of file whose magic bytes start `head` when it is a container a user may hand over
+/// in place of text columns (a spreadsheet, a MATLAB or NumPy file, a ROS or PX4 log), and how
+/// to get text columns out of it; `None` for anything else.
+fn container(head: &[u8]) -> Option<(&'static str, &'static str)> {
+    const KINDS: [(&[u8], &str, &str); 10] = [
+        (
+            b"PK\x03\x04",
+            "a ZIP archive (an Excel .xlsx or LibreOffice .ods workbook is one)",
+            "save the sheet as CSV (File > Save As > CSV) and analyse that",
+        ),
+        (
+            &[0xd0, 0xcf, 0x11, 0xe0, 0xa1, 0xb1, 0x1a, 0xe1],
+            "an old Excel workbook (.xls)",
+            "save the sheet as CSV (File > Save As > CSV) and analyse that",
+        ),
+        (
+            b"MATLAB 5.0 MAT-file",
+            "a MATLAB MAT-file",
+            "write the columns as CSV in MATLAB, e.g. `writematrix(data, 'run.csv')`",
+        ),
+        (
+            b"\x89HDF\r\n\x1a\n",
+            "an HDF5 file (MATLAB v7.3 .mat, pandas .h5)",
+            "write the columns as CSV first (pandas: `pd.read_hdf(F).to_csv('run.csv')`)",
+        ),
+        (
+            b"PAR1",
+            "a Parquet file",
+            "write it as CSV first (pandas: `pd.read_parquet(F).to_csv('run.csv', index=False)`)",
+        ),
+        (
+            b"\x93NUMPY",
+            "a NumPy .npy array",
+            "write it as CSV first (`np.savetxt('run.csv', a, delimiter=',')`)",
+        ),
+        (
+            b"#ROSBAG V2.0",
+            "a ROS 1 bag",
+            "export the IMU topic first: `rostopic echo -b F -p /imu > imu.csv` (README, ROS 1)",
+        ),
+        (
+            b"\x89MCAP0\r\n",
+            "an MCAP file (a ROS 2 bag)",
+            "export the IMU topic as CSV first (`ros2 topic echo --csv /imu > imu.csv` while \
+             playing it, or PlotJuggler's CSV export)",
+        ),
+        (
+            b"SQLite format 3\0",
+            "an SQLite database (a ROS 2 bag's .db3?)",
+            "export the IMU topic as CSV first (`ros2 topic echo --csv /imu > imu.csv` while \
+             playing the bag)",
+        ),
+        (
+            b"ULog\x01\x12\x35",
+            "a PX4 ULog",
+            "convert it with pyulog's `ulog2csv F` and analyse the sensor_combined CSV with \
+             --tau0 (README, PX4)",
+        ),
+    ];
+    KINDS
+        .iter()
+        .find(|(magic, _, _)| head.starts_with(magic))
+        .map(|(_, what, how)| (*what, *how))
 }
 
 /// The compression whose magic bytes start `head`, if any.

@@ -1284,7 +1284,11 @@ impl<R: BufRead> TextReader<R> {
     /// Whether the line `t` is the header (or the row of units under it) again.
     fn repeats_header(&self, t: &str) -> bool {
         let t = t.trim_start_matches('\u{feff}');
-        if self.header_rows.is_empty() || t.starts_with(|c: char| c.is_ascii_digit()) {
+        // A data row starts with a digit, a sign or a point: only a line starting otherwise is
+        // compared, so rows of numbers cost nothing here.
+        if self.header_rows.is_empty()
+            || t.starts_with(|c: char| c.is_ascii_digit() || matches!(c, '-' | '+' | '.'))
+        {
             return false;
         }
         let fields = self.layout.split(t);

@@ -226,17 +226,33 @@ impl TimeColumn {
         };
         let steps = dt * scale / self.tau0_s;
         if let Some(back) = self.restart.take() {
-            if ((t - back) * scale / self.tau0_s - 1.0).abs() <= STEP_TOLERANCE {
-                // The row before went back and this one steps on from it: the clock restarted.
+            // The row before went back and this one steps on from it, one step or (while still
+            // behind the old clock: no glitch's next row) a whole number of them: the clock
+            // restarted, and samples right after the restart are missing when more than one.
+            let since = (t - back) * scale / self.tau0_s;
+            let k = since.round();
+            let whole = k >= 1.0 && (since - k).abs() <= STEP_TOLERANCE;
+            if whole && (k == 1.0 || (dt < 0.0 && k - 1.0 <= MAX_GAP_STEPS as f64)) {
                 self.backwards -= 1;
                 self.discontinuities += 1;
+                let missing = k as u64 - 1;
                 tracing::warn!(
                     "{}: line {line}: the time column `{}` restarted at the row before, at {back} \
-                     (a clock reset or a counter's wrap); read on from there, no gap inserted",
+                     (a clock reset or a counter's wrap); read on from there, {}",
                     file.display(),
-                    self.name
+                    self.name,
+                    if missing == 0 {
+                        "no gap inserted".to_string()
+                    } else {
+                        format!("{missing} samples missing right after it, a gap")
+                    }
                 );
-                return 0;
+                if missing > 0 {
+                    self.jumps += 1;
+                    self.missing += missing;
+                    self.last = Some(back);
+                }
+                return missing;
             }
         }
         if dt <= 0.0 {
@@ -406,5 +422,17 @@ mod tests {
         let glitch = [0.0, 0.01, 0.02, 0.005, 0.04, 0.05, 0.07];
         assert_eq!(run(&mut g, &glitch), [0, 0, 0, 0, 0, 0, 1]);
         assert_eq!((g.backwards, g.discontinuities, g.missing), (1, 0, 1));
+        // A glitch to a stamp a whole number of steps before the next row, which is on the
+        // old clock: still a glitch, no restart.
+        let mut g = TimeColumn::new("t", 0.01);
+        let glitch = [0.0, 0.01, 0.02, 0.0, 0.04, 0.05];
+        assert_eq!(run(&mut g, &glitch), [0, 0, 0, 0, 0, 0]);
+        assert_eq!((g.backwards, g.discontinuities), (1, 0));
+        // A wrap with two samples missing right after it: the restart and its gap, and the
+        // clock reads on (before: every later row "backwards").
+        let mut c = TimeColumn::new("t_us", 0.01);
+        let wrap = [b, b + 1e4, b + 2e4, 5e3, 35e3, 45e3, 75e3];
+        assert_eq!(run(&mut c, &wrap), [0, 0, 0, 0, 2, 0, 2]);
+        assert_eq!((c.backwards, c.discontinuities, c.missing), (0, 1, 4));
     }
 }
