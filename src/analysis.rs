@@ -83,6 +83,8 @@ pub struct RunAnalysis {
     bad_rows: u64,
     /// Text values infinite or out of range, read as gaps (from the reader, like `bad_rows`).
     invalid_values: u64,
+    /// Text cells that held a word, read as gaps (from the reader, like `bad_rows`).
+    flagged_cells: u64,
     /// What the text input's time column found (from the reader, like `bad_rows`).
     time_column: Option<crate::sink::records::TimeColumnRecord>,
     started: Instant,
@@ -116,6 +118,7 @@ impl RunAnalysis {
             channels,
             bad_rows: 0,
             invalid_values: 0,
+            flagged_cells: 0,
             time_column: None,
             started: Instant::now(),
             stopping: Arc::default(),
@@ -181,6 +184,11 @@ impl RunAnalysis {
     /// Counts text values that were infinite or out of range (they were fed as gaps).
     pub fn add_invalid_values(&mut self, n: u64) {
         self.invalid_values += n;
+    }
+
+    /// Counts text cells that held a word, not a number (they were fed as gaps).
+    pub fn add_flagged_cells(&mut self, n: u64) {
+        self.flagged_cells += n;
     }
 
     /// Feeds a chunk; interim records that fall due inside it are appended to `out`.
@@ -372,6 +380,7 @@ impl RunAnalysis {
             segments: self.channels.iter().map(|c| c.acc.segments()).collect(),
             bad_rows: self.bad_rows,
             invalid_values: self.invalid_values,
+            flagged_cells: self.flagged_cells,
             time_column: self.time_column.clone(),
             overlap: match self.opts.accum.overlap {
                 Overlap::Full => "full".into(),
@@ -403,6 +412,7 @@ impl RunAnalysis {
                 next_emit_s: self.next_emit_s,
                 bad_rows: if i == 0 { self.bad_rows } else { 0 },
                 invalid_values: if i == 0 { self.invalid_values } else { 0 },
+                flagged_cells: if i == 0 { self.flagged_cells } else { 0 },
                 time_column: if i == 0 {
                     self.time_column.clone()
                 } else {
@@ -423,6 +433,7 @@ impl RunAnalysis {
             first.channels.extend(p.channels);
             first.bad_rows += p.bad_rows;
             first.invalid_values += p.invalid_values;
+            first.flagged_cells += p.flagged_cells;
             first.next_emit_s = first.next_emit_s.max(p.next_emit_s);
         }
         Some(first)

@@ -140,6 +140,7 @@ impl RunAnalysis {
             next_emit_s: state.next_emit_s,
             bad_rows: state.bad_rows,
             invalid_values: 0,
+            flagged_cells: 0,
             time_column: None,
             started,
             stopping: Arc::default(),

@@ -197,6 +197,7 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue, ctl: &RunControl) -> Result
                 segments: Vec::new(),
                 bad_rows: 0,
                 invalid_values: 0,
+                flagged_cells: 0,
                 time_column: None,
                 overlap: d.overlap.clone(),
                 elapsed_s: 0.0,
@@ -262,6 +263,7 @@ fn analyze_text(
             analysis.break_segments();
             analysis.add_bad_rows(pos.bad_rows);
             analysis.add_invalid_values(pos.invalid_values);
+            analysis.add_flagged_cells(pos.words);
             reader
         }
         Some(Position::Frames { .. }) => {

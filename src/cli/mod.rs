@@ -419,7 +419,18 @@ fn text_tau0(d: &mut DataArgs, inputs: &[&str]) -> Result<()> {
 fn say_rows(input: &str, step: &allanscope::input::sampling_step::InferredStep, d: &mut DataArgs) {
     use allanscope::input::sampling_step::ordinal;
     if step.every > 1 {
-        d.sparse_rows = true;
+        match d.tau0 {
+            // --tau0 the file's row step: the channels' own step is k times that.
+            Some(t) if (t - step.tau0_s).abs() > 1e-6 * step.tau0_s => tracing::warn!(
+                "{input}: the channels analysed hold a value on every {} row only, {} s apart by \
+                 the time column, but --tau0 is {t} s: give --tau0 {} (or leave it out) to read \
+                 them at their own rate",
+                ordinal(step.every),
+                allanscope::ranges::show(step.tau0_s),
+                allanscope::ranges::show(step.tau0_s)
+            ),
+            _ => d.sparse_rows = true,
+        }
     }
     for (name, k) in &step.slow {
         tracing::warn!(

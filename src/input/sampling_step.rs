@@ -198,8 +198,8 @@ pub fn infer_tau0<R: BufRead>(
     let resolution = 2.0 * large * f64::EPSILON;
     // A clock with jitter (a phone's, a host's stamps: 0.0025 s steps +- 20 us) gives a median
     // step such as 0.002499751 whose last digits are noise: the step is then the shortest
-    // decimal within three standard errors of the median (1.25 sd / sqrt(n) for a median of
-    // n steps of standard deviation sd, the regular steps'), 0.0025 there.
+    // decimal within three standard errors of the mean of the regular steps (sd / n for n steps
+    // of standard deviation sd between jittered stamps), 0.0025 there; 104 Hz stays 0.0096154.
     let near: Vec<f64> = steps
         .iter()
         .copied()
@@ -208,11 +208,19 @@ pub fn infer_tau0<R: BufRead>(
     let n = near.len() as f64;
     let mean = near.iter().sum::<f64>() / n;
     let sd = (near.iter().map(|d| (d - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0)).sqrt();
-    let resolution = resolution.max(3.0 * 1.25 * sd / n.sqrt());
+    // Where the jitter is what limits, the mean step is the estimate (the steps of jittered
+    // stamps telescope: their mean's error is about sd / n, not sd / sqrt(n)), and the median
+    // only tells whether a round number is within reach.
+    let jitter = 3.0 * sd / n;
+    let (center, resolution) = if jitter > resolution {
+        (mean, jitter)
+    } else {
+        (median, resolution)
+    };
     let step = (1..=15)
-        .map(|digits| round_significant(median, digits))
-        .find(|r| (r - median).abs() <= resolution)
-        .unwrap_or(median);
+        .map(|digits| round_significant(center, digits))
+        .find(|r| (r - center).abs() <= resolution)
+        .unwrap_or(center);
     let tau0_s = round_significant(step * unit_s, 15);
     if crate::ranges::check_tau0(tau0_s).is_err() || tau0_s > 10.0 {
         return Err(usage(format!(
@@ -400,18 +408,49 @@ mod tests {
     fn a_jittery_clock_gives_its_nominal_step() {
         let jittered = |step: f64| {
             let mut t = String::from("Time (s),gx\n");
-            let mut x = 0.0;
             for k in 0..4000u64 {
-                // A deterministic jitter of +-20 us (a Weyl sequence), no generator needed.
+                // A deterministic jitter of each stamp by +-20 us (a Weyl sequence), no
+                // generator needed.
                 let u = ((k as f64 * 0.618_033_988_75) % 1.0) - 0.5;
-                x += step + 4e-5 * u;
+                let x = k as f64 * step + 4e-5 * u;
                 t.push_str(&format!("{x:.9},1\n"));
             }
             t
         };
         assert_eq!(infer(&jittered(0.0025)).unwrap().tau0_s, 0.0025);
-        let s = infer(&jittered(0.00251)).unwrap();
-        assert!((s.tau0_s - 0.00251).abs() < 2e-6, "{}", s.tau0_s);
-        assert_ne!(s.tau0_s, 0.0025);
+        assert_eq!(infer(&jittered(0.00251)).unwrap().tau0_s, 0.00251);
+        // 104 Hz, not a round step: kept to the digits the stamps tell (0.0096154 s).
+        let s = infer(&jittered(1.0 / 104.0)).unwrap();
+        assert!((s.tau0_s * 104.0 - 1.0).abs() < 1e-5, "{}", s.tau0_s);
+    }
+
+    /// A slow stream on the odd rows (the first row empty) with a 1-s dropout: its own step,
+    /// the dropout one gap of 100 samples (a review found the empty first row started the clock
+    /// and ruled the time column out).
+    #[test]
+    fn a_slow_stream_on_odd_rows_keeps_its_gaps() {
+        let mut t = String::from("time,gx,ax\n");
+        for k in 0..800 {
+            let present = k % 2 == 1 && !(401..=599).contains(&k);
+            let ax = if present { "0.5" } else { "" };
+            t.push_str(&format!("{:.3},1,{ax}\n", k as f64 * 0.005));
+        }
+        let opts = TextOptions {
+            channels: Some(vec!["ax".into()]),
+            ..TextOptions::default()
+        };
+        let s = infer_tau0(t.as_bytes(), Path::new("o.csv"), &opts).unwrap();
+        assert_eq!((s.tau0_s, s.every), (0.01, 2));
+        let opts = TextOptions {
+            tau0_s: Some(0.01),
+            sparse_rows: true,
+            ..opts
+        };
+        let mut r = TextReader::with_options(t.as_bytes(), Path::new("o.csv"), &opts).unwrap();
+        let mut out = Vec::new();
+        while r.read_rows(&mut out, 64).unwrap() > 0 {}
+        let ax: Vec<f64> = out.chunks(2).map(|c| c[1]).collect();
+        assert_eq!(ax.len(), 400);
+        assert_eq!(ax.iter().filter(|x| x.is_nan()).count(), 100);
     }
 }

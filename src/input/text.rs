@@ -95,7 +95,7 @@ pub const TIME_COLUMN_NAMES: [&str; 4] = ["time", "t", "timestamp", "time_s"];
 /// Words that make a column a time column wherever they stand in its name, split at anything
 /// not a letter or digit: `gps_time`, `field.header.stamp`, `Zeit [s]`, `elapsed (ms)`,
 /// `sample_time_us`. Other languages' word for time are here as spreadsheets there write them.
-const TIME_WORDS: [&str; 16] = [
+const TIME_WORDS: [&str; 13] = [
     "time",
     "timestamp",
     "stamp",
@@ -105,18 +105,40 @@ const TIME_WORDS: [&str; 16] = [
     "fecha",
     "utc",
     "elapsed",
-    "sec",
-    "secs",
-    "seconds",
     "zeit",
     "tiempo",
     "tijd",
     "czas",
 ];
 
+/// Names that are a time column's when they are the whole name (`sec`, `Seconds`), but are a
+/// unit inside a channel's (`gyro_deg_sec_x`).
+const TIME_ALONE: [&str; 3] = ["sec", "secs", "seconds"];
+
 /// Words that make a name with a time word in it something else: a step between samples
-/// (`delta_time`, `dt`), a filter's time constant, not a clock.
-const NOT_TIME_WORDS: [&str; 6] = ["delta", "dt", "diff", "interval", "period", "constant"];
+/// (`delta_time`, `dt`), a filter's time constant, a sensor's quantity, not a clock.
+const NOT_TIME_WORDS: [&str; 20] = [
+    "delta",
+    "dt",
+    "diff",
+    "interval",
+    "period",
+    "constant",
+    "gyro",
+    "gyr",
+    "gyroscope",
+    "acc",
+    "accel",
+    "accelerometer",
+    "rate",
+    "deg",
+    "rad",
+    "dps",
+    "mag",
+    "temp",
+    "temperature",
+    "angle",
+];
 
 /// What a time column's brackets may hold besides a unit: the clock's scale (`Timestamp (UTC)`).
 const TIME_SCALES: [&str; 7] = ["utc", "gps", "tai", "local", "unix", "epoch", "iso"];
@@ -146,16 +168,19 @@ pub fn time_column_unit(name: &str) -> Option<Option<f64>> {
     time_name(name).map(|(_, unit)| unit)
 }
 
-/// `name` with a `_` where a lower-case letter meets an upper-case one (`GpsTime` ->
-/// `Gps_Time`), so that the words of a camel-case name are words.
+/// `name` with a `_` where a lower-case letter meets an upper-case one that starts a word
+/// (`GpsTime` -> `Gps_Time`), so that the words of a camel-case name are words.
 fn camel_words(name: &str) -> String {
+    let chars: Vec<char> = name.chars().collect();
     let mut out = String::with_capacity(name.len() + 4);
-    let mut prev_lower = false;
-    for c in name.chars() {
-        if prev_lower && c.is_uppercase() {
+    for (i, &c) in chars.iter().enumerate() {
+        // A word starts at an upper-case letter after a lower-case one and before another
+        // (`GpsTime`); `time_mS`, `t_uS` keep their unit whole.
+        let prev_lower = i > 0 && (chars[i - 1].is_lowercase() || chars[i - 1].is_ascii_digit());
+        let next_lower = chars.get(i + 1).is_some_and(|n| n.is_lowercase());
+        if prev_lower && c.is_uppercase() && next_lower {
             out.push('_');
         }
-        prev_lower = c.is_lowercase() || c.is_ascii_digit();
         out.push(c);
     }
     out
@@ -167,7 +192,8 @@ const COUNTER_WORDS: [&str; 7] = ["counter", "count", "cnt", "seq", "sequence", 
 
 /// Whether `name` names a counter of samples or packets ([`COUNTER_WORDS`]).
 pub fn counter_column(name: &str) -> bool {
-    let n = camel_words(name.trim().trim_start_matches(['#', '%'])).to_ascii_lowercase();
+    // `gx (count)`, `gx [cnt]`: counts are the unit there, not a counter.
+    let n = camel_words(base_name(name.trim_start_matches(['#', '%']))).to_ascii_lowercase();
     n.split(|c: char| !c.is_alphanumeric())
         .any(|w| COUNTER_WORDS.contains(&w))
 }
@@ -225,7 +251,8 @@ fn time_name(name: &str) -> Option<(bool, Option<f64>)> {
     if words == ["t"] && unit.is_some() {
         return Some((true, unit));
     }
-    let timeish = words.iter().any(|w| TIME_WORDS.contains(w))
+    let timeish = (words.iter().any(|w| TIME_WORDS.contains(w))
+        || (words.len() == 1 && TIME_ALONE.contains(&words[0])))
         && !words.iter().any(|w| NOT_TIME_WORDS.contains(w));
     let plain = words.len() == 1 && TIME_COLUMN_NAMES.contains(&words[0]);
     timeish.then_some((plain, unit))
@@ -370,7 +397,7 @@ impl Layout {
         let named = |n: &str| {
             opts.channels
                 .as_ref()
-                .is_some_and(|c| c.iter().any(|x| x == n))
+                .is_some_and(|c| c.iter().any(|x| x == n || x == base_name(n)))
         };
         let other_clock = |i: usize| {
             Some(i) != time
@@ -458,7 +485,7 @@ impl Layout {
             .iter()
             .zip(units)
             .map(|(n, u)| {
-                if u.is_empty() || base_name(n) != n.trim() {
+                if u.is_empty() || parse_field(u).is_ok() || base_name(n) != n.trim() {
                     n.clone()
                 } else {
                     format!("{n} [{u}]")
@@ -599,6 +626,24 @@ impl Layout {
                 })
             })
             .collect::<Result<Vec<f64>, String>>()?;
+        // A row whose every analysed cell is a word holds no sample: text where the data
+        // should be (another file's header joined in, a log line), a bad row.
+        let analysed = self.strict.iter().filter(|&&s| s).count();
+        let words = values
+            .iter()
+            .zip(&self.strict)
+            .filter(|(x, &s)| s && x.to_bits() == WORD_CELL_BITS)
+            .count();
+        if analysed > 0 && words == analysed {
+            return Err(format!(
+                "no number in the row, only words (`{}`)",
+                self.keep
+                    .iter()
+                    .map(|&i| fields[i].trim())
+                    .collect::<Vec<_>>()
+                    .join("`, `")
+            ));
+        }
         let time = self
             .time
             .and_then(|i| parse_field(fields[i]).ok().or_else(|| date_time(fields[i])))
@@ -662,6 +707,15 @@ fn base_name(n: &str) -> &str {
         Some(o) if !n[..o].trim().is_empty() => n[..o].trim(),
         _ => n,
     }
+}
+
+/// Whether a row holds no value in any column the run analyses (`strict`): empty cells, `nan`
+/// or missing-value markers (a word is a value that was flagged, not an empty cell).
+fn empty_row(p: &Row, strict: &[bool]) -> bool {
+    let Ok(v) = &p.0 else { return false };
+    v.iter()
+        .zip(strict)
+        .all(|(x, &s)| !s || (x.is_nan() && x.to_bits() != WORD_CELL_BITS))
 }
 
 /// A row as read: its values or what is wrong with it, and its time stamp (NaN if none).
@@ -783,6 +837,10 @@ fn fortran_exponent(t: &str) -> Option<f64> {
 /// (`01:02:03.456`) is seconds since its midnight. `None` for anything else.
 fn date_time(t: &str) -> Option<f64> {
     let t = t.trim().trim_matches('"').trim();
+    // Every form has a clock `HH:MM:SS`, and all of it is ASCII.
+    if !t.contains(':') || !t.is_ascii() {
+        return None;
+    }
     let (date, time) = match t.split_once(['T', ' ']) {
         Some((d, rest)) => (Some(d), rest.trim()),
         None => (None, t),
@@ -901,8 +959,13 @@ fn units_row(fields: &[&str]) -> bool {
             )
             || super::temperature_column::temperature_column(&format!("temp [{u}]")).is_some()
     };
+    // `-` for a column without a unit: a missing-value marker, neither number nor unit.
+    let cells: Vec<&str> = cells
+        .into_iter()
+        .filter(|c| !parse_field(c).is_ok_and(f64::is_nan))
+        .collect();
     let units = cells.iter().filter(|c| known(c)).count();
-    !cells.is_empty() && cells.iter().all(|c| parse_field(c).is_err()) && 2 * units >= cells.len()
+    units > 0 && cells.iter().all(|c| parse_field(c).is_err()) && 2 * units >= cells.len()
 }
 
 /// `0,25` or `-1,5e-3` read as `0.25`, `-1.5e-3`: a decimal comma, as spreadsheets in many
@@ -1075,7 +1138,7 @@ impl<R: BufRead> TextReader<R> {
             if t.starts_with("//") {
                 continue;
             }
-            let (values, layout) = match layout.take() {
+            let (values, found) = match layout.take() {
                 Some(l) => {
                     let fields = l.split(t);
                     if !units_read && fields.len() == l.width_in && units_row(&fields) {
@@ -1123,7 +1186,7 @@ impl<R: BufRead> TextReader<R> {
                     // of integer-labelled columns.)
                     let names_time = fields.iter().any(|f| {
                         parse_field(f).is_err()
-                            && time_column_unit(f.trim().trim_matches('"')).is_some()
+                            && time_name(f.trim().trim_matches('"')).is_some_and(|(plain, _)| plain)
                     });
                     if fields.iter().all(|f| parse_field(f).is_ok())
                         || (2 * numbers > fields.len() && !names_time)
@@ -1162,6 +1225,19 @@ impl<R: BufRead> TextReader<R> {
                     }
                 }
             };
+            // With a time column, a first row with no value and no stamp (an empty line), or
+            // with no value in a file of sparse rows, is no sample: the clock starts at the
+            // first that is.
+            let skip_first = ahead.is_empty()
+                && found.time.is_some()
+                && opts.tau0_s.is_some()
+                && (opts.sparse_rows || values.1.is_nan())
+                && empty_row(&values, &found.strict);
+            if skip_first {
+                layout = Some(found);
+                continue;
+            }
+            let layout = found;
             let mut time = match (layout.time, opts.tau0_s) {
                 (Some(i), Some(tau0)) => Some(TimeColumn::new(&layout.source_names[i], tau0)),
                 _ => None,
@@ -1274,6 +1350,12 @@ impl<R: BufRead> TextReader<R> {
         }
         while rows.len() < max_rows {
             match self.next_row()? {
+                // An empty line in a file with a time column is no row of it (the run skips
+                // it too: [`TextReader::not_a_sample`]).
+                Some(p)
+                    if self.layout.time.is_some()
+                        && p.1.is_nan()
+                        && empty_row(&p, &self.layout.strict) => {}
                 Some((row, t)) => rows.push((t, present(&row, &self.layout.strict))),
                 None => break,
             }
@@ -1300,17 +1382,13 @@ impl<R: BufRead> TextReader<R> {
         })
     }
 
-    /// Whether the row `p` is no sample of this run: rows where every channel it analyses is
-    /// empty, in a file whose channels hold values on every k-th row only
-    /// ([`TextOptions::sparse_rows`]); the time column spaces the rows kept.
+    /// Whether the row `p` is no sample of this run, where a time column is in use (it spaces
+    /// the rows kept, and a missing one is a gap): an empty line (no stamp, no value), and
+    /// in a file whose channels hold values on every k-th row only
+    /// ([`TextOptions::sparse_rows`]) a row where every channel the run analyses is empty.
     fn not_a_sample(&self, p: &Row) -> bool {
-        let Ok(v) = &p.0 else { return false };
-        self.sparse
-            && self.time.is_some()
-            && p.1.is_finite()
-            && v.iter()
-                .zip(&self.layout.strict)
-                .all(|(x, &s)| !s || (x.is_nan() && x.to_bits() != WORD_CELL_BITS))
+        let in_use = self.time.as_ref().is_some_and(TimeColumn::in_use);
+        in_use && (self.sparse || p.1.is_nan()) && empty_row(p, &self.layout.strict)
     }
 
     /// Each channel's temperature scale where it holds the unit's temperature
@@ -1924,5 +2002,62 @@ mod tests {
         assert_eq!(time_column_unit("GpsTime"), Some(None));
         assert!(counter_column("field.header.seq") && counter_column("frame_count"));
         assert!(!counter_column("gyro_x_counts") && !counter_column("gx"));
+    }
+
+    /// What a review of the first version found, each a file that read wrongly or crashed:
+    /// units in mixed case, non-ASCII headers, unit words inside channel names, counts as a
+    /// unit, a label that is a time word in a headerless file, `--channels` with a units row, a
+    /// `-` in a units row, an empty line after every row, a row of words.
+    #[test]
+    fn names_and_rows_a_review_found() {
+        assert_eq!(time_column_unit("time_mS"), Some(Some(1e-3)));
+        assert_eq!(time_column_unit("Time (mS)"), Some(Some(1e-3)));
+        assert_eq!(time_column_unit("timestamp_uS"), Some(Some(1e-6)));
+        let (names, v, _) = read_all("time,acc_x_\u{b5}g,a-1\u{b0}C\n0.00,1,2\n0.01,3,4\n");
+        assert_eq!((names.len(), v.len()), (2, 4));
+        assert!(!counter_column("gx (count)") && !counter_column("gx [cnt]"));
+        for name in ["gyro_deg_sec_x", "gyro_time_x", "acc_z"] {
+            assert_eq!(time_column_unit(name), None, "{name}");
+        }
+        assert_eq!(time_column_unit("Seconds"), Some(None));
+        let (names, v, _) =
+            read_all("1700000000.00,UTC,-1.1788,-1.1482\n1700000000.01,UTC,-1.2,-1.1\n");
+        assert_eq!(names, ["c1", "c3", "c4"]);
+        assert_eq!(v.len(), 6);
+        let opts = TextOptions {
+            channels: Some(vec!["seq".into(), "gx".into()]),
+            ..TextOptions::default()
+        };
+        let r = TextReader::with_options(
+            "time,seq,gx\ns,#,deg/s\n0,1,0.5\n".as_bytes(),
+            Path::new("s.csv"),
+            &opts,
+        )
+        .unwrap();
+        assert_eq!(r.names(), ["seq", "gx"]);
+        let r = TextReader::new(
+            "time;gx;ax;n\ns;deg/s;g;-\n0;1;2;3\n".as_bytes(),
+            Path::new("d.csv"),
+        )
+        .unwrap();
+        assert_eq!(r.time_column_name(), Some("time [s]"));
+        assert_eq!(r.channel_columns()[2], (4, "n"));
+        // An empty line after every row, with a time column in use: no gaps, no extra samples.
+        let mut text = String::from("time,gx\n");
+        for k in 0..50 {
+            text.push_str(&format!("{:.2},{k}\n\n", k as f64 * 0.01));
+        }
+        let opts = TextOptions {
+            tau0_s: Some(0.01),
+            ..TextOptions::default()
+        };
+        let mut r = TextReader::with_options(text.as_bytes(), Path::new("b.csv"), &opts).unwrap();
+        let mut out = Vec::new();
+        while r.read_rows(&mut out, 16).unwrap() > 0 {}
+        assert_eq!(out.len(), 50);
+        assert!(out.iter().all(|x| !x.is_nan()));
+        // A row of words where numbers belong: a bad row, not gaps.
+        let (_, v, bad) = read_all("gx,gy\n1,2\nERR,OVF\n3,4\n");
+        assert_eq!((v.len(), bad), (6, 1));
     }
 }

@@ -194,8 +194,12 @@ impl TimeColumn {
         let scale = match self.scale {
             Some(s) => s,
             None => {
+                // 100 us only for a column whose name says so (Xsens's `SampleTimeFine`): it
+                // would otherwise hide a --tau0 ten times off.
+                let fine = crate::input::text::time_column_unit(&self.name) == Some(Some(1e-4));
                 let found = SCALES
                     .iter()
+                    .filter(|(s, _)| *s != 1e-4 || fine)
                     .find(|(s, _)| (dt * s / self.tau0_s - 1.0).abs() <= STEP_TOLERANCE);
                 match found {
                     Some((s, unit)) => {
@@ -434,5 +438,20 @@ mod tests {
         let wrap = [b, b + 1e4, b + 2e4, 5e3, 35e3, 45e3, 75e3];
         assert_eq!(run(&mut c, &wrap), [0, 0, 0, 0, 2, 0, 2]);
         assert_eq!((c.backwards, c.discontinuities, c.missing), (0, 1, 4));
+    }
+
+    /// 100 us is a scale only for a column named so (Xsens's `SampleTimeFine`): a `time_ms`
+    /// column stepping by 10 under --tau0 0.001 is not read in it, but refused (check --tau0).
+    #[test]
+    fn a_scale_of_100_us_only_for_its_name() {
+        let p = Path::new("x.csv");
+        let mut c = TimeColumn::new("time_ms", 0.001);
+        c.missing_before(0.0, p, 2);
+        c.missing_before(10.0, p, 3);
+        assert!(!c.in_use());
+        let mut c = TimeColumn::new("SampleTimeFine", 0.001);
+        c.missing_before(0.0, p, 2);
+        c.missing_before(10.0, p, 3);
+        assert_eq!(c.state().unit(), Some("100us"));
     }
 }

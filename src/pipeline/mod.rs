@@ -506,12 +506,15 @@ fn finish_text(
         let complete = !(plan.data_seconds && ctl.shutdown.is_cancelled());
         let bad_rows = position.bad_rows;
         let invalid = position.invalid_values;
+        let words = position.words;
         final_checkpoint(plan, written, complete, Position::Text(position), &analysis);
         analysis.add_bad_rows(bad_rows);
         analysis.add_invalid_values(invalid);
+        analysis.add_flagged_cells(words);
     } else {
         analysis.add_bad_rows(position.bad_rows);
         analysis.add_invalid_values(position.invalid_values);
+        analysis.add_flagged_cells(position.words);
     }
     let read_to_end = ctl.progress.input_ended();
     finish_records(&mut analysis, None, queue, ctl);

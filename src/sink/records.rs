@@ -244,6 +244,10 @@ pub struct SummaryRecord {
     /// count theirs in `health`'s `invalid_values`).
     #[serde(skip_serializing_if = "is_zero", default)]
     pub invalid_values: u64,
+    /// Text cells of analysed channels that held a word, not a number (`ERR`, `OVF`, `#N/A`),
+    /// read as gaps of their channel (since session 31).
+    #[serde(skip_serializing_if = "is_zero", default)]
+    pub flagged_cells: u64,
     pub overlap: String,
     /// Wall-clock seconds spent.
     pub elapsed_s: f64,

@@ -674,8 +674,13 @@ fn a_slower_stream_merged_into_the_rows_is_read_at_its_own_rate() {
     assert_eq!(s.tau0, 0.005);
     assert!(c.iter().any(|c| c.channel == "gx" && !c.sigma.is_empty()));
     assert!(c.iter().any(|c| c.channel == "ax" && c.sigma.is_empty()));
+    assert_eq!(s.flagged_cells, 1);
     let (c, s) = parsed(&run(&["--channels", "ax"]));
     assert_eq!((s.tau0, s.samples.clone()), (0.01, vec![401]));
+    // Given the file's row step as --tau0, it is said what the stream's own step is.
+    let out = run(&["--channels", "ax", "--tau0", "0.005"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("give --tau0 0.01 (or leave it out)"), "{err}");
     let reference = exe()
         .args(["analyze"])
         .arg(write("ax_alone.csv", alone.as_bytes()))
