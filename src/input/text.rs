@@ -1138,6 +1138,32 @@ impl<R: BufRead> TextReader<R> {
             if t.starts_with("//") {
                 continue;
             }
+            // `sep=;`: Excel's note of the separator before the header.
+            if layout.is_none() && t.len() <= 6 && t.to_ascii_lowercase().starts_with("sep=") {
+                continue;
+            }
+            // A title line before the header (`IMU log 2026-12-03 S/N 1234`, then `time,gx,gy`):
+            // one field or words between spaces, and after it a line of several fields split
+            // otherwise that is itself names.
+            if let Some(l) = &layout {
+                let sep = Sep::of(t);
+                let fields = sep.split(t);
+                if (l.width_in == 1 || (l.sep == Sep::Spaces && sep != Sep::Spaces))
+                    && fields.len() > 1
+                    && fields
+                        .iter()
+                        .any(|f| parse_field(f).is_err() && date_time(f).is_none())
+                {
+                    tracing::info!(
+                        "{}: line {}: `{}` is a title, not a header: skipped",
+                        path.display(),
+                        line_no - 1,
+                        l.source_names.join(" ")
+                    );
+                    layout = None;
+                    header_rows.clear();
+                }
+            }
             let (values, found) = match layout.take() {
                 Some(l) => {
                     let fields = l.split(t);
@@ -2059,5 +2085,24 @@ mod tests {
         // A row of words where numbers belong: a bad row, not gaps.
         let (_, v, bad) = read_all("gx,gy\n1,2\nERR,OVF\n3,4\n");
         assert_eq!((v.len(), bad), (6, 1));
+    }
+
+    /// Excel's `sep=;` before the header, and a title line before it: skipped; a one-column
+    /// file keeps its header, also when its numbers have a decimal comma.
+    #[test]
+    fn a_separator_note_and_a_title_before_the_header() {
+        let (names, v, bad) = read_all("sep=;\ngx;gy\n0,5;1,5\n2;3\n");
+        assert_eq!(
+            (names, v, bad),
+            (vec!["gx".into(), "gy".into()], vec![0.5, 1.5, 2.0, 3.0], 0)
+        );
+        let (names, v, _) =
+            read_all("IMU log 2026-12-03 S/N 1234\ntime,gx,gy\n0.0,1,2\n0.01,3,4\n");
+        assert_eq!(
+            (names, v),
+            (vec!["gx".into(), "gy".into()], vec![1.0, 2.0, 3.0, 4.0])
+        );
+        let (names, v, _) = read_all("gx\n0,5\n1,5\n");
+        assert_eq!((names, v), (vec!["gx".to_string()], vec![0.5, 1.5]));
     }
 }
