@@ -348,20 +348,7 @@ fn text_tau0(d: &mut DataArgs, inputs: &[&str]) -> Result<()> {
             if input == "-" || read_once(input) {
                 continue;
             }
-            let Ok(src) = open_input(input).map(std::io::BufReader::new) else {
-                continue;
-            };
-            let look = tracing::subscriber::with_default(
-                tracing::subscriber::NoSubscriber::default(),
-                || {
-                    allanscope::input::sampling_step::infer_tau0(
-                        src,
-                        Path::new(input),
-                        &d.text_options(),
-                    )
-                },
-            );
-            if let Ok(step) = look {
+            if let Ok(Ok(step)) = look_at_start(input, d) {
                 say_rows(input, &step, d);
             }
         }
@@ -380,18 +367,7 @@ fn text_tau0(d: &mut DataArgs, inputs: &[&str]) -> Result<()> {
                 "{input}: --tau0 is required for text columns from a pipe (a FIFO or `<(...)`)"
             )));
         }
-        let src = std::io::BufReader::new(open_input(input)?);
-        let opts = TextOptions {
-            tau0_s: None,
-            ..d.text_options()
-        };
-        // The run reads the input again and logs what it finds (a column without a name, a
-        // label column): this look at its start says nothing, so nothing is said twice.
-        let step =
-            tracing::subscriber::with_default(tracing::subscriber::NoSubscriber::default(), || {
-                allanscope::input::sampling_step::infer_tau0(src, Path::new(input), &opts)
-            })
-            .map_err(anyhow::Error::new)?;
+        let step = look_at_start(input, d)?.map_err(anyhow::Error::new)?;
         match &found {
             Some((first, s)) if (s.tau0_s - step.tau0_s).abs() > 1e-9 * s.tau0_s => {
                 return Err(usage(format!(
@@ -411,6 +387,26 @@ fn text_tau0(d: &mut DataArgs, inputs: &[&str]) -> Result<()> {
     }
     d.tau0 = found.map(|(_, s)| s.tau0_s);
     Ok(())
+}
+
+/// The sampling step and rows found at the start of `input` (a file that can be read twice)
+/// by [`allanscope::input::sampling_step::infer_tau0`], as the run will lay out its columns but
+/// with no `--tau0`. The run reads the input again and logs what it finds (a column without a
+/// name, a label column): this look says nothing, so nothing is said twice. The outer error:
+/// the input does not open.
+fn look_at_start(
+    input: &str,
+    d: &DataArgs,
+) -> Result<Result<allanscope::input::sampling_step::InferredStep, UsageError>> {
+    let src = std::io::BufReader::new(open_input(input)?);
+    let opts = TextOptions {
+        tau0_s: None,
+        ..d.text_options()
+    };
+    Ok(tracing::subscriber::with_default(
+        tracing::subscriber::NoSubscriber::default(),
+        || allanscope::input::sampling_step::infer_tau0(src, Path::new(input), &opts),
+    ))
 }
 
 /// What the look at an input's start found of its rows: the channels analysed on every k-th

@@ -36,18 +36,30 @@ pub fn header_unit(name: &str) -> Option<Result<HeaderUnit, String>> {
     if let Some(base) = array_element(n) {
         return px4_field(base).map(Ok);
     }
-    let (open, close) = match n.chars().last()? {
-        ']' => ('[', ']'),
-        ')' => ('(', ')'),
-        _ => return ros_imu_field(n).map(Ok),
+    match bracketed(n) {
+        Some((_, inner)) => Some(parse(inner).ok_or_else(|| inner.to_string())),
+        // A name that ends in a bracket it does not open, or is nothing but brackets, is a
+        // name, not a unit.
+        None if n.ends_with([']', ')']) => None,
+        None => ros_imu_field(n).map(Ok),
+    }
+}
+
+/// A column's name split at the brackets that end it: the name before them and what they hold,
+/// both trimmed (`gyro_x (deg/s)` -> `gyro_x`, `deg/s`); `None` when the name does not end in a
+/// bracket, or holds nothing before it. The one reading of a unit in brackets: the header's
+/// unit here, the temperature's (`super::temperature_column`), the name without its unit
+/// (`super::text`).
+pub fn bracketed(name: &str) -> Option<(&str, &str)> {
+    let n = name.trim();
+    let open = match n.chars().last()? {
+        ']' => '[',
+        ')' => '(',
+        _ => return None,
     };
     let start = n.rfind(open)?;
-    let inner = n[start + open.len_utf8()..n.len() - close.len_utf8()].trim();
-    // A name that is nothing but brackets is a name, not a unit.
-    if n[..start].trim().is_empty() {
-        return None;
-    }
-    Some(parse(inner).ok_or_else(|| inner.to_string()))
+    let base = n[..start].trim();
+    (!base.is_empty()).then(|| (base, n[start + 1..n.len() - 1].trim()))
 }
 
 /// A ROS `sensor_msgs/Imu` field, whose unit the message fixes (REP 103): `angular_velocity.x`

@@ -176,11 +176,12 @@ pub fn infer_tau0<R: BufRead>(
         .copied()
         .find(|t| t.is_finite())
         .unwrap_or(0.0);
-    let (unit_s, unit_from) = match time_column_unit(&column).flatten() {
-        Some(u) => (u, "its name"),
+    // `unit_guessed`: seconds for want of anything that says so.
+    let (unit_s, unit_from, unit_guessed) = match time_column_unit(&column).flatten() {
+        Some(u) => (u, "its name", false),
         None => match epoch_unit(first) {
-            Some(u) => (u, "its stamps, a clock since 1970"),
-            None => (1.0, "no unit given: seconds"),
+            Some(u) => (u, "its stamps, a clock since 1970", false),
+            None => (1.0, "no unit given: seconds", true),
         },
     };
     // The shortest decimal step within the stamps' resolution: stamps read as f64 (a clock
@@ -236,7 +237,7 @@ pub fn infer_tau0<R: BufRead>(
         .iter()
         .filter(|t| t.is_finite())
         .all(|t| t.fract() == 0.0);
-    let doubt = (unit_from == "no unit given: seconds" && whole && tau0_s >= 2.0).then(|| {
+    let doubt = (unit_guessed && whole && tau0_s >= 2.0).then(|| {
         format!(
             "the time column `{column}` holds whole numbers stepping by {}, read as seconds: if \
              they count ms or us, name the unit (`{column} [ms]`) or give --tau0",

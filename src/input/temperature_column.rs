@@ -78,18 +78,9 @@ fn temperature_unit(inner: &str, temp_name: bool) -> Option<TemperatureScale> {
 /// degC (module doc); `None` for any other column.
 pub fn temperature_column(name: &str) -> Option<TemperatureScale> {
     let n = name.trim();
-    let bracket = match n.chars().last() {
-        Some(']') => n.rfind('['),
-        Some(')') => n.rfind('('),
-        _ => None,
-    };
-    match bracket {
-        Some(open) if !n[..open].trim().is_empty() => {
-            let base = n[..open].trim();
-            let inner = &n[open + 1..n.len() - 1];
-            temperature_unit(inner, temperature_name(base))
-        }
-        _ => temperature_name(n).then_some(TemperatureScale {
+    match super::header_unit::bracketed(n) {
+        Some((base, inner)) => temperature_unit(inner, temperature_name(base)),
+        None => temperature_name(n).then_some(TemperatureScale {
             named: false,
             ..CELSIUS
         }),

@@ -454,10 +454,7 @@ impl Layout {
         if keep.is_empty() {
             return Err(err("no data column (only a time column)".into()));
         }
-        let strict = names
-            .iter()
-            .map(|n| opts.channels.as_ref().is_none_or(|c| c.contains(n)))
-            .collect();
+        let strict = names.iter().map(|n| analysed(n, opts)).collect();
         Ok(Layout {
             width_in: source_names.len(),
             sep,
@@ -495,13 +492,36 @@ impl Layout {
         let mut l = Layout::new(named, true, self.sep, opts, path, line)?;
         if opts.columns.is_none() {
             l.names = l.keep.iter().map(|&i| bare[i].clone()).collect();
-            l.strict = l
-                .names
-                .iter()
-                .map(|n| opts.channels.as_ref().is_none_or(|c| c.contains(n)))
-                .collect();
+            l.strict = l.names.iter().map(|n| analysed(n, opts)).collect();
         }
         Ok(l)
+    }
+
+    /// The first data row `t` read with this layout, and the layout without the label columns
+    /// it shows: when a column it analyses holds text there, the next [`AHEAD_LINES`] lines of
+    /// `src` are read into `ahead` to tell labels from flagged samples
+    /// ([`Layout::without_label_columns`]). A row of the wrong width, or a damaged number, is
+    /// a bad row, as later.
+    fn first_row<R: BufRead>(
+        self,
+        t: &str,
+        src: &mut R,
+        ahead: &mut VecDeque<(Vec<u8>, usize, bool)>,
+        opts: &TextOptions,
+        path: &Path,
+        line: u64,
+    ) -> Result<(Row, Layout), UsageError> {
+        let l = if self.has_text_cells(t) {
+            *ahead = read_ahead(src, AHEAD_LINES)
+                .map_err(|e| input_error(path, line + 1, e.to_string()))?;
+            self.without_label_columns(t, &ahead_text(ahead), opts, path, line)?
+        } else {
+            self
+        };
+        Ok(match l.parse(t) {
+            Ok((v, time)) => ((Ok(v), time), l),
+            Err(problem) => ((Err(problem), f64::NAN), l),
+        })
     }
 
     /// Whether a column the run analyses holds in the first data row `t` a cell that is not a
@@ -691,22 +711,26 @@ fn ahead_text(ahead: &VecDeque<(Vec<u8>, usize, bool)>) -> Vec<String> {
     ahead
         .iter()
         .map(|(b, _, _)| String::from_utf8_lossy(b).trim().to_string())
-        .filter(|t| !t.is_empty() && !t.starts_with('#') && !t.starts_with("//"))
+        .filter(|t| !t.is_empty() && !is_note(t))
         .collect()
 }
 
 /// A column's name without the unit in brackets at its end (`gx [deg/s]` -> `gx`).
 fn base_name(n: &str) -> &str {
-    let n = n.trim();
-    let open = match n.chars().last() {
-        Some(']') => n.rfind('['),
-        Some(')') => n.rfind('('),
-        _ => None,
-    };
-    match open {
-        Some(o) if !n[..o].trim().is_empty() => n[..o].trim(),
-        _ => n,
-    }
+    super::header_unit::bracketed(n).map_or(n.trim(), |(base, _)| base)
+}
+
+/// A line of notes, not of data: `#` (a commented header is looked for before the first data
+/// row) or `//` (an exporter's notes, as Xsens MT Manager writes them).
+fn is_note(t: &str) -> bool {
+    t.starts_with('#') || t.starts_with("//")
+}
+
+/// Whether a column named `n` is one the run analyses (`--channels`, or every column).
+fn analysed(n: &str, opts: &TextOptions) -> bool {
+    opts.channels
+        .as_ref()
+        .is_none_or(|c| c.iter().any(|x| x == n))
 }
 
 /// Whether a row holds no value in any column the run analyses (`strict`): empty cells, `nan`
@@ -1183,18 +1207,7 @@ impl<R: BufRead> TextReader<R> {
                         layout = Some(l.with_units(&units, opts, path, line_no)?);
                         continue;
                     }
-                    let l = if l.has_text_cells(t) {
-                        ahead = read_ahead(&mut src, AHEAD_LINES)
-                            .map_err(|e| input_error(path, line_no + 1, e.to_string()))?;
-                        l.without_label_columns(t, &ahead_text(&ahead), opts, path, line_no)?
-                    } else {
-                        l
-                    };
-                    // A row of the wrong width, or a damaged number, is a bad row, as later.
-                    match l.parse(t) {
-                        Ok((v, time)) => ((Ok(v), time), l),
-                        Err(problem) => ((Err(problem), f64::NAN), l),
-                    }
+                    l.first_row(t, &mut src, &mut ahead, opts, path, line_no)?
                 }
                 None => {
                     let sep = Sep::of(t);
@@ -1224,22 +1237,8 @@ impl<R: BufRead> TextReader<R> {
                         let names = commented.unwrap_or_else(|| {
                             (1..=fields.len()).map(|i| format!("c{i}")).collect()
                         });
-                        let mut l = Layout::new(names, header, sep, opts, path, line_no)?;
-                        if l.has_text_cells(t) {
-                            ahead = read_ahead(&mut src, AHEAD_LINES)
-                                .map_err(|e| input_error(path, line_no + 1, e.to_string()))?;
-                            l = l.without_label_columns(
-                                t,
-                                &ahead_text(&ahead),
-                                opts,
-                                path,
-                                line_no,
-                            )?;
-                        }
-                        match l.parse(t) {
-                            Ok((v, time)) => ((Ok(v), time), l),
-                            Err(problem) => ((Err(problem), f64::NAN), l),
-                        }
+                        Layout::new(names, header, sep, opts, path, line_no)?
+                            .first_row(t, &mut src, &mut ahead, opts, path, line_no)?
                     } else {
                         let names: Vec<String> = fields
                             .iter()
@@ -1591,7 +1590,7 @@ impl<R: BufRead> TextReader<R> {
                 return Ok(Some((Err("not UTF-8 text".to_string()), f64::NAN)));
             };
             let t = text.trim();
-            if t.starts_with('#') || t.starts_with("//") {
+            if is_note(t) {
                 continue;
             }
             if self.repeats_header(t) {
