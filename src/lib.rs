@@ -61,6 +61,7 @@
 //!   sampling_step.rs       the sampling step read off the time column (no --tau0)
 //!   header_unit.rs         a data column's unit in its header (`[rad s^-1]`), without --unit
 //!   temperature_column.rs  the unit's temperature column (`temp [degC]`): not a channel
+//!   px4_export.rs          PX4's CSV export: us stamps, fields that describe samples
 //! frame/                   frames (pure: no I/O)                          bytes -> FrameEvent
 //!   descriptor/            the descriptor language (TOML) and its checked types
 //!     parse.rs             the top level, sync, checks across message kinds, interleave

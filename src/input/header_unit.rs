@@ -34,7 +34,7 @@ pub fn header_unit(name: &str) -> Option<Result<HeaderUnit, String>> {
     let n = name.trim();
     // `gyro_rad[0]`: an array's index in brackets (PX4's CSV export), not a unit.
     if let Some(base) = array_element(n) {
-        return px4_field(base).map(Ok);
+        return super::px4_export::field_unit(base).map(Ok);
     }
     match bracketed(n) {
         Some((_, inner)) => Some(parse(inner).ok_or_else(|| inner.to_string())),
@@ -92,24 +92,6 @@ pub fn array_element(name: &str) -> Option<&str> {
     let open = inner.rfind('[')?;
     let index = &inner[open + 1..];
     (!index.is_empty() && index.bytes().all(|b| b.is_ascii_digit())).then(|| inner[..open].trim())
-}
-
-/// A PX4 uORB field whose unit its message fixes, as its CSV export (`ulog2csv`) names it:
-/// `sensor_combined`'s `gyro_rad` (rad/s) and `accelerometer_m_s2` (m/s^2), `vehicle_imu`'s
-/// `delta_angle` (rad) and `delta_velocity` (m/s) increments.
-fn px4_field(base: &str) -> Option<HeaderUnit> {
-    let (unit, rate, text) = match base {
-        "gyro_rad" => ("rad", true, "rad/s, by PX4's sensor_combined"),
-        "accelerometer_m_s2" => ("m/s", true, "m/s^2, by PX4's sensor_combined"),
-        "delta_angle" => ("rad", false, "rad, by PX4's vehicle_imu"),
-        "delta_velocity" => ("m/s", false, "m/s, by PX4's vehicle_imu"),
-        _ => return None,
-    };
-    Some(HeaderUnit {
-        unit: unit.into(),
-        rate,
-        text: text.into(),
-    })
 }
 
 /// The physical atoms a header unit may hold: the name, the increment unit it gives, the power

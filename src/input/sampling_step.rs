@@ -179,6 +179,12 @@ pub fn infer_tau0<R: BufRead>(
     // `unit_guessed`: seconds for want of anything that says so.
     let (unit_s, unit_from, unit_guessed) = match time_column_unit(&column).flatten() {
         Some(u) => (u, "its name", false),
+        // uORB's `timestamp`: us since boot (`super::px4_export`).
+        None if reader.px4_export() && column == "timestamp" => (
+            super::px4_export::TIMESTAMP_UNIT_S,
+            "a PX4 export's timestamp, since boot",
+            false,
+        ),
         None => match epoch_unit(first) {
             Some(u) => (u, "its stamps, a clock since 1970", false),
             None => (1.0, "no unit given: seconds", true),
@@ -303,6 +309,28 @@ mod tests {
         assert_eq!(s.column, "timestamp [ns]");
         assert_eq!((s.steps, s.regular), (49, 48));
         assert_eq!(s.unit_from, "its name");
+    }
+
+    /// PX4's CSV export: `timestamp` counts us since boot (a whole number with no unit in its
+    /// name, far below a clock since 1970), jittered by a few us about a 4-ms step.
+    #[test]
+    fn px4_timestamps_are_microseconds() {
+        let mut t = String::from("timestamp,gyro_rad[0],gyro_integral_dt\n");
+        for k in 0..400u64 {
+            t.push_str(&format!(
+                "{},0.001,4000\n",
+                81_220_117 + 4000 * k + (k * 7) % 5
+            ));
+        }
+        let s = infer(&t).unwrap();
+        assert_eq!(s.tau0_s, 0.004);
+        assert_eq!(s.unit_s, 1e-6);
+        assert!(s.unit_from.contains("PX4"), "{}", s.unit_from);
+        assert!(s.doubt.is_none());
+        // The same stamps under a logger's header are seconds, with the doubt said.
+        let t = t.replacen("gyro_rad[0],gyro_integral_dt", "gx,gy", 1);
+        let e = infer(&t).unwrap_err().to_string();
+        assert!(e.contains("not a sampling step"), "{e}");
     }
 
     /// No unit in the name: a clock since 1970 in microseconds is told by its size; plain

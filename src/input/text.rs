@@ -24,6 +24,7 @@ use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
 use crate::error::UsageError;
+use crate::input::px4_export;
 use crate::input::time_column::{TimeColumn, TimeState};
 
 /// Rows per batch handed to the analysis.
@@ -320,6 +321,8 @@ struct Layout {
     names: Vec<String>,
     /// Input column (0-based) of the time stamps, if any.
     time: Option<usize>,
+    /// The header is PX4's CSV export's ([`px4_export::is_export`]).
+    px4: bool,
 }
 
 fn input_error(path: &Path, line: u64, problem: String) -> UsageError {
@@ -399,10 +402,15 @@ impl Layout {
                 .as_ref()
                 .is_some_and(|c| c.iter().any(|x| x == n || x == base_name(n)))
         };
+        // PX4's CSV export: its fields that describe samples (intervals, relative stamps,
+        // clipping, ids) are no channels either (`super::px4_export`).
+        let px4 = header && px4_export::is_export(&source_names);
+        let bookkeeping = |i: usize| px4 && px4_export::bookkeeping(&source_names[i]);
         let other_clock = |i: usize| {
             Some(i) != time
                 && ((time.is_some() && time_name(&source_names[i]).is_some())
-                    || counter_column(&source_names[i]))
+                    || counter_column(&source_names[i])
+                    || bookkeeping(i))
                 && !named(&source_names[i])
         };
         let (keep, names) = match &opts.columns {
@@ -432,6 +440,8 @@ impl Layout {
                 for i in (0..source_names.len()).filter(|&i| other_clock(i)) {
                     let what = if counter_column(&source_names[i]) {
                         "a counter"
+                    } else if bookkeeping(i) {
+                        "a PX4 field that describes samples"
                     } else {
                         "a second time column"
                     };
@@ -463,6 +473,7 @@ impl Layout {
             source_names,
             names,
             time,
+            px4,
         })
     }
 
@@ -1349,6 +1360,12 @@ impl<R: BufRead> TextReader<R> {
         self.samples
     }
 
+    /// Whether the header is that of PX4's CSV export (`super::px4_export`): its `timestamp`
+    /// counts us since boot.
+    pub fn px4_export(&self) -> bool {
+        self.layout.px4
+    }
+
     /// The header name of the time column, if the input has one.
     pub fn time_column_name(&self) -> Option<&str> {
         self.layout
@@ -2027,6 +2044,44 @@ mod tests {
         assert_eq!(time_column_unit("GpsTime"), Some(None));
         assert!(counter_column("field.header.seq") && counter_column("frame_count"));
         assert!(!counter_column("gyro_x_counts") && !counter_column("gx"));
+    }
+
+    /// PX4's `ulog2csv` export of sensor_combined: the fields that describe samples
+    /// (integration intervals, a relative stamp, clipping flags, calibration counts) are no
+    /// channels; `timestamp` in us finds a missing sample; `--channels` still reads such a field.
+    #[test]
+    fn a_px4_export() {
+        let mut text = String::from(
+            "timestamp,gyro_rad[0],gyro_integral_dt,accelerometer_timestamp_relative,\
+             accelerometer_m_s2[0],accelerometer_clipping,gyro_calibration_count\n",
+        );
+        for (k, t) in [0u64, 1, 2, 4, 5].iter().enumerate() {
+            let us = 20_313_000 + 5000 * t + [0, 2, 1, 3, 2][k];
+            text.push_str(&format!("{us},0.0{k},5000,0,9.8{k},0,1\n"));
+        }
+        let opts = TextOptions {
+            tau0_s: Some(0.005),
+            ..TextOptions::default()
+        };
+        let mut r = TextReader::with_options(text.as_bytes(), Path::new("p.csv"), &opts).unwrap();
+        assert!(r.px4_export());
+        assert_eq!(r.names(), ["gyro_rad[0]", "accelerometer_m_s2[0]"]);
+        let mut out = Vec::new();
+        while r.read_rows(&mut out, 8).unwrap() > 0 {}
+        // Five rows and the one missing between steps 2 and 4.
+        assert_eq!(out.len(), 12);
+        assert!(out[6].is_nan() && out[7].is_nan());
+        assert_eq!((out[8], out[9]), (0.03, 9.83));
+        let opts = TextOptions {
+            tau0_s: Some(0.005),
+            channels: Some(vec!["gyro_integral_dt".into()]),
+            ..TextOptions::default()
+        };
+        let r = TextReader::with_options(text.as_bytes(), Path::new("p.csv"), &opts).unwrap();
+        assert!(r.names().contains(&"gyro_integral_dt".to_string()));
+        // A logger's own `timestamp,gx` is no PX4 export.
+        let r = TextReader::new("timestamp,gx\n0,1\n".as_bytes(), Path::new("l.csv")).unwrap();
+        assert!(!r.px4_export());
     }
 
     /// What a review of the first version found, each a file that read wrongly or crashed:

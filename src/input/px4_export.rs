@@ -1,0 +1,138 @@
+//! PX4's CSV export (`ulog2csv LOG.ulg`, one file per uORB message: `LOG_sensor_combined_0.csv`).
+//!
+//! Every uORB message starts with `timestamp`, microseconds since the autopilot booted, written
+//! as a whole number with no unit in its name; arrays are flattened to `name[0]`, `name[1]`, ...
+//! Beside the measurements a message carries fields that describe each sample rather than measure
+//! anything: its integration interval (`gyro_integral_dt`, `delta_angle_dt`, in us), a stamp
+//! relative to `timestamp` (`accelerometer_timestamp_relative`), the sensor's id, clipping flags
+//! and counters, calibration counts (PX4's `msg/SensorCombined.msg`, `msg/VehicleImu.msg`,
+//! `msg/SensorGyro.msg`). Read as channels they are constants or counters, and a curve of them
+//! means nothing; and a `timestamp` read as seconds makes tau0 5000 s at 200 Hz.
+//!
+//! So a header that is PX4's ([`is_export`]) gets its `timestamp` read in us ([`TIMESTAMP_UNIT_S`])
+//! and its bookkeeping fields ([`bookkeeping`]) left out of the channels unless `--channels`
+//! names them. The fields whose unit the message fixes are [`field_unit`]'s.
+
+use super::header_unit::{array_element, HeaderUnit};
+
+/// Seconds per unit of a uORB `timestamp`: microseconds since boot.
+pub const TIMESTAMP_UNIT_S: f64 = 1e-6;
+
+/// Whether a header (`names`, in input order) is that of a PX4 CSV export: its first column is
+/// `timestamp`, and another column is a flattened array element (`gyro_rad[0]`) or a field only
+/// uORB messages carry (`timestamp_sample`, `device_id`, `..._timestamp_relative`,
+/// `..._integral_dt`).
+pub fn is_export(names: &[String]) -> bool {
+    let Some((first, rest)) = names.split_first() else {
+        return false;
+    };
+    first == "timestamp"
+        && rest.iter().any(|n| {
+            array_element(n).is_some()
+                || n == "timestamp_sample"
+                || n == "device_id"
+                || n.ends_with("_timestamp_relative")
+                || n.ends_with("_integral_dt")
+        })
+}
+
+/// Whether the field `name` of a PX4 export describes its samples rather than measures: an
+/// interval (`..._dt`), a relative stamp, a device id, clipping flags and counters, error and
+/// calibration counts, a FIFO message's sample count and scale.
+pub fn bookkeeping(name: &str) -> bool {
+    let base = array_element(name).unwrap_or(name);
+    let words: Vec<&str> = base.split('_').collect();
+    let last = words.last().copied().unwrap_or("");
+    let has = |w: &str| words.contains(&w);
+    last == "dt"
+        || (has("timestamp") && has("relative"))
+        || (has("device") && last == "id")
+        || has("clipping")
+        || base == "clip_counter"
+        || (last == "count" && (has("error") || has("calibration")))
+        || base == "samples"
+        || base == "scale"
+}
+
+/// A uORB field whose unit its message fixes, by its name without the array index:
+/// `sensor_combined`'s `gyro_rad` (rad/s) and `accelerometer_m_s2` (m/s^2), `vehicle_imu`'s
+/// `delta_angle` (rad) and `delta_velocity` (m/s) increments.
+pub fn field_unit(base: &str) -> Option<HeaderUnit> {
+    let (unit, rate, text) = match base {
+        "gyro_rad" => ("rad", true, "rad/s, by PX4's sensor_combined"),
+        "accelerometer_m_s2" => ("m/s", true, "m/s^2, by PX4's sensor_combined"),
+        "delta_angle" => ("rad", false, "rad, by PX4's vehicle_imu"),
+        "delta_velocity" => ("m/s", false, "m/s, by PX4's vehicle_imu"),
+        _ => return None,
+    };
+    Some(HeaderUnit {
+        unit: unit.into(),
+        rate,
+        text: text.into(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn names(h: &str) -> Vec<String> {
+        h.split(',').map(str::to_string).collect()
+    }
+
+    /// The headers `ulog2csv` writes for sensor_combined, vehicle_imu and sensor_gyro are PX4's;
+    /// a logger's `timestamp,gx,gy` and a header with `timestamp` elsewhere are not.
+    #[test]
+    fn export_headers() {
+        for h in [
+            "timestamp,gyro_rad[0],gyro_rad[1],gyro_rad[2],gyro_integral_dt,accelerometer_timestamp_relative,accelerometer_m_s2[0]",
+            "timestamp,timestamp_sample,accel_device_id,gyro_device_id,delta_angle[0],delta_angle[1]",
+            "timestamp,timestamp_sample,device_id,x,y,z,temperature,error_count",
+        ] {
+            assert!(is_export(&names(h)), "{h}");
+        }
+        for h in [
+            "timestamp,gx,gy,gz",
+            "gx,timestamp,gyro_rad[0]",
+            "timestamp",
+            "time,timestamp_sample,x",
+        ] {
+            assert!(!is_export(&names(h)), "{h}");
+        }
+    }
+
+    /// The fields of sensor_combined, vehicle_imu and sensor_gyro that describe samples; the
+    /// measurements and the temperature are not among them.
+    #[test]
+    fn bookkeeping_fields() {
+        for n in [
+            "gyro_integral_dt",
+            "accelerometer_timestamp_relative",
+            "accelerometer_integral_dt",
+            "accelerometer_clipping",
+            "gyro_clipping",
+            "accel_calibration_count",
+            "gyro_calibration_count",
+            "accel_device_id",
+            "device_id",
+            "delta_angle_dt",
+            "delta_velocity_clipping",
+            "error_count",
+            "clip_counter[2]",
+            "samples",
+        ] {
+            assert!(bookkeeping(n), "{n}");
+        }
+        for n in [
+            "gyro_rad[0]",
+            "accelerometer_m_s2[2]",
+            "delta_angle[1]",
+            "x",
+            "temperature",
+            "timestamp_sample",
+            "dt_gyro_x",
+        ] {
+            assert!(!bookkeeping(n), "{n}");
+        }
+    }
+}
