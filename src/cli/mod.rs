@@ -30,6 +30,7 @@ use allanscope::analysis::{AnalysisOptions, InputKind};
 use allanscope::error::UsageError;
 use allanscope::frame::FrameDescriptor;
 use allanscope::input::header_unit::{header_unit, units_from_headers};
+use allanscope::input::px4_export;
 use allanscope::input::text::{ColumnPick, TextOptions, TextReader};
 use allanscope::model::fit::FitMethod;
 use allanscope::plan::checkpoint_setup::CheckpointRequest;
@@ -694,13 +695,26 @@ impl DataArgs {
         }
         let columns = reader.channel_columns();
         // A column renamed with a unit (`--columns "c17=wx [rad/s]"`) is in that unit when its
-        // own header gives none.
+        // own header gives none; a PX4 sensor_gyro's `x` is in the unit its message fixes.
+        let px4: Vec<Option<String>> = setups
+            .iter()
+            .map(|c| {
+                let src = columns[c.column].1;
+                reader
+                    .px4_export()
+                    .then(|| px4_export::message_unit(Path::new(input), src))
+                    .flatten()
+                    .map(|u| format!("{src} [{u}]"))
+            })
+            .collect();
         let ours: Vec<(usize, &str)> = setups
             .iter()
-            .map(|c| match columns[c.column] {
+            .zip(&px4)
+            .map(|(c, p)| match columns[c.column] {
                 (i, src) if header_unit(src).is_none() && header_unit(&c.name).is_some() => {
                     (i, c.name.as_str())
                 }
+                (i, _) if p.is_some() => (i, p.as_deref().unwrap_or_default()),
                 col => col,
             })
             .collect();

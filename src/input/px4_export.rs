@@ -72,6 +72,29 @@ pub fn field_unit(base: &str) -> Option<HeaderUnit> {
     })
 }
 
+/// The unit of a `sensor_gyro` or `sensor_accel` export's `x`, `y`, `z` (rad/s, m/s^2 by their
+/// message), which their names do not carry: the message is read off the file's name, as
+/// `ulog2csv` writes it (`LOG_sensor_gyro_0.csv`; not `sensor_gyro_fifo`, whose `x[k]` are
+/// scaled counts, nor `sensor_gyro_status`). `None` for any other file or column.
+pub fn message_unit(file: &std::path::Path, column: &str) -> Option<&'static str> {
+    if !matches!(column, "x" | "y" | "z") {
+        return None;
+    }
+    let stem = file.file_stem()?.to_str()?;
+    // `..._sensor_gyro_<instance>`: the message name, then the instance number.
+    let (head, instance) = stem.rsplit_once('_')?;
+    if instance.is_empty() || !instance.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    if head.ends_with("sensor_gyro") {
+        Some("rad/s")
+    } else if head.ends_with("sensor_accel") {
+        Some("m/s^2")
+    } else {
+        None
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -134,5 +157,20 @@ mod tests {
         ] {
             assert!(!bookkeeping(n), "{n}");
         }
+    }
+
+    /// `x`, `y`, `z` of sensor_gyro and sensor_accel exports by the file's name; not of their
+    /// FIFO or status messages, nor another column.
+    #[test]
+    fn units_by_the_message() {
+        use std::path::Path;
+        let u = |f: &str, c: &str| message_unit(Path::new(f), c);
+        assert_eq!(u("log_12_sensor_gyro_0.csv", "x"), Some("rad/s"));
+        assert_eq!(u("/tmp/flight/log_sensor_accel_1.csv", "z"), Some("m/s^2"));
+        assert_eq!(u("log_sensor_gyro_0.csv", "temperature"), None);
+        assert_eq!(u("log_sensor_gyro_fifo_0.csv", "x"), None);
+        assert_eq!(u("log_sensor_gyro_status_0.csv", "x"), None);
+        assert_eq!(u("sensor_gyro.csv", "x"), None);
+        assert_eq!(u("log_vehicle_imu_0.csv", "x"), None);
     }
 }

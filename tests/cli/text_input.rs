@@ -274,7 +274,7 @@ fn a_rostopic_export_reads_as_the_plain_file() {
         ],
     );
     let (c, s) = parsed(&out);
-    let (pc, ps) = parsed(&analyze(&q, &["--rate"]));
+    let (pc, ps) = parsed(&analyze_no_tau0(&q, &["--rate", "--tau0", "0.004"]));
     assert_eq!((s.tau0, s.bad_rows, s.invalid_values), (0.01, 0, 0));
     assert_eq!(s.samples, ps.samples);
     assert_eq!(c.len(), pc.len());
@@ -300,6 +300,43 @@ fn a_rostopic_export_reads_as_the_plain_file() {
     let (c, _) = parsed(&out);
     for (x, y) in c.iter().zip(&pc) {
         assert_eq!((x.unit.as_str(), &x.sigma), ("deg", &y.sigma));
+    }
+}
+
+/// PX4's `ulog2csv` exports as they come, no `--tau0`, no `--unit`: sensor_combined's
+/// `timestamp` in us since boot (jittered by a few us) gives tau0, its fields that describe
+/// samples are no channels, `gyro_rad[0]` is in rad; sensor_gyro's `x`, `y` are in rad by the
+/// message its file is named after. The curves are those of the same rates in a plain file.
+#[test]
+fn px4_exports_read_as_they_come() {
+    let (a, b) = columns();
+    let mut combined = String::from(
+        "timestamp,gyro_rad[0],gyro_rad[1],gyro_integral_dt,accelerometer_timestamp_relative,\
+         gyro_clipping,gyro_calibration_count\n",
+    );
+    let mut gyro = String::from("timestamp,timestamp_sample,device_id,x,y,temperature,samples\n");
+    let mut plain = String::from("wx,wy\n");
+    for i in 0..a.len() {
+        let us = 20_313_000 + 4000 * i as u64 + (i as u64 * 7) % 5;
+        combined += &format!("{us},{:e},{:e},4000,0,0,1\n", a[i], b[i]);
+        gyro += &format!("{us},{},2490378,{:e},{:e},41.5,1\n", us - 150, a[i], b[i]);
+        plain += &format!("{:e},{:e}\n", a[i], b[i]);
+    }
+    let q = write("px4_plain.csv", plain.as_bytes());
+    let (pc, ps) = parsed(&analyze_no_tau0(&q, &["--rate", "--tau0", "0.004"]));
+    for (name, text) in [
+        ("log_1_sensor_combined_0.csv", &combined),
+        ("log_1_sensor_gyro_0.csv", &gyro),
+    ] {
+        let p = write(name, text.as_bytes());
+        let out = analyze_no_tau0(&p, &[]);
+        let (c, s) = parsed(&out);
+        assert_eq!((s.tau0, s.channels.len()), (0.004, 2), "{name}");
+        assert_eq!(s.samples, ps.samples, "{name}");
+        assert_eq!(c.len(), pc.len(), "{name}");
+        for (x, y) in c.iter().zip(&pc) {
+            assert_eq!((x.unit.as_str(), &x.sigma), ("rad", &y.sigma), "{name}");
+        }
     }
 }
 
