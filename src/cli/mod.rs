@@ -176,7 +176,7 @@ pub struct DataArgs {
     #[arg(long)]
     pub phase: bool,
     /// Unit of the increment of text columns, also with --rate or --phase (with --rate, `deg/s`
-    /// means `deg`): deg, rad, mrad, arcsec, m/s, ft/s, g (g*s), mg give datasheet units.
+    /// means `deg`): deg, rad, mrad, arcsec, m/s, ft/s, g (g*s), mg, ug give datasheet units.
     /// Without it, a unit in brackets in a column's header (`w_RS_S_x [rad s^-1]`, `acc_x[g]`)
     /// is read, rates or increments as it says; else `u`.
     #[arg(long, value_name = "U")]

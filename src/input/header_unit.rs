@@ -94,10 +94,33 @@ pub fn array_element(name: &str) -> Option<&str> {
     (!index.is_empty() && index.bytes().all(|b| b.is_ascii_digit())).then(|| inner[..open].trim())
 }
 
+/// What a column holds when its unit in brackets is that of a quantity no inertial sensor
+/// measures (a magnetometer's `uT`, a barometer's `hPa`, a supply's `V`): such a column is no
+/// channel unless the run names it. `G` and `mG` are not among these (a gauss as often as a g);
+/// nor are temperatures (`super::temperature_column` reads them).
+pub fn other_quantity(name: &str) -> Option<&'static str> {
+    let (_, inner) = bracketed(name)?;
+    let u = inner.replace(['\u{b5}', '\u{3bc}'], "u");
+    let what = match u.as_str() {
+        "uT" | "nT" | "mT" | "T" | "gauss" | "Gauss" | "Gs" | "mGauss" | "mgauss" => {
+            "a magnetic field"
+        }
+        "Pa" | "hPa" | "kPa" | "mbar" | "bar" | "psi" | "mmHg" | "inHg" | "atm" => "a pressure",
+        "V" | "mV" | "uV" => "a voltage",
+        "A" | "mA" | "uA" => "a current",
+        "%" | "%RH" => "a percentage",
+        "lx" | "lux" => "an illuminance",
+        "Hz" | "kHz" => "a frequency",
+        "dB" | "dBm" => "a level in dB",
+        _ => return None,
+    };
+    Some(what)
+}
+
 /// The physical atoms a header unit may hold: the name, the increment unit it gives, the power
 /// of time it carries itself (`dps` is deg/s) and the power of time of its increment (`m/s` for
 /// a length, `g*s` for an acceleration); one power below the increment's is a rate.
-const ATOMS: [(&str, &str, i32, i32); 12] = [
+const ATOMS: [(&str, &str, i32, i32); 13] = [
     ("rad", "rad", 0, 0),
     ("mrad", "mrad", 0, 0),
     ("urad", "urad", 0, 0),
@@ -110,7 +133,11 @@ const ATOMS: [(&str, &str, i32, i32); 12] = [
     ("ft", "ft/s", 0, -1),
     ("g", "g", 0, 1),
     ("mg", "mg", 0, 1),
+    ("ug", "ug", 0, 1),
 ];
+
+/// Names of the hour as a factor of a unit (`deg/h`, `°/hr`).
+const HOURS: [&str; 4] = ["h", "hr", "hrs", "hour"];
 
 fn parse(text: &str) -> Option<HeaderUnit> {
     let t = text
@@ -124,9 +151,18 @@ fn parse(text: &str) -> Option<HeaderUnit> {
         return None;
     }
     let t = t.to_lowercase();
+    // A FOG's rate in deg/h: 1 deg/h over 1 s turns 1 arcsec, so it is a rate in arcsec/s.
+    if t == "dph" {
+        return Some(HeaderUnit {
+            unit: "arcsec".into(),
+            rate: true,
+            text: text.to_string(),
+        });
+    }
     let mut atom: Option<(&str, i32)> = None;
-    // The power of time of the whole unit.
+    // The power of time of the whole unit, and of the hour in it.
     let mut time = 0i32;
+    let mut hours = 0i32;
     for (i, part) in t.split('/').enumerate() {
         let sign = if i == 0 { 1 } else { -1 };
         let factors = part
@@ -141,6 +177,10 @@ fn parse(text: &str) -> Option<HeaderUnit> {
                 time += power;
                 continue;
             }
+            if HOURS.contains(&base) {
+                hours += power;
+                continue;
+            }
             let &(_, unit, own, incr) = ATOMS.iter().find(|(a, _, _, _)| *a == base)?;
             if atom.is_some() || power != 1 {
                 return None;
@@ -152,7 +192,15 @@ fn parse(text: &str) -> Option<HeaderUnit> {
             return None;
         }
     }
-    let (unit, incr) = atom?;
+    let (mut unit, incr) = atom?;
+    // Per hour: only deg/h (arcsec/s, above); other units per hour have no increment unit.
+    if hours != 0 {
+        if (unit, hours, time, incr) != ("deg", -1, 0, 0) {
+            return None;
+        }
+        unit = "arcsec";
+        time = -1;
+    }
     let rate = match time - incr {
         0 => false,
         -1 => true,
@@ -353,6 +401,19 @@ mod tests {
         assert_eq!(unit("ax [ft/s^2]"), r("ft/s"));
         assert_eq!(unit("wx [mrad/s]"), r("mrad"));
         assert_eq!(unit("wx [\u{b5}rad/s]"), r("urad"));
+        // A FOG's rate in deg/h is one in arcsec/s (1 deg/h turns 1 arcsec in 1 s); a
+        // navigation accelerometer's in micro-g.
+        for n in [
+            "wx [deg/h]",
+            "wx [deg/hr]",
+            "wx (\u{b0}/h)",
+            "wx [dph]",
+            "wx [deg h^-1]",
+        ] {
+            assert_eq!(unit(n), r("arcsec"), "{n}");
+        }
+        assert_eq!(unit("az [\u{b5}g]"), r("ug"));
+        assert_eq!(unit("az [ug]"), r("ug"));
         // Increments.
         assert_eq!(unit("dtheta_x [rad]"), i("rad"));
         assert_eq!(unit("dtheta_x [arcsec]"), i("arcsec"));
@@ -370,7 +431,9 @@ mod tests {
             ("mag_x [G]", "G"),
             ("mag_x [uT]", "uT"),
             ("temp [degC]", "degC"),
-            ("gx [deg/h]", "deg/h"),
+            ("gx [rad/h]", "rad/h"),
+            ("gx [deg/h^2]", "deg/h^2"),
+            ("dtheta [deg*h]", "deg*h"),
             ("gx [rad/s^2]", "rad/s^2"),
             ("ax [m]", "m"),
             ("gx [rad rad/s]", "rad rad/s"),
@@ -378,6 +441,31 @@ mod tests {
             ("acc (x)", "x"),
         ] {
             assert_eq!(header_unit(n), Some(Err(t.to_string())), "{n}");
+        }
+    }
+
+    /// A magnetometer's, a barometer's, a supply's column is another quantity; inertial units,
+    /// temperatures and the ambiguous `G` are not.
+    #[test]
+    fn other_quantities() {
+        for (n, w) in [
+            ("mag_x [uT]", "a magnetic field"),
+            ("mx (\u{b5}T)", "a magnetic field"),
+            ("baro [hPa]", "a pressure"),
+            ("vbat [V]", "a voltage"),
+            ("rssi [dBm]", "a level in dB"),
+        ] {
+            assert_eq!(other_quantity(n), Some(w), "{n}");
+        }
+        for n in [
+            "mag_x [G]",
+            "acc [mG]",
+            "gx [deg/s]",
+            "temp [degC]",
+            "mag_x",
+            "x [a.u.]",
+        ] {
+            assert_eq!(other_quantity(n), None, "{n}");
         }
     }
 

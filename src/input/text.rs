@@ -406,11 +406,18 @@ impl Layout {
         // clipping, ids) are no channels either (`super::px4_export`).
         let px4 = header && px4_export::is_export(&source_names);
         let bookkeeping = |i: usize| px4 && px4_export::bookkeeping(&source_names[i]);
+        // A magnetometer's or a barometer's column by its unit (`mag_x [uT]`): no channel.
+        let other_quantity = |i: usize| {
+            header
+                .then(|| super::header_unit::other_quantity(&source_names[i]))
+                .flatten()
+        };
         let other_clock = |i: usize| {
             Some(i) != time
                 && ((time.is_some() && time_name(&source_names[i]).is_some())
                     || counter_column(&source_names[i])
-                    || bookkeeping(i))
+                    || bookkeeping(i)
+                    || other_quantity(i).is_some())
                 && !named(&source_names[i])
         };
         let (keep, names) = match &opts.columns {
@@ -439,14 +446,16 @@ impl Layout {
             None => {
                 for i in (0..source_names.len()).filter(|&i| other_clock(i)) {
                     let what = if counter_column(&source_names[i]) {
-                        "a counter"
+                        "is a counter".to_string()
                     } else if bookkeeping(i) {
-                        "a PX4 field that describes samples"
+                        "is a PX4 field that describes samples".to_string()
+                    } else if let Some(q) = other_quantity(i) {
+                        format!("holds {q}, by its unit")
                     } else {
-                        "a second time column"
+                        "is a second time column".to_string()
                     };
                     tracing::info!(
-                        "{}: column {} `{}` is {what}: not a channel (name it in --channels to \
+                        "{}: column {} `{}` {what}: not a channel (name it in --channels to \
                          analyse it)",
                         path.display(),
                         i + 1,

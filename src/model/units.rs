@@ -42,8 +42,8 @@ pub struct IncrementUnit {
 
 impl IncrementUnit {
     /// Parses an increment unit: `rad`, `mrad`, `urad` (or `µrad`), `deg`, `arcsec` (angle);
-    /// `m/s`, `mm/s`, `ft/s`, `g`, `mg` (velocity; `g` as an increment is g*s, also written
-    /// `g*s`, `g.s` or `g s`, likewise `mg*s`). `None` for anything else (e.g. the default `u`).
+    /// `m/s`, `mm/s`, `ft/s`, `g`, `mg`, `ug` (velocity; `g` as an increment is g*s, also
+    /// written `g*s`, `g.s` or `g s`, likewise `mg*s`, `ug*s`; `µg` is `ug`). `None` for anything else (e.g. the default `u`).
     pub fn parse(unit: &str) -> Option<IncrementUnit> {
         let t = unit.trim().replace('µ', "u").replace(['·', '.', ' '], "*");
         let (kind, si) = match t.as_str() {
@@ -57,6 +57,7 @@ impl IncrementUnit {
             "ft/s" => (SensorKind::Accel, M_PER_FT),
             "g" | "g*s" => (SensorKind::Accel, G0_M_S2),
             "mg" | "mg*s" => (SensorKind::Accel, G0_M_S2 * 1e-3),
+            "ug" | "ug*s" => (SensorKind::Accel, G0_M_S2 * 1e-6),
             _ => return None,
         };
         Some(IncrementUnit {

@@ -116,11 +116,45 @@ fn rates_and_increments_are_read_from_the_headers() {
     assert_eq!(curves(&analyze(&p, &phase))[0].unit, "deg");
 }
 
+/// A FOG's rate in deg/h is a rate in arcsec/s (1 deg/h turns 1 arcsec in 1 s): the records of
+/// `wx [deg/h]` are those of the same column read with `--rate --unit arcsec`, in arcsec; a
+/// navigation accelerometer's `[ug]` is read as `--rate --unit ug`, and its B comes out in ug
+/// as that of `[mg]` in mg scaled by 1000.
+#[test]
+fn deg_per_hour_and_micro_g() {
+    let p = file("fog.csv", "t,wx [deg/h],az [ug],ay [mg]");
+    let out = analyze(&p, &["--columns", "wx [deg/h]"]);
+    let read = curves(&out);
+    assert_eq!(read[0].unit, "arcsec");
+    let told = curves(&analyze(
+        &p,
+        &["--columns", "wx [deg/h]", "--rate", "--unit", "arcsec"],
+    ));
+    assert_eq!(read, told);
+    let out = analyze(&p, &["--columns", "az [ug]"]);
+    assert_eq!(curves(&out)[0].unit, "ug");
+    let told = curves(&analyze(
+        &p,
+        &["--columns", "az [ug]", "--rate", "--unit", "ug"],
+    ));
+    assert_eq!(curves(&out), told);
+}
+
 #[test]
 fn headers_that_cannot_be_read_or_contradict_the_options_are_usage_errors() {
+    // A magnetometer's column is no channel by its unit (said); picked, its unit is not one
+    // allanscope knows.
     let p = file("mixed.csv", "t,w [rad s^-1],a [m s^-2],mag_x [uT]");
+    let out = analyze(&p, &[]);
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(
+        err.contains("column 4 `mag_x [uT]` holds a magnetic field, by its unit: not a channel"),
+        "{err}"
+    );
+    let read = curves(&out);
+    assert_eq!(read.len(), 2);
     usage_error(
-        &analyze(&p, &[]),
+        &analyze(&p, &["--columns", "w [rad s^-1],mag_x [uT]"]),
         &[
             "mixed.csv: column 4 `mag_x [uT]`: unit `uT` in its header is not one",
             "--unit U",
@@ -168,12 +202,12 @@ fn diagnose_reads_the_header_units() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
     assert!(err.contains("read as rate samples, as --rate"), "{err}");
-    let p = file("diag_bad.csv", "t,gx [deg/s],gy [deg/h],gz [deg/s]");
+    let p = file("diag_bad.csv", "t,gx [deg/s],gy [rad/h],gz [deg/s]");
     let out = exe()
         .arg("diagnose")
         .arg(&p)
         .args(["--json"])
         .output()
         .unwrap();
-    usage_error(&out, &["column 3 `gy [deg/h]`: unit `deg/h`"]);
+    usage_error(&out, &["column 3 `gy [rad/h]`: unit `rad/h`"]);
 }
