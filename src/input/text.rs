@@ -207,6 +207,12 @@ fn time_name(name: &str) -> Option<(bool, Option<f64>)> {
     if original.eq_ignore_ascii_case("sampletimefine") {
         return Some((false, Some(1e-4)));
     }
+    // An Arduino sketch's clocks, by the functions that read them: `millis()`, `micros()`.
+    for (clock, unit) in [("millis", 1e-3), ("micros", 1e-6)] {
+        if original.eq_ignore_ascii_case(clock) {
+            return Some((false, Some(unit)));
+        }
+    }
     let n = camel_words(original).to_ascii_lowercase();
     let unit_of = |u: &str| {
         let u = u.trim();
@@ -631,6 +637,19 @@ impl Layout {
     /// The channel values of a row and its time stamp (NaN without a time column or where the
     /// stamp is not a number), or what is wrong with the row.
     fn parse(&self, t: &str) -> Result<(Vec<f64>, f64), String> {
+        if self.sep == Sep::Labelled {
+            let known = |l: &&str| self.source_names.iter().any(|n| n == l);
+            if let Some((l, _)) = labelled_cells(t)
+                .unwrap_or_default()
+                .iter()
+                .find(|(l, _)| !known(l))
+            {
+                return Err(format!(
+                    "label `{l}` is none of the first row's ({})",
+                    self.source_names.join(", ")
+                ));
+            }
+        }
         let fields = self.split(t);
         if fields.len() != self.width_in {
             return Err(format!(
@@ -696,6 +715,24 @@ impl Layout {
     /// The fields of a row: split at the header's separator, or, when that does not give the
     /// header's width, as the row itself suggests (a row written with spaces in a comma file).
     fn split<'a>(&self, t: &'a str) -> Vec<&'a str> {
+        if self.sep == Sep::Labelled {
+            // Each value under the name its label gives, in the header's order: a label not
+            // known is a row of the wrong width (a bad row); one left out, a gap.
+            let Some(pairs) = labelled_cells(t) else {
+                return split(t);
+            };
+            if pairs
+                .iter()
+                .any(|(l, _)| !self.source_names.iter().any(|n| n == l))
+            {
+                return vec![""; pairs.len().max(self.width_in) + 1];
+            }
+            return self
+                .source_names
+                .iter()
+                .map(|n| pairs.iter().find(|(l, _)| l == n).map_or("", |(_, v)| *v))
+                .collect();
+        }
         let fields = self.sep.split(t);
         if fields.len() == self.width_in {
             fields
@@ -1050,6 +1087,35 @@ enum Sep {
     Tab,
     Comma,
     Spaces,
+    /// Each value after its label, as an Arduino's serial monitor prints them
+    /// ([`labelled_cells`]): `ax:0.012 ay:-0.003` or `ax=0.012, ay=-0.003`.
+    Labelled,
+}
+
+/// A line of labelled values, `label:value` or `label=value` (spaces allowed around the `:` or
+/// `=`), the pairs separated by commas, semicolons, tabs or spaces, as an Arduino sketch prints
+/// them for its serial plotter (`ax:0.012 ay:-0.003 gz:0.0001`): the (label, value) pairs, or
+/// `None` when the line is not such. A label starts with a letter and holds no space (`12:03:04`
+/// is a time of day, not a label).
+fn labelled_cells(line: &str) -> Option<Vec<(&str, &str)>> {
+    let is_sep = |c: char| c.is_whitespace() || c == ',' || c == ';';
+    let mut out = Vec::new();
+    let mut rest = line.trim();
+    while !rest.is_empty() {
+        let end = rest.find([':', '='])?;
+        let label = rest[..end].trim();
+        if !label.starts_with(char::is_alphabetic) || label.contains(is_sep) {
+            return None;
+        }
+        rest = rest[end + 1..].trim_start();
+        let value_end = rest.find(is_sep).unwrap_or(rest.len());
+        if value_end == 0 {
+            return None;
+        }
+        out.push((label, &rest[..value_end]));
+        rest = rest[value_end..].trim_start_matches(is_sep);
+    }
+    (!out.is_empty()).then_some(out)
 }
 
 impl Sep {
@@ -1071,8 +1137,23 @@ impl Sep {
             Sep::Tab => line.split('\t').collect(),
             Sep::Comma => line.split(',').collect(),
             Sep::Spaces => line.split_whitespace().collect(),
+            Sep::Labelled => labelled_cells(line)
+                .map(|pairs| pairs.into_iter().map(|(_, v)| v).collect())
+                .unwrap_or_else(|| split(line)),
         }
     }
+}
+
+/// The labels of a first data row of labelled values ([`labelled_cells`]), when each labels a
+/// number and no label comes twice.
+fn labelled_names(t: &str) -> Option<Vec<String>> {
+    let pairs = labelled_cells(t)?;
+    let names: Vec<String> = pairs.iter().map(|(l, _)| l.to_string()).collect();
+    let distinct = names
+        .iter()
+        .enumerate()
+        .all(|(i, n)| !names[..i].contains(n));
+    (distinct && pairs.iter().all(|(_, v)| parse_field(v).is_ok())).then_some(names)
 }
 
 /// A row's fields by the row alone: commas, else semicolons, else spaces and tabs.
@@ -1192,8 +1273,14 @@ impl<R: BufRead> TextReader<R> {
             if let Some(l) = &layout {
                 let sep = Sep::of(t);
                 let fields = sep.split(t);
-                if (l.width_in == 1 || (l.sep == Sep::Spaces && sep != Sep::Spaces))
+                // Or greetings before labelled values (`Initializing I2C devices...`,
+                // `MPU6050 connection successful`, then `ax:0.01 ...`): words between spaces,
+                // then words again (not a row of units) or labelled values.
+                let words = |f: &&str| parse_field(f).is_err() && date_time(f).is_none();
+                if ((l.width_in == 1 || (l.sep == Sep::Spaces && sep != Sep::Spaces))
                     && fields.len() > 1
+                    || labelled_names(t).is_some()
+                    || (l.sep == Sep::Spaces && fields.iter().all(words) && !units_row(&fields)))
                     && fields
                         .iter()
                         .any(|f| parse_field(f).is_err() && date_time(f).is_none())
@@ -1228,6 +1315,17 @@ impl<R: BufRead> TextReader<R> {
                         continue;
                     }
                     l.first_row(t, &mut src, &mut ahead, opts, path, line_no)?
+                }
+                // `ax:0.012 ay:-0.003`: labelled values, their labels the names.
+                None if labelled_names(t).is_some() => {
+                    let names = labelled_names(t).unwrap_or_default();
+                    tracing::info!(
+                        "{}: line {line_no}: labelled values ({}): the labels are the names",
+                        path.display(),
+                        names.join(", ")
+                    );
+                    Layout::new(names, true, Sep::Labelled, opts, path, line_no)?
+                        .first_row(t, &mut src, &mut ahead, opts, path, line_no)?
                 }
                 None => {
                     let sep = Sep::of(t);
@@ -2091,6 +2189,39 @@ mod tests {
         // A logger's own `timestamp,gx` is no PX4 export.
         let r = TextReader::new("timestamp,gx\n0,1\n".as_bytes(), Path::new("l.csv")).unwrap();
         assert!(!r.px4_export());
+    }
+
+    /// An Arduino sketch's serial output: greetings, then labelled values (`ax:0.5 ay:-1`,
+    /// `ax=0.5, ay=-1`); the labels are the names, each value goes under its label whatever
+    /// the order, a label left out is a gap, an unknown label makes a bad row. A time of day
+    /// (`12:03:04`) is no label.
+    #[test]
+    fn labelled_values() {
+        let text = "Initializing I2C devices...\nMPU6050 connection successful\n\
+                    ax:0.5 ay:-1 gz:2e-3\nax: 0.25, ay: -2, gz: 1e-3\nay=-3 ax=0.125 gz=0\n\
+                    ax:1 gz:5\nax:1 ay:2 mx:7\n";
+        let (names, v, bad) = read_all(text);
+        assert_eq!(names, ["ax", "ay", "gz"]);
+        assert_eq!(bad, 1);
+        let expect = [0.5, -1.0, 2e-3, 0.25, -2.0, 1e-3, 0.125, -3.0, 0.0, 1.0];
+        assert_eq!(&v[..10], &expect);
+        assert!(v[10].is_nan() && v[11] == 5.0);
+        // `millis()` stamps: the time column, in ms; a missing sample found.
+        let opts = TextOptions {
+            tau0_s: Some(0.01),
+            ..TextOptions::default()
+        };
+        let text = "millis:1000 gz:1\nmillis:1010 gz:2\nmillis:1030 gz:3\n";
+        let mut r = TextReader::with_options(text.as_bytes(), Path::new("a.txt"), &opts).unwrap();
+        assert_eq!(r.time_column_name(), Some("millis"));
+        let mut out = Vec::new();
+        while r.read_rows(&mut out, 8).unwrap() > 0 {}
+        assert_eq!(out.len(), 4);
+        assert!(out[2].is_nan());
+        assert_eq!(labelled_cells("12:03:04.5,1,2"), None);
+        assert_eq!(labelled_cells("gx [deg/s],gy"), None);
+        let (names, _, _) = read_all("time,gx\n12:03:04.5,1\n12:03:04.6,2\n");
+        assert_eq!(names, ["gx"]);
     }
 
     /// What a review of the first version found, each a file that read wrongly or crashed:

@@ -340,6 +340,30 @@ fn px4_exports_read_as_they_come() {
     }
 }
 
+/// An Arduino sketch's serial output saved to a file: greetings, then labelled values with a
+/// `millis()` stamp. No `--tau0`: the step is read off `millis` (ms), the labels are the names,
+/// and the curves are those of the same values in a plain file.
+#[test]
+fn an_arduino_serial_log_reads_as_the_plain_file() {
+    let (a, b) = columns();
+    let mut text = String::from("Initializing I2C devices...\nMPU6050 connection successful\n");
+    let mut plain = String::from("ax,gz\n");
+    for i in 0..a.len() {
+        text += &format!("millis:{},ax:{:e},gz:{:e}\n", 2000 + 10 * i, a[i], b[i]);
+        plain += &format!("{:e},{:e}\n", a[i], b[i]);
+    }
+    let p = write("arduino.txt", text.as_bytes());
+    let q = write("arduino_plain.csv", plain.as_bytes());
+    let (c, s) = parsed(&analyze_no_tau0(&p, &[]));
+    let (pc, ps) = parsed(&analyze(&q, &[]));
+    assert_eq!((s.tau0, s.channels.clone()), (0.01, ps.channels.clone()));
+    assert_eq!((s.samples.clone(), s.bad_rows), (ps.samples.clone(), 0));
+    assert_eq!(c.len(), pc.len());
+    for (x, y) in c.iter().zip(&pc) {
+        assert_eq!(x.sigma, y.sigma);
+    }
+}
+
 /// A temperature column (`temp [degC]`) is the unit's temperature, not a channel, and the log
 /// says so; named in --channels it is analysed as one too (with --unit, its header's unit being
 /// no inertial one). Before, its unit stopped every run with exit 2.
