@@ -825,6 +825,9 @@ pub struct TextReader<R> {
     /// The time column used to find gaps, and the gap steps still to hand out.
     time: Option<TimeColumn>,
     gap_left: u64,
+    /// The next row read is the pending one of the reader this one resumes
+    /// ([`TextPosition::clocked`]).
+    clocked_next: bool,
     /// The time column's account was logged (at the end of the input).
     time_reported: bool,
     /// The values and stamp of the last row handed out, to tell a row written twice.
@@ -861,6 +864,17 @@ pub struct TextPosition {
     /// The time column's clock, when it is used to find gaps.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub time: Option<TimeState>,
+    /// Gap steps the time column found that were not handed out yet (a checkpoint inside a
+    /// long gap), and whether the row at `offset` is the one after them (or the first row),
+    /// already on the clock: it is handed out as it is, not clocked again. Before session 32 a
+    /// resume there dropped the rest of the gap and counted the row's stamp as a step back.
+    #[serde(default)]
+    pub gap_left: u64,
+    #[serde(default)]
+    pub clocked: bool,
+    /// The last row handed out, to tell a row written twice across the checkpoint.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub last_row: Option<(Vec<f64>, f64)>,
 }
 
 /// Cells that mark a value as missing, read as gaps like an empty cell (any case): a logger's
@@ -1244,12 +1258,9 @@ impl<R: BufRead> TextReader<R> {
                     raw.iter().map(|&b| char::from(b)).collect()
                 }
             };
-            // A byte-order mark (spreadsheets write one) is not part of the first name.
-            let t = if line_no == 1 {
-                line.trim_start_matches('\u{feff}').trim()
-            } else {
-                line.trim()
-            };
+            // A byte-order mark (spreadsheets write one) is not part of the first name, nor of
+            // a line of a file joined after the first.
+            let t = line.trim_start_matches('\u{feff}').trim();
             if t.is_empty() {
                 continue;
             }
@@ -1396,6 +1407,7 @@ impl<R: BufRead> TextReader<R> {
                 names: layout.names.clone(),
                 layout,
                 pending: Some(values),
+                clocked_next: false,
                 header_rows,
                 header_repeats: 0,
                 sparse: opts.sparse_rows,
@@ -1429,15 +1441,16 @@ impl<R: BufRead> TextReader<R> {
             names: self.names,
             layout: self.layout,
             pending: None,
+            clocked_next: pos.clocked,
             header_rows: self.header_rows,
             header_repeats: 0,
             sparse: self.sparse,
             ahead: VecDeque::new(),
             words: pos.words,
             time,
-            gap_left: 0,
+            gap_left: pos.gap_left,
             time_reported: false,
-            last_row: None,
+            last_row: pos.last_row.clone(),
             line: Vec::new(),
             bad_rows: pos.bad_rows,
             invalid_values: pos.invalid_values,
@@ -1459,6 +1472,9 @@ impl<R: BufRead> TextReader<R> {
             invalid_values: self.invalid_values,
             words: self.words,
             time: self.time.as_ref().map(TimeColumn::state),
+            gap_left: self.gap_left,
+            clocked: self.pending.is_some(),
+            last_row: self.last_row.clone(),
         }
     }
 
@@ -1617,6 +1633,11 @@ impl<R: BufRead> TextReader<R> {
                     let Some(p) = self.next_row()? else {
                         break;
                     };
+                    if std::mem::take(&mut self.clocked_next) {
+                        // The pending row of the reader this one resumes.
+                        self.pending = Some(p);
+                        continue;
+                    }
                     if self.not_a_sample(&p) {
                         continue;
                     }
@@ -1708,12 +1729,21 @@ impl<R: BufRead> TextReader<R> {
                 let problem = format!("a line of {got} bytes, longer than any row of text columns");
                 return Ok(Some((Err(problem), f64::NAN)));
             }
-            // A line that is not UTF-8 (a damaged stretch of the file) is a bad row, not the
-            // end of the run.
-            let Ok(text) = std::str::from_utf8(&self.line) else {
-                return Ok(Some((Err("not UTF-8 text".to_string()), f64::NAN)));
+            // A line that is not UTF-8 is read as Latin-1 (Windows-1252), as the header and the
+            // first row are: a label cell saved in a Windows code page is a label there too,
+            // and a damaged stretch of the file is then a row whose cells are not numbers (a
+            // bad row, not the end of the run).
+            let latin1: String;
+            let text = match std::str::from_utf8(&self.line) {
+                Ok(t) => t,
+                Err(_) => {
+                    latin1 = self.line.iter().map(|&b| char::from(b)).collect();
+                    &latin1
+                }
             };
-            let t = text.trim();
+            // A byte-order mark starts the file (a reader resumed at its start reads it here)
+            // and each file joined into it.
+            let t = text.trim_start_matches('\u{feff}').trim();
             if is_note(t) {
                 continue;
             }
@@ -2222,6 +2252,49 @@ mod tests {
         assert_eq!(labelled_cells("gx [deg/s],gy"), None);
         let (names, _, _) = read_all("time,gx\n12:03:04.5,1\n12:03:04.6,2\n");
         assert_eq!(names, ["gx"]);
+    }
+
+    /// A checkpoint may be taken anywhere: at the first row, inside a long gap the time column
+    /// found (the rest of the gap and the row after it still to hand out), right after a row
+    /// written twice. A reader resumed from each position gives the rows of one reading on.
+    /// Before, a resume inside a gap dropped the rest of the gap and counted the row after it as
+    /// a step backwards.
+    #[test]
+    fn a_resume_inside_a_gap_keeps_the_gap() {
+        let mut text = String::from("time,gx\n");
+        for k in [0u32, 1, 2, 3, 53, 54, 54, 55, 56] {
+            text.push_str(&format!("{:.2},{}\n", f64::from(k) * 0.01, k % 7));
+        }
+        let opts = TextOptions {
+            tau0_s: Some(0.01),
+            ..TextOptions::default()
+        };
+        let open = || TextReader::with_options(text.as_bytes(), Path::new("g.csv"), &opts).unwrap();
+        let mut whole = Vec::new();
+        let mut r = open();
+        while r.read_rows(&mut whole, 7).unwrap() > 0 {}
+        // 57 steps: 0..=56, the row 54 written twice dropped.
+        assert_eq!(whole.len(), 57);
+        for cut in 0..=whole.len() {
+            let mut r = open();
+            let mut head = Vec::new();
+            r.read_rows(&mut head, cut).unwrap();
+            let pos = r.position();
+            let mut r2 = r.resume(&text.as_bytes()[pos.offset as usize..], &pos);
+            while r2.read_rows(&mut head, 7).unwrap() > 0 {}
+            let same = head.len() == whole.len()
+                && head
+                    .iter()
+                    .zip(&whole)
+                    .all(|(a, b)| a == b || (a.is_nan() && b.is_nan()));
+            assert!(same, "cut {cut}: {head:?}");
+            let st = r2.position().time.unwrap();
+            assert_eq!(
+                (st.missing, st.backwards, st.duplicates),
+                (49, 0, 1),
+                "cut {cut}"
+            );
+        }
     }
 
     /// What a review of the first version found, each a file that read wrongly or crashed:

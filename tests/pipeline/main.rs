@@ -6,6 +6,7 @@
 mod common;
 
 mod arbitrary_checkpoint;
+mod arbitrary_text;
 mod backpressure;
 mod block_feed;
 mod checkpoint;
