@@ -718,11 +718,27 @@ impl DataArgs {
                 col => col,
             })
             .collect();
+        // A unit PX4's message fixes is said as such, not as a name the file does not hold.
+        let px4_shown: Vec<(String, String)> = setups
+            .iter()
+            .zip(&px4)
+            .filter_map(|(c, p)| {
+                let p = p.as_ref()?;
+                Some((
+                    p.clone(),
+                    format!("`{}` (by its PX4 message)", columns[c.column].1),
+                ))
+            })
+            .collect();
+        let shown = |n: &str| match px4_shown.iter().find(|(p, _)| p == n) {
+            Some((_, s)) => s.clone(),
+            None => format!("`{n}`"),
+        };
         if self.unit.is_some() {
             let carried: Vec<String> = ours
                 .iter()
                 .filter(|(_, n)| header_unit(n).is_some())
-                .map(|(_, n)| format!("`{n}`"))
+                .map(|(_, n)| shown(n))
                 .collect();
             if !carried.is_empty() {
                 tracing::info!(
@@ -751,10 +767,13 @@ impl DataArgs {
             InputKind::Phase => "phase, as --phase",
             InputKind::Increments => "increments",
         };
+        let mut account = read.account.clone();
+        for p in px4.iter().flatten() {
+            account = account.replace(&format!("`{p}`"), &shown(p));
+        }
         tracing::info!(
-            "{input}: no --unit: units from the column headers: {}; read as {how} \
-             (--unit U overrides the headers)",
-            read.account
+            "{input}: no --unit: units from the column headers: {account}; read as {how} \
+             (--unit U overrides the headers)"
         );
         Ok((setups, kind))
     }

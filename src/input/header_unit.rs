@@ -146,8 +146,11 @@ fn parse(text: &str) -> Option<HeaderUnit> {
         .replace('\u{b2}', "^2")
         .replace("\u{207b}\u{b9}", "^-1")
         .replace("\u{207b}\u{b2}", "^-2");
-    // `G` is a gauss (magnetometers) as often as a g: not taken.
-    if t.split(|c: char| !c.is_alphanumeric()).any(|w| w == "G") {
+    // `G` is a gauss (magnetometers) as often as a g, and `mG`, `uG` (`µG`) a milli- or
+    // microgauss as often as a milli- or micro-g: not taken.
+    if t.split(|c: char| !c.is_alphanumeric())
+        .any(|w| matches!(w, "G" | "mG" | "uG" | "UG" | "nG" | "kG"))
+    {
         return None;
     }
     let t = t.to_lowercase();
@@ -164,7 +167,7 @@ fn parse(text: &str) -> Option<HeaderUnit> {
     let mut time = 0i32;
     let mut hours = 0i32;
     for (i, part) in t.split('/').enumerate() {
-        let sign = if i == 0 { 1 } else { -1 };
+        let sign: i32 = if i == 0 { 1 } else { -1 };
         let factors = part
             .split(|c: char| c.is_whitespace() || c == '*' || c == '.')
             .filter(|f| !f.is_empty());
@@ -172,20 +175,20 @@ fn parse(text: &str) -> Option<HeaderUnit> {
         for f in factors {
             any = true;
             let (base, power) = split_power(f)?;
-            let power = sign * power;
+            let power = sign.checked_mul(power)?;
             if base == "s" || base == "sec" {
-                time += power;
+                time = time.checked_add(power)?;
                 continue;
             }
             if HOURS.contains(&base) {
-                hours += power;
+                hours = hours.checked_add(power)?;
                 continue;
             }
             let &(_, unit, own, incr) = ATOMS.iter().find(|(a, _, _, _)| *a == base)?;
             if atom.is_some() || power != 1 {
                 return None;
             }
-            time += own;
+            time = time.checked_add(own)?;
             atom = Some((unit, incr));
         }
         if !any {
@@ -201,7 +204,7 @@ fn parse(text: &str) -> Option<HeaderUnit> {
         unit = "arcsec";
         time = -1;
     }
-    let rate = match time - incr {
+    let rate = match time.checked_sub(incr)? {
         0 => false,
         -1 => true,
         _ => return None,
@@ -263,9 +266,9 @@ pub fn units_from_headers(
                 return Err(format!(
                     "column {col} `{name}`: unit `{text}` in its header is not one allanscope \
                      knows (angles rad, mrad, urad, deg, arcsec; velocities m/s, mm/s, ft/s; \
-                     accelerations g, mg; each per s for a rate, as `rad/s`, `rad s^-1`, \
-                     `m/s^2`); give --unit U for the columns' unit, or --columns to leave this \
-                     one out"
+                     accelerations g, mg, ug; each per s for a rate, as `rad/s`, `rad s^-1`, \
+                     `m/s^2`, and deg/h); give --unit U for the columns' unit, or --columns to \
+                     leave this one out"
                 ))
             }
         }
@@ -429,6 +432,9 @@ mod tests {
         }
         for (n, t) in [
             ("mag_x [G]", "G"),
+            ("ax [mG]", "mG"),
+            ("ax [\u{b5}G]", "\u{b5}G"),
+            ("ax [uG]", "uG"),
             ("mag_x [uT]", "uT"),
             ("temp [degC]", "degC"),
             ("gx [rad/h]", "rad/h"),
@@ -439,6 +445,11 @@ mod tests {
             ("gx [rad rad/s]", "rad rad/s"),
             ("gx []", ""),
             ("acc (x)", "x"),
+            (
+                "gx [deg h^2147483647 h^2147483647 h^2]",
+                "deg h^2147483647 h^2147483647 h^2",
+            ),
+            ("gx [deg s^2147483647 s^2]", "deg s^2147483647 s^2"),
         ] {
             assert_eq!(header_unit(n), Some(Err(t.to_string())), "{n}");
         }

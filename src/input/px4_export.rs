@@ -19,21 +19,31 @@ use super::header_unit::{array_element, HeaderUnit};
 pub const TIMESTAMP_UNIT_S: f64 = 1e-6;
 
 /// Whether a header (`names`, in input order) is that of a PX4 CSV export: its first column is
-/// `timestamp`, and another column is a flattened array element (`gyro_rad[0]`) or a field only
-/// uORB messages carry (`timestamp_sample`, `device_id`, `..._timestamp_relative`,
-/// `..._integral_dt`).
+/// `timestamp`, and another is a field only uORB messages carry: an array whose unit the
+/// message fixes (`gyro_rad[0]`, [`field_unit`]), `timestamp_sample`, `device_id`,
+/// `..._timestamp_relative`, `..._integral_dt` (a logger's `gyro[0]` is not enough).
 pub fn is_export(names: &[String]) -> bool {
     let Some((first, rest)) = names.split_first() else {
         return false;
     };
     first == "timestamp"
         && rest.iter().any(|n| {
-            array_element(n).is_some()
+            array_element(n).is_some_and(|b| field_unit(b).is_some())
                 || n == "timestamp_sample"
                 || n == "device_id"
                 || n.ends_with("_timestamp_relative")
                 || n.ends_with("_integral_dt")
         })
+}
+
+/// Whether the time column `column` of a PX4 export holds uORB stamps (us since boot):
+/// `timestamp` or `timestamp_sample`, whole numbers (`stamps`) not the size of a clock since
+/// 1970 (a file that only looks like PX4's, stamped in seconds or epoch ms, keeps its unit).
+pub fn boot_stamps(column: &str, stamps: &[f64]) -> bool {
+    let finite = || stamps.iter().filter(|t| t.is_finite());
+    matches!(column, "timestamp" | "timestamp_sample")
+        && finite().next().is_some()
+        && finite().all(|t| t.fract() == 0.0 && *t >= 0.0 && *t < 1e12)
 }
 
 /// Whether the field `name` of a PX4 export describes its samples rather than measures: an
@@ -116,6 +126,7 @@ mod tests {
         }
         for h in [
             "timestamp,gx,gy,gz",
+            "timestamp,gyro[0],gyro[1],gyro[2]",
             "gx,timestamp,gyro_rad[0]",
             "timestamp",
             "time,timestamp_sample,x",
@@ -172,5 +183,16 @@ mod tests {
         assert_eq!(u("log_sensor_gyro_status_0.csv", "x"), None);
         assert_eq!(u("sensor_gyro.csv", "x"), None);
         assert_eq!(u("log_vehicle_imu_0.csv", "x"), None);
+    }
+
+    /// Stamps since boot in us: whole, below 1e12 (11.6 days); not seconds, not epoch ms.
+    #[test]
+    fn boot_stamps_are_whole_and_small() {
+        assert!(boot_stamps("timestamp", &[20_313_000.0, 20_317_000.0]));
+        assert!(boot_stamps("timestamp_sample", &[f64::NAN, 20_313_000.0]));
+        assert!(!boot_stamps("timestamp", &[0.0, 0.01, 0.02]));
+        assert!(!boot_stamps("timestamp", &[1.7e12, 1.7e12 + 10.0]));
+        assert!(!boot_stamps("time", &[20_313_000.0]));
+        assert!(!boot_stamps("timestamp", &[]));
     }
 }

@@ -180,7 +180,7 @@ pub fn infer_tau0<R: BufRead>(
     let (unit_s, unit_from, unit_guessed) = match time_column_unit(&column).flatten() {
         Some(u) => (u, "its name", false),
         // uORB's `timestamp`: us since boot (`super::px4_export`).
-        None if reader.px4_export() && column == "timestamp" => (
+        None if reader.px4_export() && super::px4_export::boot_stamps(&column, &stamps) => (
             super::px4_export::TIMESTAMP_UNIT_S,
             "a PX4 export's timestamp, since boot",
             false,
@@ -327,6 +327,12 @@ mod tests {
         assert_eq!(s.unit_s, 1e-6);
         assert!(s.unit_from.contains("PX4"), "{}", s.unit_from);
         assert!(s.doubt.is_none());
+        // A logger's `gyro[0]` beside seconds is no PX4 export: seconds stay seconds.
+        let mut l = String::from("timestamp,gyro[0],gyro[1]\n");
+        for k in 0..40 {
+            l.push_str(&format!("{:.2},0.1,0.2\n", k as f64 * 0.01));
+        }
+        assert_eq!(infer(&l).unwrap().tau0_s, 0.01);
         // The same stamps under a logger's header are seconds, with the doubt said.
         let t = t.replacen("gyro_rad[0],gyro_integral_dt", "gx,gy", 1);
         let e = infer(&t).unwrap_err().to_string();

@@ -451,18 +451,18 @@ impl Layout {
             }
             None => {
                 for i in (0..source_names.len()).filter(|&i| other_clock(i)) {
-                    let what = if counter_column(&source_names[i]) {
-                        "is a counter".to_string()
+                    let (what, how) = if counter_column(&source_names[i]) {
+                        ("is a counter".to_string(), "")
                     } else if bookkeeping(i) {
-                        "is a PX4 field that describes samples".to_string()
+                        ("is a PX4 field that describes samples".to_string(), "")
                     } else if let Some(q) = other_quantity(i) {
-                        format!("holds {q}, by its unit")
+                        (format!("holds {q}, by its unit"), ", with --unit U,")
                     } else {
-                        "is a second time column".to_string()
+                        ("is a second time column".to_string(), "")
                     };
                     tracing::info!(
-                        "{}: column {} `{}` {what}: not a channel (name it in --channels to \
-                         analyse it)",
+                        "{}: column {} `{}` {what}: not a channel (name it in --channels{how} \
+                         to analyse it)",
                         path.display(),
                         i + 1,
                         source_names[i]
@@ -477,7 +477,25 @@ impl Layout {
             }
         };
         if keep.is_empty() {
-            return Err(err("no data column (only a time column)".into()));
+            // Say which columns were left out and why, when some were.
+            let out: Vec<String> = (0..source_names.len())
+                .filter(|&i| other_clock(i))
+                .map(|i| match other_quantity(i) {
+                    Some(q) => format!("`{}` ({q})", source_names[i]),
+                    None => format!("`{}`", source_names[i]),
+                })
+                .collect();
+            let problem = if out.is_empty() {
+                "no data column (only a time column)".to_string()
+            } else {
+                format!(
+                    "no data column: beside the time, only columns that are no channels: {} \
+                     (name one in --channels, with --unit U for a unit allanscope does not \
+                     read, to analyse it)",
+                    out.join(", ")
+                )
+            };
+            return Err(err(problem));
         }
         let strict = names.iter().map(|n| analysed(n, opts)).collect();
         Ok(Layout {
@@ -538,7 +556,7 @@ impl Layout {
         line: u64,
     ) -> Result<(Row, Layout), UsageError> {
         let l = if self.has_text_cells(t) {
-            *ahead = read_ahead(src, AHEAD_LINES)
+            fill_ahead(src, ahead, AHEAD_LINES)
                 .map_err(|e| input_error(path, line + 1, e.to_string()))?;
             self.without_label_columns(t, &ahead_text(ahead), opts, path, line)?
         } else {
@@ -638,16 +656,27 @@ impl Layout {
     /// stamp is not a number), or what is wrong with the row.
     fn parse(&self, t: &str) -> Result<(Vec<f64>, f64), String> {
         if self.sep == Sep::Labelled {
-            let known = |l: &&str| self.source_names.iter().any(|n| n == l);
-            if let Some((l, _)) = labelled_cells(t)
-                .unwrap_or_default()
-                .iter()
-                .find(|(l, _)| !known(l))
-            {
+            let pairs = labelled_cells(t).unwrap_or_default();
+            if pairs.len() > self.width_in {
                 return Err(format!(
-                    "label `{l}` is none of the first row's ({})",
+                    "{} labelled values, more than the {} names",
+                    pairs.len(),
+                    self.width_in
+                ));
+            }
+            let known = |l: &&str| self.source_names.iter().any(|n| n == l);
+            if let Some((l, _)) = pairs.iter().find(|(l, _)| !known(l)) {
+                return Err(format!(
+                    "label `{l}` is none of the names ({})",
                     self.source_names.join(", ")
                 ));
+            }
+            if let Some((i, (l, _))) = pairs
+                .iter()
+                .enumerate()
+                .find(|(i, (l, _))| pairs[..*i].iter().any(|(m, _)| m == l))
+            {
+                return Err(format!("label `{l}` twice (pair {})", i + 1));
             }
         }
         let fields = self.split(t);
@@ -721,9 +750,17 @@ impl Layout {
             let Some(pairs) = labelled_cells(t) else {
                 return split(t);
             };
-            if pairs
+            if pairs.len() > self.width_in {
+                return vec![""; pairs.len() + 1];
+            }
+            let twice = pairs
                 .iter()
-                .any(|(l, _)| !self.source_names.iter().any(|n| n == l))
+                .enumerate()
+                .any(|(i, (l, _))| pairs[..i].iter().any(|(m, _)| m == l));
+            if twice
+                || pairs
+                    .iter()
+                    .any(|(l, _)| !self.source_names.iter().any(|n| n == l))
             {
                 return vec![""; pairs.len().max(self.width_in) + 1];
             }
@@ -746,12 +783,13 @@ impl Layout {
 /// holds numbers later (a flagged first sample) or never (a label).
 const AHEAD_LINES: usize = 256;
 
-/// The next `n` lines of `src` as [`TextReader::ahead`] holds them.
-fn read_ahead<R: BufRead>(
+/// Lines of `src` added to `ahead` (as [`TextReader::ahead`] holds them) until it holds `n`,
+/// or the input ends.
+fn fill_ahead<R: BufRead>(
     src: &mut R,
+    ahead: &mut VecDeque<(Vec<u8>, usize, bool)>,
     n: usize,
-) -> std::io::Result<VecDeque<(Vec<u8>, usize, bool)>> {
-    let mut ahead = VecDeque::new();
+) -> std::io::Result<()> {
     while ahead.len() < n {
         let mut buf = Vec::new();
         let (got, long) = read_line_bounded(src, &mut buf, MAX_LINE_BYTES)?;
@@ -760,7 +798,7 @@ fn read_ahead<R: BufRead>(
         }
         ahead.push_back((buf, got, long));
     }
-    Ok(ahead)
+    Ok(())
 }
 
 /// The data lines among lines read ahead (comments and empty lines left out).
@@ -1158,16 +1196,66 @@ impl Sep {
     }
 }
 
-/// The labels of a first data row of labelled values ([`labelled_cells`]), when each labels a
-/// number and no label comes twice.
+/// The labels of a line of labelled values ([`labelled_cells`]), when at least one labels a
+/// number (a `st=OK` beside them is a label column), no label comes twice and there are no more
+/// than a run takes channels.
 fn labelled_names(t: &str) -> Option<Vec<String>> {
     let pairs = labelled_cells(t)?;
-    let names: Vec<String> = pairs.iter().map(|(l, _)| l.to_string()).collect();
-    let distinct = names
+    if pairs.len() > crate::ranges::MAX_CHANNELS
+        || !pairs.iter().any(|(_, v)| parse_field(v).is_ok())
+    {
+        return None;
+    }
+    let mut seen = std::collections::HashSet::new();
+    pairs
         .iter()
-        .enumerate()
-        .all(|(i, n)| !names[..i].contains(n));
-    (distinct && pairs.iter().all(|(_, v)| parse_field(v).is_ok())).then_some(names)
+        .all(|(l, _)| seen.insert(*l))
+        .then(|| pairs.iter().map(|(l, _)| l.to_string()).collect())
+}
+
+/// Lines looked at, from the first line before a header, to tell labelled values.
+const LABELLED_LOOK: usize = 16;
+
+/// What the lines from the first one before a header show of labelled values.
+#[derive(Debug, PartialEq)]
+enum Labelled {
+    /// They start here, under these names.
+    Here(Vec<String>),
+    /// They start on a later line: this one greets (`MPU6050 connection successful`).
+    Later,
+}
+
+/// Whether labelled values start at `t` or a few lines after it (`ahead`: the next lines, notes
+/// and empty ones left out): from the first labelled line on, at least two in three of the
+/// lines looked at must be labelled, and two in three of those must hold no label outside the
+/// names, which are the labels of the commonest labelled line (a first line cut short by the
+/// start of a capture does not name them). Lines of `key=value` notes, each key its own, are
+/// no labelled values.
+fn labelled_start(t: &str, ahead: &[String]) -> Option<Labelled> {
+    let lines: Vec<&str> = std::iter::once(t)
+        .chain(ahead.iter().map(String::as_str))
+        .take(LABELLED_LOOK + 1)
+        .collect();
+    let first = lines.iter().position(|l| labelled_names(l).is_some())?;
+    let from = &lines[first..];
+    let labelled: Vec<Vec<String>> = from.iter().filter_map(|l| labelled_names(l)).collect();
+    if 3 * labelled.len() < 2 * from.len() {
+        return None;
+    }
+    let count = |n: &Vec<String>| labelled.iter().filter(|m| *m == n).count();
+    let names = labelled.iter().max_by_key(|n| (count(n), n.len()))?.clone();
+    let within = labelled
+        .iter()
+        .filter(|m| m.iter().all(|l| names.contains(l)))
+        .count();
+    if 3 * within < 2 * labelled.len() {
+        return None;
+    }
+    Some(if first == 0 {
+        Labelled::Here(names)
+    } else {
+        Labelled::Later
+    })
 }
 
 /// A row's fields by the row alone: commas, else semicolons, else spaces and tabs.
@@ -1208,9 +1296,18 @@ impl<R: BufRead> TextReader<R> {
         let mut header_rows: Vec<Vec<String>> = Vec::new();
         // Lines read past the first data row to tell label columns (handed out as rows later).
         let mut ahead = VecDeque::new();
+        // The line the header (or a title taken for one) was on, for messages.
+        let mut layout_line = 0u64;
         loop {
-            let (n, long) = read_line_bounded(&mut src, &mut raw, MAX_LINE_BYTES)
-                .map_err(|e| input_error(path, line_no + 1, e.to_string()))?;
+            // Lines looked at ahead (for labelled values) are read again from there first.
+            let (n, long) = match ahead.pop_front() {
+                Some((bytes, got, long)) => {
+                    raw = bytes;
+                    (got, long)
+                }
+                None => read_line_bounded(&mut src, &mut raw, MAX_LINE_BYTES)
+                    .map_err(|e| input_error(path, line_no + 1, e.to_string()))?,
+            };
             if n == 0 {
                 return Err(input_error(path, line_no, "no data rows".into()));
             }
@@ -1284,22 +1381,15 @@ impl<R: BufRead> TextReader<R> {
             if let Some(l) = &layout {
                 let sep = Sep::of(t);
                 let fields = sep.split(t);
-                // Or greetings before labelled values (`Initializing I2C devices...`,
-                // `MPU6050 connection successful`, then `ax:0.01 ...`): words between spaces,
-                // then words again (not a row of units) or labelled values.
-                let words = |f: &&str| parse_field(f).is_err() && date_time(f).is_none();
-                if ((l.width_in == 1 || (l.sep == Sep::Spaces && sep != Sep::Spaces))
+                if (l.width_in == 1 || (l.sep == Sep::Spaces && sep != Sep::Spaces))
                     && fields.len() > 1
-                    || labelled_names(t).is_some()
-                    || (l.sep == Sep::Spaces && fields.iter().all(words) && !units_row(&fields)))
                     && fields
                         .iter()
                         .any(|f| parse_field(f).is_err() && date_time(f).is_none())
                 {
                     tracing::info!(
-                        "{}: line {}: `{}` is a title, not a header: skipped",
+                        "{}: line {layout_line}: `{}` is a title, not a header: skipped",
                         path.display(),
-                        line_no - 1,
                         l.source_names.join(" ")
                     );
                     layout = None;
@@ -1327,63 +1417,79 @@ impl<R: BufRead> TextReader<R> {
                     }
                     l.first_row(t, &mut src, &mut ahead, opts, path, line_no)?
                 }
-                // `ax:0.012 ay:-0.003`: labelled values, their labels the names.
-                None if labelled_names(t).is_some() => {
-                    let names = labelled_names(t).unwrap_or_default();
-                    tracing::info!(
-                        "{}: line {line_no}: labelled values ({}): the labels are the names",
-                        path.display(),
-                        names.join(", ")
-                    );
-                    Layout::new(names, true, Sep::Labelled, opts, path, line_no)?
-                        .first_row(t, &mut src, &mut ahead, opts, path, line_no)?
-                }
                 None => {
-                    let sep = Sep::of(t);
-                    let fields = sep.split(t);
-                    // A row most of whose fields are numbers is data, not names: ROS 2's
-                    // `ros2 topic echo --csv` writes no header, and a `frame_id` among numbers.
-                    let numbers = fields
-                        .iter()
-                        .filter(|f| {
-                            !f.trim().is_empty()
-                                && (parse_field(f).is_ok() || date_time(f).is_some())
-                        })
-                        .count();
-                    // (Unless a text cell names a time column: `time,0,1,2` is pandas' header
-                    // of integer-labelled columns.)
-                    let names_time = fields.iter().any(|f| {
-                        parse_field(f).is_err()
-                            && time_name(f.trim().trim_matches('"')).is_some_and(|(plain, _)| plain)
-                    });
-                    if fields.iter().all(|f| parse_field(f).is_ok())
-                        || (2 * numbers > fields.len() && !names_time)
-                    {
-                        let commented = hash_line
-                            .as_deref()
-                            .and_then(|h| commented_header(h, fields.len()));
-                        let header = commented.is_some();
-                        let names = commented.unwrap_or_else(|| {
-                            (1..=fields.len()).map(|i| format!("c{i}")).collect()
-                        });
-                        Layout::new(names, header, sep, opts, path, line_no)?
-                            .first_row(t, &mut src, &mut ahead, opts, path, line_no)?
-                    } else {
-                        let names: Vec<String> = fields
-                            .iter()
-                            .map(|f| f.trim().trim_matches('"').trim().to_string())
-                            .collect();
-                        header_rows.push(names.clone());
-                        layout = Some(Layout::new(names, true, sep, opts, path, line_no)?);
-                        continue;
+                    // `ax:0.012 ay:-0.003`: labelled values, when most lines from here on are
+                    // such (a `SampleRate=100` note before a header is not); a greeting before
+                    // them (`MPU6050 connection successful`) is skipped.
+                    fill_ahead(&mut src, &mut ahead, LABELLED_LOOK)
+                        .map_err(|e| input_error(path, line_no + 1, e.to_string()))?;
+                    match labelled_start(t, &ahead_text(&ahead)) {
+                        Some(Labelled::Here(names)) => {
+                            tracing::info!(
+                                "{}: line {line_no}: labelled values ({}): the labels are the \
+                                 names",
+                                path.display(),
+                                names.join(", ")
+                            );
+                            Layout::new(names, true, Sep::Labelled, opts, path, line_no)?
+                                .first_row(t, &mut src, &mut ahead, opts, path, line_no)?
+                        }
+                        Some(Labelled::Later) => {
+                            tracing::info!(
+                                "{}: line {line_no}: `{t}` comes before labelled values: skipped",
+                                path.display()
+                            );
+                            continue;
+                        }
+                        None => {
+                            let sep = Sep::of(t);
+                            let fields = sep.split(t);
+                            // A row most of whose fields are numbers is data, not names: ROS 2's
+                            // `ros2 topic echo --csv` writes no header, and a `frame_id` among numbers.
+                            let numbers = fields
+                                .iter()
+                                .filter(|f| {
+                                    !f.trim().is_empty()
+                                        && (parse_field(f).is_ok() || date_time(f).is_some())
+                                })
+                                .count();
+                            // (Unless a text cell names a time column: `time,0,1,2` is pandas' header
+                            // of integer-labelled columns.)
+                            let names_time = fields.iter().any(|f| {
+                                parse_field(f).is_err()
+                                    && time_name(f.trim().trim_matches('"'))
+                                        .is_some_and(|(plain, _)| plain)
+                            });
+                            if fields.iter().all(|f| parse_field(f).is_ok())
+                                || (2 * numbers > fields.len() && !names_time)
+                            {
+                                let commented = hash_line
+                                    .as_deref()
+                                    .and_then(|h| commented_header(h, fields.len()));
+                                let header = commented.is_some();
+                                let names = commented.unwrap_or_else(|| {
+                                    (1..=fields.len()).map(|i| format!("c{i}")).collect()
+                                });
+                                Layout::new(names, header, sep, opts, path, line_no)?
+                                    .first_row(t, &mut src, &mut ahead, opts, path, line_no)?
+                            } else {
+                                let names: Vec<String> = fields
+                                    .iter()
+                                    .map(|f| f.trim().trim_matches('"').trim().to_string())
+                                    .collect();
+                                header_rows.push(names.clone());
+                                layout_line = line_no;
+                                layout = Some(Layout::new(names, true, sep, opts, path, line_no)?);
+                                continue;
+                            }
+                        }
                     }
                 }
             };
             // With a time column, a first row with no value and no stamp (an empty line), or
             // with no value in a file of sparse rows, is no sample: the clock starts at the
             // first that is.
-            let skip_first = ahead.is_empty()
-                && found.time.is_some()
+            let skip_first = found.time.is_some()
                 && opts.tau0_s.is_some()
                 && (opts.sparse_rows || values.1.is_nan())
                 && empty_row(&values, &found.strict);
@@ -2295,6 +2401,44 @@ mod tests {
                 "cut {cut}"
             );
         }
+    }
+
+    /// What a review of the labelled values found: a `key=value` note before a header is a
+    /// title, not labelled values; a first line cut short by the start of a capture does not
+    /// name the channels (the commonest line does); greetings holding numbers are skipped; a
+    /// `st=OK` beside the values is a label column; a label twice in a row makes a bad row; a
+    /// header of words between spaces followed by a line of words keeps its names.
+    #[test]
+    fn labelled_values_a_review_found() {
+        let mut csv = String::from("SampleRate=100\ntime,gx,gy\n");
+        let mut cut = String::from("y:0.3 gz:0.1\n");
+        let mut greet =
+            String::from("MPU6050 found!\nCalibrating with 500 samples\nOffsets: 12 -3 5\n");
+        let mut kv = String::new();
+        for k in 0..40 {
+            csv.push_str(&format!("{:.2},{k},{}\n", k as f64 * 0.01, k + 1));
+            cut.push_str(&format!("ax:{k} ay:1 gz:2\n"));
+            greet.push_str(&format!("ax:{k}, ay:1, gz:2\n"));
+            kv.push_str(&format!("t={:.2} gx={k} st=OK\n", k as f64 * 0.01));
+        }
+        let (names, v, bad) = read_all(&csv);
+        assert_eq!(
+            (names, v.len(), bad),
+            (vec!["gx".to_string(), "gy".into()], 80, 0)
+        );
+        let (names, v, bad) = read_all(&cut);
+        assert_eq!((names.len(), v.len(), bad), (3, 123, 1));
+        let (names, v, bad) = read_all(&greet);
+        assert_eq!((names.len(), v.len(), bad, v[3]), (3, 120, 0, 1.0));
+        let (names, v, _) = read_all(&kv);
+        assert_eq!((names, v.len()), (vec!["gx".to_string()], 40));
+        let (_, v, bad) = read_all("ax:1 ay:2\nax:3 ay:4 ax:5\nax:6 ay:7\n");
+        assert_eq!((v.len(), bad), (6, 1));
+        let (names, v, bad) = read_all("time gx gy\nX Y Z\n0 1 2\n0.01 3 4\n");
+        assert_eq!(
+            (names, v.len(), bad),
+            (vec!["gx".to_string(), "gy".into()], 6, 1)
+        );
     }
 
     /// What a review of the first version found, each a file that read wrongly or crashed:

@@ -87,11 +87,18 @@ impl IncrementUnit {
 
 /// The increment unit a `--unit` names. `--unit` is the unit of the increment whatever the
 /// columns hold; with `--rate` the rate's own unit is accepted as meaning the same: `deg/s` (or
-/// `deg/sec`) is `deg`, `m/s/s` and `m/s^2` are `m/s`. Anything else is returned as given.
+/// `deg/sec`) is `deg`, `m/s/s` and `m/s^2` are `m/s`, and a FOG's `deg/h` (`deg/hr`, `dph`)
+/// is `arcsec` (1 deg/h turns 1 arcsec in 1 s). Anything else is returned as given.
 pub fn increment_unit_label(unit: &str, rate: bool) -> String {
     let t = unit.trim();
     if !rate || IncrementUnit::parse(t).is_some() {
         return t.to_string();
+    }
+    if matches!(
+        t.to_ascii_lowercase().as_str(),
+        "deg/h" | "deg/hr" | "dph" | "\u{b0}/h" | "\u{b0}/hr"
+    ) {
+        return "arcsec".to_string();
     }
     if let Some(v) = t.strip_suffix("^2").filter(|v| v.ends_with("/s")) {
         if IncrementUnit::parse(v).is_some() {
@@ -313,6 +320,19 @@ mod tests {
         assert_eq!(increment_unit_label("m/s/s", true), "m/s");
         assert_eq!(increment_unit_label("deg/s", false), "deg/s");
         assert_eq!(increment_unit_label("u", true), "u");
+        // A FOG's deg/h is arcsec/s: 1 deg/h * 1 s = 1/3600 deg = 1 arcsec.
+        for u in ["deg/h", "deg/hr", "dph", "\u{b0}/h"] {
+            assert_eq!(increment_unit_label(u, true), "arcsec", "{u}");
+        }
+        assert_eq!(increment_unit_label("deg/h", false), "deg/h");
+        let per_h = IncrementUnit::parse("deg").unwrap().si_per_unit / S_PER_H;
+        let arcsec = IncrementUnit::parse("arcsec").unwrap().si_per_unit;
+        assert!((per_h / arcsec - 1.0).abs() < 1e-12);
+        let ug = IncrementUnit::parse("\u{b5}g").unwrap();
+        assert_eq!(
+            (ug.kind, ug.si_per_unit),
+            (SensorKind::Accel, G0_M_S2 * 1e-6)
+        );
     }
 
     #[test]

@@ -153,7 +153,7 @@ pub enum Position {
         stage: Box<DecodeStageState>,
     },
     /// Text columns.
-    Text(TextPosition),
+    Text(Box<TextPosition>),
 }
 
 impl Position {

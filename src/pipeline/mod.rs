@@ -444,7 +444,7 @@ pub async fn run_text_async<R: BufRead + Send + 'static>(
             if let (Some(s), Some((ptx, in_flight, _))) = (&mut schedule, &ck) {
                 s.add_steps(n as u64);
                 if s.due(in_flight) {
-                    let position = Position::Text(reader.position());
+                    let position = Position::Text(Box::new(reader.position()));
                     let _ = ptx.send(Piece::Position {
                         seq: s.seq,
                         position: Box::new(position),
@@ -507,7 +507,13 @@ fn finish_text(
         let bad_rows = position.bad_rows;
         let invalid = position.invalid_values;
         let words = position.words;
-        final_checkpoint(plan, written, complete, Position::Text(position), &analysis);
+        final_checkpoint(
+            plan,
+            written,
+            complete,
+            Position::Text(Box::new(position)),
+            &analysis,
+        );
         analysis.add_bad_rows(bad_rows);
         analysis.add_invalid_values(invalid);
         analysis.add_flagged_cells(words);
