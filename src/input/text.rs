@@ -329,6 +329,8 @@ struct Layout {
     time: Option<usize>,
     /// The header is PX4's CSV export's ([`px4_export::is_export`]).
     px4: bool,
+    /// `time` is a counter of samples, not a clock ([`TimeColumn::counter`]).
+    counter_clock: bool,
 }
 
 fn input_error(path: &Path, line: u64, problem: String) -> UsageError {
@@ -400,6 +402,32 @@ impl Layout {
                 .position(|n| time_name(n).is_some_and(|(plain, _)| plain))
                 .or_else(|| source_names.iter().position(|n| time_name(n).is_some())),
             None => None,
+        };
+        // No time column, but a counter of samples (`PacketCounter`): it finds the missing
+        // samples (`TimeColumn::counter`), once the run knows its step.
+        let counter_clock = time.is_none() && header && opts.tau0_s.is_some();
+        let (time, counter_clock) = match counter_clock
+            .then(|| {
+                let named = |n: &String| {
+                    opts.channels
+                        .as_ref()
+                        .is_some_and(|c| c.iter().any(|x| x == n || x == base_name(n)))
+                };
+                // (Not a count of events: errors, clippings, calibrations, drops.)
+                let events = |n: &String| {
+                    let n = n.to_ascii_lowercase();
+                    ["error", "clip", "calib", "overflow", "drop", "fail", "retr"]
+                        .iter()
+                        .any(|w| n.contains(w))
+                };
+                source_names
+                    .iter()
+                    .position(|n| counter_column(n) && !named(n) && !events(n))
+            })
+            .flatten()
+        {
+            Some(i) => (Some(i), true),
+            None => (time, false),
         };
         // Every other column named as a time column (ROS's `field.header.stamp` beside `%time`)
         // is a clock too, not a channel, unless the run names it.
@@ -507,6 +535,7 @@ impl Layout {
             names,
             time,
             px4,
+            counter_clock,
         })
     }
 
@@ -1499,6 +1528,9 @@ impl<R: BufRead> TextReader<R> {
             }
             let layout = found;
             let mut time = match (layout.time, opts.tau0_s) {
+                (Some(i), Some(_)) if layout.counter_clock => {
+                    Some(TimeColumn::counter(&layout.source_names[i]))
+                }
                 (Some(i), Some(tau0)) => Some(TimeColumn::new(&layout.source_names[i], tau0)),
                 _ => None,
             };
@@ -2439,6 +2471,38 @@ mod tests {
             (names, v.len(), bad),
             (vec!["gx".to_string(), "gy".into()], 6, 1)
         );
+    }
+
+    /// An export with no time column but a packet counter (`PacketCounter`, 16 bits): with
+    /// `--tau0`, the counter finds the missing samples, across its wrap too; named in
+    /// `--channels` it is a channel and finds nothing; without `--tau0` it is no clock (the step
+    /// is asked for).
+    #[test]
+    fn a_packet_counter_finds_missing_samples_without_a_time_column() {
+        let text = "PacketCounter\tGyr_X\n65533\t1\n65534\t2\n1\t3\n2\t4\n5\t5\n";
+        let opts = TextOptions {
+            tau0_s: Some(0.01),
+            ..TextOptions::default()
+        };
+        let mut r = TextReader::with_options(text.as_bytes(), Path::new("x.txt"), &opts).unwrap();
+        assert_eq!(r.names(), ["Gyr_X"]);
+        let mut out = Vec::new();
+        while r.read_rows(&mut out, 8).unwrap() > 0 {}
+        // 65533, 65534, (65535, 0), 1, 2, (3, 4), 5.
+        assert_eq!(out.len(), 9);
+        assert_eq!(out.iter().filter(|x| x.is_nan()).count(), 4);
+        assert_eq!(r.position().time.unwrap().unit(), Some("count"));
+        let opts = TextOptions {
+            channels: Some(vec!["PacketCounter".into(), "Gyr_X".into()]),
+            ..opts
+        };
+        let mut r = TextReader::with_options(text.as_bytes(), Path::new("x.txt"), &opts).unwrap();
+        let mut out = Vec::new();
+        while r.read_rows(&mut out, 8).unwrap() > 0 {}
+        assert_eq!(out.len(), 10);
+        assert!(r.time_column_name().is_none());
+        let r = TextReader::new(text.as_bytes(), Path::new("x.txt")).unwrap();
+        assert!(r.time_column_name().is_none());
     }
 
     /// What a review of the first version found, each a file that read wrongly or crashed:

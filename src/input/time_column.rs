@@ -58,6 +58,9 @@ pub struct TimeColumn {
     /// The stamp of the last row, when it went backwards: a restart of the clock if the next
     /// row steps on from it by one tau0 (module doc).
     restart: Option<f64>,
+    /// A counter of samples (`PacketCounter`, `field.header.seq`) stands in for a missing time
+    /// column ([`TimeColumn::counter`]).
+    counter: bool,
 }
 
 /// Where a time column stands, for a checkpoint (`TextPosition`), and what it found so far (the
@@ -87,6 +90,9 @@ pub struct TimeState {
     /// A backward stamp waiting to be told a clock restart (see [`TimeColumn`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub restart: Option<f64>,
+    /// The column is a counter of samples, not a clock ([`TimeColumn::counter`]).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub counter: bool,
 }
 
 impl TimeState {
@@ -99,6 +105,9 @@ impl TimeState {
     /// The column's unit once decided (`s`, `ms`, `us`, `ns`).
     pub fn unit(&self) -> Option<&'static str> {
         let s = self.scale?;
+        if self.counter {
+            return Some("count");
+        }
         SCALES.iter().find(|(x, _)| *x == s).map(|(_, u)| *u)
     }
 }
@@ -117,6 +126,18 @@ impl TimeColumn {
             discontinuities: 0,
             duplicates: 0,
             restart: None,
+            counter: false,
+        }
+    }
+
+    /// A counter of samples in place of a time column (a file with no clock but a
+    /// `PacketCounter`): one count per sample, so a jump of `k` counts is `k - 1` samples
+    /// missing, and a step back to near 0 from near a power of two (a 16-bit counter's 65535 ->
+    /// 2) is its wrap, the counts across it missing. Used only when its first step is one.
+    pub fn counter(name: &str) -> TimeColumn {
+        TimeColumn {
+            counter: true,
+            ..TimeColumn::new(name, 1.0)
         }
     }
 
@@ -133,6 +154,7 @@ impl TimeColumn {
             discontinuities: self.discontinuities,
             duplicates: self.duplicates,
             restart: self.restart,
+            counter: self.counter,
         }
     }
 
@@ -146,6 +168,7 @@ impl TimeColumn {
         self.discontinuities = s.discontinuities;
         self.duplicates = s.duplicates;
         self.restart = s.restart;
+        self.counter = s.counter;
     }
 
     /// A row at `line` repeated the row before it, stamp and values, and was dropped.
@@ -193,6 +216,27 @@ impl TimeColumn {
         let dt = t - last;
         let scale = match self.scale {
             Some(s) => s,
+            // A counter of samples steps by one, or is no use for finding gaps.
+            None if self.counter => {
+                if dt == 1.0 {
+                    tracing::info!(
+                        "{}: no time column: the counter `{}` finds missing samples",
+                        file.display(),
+                        self.name
+                    );
+                    self.scale = Some(1.0);
+                    1.0
+                } else {
+                    tracing::warn!(
+                        "{}: line {line}: the counter `{}` steps by {dt}, not one a sample: not \
+                         used to find gaps",
+                        file.display(),
+                        self.name
+                    );
+                    self.scale = Some(0.0);
+                    return 0;
+                }
+            }
             None => {
                 // 100 us only for a column whose name says so (Xsens's `SampleTimeFine`): it
                 // would otherwise hide a --tau0 ten times off.
@@ -229,6 +273,20 @@ impl TimeColumn {
             }
         };
         let steps = dt * scale / self.tau0_s;
+        // A counter's wrap: from near the top of its range (a power of two) to near 0, the
+        // counts across the wrap being the samples, so those between are missing.
+        if self.counter && dt < 0.0 && t >= 0.0 && last >= 1.0 {
+            let range = (last as u64 + 1).next_power_of_two() as f64;
+            let across = t + range - last;
+            if across >= 1.0 && across <= range / 8.0 {
+                let missing = across as u64 - 1;
+                if missing > 0 {
+                    self.jumps += 1;
+                    self.missing += missing;
+                }
+                return missing;
+            }
+        }
         if let Some(back) = self.restart.take() {
             // The row before went back and this one steps on from it, one step or (while still
             // behind the old clock: no glitch's next row) a whole number of them: the clock
@@ -325,10 +383,15 @@ impl TimeColumn {
             return;
         }
         tracing::warn!(
-            "{}: time column `{}`: {} jumps, {} missing samples counted as gaps; {} steps \
+            "{}: {} `{}`: {} jumps, {} missing samples counted as gaps; {} steps \
              backwards or repeated, {} not a whole number of tau0, {} discontinuities; {} rows \
              written twice dropped",
             file.display(),
+            if self.counter {
+                "counter"
+            } else {
+                "time column"
+            },
             self.name,
             self.jumps,
             self.missing,
@@ -344,6 +407,40 @@ impl TimeColumn {
 mod tests {
     use super::*;
     use std::path::Path;
+
+    /// A counter of samples: a jump of k counts is k - 1 missing; a 16-bit wrap (65534 -> 1)
+    /// has the counts across it missing (65535 and 0); a step back that is no wrap is no gap;
+    /// a counter whose first step is not one is not used.
+    #[test]
+    fn a_counter_of_samples_finds_missing_samples_across_its_wrap() {
+        let p = Path::new("x.csv");
+        let mut c = TimeColumn::counter("PacketCounter");
+        assert_eq!(c.missing_before(65530.0, p, 2), 0);
+        assert_eq!(c.missing_before(65531.0, p, 3), 0);
+        assert_eq!(c.missing_before(65534.0, p, 4), 2);
+        c.step_inserted();
+        c.step_inserted();
+        c.handed_out(65534.0);
+        assert_eq!(c.missing_before(1.0, p, 5), 2);
+        c.step_inserted();
+        c.step_inserted();
+        c.handed_out(1.0);
+        assert_eq!(c.missing_before(2.0, p, 6), 0);
+        // From 20000 to 5: no wrap (not near the top of its range), no gap.
+        assert_eq!(c.missing_before(20000.0, p, 7), 19997);
+        c.handed_out(20000.0);
+        assert_eq!(c.missing_before(5.0, p, 8), 0);
+        let st = c.state();
+        assert_eq!(
+            (st.missing, st.jumps, st.unit()),
+            (2 + 2 + 19997, 3, Some("count"))
+        );
+        let mut d = TimeColumn::counter("frame_count");
+        assert_eq!(d.missing_before(0.0, p, 2), 0);
+        assert_eq!(d.missing_before(4.0, p, 3), 0);
+        assert_eq!(d.missing_before(12.0, p, 4), 0);
+        assert!(!d.in_use());
+    }
 
     #[test]
     fn jumps_become_missing_steps_and_the_unit_is_found() {
