@@ -403,16 +403,17 @@ impl Layout {
                 .or_else(|| source_names.iter().position(|n| time_name(n).is_some())),
             None => None,
         };
+        // A column `--channels` names is a channel, whatever its name says.
+        let named = |n: &str| {
+            opts.channels
+                .as_ref()
+                .is_some_and(|c| c.iter().any(|x| x == n || x == base_name(n)))
+        };
         // No time column, but a counter of samples (`PacketCounter`): it finds the missing
         // samples (`TimeColumn::counter`), once the run knows its step.
         let counter_clock = time.is_none() && header && opts.tau0_s.is_some();
         let (time, counter_clock) = match counter_clock
             .then(|| {
-                let named = |n: &String| {
-                    opts.channels
-                        .as_ref()
-                        .is_some_and(|c| c.iter().any(|x| x == n || x == base_name(n)))
-                };
                 // (Not a count of events: errors, clippings, calibrations, drops.)
                 let events = |n: &String| {
                     let n = n.to_ascii_lowercase();
@@ -431,11 +432,6 @@ impl Layout {
         };
         // Every other column named as a time column (ROS's `field.header.stamp` beside `%time`)
         // is a clock too, not a channel, unless the run names it.
-        let named = |n: &str| {
-            opts.channels
-                .as_ref()
-                .is_some_and(|c| c.iter().any(|x| x == n || x == base_name(n)))
-        };
         // PX4's CSV export: its fields that describe samples (intervals, relative stamps,
         // clipping, ids) are no channels either (`super::px4_export`).
         let px4 = header && px4_export::is_export(&source_names);
@@ -684,31 +680,10 @@ impl Layout {
     /// The channel values of a row and its time stamp (NaN without a time column or where the
     /// stamp is not a number), or what is wrong with the row.
     fn parse(&self, t: &str) -> Result<(Vec<f64>, f64), String> {
-        if self.sep == Sep::Labelled {
-            let pairs = labelled_cells(t).unwrap_or_default();
-            if pairs.len() > self.width_in {
-                return Err(format!(
-                    "{} labelled values, more than the {} names",
-                    pairs.len(),
-                    self.width_in
-                ));
-            }
-            let known = |l: &&str| self.source_names.iter().any(|n| n == l);
-            if let Some((l, _)) = pairs.iter().find(|(l, _)| !known(l)) {
-                return Err(format!(
-                    "label `{l}` is none of the names ({})",
-                    self.source_names.join(", ")
-                ));
-            }
-            if let Some((i, (l, _))) = pairs
-                .iter()
-                .enumerate()
-                .find(|(i, (l, _))| pairs[..*i].iter().any(|(m, _)| m == l))
-            {
-                return Err(format!("label `{l}` twice (pair {})", i + 1));
-            }
-        }
-        let fields = self.split(t);
+        let fields = match self.labelled_fields(t) {
+            Some(fields) => fields?,
+            None => self.split(t),
+        };
         if fields.len() != self.width_in {
             return Err(format!(
                 "{} fields, expected {}",
@@ -773,31 +748,12 @@ impl Layout {
     /// The fields of a row: split at the header's separator, or, when that does not give the
     /// header's width, as the row itself suggests (a row written with spaces in a comma file).
     fn split<'a>(&self, t: &'a str) -> Vec<&'a str> {
-        if self.sep == Sep::Labelled {
-            // Each value under the name its label gives, in the header's order: a label not
-            // known is a row of the wrong width (a bad row); one left out, a gap.
-            let Some(pairs) = labelled_cells(t) else {
-                return split(t);
-            };
-            if pairs.len() > self.width_in {
-                return vec![""; pairs.len() + 1];
-            }
-            let twice = pairs
-                .iter()
-                .enumerate()
-                .any(|(i, (l, _))| pairs[..i].iter().any(|(m, _)| m == l));
-            if twice
-                || pairs
-                    .iter()
-                    .any(|(l, _)| !self.source_names.iter().any(|n| n == l))
-            {
-                return vec![""; pairs.len().max(self.width_in) + 1];
-            }
-            return self
-                .source_names
-                .iter()
-                .map(|n| pairs.iter().find(|(l, _)| l == n).map_or("", |(_, v)| *v))
-                .collect();
+        // A row of labelled values that cannot be laid out: a row of the wrong width (a bad
+        // row), whose problem `parse` says.
+        match self.labelled_fields(t) {
+            Some(Ok(fields)) => return fields,
+            Some(Err(_)) => return vec![""; self.width_in + 1],
+            None => {}
         }
         let fields = self.sep.split(t);
         if fields.len() == self.width_in {
@@ -806,11 +762,65 @@ impl Layout {
             split(t)
         }
     }
+
+    /// A row of labelled values ([`Sep::Labelled`]) laid out under the names, in their order:
+    /// each value under its label, a label left out an empty field (a gap); or what keeps it
+    /// from being laid out (more values than names, a label none of the names, a label twice).
+    /// `None` for a layout of another separator, or a line that is not labelled values (split
+    /// as the line itself suggests).
+    fn labelled_fields<'a>(&self, t: &'a str) -> Option<Result<Vec<&'a str>, String>> {
+        if self.sep != Sep::Labelled {
+            return None;
+        }
+        let pairs = labelled_cells(t)?;
+        if pairs.len() > self.width_in {
+            return Some(Err(format!(
+                "{} labelled values, more than the {} names",
+                pairs.len(),
+                self.width_in
+            )));
+        }
+        let known = |l: &&str| self.source_names.iter().any(|n| n == l);
+        if let Some((l, _)) = pairs.iter().find(|(l, _)| !known(l)) {
+            return Some(Err(format!(
+                "label `{l}` is none of the names ({})",
+                self.source_names.join(", ")
+            )));
+        }
+        if let Some((i, (l, _))) = pairs
+            .iter()
+            .enumerate()
+            .find(|(i, (l, _))| pairs[..*i].iter().any(|(m, _)| m == l))
+        {
+            return Some(Err(format!("label `{l}` twice (pair {})", i + 1)));
+        }
+        Some(Ok(self
+            .source_names
+            .iter()
+            .map(|n| pairs.iter().find(|(l, _)| l == n).map_or("", |(_, v)| *v))
+            .collect()))
+    }
 }
 
 /// Lines read past the first data row when a column holds text there, to see whether it
 /// holds numbers later (a flagged first sample) or never (a label).
 const AHEAD_LINES: usize = 256;
+
+/// The next line into `buf`: the first of those read ahead, else one of `src`; the bytes it
+/// took in the input and whether it was longer than [`MAX_LINE_BYTES`] (0 bytes: the end).
+fn next_line<R: BufRead>(
+    src: &mut R,
+    ahead: &mut VecDeque<(Vec<u8>, usize, bool)>,
+    buf: &mut Vec<u8>,
+) -> std::io::Result<(usize, bool)> {
+    match ahead.pop_front() {
+        Some((bytes, got, long)) => {
+            *buf = bytes;
+            Ok((got, long))
+        }
+        None => read_line_bounded(src, buf, MAX_LINE_BYTES),
+    }
+}
 
 /// Lines of `src` added to `ahead` (as [`TextReader::ahead`] holds them) until it holds `n`,
 /// or the input ends.
@@ -1218,9 +1228,8 @@ impl Sep {
             Sep::Tab => line.split('\t').collect(),
             Sep::Comma => line.split(',').collect(),
             Sep::Spaces => line.split_whitespace().collect(),
-            Sep::Labelled => labelled_cells(line)
-                .map(|pairs| pairs.into_iter().map(|(_, v)| v).collect())
-                .unwrap_or_else(|| split(line)),
+            // Laid out by [`Layout::labelled_fields`]; a line that is not such, as it suggests.
+            Sep::Labelled => split(line),
         }
     }
 }
@@ -1265,9 +1274,10 @@ fn labelled_start(t: &str, ahead: &[String]) -> Option<Labelled> {
         .chain(ahead.iter().map(String::as_str))
         .take(LABELLED_LOOK + 1)
         .collect();
-    let first = lines.iter().position(|l| labelled_names(l).is_some())?;
-    let from = &lines[first..];
-    let labelled: Vec<Vec<String>> = from.iter().filter_map(|l| labelled_names(l)).collect();
+    let read: Vec<Option<Vec<String>>> = lines.iter().map(|l| labelled_names(l)).collect();
+    let first = read.iter().position(Option::is_some)?;
+    let from = &read[first..];
+    let labelled: Vec<Vec<String>> = from.iter().flatten().cloned().collect();
     if 3 * labelled.len() < 2 * from.len() {
         return None;
     }
@@ -1329,14 +1339,8 @@ impl<R: BufRead> TextReader<R> {
         let mut layout_line = 0u64;
         loop {
             // Lines looked at ahead (for labelled values) are read again from there first.
-            let (n, long) = match ahead.pop_front() {
-                Some((bytes, got, long)) => {
-                    raw = bytes;
-                    (got, long)
-                }
-                None => read_line_bounded(&mut src, &mut raw, MAX_LINE_BYTES)
-                    .map_err(|e| input_error(path, line_no + 1, e.to_string()))?,
-            };
+            let (n, long) = next_line(&mut src, &mut ahead, &mut raw)
+                .map_err(|e| input_error(path, line_no + 1, e.to_string()))?;
             if n == 0 {
                 return Err(input_error(path, line_no, "no data rows".into()));
             }
@@ -1851,13 +1855,7 @@ impl<R: BufRead> TextReader<R> {
     fn next_row(&mut self) -> std::io::Result<Option<Row>> {
         let width = self.names.len();
         loop {
-            let (got, long) = match self.ahead.pop_front() {
-                Some((bytes, got, long)) => {
-                    self.line = bytes;
-                    (got, long)
-                }
-                None => read_line_bounded(&mut self.src, &mut self.line, MAX_LINE_BYTES)?,
-            };
+            let (got, long) = next_line(&mut self.src, &mut self.ahead, &mut self.line)?;
             if got == 0 {
                 return Ok(None);
             }
