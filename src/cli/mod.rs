@@ -29,7 +29,7 @@ use allanscope::analysis::ChannelSetup;
 use allanscope::analysis::{AnalysisOptions, InputKind};
 use allanscope::error::UsageError;
 use allanscope::frame::FrameDescriptor;
-use allanscope::input::header_unit::{header_unit, units_from_headers};
+use allanscope::input::header_unit::{self, header_unit, units_from_headers, HeaderUnit};
 use allanscope::input::px4_export;
 use allanscope::input::text::{ColumnPick, TextOptions, TextReader};
 use allanscope::model::fit::FitMethod;
@@ -357,17 +357,6 @@ fn text_tau0(d: &mut DataArgs, inputs: &[&str]) -> Result<()> {
     }
     let mut found: Option<(&str, allanscope::input::sampling_step::InferredStep)> = None;
     for &input in inputs {
-        if input == "-" {
-            return Err(usage(
-                "--tau0 is required for text columns on standard input",
-            ));
-        }
-        if read_once(input) {
-            // Its start would be consumed finding the step.
-            return Err(usage(format!(
-                "{input}: --tau0 is required for text columns from a pipe (a FIFO or `<(...)`)"
-            )));
-        }
         let step = look_at_start(input, d)?.map_err(anyhow::Error::new)?;
         match &found {
             Some((first, s)) if (s.tau0_s - step.tau0_s).abs() > 1e-9 * s.tau0_s => {
@@ -390,24 +379,72 @@ fn text_tau0(d: &mut DataArgs, inputs: &[&str]) -> Result<()> {
     Ok(())
 }
 
-/// The sampling step and rows found at the start of `input` (a file that can be read twice)
-/// by [`allanscope::input::sampling_step::infer_tau0`], as the run will lay out its columns but
+/// The sampling step and rows found at the start of `input` by
+/// [`allanscope::input::sampling_step::infer_tau0`], as the run will lay out its columns but
 /// with no `--tau0`. The run reads the input again and logs what it finds (a column without a
-/// name, a label column): this look says nothing, so nothing is said twice. The outer error:
-/// the input does not open.
+/// name, a label column): this look says nothing, so nothing is said twice. An input that can
+/// be read only once (standard input, a FIFO, `<(zcat run.csv.gz)`) keeps the bytes the look
+/// took, and the run reads them first ([`open_input`]). The outer error: the input does not
+/// open, or is no text (a compressed file, a workbook, binary data: refused as the run would
+/// refuse it, not read as columns without a time column).
 fn look_at_start(
     input: &str,
     d: &DataArgs,
 ) -> Result<Result<allanscope::input::sampling_step::InferredStep, UsageError>> {
-    let src = std::io::BufReader::new(open_input(input)?);
+    analyze::sniff(input, None)?;
     let opts = TextOptions {
         tau0_s: None,
         ..d.text_options()
     };
-    Ok(tracing::subscriber::with_default(
-        tracing::subscriber::NoSubscriber::default(),
-        || allanscope::input::sampling_step::infer_tau0(src, Path::new(input), &opts),
-    ))
+    let mut src = std::io::BufReader::new(Recording {
+        inner: open_input(input)?,
+        seen: read_once(input).then(Vec::new),
+    });
+    let step =
+        tracing::subscriber::with_default(tracing::subscriber::NoSubscriber::default(), || {
+            allanscope::input::sampling_step::infer_tau0(&mut src, Path::new(input), &opts)
+        });
+    let Recording { inner, seen } = src.into_inner();
+    if let Some(head) = seen {
+        read_once_heads().push(ReadOnceHead {
+            input: input.to_string(),
+            head,
+            rest: inner,
+        });
+    }
+    Ok(step)
+}
+
+/// A reader that keeps every byte read through it (when `seen` is `Some`).
+struct Recording {
+    inner: Box<dyn Read + Send>,
+    seen: Option<Vec<u8>>,
+}
+
+impl Read for Recording {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        if let Some(seen) = &mut self.seen {
+            seen.extend_from_slice(&buf[..n]);
+        }
+        Ok(n)
+    }
+}
+
+/// The start of a read-once input that [`look_at_start`] read, and the stream after it.
+struct ReadOnceHead {
+    input: String,
+    head: Vec<u8>,
+    rest: Box<dyn Read + Send>,
+}
+
+/// The read-once inputs' starts taken by [`look_at_start`], until [`open_input`] hands each
+/// out (standard input and a pipe are the process's, so this is too).
+fn read_once_heads() -> std::sync::MutexGuard<'static, Vec<ReadOnceHead>> {
+    static HEADS: std::sync::Mutex<Vec<ReadOnceHead>> = std::sync::Mutex::new(Vec::new());
+    HEADS
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
 /// What the look at an input's start found of its rows: the channels analysed on every k-th
@@ -695,50 +732,35 @@ impl DataArgs {
         }
         let columns = reader.channel_columns();
         // A column renamed with a unit (`--columns "c17=wx [rad/s]"`) is in that unit when its
-        // own header gives none; a PX4 sensor_gyro's `x` is in the unit its message fixes.
-        let px4: Vec<Option<String>> = setups
-            .iter()
-            .map(|c| {
-                let src = columns[c.column].1;
-                reader
-                    .px4_export()
-                    .then(|| px4_export::message_unit(Path::new(input), src))
-                    .flatten()
-                    .map(|u| format!("{src} [{u}]"))
-            })
-            .collect();
+        // own header gives none.
         let ours: Vec<(usize, &str)> = setups
             .iter()
-            .zip(&px4)
-            .map(|(c, p)| match columns[c.column] {
+            .map(|c| match columns[c.column] {
                 (i, src) if header_unit(src).is_none() && header_unit(&c.name).is_some() => {
                     (i, c.name.as_str())
                 }
-                (i, _) if p.is_some() => (i, p.as_deref().unwrap_or_default()),
                 col => col,
             })
             .collect();
-        // A unit PX4's message fixes is said as such, not as a name the file does not hold.
-        let px4_shown: Vec<(String, String)> = setups
+        // A name that carries no unit may be in the unit its file's format fixes: a PX4
+        // sensor_gyro's `x` (by its message), Kalibr's `omega_x`.
+        let kalibr = header_unit::kalibr_layout(reader.header_names());
+        let fixed: Vec<Option<HeaderUnit>> = ours
             .iter()
-            .zip(&px4)
-            .filter_map(|(c, p)| {
-                let p = p.as_ref()?;
-                Some((
-                    p.clone(),
-                    format!("`{}` (by its PX4 message)", columns[c.column].1),
-                ))
+            .map(|&(_, name)| {
+                let px4 = reader
+                    .px4_export()
+                    .then(|| px4_export::message_unit(Path::new(input), name));
+                px4.flatten()
+                    .or_else(|| kalibr.then(|| header_unit::kalibr_field(name)).flatten())
             })
             .collect();
-        let shown = |n: &str| match px4_shown.iter().find(|(p, _)| p == n) {
-            Some((_, s)) => s.clone(),
-            None => format!("`{n}`"),
-        };
         if self.unit.is_some() {
             let carried: Vec<String> = ours
                 .iter()
-                .filter(|(_, n)| header_unit(n).is_some())
-                .map(|(_, n)| shown(n))
+                .zip(&fixed)
+                .filter(|((_, n), f)| header_unit(n).is_some() || f.is_some())
+                .map(|((_, n), _)| format!("`{n}`"))
                 .collect();
             if !carried.is_empty() {
                 tracing::info!(
@@ -749,9 +771,16 @@ impl DataArgs {
             }
             return Ok((setups, settings.kind));
         }
-        let read = units_from_headers(&ours, self.rate, self.phase)
+        let read = units_from_headers(&ours, &fixed, self.rate, self.phase)
             .map_err(|e| usage(format!("{input}: {e}")))?;
         let Some(read) = read else {
+            if settings.kind == InputKind::Increments && !setups.is_empty() {
+                tracing::info!(
+                    "{input}: no unit in the column headers and no --unit: the values are read as \
+                     increments (each sample's angle or velocity change) in u; give --rate if they \
+                     are rate samples, and --unit for their unit"
+                );
+            }
             return Ok((setups, settings.kind));
         };
         for (c, u) in setups.iter_mut().zip(&read.units) {
@@ -767,13 +796,10 @@ impl DataArgs {
             InputKind::Phase => "phase, as --phase",
             InputKind::Increments => "increments",
         };
-        let mut account = read.account.clone();
-        for p in px4.iter().flatten() {
-            account = account.replace(&format!("`{p}`"), &shown(p));
-        }
         tracing::info!(
-            "{input}: no --unit: units from the column headers: {account}; read as {how} \
-             (--unit U overrides the headers)"
+            "{input}: no --unit: units from the column headers: {}; read as {how} (--unit U \
+             overrides the headers)",
+            read.account
         );
         Ok((setups, kind))
     }
@@ -801,6 +827,12 @@ pub(crate) fn read_once(input: &str) -> bool {
 }
 
 pub(crate) fn open_input(input: &str) -> Result<Box<dyn Read + Send>> {
+    let mut heads = read_once_heads();
+    if let Some(at) = heads.iter().position(|h| h.input == input) {
+        let h = heads.remove(at);
+        return Ok(Box::new(std::io::Cursor::new(h.head).chain(h.rest)));
+    }
+    drop(heads);
     if input == "-" {
         Ok(Box::new(std::io::stdin()))
     } else {

@@ -85,6 +85,45 @@ fn ros_imu_field(name: &str) -> Option<HeaderUnit> {
     })
 }
 
+/// Whether a header is that of Kalibr's `imu0.csv` (the input of `kalibr_bagcreater`, the
+/// output of `kalibr_bagextractor`): `timestamp` (ns), `omega_x`, `omega_y`, `omega_z`,
+/// `alpha_x`, `alpha_y`, `alpha_z`, whose names carry no unit because Kalibr's bag format fixes
+/// them (rad/s, m/s^2; its wiki, "Bag format"). All seven names are needed: `alpha` alone is as
+/// often an angular acceleration.
+pub fn kalibr_layout<S: AsRef<str>>(names: &[S]) -> bool {
+    const KALIBR: [&str; 7] = [
+        "timestamp",
+        "omega_x",
+        "omega_y",
+        "omega_z",
+        "alpha_x",
+        "alpha_y",
+        "alpha_z",
+    ];
+    KALIBR
+        .iter()
+        .all(|k| names.iter().any(|n| n.as_ref().trim() == *k))
+}
+
+/// The unit of a column of Kalibr's `imu0.csv` ([`kalibr_layout`]): `omega_*` rad/s,
+/// `alpha_*` m/s^2; `None` for any other name.
+pub fn kalibr_field(name: &str) -> Option<HeaderUnit> {
+    let (field, axis) = name.trim().split_once('_')?;
+    if !matches!(axis, "x" | "y" | "z") {
+        return None;
+    }
+    let (unit, text) = match field {
+        "omega" => ("rad", "rad/s, by Kalibr's imu0.csv"),
+        "alpha" => ("m/s", "m/s^2, by Kalibr's imu0.csv"),
+        _ => return None,
+    };
+    Some(HeaderUnit {
+        unit: unit.into(),
+        rate: true,
+        text: text.into(),
+    })
+}
+
 /// The name of the array a column is an element of (`gyro_rad` for `gyro_rad[0]`), when its
 /// brackets hold only an index.
 pub fn array_element(name: &str) -> Option<&str> {
@@ -248,19 +287,22 @@ pub struct ColumnUnits {
 }
 
 /// The units of `columns` (each channel's 1-based input column and header name) read from the
-/// headers, when no `--unit` is given. `rate`/`phase` are the options given. `Ok(None)`: no
+/// headers, when no `--unit` is given; `fixed` holds, per column (or none at all), the unit the
+/// file's format fixes for a name that carries none (a PX4 message's `x`, Kalibr's `omega_x`),
+/// taken when the name itself gives none. `rate`/`phase` are the options given. `Ok(None)`: no
 /// header carries a unit (the columns are in `u`, as before). Errors (a usage error to the
 /// caller, naming column and header): a unit not known; rates and increments mixed; `--rate`
 /// on increments, or `--phase` on rates, by their headers.
 pub fn units_from_headers(
     columns: &[(usize, &str)],
+    fixed: &[Option<HeaderUnit>],
     rate: bool,
     phase: bool,
 ) -> Result<Option<ColumnUnits>, String> {
     let mut read: Vec<Option<HeaderUnit>> = Vec::new();
-    for &(col, name) in columns {
+    for (i, &(col, name)) in columns.iter().enumerate() {
         match header_unit(name) {
-            None => read.push(None),
+            None => read.push(fixed.get(i).cloned().flatten()),
             Some(Ok(u)) => read.push(Some(u)),
             Some(Err(text)) => {
                 return Err(format!(
@@ -487,7 +529,9 @@ mod tests {
             (5, "a_RS_S_x [m s^-2]"),
             (8, "status"),
         ];
-        let u = units_from_headers(&euroc, false, false).unwrap().unwrap();
+        let u = units_from_headers(&euroc, &[], false, false)
+            .unwrap()
+            .unwrap();
         assert_eq!(u.units, ["rad", "m/s", "u"]);
         assert!(u.rate);
         assert!(
@@ -502,30 +546,77 @@ mod tests {
             u.account
         );
         // `--rate` agrees with the headers; `--phase` does not.
-        assert!(units_from_headers(&euroc, true, false).unwrap().is_some());
-        let e = units_from_headers(&euroc, false, true).unwrap_err();
+        assert!(units_from_headers(&euroc, &[], true, false)
+            .unwrap()
+            .is_some());
+        let e = units_from_headers(&euroc, &[], false, true).unwrap_err();
         assert!(
             e.contains("--phase, but column 2 `w_RS_S_x [rad s^-1]`"),
             "{e}"
         );
         // Increments by their headers: `--rate` refused, `--phase` taken.
         let inc = [(1, "dth [deg]"), (2, "dv [m/s]")];
-        let e = units_from_headers(&inc, true, false).unwrap_err();
+        let e = units_from_headers(&inc, &[], true, false).unwrap_err();
         assert!(e.contains("--rate, but column 1 `dth [deg]`"), "{e}");
-        let u = units_from_headers(&inc, false, true).unwrap().unwrap();
+        let u = units_from_headers(&inc, &[], false, true).unwrap().unwrap();
         assert_eq!((u.units, u.rate), (vec!["deg".into(), "m/s".into()], false));
         // Mixed kinds, a unit not known, no units at all.
-        let e = units_from_headers(&[(1, "g [deg/s]"), (3, "d [deg]")], false, false).unwrap_err();
+        let e =
+            units_from_headers(&[(1, "g [deg/s]"), (3, "d [deg]")], &[], false, false).unwrap_err();
         assert!(
             e.starts_with("column 1 `g [deg/s]` holds rates and column 3 `d [deg]` increments"),
             "{e}"
         );
-        let e = units_from_headers(&[(4, "gyro_x (furlong/s)")], false, false).unwrap_err();
+        let e = units_from_headers(&[(4, "gyro_x (furlong/s)")], &[], false, false).unwrap_err();
         assert!(
             e.starts_with("column 4 `gyro_x (furlong/s)`: unit `furlong/s`"),
             "{e}"
         );
-        assert_eq!(units_from_headers(&[(1, "gx")], false, false), Ok(None));
+        assert_eq!(
+            units_from_headers(&[(1, "gx")], &[], false, false),
+            Ok(None)
+        );
+    }
+
+    /// Kalibr's imu0.csv: its header is told only whole; its columns are rates in rad/s and
+    /// m/s^2, taken where a name carries no unit of its own.
+    #[test]
+    fn kalibr_imu_csv() {
+        let h = [
+            "timestamp",
+            "omega_x",
+            "omega_y",
+            "omega_z",
+            "alpha_x",
+            "alpha_y",
+            "alpha_z",
+        ];
+        assert!(kalibr_layout(&h));
+        assert!(!kalibr_layout(&h[..6]));
+        assert!(!kalibr_layout(&["t", "omega_x", "alpha_x"]));
+        let cols: Vec<(usize, &str)> = h
+            .iter()
+            .enumerate()
+            .skip(1)
+            .map(|(i, n)| (i + 1, *n))
+            .collect();
+        let fixed: Vec<Option<HeaderUnit>> = cols.iter().map(|(_, n)| kalibr_field(n)).collect();
+        let u = units_from_headers(&cols, &fixed, false, false)
+            .unwrap()
+            .unwrap();
+        assert_eq!(u.units, ["rad", "rad", "rad", "m/s", "m/s", "m/s"]);
+        assert!(u.rate);
+        assert!(
+            u.account
+                .contains("`omega_x` rates in rad/s, by Kalibr's imu0.csv (unit rad)"),
+            "{}",
+            u.account
+        );
+        assert_eq!(kalibr_field("omega_w"), None);
+        assert_eq!(kalibr_field("theta_x"), None);
+        // A unit in a column's own name rules over the format's.
+        let own = units_from_headers(&[(2, "omega_x [deg/s]")], &fixed[..1], false, false);
+        assert_eq!(own.unwrap().unwrap().units, ["deg"]);
     }
 
     /// PX4's CSV export: an index in brackets is no unit; the fields whose unit the message

@@ -86,7 +86,7 @@ pub fn field_unit(base: &str) -> Option<HeaderUnit> {
 /// message), which their names do not carry: the message is read off the file's name, as
 /// `ulog2csv` writes it (`LOG_sensor_gyro_0.csv`; not `sensor_gyro_fifo`, whose `x[k]` are
 /// scaled counts, nor `sensor_gyro_status`). `None` for any other file or column.
-pub fn message_unit(file: &std::path::Path, column: &str) -> Option<&'static str> {
+pub fn message_unit(file: &std::path::Path, column: &str) -> Option<HeaderUnit> {
     if !matches!(column, "x" | "y" | "z") {
         return None;
     }
@@ -96,13 +96,18 @@ pub fn message_unit(file: &std::path::Path, column: &str) -> Option<&'static str
     if instance.is_empty() || !instance.bytes().all(|b| b.is_ascii_digit()) {
         return None;
     }
-    if head.ends_with("sensor_gyro") {
-        Some("rad/s")
+    let (unit, text) = if head.ends_with("sensor_gyro") {
+        ("rad", "rad/s, by its PX4 message sensor_gyro")
     } else if head.ends_with("sensor_accel") {
-        Some("m/s^2")
+        ("m/s", "m/s^2, by its PX4 message sensor_accel")
     } else {
-        None
-    }
+        return None;
+    };
+    Some(HeaderUnit {
+        unit: unit.into(),
+        rate: true,
+        text: text.into(),
+    })
 }
 
 #[cfg(test)]
@@ -175,9 +180,15 @@ mod tests {
     #[test]
     fn units_by_the_message() {
         use std::path::Path;
-        let u = |f: &str, c: &str| message_unit(Path::new(f), c);
-        assert_eq!(u("log_12_sensor_gyro_0.csv", "x"), Some("rad/s"));
-        assert_eq!(u("/tmp/flight/log_sensor_accel_1.csv", "z"), Some("m/s^2"));
+        let u = |f: &str, c: &str| message_unit(Path::new(f), c).map(|u| (u.unit, u.rate));
+        assert_eq!(
+            u("log_12_sensor_gyro_0.csv", "x"),
+            Some(("rad".into(), true))
+        );
+        assert_eq!(
+            u("/tmp/flight/log_sensor_accel_1.csv", "z"),
+            Some(("m/s".into(), true))
+        );
         assert_eq!(u("log_sensor_gyro_0.csv", "temperature"), None);
         assert_eq!(u("log_sensor_gyro_fifo_0.csv", "x"), None);
         assert_eq!(u("log_sensor_gyro_status_0.csv", "x"), None);

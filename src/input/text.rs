@@ -1631,6 +1631,11 @@ impl<R: BufRead> TextReader<R> {
         self.layout.px4
     }
 
+    /// Every column's name in the input (the header's, or `c1..cn`), used or not.
+    pub fn header_names(&self) -> &[String] {
+        &self.layout.source_names
+    }
+
     /// The header name of the time column, if the input has one.
     pub fn time_column_name(&self) -> Option<&str> {
         self.layout

@@ -140,6 +140,59 @@ fn deg_per_hour_and_micro_g() {
     assert_eq!(curves(&out), told);
 }
 
+/// Kalibr's imu0.csv (`timestamp` in ns, `omega_*` in rad/s, `alpha_*` in m/s^2, no unit in
+/// the names): read in those units, as `--rate --unit rad` (and `m/s`) told by hand; the same
+/// names in a header that is not Kalibr's whole carry no unit.
+#[test]
+fn kalibr_imu_csv_is_in_its_fixed_units() {
+    let rows = |header: &str| {
+        let mut s = format!("{header}\n");
+        for i in 0..400u64 {
+            let w = ((i * 37 % 101) as f64 - 50.0) * 1e-3;
+            let a = ((i * 53 % 89) as f64 - 44.0) * 2e-3;
+            let ns = 1_385_030_208_736_607_488u64 + i * 5_000_000;
+            s += &format!("{ns},{w:e},{:e},{:e},{:e},{:e},{a:e}\n", -w, 2.0 * w, a, -a);
+        }
+        s
+    };
+    let p = tmp_in("cli_header_units", "imu0.csv");
+    std::fs::write(
+        &p,
+        rows("timestamp,omega_x,omega_y,omega_z,alpha_x,alpha_y,alpha_z"),
+    )
+    .unwrap();
+    let out = analyze(&p, &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("`omega_x` rates in rad/s, by Kalibr's imu0.csv (unit rad)"),
+        "{err}"
+    );
+    let read = curves(&out);
+    assert_eq!(read.len(), 6);
+    let told_w = curves(&analyze(
+        &p,
+        &["--columns", "omega_x", "--rate", "--unit", "rad"],
+    ));
+    assert_eq!(curve(&read, "omega_x"), &told_w[0]);
+    let told_a = curves(&analyze(
+        &p,
+        &["--columns", "alpha_z", "--rate", "--unit", "m/s"],
+    ));
+    assert_eq!(curve(&read, "alpha_z"), &told_a[0]);
+    // Without the alpha columns the header is not Kalibr's: no unit, increments in u (said).
+    let q = tmp_in("cli_header_units", "omega_only.csv");
+    std::fs::write(&q, rows("timestamp,omega_x,omega_y,omega_z,ax,ay,az")).unwrap();
+    let out = analyze(&q, &[]);
+    assert!(curves(&out).iter().all(|c| c.unit == "u"));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(
+            "no unit in the column headers and no --unit: the values are read as increments"
+        ),
+        "{err}"
+    );
+}
+
 #[test]
 fn headers_that_cannot_be_read_or_contradict_the_options_are_usage_errors() {
     // A magnetometer's column is no channel by its unit (said); picked, its unit is not one

@@ -5,7 +5,8 @@
 //! - Quoted fields, `;` or tab columns with decimal commas, a Latin-1 header, a trailing
 //!   separator: the plain file's curves.
 //! - A FIFO (as `<(zcat run.csv.gz)` gives) is read whole, once: the plain file's curves (it
-//!   lost its first 4 KiB to the format check, or hung, before).
+//!   lost its first 4 KiB to the format check, or hung, before), with `--tau0` or, from a time
+//!   column, without (refused before: the look at the start took its bytes).
 //! - A line of 3 MiB inside the rows is one bad row, read as a gap: the curves of the file with
 //!   an empty row there (it was held whole in memory before).
 //! - A result file whose last line is cut short (a run killed while writing) exports and
@@ -179,15 +180,40 @@ fn a_fifo_is_read_whole_once() {
         .status()
         .expect("mkfifo");
     assert!(made.success());
-    // Without --tau0 the step would be read off the start of the stream, which is then gone.
-    let refused = exe()
+    // Without --tau0 the step is read off the start of the stream, which the run then reads
+    // first: the curves of the plain file with its time column (before: refused).
+    let mut stamped = "t,g1,g2\n".to_string();
+    for (i, [a, b]) in rows().into_iter().enumerate() {
+        stamped += &format!("{:.2},{a},{b}\n", i as f64 * 0.01);
+    }
+    std::fs::write(dir.join("stamped.csv"), &stamped).unwrap();
+    let plain_stamped = {
+        let mut c = exe();
+        c.current_dir(&dir).env("ALLANSCOPE_LOG", "off");
+        final_curves(
+            &c.args(["analyze", "stamped.csv", "--json"])
+                .output()
+                .expect("run"),
+        )
+    };
+    assert_eq!(plain_stamped, want, "the time column changes nothing");
+    let writer = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || {
+            let _ = std::fs::write(&fifo, stamped);
+        })
+    };
+    let child = exe()
         .current_dir(&dir)
         .env("ALLANSCOPE_LOG", "off")
-        .args(["analyze", "fifo"])
-        .output()
-        .expect("run");
-    assert_eq!(refused.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&refused.stderr).contains("--tau0 is required"));
+        .args(["analyze", "fifo", "--json"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let out = output_within(child, Duration::from_secs(20));
+    assert_eq!(final_curves(&out), want);
+    writer.join().expect("writer");
     let writer = {
         let fifo = fifo.clone();
         // Errors are ignored: a reader that closes early makes the write fail, and the test

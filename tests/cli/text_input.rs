@@ -647,6 +647,31 @@ fn a_euroc_file_needs_no_tau0() {
     for (x, y) in c.iter().zip(&tc) {
         assert_eq!((&x.channel, &x.sigma), (&y.channel, &y.sigma));
     }
+    // Piped in (`zcat imu0.csv.gz | allanscope analyze -`): the step read off the stream's
+    // start, which the run then reads: the same records (refused before without --tau0).
+    let mut child = exe()
+        .args(["analyze", "-", "--fit", "none", "--stats", "avar"])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    let feeder = std::thread::spawn(move || {
+        use std::io::Write;
+        stdin.write_all(text.as_bytes()).unwrap();
+    });
+    let piped = child.wait_with_output().unwrap();
+    feeder.join().unwrap();
+    let (pc, ps) = parsed(&piped);
+    assert_eq!(
+        (ps.tau0, ps.samples.clone(), ps.segments.clone()),
+        (0.01, s.samples.clone(), s.segments.clone())
+    );
+    assert_eq!(pc.len(), c.len());
+    for (x, y) in pc.iter().zip(&c) {
+        assert_eq!((&x.channel, &x.sigma), (&y.channel, &y.sigma));
+    }
 }
 
 /// Without `--tau0` and without a usable time column: exit 2 saying why, once.
@@ -669,12 +694,25 @@ fn no_tau0_without_a_usable_time_column_is_a_usage_error() {
         &analyze_no_tau0(&p, &[]),
         &["irregular_time.csv", "irregular"],
     );
-    let out = exe()
+    // Standard input is looked at as a file is: no time column, no --tau0.
+    let mut child = exe()
         .args(["analyze", "-", "--fit", "none"])
-        .stdin(std::process::Stdio::null())
-        .output()
+        .stdin(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
         .unwrap();
-    usage_error(&out, &["standard input"]);
+    let rows_only = format!("gx,gy\n{}", rows(",", false));
+    use std::io::Write;
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(rows_only.as_bytes())
+        .unwrap();
+    usage_error(
+        &child.wait_with_output().unwrap(),
+        &["-: ", "no time column"],
+    );
 }
 
 /// A merged multi-rate file (`ax` logged at half the rate of `gx`, empty cells between): read
