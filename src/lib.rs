@@ -62,6 +62,7 @@
 //!   header_unit.rs         a data column's unit in its header (`[rad s^-1]`), without --unit
 //!   temperature_column.rs  the unit's temperature column (`temp [degC]`): not a channel
 //!   px4_export.rs          PX4's CSV export: us stamps, fields that describe samples
+//!   lvm.rs                 LabVIEW Measurement files: tagged headers, Delta_X, units
 //! frame/                   frames (pure: no I/O)                          bytes -> FrameEvent
 //!   descriptor/            the descriptor language (TOML) and its checked types
 //!     parse.rs             the top level, sync, checks across message kinds, interleave

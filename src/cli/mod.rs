@@ -297,6 +297,7 @@ impl DataArgs {
             tau0_s: self.tau0,
             channels: self.channels.clone(),
             sparse_rows: self.sparse_rows,
+            phase: self.phase,
         }
     }
 }

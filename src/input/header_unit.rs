@@ -145,7 +145,7 @@ pub fn other_quantity(name: &str) -> Option<&'static str> {
             "a magnetic field"
         }
         "Pa" | "hPa" | "kPa" | "mbar" | "bar" | "psi" | "mmHg" | "inHg" | "atm" => "a pressure",
-        "V" | "mV" | "uV" => "a voltage",
+        "V" | "mV" | "uV" | "Volts" | "volts" | "Volt" | "volt" => "a voltage",
         "A" | "mA" | "uA" => "a current",
         "%" | "%RH" => "a percentage",
         "lx" | "lux" => "an illuminance",

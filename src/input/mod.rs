@@ -3,6 +3,7 @@
 //! A reader turns bytes into [`Chunk`]s of rows; it knows nothing of statistics.
 
 pub mod header_unit;
+pub mod lvm;
 pub mod px4_export;
 pub mod sampling_step;
 pub mod temperature_column;

@@ -51,6 +51,16 @@ impl std::fmt::Display for InferredStep {
             .into_iter()
             .find(|(u, _)| *u == self.unit_s)
             .map_or("s", |(_, name)| name);
+        if self.steps == 0 {
+            // Not read off stamps: a header's step (`Delta_X`).
+            return write!(
+                f,
+                "tau0 {} s from {}'s {}",
+                crate::ranges::show(self.tau0_s),
+                self.unit_from,
+                self.column
+            );
+        }
         write!(
             f,
             "tau0 {} s from the time column `{}` (median of {} steps, {} of them within {}% of it; \
@@ -92,6 +102,28 @@ fn epoch_unit(stamp: f64) -> Option<f64> {
         .find(|&u| (1e9..4e9).contains(&(stamp * u)))
 }
 
+/// The step a LabVIEW Measurement file's `Delta_X` gives (s), when it is a sampling step.
+fn lvm_step(dx: f64) -> Result<InferredStep, String> {
+    let tau0_s = round_significant(dx, 12);
+    if crate::ranges::check_tau0(tau0_s).is_err() || tau0_s > 10.0 {
+        return Err(format!(
+            "--tau0 is required: the LabVIEW header's Delta_X is {} s, not a sampling step",
+            crate::ranges::show(tau0_s)
+        ));
+    }
+    Ok(InferredStep {
+        tau0_s,
+        column: "Delta_X".into(),
+        unit_s: 1.0,
+        unit_from: "the LabVIEW header",
+        steps: 0,
+        regular: 0,
+        every: 1,
+        slow: Vec::new(),
+        doubt: None,
+    })
+}
+
 /// `x` rounded to `digits` significant decimal digits.
 fn round_significant(x: f64, digits: i32) -> f64 {
     if x == 0.0 || !x.is_finite() {
@@ -111,6 +143,10 @@ pub fn infer_tau0<R: BufRead>(
     let usage = |p: String| UsageError::Option(format!("{}: {p}", path.display()));
     let mut reader = TextReader::with_options(src, path, opts)?;
     let Some(column) = reader.time_column_name().map(str::to_string) else {
+        // A LabVIEW Measurement file without an x column: its header's `Delta_X`.
+        if let Some(dx) = reader.lvm_delta_x() {
+            return lvm_step(dx).map_err(usage);
+        }
         return Err(usage(
             "--tau0 is required: the text columns have no time column (a header name time, t, \
              timestamp or time_s, with or without a unit, or --time-column NAME)"
@@ -362,6 +398,27 @@ mod tests {
             t.push_str(&format!("{:.3},1\n", k as f64 * 0.005));
         }
         assert_eq!(infer(&t).unwrap().tau0_s, 0.005);
+    }
+
+    /// A LabVIEW Measurement file without an x column: the step is its header's `Delta_X`; a
+    /// `Delta_X` that is no sampling step (1 h) asks for --tau0.
+    #[test]
+    fn a_labview_file_gives_its_delta_x() {
+        let lvm = |dx: &str| {
+            format!(
+                "LabVIEW Measurement\t\nX_Columns\tNo\n***End_of_Header***\t\n\nChannels\t2\t\n\
+                 Delta_X\t{dx}\t{dx}\t\n***End_of_Header***\t\ngx\tgy\tComment\n\
+                 0.1\t0.2\t\n0.3\t0.4\t\n"
+            )
+        };
+        let s = infer(&lvm("4.000000E-3")).unwrap();
+        assert_eq!((s.tau0_s, s.column.as_str()), (0.004, "Delta_X"));
+        assert_eq!(
+            s.to_string(),
+            "tau0 0.004 s from the LabVIEW header's Delta_X"
+        );
+        let e = infer(&lvm("3600")).unwrap_err().to_string();
+        assert!(e.contains("Delta_X is 3600 s, not a sampling step"), "{e}");
     }
 
     /// What is refused: no time column, an irregular one, and one whose step is not a sampling

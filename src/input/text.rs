@@ -207,6 +207,29 @@ fn time_name(name: &str) -> Option<(bool, Option<f64>)> {
     if original.eq_ignore_ascii_case("sampletimefine") {
         return Some((false, Some(1e-4)));
     }
+    // HBM catman's time channel: `Time  1 - default sample rate`, its unit in the row under
+    // (`[s]` after it then).
+    let (bare, unit) = match super::header_unit::bracketed(original) {
+        Some((b, u)) => (b, Some(u)),
+        None => (original, None),
+    };
+    let lower = bare.to_ascii_lowercase();
+    if lower.starts_with("time") && lower.ends_with("default sample rate") {
+        let scale = unit.and_then(|u| TIME_UNITS.iter().find(|(x, _)| *x == u).map(|(_, s)| *s));
+        return Some((true, scale));
+    }
+    // LabVIEW's x axis (`super::lvm`), in seconds; with an x column per channel (`X_Columns
+    // Multi`) the later ones are numbered by the reader.
+    if super::lvm::is_x_column(original) {
+        return Some((true, Some(1.0)));
+    }
+    if original
+        .to_ascii_lowercase()
+        .strip_prefix("x_value_")
+        .is_some_and(|k| !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
+    {
+        return Some((false, Some(1.0)));
+    }
     // An Arduino sketch's clocks, by the functions that read them: `millis()`, `micros()`.
     for (clock, unit) in [("millis", 1e-3), ("micros", 1e-6)] {
         if original.eq_ignore_ascii_case(clock) {
@@ -307,6 +330,10 @@ pub struct TextOptions {
     /// they are all empty is no sample, and the time column spaces the others (a missing one is
     /// a gap, as ever). Without a time column it does nothing.
     pub sparse_rows: bool,
+    /// The values are phase (`--phase`, the running sum of increments): a pulse counter that
+    /// turns one pulse a sample counts up by one a row, so no column is taken for the rows'
+    /// index ([`Layout::without_index_columns`]).
+    pub phase: bool,
 }
 
 /// Which input columns are read, and under which names.
@@ -580,13 +607,15 @@ impl Layout {
         path: &Path,
         line: u64,
     ) -> Result<(Row, Layout), UsageError> {
+        fill_ahead(src, ahead, AHEAD_LINES)
+            .map_err(|e| input_error(path, line + 1, e.to_string()))?;
+        let rows_ahead = ahead_text(ahead);
         let l = if self.has_text_cells(t) {
-            fill_ahead(src, ahead, AHEAD_LINES)
-                .map_err(|e| input_error(path, line + 1, e.to_string()))?;
-            self.without_label_columns(t, &ahead_text(ahead), opts, path, line)?
+            self.without_label_columns(t, &rows_ahead, opts, path, line)?
         } else {
             self
         };
+        let l = l.without_index_columns(t, &rows_ahead, opts, path, line);
         Ok(match l.parse(t) {
             Ok((v, time)) => ((Ok(v), time), l),
             Err(problem) => ((Err(problem), f64::NAN), l),
@@ -677,6 +706,87 @@ impl Layout {
         Ok(self)
     }
 
+    /// The layout without the columns that number the rows: whole numbers stepping by exactly
+    /// one from the first data row `t` through each of the rows read ahead (at least
+    /// [`INDEX_ROWS`] rows in all), as pandas' unnamed index (`,time,gx`), a dataset's `id` or a
+    /// logger's `Sample` column hold. No sensor's samples count up so; such a column is left out,
+    /// said in the log, unless the run names it (`--columns`, `--channels`). With no time column
+    /// and `--tau0` given, the first such column finds missing samples as a counter does
+    /// ([`TimeColumn::counter`]).
+    fn without_index_columns(
+        mut self,
+        t: &str,
+        ahead: &[String],
+        opts: &TextOptions,
+        path: &Path,
+        line: u64,
+    ) -> Layout {
+        if opts.columns.is_some() || opts.phase || self.sep == Sep::Labelled {
+            return self;
+        }
+        let rows: Vec<Vec<&str>> = std::iter::once(t)
+            .chain(ahead.iter().map(String::as_str))
+            .map(|r| self.split(r.trim()))
+            .filter(|f| f.len() == self.width_in)
+            .collect();
+        if rows.len() < INDEX_ROWS {
+            return self;
+        }
+        // Whole numbers that rise every row, by exactly one in three steps of four at least (a
+        // row dropped before the file was written leaves a larger step).
+        let counts_rows = |i: usize| {
+            let mut last: Option<f64> = None;
+            let mut ones = 0usize;
+            let rising = rows.iter().all(|f| match parse_field(f[i]) {
+                Ok(v) if v.is_finite() && v.fract() == 0.0 && v.abs() < 1e15 => {
+                    let step = last.map_or(1.0, |l| v - l);
+                    ones += usize::from(last.is_some() && step == 1.0);
+                    last = Some(v);
+                    step >= 1.0
+                }
+                _ => false,
+            });
+            rising && 4 * ones >= 3 * (rows.len() - 1)
+        };
+        let index: Vec<bool> = self
+            .keep
+            .iter()
+            .zip(&self.names)
+            .map(|(&i, n)| {
+                let named = opts.channels.as_ref().is_some_and(|c| c.contains(n));
+                !named && counts_rows(i)
+            })
+            .collect();
+        // A file of nothing but such a column is analysed as it is.
+        if index.iter().all(|&x| x) {
+            return self;
+        }
+        for k in (0..index.len()).rev().filter(|&k| index[k]) {
+            let i = self.keep[k];
+            let clock = self.time.is_none() && opts.tau0_s.is_some();
+            tracing::info!(
+                "{}: line {line}: column {} `{}` numbers the rows (whole numbers stepping by one): \
+                 an index, not a channel{} (name it in --channels to analyse it)",
+                path.display(),
+                i + 1,
+                self.source_names[i],
+                if clock {
+                    "; it finds missing samples as a counter does"
+                } else {
+                    ""
+                }
+            );
+            if clock {
+                self.time = Some(i);
+                self.counter_clock = true;
+            }
+            self.keep.remove(k);
+            self.names.remove(k);
+            self.strict.remove(k);
+        }
+        self
+    }
+
     /// The channel values of a row and its time stamp (NaN without a time column or where the
     /// stamp is not a number), or what is wrong with the row.
     fn parse(&self, t: &str) -> Result<(Vec<f64>, f64), String> {
@@ -755,7 +865,14 @@ impl Layout {
             Some(Err(_)) => return vec![""; self.width_in + 1],
             None => {}
         }
-        let fields = self.sep.split(t);
+        let mut fields = self.sep.split(t);
+        // A last column with no name and no values (LabVIEW's `Comment`): the tab before its
+        // empty cell was trimmed off with the line's white space.
+        if fields.len() + 1 == self.width_in
+            && self.source_names.last().is_some_and(String::is_empty)
+        {
+            fields.push("");
+        }
         if fields.len() == self.width_in {
             fields
         } else {
@@ -805,6 +922,10 @@ impl Layout {
 /// Lines read past the first data row when a column holds text there, to see whether it
 /// holds numbers later (a flagged first sample) or never (a label).
 const AHEAD_LINES: usize = 256;
+
+/// Rows (the first data row and those read ahead) a column must number one by one to be taken
+/// as the rows' index ([`Layout::without_index_columns`]).
+const INDEX_ROWS: usize = 16;
 
 /// The next line into `buf`: the first of those read ahead, else one of `src`; the bytes it
 /// took in the input and whether it was longer than [`MAX_LINE_BYTES`] (0 bytes: the end).
@@ -918,6 +1039,9 @@ pub struct TextReader<R> {
     samples: u64,
     /// Bytes of the input consumed so far (header and comment lines included).
     offset: u64,
+    /// A LabVIEW Measurement file's headers ([`super::lvm`]): a segment's header between rows
+    /// is skipped, not read as rows.
+    lvm: Option<super::lvm::LvmHeader>,
 }
 
 /// Where a [`TextReader`] stands, for a checkpoint: continuing from `offset` with these counts
@@ -1004,7 +1128,9 @@ fn fortran_exponent(t: &str) -> Option<f64> {
 
 /// A time stamp written as a date and time, in seconds since 1970-01-01 00:00 UTC: ISO 8601
 /// (`2026-12-03T01:02:03.456Z`, `2026-12-03 01:02:03.456+01:00`), with slashes
-/// (`2026/12/03 01:02:03`), or day first with points (`03.12.2026 01:02:03,456`); without a
+/// (`2026/12/03 01:02:03`, or month first as US spreadsheets write it, `12/03/2026`), day first
+/// with points or dashes (`03.12.2026 01:02:03,456`, `03-12-2026`), or MATLAB's `03-Dec-2026
+/// 01:02:03.456`; without a
 /// zone the clock's own time, read as UTC (only steps matter). A time of day alone
 /// (`01:02:03.456`) is seconds since its midnight. `None` for anything else.
 fn date_time(t: &str) -> Option<f64> {
@@ -1026,10 +1152,29 @@ fn date_time(t: &str) -> Option<f64> {
                     .then(|| x.parse::<i64>().ok())
                     .flatten()
             };
+            // MATLAB's `03-Dec-2026`: the month's English name.
+            let month = |x: &str| {
+                const MONTHS: [&str; 12] = [
+                    "jan", "feb", "mar", "apr", "may", "jun", "jul", "aug", "sep", "oct", "nov",
+                    "dec",
+                ];
+                let x = x.to_ascii_lowercase();
+                MONTHS
+                    .iter()
+                    .position(|m| *m == x)
+                    .map(|i| i as i64 + 1)
+                    .or_else(|| num(&x))
+            };
             let (y, m, dd) = if a.len() == 4 {
                 (num(a)?, num(b)?, num(c)?)
             } else if c.len() == 4 && d.contains('.') {
                 (num(c)?, num(b)?, num(a)?)
+            } else if c.len() == 4 && d.contains('/') && num(a).is_some_and(|a| a <= 12) {
+                // `12/03/2026`: month first, as US spreadsheets write it (day first when the
+                // first number cannot be a month).
+                (num(c)?, num(a)?, num(b)?)
+            } else if c.len() == 4 {
+                (num(c)?, month(b)?, num(a)?)
             } else {
                 return None;
             };
@@ -1234,6 +1379,79 @@ impl Sep {
     }
 }
 
+/// Lines read ahead to find the header below an instrument's notes ([`notes_before_header`]).
+const NOTES_LOOK: usize = 64;
+
+/// Data rows in a row that mark where the rows start ([`notes_before_header`]).
+const NOTES_BLOCK: usize = 8;
+
+/// How many lines, from `first` on, come before the header when they are notes: `first` and the
+/// lines after it (`ahead`: blank, `#` and `//` lines are not counted) up to the header of the
+/// rows below, when those lines do not have its columns. The rows are found as
+/// [`NOTES_BLOCK`] lines in a row of one separator and as many fields, most of them numbers;
+/// the header is the line above them with as many fields and fewer numbers (above a row of
+/// units, when there is one); with no such header, the lines above the rows are notes when
+/// none has their columns (the rows are then read without a header). `None` when `first` is
+/// the header or a row, or a line above could head the rows too (the reader's own rules then
+/// read the lines).
+fn notes_before_header(first: &str, ahead: &[String]) -> Option<usize> {
+    let lines: Vec<&str> = std::iter::once(first)
+        .chain(ahead.iter().map(String::as_str))
+        .map(|l| l.trim_start_matches('\u{feff}').trim())
+        .filter(|l| !l.is_empty() && !l.starts_with('#') && !l.starts_with("//"))
+        .collect();
+    let numbers = |f: &[&str]| {
+        f.iter()
+            .filter(|x| !x.trim().is_empty() && (parse_field(x).is_ok() || date_time(x).is_some()))
+            .count()
+    };
+    for d in 1..lines.len().saturating_sub(NOTES_BLOCK - 1) {
+        let sep = Sep::of(lines[d]);
+        let n = sep.split(lines[d]).len();
+        if n < 2 {
+            continue;
+        }
+        let row = |l: &str| {
+            let f = sep.split(l);
+            f.len() == n && 2 * numbers(&f) > n
+        };
+        if !lines[d..d + NOTES_BLOCK].iter().all(|l| row(l)) {
+            continue;
+        }
+        let names = |l: &str| {
+            let f = sep.split(l);
+            f.len() == n && 2 * numbers(&f) < n
+        };
+        let mut h = d - 1;
+        if h >= 1 && units_row(&sep.split(lines[h])) && names(lines[h - 1]) {
+            h -= 1;
+        }
+        // A line above that could itself head these rows keeps them all (the reader's rules
+        // then read them): of as many fields, fewer numbers, and with three columns or more
+        // (two-field notes, `Comment<TAB>stand 3`, are common) or a time column's name.
+        let heads = |l: &str| {
+            let f = sep.split(l);
+            names(l) && (n >= 3 || f.iter().any(|x| time_name(x.trim()).is_some()))
+        };
+        if names(lines[h]) {
+            if h == 0 || lines[..h].iter().any(|l| heads(l)) {
+                return None;
+            }
+            return Some(h);
+        }
+        // No header above the rows: the lines above them are notes too (an Arduino sketch's
+        // greetings, a first row cut short by the capture's start) when none has their
+        // columns, nor is a header of one field fewer (rows that end in a separator).
+        let above = sep.split(lines[d - 1]);
+        let short_header = above.len() + 1 == n && numbers(&above) == 0;
+        if short_header || lines[..d].iter().any(|l| sep.split(l).len() == n) {
+            return None;
+        }
+        return Some(d);
+    }
+    None
+}
+
 /// The labels of a line of labelled values ([`labelled_cells`]), when at least one labels a
 /// number (a `st=OK` beside them is a label column), no label comes twice and there are no more
 /// than a run takes channels.
@@ -1337,6 +1555,10 @@ impl<R: BufRead> TextReader<R> {
         let mut ahead = VecDeque::new();
         // The line the header (or a title taken for one) was on, for messages.
         let mut layout_line = 0u64;
+        // A LabVIEW Measurement file's headers (`super::lvm`), from its first line on.
+        let mut lvm: Option<super::lvm::LvmHeader> = None;
+        // Lines of notes before the header still to skip ([`notes_before_header`]).
+        let mut notes_left = 0usize;
         loop {
             // Lines looked at ahead (for labelled values) are read again from there first.
             let (n, long) = next_line(&mut src, &mut ahead, &mut raw)
@@ -1394,6 +1616,18 @@ impl<R: BufRead> TextReader<R> {
             if t.is_empty() {
                 continue;
             }
+            if layout.is_none() && lvm.is_none() && t.starts_with(super::lvm::MAGIC) {
+                tracing::info!(
+                    "{}: a LabVIEW Measurement file: its header lines skipped",
+                    path.display()
+                );
+                lvm = Some(super::lvm::LvmHeader::default());
+            }
+            if let Some(h) = &mut lvm {
+                if h.take(t) {
+                    continue;
+                }
+            }
             if let Some(c) = t.strip_prefix('#') {
                 if layout.is_none() {
                     hash_line = Some(c.trim().to_string());
@@ -1407,6 +1641,29 @@ impl<R: BufRead> TextReader<R> {
             // `sep=;`: Excel's note of the separator before the header.
             if layout.is_none() && t.len() <= 6 && t.to_ascii_lowercase().starts_with("sep=") {
                 continue;
+            }
+            // An instrument's notes before the header (`Start time: ...`, `Sample rate: 1000
+            // Hz`, `File<TAB>C:\run1.BIN`): lines without the columns of the header and rows
+            // below them.
+            if layout.is_none() && lvm.is_none() {
+                if notes_left > 0 {
+                    notes_left -= 1;
+                    continue;
+                }
+                fill_ahead(&mut src, &mut ahead, NOTES_LOOK)
+                    .map_err(|e| input_error(path, line_no + 1, e.to_string()))?;
+                if let Some(h) = notes_before_header(t, &ahead_text(&ahead)) {
+                    tracing::info!(
+                        "{}: line {line_no}: `{t}`{} before the data: skipped",
+                        path.display(),
+                        match h {
+                            1 => " is a note".to_string(),
+                            _ => format!(" and the {} lines after it are notes", h - 1),
+                        }
+                    );
+                    notes_left = h - 1;
+                    continue;
+                }
             }
             // A title line before the header (`IMU log 2026-12-03 S/N 1234`, then `time,gx,gy`):
             // one field or words between spaces, and after it a line of several fields split
@@ -1506,13 +1763,46 @@ impl<R: BufRead> TextReader<R> {
                                 Layout::new(names, header, sep, opts, path, line_no)?
                                     .first_row(t, &mut src, &mut ahead, opts, path, line_no)?
                             } else {
-                                let names: Vec<String> = fields
+                                let mut names: Vec<String> = fields
                                     .iter()
                                     .map(|f| f.trim().trim_matches('"').trim().to_string())
                                     .collect();
                                 header_rows.push(names.clone());
                                 layout_line = line_no;
-                                layout = Some(Layout::new(names, true, sep, opts, path, line_no)?);
+                                // LabVIEW's last `Comment` column is no channel (as a trailing
+                                // separator's empty name is not).
+                                if lvm.is_some() {
+                                    if names.last().is_some_and(|n| super::lvm::is_comment(n)) {
+                                        names.last_mut().map(String::clear);
+                                    }
+                                    // An x column per channel (`X_Columns Multi`): the first
+                                    // is the time column, the others numbered.
+                                    let mut k = 0;
+                                    for n in names.iter_mut().filter(|n| super::lvm::is_x_column(n))
+                                    {
+                                        k += 1;
+                                        if k > 1 {
+                                            *n = format!("X_Value_{k}");
+                                        }
+                                    }
+                                }
+                                let units = lvm.as_ref().and_then(|h| h.column_units(&names));
+                                let mut l = Layout::new(names, true, sep, opts, path, line_no)?;
+                                if let Some(units) = units {
+                                    let given: Vec<&str> = units
+                                        .iter()
+                                        .filter(|u| !u.is_empty())
+                                        .map(String::as_str)
+                                        .collect();
+                                    tracing::info!(
+                                        "{}: the LabVIEW header's Y_Unit_Label: {}",
+                                        path.display(),
+                                        given.join(", ")
+                                    );
+                                    units_read = true;
+                                    l = l.with_units(&units, opts, path, line_no)?;
+                                }
+                                layout = Some(l);
                                 continue;
                             }
                         }
@@ -1565,6 +1855,7 @@ impl<R: BufRead> TextReader<R> {
                 rows: 0,
                 samples: 0,
                 offset,
+                lvm,
             });
         }
     }
@@ -1599,6 +1890,7 @@ impl<R: BufRead> TextReader<R> {
             rows: pos.rows,
             samples: pos.samples,
             offset: pos.offset,
+            lvm: self.lvm,
         }
     }
 
@@ -1634,6 +1926,11 @@ impl<R: BufRead> TextReader<R> {
     /// Every column's name in the input (the header's, or `c1..cn`), used or not.
     pub fn header_names(&self) -> &[String] {
         &self.layout.source_names
+    }
+
+    /// The sampling step a LabVIEW Measurement file's header gives (`Delta_X`, s), if it is one.
+    pub fn lvm_delta_x(&self) -> Option<f64> {
+        self.lvm.as_ref().and_then(|h| h.delta_x)
     }
 
     /// The header name of the time column, if the input has one.
@@ -1886,6 +2183,13 @@ impl<R: BufRead> TextReader<R> {
             // and each file joined into it.
             let t = text.trim_start_matches('\u{feff}').trim();
             if is_note(t) {
+                continue;
+            }
+            // A LabVIEW file's next segment: its header, its column names and the blank lines
+            // around them (the format writes no empty row) are no rows.
+            if self.lvm.is_some()
+                && (t.is_empty() || super::lvm::is_tag_line(t) || self.repeats_header(t))
+            {
                 continue;
             }
             if self.repeats_header(t) {
@@ -2506,6 +2810,226 @@ mod tests {
         assert!(r.time_column_name().is_none());
         let r = TextReader::new(text.as_bytes(), Path::new("x.txt")).unwrap();
         assert!(r.time_column_name().is_none());
+    }
+
+    /// A LabVIEW Measurement file as "Write To Measurement File" leaves it: a file header, a
+    /// segment header with the channels' units, `X_Value` first, an empty `Comment` column
+    /// last (each row's trailing tab), CRLF; a second segment's header and column names between
+    /// rows. Read as the plain file of the same numbers with the units in the names: the same
+    /// values, the x column the time column (a row left out a gap), nothing a bad row.
+    #[test]
+    fn a_labview_measurement_file_reads_as_the_plain_file() {
+        let head = "LabVIEW Measurement\t\r\nWriter_Version\t2\r\nSeparator\tTab\r\n\
+                    Decimal_Separator\t.\r\nX_Columns\tOne\r\nTime_Pref\tRelative\r\n\
+                    Date\t2026/12/03\r\nTime\t07:51:28.665\r\n***End_of_Header***\t\r\n\t\r\n";
+        let segment = "Channels\t2\t\t\r\nSamples\t8\t8\t\r\nY_Unit_Label\tdeg/s\tg\t\r\n\
+                       X_Dimension\tTime\tTime\t\r\nX0\t0.0000000000000000E+0\t0.0E+0\t\r\n\
+                       Delta_X\t1.000000E-2\t1.000000E-2\t\r\n***End_of_Header***\t\t\t\r\n\
+                       X_Value\tgx\taz\tComment\r\n";
+        let mut lvm = format!("{head}{segment}");
+        let mut plain = String::from("time,gx [deg/s],az [g]\n");
+        for i in (0..40u64).filter(|&i| i != 25) {
+            if i == 20 {
+                lvm += &format!("\t\r\n{segment}");
+            }
+            let (g, a) = (
+                ((i * 37) % 11) as f64 * 1e-3,
+                1.0 + ((i * 7) % 5) as f64 * 1e-4,
+            );
+            lvm += &format!("{:.6}\t{g:.6}\t{a:.6}\t\r\n", i as f64 * 0.01);
+            plain += &format!("{:.6},{g:.6},{a:.6}\n", i as f64 * 0.01);
+        }
+        let opts = TextOptions {
+            tau0_s: Some(0.01),
+            ..TextOptions::default()
+        };
+        let read = |text: &str| {
+            let mut r =
+                TextReader::with_options(text.as_bytes(), Path::new("x.lvm"), &opts).unwrap();
+            let mut out = Vec::new();
+            while r.read_rows(&mut out, 8).unwrap() > 0 {}
+            let columns: Vec<String> = r
+                .channel_columns()
+                .iter()
+                .map(|(_, n)| n.to_string())
+                .collect();
+            (columns, out, r.bad_rows(), r.lvm_delta_x())
+        };
+        let (names, v, bad, dx) = read(&lvm);
+        let (pnames, pv, _, pdx) = read(&plain);
+        // The units where the headers' units are read (the channels keep the bare names).
+        assert_eq!(names, ["gx [deg/s]", "az [g]"]);
+        assert_eq!(names, pnames);
+        assert_eq!((bad, dx, pdx), (0, Some(0.01), None));
+        assert_eq!(v.len(), 80);
+        assert_eq!(v.iter().filter(|x| x.is_nan()).count(), 2);
+        assert_eq!(
+            v.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+            pv.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+        );
+    }
+
+    /// An instrument's notes before the header are skipped, whatever they hold: DEWESoft's
+    /// `Start time: ...` lines (a clock and a colon that read as labelled values or a header
+    /// before), catman's tab-separated `File`/`Comment` lines with a row of units under its
+    /// header; the rows read as the plain file's. A title the old rule skipped still is; a
+    /// header with its rows right under it is not touched.
+    #[test]
+    fn notes_before_the_header_are_skipped() {
+        let mut plain = String::from("time,gx\n");
+        let mut dewe = String::from(
+            "Start time: 03.12.2026 07:51:28.665\nSample rate: 100 Hz\nSetup: stand.dxs\n\n\
+             Time [s];Gx [deg/s]\n",
+        );
+        let mut catman = String::from(
+            "File\tC:\\data\\run1.BIN\nComment\tIMU stand\nT0\t03.12.2026 07:51:28\n\n\
+             Time  1 - default sample rate\tGx\ns\tdeg/s\n",
+        );
+        for i in 0..30u64 {
+            let g = ((i * 37) % 11) as f64 * 1e-3;
+            plain += &format!("{:.2},{g}\n", i as f64 * 0.01);
+            dewe += &format!(
+                "{};{}\n",
+                format!("{:.2}", i as f64 * 0.01).replace('.', ","),
+                format!("{g}").replace('.', ",")
+            );
+            catman += &format!("{:.2}\t{g}\n", i as f64 * 0.01);
+        }
+        let opts = TextOptions {
+            tau0_s: Some(0.01),
+            ..TextOptions::default()
+        };
+        let read = |text: &str| {
+            let mut r =
+                TextReader::with_options(text.as_bytes(), Path::new("x.csv"), &opts).unwrap();
+            let mut out = Vec::new();
+            while r.read_rows(&mut out, 8).unwrap() > 0 {}
+            (
+                out.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+                r.bad_rows(),
+                r.time_column_name().map(str::to_string),
+            )
+        };
+        let (want, _, _) = read(&plain);
+        assert_eq!(want.len(), 30);
+        let (v, bad, time) = read(&dewe);
+        assert_eq!(
+            (v, bad, time.as_deref()),
+            (want.clone(), 0, Some("Time [s]"))
+        );
+        let (v, bad, time) = read(&catman);
+        assert_eq!(
+            (v, bad, time.as_deref()),
+            (want, 0, Some("Time  1 - default sample rate [s]"))
+        );
+        let lines: Vec<String> = plain.lines().skip(1).map(String::from).collect();
+        assert_eq!(
+            notes_before_header("IMU log, stand 3, S/N 1234", &{
+                let mut l = vec!["time,gx".to_string()];
+                l.extend(lines.iter().cloned());
+                l
+            }),
+            Some(1)
+        );
+        assert_eq!(notes_before_header("time,gx", &lines), None);
+        assert_eq!(notes_before_header(&lines[0], &lines[1..]), None);
+        // No header: greetings above the rows (an Arduino sketch's MPU6050_raw), or a first row
+        // cut short by the capture's start, are notes; a header of one field fewer is not.
+        let raw: Vec<String> = (0..20)
+            .map(|i| format!("a/g:\t{}\t-256\t16212", -1540 + i))
+            .collect();
+        let mut greeted = vec!["MPU6050 connection successful".to_string()];
+        greeted.extend(raw.iter().cloned());
+        assert_eq!(
+            notes_before_header("Initializing I2C devices...", &greeted),
+            Some(2)
+        );
+        assert_eq!(notes_before_header("256\t16212", &raw), Some(1));
+        let ending: Vec<String> = lines.iter().map(|l| format!("{l},")).collect();
+        assert_eq!(notes_before_header("time,gx", &ending), None);
+    }
+
+    /// Dates as spreadsheets and MATLAB write them: the same instant however written.
+    #[test]
+    fn dates_with_month_names_and_month_first() {
+        let iso = date_time("2026-12-03 07:51:28.665").unwrap();
+        for t in [
+            "03-Dec-2026 07:51:28.665",
+            "03-dec-2026 07:51:28.665",
+            "12/03/2026 07:51:28.665",
+            "03.12.2026 07:51:28,665",
+            "03-12-2026 07:51:28.665",
+        ] {
+            assert_eq!(date_time(t), Some(iso), "{t}");
+        }
+        // Day first where the first number is no month.
+        assert_eq!(
+            date_time("13/12/2026 00:00:00").unwrap() - date_time("2026-12-13 00:00:00").unwrap(),
+            0.0
+        );
+        assert_eq!(date_time("03-Foo-2026 07:51:28"), None);
+    }
+
+    /// A column that numbers the rows (pandas' unnamed index, a dataset's `id`) is no channel:
+    /// with a time column it is left out; without one, given `--tau0`, it finds the missing
+    /// samples as a counter does. Kept: a column named in `--channels`, a file of only that
+    /// column, phase values (a pulse counter may count one a row), fewer than `INDEX_ROWS` rows
+    /// to judge by, a column that once stays or falls, or steps by one in fewer than three
+    /// steps of four.
+    #[test]
+    fn a_column_that_numbers_the_rows_is_an_index() {
+        let rows = |n: u64, skip: u64| {
+            let mut t = String::from(",time,gx\n");
+            for i in (0..n).filter(|&i| i != skip) {
+                t += &format!("{i},{:.2},{}\n", i as f64 * 0.01, (i * 7919) % 13);
+            }
+            t
+        };
+        let (names, v, _) = read_all(&rows(40, 99));
+        assert_eq!((names, v.len()), (vec!["gx".to_string()], 40));
+        let (names, _, _) = read_all(&rows(INDEX_ROWS as u64 - 1, 99));
+        assert_eq!(names, ["c1", "gx"]);
+        // No time column: with --tau0 the index finds the row left out (17).
+        let no_time = rows(40, 17).replace(",time,gx", "id,gy,gx");
+        let opts = TextOptions {
+            tau0_s: Some(0.01),
+            ..TextOptions::default()
+        };
+        let mut r =
+            TextReader::with_options(no_time.as_bytes(), Path::new("x.txt"), &opts).unwrap();
+        assert_eq!(r.names(), ["gy", "gx"]);
+        let mut out = Vec::new();
+        while r.read_rows(&mut out, 8).unwrap() > 0 {}
+        assert_eq!(out.len(), 2 * 40);
+        assert_eq!(out.iter().filter(|x| x.is_nan()).count(), 2);
+        assert_eq!(r.position().time.unwrap().unit(), Some("count"));
+        for opts in [
+            TextOptions {
+                phase: true,
+                ..TextOptions::default()
+            },
+            TextOptions {
+                channels: Some(vec!["c1".into(), "gx".into()]),
+                ..TextOptions::default()
+            },
+        ] {
+            let text = rows(40, 99);
+            let r = TextReader::with_options(text.as_bytes(), Path::new("x.txt"), &opts).unwrap();
+            assert_eq!(r.names(), ["c1", "gx"]);
+        }
+        let (names, _, _) =
+            read_all("n\n1\n2\n3\n4\n5\n6\n7\n8\n9\n10\n11\n12\n13\n14\n15\n16\n17\n");
+        assert_eq!(names, ["n"]);
+        // Once the same twice, or rising by two as often as by one: a channel.
+        let (names, _, _) = read_all(&rows(40, 99).replace("\n7,", "\n6,"));
+        assert_eq!(names, ["c1", "gx"]);
+        let mut twos = String::from(",time,gx\n");
+        for i in 0..40u64 {
+            twos += &format!("{},{:.2},{}\n", i * 3 / 2, i as f64 * 0.01, i % 5);
+        }
+        assert_eq!(read_all(&twos).0, ["c1", "gx"]);
+        // A row left out: the index rises by two there, and is still an index.
+        assert_eq!(read_all(&rows(40, 5)).0, ["gx"]);
     }
 
     /// What a review of the first version found, each a file that read wrongly or crashed:

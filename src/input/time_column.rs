@@ -248,8 +248,11 @@ impl TimeColumn {
                 match found {
                     Some((s, unit)) => {
                         if *s != 1.0 {
+                            // As read: stamps of a clock since 1970 in ns are resolved to
+                            // 256 ns as f64, so the step is shown to that resolution.
+                            let shown = to_resolution(dt, 2.0 * t.abs() * f64::EPSILON);
                             tracing::info!(
-                                "{}: time column `{}` read in {unit} (its first step is {dt} {unit} = tau0)",
+                                "{}: time column `{}` read in {unit} (its first step is {shown} {unit} = tau0)",
                                 file.display(),
                                 self.name
                             );
@@ -403,6 +406,28 @@ impl TimeColumn {
     }
 }
 
+/// `x` with the fewest significant digits that stay within `resolution` of it (itself when
+/// none do): a step between stamps read as f64, shown as the stamps resolve it.
+fn to_resolution(x: f64, resolution: f64) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return x;
+    }
+    (1..=15)
+        .map(|digits| {
+            // Powers of ten at or above one multiply, below one divide: each exact.
+            let power = x.abs().log10().floor() as i32 + 1 - digits;
+            if power >= 0 {
+                let p = 10f64.powi(power);
+                (x / p).round() * p
+            } else {
+                let p = 10f64.powi(-power);
+                (x * p).round() / p
+            }
+        })
+        .find(|r| (r - x).abs() <= resolution)
+        .unwrap_or(x)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -539,6 +564,17 @@ mod tests {
 
     /// 100 us is a scale only for a column named so (Xsens's `SampleTimeFine`): a `time_ms`
     /// column stepping by 10 under --tau0 0.001 is not read in it, but refused (check --tau0).
+    /// A step between ns stamps since 1970 (resolved to 256 ns as f64) is shown as the
+    /// stamps resolve it; a step read exactly is shown as it is.
+    #[test]
+    fn a_step_is_shown_to_the_stamps_resolution() {
+        let (a, b) = (1_403_636_579_758_555_392f64, 1_403_636_579_759_555_392f64);
+        assert_eq!(b - a, 999_936.0);
+        assert_eq!(to_resolution(b - a, 2.0 * b * f64::EPSILON), 1_000_000.0);
+        assert_eq!(to_resolution(2.5, 2.0 * 10.0 * f64::EPSILON), 2.5);
+        assert_eq!(to_resolution(0.0, 1.0), 0.0);
+    }
+
     #[test]
     fn a_scale_of_100_us_only_for_its_name() {
         let p = Path::new("x.csv");

@@ -674,6 +674,57 @@ fn a_euroc_file_needs_no_tau0() {
     }
 }
 
+/// A LabVIEW Measurement file (file header, segment header with `Y_Unit_Label`, `X_Value`
+/// first, an empty `Comment` column, tabs and CRLF), no `--tau0`: the step read off `X_Value`,
+/// the units off the header, and the records of the plain CSV with the same units in its names.
+/// Without an x column, the step is the header's `Delta_X`.
+#[test]
+fn a_labview_measurement_file_needs_no_options() {
+    let (a, b) = columns();
+    let head = "LabVIEW Measurement\t\r\nWriter_Version\t2\r\nSeparator\tTab\r\n\
+                Decimal_Separator\t.\r\nX_Columns\tOne\r\n***End_of_Header***\t\r\n\t\r\n\
+                Channels\t2\t\t\r\nY_Unit_Label\tdeg/s\tdeg/s\t\r\nX_Dimension\tTime\tTime\t\r\n\
+                Delta_X\t1.000000E-2\t1.000000E-2\t\r\n***End_of_Header***\t\t\t\r\n";
+    let mut lvm = format!("{head}X_Value\tgx\tgy\tComment\r\n");
+    let mut no_x = format!(
+        "{}gx\tgy\tComment\r\n",
+        head.replace("X_Columns\tOne", "X_Columns\tNo")
+    );
+    let mut plain = String::from("time,gx [deg/s],gy [deg/s]\n");
+    for i in 0..a.len() {
+        lvm += &format!("{:.6}\t{:e}\t{:e}\t\r\n", i as f64 * 0.01, a[i], b[i]);
+        no_x += &format!("{:e}\t{:e}\t\r\n", a[i], b[i]);
+        plain += &format!("{:.6},{:e},{:e}\n", i as f64 * 0.01, a[i], b[i]);
+    }
+    let want = parsed(&analyze_no_tau0(
+        &write("plain_units.csv", plain.as_bytes()),
+        &[],
+    ));
+    for (name, text, from) in [
+        (
+            "stand.lvm",
+            lvm,
+            "tau0 0.01 s from the time column `X_Value`",
+        ),
+        (
+            "no_x.lvm",
+            no_x,
+            "tau0 0.01 s from the LabVIEW header's Delta_X",
+        ),
+    ] {
+        let out = analyze_no_tau0(&write(name, text.as_bytes()), &[]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(from), "{err}");
+        let (c, s) = parsed(&out);
+        assert_eq!(s.channels, ["gx", "gy"]);
+        assert_eq!((s.tau0, &s.samples, s.bad_rows), (0.01, &want.1.samples, 0));
+        assert_eq!(c.len(), want.0.len());
+        for (x, y) in c.iter().zip(&want.0) {
+            assert_eq!((&x.unit, &x.sigma), (&y.unit, &y.sigma), "{name}");
+        }
+    }
+}
+
 /// Without `--tau0` and without a usable time column: exit 2 saying why, once.
 #[test]
 fn no_tau0_without_a_usable_time_column_is_a_usage_error() {
