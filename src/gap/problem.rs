@@ -1195,6 +1195,23 @@ impl GapProblem {
         }
     }
 
+    /// The shortest shape a scan of `kind` tries (the grid's points below it are left out, the
+    /// others kept as they are): a Gauss-Markov `tau_c` of the curve's shortest tau, a first
+    /// order's or zero phase's time constant of half the sampling step. Shorter, either shows
+    /// only at the first one or two taus, where the rounding of the values and the sampling
+    /// set the curve as much: every such shape named on the saved benchmark runs of sessions 28
+    /// to 30 (2 clean draws, a first order at 0.36 tau0) and on the phone-class and ADXL-class
+    /// units of sessions 31 and 32 (first orders at 0.34-0.36 tau0, a Gauss-Markov term at
+    /// tau0 / 2) was a false alarm, and no true effect drawn lies there (filters from 0.64
+    /// tau0, Gauss-Markov terms from 20 tau0; docs/gap.md, "The scans' shortest shapes").
+    pub fn shape_floor(&self, kind: EffectKind) -> f64 {
+        match kind {
+            EffectKind::GaussMarkov => self.tau[0],
+            EffectKind::OutputFilter | EffectKind::ZeroPhaseFilter => 0.5 * self.tau0_s,
+            _ => 0.0,
+        }
+    }
+
     /// `base` with one effect added, with all its parameters (a filter in the N column, an
     /// extra column otherwise).
     pub(crate) fn spec_with_params(&self, base: &ModelSpec, p: &EffectParams) -> ModelSpec {
@@ -1258,7 +1275,13 @@ impl GapProblem {
     /// Best shape of one candidate on top of `base`: grid scan, then golden-section polish
     /// in `ln shape`. Returns `(shape, fit)`.
     pub fn scan(&self, base: &ModelSpec, kind: EffectKind) -> Option<(f64, GlsFit)> {
-        let pts = self.grid(kind).points();
+        let floor = self.shape_floor(kind);
+        let pts: Vec<f64> = self
+            .grid(kind)
+            .points()
+            .into_iter()
+            .filter(|&p| p >= floor)
+            .collect();
         if pts.len() < 2 {
             return None;
         }
@@ -1410,6 +1433,29 @@ mod tests {
         let prob = GapProblem::new(&ev.snapshot(), &DiagnoseOptions::default()).expect("problem");
         let fit = prob.gls(&ModelSpec::default()).expect("fit");
         (prob, fit)
+    }
+
+    /// The scans start at their floors (a Gauss-Markov `tau_c` at the curve's shortest tau, a
+    /// first order's or zero phase's time constant at tau0 / 2) and keep the grid's other
+    /// points as they are: the shapes they return are never below, and a floor between grid
+    /// points drops only the points under it.
+    #[test]
+    fn scans_start_at_their_floors() {
+        let (prob, _) = vog4_problem();
+        let base = ModelSpec::default();
+        for (kind, floor) in [
+            (EffectKind::GaussMarkov, 0.004),
+            (EffectKind::OutputFilter, 0.002),
+            (EffectKind::ZeroPhaseFilter, 0.002),
+        ] {
+            assert_eq!(prob.shape_floor(kind), floor);
+            let all = prob.grid(kind).points();
+            let below = all.iter().filter(|&&p| p < floor).count();
+            assert!(below >= 2, "{kind:?}: {below} points below the floor");
+            let (shape, _) = prob.scan(&base, kind).expect("scan");
+            assert!(shape >= floor, "{kind:?}: {shape}");
+        }
+        assert_eq!(prob.shape_floor(EffectKind::Sinusoid), 0.0);
     }
 
     #[test]
