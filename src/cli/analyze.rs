@@ -367,6 +367,11 @@ pub(crate) fn sniff(input: &str, frames: Option<&FrameDescriptor>) -> Result<()>
     if f.take(SNIFF_BYTES as u64).read_to_end(&mut head).is_err() {
         return Ok(());
     }
+    sniff_head(input, &head, frames)
+}
+
+/// [`sniff`]'s checks on the first bytes `head` of `input` (an empty `head`: an empty file).
+pub(crate) fn sniff_head(input: &str, head: &[u8], frames: Option<&FrameDescriptor>) -> Result<()> {
     if head.is_empty() {
         return match frames {
             // Text columns say "no data rows" with the line.
@@ -379,19 +384,20 @@ pub(crate) fn sniff(input: &str, frames: Option<&FrameDescriptor>) -> Result<()>
     }
     // A capture that holds frames is a capture, whatever its first bytes are.
     let frames_found = frames.is_some_and(|d| no_frame_in_head(input, d).is_ok());
-    if let Some(kind) = compressed(&head).filter(|_| !frames_found) {
+    if let Some(kind) = compressed(head).filter(|_| !frames_found) {
         return Err(usage(format!(
             "{input}: {kind}-compressed; decompress it first, or read it through a pipe: \
-             `{} {input} | allanscope ... -` (standard input)",
+             `{} {} | allanscope ... -` (standard input)",
             match kind {
                 "gzip" => "zcat",
                 "xz" => "xzcat",
                 "bzip2" => "bzcat",
                 _ => "zstdcat",
-            }
+            },
+            if input == "-" { "FILE" } else { input }
         )));
     }
-    if let Some((what, how)) = container(&head).filter(|_| !frames_found) {
+    if let Some((what, how)) = container(head).filter(|_| !frames_found) {
         return Err(usage(format!(
             "{input}: {what}, not text columns or a capture of frames; {how}"
         )));

@@ -401,6 +401,12 @@ fn look_at_start(
         inner: open_input(input)?,
         seen: read_once(input).then(Vec::new),
     });
+    if read_once(input) {
+        // Standard input and a pipe are checked on the bytes they send first (a file was
+        // above): a compressed stream, a workbook or binary data is refused as such.
+        let head = src.fill_buf().map_err(|e| usage(format!("{input}: {e}")))?;
+        analyze::sniff_head(input, head, None)?;
+    }
     let step =
         tracing::subscriber::with_default(tracing::subscriber::NoSubscriber::default(), || {
             allanscope::input::sampling_step::infer_tau0(&mut src, Path::new(input), &opts)

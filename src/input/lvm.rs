@@ -46,6 +46,24 @@ const TAGS: [&str; 27] = [
     "Channel_Name",
 ];
 
+/// The tags only a segment header holds.
+const SEGMENT_TAGS: [&str; 14] = [
+    "Notes",
+    "Test_Name",
+    "Test_Numbers",
+    "Test_Series",
+    "UUT_Part_Number",
+    "UUT_Name",
+    "UUT_Serial_Number",
+    "Channels",
+    "Samples",
+    "Y_Unit_Label",
+    "X_Dimension",
+    "X0",
+    "Delta_X",
+    "Channel_Name",
+];
+
 /// What an LVM file's headers say of its columns, gathered line by line.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct LvmHeader {
@@ -55,6 +73,11 @@ pub struct LvmHeader {
     pub y_units: Vec<String>,
     /// Inside a `***Start_Special***` block (free text to its `***End_Special***`).
     special: bool,
+    /// Inside a segment header (a segment's tag seen since the last `***End_of_Header***`).
+    segment: bool,
+    /// A segment header just ended: the next line is the column names, whatever they are
+    /// (a channel may be called `Time` or `Samples`).
+    names_next: bool,
     /// Segment headers read to their end.
     headers_ended: usize,
 }
@@ -87,13 +110,23 @@ impl LvmHeader {
             }
             return true;
         }
+        let marker = t.starts_with("***");
+        if std::mem::take(&mut self.names_next) && !marker {
+            return false;
+        }
         if !is_tag_line(t) {
             return false;
         }
         let f = fields(t);
+        if SEGMENT_TAGS.contains(&f[0]) {
+            self.segment = true;
+        }
         match f[0] {
             "***Start_Special***" => self.special = true,
-            "***End_of_Header***" => self.headers_ended += 1,
+            "***End_of_Header***" => {
+                self.headers_ended += 1;
+                self.names_next = std::mem::take(&mut self.segment);
+            }
             // The first segment's: a later segment of the same run repeats them.
             "Delta_X" if self.delta_x.is_none() => {
                 self.delta_x = f[1..]
@@ -177,6 +210,13 @@ mod tests {
             assert!(h.take(l.trim()), "{l}");
         }
         assert!(!h.take("X_Value\tgx\taz\tComment"));
+        // After a segment header, the column names are names, even a tag's (`Time`).
+        let mut n = LvmHeader::default();
+        for l in ["Channels\t2", "Delta_X\t0.01\t0.01", "***End_of_Header***"] {
+            assert!(n.take(l));
+        }
+        assert!(!n.take("Time\tgx\tComment"));
+        assert!(n.take("Time\t07:51:28"), "a tag again after the names");
         assert!(!h.take("0.000000\t1.2E-3\t0.99"));
         assert!(h.take("Delta_X\t5.0E-3"), "a later segment's");
         assert_eq!(h.delta_x, Some(2e-3));

@@ -764,6 +764,22 @@ fn no_tau0_without_a_usable_time_column_is_a_usage_error() {
         &child.wait_with_output().unwrap(),
         &["-: ", "no time column"],
     );
+    // Compressed bytes on standard input are told as such (its first bytes checked as a
+    // file's are), not read as text without a time column.
+    let mut child = exe()
+        .args(["analyze", "-", "--fit", "none"])
+        .stdin(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut gz = vec![0x1f, 0x8b, 0x08, 0x00];
+    gz.extend((0..4000u32).map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8));
+    // (The run may stop reading before all is written.)
+    let _ = child.stdin.take().unwrap().write_all(&gz);
+    usage_error(
+        &child.wait_with_output().unwrap(),
+        &["-: gzip-compressed", "zcat FILE | allanscope ... -"],
+    );
 }
 
 /// A merged multi-rate file (`ax` logged at half the rate of `gx`, empty cells between): read
