@@ -70,14 +70,23 @@ fn ros_imu_field(name: &str) -> Option<HeaderUnit> {
     let mut parts = name.rsplit(['.', '/']);
     let axis = parts.next()?;
     let field = parts.next()?;
+    fixed_rate(
+        field,
+        axis,
+        &[
+            ("angular_velocity", "rad", "rad/s, by sensor_msgs/Imu"),
+            ("linear_acceleration", "m/s", "m/s^2, by sensor_msgs/Imu"),
+        ],
+    )
+}
+
+/// The rate a format fixes for a vector's `field` (`table`: the field, its increment unit and
+/// the unit as said) when `axis` is `x`, `y` or `z`.
+fn fixed_rate(field: &str, axis: &str, table: &[(&str, &str, &str)]) -> Option<HeaderUnit> {
     if !matches!(axis, "x" | "y" | "z") {
         return None;
     }
-    let (unit, text) = match field {
-        "angular_velocity" => ("rad", "rad/s, by sensor_msgs/Imu"),
-        "linear_acceleration" => ("m/s", "m/s^2, by sensor_msgs/Imu"),
-        _ => return None,
-    };
+    let &(_, unit, text) = table.iter().find(|(f, _, _)| *f == field)?;
     Some(HeaderUnit {
         unit: unit.into(),
         rate: true,
@@ -85,22 +94,24 @@ fn ros_imu_field(name: &str) -> Option<HeaderUnit> {
     })
 }
 
+/// The header of Kalibr's `imu0.csv`.
+pub const KALIBR_HEADER: [&str; 7] = [
+    "timestamp",
+    "omega_x",
+    "omega_y",
+    "omega_z",
+    "alpha_x",
+    "alpha_y",
+    "alpha_z",
+];
+
 /// Whether a header is that of Kalibr's `imu0.csv` (the input of `kalibr_bagcreater`, the
 /// output of `kalibr_bagextractor`): `timestamp` (ns), `omega_x`, `omega_y`, `omega_z`,
 /// `alpha_x`, `alpha_y`, `alpha_z`, whose names carry no unit because Kalibr's bag format fixes
 /// them (rad/s, m/s^2; its wiki, "Bag format"). All seven names are needed: `alpha` alone is as
 /// often an angular acceleration.
 pub fn kalibr_layout<S: AsRef<str>>(names: &[S]) -> bool {
-    const KALIBR: [&str; 7] = [
-        "timestamp",
-        "omega_x",
-        "omega_y",
-        "omega_z",
-        "alpha_x",
-        "alpha_y",
-        "alpha_z",
-    ];
-    KALIBR
+    KALIBR_HEADER
         .iter()
         .all(|k| names.iter().any(|n| n.as_ref().trim() == *k))
 }
@@ -109,19 +120,14 @@ pub fn kalibr_layout<S: AsRef<str>>(names: &[S]) -> bool {
 /// `alpha_*` m/s^2; `None` for any other name.
 pub fn kalibr_field(name: &str) -> Option<HeaderUnit> {
     let (field, axis) = name.trim().split_once('_')?;
-    if !matches!(axis, "x" | "y" | "z") {
-        return None;
-    }
-    let (unit, text) = match field {
-        "omega" => ("rad", "rad/s, by Kalibr's imu0.csv"),
-        "alpha" => ("m/s", "m/s^2, by Kalibr's imu0.csv"),
-        _ => return None,
-    };
-    Some(HeaderUnit {
-        unit: unit.into(),
-        rate: true,
-        text: text.into(),
-    })
+    fixed_rate(
+        field,
+        axis,
+        &[
+            ("omega", "rad", "rad/s, by Kalibr's imu0.csv"),
+            ("alpha", "m/s", "m/s^2, by Kalibr's imu0.csv"),
+        ],
+    )
 }
 
 /// The name of the array a column is an element of (`gyro_rad` for `gyro_rad[0]`), when its
@@ -582,15 +588,7 @@ mod tests {
     /// m/s^2, taken where a name carries no unit of its own.
     #[test]
     fn kalibr_imu_csv() {
-        let h = [
-            "timestamp",
-            "omega_x",
-            "omega_y",
-            "omega_z",
-            "alpha_x",
-            "alpha_y",
-            "alpha_z",
-        ];
+        let h = KALIBR_HEADER;
         assert!(kalibr_layout(&h));
         assert!(!kalibr_layout(&h[..6]));
         assert!(!kalibr_layout(&["t", "omega_x", "alpha_x"]));

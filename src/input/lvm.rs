@@ -14,9 +14,8 @@
 /// The first line's tag.
 pub const MAGIC: &str = "LabVIEW Measurement";
 
-/// Tags of the file header and of a segment header (NI's specification, LVM 2.0); a line that
-/// starts with one of them is header, not a row.
-const TAGS: [&str; 27] = [
+/// Tags of the file header (NI's specification, LVM 2.0).
+const FILE_TAGS: [&str; 13] = [
     MAGIC,
     "Writer_Version",
     "Reader_Version",
@@ -30,23 +29,9 @@ const TAGS: [&str; 27] = [
     "Project",
     "Date",
     "Time",
-    "Notes",
-    "Test_Name",
-    "Test_Numbers",
-    "Test_Series",
-    "UUT_Part_Number",
-    "UUT_Name",
-    "UUT_Serial_Number",
-    "Channels",
-    "Samples",
-    "Y_Unit_Label",
-    "X_Dimension",
-    "X0",
-    "Delta_X",
-    "Channel_Name",
 ];
 
-/// The tags only a segment header holds.
+/// Tags of a segment header (it may repeat `Date` and `Time` of the file header's).
 const SEGMENT_TAGS: [&str; 14] = [
     "Notes",
     "Test_Name",
@@ -97,7 +82,9 @@ fn fields(t: &str) -> Vec<&str> {
 /// `***...***` marker.
 pub fn is_tag_line(t: &str) -> bool {
     let first = fields(t)[0];
-    (first.starts_with("***") && first.ends_with("***") && first.len() > 6) || TAGS.contains(&first)
+    (first.starts_with("***") && first.ends_with("***") && first.len() > 6)
+        || FILE_TAGS.contains(&first)
+        || SEGMENT_TAGS.contains(&first)
 }
 
 impl LvmHeader {

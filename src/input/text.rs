@@ -2284,6 +2284,18 @@ mod tests {
         (r.names().to_vec(), out, r.bad_rows())
     }
 
+    /// `text` read whole at `--tau0 0.01`: the reader at its end, and the values.
+    fn read_stepped(text: &str) -> (TextReader<&[u8]>, Vec<f64>) {
+        let opts = TextOptions {
+            tau0_s: Some(0.01),
+            ..TextOptions::default()
+        };
+        let mut r = TextReader::with_options(text.as_bytes(), Path::new("t.csv"), &opts).unwrap();
+        let mut out = Vec::new();
+        while r.read_rows(&mut out, 8).unwrap() > 0 {}
+        (r, out)
+    }
+
     #[test]
     fn header_separators_gaps_and_bad_rows() {
         let (names, v, bad) = read_all("# c\ngx, gy\n1,2\n\n3,nan\n4 5\nx,6\n2.5.1,8\n7,\n");
@@ -2846,15 +2858,8 @@ mod tests {
             lvm += &format!("{:.6}\t{g:.6}\t{a:.6}\t\r\n", i as f64 * 0.01);
             plain += &format!("{:.6},{g:.6},{a:.6}\n", i as f64 * 0.01);
         }
-        let opts = TextOptions {
-            tau0_s: Some(0.01),
-            ..TextOptions::default()
-        };
         let read = |text: &str| {
-            let mut r =
-                TextReader::with_options(text.as_bytes(), Path::new("x.lvm"), &opts).unwrap();
-            let mut out = Vec::new();
-            while r.read_rows(&mut out, 8).unwrap() > 0 {}
+            let (r, out) = read_stepped(text);
             let columns: Vec<String> = r
                 .channel_columns()
                 .iter()
@@ -2876,15 +2881,9 @@ mod tests {
             "{head}Channels\t2\t\r\nY_Unit_Label\tdeg/s\tg\t\r\n***End_of_Header***\t\r\n\
              X_Value\tgx\tX_Value\tTime\tComment\r\n0.00\t1\t0.00\t2\t\r\n0.01\t3\t0.01\t4\t\r\n"
         );
-        let mut r = TextReader::with_options(multi.as_bytes(), Path::new("m.lvm"), &opts).unwrap();
-        let cols: Vec<String> = r
-            .channel_columns()
-            .iter()
-            .map(|(_, n)| n.to_string())
-            .collect();
+        let (cols, _, _, _) = read(&multi);
         assert_eq!(cols, ["gx [deg/s]", "Time [g]"]);
-        let mut out = Vec::new();
-        while r.read_rows(&mut out, 8).unwrap() > 0 {}
+        let (_, out) = read_stepped(&multi);
         assert_eq!(out, [1.0, 2.0, 3.0, 4.0]);
         assert_eq!(
             v.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
@@ -2918,15 +2917,8 @@ mod tests {
             );
             catman += &format!("{:.2}\t{g}\t{g}\t{g}\n", i as f64 * 0.01);
         }
-        let opts = TextOptions {
-            tau0_s: Some(0.01),
-            ..TextOptions::default()
-        };
         let read = |text: &str| {
-            let mut r =
-                TextReader::with_options(text.as_bytes(), Path::new("x.csv"), &opts).unwrap();
-            let mut out = Vec::new();
-            while r.read_rows(&mut out, 8).unwrap() > 0 {}
+            let (r, out) = read_stepped(text);
             (
                 out.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
                 r.bad_rows(),
@@ -3115,13 +3107,7 @@ mod tests {
         for k in 0..50 {
             text.push_str(&format!("{:.2},{k}\n\n", k as f64 * 0.01));
         }
-        let opts = TextOptions {
-            tau0_s: Some(0.01),
-            ..TextOptions::default()
-        };
-        let mut r = TextReader::with_options(text.as_bytes(), Path::new("b.csv"), &opts).unwrap();
-        let mut out = Vec::new();
-        while r.read_rows(&mut out, 16).unwrap() > 0 {}
+        let (_, out) = read_stepped(&text);
         assert_eq!(out.len(), 50);
         assert!(out.iter().all(|x| !x.is_nan()));
         // A row of words where numbers belong: a bad row, not gaps.

@@ -197,42 +197,33 @@ fn a_fifo_is_read_whole_once() {
         )
     };
     assert_eq!(plain_stamped, want, "the time column changes nothing");
+    assert_eq!(final_curves(&through_fifo(&dir, &fifo, stamped, &[])), want);
+    let with_tau0 = through_fifo(&dir, &fifo, plain(), &["--tau0", "0.01"]);
+    assert_eq!(final_curves(&with_tau0), want);
+}
+
+/// `analyze fifo ARGS --json` in `dir` while a thread writes `text` into the FIFO `fifo`.
+fn through_fifo(dir: &Path, fifo: &Path, text: String, args: &[&str]) -> std::process::Output {
     let writer = {
-        let fifo = fifo.clone();
-        std::thread::spawn(move || {
-            let _ = std::fs::write(&fifo, stamped);
-        })
-    };
-    let child = exe()
-        .current_dir(&dir)
-        .env("ALLANSCOPE_LOG", "off")
-        .args(["analyze", "fifo", "--json"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn");
-    let out = output_within(child, Duration::from_secs(20));
-    assert_eq!(final_curves(&out), want);
-    writer.join().expect("writer");
-    let writer = {
-        let fifo = fifo.clone();
+        let fifo = fifo.to_path_buf();
         // Errors are ignored: a reader that closes early makes the write fail, and the test
         // then fails on the records, not here.
         std::thread::spawn(move || {
-            let _ = std::fs::write(&fifo, plain());
+            let _ = std::fs::write(&fifo, text);
         })
     };
     let child = exe()
-        .current_dir(&dir)
+        .current_dir(dir)
         .env("ALLANSCOPE_LOG", "off")
-        .args(["analyze", "fifo", "--tau0", "0.01", "--json"])
+        .args(["analyze", "fifo", "--json"])
+        .args(args)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .expect("spawn");
     let out = output_within(child, Duration::from_secs(20));
-    assert_eq!(final_curves(&out), want);
     writer.join().expect("writer");
+    out
 }
 
 /// The child's output, killing it (and failing) if it runs longer than `limit`.

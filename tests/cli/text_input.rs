@@ -649,20 +649,7 @@ fn a_euroc_file_needs_no_tau0() {
     }
     // Piped in (`zcat imu0.csv.gz | allanscope analyze -`): the step read off the stream's
     // start, which the run then reads: the same records (refused before without --tau0).
-    let mut child = exe()
-        .args(["analyze", "-", "--fit", "none", "--stats", "avar"])
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut stdin = child.stdin.take().unwrap();
-    let feeder = std::thread::spawn(move || {
-        use std::io::Write;
-        stdin.write_all(text.as_bytes()).unwrap();
-    });
-    let piped = child.wait_with_output().unwrap();
-    feeder.join().unwrap();
+    let piped = analyze_stdin(&["--fit", "none", "--stats", "avar"], text.into_bytes());
     let (pc, ps) = parsed(&piped);
     assert_eq!(
         (ps.tau0, ps.samples.clone(), ps.segments.clone()),
@@ -746,40 +733,40 @@ fn no_tau0_without_a_usable_time_column_is_a_usage_error() {
         &["irregular_time.csv", "irregular"],
     );
     // Standard input is looked at as a file is: no time column, no --tau0.
-    let mut child = exe()
-        .args(["analyze", "-", "--fit", "none"])
-        .stdin(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
     let rows_only = format!("gx,gy\n{}", rows(",", false));
-    use std::io::Write;
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(rows_only.as_bytes())
-        .unwrap();
     usage_error(
-        &child.wait_with_output().unwrap(),
+        &analyze_stdin(&["--fit", "none"], rows_only.into_bytes()),
         &["-: ", "no time column"],
     );
     // Compressed bytes on standard input are told as such (its first bytes checked as a
     // file's are), not read as text without a time column.
+    let mut gz = vec![0x1f, 0x8b, 0x08, 0x00];
+    gz.extend((0..4000u32).map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8));
+    usage_error(
+        &analyze_stdin(&["--fit", "none"], gz),
+        &["-: gzip-compressed", "zcat FILE | allanscope ... -"],
+    );
+}
+
+/// `allanscope analyze - ARGS` with `bytes` on its standard input, written from a thread (the
+/// run may stop reading before the end: the write's error is ignored).
+fn analyze_stdin(args: &[&str], bytes: Vec<u8>) -> Output {
     let mut child = exe()
-        .args(["analyze", "-", "--fit", "none"])
+        .args(["analyze", "-"])
+        .args(args)
         .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    let mut gz = vec![0x1f, 0x8b, 0x08, 0x00];
-    gz.extend((0..4000u32).map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8));
-    // (The run may stop reading before all is written.)
-    let _ = child.stdin.take().unwrap().write_all(&gz);
-    usage_error(
-        &child.wait_with_output().unwrap(),
-        &["-: gzip-compressed", "zcat FILE | allanscope ... -"],
-    );
+    let mut stdin = child.stdin.take().unwrap();
+    let feeder = std::thread::spawn(move || {
+        use std::io::Write;
+        let _ = stdin.write_all(&bytes);
+    });
+    let out = child.wait_with_output().unwrap();
+    feeder.join().unwrap();
+    out
 }
 
 /// A merged multi-rate file (`ax` logged at half the rate of `gx`, empty cells between): read
