@@ -540,9 +540,14 @@ impl Layout {
                 "no data column (only a time column)".to_string()
             } else {
                 format!(
-                    "no data column: beside the time, only columns that are no channels: {} \
-                     (name one in --channels, with --unit U for a unit allanscope does not \
-                     read, to analyse it)",
+                    "no data column: {}only columns that are no channels: {} (name one in \
+                     --channels, with --unit U for a unit allanscope does not read, to analyse \
+                     it)",
+                    if time.is_some() {
+                        "beside the time, "
+                    } else {
+                        ""
+                    },
                     out.join(", ")
                 )
             };
@@ -2978,6 +2983,28 @@ mod tests {
         joined.push("time,gx".into());
         joined.extend(lines.iter().cloned());
         assert_eq!(notes_before_header("time,gx", &joined), None);
+    }
+
+    /// A file of only columns that are no channels (a magnetometer's) says which and why, and
+    /// speaks of a time column only when there is one.
+    #[test]
+    fn only_columns_that_are_no_channels_are_said() {
+        let err = |text: &str| {
+            TextReader::new(text.as_bytes(), Path::new("m.csv"))
+                .err()
+                .expect("refused")
+                .to_string()
+        };
+        let e = err("mag_x [uT],mag_y [uT]\n1,2\n3,4\n");
+        assert!(
+            e.contains("no data column: only columns that are no channels: `mag_x [uT]` (a magnetic field)"),
+            "{e}"
+        );
+        let e = err("time,mag_x [uT]\n0.0,2\n0.1,4\n");
+        assert!(
+            e.contains("no data column: beside the time, only columns that are no channels"),
+            "{e}"
+        );
     }
 
     /// Dates as spreadsheets and MATLAB write them: the same instant however written; an order
