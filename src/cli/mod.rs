@@ -397,11 +397,12 @@ fn look_at_start(
         tau0_s: None,
         ..d.text_options()
     };
+    let once = read_once(input);
     let mut src = std::io::BufReader::new(Recording {
         inner: open_input(input)?,
-        seen: read_once(input).then(Vec::new),
+        seen: once.then(Vec::new),
     });
-    if read_once(input) {
+    if once {
         // Standard input and a pipe are checked on the bytes they send first (a file was
         // above): a compressed stream, a workbook or binary data is refused as such.
         let head = src.fill_buf().map_err(|e| usage(format!("{input}: {e}")))?;

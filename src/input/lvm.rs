@@ -133,6 +133,24 @@ impl LvmHeader {
         true
     }
 
+    /// The line of column names `names` made the reader's: the last `Comment` column unnamed
+    /// (no channel, as a trailing separator's empty name is not), and with an x column per
+    /// channel (`X_Columns Multi`) the later ones numbered (`X_Value_2`: clocks, not
+    /// channels); and each input column's unit ([`LvmHeader::column_units`], read before the
+    /// names change).
+    pub fn columns(&self, names: &mut [String]) -> Option<Vec<String>> {
+        let units = self.column_units(names);
+        if let Some(last) = names.last_mut().filter(|n| is_comment(n)) {
+            last.clear();
+        }
+        for (k, n) in names.iter_mut().filter(|n| is_x_column(n)).enumerate() {
+            if k > 0 {
+                *n = format!("X_Value_{}", k + 1);
+            }
+        }
+        units
+    }
+
     /// The units of the input columns named `names` (the line of column names): the
     /// `Y_Unit_Label` units in order over the columns that are not `X_Value` nor the `Comment`,
     /// an empty unit for those; `None` when the header gives no unit.
@@ -159,6 +177,19 @@ impl LvmHeader {
 /// Whether a column name is LabVIEW's x column (`X_Value`).
 pub fn is_x_column(name: &str) -> bool {
     name.trim().eq_ignore_ascii_case("X_Value")
+}
+
+/// Which of LabVIEW's x columns a name is, as [`LvmHeader::columns`] names them: 1 for
+/// `X_Value`, k for `X_Value_k`; `None` for any other name.
+pub fn x_column_number(name: &str) -> Option<usize> {
+    if is_x_column(name) {
+        return Some(1);
+    }
+    let k = name.trim().to_ascii_lowercase();
+    let k = k.strip_prefix("x_value_")?;
+    (!k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
+        .then(|| k.parse().ok())
+        .flatten()
 }
 
 /// Whether a column name is the `Comment` column LabVIEW writes last.

@@ -124,13 +124,30 @@ fn lvm_step(dx: f64) -> Result<InferredStep, String> {
     })
 }
 
-/// `x` rounded to `digits` significant decimal digits.
+/// `x` rounded to `digits` significant decimal digits. A power of ten at or above one
+/// divides, one below it multiplies: each exact, so `999936` to one digit is `1000000`, not
+/// `999999.9999999999`.
 fn round_significant(x: f64, digits: i32) -> f64 {
     if x == 0.0 || !x.is_finite() {
         return x;
     }
-    let scale = 10f64.powi(digits - 1 - x.abs().log10().floor() as i32);
-    (x * scale).round() / scale
+    let power = x.abs().log10().floor() as i32 + 1 - digits;
+    if power >= 0 {
+        let p = 10f64.powi(power);
+        (x / p).round() * p
+    } else {
+        let p = 10f64.powi(-power);
+        (x * p).round() / p
+    }
+}
+
+/// `x` with the fewest significant digits (up to 15) that stay within `resolution` of it
+/// (itself when none do): a step read off stamps, as their resolution or jitter tells it.
+pub(crate) fn shortest_within(x: f64, resolution: f64) -> f64 {
+    (1..=15)
+        .map(|digits| round_significant(x, digits))
+        .find(|r| (r - x).abs() <= resolution)
+        .unwrap_or(x)
 }
 
 /// Reads the start of `src` (text columns, as `opts` lay them out) and returns the sampling step
@@ -260,10 +277,7 @@ pub fn infer_tau0<R: BufRead>(
     } else {
         (median, resolution)
     };
-    let step = (1..=15)
-        .map(|digits| round_significant(center, digits))
-        .find(|r| (r - center).abs() <= resolution)
-        .unwrap_or(center);
+    let step = shortest_within(center, resolution);
     let tau0_s = round_significant(step * unit_s, 15);
     if crate::ranges::check_tau0(tau0_s).is_err() || tau0_s > 10.0 {
         return Err(usage(format!(

@@ -207,6 +207,10 @@ fn time_name(name: &str) -> Option<(bool, Option<f64>)> {
     if original.eq_ignore_ascii_case("sampletimefine") {
         return Some((false, Some(1e-4)));
     }
+    let unit_of = |u: &str| {
+        let u = u.trim();
+        TIME_UNITS.iter().find(|(x, _)| *x == u).map(|(_, s)| *s)
+    };
     // HBM catman's time channel: `Time  1 - default sample rate`, its unit in the row under
     // (`[s]` after it then).
     let (bare, unit) = match super::header_unit::bracketed(original) {
@@ -215,20 +219,12 @@ fn time_name(name: &str) -> Option<(bool, Option<f64>)> {
     };
     let lower = bare.to_ascii_lowercase();
     if lower.starts_with("time") && lower.ends_with("default sample rate") {
-        let scale = unit.and_then(|u| TIME_UNITS.iter().find(|(x, _)| *x == u).map(|(_, s)| *s));
-        return Some((true, scale));
+        return Some((true, unit.and_then(unit_of)));
     }
-    // LabVIEW's x axis (`super::lvm`), in seconds; with an x column per channel (`X_Columns
-    // Multi`) the later ones are numbered by the reader.
-    if super::lvm::is_x_column(original) {
-        return Some((true, Some(1.0)));
-    }
-    if original
-        .to_ascii_lowercase()
-        .strip_prefix("x_value_")
-        .is_some_and(|k| !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
-    {
-        return Some((false, Some(1.0)));
+    // LabVIEW's x axis (`super::lvm`), in seconds: the first x column is the time column, the
+    // others (`X_Columns Multi`) clocks beside it.
+    if let Some(k) = super::lvm::x_column_number(original) {
+        return Some((k == 1, Some(1.0)));
     }
     // An Arduino sketch's clocks, by the functions that read them: `millis()`, `micros()`.
     for (clock, unit) in [("millis", 1e-3), ("micros", 1e-6)] {
@@ -237,10 +233,6 @@ fn time_name(name: &str) -> Option<(bool, Option<f64>)> {
         }
     }
     let n = camel_words(original).to_ascii_lowercase();
-    let unit_of = |u: &str| {
-        let u = u.trim();
-        TIME_UNITS.iter().find(|(x, _)| *x == u).map(|(_, s)| *s)
-    };
     // `timestamp [ns]`, `time (s)`: the unit in brackets.
     let (base, bracket) = match n.find(['[', '(']) {
         Some(open) => {
@@ -1771,25 +1763,8 @@ impl<R: BufRead> TextReader<R> {
                                     .collect();
                                 header_rows.push(names.clone());
                                 layout_line = line_no;
-                                // LabVIEW's last `Comment` column is no channel (as a trailing
-                                // separator's empty name is not).
-                                // The units by the column names as LabVIEW writes them.
-                                let units = lvm.as_ref().and_then(|h| h.column_units(&names));
-                                if lvm.is_some() {
-                                    if names.last().is_some_and(|n| super::lvm::is_comment(n)) {
-                                        names.last_mut().map(String::clear);
-                                    }
-                                    // An x column per channel (`X_Columns Multi`): the first
-                                    // is the time column, the others numbered.
-                                    let mut k = 0;
-                                    for n in names.iter_mut().filter(|n| super::lvm::is_x_column(n))
-                                    {
-                                        k += 1;
-                                        if k > 1 {
-                                            *n = format!("X_Value_{k}");
-                                        }
-                                    }
-                                }
+                                // A LabVIEW file's names made the reader's, its units read.
+                                let units = lvm.as_ref().and_then(|h| h.columns(&mut names));
                                 // Laid out again with the units: what the first layout would
                                 // say is said then, once.
                                 let mut l = if units.is_some() {
@@ -2197,16 +2172,15 @@ impl<R: BufRead> TextReader<R> {
             if is_note(t) {
                 continue;
             }
-            // A LabVIEW file's next segment: its header, its column names and the blank lines
-            // around them (the format writes no empty row) are no rows.
-            if self.lvm.is_some()
-                && (t.is_empty() || super::lvm::is_tag_line(t) || self.repeats_header(t))
-            {
+            // A LabVIEW file's next segment: its header and the blank lines around it (the
+            // format writes no empty row) are no rows; its column names again, below, are its
+            // own (said for files joined into one).
+            if self.lvm.is_some() && (t.is_empty() || super::lvm::is_tag_line(t)) {
                 continue;
             }
             if self.repeats_header(t) {
                 self.header_repeats += 1;
-                if self.header_repeats == 1 {
+                if self.header_repeats == 1 && self.lvm.is_none() {
                     tracing::warn!(
                         "{}: line {}: the header again (files joined into one?): skipped, not a \
                          row",

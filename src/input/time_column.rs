@@ -250,7 +250,10 @@ impl TimeColumn {
                         if *s != 1.0 {
                             // As read: stamps of a clock since 1970 in ns are resolved to
                             // 256 ns as f64, so the step is shown to that resolution.
-                            let shown = to_resolution(dt, 2.0 * t.abs() * f64::EPSILON);
+                            let shown = super::sampling_step::shortest_within(
+                                dt,
+                                2.0 * t.abs() * f64::EPSILON,
+                            );
                             tracing::info!(
                                 "{}: time column `{}` read in {unit} (its first step is {shown} {unit} = tau0)",
                                 file.display(),
@@ -406,32 +409,19 @@ impl TimeColumn {
     }
 }
 
-/// `x` with the fewest significant digits that stay within `resolution` of it (itself when
-/// none do): a step between stamps read as f64, shown as the stamps resolve it.
-fn to_resolution(x: f64, resolution: f64) -> f64 {
-    if x == 0.0 || !x.is_finite() {
-        return x;
-    }
-    (1..=15)
-        .map(|digits| {
-            // Powers of ten at or above one multiply, below one divide: each exact.
-            let power = x.abs().log10().floor() as i32 + 1 - digits;
-            if power >= 0 {
-                let p = 10f64.powi(power);
-                (x / p).round() * p
-            } else {
-                let p = 10f64.powi(-power);
-                (x * p).round() / p
-            }
-        })
-        .find(|r| (r - x).abs() <= resolution)
-        .unwrap_or(x)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use std::path::Path;
+
+    /// As the reader does after a gap: its `steps` missing steps handed out, then the row
+    /// stamped `t`.
+    fn hand_out(c: &mut TimeColumn, steps: u64, t: f64) {
+        for _ in 0..steps {
+            c.step_inserted();
+        }
+        c.handed_out(t);
+    }
 
     /// A counter of samples: a jump of k counts is k - 1 missing; a 16-bit wrap (65534 -> 1)
     /// has the counts across it missing (65535 and 0); a step back that is no wrap is no gap;
@@ -443,13 +433,9 @@ mod tests {
         assert_eq!(c.missing_before(65530.0, p, 2), 0);
         assert_eq!(c.missing_before(65531.0, p, 3), 0);
         assert_eq!(c.missing_before(65534.0, p, 4), 2);
-        c.step_inserted();
-        c.step_inserted();
-        c.handed_out(65534.0);
+        hand_out(&mut c, 2, 65534.0);
         assert_eq!(c.missing_before(1.0, p, 5), 2);
-        c.step_inserted();
-        c.step_inserted();
-        c.handed_out(1.0);
+        hand_out(&mut c, 2, 1.0);
         assert_eq!(c.missing_before(2.0, p, 6), 0);
         // From 20000 to 5: no wrap (not near the top of its range), no gap.
         assert_eq!(c.missing_before(20000.0, p, 7), 19997);
@@ -475,9 +461,7 @@ mod tests {
         assert_eq!(c.missing_before(1000.0, p, 2), 0);
         assert_eq!(c.missing_before(1004.0, p, 3), 0);
         assert_eq!(c.missing_before(1016.0, p, 4), 2);
-        c.step_inserted();
-        c.step_inserted();
-        c.handed_out(1016.0);
+        hand_out(&mut c, 2, 1016.0);
         assert_eq!(c.missing_before(1020.0, p, 5), 0);
         assert_eq!((c.jumps, c.missing), (1, 2));
         // Backwards: counted, nothing inserted, taken as the next sample (1024).
@@ -529,10 +513,7 @@ mod tests {
             for (i, &t) in stamps.iter().enumerate() {
                 let m = c.missing_before(t, p, i as u64 + 2);
                 if m > 0 {
-                    for _ in 0..m {
-                        c.step_inserted();
-                    }
-                    c.handed_out(t);
+                    hand_out(c, m, t);
                 }
                 got.push(m);
             }
@@ -570,9 +551,10 @@ mod tests {
     fn a_step_is_shown_to_the_stamps_resolution() {
         let (a, b) = (1_403_636_579_758_555_392f64, 1_403_636_579_759_555_392f64);
         assert_eq!(b - a, 999_936.0);
-        assert_eq!(to_resolution(b - a, 2.0 * b * f64::EPSILON), 1_000_000.0);
-        assert_eq!(to_resolution(2.5, 2.0 * 10.0 * f64::EPSILON), 2.5);
-        assert_eq!(to_resolution(0.0, 1.0), 0.0);
+        let shown = |x: f64, r: f64| crate::input::sampling_step::shortest_within(x, r);
+        assert_eq!(shown(b - a, 2.0 * b * f64::EPSILON), 1_000_000.0);
+        assert_eq!(shown(2.5, 2.0 * 10.0 * f64::EPSILON), 2.5);
+        assert_eq!(shown(0.0, 1.0), 0.0);
     }
 
     #[test]
