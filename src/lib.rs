@@ -60,6 +60,7 @@
 //!   time_column.rs         the time column: gaps found from the sampling step
 //!   sampling_step.rs       the sampling step read off the time column (no --tau0)
 //!   header_unit.rs         a data column's unit in its header (`[rad s^-1]`), without --unit
+//!   format_units.rs        units a file's format fixes (Kalibr, Xsens, UZH-FPV, ArduPilot)
 //!   temperature_column.rs  the unit's temperature column (`temp [degC]`): not a channel
 //!   px4_export.rs          PX4's CSV export: us stamps, fields that describe samples
 //!   lvm.rs                 LabVIEW Measurement files: tagged headers, Delta_X, units

@@ -448,7 +448,7 @@ pub(crate) fn sniff_head(input: &str, head: &[u8], frames: Option<&FrameDescript
 /// in place of text columns (a spreadsheet, a MATLAB or NumPy file, a ROS or PX4 log), and how
 /// to get text columns out of it; `None` for anything else.
 fn container(head: &[u8]) -> Option<(&'static str, &'static str)> {
-    const KINDS: [(&[u8], &str, &str); 10] = [
+    const KINDS: [(&[u8], &str, &str); 12] = [
         (
             b"PK\x03\x04",
             "a ZIP archive (an Excel .xlsx or LibreOffice .ods workbook is one)",
@@ -495,6 +495,18 @@ fn container(head: &[u8]) -> Option<(&'static str, &'static str)> {
             "an SQLite database (a ROS 2 bag's .db3?)",
             "export the IMU topic as CSV first (`ros2 topic echo --csv /imu > imu.csv` while \
              playing the bag)",
+        ),
+        (
+            &[0xa3, 0x95, 0x80],
+            "an ArduPilot DataFlash log (.bin)",
+            "export its IMU messages as CSV first with pymavlink: `mavlogdump.py --types IMU \
+             --format csv F > imu.csv` (README, ArduPilot)",
+        ),
+        (
+            b"FMT, ",
+            "an ArduPilot DataFlash log as text (.log: messages of many kinds)",
+            "export its IMU messages as CSV first with pymavlink: `mavlogdump.py --types IMU \
+             --format csv F > imu.csv` (README, ArduPilot)",
         ),
         (
             b"ULog\x01\x12\x35",

@@ -29,7 +29,8 @@ use allanscope::analysis::ChannelSetup;
 use allanscope::analysis::{AnalysisOptions, InputKind};
 use allanscope::error::UsageError;
 use allanscope::frame::FrameDescriptor;
-use allanscope::input::header_unit::{self, header_unit, units_from_headers, HeaderUnit};
+use allanscope::input::format_units;
+use allanscope::input::header_unit::{header_unit, units_from_headers, HeaderUnit};
 use allanscope::input::px4_export;
 use allanscope::input::text::{ColumnPick, TextOptions, TextReader};
 use allanscope::model::fit::FitMethod;
@@ -751,8 +752,8 @@ impl DataArgs {
             })
             .collect();
         // A name that carries no unit may be in the unit its file's format fixes: a PX4
-        // sensor_gyro's `x` (by its message), Kalibr's `omega_x`.
-        let kalibr = header_unit::kalibr_layout(reader.header_names());
+        // sensor_gyro's `x` (by its message), Kalibr's `omega_x`, an Xsens export's `Gyr_X`.
+        let format = format_units::file_format(reader.header_names(), Path::new(input));
         let fixed: Vec<Option<HeaderUnit>> = ours
             .iter()
             .map(|&(_, name)| {
@@ -760,7 +761,7 @@ impl DataArgs {
                     .px4_export()
                     .then(|| px4_export::message_unit(Path::new(input), name));
                 px4.flatten()
-                    .or_else(|| kalibr.then(|| header_unit::kalibr_field(name)).flatten())
+                    .or_else(|| format.and_then(|f| f.column_unit(name)))
             })
             .collect();
         if self.unit.is_some() {

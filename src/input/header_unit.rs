@@ -94,42 +94,6 @@ fn fixed_rate(field: &str, axis: &str, table: &[(&str, &str, &str)]) -> Option<H
     })
 }
 
-/// The header of Kalibr's `imu0.csv`.
-pub const KALIBR_HEADER: [&str; 7] = [
-    "timestamp",
-    "omega_x",
-    "omega_y",
-    "omega_z",
-    "alpha_x",
-    "alpha_y",
-    "alpha_z",
-];
-
-/// Whether a header is that of Kalibr's `imu0.csv` (the input of `kalibr_bagcreater`, the
-/// output of `kalibr_bagextractor`): `timestamp` (ns), `omega_x`, `omega_y`, `omega_z`,
-/// `alpha_x`, `alpha_y`, `alpha_z`, whose names carry no unit because Kalibr's bag format fixes
-/// them (rad/s, m/s^2; its wiki, "Bag format"). All seven names are needed: `alpha` alone is as
-/// often an angular acceleration.
-pub fn kalibr_layout<S: AsRef<str>>(names: &[S]) -> bool {
-    KALIBR_HEADER
-        .iter()
-        .all(|k| names.iter().any(|n| n.as_ref().trim() == *k))
-}
-
-/// The unit of a column of Kalibr's `imu0.csv` ([`kalibr_layout`]): `omega_*` rad/s,
-/// `alpha_*` m/s^2; `None` for any other name.
-pub fn kalibr_field(name: &str) -> Option<HeaderUnit> {
-    let (field, axis) = name.trim().split_once('_')?;
-    fixed_rate(
-        field,
-        axis,
-        &[
-            ("omega", "rad", "rad/s, by Kalibr's imu0.csv"),
-            ("alpha", "m/s", "m/s^2, by Kalibr's imu0.csv"),
-        ],
-    )
-}
-
 /// The name of the array a column is an element of (`gyro_rad` for `gyro_rad[0]`), when its
 /// brackets hold only an index.
 pub fn array_element(name: &str) -> Option<&str> {
@@ -582,39 +546,6 @@ mod tests {
             units_from_headers(&[(1, "gx")], &[], false, false),
             Ok(None)
         );
-    }
-
-    /// Kalibr's imu0.csv: its header is told only whole; its columns are rates in rad/s and
-    /// m/s^2, taken where a name carries no unit of its own.
-    #[test]
-    fn kalibr_imu_csv() {
-        let h = KALIBR_HEADER;
-        assert!(kalibr_layout(&h));
-        assert!(!kalibr_layout(&h[..6]));
-        assert!(!kalibr_layout(&["t", "omega_x", "alpha_x"]));
-        let cols: Vec<(usize, &str)> = h
-            .iter()
-            .enumerate()
-            .skip(1)
-            .map(|(i, n)| (i + 1, *n))
-            .collect();
-        let fixed: Vec<Option<HeaderUnit>> = cols.iter().map(|(_, n)| kalibr_field(n)).collect();
-        let u = units_from_headers(&cols, &fixed, false, false)
-            .unwrap()
-            .unwrap();
-        assert_eq!(u.units, ["rad", "rad", "rad", "m/s", "m/s", "m/s"]);
-        assert!(u.rate);
-        assert!(
-            u.account
-                .contains("`omega_x` rates in rad/s, by Kalibr's imu0.csv (unit rad)"),
-            "{}",
-            u.account
-        );
-        assert_eq!(kalibr_field("omega_w"), None);
-        assert_eq!(kalibr_field("theta_x"), None);
-        // A unit in a column's own name rules over the format's.
-        let own = units_from_headers(&[(2, "omega_x [deg/s]")], &fixed[..1], false, false);
-        assert_eq!(own.unwrap().unwrap().units, ["deg"]);
     }
 
     /// PX4's CSV export: an index in brackets is no unit; the fields whose unit the message

@@ -2,6 +2,7 @@
 //!
 //! A reader turns bytes into [`Chunk`]s of rows; it knows nothing of statistics.
 
+pub mod format_units;
 pub mod header_unit;
 pub mod lvm;
 pub mod px4_export;

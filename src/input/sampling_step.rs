@@ -20,6 +20,10 @@ pub const LOOK_ROWS: usize = 4001;
 /// A step farther than this share of the median from it counts as irregular.
 const TOLERANCE: f64 = 0.25;
 
+/// The shortest step of an Xsens `SampleTimeFine` read in us (an Xsens DOT's clock) rather
+/// than in 100 us (an MTi's): 8000, below a DOT's fastest 8333 and an MTi's 1 Hz 10000.
+const DOT_STEP_MIN: f64 = 8000.0;
+
 /// A sampling step read off a time column.
 #[derive(Debug, Clone, PartialEq)]
 pub struct InferredStep {
@@ -278,6 +282,18 @@ pub fn infer_tau0<R: BufRead>(
         (median, resolution)
     };
     let step = shortest_within(center, resolution);
+    // `SampleTimeFine` counts 100 us on an Xsens MTi (1-2000 Hz: steps of 5 to 10000) but us
+    // on an Xsens DOT (1-120 Hz: steps of 8333 or more): a step of 8000 or more is a DOT's.
+    let dot = unit_s == 1e-4 && step >= DOT_STEP_MIN && column.trim() == "SampleTimeFine";
+    let (unit_s, unit_from) = if dot {
+        (
+            1e-6,
+            "its steps: an Xsens DOT's clock counts us (an MTi's counts 100 us, steps of 8000 \
+             only below 1.25 Hz)",
+        )
+    } else {
+        (unit_s, unit_from)
+    };
     let tau0_s = round_significant(step * unit_s, 15);
     if crate::ranges::check_tau0(tau0_s).is_err() || tau0_s > 10.0 {
         return Err(usage(format!(

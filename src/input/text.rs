@@ -199,6 +199,41 @@ pub fn counter_column(name: &str) -> bool {
         .any(|w| COUNTER_WORDS.contains(&w))
 }
 
+/// Words that make a column something other than an inertial channel, and what it holds: a
+/// status word (Xsens's `Status`, a logger's `flags`), a magnetometer's field (`Mag_X`, `magY`,
+/// `compass_z`), a vector's magnitude (`Magnitude`, `norm`, phyphox's `Absolute (rad/s)`: the
+/// norm of the three axes, not an axis).
+const QUANTITY_WORDS: [(&str, &str); 10] = [
+    ("status", "a status word"),
+    ("flags", "a status word"),
+    ("mag", "a magnetic field"),
+    ("magn", "a magnetic field"),
+    ("magnetometer", "a magnetic field"),
+    ("magnetic", "a magnetic field"),
+    ("compass", "a magnetic field"),
+    ("magnitude", "a vector's magnitude"),
+    ("norm", "a vector's magnitude"),
+    ("absolute", "a vector's magnitude"),
+];
+
+/// What a column holds by its name when that is no inertial channel ([`QUANTITY_WORDS`]; a
+/// word may end in its axis, `magx`; or one of [`INSTANCE_NAMES`], the number of the sensor
+/// the rows are of, but a bare `I`, which may as well be a current or an in-phase signal, only
+/// in ArduPilot's messages, `super::format_units`); `None` for any other name.
+pub fn named_quantity(name: &str) -> Option<&'static str> {
+    let n = camel_words(base_name(name.trim_start_matches(['#', '%']))).to_ascii_lowercase();
+    if n != "i" && INSTANCE_NAMES.contains(&n.as_str()) {
+        return Some("the number of the sensor its rows are of");
+    }
+    n.split(|c: char| !c.is_alphanumeric()).find_map(|w| {
+        let bare = w.strip_suffix(['x', 'y', 'z']).filter(|b| b.len() >= 3);
+        QUANTITY_WORDS
+            .iter()
+            .find(|(k, _)| w == *k || bare == Some(*k))
+            .map(|(_, q)| *q)
+    })
+}
+
 /// [`time_column_unit`], and whether the name is one of [`TIME_COLUMN_NAMES`] (preferred
 /// when several columns are named as time columns: `gps_time,time` reads `time`).
 fn time_name(name: &str) -> Option<(bool, Option<f64>)> {
@@ -226,8 +261,14 @@ fn time_name(name: &str) -> Option<(bool, Option<f64>)> {
     if let Some(k) = super::lvm::x_column_number(original) {
         return Some((k == 1, Some(1.0)));
     }
-    // An Arduino sketch's clocks, by the functions that read them: `millis()`, `micros()`.
-    for (clock, unit) in [("millis", 1e-3), ("micros", 1e-6)] {
+    // An Arduino sketch's clocks, by the functions that read them: `millis()`, `micros()`;
+    // ArduPilot's log stamps (`TimeUS`, older logs' `TimeMS`).
+    for (clock, unit) in [
+        ("millis", 1e-3),
+        ("micros", 1e-6),
+        ("TimeUS", 1e-6),
+        ("TimeMS", 1e-3),
+    ] {
         if original.eq_ignore_ascii_case(clock) {
             return Some((false, Some(unit)));
         }
@@ -455,10 +496,23 @@ impl Layout {
         // clipping, ids) are no channels either (`super::px4_export`).
         let px4 = header && px4_export::is_export(&source_names);
         let bookkeeping = |i: usize| px4 && px4_export::bookkeeping(&source_names[i]);
-        // A magnetometer's or a barometer's column by its unit (`mag_x [uT]`): no channel.
+        // A magnetometer's or a barometer's column by its unit (`mag_x [uT]`), or a status
+        // word, a magnetic field or a magnitude by its name (`Status`, `Mag_X`, `Absolute`): no
+        // channel. `(what it holds, whether its unit says so)`.
+        // And the fields a format fixes as no channel (ArduPilot's error counts and health
+        // flags beside its `GyrX`).
+        let format = header
+            .then(|| super::format_units::file_format(&source_names, path))
+            .flatten();
         let other_quantity = |i: usize| {
+            let n = &source_names[i];
             header
-                .then(|| super::header_unit::other_quantity(&source_names[i]))
+                .then(|| {
+                    super::header_unit::other_quantity(n)
+                        .map(|q| (q, true))
+                        .or_else(|| named_quantity(n).map(|q| (q, false)))
+                        .or_else(|| format.and_then(|f| f.other_column(n)).map(|q| (q, false)))
+                })
                 .flatten()
         };
         let other_clock = |i: usize| {
@@ -498,8 +552,10 @@ impl Layout {
                         ("is a counter".to_string(), "")
                     } else if bookkeeping(i) {
                         ("is a PX4 field that describes samples".to_string(), "")
-                    } else if let Some(q) = other_quantity(i) {
+                    } else if let Some((q, true)) = other_quantity(i) {
                         (format!("holds {q}, by its unit"), ", with --unit U,")
+                    } else if let Some((q, false)) = other_quantity(i) {
+                        (format!("holds {q}, by its name"), "")
                     } else {
                         ("is a second time column".to_string(), "")
                     };
@@ -524,7 +580,7 @@ impl Layout {
             let out: Vec<String> = (0..source_names.len())
                 .filter(|&i| other_clock(i))
                 .map(|i| match other_quantity(i) {
-                    Some(q) => format!("`{}` ({q})", source_names[i]),
+                    Some((q, _)) => format!("`{}` ({q})", source_names[i]),
                     None => format!("`{}`", source_names[i]),
                 })
                 .collect();
@@ -613,6 +669,7 @@ impl Layout {
             self
         };
         let l = l.without_index_columns(t, &rows_ahead, opts, path, line);
+        l.check_interleaved(t, &rows_ahead, path, line)?;
         Ok(match l.parse(t) {
             Ok((v, time)) => ((Ok(v), time), l),
             Err(problem) => ((Err(problem), f64::NAN), l),
@@ -771,6 +828,78 @@ impl Layout {
         self
     }
 
+    /// An error when a column named as an instance number ([`INSTANCE_NAMES`]: ArduPilot's `I`
+    /// in a `mavlogdump.py` CSV, a `sensor_id`) holds 2 to [`INSTANCE_MAX`] whole numbers, each
+    /// on several of the first row `t` and the rows `ahead`: the rows of as many sensors
+    /// interleave, and a channel would hold their samples in turn (one curve of two units, its
+    /// step read between them). The same column holding one number (one sensor) is no error.
+    fn check_interleaved(
+        &self,
+        t: &str,
+        ahead: &[String],
+        path: &Path,
+        line: u64,
+    ) -> Result<(), UsageError> {
+        if self.sep == Sep::Labelled {
+            return Ok(());
+        }
+        let rows: Vec<Vec<&str>> = std::iter::once(t)
+            .chain(ahead.iter().map(String::as_str))
+            .map(|r| self.split(r.trim()))
+            .filter(|f| f.len() == self.width_in)
+            .collect();
+        if rows.len() < INDEX_ROWS {
+            return Ok(());
+        }
+        for (i, name) in self.source_names.iter().enumerate() {
+            let n =
+                camel_words(base_name(name.trim_start_matches(['#', '%']))).to_ascii_lowercase();
+            if !INSTANCE_NAMES.contains(&n.as_str()) {
+                continue;
+            }
+            let mut seen: Vec<(i64, usize)> = Vec::new();
+            for f in &rows {
+                let Some(v) = parse_field(f[i])
+                    .ok()
+                    .filter(|v| v.fract() == 0.0 && v.abs() < 1e9)
+                else {
+                    return Ok(());
+                };
+                let v = v as i64;
+                match seen.iter_mut().find(|(x, _)| *x == v) {
+                    Some((_, k)) => *k += 1,
+                    None => seen.push((v, 1)),
+                }
+            }
+            if (2..=INSTANCE_MAX).contains(&seen.len()) && seen.iter().all(|&(_, k)| k >= 2) {
+                let values: Vec<String> = seen.iter().map(|(v, _)| v.to_string()).collect();
+                let sep = match self.sep {
+                    Sep::Comma => " -F,",
+                    Sep::Semicolon => " -F';'",
+                    Sep::Tab => " -F'\\t'",
+                    _ => "",
+                };
+                return Err(input_error(
+                    path,
+                    line,
+                    format!(
+                        "column {} `{name}` numbers {} sensors ({}) whose rows interleave: a \
+                         channel would hold their samples in turn. Analyse one sensor's rows at \
+                         a time: `awk{sep} 'NR == 1 || ${} == {}' {} > one.csv` keeps the \
+                         header line and the first sensor's rows",
+                        i + 1,
+                        seen.len(),
+                        values.join(", "),
+                        i + 1,
+                        seen[0].0,
+                        path.display()
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// The channel values of a row and its time stamp (NaN without a time column or where the
     /// stamp is not a number), or what is wrong with the row.
     fn parse(&self, t: &str) -> Result<(Vec<f64>, f64), String> {
@@ -910,6 +1039,25 @@ const AHEAD_LINES: usize = 256;
 /// Rows (the first data row and those read ahead) a column must number one by one to be taken
 /// as the rows' index ([`Layout::without_index_columns`]).
 const INDEX_ROWS: usize = 16;
+
+/// Names (lower case, camel case split with `_`) of a column that numbers the sensor a row is
+/// of, when one file holds several ([`Layout::check_interleaved`]): ArduPilot's `I` (`IMU`,
+/// `GYR`, `ACC` messages), `instance`, `sensor_id`, `imu_id`.
+const INSTANCE_NAMES: [&str; 10] = [
+    "i",
+    "inst",
+    "instance",
+    "imu_id",
+    "imu_index",
+    "imu_instance",
+    "sensor_id",
+    "sensor_index",
+    "sensor_instance",
+    "device_id",
+];
+
+/// The most sensors an instance column numbers ([`Layout::check_interleaved`]).
+const INSTANCE_MAX: usize = 8;
 
 /// The next line into `buf`: the first of those read ahead, else one of `src`; the bytes it
 /// took in the input and whether it was longer than [`MAX_LINE_BYTES`] (0 bytes: the end).
@@ -2624,6 +2772,75 @@ mod tests {
         assert_eq!(time_column_unit("GpsTime"), Some(None));
         assert!(counter_column("field.header.seq") && counter_column("frame_count"));
         assert!(!counter_column("gyro_x_counts") && !counter_column("gx"));
+    }
+
+    /// Names that say a column holds no inertial channel, and names that only look alike:
+    /// words, not substrings; an axis letter may end the word (`magX`); an instance number only
+    /// by its whole name. ArduPilot's clocks are in us and ms.
+    #[test]
+    fn names_of_other_quantities() {
+        for (n, q) in [
+            ("Status", "a status word"),
+            ("imu.flags", "a status word"),
+            ("Mag_X", "a magnetic field"),
+            ("magY", "a magnetic field"),
+            ("compass_z [raw]", "a magnetic field"),
+            ("Magnitude", "a vector's magnitude"),
+            ("acc_norm", "a vector's magnitude"),
+            ("Absolute (m/s^2)", "a vector's magnitude"),
+            ("sensor_id", "the number of the sensor its rows are of"),
+            ("imuId", "the number of the sensor its rows are of"),
+        ] {
+            assert_eq!(named_quantity(n), Some(q), "{n}");
+        }
+        for n in [
+            "gyro_x",
+            "max_rate",
+            "magic",
+            "image_x",
+            "normal_acc",
+            "flag_count",
+            "Ix",
+            "id",
+            "I",
+            "gx (abs)",
+        ] {
+            assert_eq!(named_quantity(n), None, "{n}");
+        }
+        assert_eq!(time_name("TimeUS"), Some((false, Some(1e-6))));
+        assert_eq!(time_name("TimeMS"), Some((false, Some(1e-3))));
+    }
+
+    /// Rows of two sensors, numbered in `I`, interleave: refused with the line to keep one;
+    /// the same column with one number, or a column named otherwise, is no error.
+    #[test]
+    fn interleaved_sensors() {
+        let rows = |name: &str, sensors: u64| {
+            let mut s = format!("t,{name},gx\n");
+            for i in 0..40u64 {
+                s += &format!("{},{},{}\n", i / sensors, i % sensors, i % 7);
+            }
+            s
+        };
+        let opts = TextOptions::default();
+        let e = TextReader::with_options(rows("I", 2).as_bytes(), Path::new("m.csv"), &opts)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            e.contains("column 2 `I` numbers 2 sensors (0, 1) whose rows interleave")
+                && e.contains("`awk -F, 'NR == 1 || $2 == 0' m.csv > one.csv`"),
+            "{e}"
+        );
+        for (name, sensors, names) in [
+            ("instance", 1, &["gx"][..]),
+            ("I", 1, &["I", "gx"]),
+            ("mode", 2, &["mode", "gx"]),
+        ] {
+            let text = rows(name, sensors);
+            let r = TextReader::with_options(text.as_bytes(), Path::new("m.csv"), &opts).unwrap();
+            assert_eq!(r.names(), names, "{name}");
+        }
     }
 
     /// PX4's `ulog2csv` export of sensor_combined: the fields that describe samples

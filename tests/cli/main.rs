@@ -9,6 +9,7 @@ mod aggregate;
 mod analyze;
 mod diagnose;
 mod export;
+mod format_units;
 mod header_units;
 mod limits_summary;
 mod malformed;

@@ -196,12 +196,12 @@ fn bad_headers_and_columns_are_usage_errors_naming_them() {
 fn a_text_column_is_left_out_unless_named_and_an_input_without_samples_is_an_error() {
     let p = write(
         "status.csv",
-        b"# log\ngx,status,gy\n0.1,OK,0.2\n0.3,OK,0.4\n0.5,FAIL,0.25\n",
+        b"# log\ngx,state,gy\n0.1,OK,0.2\n0.3,OK,0.4\n0.5,FAIL,0.25\n",
     );
     let out = analyze(&p, &[]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("line 3: column 2 `status` holds text (`OK`), not numbers: left out"),
+        err.contains("line 3: column 2 `state` holds text (`OK`), not numbers: left out"),
         "{err}"
     );
     let (c, s) = parsed(&out);
@@ -214,13 +214,13 @@ fn a_text_column_is_left_out_unless_named_and_an_input_without_samples_is_an_err
     for (x, y) in c.iter().zip(&c2) {
         assert_eq!((&x.channel, &x.sigma), (&y.channel, &y.sigma));
     }
-    for named in [["--columns", "gx,status"], ["--channels", "status"]] {
+    for named in [["--columns", "gx,state"], ["--channels", "state"]] {
         usage_error(
             &analyze(&p, &named),
             &[
                 "status.csv",
                 "line 3",
-                "column 2 `status`: `OK` is not a number",
+                "column 2 `state`: `OK` is not a number",
             ],
         );
     }
