@@ -15,6 +15,7 @@
 //! A unit in a column's own name rules over its format's (`super::header_unit::units_from_headers`).
 
 use super::header_unit::HeaderUnit;
+use super::temperature_column::{TemperatureScale, CELSIUS};
 use std::path::Path;
 
 /// A file format that fixes the units of its data columns.
@@ -22,8 +23,9 @@ use std::path::Path;
 pub enum FileFormat {
     /// Kalibr's `imu0.csv`.
     Kalibr,
-    /// An Xsens MT Manager or DOT export.
-    Xsens,
+    /// An Xsens MT Manager or DOT export; `rates`: it holds rates of turn or accelerations
+    /// (`Gyr_X`, `Acc_X`, `FreeAcc_X`), beside which its velocity increments are no channels.
+    Xsens { rates: bool },
     /// UZH-FPV's `imu.txt`.
     UzhFpv,
     /// A Sensor Logger file of a gyroscope (`true`) or an accelerometer (`false`).
@@ -68,7 +70,10 @@ pub fn file_format<S: AsRef<str>>(names: &[S], file: &Path) -> Option<FileFormat
         return Some(FileFormat::Kalibr);
     }
     if has("PacketCounter") || has("SampleTimeFine") {
-        return Some(FileFormat::Xsens);
+        let rates = ["Gyr_", "Acc_", "FreeAcc_"]
+            .iter()
+            .any(|p| ["X", "Y", "Z"].iter().any(|a| has(&format!("{p}{a}"))));
+        return Some(FileFormat::Xsens { rates });
     }
     if (has("TimeUS") || has("TimeMS")) && (has("GyrX") || has("AccX")) {
         return Some(FileFormat::ArduPilot);
@@ -104,7 +109,7 @@ impl FileFormat {
                 ("alpha", "x" | "y" | "z") => ("m/s", true, "m/s^2, by Kalibr's imu0.csv"),
                 _ => return None,
             },
-            FileFormat::Xsens => match n {
+            FileFormat::Xsens { .. } => match n {
                 "Gyr_X" | "Gyr_Y" | "Gyr_Z" => ("rad", true, "rad/s, by its Xsens export"),
                 "Acc_X" | "Acc_Y" | "Acc_Z" | "FreeAcc_X" | "FreeAcc_Y" | "FreeAcc_Z" => {
                     ("m/s", true, "m/s^2, by its Xsens export")
@@ -135,24 +140,44 @@ impl FileFormat {
         })
     }
 
+    /// The format, as the log names it where it says what a column holds.
+    pub fn source(self) -> &'static str {
+        match self {
+            FileFormat::Kalibr => "Kalibr's imu0.csv",
+            FileFormat::Xsens { .. } => "its Xsens export",
+            FileFormat::UzhFpv => "UZH-FPV's imu.txt",
+            FileFormat::SensorLogger { .. } => "Sensor Logger's file",
+            FileFormat::ArduPilot => "ArduPilot's IMU message",
+        }
+    }
+
+    /// The scale of the column `name` when this format fixes it as the unit's temperature
+    /// (ArduPilot's `T`, degC): `diagnose` fits the bias against it, `analyze` leaves it out,
+    /// as a `temp [degC]` column (`super::temperature_column`).
+    pub fn temperature(self, name: &str) -> Option<TemperatureScale> {
+        (self == FileFormat::ArduPilot && name.trim() == "T").then_some(CELSIUS)
+    }
+
     /// What a column this format fixes as no channel holds (ArduPilot's `IMU` message: the
-    /// IMU's number `I`, the error counts `EG`, `EA`, the health flags `GH`, `AH`, the sensors' rates `GHz`, `AHz`,
-    /// the temperature `T`); `None` for the others.
+    /// IMU's number `I`, the error counts `EG`, `EA`, the health flags `GH`, `AH`, the sensors'
+    /// rates `GHz`, `AHz`; an Xsens export's orientation increments `dq_*`, and its velocity
+    /// increments `dv[*]` beside rates, since one run reads rates or increments, not both);
+    /// `None` for the others.
     pub fn other_column(self, name: &str) -> Option<&'static str> {
         match (self, name.trim()) {
             (FileFormat::ArduPilot, "I") => Some("the number of the IMU its rows are of"),
-            (FileFormat::ArduPilot, "EG" | "EA") => {
-                Some("an error count, by ArduPilot's IMU message")
+            // Half the angle increment about each axis (and the real part): no angle as it
+            // stands, and read as a rate beside `Gyr_X` it would be off by 1/tau0.
+            (FileFormat::Xsens { .. }, "dq_W" | "dq_X" | "dq_Y" | "dq_Z") => {
+                Some("an orientation increment as a quaternion (half angles)")
             }
-            (FileFormat::ArduPilot, "GH" | "AH") => {
-                Some("a health flag, by ArduPilot's IMU message")
-            }
-            (FileFormat::ArduPilot, "GHz" | "AHz") => {
-                Some("a sensor's sampling rate, by ArduPilot's IMU message")
-            }
-            (FileFormat::ArduPilot, "T") => {
-                Some("the IMU's temperature, by ArduPilot's IMU message")
-            }
+            (FileFormat::Xsens { rates: true }, "dv[1]" | "dv[2]" | "dv[3]") => Some(
+                "velocity increments beside the rates (analyse them alone: --columns \
+                 dv[1],dv[2],dv[3])",
+            ),
+            (FileFormat::ArduPilot, "EG" | "EA") => Some("an error count"),
+            (FileFormat::ArduPilot, "GH" | "AH") => Some("a health flag"),
+            (FileFormat::ArduPilot, "GHz" | "AHz") => Some("a sensor's sampling rate"),
             _ => None,
         }
     }
@@ -223,20 +248,24 @@ mod tests {
             "FreeAcc_Y",
         ];
         let f = file_format(&mt, Path::new("MT_0123_000.txt")).unwrap();
-        assert_eq!(f, FileFormat::Xsens);
+        assert_eq!(f, FileFormat::Xsens { rates: true });
         assert_eq!(
             units(f, &mt[2..]),
             [some("m/s", true), some("rad", true), some("m/s", true)]
         );
         let dot = ["PacketCounter", "dq_X", "dv[1]", "dv[3]", "Mag_X", "Gyr_W"];
+        let d = file_format(&dot, Path::new("x.csv")).unwrap();
+        assert_eq!(d, FileFormat::Xsens { rates: false });
         assert_eq!(
-            file_format(&dot, Path::new("x.csv")),
-            Some(FileFormat::Xsens)
-        );
-        assert_eq!(
-            units(f, &dot[1..]),
+            units(d, &dot[1..]),
             [None, some("m/s", false), some("m/s", false), None, None]
         );
+        // The orientation increments are no channel; the velocity increments only beside rates.
+        assert!(d.other_column("dq_X").is_some() && d.other_column("dv[1]").is_none());
+        assert!(f
+            .other_column("dv[1]")
+            .unwrap()
+            .contains("--columns dv[1],dv[2],dv[3]"));
         // Without a counter or Xsens's clock, `Acc_X` alone fixes nothing.
         assert_eq!(
             file_format(&["time", "Acc_X", "Gyr_X"], Path::new("a")),

@@ -301,8 +301,9 @@ pub fn units_from_headers(
             (other, first)
         };
         return Err(format!(
-            "{} holds rates and {} increments by their headers: analyse them in separate runs \
-             (--columns), or give --unit and --rate or not to read them all one way",
+            "{} holds rates and {} increments by their headers (or their file's format): \
+             analyse them in separate runs (--columns), or give --unit and --rate or not to read \
+             them all one way",
             name(r),
             name(inc)
         ));

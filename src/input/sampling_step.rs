@@ -20,9 +20,10 @@ pub const LOOK_ROWS: usize = 4001;
 /// A step farther than this share of the median from it counts as irregular.
 const TOLERANCE: f64 = 0.25;
 
-/// The shortest step of an Xsens `SampleTimeFine` read in us (an Xsens DOT's clock) rather
-/// than in 100 us (an MTi's): 8000, below a DOT's fastest 8333 and an MTi's 1 Hz 10000.
-const DOT_STEP_MIN: f64 = 8000.0;
+/// The output rates of an Xsens DOT (Hz), whose `SampleTimeFine` counts us: a step of
+/// `1e6 / rate` is a DOT's, read in us, not in an MTi's 100 us (its 1 Hz steps by 10000, which
+/// no DOT rate gives).
+const DOT_RATES_HZ: [f64; 9] = [1.0, 4.0, 10.0, 12.0, 15.0, 20.0, 30.0, 60.0, 120.0];
 
 /// A sampling step read off a time column.
 #[derive(Debug, Clone, PartialEq)]
@@ -51,10 +52,16 @@ pub struct InferredStep {
 
 impl std::fmt::Display for InferredStep {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let unit = [(1e-9, "ns"), (1e-6, "us"), (1e-4, "100us"), (1e-3, "ms")]
-            .into_iter()
-            .find(|(u, _)| *u == self.unit_s)
-            .map_or("s", |(_, name)| name);
+        let unit = [
+            (1e-9, "ns"),
+            (1e-6, "us"),
+            (1e-4, "100us"),
+            (1e-3, "ms"),
+            (SECONDS_PER_DAY, "day"),
+        ]
+        .into_iter()
+        .find(|(u, _)| *u == self.unit_s)
+        .map_or("s", |(_, name)| name);
         if self.steps == 0 {
             // Not read off stamps: a header's step (`Delta_X`).
             return write!(
@@ -104,6 +111,22 @@ fn epoch_unit(stamp: f64) -> Option<f64> {
     [1.0, 1e-3, 1e-6, 1e-9]
         .into_iter()
         .find(|&u| (1e9..4e9).contains(&(stamp * u)))
+}
+
+/// Seconds in a day: the unit of serial dates ([`serial_days`]).
+pub const SECONDS_PER_DAY: f64 = 86_400.0;
+
+/// Whether stamps without a unit are serial dates in days, as Excel (days since 1900, about
+/// 46000 in 2026) and MATLAB's `datenum` (days since year 0, about 740000) write a time:
+/// fractions of a day between 1e4 and 1e6 whose median step, read as seconds, would be a rate
+/// above 10 kHz, and read as days a step between 0.1 ms and 10 s.
+fn serial_days(stamps: &[f64], median: f64) -> bool {
+    let finite: Vec<f64> = stamps.iter().copied().filter(|t| t.is_finite()).collect();
+    !finite.is_empty()
+        && finite.iter().all(|t| (1e4..1e6).contains(t))
+        && finite.iter().any(|t| t.fract() != 0.0)
+        && median < 1e-4
+        && (1e-4..=10.0).contains(&(median * SECONDS_PER_DAY))
 }
 
 /// The step a LabVIEW Measurement file's `Delta_X` gives (s), when it is a sampling step.
@@ -244,6 +267,11 @@ pub fn infer_tau0<R: BufRead>(
         ),
         None => match epoch_unit(first) {
             Some(u) => (u, "its stamps, a clock since 1970", false),
+            None if serial_days(&stamps, median) => (
+                SECONDS_PER_DAY,
+                "its stamps: serial dates in days (Excel's, MATLAB's datenum)",
+                false,
+            ),
             None => (1.0, "no unit given: seconds", true),
         },
     };
@@ -276,20 +304,35 @@ pub fn infer_tau0<R: BufRead>(
     // stamps telescope: their mean's error is about sd / n, not sd / sqrt(n)), and the median
     // only tells whether a round number is within reach.
     let jitter = 3.0 * sd / n;
-    let (center, resolution) = if jitter > resolution {
+    // Serial dates printed to a few decimals of a day step by whole quanta (1e-10 days is
+    // 8.6 us): the median step is a quantum off, the mean of the steps is not.
+    let (center, resolution) = if unit_s == SECONDS_PER_DAY {
+        (mean, (2.0 * jitter).max(resolution))
+    } else if jitter > resolution {
         (mean, jitter)
     } else {
         (median, resolution)
     };
-    let step = shortest_within(center, resolution);
+    // Days are no power of ten of a second: the step is rounded in seconds (1.1574e-7 days
+    // is 0.01 s, whose shortest decimal in days would not be).
+    let scale = if unit_s == SECONDS_PER_DAY {
+        unit_s
+    } else {
+        1.0
+    };
+    let step = shortest_within(center * scale, resolution * scale) / scale;
     // `SampleTimeFine` counts 100 us on an Xsens MTi (1-2000 Hz: steps of 5 to 10000) but us
-    // on an Xsens DOT (1-120 Hz: steps of 8333 or more): a step of 8000 or more is a DOT's.
-    let dot = unit_s == 1e-4 && step >= DOT_STEP_MIN && column.trim() == "SampleTimeFine";
+    // on an Xsens DOT (1 to 120 Hz at its own rates: steps of 1e6 / rate, 8333 or more).
+    let dot = unit_s == 1e-4
+        && column.trim() == "SampleTimeFine"
+        && DOT_RATES_HZ
+            .iter()
+            .any(|r| (step * r / 1e6 - 1.0).abs() <= 0.01);
     let (unit_s, unit_from) = if dot {
         (
             1e-6,
-            "its steps: an Xsens DOT's clock counts us (an MTi's counts 100 us, steps of 8000 \
-             only below 1.25 Hz)",
+            "its steps: an Xsens DOT's clock counts us (an MTi's counts 100 us and never \
+             steps by 1e6 / a DOT's rate)",
         )
     } else {
         (unit_s, unit_from)
@@ -521,6 +564,44 @@ mod tests {
         assert_eq!((s.tau0_s, s.doubt), (1.0, None));
         let s = infer("time_ms,gx\n0,1\n4,2\n8,1\n12,2\n").unwrap();
         assert_eq!((s.tau0_s, s.doubt), (0.004, None));
+    }
+
+    /// Serial dates in days (Excel's near 46000, MATLAB's datenum near 740000, printed to 10
+    /// decimals): tau0 read in seconds, rounded there (0.01 s, not 0.0099999x); a gap of one
+    /// sample found in them. Seconds from 0 at 20 kHz, or in the same range stepping by 2 ms,
+    /// stay seconds.
+    #[test]
+    fn serial_dates_are_days() {
+        for (start, gyro) in [(46_000.3, "gx"), (739_954.25, "gyro_x")] {
+            let mut t = format!("time,{gyro}\n");
+            for k in (0..400u64).filter(|&k| k != 200) {
+                t.push_str(&format!("{:.10},1\n", start + k as f64 * 0.01 / 86_400.0));
+            }
+            let s = infer(&t).unwrap();
+            assert_eq!((s.tau0_s, s.unit_s), (0.01, SECONDS_PER_DAY), "{start}");
+            assert!(
+                s.to_string()
+                    .contains("unit day from its stamps: serial dates"),
+                "{s}"
+            );
+            let opts = TextOptions {
+                tau0_s: Some(s.tau0_s),
+                ..TextOptions::default()
+            };
+            let mut r = TextReader::with_options(t.as_bytes(), Path::new("t.csv"), &opts).unwrap();
+            let mut out = Vec::new();
+            while r.read_rows(&mut out, 64).unwrap() > 0 {}
+            assert_eq!(out.len(), 400, "{start}: the missing sample a gap");
+            assert!(out[200].is_nan());
+        }
+        let fast: String = std::iter::once("time,gx\n".to_string())
+            .chain((0..400).map(|k| format!("{:.5},1\n", k as f64 * 5e-5)))
+            .collect();
+        assert_eq!(infer(&fast).unwrap().unit_s, 1.0);
+        let slow: String = std::iter::once("time,gx\n".to_string())
+            .chain((0..400).map(|k| format!("{:.3},1\n", 20_000.0 + k as f64 * 2e-3)))
+            .collect();
+        assert_eq!(infer(&slow).unwrap().tau0_s, 0.002);
     }
 
     /// Stamps of a clock with jitter: the step is the nominal one the jitter cannot tell from

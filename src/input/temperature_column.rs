@@ -29,7 +29,8 @@ impl TemperatureScale {
     }
 }
 
-const CELSIUS: TemperatureScale = TemperatureScale {
+/// degC, named so.
+pub const CELSIUS: TemperatureScale = TemperatureScale {
     scale: 1.0,
     offset: 0.0,
     unit: "degC",

@@ -201,9 +201,9 @@ pub fn counter_column(name: &str) -> bool {
 
 /// Words that make a column something other than an inertial channel, and what it holds: a
 /// status word (Xsens's `Status`, a logger's `flags`), a magnetometer's field (`Mag_X`, `magY`,
-/// `compass_z`), a vector's magnitude (`Magnitude`, `norm`, phyphox's `Absolute (rad/s)`: the
-/// norm of the three axes, not an axis).
-const QUANTITY_WORDS: [(&str, &str); 10] = [
+/// `compass_z`), a vector's magnitude (`Magnitude`, phyphox's `Absolute (rad/s)`: the norm of
+/// the three axes, not an axis; not `norm`, which `gx_norm` may use for a normalised channel).
+const QUANTITY_WORDS: [(&str, &str); 9] = [
     ("status", "a status word"),
     ("flags", "a status word"),
     ("mag", "a magnetic field"),
@@ -212,7 +212,6 @@ const QUANTITY_WORDS: [(&str, &str); 10] = [
     ("magnetic", "a magnetic field"),
     ("compass", "a magnetic field"),
     ("magnitude", "a vector's magnitude"),
-    ("norm", "a vector's magnitude"),
     ("absolute", "a vector's magnitude"),
 ];
 
@@ -262,12 +261,13 @@ fn time_name(name: &str) -> Option<(bool, Option<f64>)> {
         return Some((k == 1, Some(1.0)));
     }
     // An Arduino sketch's clocks, by the functions that read them: `millis()`, `micros()`;
-    // ArduPilot's log stamps (`TimeUS`, older logs' `TimeMS`).
+    // ArduPilot's log stamps (`TimeUS`, older logs' `TimeMS`; its batch messages' `SampleUS`).
     for (clock, unit) in [
         ("millis", 1e-3),
         ("micros", 1e-6),
         ("TimeUS", 1e-6),
         ("TimeMS", 1e-3),
+        ("SampleUS", 1e-6),
     ] {
         if original.eq_ignore_ascii_case(clock) {
             return Some((false, Some(unit)));
@@ -391,6 +391,8 @@ struct Layout {
     px4: bool,
     /// `time` is a counter of samples, not a clock ([`TimeColumn::counter`]).
     counter_clock: bool,
+    /// How the time column's open dates are read, as its rows have decided so far.
+    dates: std::cell::Cell<DateOrder>,
 }
 
 fn input_error(path: &Path, line: u64, problem: String) -> UsageError {
@@ -449,6 +451,13 @@ impl Layout {
                 }
             })
         };
+        // The fields a format fixes (ArduPilot's error counts and health flags beside its
+        // `GyrX`, its temperature `T`, which is no clock).
+        let format = header
+            .then(|| super::format_units::file_format(&source_names, path))
+            .flatten();
+        let clock =
+            |n: &str| time_name(n).filter(|_| format.and_then(|f| f.temperature(n)).is_none());
         let time = match &opts.time_column {
             Some(t) => Some(find(t).ok_or_else(|| {
                 err(format!(
@@ -456,11 +465,19 @@ impl Layout {
                     source_names.join(", ")
                 ))
             })?),
+            // ArduPilot's batch messages (`GYR`, `ACC`): each sample's own stamp, `SampleUS`
+            // (their `TimeUS` and `timestamp` are the batch's).
+            None if header
+                && format == Some(super::format_units::FileFormat::ArduPilot)
+                && source_names.iter().any(|n| n == "SampleUS") =>
+            {
+                source_names.iter().position(|n| n == "SampleUS")
+            }
             // A column named `time` before one whose name only holds a time word.
             None if header => source_names
                 .iter()
-                .position(|n| time_name(n).is_some_and(|(plain, _)| plain))
-                .or_else(|| source_names.iter().position(|n| time_name(n).is_some())),
+                .position(|n| clock(n).is_some_and(|(plain, _)| plain))
+                .or_else(|| source_names.iter().position(|n| clock(n).is_some())),
             None => None,
         };
         // A column `--channels` names is a channel, whatever its name says.
@@ -499,25 +516,21 @@ impl Layout {
         // A magnetometer's or a barometer's column by its unit (`mag_x [uT]`), or a status
         // word, a magnetic field or a magnitude by its name (`Status`, `Mag_X`, `Absolute`): no
         // channel. `(what it holds, whether its unit says so)`.
-        // And the fields a format fixes as no channel (ArduPilot's error counts and health
-        // flags beside its `GyrX`).
-        let format = header
-            .then(|| super::format_units::file_format(&source_names, path))
-            .flatten();
+        // And the fields a format fixes as no channel. `(what it holds, what says so)`.
         let other_quantity = |i: usize| {
             let n = &source_names[i];
             header
                 .then(|| {
                     super::header_unit::other_quantity(n)
-                        .map(|q| (q, true))
-                        .or_else(|| named_quantity(n).map(|q| (q, false)))
-                        .or_else(|| format.and_then(|f| f.other_column(n)).map(|q| (q, false)))
+                        .map(|q| (q, "its unit"))
+                        .or_else(|| named_quantity(n).map(|q| (q, "its name")))
+                        .or_else(|| format.and_then(|f| Some((f.other_column(n)?, f.source()))))
                 })
                 .flatten()
         };
         let other_clock = |i: usize| {
             Some(i) != time
-                && ((time.is_some() && time_name(&source_names[i]).is_some())
+                && ((time.is_some() && clock(&source_names[i]).is_some())
                     || counter_column(&source_names[i])
                     || bookkeeping(i)
                     || other_quantity(i).is_some())
@@ -552,10 +565,13 @@ impl Layout {
                         ("is a counter".to_string(), "")
                     } else if bookkeeping(i) {
                         ("is a PX4 field that describes samples".to_string(), "")
-                    } else if let Some((q, true)) = other_quantity(i) {
-                        (format!("holds {q}, by its unit"), ", with --unit U,")
-                    } else if let Some((q, false)) = other_quantity(i) {
-                        (format!("holds {q}, by its name"), "")
+                    } else if let Some((q, by)) = other_quantity(i) {
+                        let how = if by == "its unit" {
+                            ", with --unit U,"
+                        } else {
+                            ""
+                        };
+                        (format!("holds {q}, by {by}"), how)
                     } else {
                         ("is a second time column".to_string(), "")
                     };
@@ -612,6 +628,7 @@ impl Layout {
             time,
             px4,
             counter_clock,
+            dates: Default::default(),
         })
     }
 
@@ -669,7 +686,7 @@ impl Layout {
             self
         };
         let l = l.without_index_columns(t, &rows_ahead, opts, path, line);
-        l.check_interleaved(t, &rows_ahead, path, line)?;
+        l.check_interleaved(t, &rows_ahead, opts, path, line)?;
         Ok(match l.parse(t) {
             Ok((v, time)) => ((Ok(v), time), l),
             Err(problem) => ((Err(problem), f64::NAN), l),
@@ -837,12 +854,25 @@ impl Layout {
         &self,
         t: &str,
         ahead: &[String],
+        opts: &TextOptions,
         path: &Path,
         line: u64,
     ) -> Result<(), UsageError> {
         if self.sep == Sep::Labelled {
             return Ok(());
         }
+        let ardupilot = super::format_units::file_format(&self.source_names, path)
+            == Some(super::format_units::FileFormat::ArduPilot);
+        // A column the run names is a channel, as the run says.
+        let named = |n: &str| {
+            opts.channels
+                .as_ref()
+                .is_some_and(|c| c.iter().any(|x| x == n))
+                || opts
+                    .columns
+                    .as_ref()
+                    .is_some_and(|c| c.iter().any(|p| p.source == n))
+        };
         let rows: Vec<Vec<&str>> = std::iter::once(t)
             .chain(ahead.iter().map(String::as_str))
             .map(|r| self.split(r.trim()))
@@ -854,14 +884,21 @@ impl Layout {
         for (i, name) in self.source_names.iter().enumerate() {
             let n =
                 camel_words(base_name(name.trim_start_matches(['#', '%']))).to_ascii_lowercase();
-            if !INSTANCE_NAMES.contains(&n.as_str()) {
+            // A bare `I` only in ArduPilot's messages (elsewhere a current, an in-phase signal).
+            let instance = if n == "i" {
+                ardupilot
+            } else {
+                INSTANCE_NAMES.contains(&n.as_str())
+            };
+            if !instance || named(name) {
                 continue;
             }
             let mut seen: Vec<(i64, usize)> = Vec::new();
             for f in &rows {
+                // Sensor numbers: small whole numbers from 0.
                 let Some(v) = parse_field(f[i])
                     .ok()
-                    .filter(|v| v.fract() == 0.0 && v.abs() < 1e9)
+                    .filter(|v| v.fract() == 0.0 && (0.0..=255.0).contains(v))
                 else {
                     return Ok(());
                 };
@@ -879,20 +916,30 @@ impl Layout {
                     Sep::Tab => " -F'\\t'",
                     _ => "",
                 };
+                // The path as a shell reads it: in single quotes unless it needs none.
+                let shown = path.display().to_string();
+                let quoted = if shown
+                    .bytes()
+                    .all(|b| b.is_ascii_alphanumeric() || b"._/-+".contains(&b))
+                {
+                    shown
+                } else {
+                    format!("'{}'", shown.replace('\'', "'\\''"))
+                };
                 return Err(input_error(
                     path,
                     line,
                     format!(
                         "column {} `{name}` numbers {} sensors ({}) whose rows interleave: a \
                          channel would hold their samples in turn. Analyse one sensor's rows at \
-                         a time: `awk{sep} 'NR == 1 || ${} == {}' {} > one.csv` keeps the \
-                         header line and the first sensor's rows",
+                         a time: `awk{sep} '!/^[-+0-9.]/ || ${} == {}' {quoted} > one.csv` keeps \
+                         the lines that are no rows (the header, notes) and the first sensor's \
+                         rows; or name the column in --channels to read it as a channel",
                         i + 1,
                         seen.len(),
                         values.join(", "),
                         i + 1,
                         seen[0].0,
-                        path.display()
                     ),
                 ));
             }
@@ -961,13 +1008,31 @@ impl Layout {
         }
         let time = self
             .time
-            .and_then(|i| parse_field(fields[i]).ok().or_else(|| date_time(fields[i])))
+            .and_then(|i| {
+                parse_field(fields[i])
+                    .ok()
+                    .or_else(|| self.stamp(fields[i]))
+            })
             .unwrap_or(f64::NAN);
         Ok((values, time))
     }
 }
 
 impl Layout {
+    /// A time stamp written as a date and time ([`date_time`]), an open date (`03/12/2026`)
+    /// read in the order the file's rows decide ([`DateOrder`]).
+    fn stamp(&self, field: &str) -> Option<f64> {
+        let (date, secs) = date_time_parts(field)?;
+        let mut order = self.dates.get();
+        let days = match date {
+            DatePart::None => Some(order.clock_days(secs)),
+            DatePart::Days(d) => Some(d),
+            DatePart::Open(d) => order.days(d),
+        };
+        self.dates.set(order);
+        Some(days? as f64 * 86_400.0 + secs)
+    }
+
     /// The fields of a row: split at the header's separator, or, when that does not give the
     /// header's width, as the row itself suggests (a row written with spaces in a comma file).
     fn split<'a>(&self, t: &'a str) -> Vec<&'a str> {
@@ -1208,6 +1273,9 @@ pub struct TextPosition {
     /// The last row handed out, to tell a row written twice across the checkpoint.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub last_row: Option<(Vec<f64>, f64)>,
+    /// How the time column's open dates (`03/12/2026`) are read, as the rows so far decided.
+    #[serde(default)]
+    pub dates: DateOrder,
 }
 
 /// Cells that mark a value as missing, read as gaps like an empty cell (any case): a logger's
@@ -1260,12 +1328,123 @@ fn fortran_exponent(t: &str) -> Option<f64> {
 
 /// A time stamp written as a date and time, in seconds since 1970-01-01 00:00 UTC: ISO 8601
 /// (`2026-12-03T01:02:03.456Z`, `2026-12-03 01:02:03.456+01:00`), with slashes
-/// (`2026/12/03 01:02:03`), day first with points (`03.12.2026 01:02:03,456`), or with the
-/// month's name (MATLAB's `03-Dec-2026 01:02:03.456`); not `03/12/2026`, whose order (day or
-/// month first) a row alone does not tell; without a
-/// zone the clock's own time, read as UTC (only steps matter). A time of day alone
-/// (`01:02:03.456`) is seconds since its midnight. `None` for anything else.
+/// (`2026/12/03 01:02:03`), day first with points (`03.12.2026 01:02:03,456`), with the
+/// month's name (MATLAB's `03-Dec-2026 01:02:03.456`), or `03/12/2026` and `03-12-2026`, whose
+/// order (day or month first) a row alone does not tell: read here day first when that is a
+/// date, else month first (`12/31/2026`); a file's rows decide it ([`DateOrder`]). A clock of
+/// 12 hours takes `AM` or `PM` (`12/3/2026 7:51:28.665 PM`, as Excel and LabVIEW write in the
+/// US). Without a zone the clock's own time, read as UTC (only steps matter). A time of day
+/// alone (`01:02:03.456`) is seconds since its midnight. `None` for anything else.
 fn date_time(t: &str) -> Option<f64> {
+    let (date, secs) = date_time_parts(t)?;
+    let days = match date {
+        DatePart::None => 0,
+        DatePart::Days(d) => d,
+        DatePart::Open(d) => d.days(true).or_else(|| d.days(false))?,
+    };
+    Some(days as f64 * 86_400.0 + secs)
+}
+
+/// The date of a stamp, as far as its row tells it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum DatePart {
+    /// A time of day alone.
+    None,
+    /// Days since 1970-01-01.
+    Days(i64),
+    /// `a/b/yyyy` or `a-b-yyyy`, day or month first.
+    Open(OpenDate),
+}
+
+/// A date written `a/b/yyyy` or `a-b-yyyy`: day first (`03/12/2026`, most of Europe) or month
+/// first (the US); which, only a file's rows tell ([`DateOrder`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+struct OpenDate {
+    a: i64,
+    b: i64,
+    y: i64,
+}
+
+impl OpenDate {
+    /// Days since 1970-01-01, read day first or month first; `None` when that is no date.
+    fn days(self, day_first: bool) -> Option<i64> {
+        let (d, m) = if day_first {
+            (self.a, self.b)
+        } else {
+            (self.b, self.a)
+        };
+        ((1..=12).contains(&m) && (1..=31).contains(&d)).then(|| days_since_1970(self.y, m, d))
+    }
+}
+
+/// How a file's open dates ([`OpenDate`]) are read: day first until a row decides, which one
+/// does when only one order makes it a date (`13/12/2026`, `12/13/2026`) or when the date
+/// moves and only one order makes that a step of one day (`03/12` to `04/12`, or `12/03` to
+/// `12/04`, at midnight). A file decided month first after rows read day first goes on from
+/// where those left off (`offset_days`): only steps matter, and they stay right.
+///
+/// A time of day alone (`23:59:59.99`, then `00:00:00.00`) goes on past midnight the same way:
+/// a step back to a clock at most an hour after midnight from one at most an hour before it
+/// is the next day (`clock_days`), not a restart.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct DateOrder {
+    day_first: Option<bool>,
+    last: Option<OpenDate>,
+    offset_days: i64,
+    last_clock: Option<f64>,
+    clock_days: i64,
+}
+
+impl DateOrder {
+    /// The days a time of day alone (`secs`, seconds since its midnight) has passed since the
+    /// first row: one more at each midnight.
+    fn clock_days(&mut self, secs: f64) -> i64 {
+        if let Some(last) = self.last_clock {
+            if secs < last && secs + 86_400.0 - last <= 3600.0 {
+                self.clock_days += 1;
+            }
+        }
+        self.last_clock = Some(secs);
+        self.clock_days
+    }
+
+    /// The days of `d` read in the file's order (deciding it if `d` does), since 1970-01-01
+    /// (plus the offset of a late decision); `None` when `d` is no date in that order.
+    fn days(&mut self, d: OpenDate) -> Option<i64> {
+        if self.day_first.is_none() {
+            let decided = match (d.days(true), d.days(false)) {
+                (None, None) => return None,
+                (Some(_), None) => Some(true),
+                (None, Some(_)) => Some(false),
+                (Some(x), Some(y)) => self.last.filter(|l| *l != d).and_then(|l| {
+                    if l.days(true).is_some_and(|p| x - p == 1) {
+                        Some(true)
+                    } else if l.days(false).is_some_and(|p| y - p == 1) {
+                        Some(false)
+                    } else {
+                        None
+                    }
+                }),
+            };
+            if decided == Some(false) {
+                // The rows before were read day first (both orders were dates then).
+                if let Some(l) = self.last {
+                    self.offset_days = l.days(true)? - l.days(false)?;
+                }
+            }
+            self.day_first = decided;
+        }
+        self.last = Some(d);
+        match self.day_first {
+            Some(false) => Some(d.days(false)? + self.offset_days),
+            _ => d.days(true),
+        }
+    }
+}
+
+/// A date and time's date part ([`DatePart`]) and its seconds of the day (the zone applied).
+fn date_time_parts(t: &str) -> Option<(DatePart, f64)> {
     let t = t.trim().trim_matches('"').trim();
     // Every form has a clock `HH:MM:SS`, and all of it is ASCII.
     if !t.contains(':') || !t.is_ascii() {
@@ -1281,15 +1460,16 @@ fn date_time(t: &str) -> Option<f64> {
                 && b.get(i + 1).is_some_and(u8::is_ascii_digit))
     });
     let (date, time) = match split {
-        Some(i) => (Some(&t[..i]), t[i + 1..].trim()),
-        None => (None, t),
+        // A date's part holds no `:` (a time of day with `AM` is not a date).
+        Some(i) if !t[..i].contains(':') => (Some(&t[..i]), t[i + 1..].trim()),
+        _ => (None, t),
     };
-    let days = match date {
+    let date = match date {
         Some(d) => {
             let parts: Vec<&str> = d.split(['-', '/', '.']).collect();
             let [a, b, c] = parts[..] else { return None };
             let num = |x: &str| {
-                (!x.is_empty() && x.bytes().all(|b| b.is_ascii_digit()))
+                (!x.is_empty() && x.len() <= 4 && x.bytes().all(|b| b.is_ascii_digit()))
                     .then(|| x.parse::<i64>().ok())
                     .flatten()
             };
@@ -1309,15 +1489,35 @@ fn date_time(t: &str) -> Option<f64> {
             } else if c.len() == 4 && num(b).is_none() {
                 // A month by name: day first.
                 (num(c)?, month(b)?, num(a)?)
+            } else if c.len() == 4 && a.len() <= 2 && b.len() <= 2 {
+                let open = OpenDate {
+                    a: num(a)?,
+                    b: num(b)?,
+                    y: num(c)?,
+                };
+                open.days(true).or_else(|| open.days(false))?;
+                return Some((DatePart::Open(open), clock_seconds(time)?));
             } else {
                 return None;
             };
             if !(1..=12).contains(&m) || !(1..=31).contains(&dd) {
                 return None;
             }
-            days_since_1970(y, m, dd)
+            DatePart::Days(days_since_1970(y, m, dd))
         }
-        None => 0,
+        None => DatePart::None,
+    };
+    Some((date, clock_seconds(time)?))
+}
+
+/// The seconds of the day of a clock `HH:MM:SS[.fff]`, with `AM` or `PM` after it or a zone
+/// (`Z`, `+01:00`, `-0500`), UTC.
+fn clock_seconds(time: &str) -> Option<f64> {
+    // A clock of 12 hours: `7:51:28 PM`, `12:00:01 AM` (just after midnight).
+    let upper = time.to_ascii_uppercase();
+    let (time, half) = match ["AM", "PM"].iter().find(|h| upper.ends_with(*h)) {
+        Some(h) => (time[..time.len() - 2].trim_end(), Some(*h == "PM")),
+        None => (time, None),
     };
     // The zone: `Z`, `+01:00`, `-0500` after the seconds.
     let (clock, offset_s) = match time.find(['Z', 'z', '+']).or_else(|| {
@@ -1355,6 +1555,11 @@ fn date_time(t: &str) -> Option<f64> {
             .filter(|v| *v <= max)
     };
     let (h, m) = (int(h, 24)?, int(m, 59)?);
+    let h = match half {
+        None => h,
+        Some(_) if !(1..=12).contains(&h) => return None,
+        Some(pm) => h % 12 + if pm { 12 } else { 0 },
+    };
     let sec = sec.replacen(',', ".", 1);
     let digits_and_point = sec.bytes().next().is_some_and(|b| b.is_ascii_digit())
         && sec.bytes().all(|b| b.is_ascii_digit() || b == b'.');
@@ -1362,7 +1567,7 @@ fn date_time(t: &str) -> Option<f64> {
         return None;
     }
     let sec: f64 = sec.parse().ok().filter(|s: &f64| *s < 61.0)?;
-    Some(days as f64 * 86_400.0 + (h * 3600 + m * 60) as f64 + sec - offset_s)
+    Some((h * 3600 + m * 60) as f64 + sec - offset_s)
 }
 
 /// Days from 1970-01-01 to the proleptic Gregorian date `y-m-d`: the days of the years before
@@ -1572,8 +1777,12 @@ fn notes_before_header(first: &str, ahead: &[String]) -> Option<usize> {
         }
         if names(lines[h]) {
             // Kept whole (the reader's own rules then read them) when a line above could
-            // head the rows too.
-            if h == 0 || lines[..h].iter().any(|l| shaped(l)) {
+            // head the rows too; but not when this line names the time column and none above
+            // names one (catman's `File`, `Comment`, `T0` notes over a two-column header are
+            // as many fields as its rows).
+            let times = |l: &str| sep.split(l).iter().any(|x| time_name(x).is_some());
+            let time_header = times(lines[h]) && !lines[..h].iter().any(|l| times(l));
+            if h == 0 || (!time_header && lines[..h].iter().any(|l| shaped(l))) {
                 return None;
             }
             return Some(h);
@@ -1998,6 +2207,7 @@ impl<R: BufRead> TextReader<R> {
     /// Continues reading `src`, positioned at `pos.offset` of the same input, with this
     /// reader's columns, as a reader that had stopped at `pos` (no header is looked for).
     pub fn resume<S: BufRead>(self, src: S, pos: &TextPosition) -> TextReader<S> {
+        self.layout.dates.set(pos.dates);
         let mut time = self.time;
         if let (Some(c), Some(st)) = (&mut time, pos.time.clone()) {
             c.restore(st);
@@ -2044,6 +2254,7 @@ impl<R: BufRead> TextReader<R> {
             gap_left: self.gap_left,
             clocked: self.pending.is_some(),
             last_row: self.last_row.clone(),
+            dates: self.layout.dates.get(),
         }
     }
 
@@ -2138,15 +2349,18 @@ impl<R: BufRead> TextReader<R> {
     /// Each channel's temperature scale where it holds the unit's temperature
     /// ([`super::temperature_column`]): read off its name in the input (`board_temp (K)`, or
     /// `Temp [K]` with a row of units) or the name the run gives it (`--columns
-    /// "c9=temp [degF]"`), the one that names a unit first; `None` for the other channels.
+    /// "c9=temp [degF]"`), the one that names a unit first, or the format's (ArduPilot's `T`,
+    /// [`super::format_units::FileFormat::temperature`]); `None` for the other channels.
     pub fn temperatures(&self) -> Vec<Option<super::temperature_column::TemperatureScale>> {
         use super::temperature_column::temperature_column;
+        let format = super::format_units::file_format(&self.layout.source_names, &self.path);
         self.layout
             .keep
             .iter()
             .zip(&self.names)
             .map(|(&i, name)| {
-                let source = temperature_column(&self.layout.source_names[i]);
+                let source = temperature_column(&self.layout.source_names[i])
+                    .or_else(|| format.and_then(|f| f.temperature(&self.layout.source_names[i])));
                 let given = temperature_column(name);
                 match (source, given) {
                     (Some(s), _) if s.named => Some(s),
@@ -2786,7 +3000,6 @@ mod tests {
             ("magY", "a magnetic field"),
             ("compass_z [raw]", "a magnetic field"),
             ("Magnitude", "a vector's magnitude"),
-            ("acc_norm", "a vector's magnitude"),
             ("Absolute (m/s^2)", "a vector's magnitude"),
             ("sensor_id", "the number of the sensor its rows are of"),
             ("imuId", "the number of the sensor its rows are of"),
@@ -2804,6 +3017,7 @@ mod tests {
             "id",
             "I",
             "gx (abs)",
+            "gx_norm",
         ] {
             assert_eq!(named_quantity(n), None, "{n}");
         }
@@ -2811,36 +3025,54 @@ mod tests {
         assert_eq!(time_name("TimeMS"), Some((false, Some(1e-3))));
     }
 
-    /// Rows of two sensors, numbered in `I`, interleave: refused with the line to keep one;
-    /// the same column with one number, or a column named otherwise, is no error.
+    /// Rows of two sensors, numbered in `sensor_id` (or ArduPilot's `I`), interleave: refused
+    /// with the line to keep one (a path with a space quoted). Not: the same column with one
+    /// number, a column named otherwise, a bare `I` outside ArduPilot's messages (a quantized
+    /// in-phase signal), negative numbers, or the column named in `--channels`.
     #[test]
     fn interleaved_sensors() {
-        let rows = |name: &str, sensors: u64| {
-            let mut s = format!("t,{name},gx\n");
-            for i in 0..40u64 {
-                s += &format!("{},{},{}\n", i / sensors, i % sensors, i % 7);
+        let rows = |head: &str, sensors: i64, from: i64| {
+            let mut s = format!("{head}\n");
+            for i in 0..40i64 {
+                s += &format!("{},{},{}\n", i / sensors, from + i % sensors, i % 7);
             }
             s
         };
+        let refused = |text: &str, path: &str, opts: &TextOptions| {
+            TextReader::with_options(text.as_bytes(), Path::new(path), opts)
+                .err()
+                .map(|e| e.to_string())
+        };
         let opts = TextOptions::default();
-        let e = TextReader::with_options(rows("I", 2).as_bytes(), Path::new("m.csv"), &opts)
-            .err()
-            .unwrap()
-            .to_string();
+        let e = refused(&rows("t,sensor_id,gx", 2, 0), "m.csv", &opts).unwrap();
         assert!(
-            e.contains("column 2 `I` numbers 2 sensors (0, 1) whose rows interleave")
-                && e.contains("`awk -F, 'NR == 1 || $2 == 0' m.csv > one.csv`"),
+            e.contains("column 2 `sensor_id` numbers 2 sensors (0, 1) whose rows interleave")
+                && e.contains("`awk -F, '!/^[-+0-9.]/ || $2 == 0' m.csv > one.csv`"),
             "{e}"
         );
-        for (name, sensors, names) in [
-            ("instance", 1, &["gx"][..]),
-            ("I", 1, &["I", "gx"]),
-            ("mode", 2, &["mode", "gx"]),
+        let e = refused(&rows("TimeUS,I,GyrX", 3, 0), "my run.csv", &opts).unwrap();
+        assert!(
+            e.contains("numbers 3 sensors (0, 1, 2)") && e.contains("'my run.csv' > one.csv"),
+            "{e}"
+        );
+        for (head, sensors, from, names) in [
+            ("t,instance,gx", 1, 0, &["gx"][..]),
+            ("t,I,gx", 2, 0, &["I", "gx"]),
+            ("t,mode,gx", 2, 0, &["mode", "gx"]),
+            ("t,sensor_id,gx", 2, -1, &["gx"]),
         ] {
-            let text = rows(name, sensors);
+            let text = rows(head, sensors, from);
             let r = TextReader::with_options(text.as_bytes(), Path::new("m.csv"), &opts).unwrap();
-            assert_eq!(r.names(), names, "{name}");
+            assert_eq!(r.names(), names, "{head}");
         }
+        let named = TextOptions {
+            channels: Some(vec!["sensor_id".into(), "gx".into()]),
+            ..TextOptions::default()
+        };
+        assert_eq!(
+            refused(&rows("t,sensor_id,gx", 2, 0), "m.csv", &named),
+            None
+        );
     }
 
     /// PX4's `ulog2csv` export of sensor_combined: the fields that describe samples
@@ -3134,6 +3366,20 @@ mod tests {
             (v, bad, time.as_deref()),
             (thrice, 0, Some("Time  1 - default sample rate [s]"))
         );
+        // Two columns: the notes have as many fields as the rows, and only the header names
+        // the time column.
+        let mut two = String::from(
+            "File\tC:\\data\\run1.BIN\nComment\tIMU stand\nT0\t03.12.2026 07:51:28\n\n\
+             Time  1 - default sample rate\tGx\ns\tdeg/s\n",
+        );
+        for l in plain.lines().skip(1) {
+            two += &format!("{}\n", l.replace(',', "\t"));
+        }
+        let (v, bad, time) = read(&two);
+        assert_eq!(
+            (v, bad, time.as_deref()),
+            (want.clone(), 0, Some("Time  1 - default sample rate [s]"))
+        );
         let lines: Vec<String> = plain.lines().skip(1).map(String::from).collect();
         assert_eq!(
             notes_before_header("IMU log stand 3 S/N 1234", &{
@@ -3214,12 +3460,130 @@ mod tests {
         let oct = date_time("2026-10-03 07:51:28").unwrap();
         assert_eq!(date_time("03-OCT-2026 07:51:28"), Some(oct));
         for t in [
-            "12/03/2026 07:51:28",
-            "03-12-2026 07:51:28",
             "03-Foo-2026 07:51:28",
+            "13/13/2026 07:51:28",
+            "03/12/26 07:51:28",
+            "12/3/2026 13:51:28 PM",
+            "12/3/2026 0:51:28 AM",
         ] {
             assert_eq!(date_time(t), None, "{t}");
         }
+        // A row alone reads an open date day first, or month first when only that is a date;
+        // a clock of 12 hours.
+        let dec3 = date_time("2026-12-03 19:51:28.665").unwrap();
+        assert_eq!(date_time("03/12/2026 19:51:28.665"), Some(dec3));
+        assert_eq!(date_time("03-12-2026 7:51:28.665 PM"), Some(dec3));
+        assert_eq!(
+            date_time("12/31/2026 00:00:00"),
+            date_time("2026-12-31 00:00:00")
+        );
+        assert_eq!(
+            date_time("12/31/2026 12:00:00 AM"),
+            date_time("2026-12-31 00:00:00")
+        );
+        assert_eq!(
+            date_time("12/31/2026 12:00:00 pm"),
+            date_time("2026-12-31 12:00:00")
+        );
+    }
+
+    /// A file's open dates (`03/12/2026`) are read in the order its rows decide: a day above
+    /// 12 in either place, or the date moving one day at midnight in one order only. Rows read
+    /// day first before a file turns out month first go on without a jump; a date that moves
+    /// by a month in either order (no midnight) decides nothing.
+    #[test]
+    fn open_dates_take_the_order_the_rows_show() {
+        let steps = |rows: &[&str]| {
+            let mut text = String::from("time,gx\n");
+            for (i, r) in rows.iter().enumerate() {
+                text += &format!("{r},{i}\n");
+            }
+            // With the step, a jump of the stamps would be a gap of missing samples.
+            let opts = TextOptions {
+                tau0_s: Some(if rows.len() > 2 { 0.25 } else { 1.0 }),
+                ..TextOptions::default()
+            };
+            let mut r =
+                TextReader::with_options(text.as_bytes(), Path::new("d.csv"), &opts).unwrap();
+            let mut out = Vec::new();
+            while r.read_rows(&mut out, 64).unwrap() > 0 {}
+            assert_eq!(out.len(), rows.len(), "{rows:?}");
+            let l = &r.layout;
+            let stamps: Vec<f64> = rows.iter().map(|x| l.stamp(x).unwrap()).collect();
+            (
+                stamps.windows(2).map(|w| w[1] - w[0]).collect::<Vec<f64>>(),
+                l.dates.get().day_first,
+            )
+        };
+        let us = [
+            "12/03/2026 11:59:59.5 PM",
+            "12/03/2026 11:59:59.75 PM",
+            "12/04/2026 12:00:00 AM",
+            "12/04/2026 12:00:00.25 AM",
+        ];
+        let (d, order) = steps(&us);
+        assert_eq!((d, order), (vec![0.25, 0.25, 0.25], Some(false)));
+        let eu = [
+            "03/12/2026 23:59:59.5",
+            "03/12/2026 23:59:59.75",
+            "04/12/2026 00:00:00",
+        ];
+        assert_eq!(steps(&eu), (vec![0.25, 0.25], Some(true)));
+        let (d, order) = steps(&["12/13/2026 10:00:00", "12/13/2026 10:00:01"]);
+        assert_eq!((d, order), (vec![1.0], Some(false)));
+        let (d, order) = steps(&["03/12/2026 10:00:00", "03/12/2026 10:00:01"]);
+        assert_eq!((d, order), (vec![1.0], None));
+        // A checkpoint keeps the order: a run resumed after the US file's midnight reads the
+        // next day's date month first too (from its first row alone it could not tell 12/05
+        // from 12/03 in either order).
+        let text = format!("time,gx\n{},0\n{},1\n{},2\n", us[1], us[2], us[3]);
+        let mut r = TextReader::new(text.as_bytes(), Path::new("d.csv")).unwrap();
+        let mut out = Vec::new();
+        while r.read_rows(&mut out, 64).unwrap() > 0 {}
+        let pos = r.position();
+        let day = |r: &TextReader<&[u8]>| {
+            r.layout.stamp("12/05/2026 12:00:00 AM").unwrap() - r.layout.stamp(us[2]).unwrap()
+        };
+        assert_eq!(day(&r), 86_400.0);
+        let fresh = || TextReader::new(text.as_bytes(), Path::new("d.csv")).unwrap();
+        let end = text.len();
+        let resumed = fresh().resume(&text.as_bytes()[end..], &pos);
+        assert_eq!(day(&resumed), 86_400.0);
+        let forgot = TextPosition {
+            dates: DateOrder::default(),
+            ..pos.clone()
+        };
+        assert_ne!(
+            day(&fresh().resume(&text.as_bytes()[end..], &forgot)),
+            86_400.0
+        );
+    }
+
+    /// A time of day alone goes on past midnight (no step back, no gap); a clock set back to
+    /// midnight from the afternoon is a restart still.
+    #[test]
+    fn a_time_of_day_goes_on_past_midnight() {
+        let read = |rows: &[&str]| {
+            let mut text = String::from("Time,gx\n");
+            for (i, r) in rows.iter().enumerate() {
+                text += &format!("{r},{i}\n");
+            }
+            let opts = TextOptions {
+                tau0_s: Some(0.25),
+                ..TextOptions::default()
+            };
+            let mut r =
+                TextReader::with_options(text.as_bytes(), Path::new("d.csv"), &opts).unwrap();
+            let mut out = Vec::new();
+            while r.read_rows(&mut out, 64).unwrap() > 0 {}
+            let st = r.position().time.unwrap();
+            (out.len(), st.backwards, st.discontinuities)
+        };
+        let night = ["23:59:59.50", "23:59:59.75", "00:00:00.00", "00:00:00.25"];
+        assert_eq!(read(&night), (4, 0, 0));
+        let reset = ["15:00:00.00", "15:00:00.25", "00:00:00.00", "00:00:00.25"];
+        let (n, _, restarts) = read(&reset);
+        assert_eq!((n, restarts), (4, 1));
     }
 
     /// A column that numbers the rows (pandas' unnamed index, a dataset's `id`) is no channel.

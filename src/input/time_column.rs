@@ -17,8 +17,10 @@
 //! was counted backwards and no later gap was found.
 
 /// Seconds per unit tried for the column, in order: s, ms, us, ns.
-const SCALES: [(f64, &str); 5] = [
+const SCALES: [(f64, &str); 6] = [
     (1.0, "s"),
+    // Serial dates (Excel's, MATLAB's datenum): a step of tau0 / 86400 is found only in days.
+    (86_400.0, "day"),
     (1e-3, "ms"),
     (1e-4, "100us"),
     (1e-6, "us"),

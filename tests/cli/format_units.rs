@@ -131,8 +131,8 @@ fn xsens_mt_manager_export() {
 }
 
 /// An Xsens DOT's export: its `SampleTimeFine` counts us (60 Hz: steps of 16666 and 16667),
-/// not an MTi's 100 us; `dv[1]` are velocity increments in m/s; the orientation increments
-/// `dq_*` carry no unit.
+/// not an MTi's 100 us (which at 1 Hz steps by 10000); `dv[1]` are velocity increments in m/s;
+/// the orientation increments `dq_*` (half angles) are no channels.
 #[test]
 fn xsens_dot_export() {
     let mut s = String::from("PacketCounter,SampleTimeFine,dq_W,dq_X,dv[1],dv[2]\n");
@@ -158,11 +158,52 @@ fn xsens_dot_export() {
     );
     assert!(err.contains("an Xsens DOT's clock counts us"), "{err}");
     assert_eq!(curve(&read, "dv[1]").unit, "m/s");
-    assert_eq!(curve(&read, "dq_X").unit, "u");
+    assert_eq!(channels(&read), ["dv[1]", "dv[2]"]);
+    assert!(
+        err.contains("`dq_X` holds an orientation increment as a quaternion (half angles)"),
+        "{err}"
+    );
     let told = curves(&analyze(&p, &["--columns", "dv[2]", "--unit", "m/s"]));
     assert_eq!(curve(&read, "dv[2]"), &told[0]);
     // No gaps in a 60 Hz clock of 16666 and 16667 us steps.
     assert!(!err.contains("missing"), "{err}");
+    // An MTi at 1 Hz: 10000 steps of 100 us, tau0 1 s.
+    let mut s = String::from("PacketCounter,SampleTimeFine,Gyr_X\n");
+    for i in 0..600u64 {
+        s += &format!("{i},{},{:.6}\n", 1000 + i * 10_000, 0.01 * noise(i, 1));
+    }
+    let p = write("mti_1hz.csv", &s);
+    assert_eq!(tau0(&curves(&analyze(&p, &[]))[0]), 1.0);
+}
+
+/// An MTi export of rates and velocity increments: one run reads rates or increments, so the
+/// increments beside the rates are left out, said with the option that reads them alone.
+#[test]
+fn xsens_rates_beside_increments() {
+    let mut s = String::from("PacketCounter\tSampleTimeFine\tAcc_X\tGyr_X\tdv[1]\tdv[2]\n");
+    for i in 0..600u64 {
+        s += &format!(
+            "{i}\t{}\t{:.6}\t{:.6}\t{:.9}\t{:.9}\n",
+            1000 + i * 25,
+            0.02 * noise(i, 1),
+            0.01 * noise(i, 2),
+            1e-4 * noise(i, 3),
+            1e-4 * noise(i, 4),
+        );
+    }
+    let p = write("MT_both_000.txt", &s);
+    let out = analyze(&p, &[]);
+    let err = stderr(&out);
+    assert_eq!(channels(&curves(&out)), ["Acc_X", "Gyr_X"]);
+    assert!(
+        err.contains("`dv[1]` holds velocity increments beside the rates (analyse them alone: --columns dv[1],dv[2],dv[3])"),
+        "{err}"
+    );
+    let inc = curves(&analyze(&p, &["--columns", "dv[1],dv[2]"]));
+    assert_eq!(channels(&inc), ["dv[1]", "dv[2]"]);
+    assert_eq!(inc[0].unit, "m/s");
+    let told = curves(&analyze(&p, &["--columns", "dv[2]", "--unit", "m/s"]));
+    assert_eq!(curve(&inc, "dv[2]"), &told[0]);
 }
 
 /// UZH-FPV's `imu.txt` (a `#` header, spaces, `id`, seconds since 1970) and the Sensor Logger
@@ -219,8 +260,8 @@ fn uzh_fpv_and_sensor_logger() {
 }
 
 /// ArduPilot's IMU messages through `mavlogdump.py --format csv`: one IMU's rows read with
-/// `GyrX` in rad/s, `TimeUS` a second clock, `I` and the message's bookkeeping fields no
-/// channels; two IMUs' rows interleaved are refused with the `awk` line that keeps one; a
+/// `GyrX` in rad/s, `TimeUS` a second clock, `T` the temperature (in degC), `I` and the
+/// message's bookkeeping fields no channels; two IMUs' rows interleaved are refused with the `awk` line that keeps one; a
 /// DataFlash log itself (text or binary) is refused with the `mavlogdump.py` line.
 #[test]
 fn ardupilot_imu_messages() {
@@ -255,7 +296,10 @@ fn ardupilot_imu_messages() {
         ("TimeUS", "is a second time column"),
         ("I", "holds the number of the IMU its rows are of"),
         ("EG", "holds an error count"),
-        ("T", "holds the IMU's temperature"),
+        (
+            "T",
+            "holds the unit's temperature, which diagnose fits the bias against (in degC)",
+        ),
         ("AHz", "holds a sensor's sampling rate"),
     ] {
         assert!(err.contains(&format!("`{name}` {what}")), "{name}: {err}");
@@ -275,10 +319,20 @@ fn ardupilot_imu_messages() {
             &analyze(&q, extra),
             &[
                 "column 3 `I` numbers 2 sensors (0, 1) whose rows interleave",
-                "`awk -F, 'NR == 1 || $3 == 0'",
+                "`awk -F, '!/^[-+0-9.]/ || $3 == 0' ",
             ],
         );
     }
+    // The line the message gives keeps IMU 0's rows: the one-IMU file's records.
+    let kept: String = both
+        .lines()
+        .filter(|l| {
+            !l.starts_with(|c: char| c.is_ascii_digit()) || l.split(',').nth(2) == Some("0")
+        })
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let k = write("imu0_kept.csv", &kept);
+    assert_eq!(curves(&analyze(&k, &[])), read);
 
     let text = write(
         "00000042.log",
