@@ -116,17 +116,45 @@ fn epoch_unit(stamp: f64) -> Option<f64> {
 /// Seconds in a day: the unit of serial dates ([`serial_days`]).
 pub const SECONDS_PER_DAY: f64 = 86_400.0;
 
+/// What stamps without a unit say of serial dates in days ([`serial_days`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Serial {
+    /// Not serial dates.
+    No,
+    /// Serial dates, printed finely enough to tell the step.
+    Days,
+    /// Serial dates printed to too few decimals: their steps are whole quanta near the step
+    /// itself (7 decimals of a day are 8.6 ms), or 0.
+    TooCoarse,
+}
+
 /// Whether stamps without a unit are serial dates in days, as Excel (days since 1900, about
 /// 46000 in 2026) and MATLAB's `datenum` (days since year 0, about 740000) write a time:
-/// fractions of a day between 1e4 and 1e6 whose median step, read as seconds, would be a rate
-/// above 10 kHz, and read as days a step between 0.1 ms and 10 s.
-fn serial_days(stamps: &[f64], median: f64) -> bool {
+/// fractions of a day between 1e4 and 1e6 whose median step (`median`, of the steps forward),
+/// read as seconds, would be a rate above 50 kHz, and read as days a step between 0.1 ms and
+/// 1.728 s (a rate of 0.58 Hz to 10 kHz); and whether they tell the step: hardly a step of 0,
+/// and nine steps in ten within 10% of the median.
+fn serial_days(stamps: &[f64], median: f64) -> Serial {
     let finite: Vec<f64> = stamps.iter().copied().filter(|t| t.is_finite()).collect();
-    !finite.is_empty()
+    let looks = !finite.is_empty()
         && finite.iter().all(|t| (1e4..1e6).contains(t))
         && finite.iter().any(|t| t.fract() != 0.0)
-        && median < 1e-4
-        && (1e-4..=10.0).contains(&(median * SECONDS_PER_DAY))
+        && median < 2e-5
+        && (1e-4..=1.728).contains(&(median * SECONDS_PER_DAY));
+    if !looks {
+        return Serial::No;
+    }
+    let steps: Vec<f64> = finite.windows(2).map(|w| w[1] - w[0]).collect();
+    let zero = steps.iter().filter(|d| **d == 0.0).count();
+    let close = steps
+        .iter()
+        .filter(|d| ((*d - median) / median).abs() <= 0.1)
+        .count();
+    if zero * 100 > steps.len() || close * 10 < steps.len() * 9 {
+        Serial::TooCoarse
+    } else {
+        Serial::Days
+    }
 }
 
 /// The step a LabVIEW Measurement file's `Delta_X` gives (s), when it is a sampling step.
@@ -267,12 +295,22 @@ pub fn infer_tau0<R: BufRead>(
         ),
         None => match epoch_unit(first) {
             Some(u) => (u, "its stamps, a clock since 1970", false),
-            None if serial_days(&stamps, median) => (
-                SECONDS_PER_DAY,
-                "its stamps: serial dates in days (Excel's, MATLAB's datenum)",
-                false,
-            ),
-            None => (1.0, "no unit given: seconds", true),
+            None => match serial_days(&stamps, median) {
+                Serial::Days => (
+                    SECONDS_PER_DAY,
+                    "its stamps: serial dates in days (Excel's, MATLAB's datenum)",
+                    false,
+                ),
+                Serial::TooCoarse => {
+                    return Err(usage(format!(
+                        "--tau0 is required: the time column `{column}` holds serial dates in \
+                         days (Excel's, MATLAB's datenum) printed to too few decimals to tell \
+                         the step (its steps are 0 or whole quanta near the step itself; 1e-7 \
+                         days is 8.64 ms); give --tau0, or write the stamps with more decimals"
+                    )))
+                }
+                Serial::No => (1.0, "no unit given: seconds", true),
+            },
         },
     };
     // The shortest decimal step within the stamps' resolution: stamps read as f64 (a clock
@@ -306,8 +344,9 @@ pub fn infer_tau0<R: BufRead>(
     let jitter = 3.0 * sd / n;
     // Serial dates printed to a few decimals of a day step by whole quanta (1e-10 days is
     // 8.6 us): the median step is a quantum off, the mean of the steps is not.
+    // The mean of n steps is off by about twice a stamp's resolution over n (they telescope).
     let (center, resolution) = if unit_s == SECONDS_PER_DAY {
-        (mean, (2.0 * jitter).max(resolution))
+        (mean, (2.0 * jitter).max(2.0 * resolution / n))
     } else if jitter > resolution {
         (mean, jitter)
     } else {
@@ -598,6 +637,31 @@ mod tests {
             .chain((0..400).map(|k| format!("{:.5},1\n", k as f64 * 5e-5)))
             .collect();
         assert_eq!(infer(&fast).unwrap().unit_s, 1.0);
+        // Seconds since boot, 3 h in, at 10 and 20 kHz: seconds, not days (a review found
+        // them read in days, tau0 8.64 and 4.32 s).
+        for step in [1e-4, 5e-5] {
+            let boot: String = std::iter::once("time,gx\n".to_string())
+                .chain((0..400).map(|k| format!("{:.6},1\n", 10_800.0 + k as f64 * step)))
+                .collect();
+            let s = infer(&boot).unwrap();
+            assert_eq!((s.unit_s, s.tau0_s), (1.0, step), "{step}");
+        }
+        // Excel's dates to 7 decimals at 100 Hz step by 8.64 or 17.28 ms: refused, not read
+        // as a step of 8.64 ms; to 8 decimals they tell 0.01 s. MATLAB's at 104 Hz keep the
+        // step's digits.
+        let excel =
+            |decimals: usize, start: f64, rate: f64| -> String {
+                std::iter::once("time,gx\n".to_string())
+                    .chain((0..2000).map(|k| {
+                        format!("{:.*},1\n", decimals, start + k as f64 / rate / 86_400.0)
+                    }))
+                    .collect()
+            };
+        let e = infer(&excel(7, 46_000.3, 100.0)).unwrap_err().to_string();
+        assert!(e.contains("printed to too few decimals"), "{e}");
+        assert_eq!(infer(&excel(8, 46_000.3, 100.0)).unwrap().tau0_s, 0.01);
+        let s = infer(&excel(10, 739_954.25, 104.0)).unwrap();
+        assert!((s.tau0_s * 104.0 - 1.0).abs() < 1e-5, "{}", s.tau0_s);
         let slow: String = std::iter::once("time,gx\n".to_string())
             .chain((0..400).map(|k| format!("{:.3},1\n", 20_000.0 + k as f64 * 2e-3)))
             .collect();

@@ -930,9 +930,9 @@ impl Layout {
                     path,
                     line,
                     format!(
-                        "column {} `{name}` numbers {} sensors ({}) whose rows interleave: a \
-                         channel would hold their samples in turn. Analyse one sensor's rows at \
-                         a time: `awk{sep} '!/^[-+0-9.]/ || ${} == {}' {quoted} > one.csv` keeps \
+                        "column {} `{name}` numbers {} sensors ({}) whose rows share the file \
+                         (interleaved or one after another): a channel would hold the samples of \
+                         all. Analyse one sensor's rows at a time: `awk{sep} '!/^[-+0-9.]/ || ${} == {}' {quoted} > one.csv` keeps \
                          the lines that are no rows (the header, notes) and the first sensor's \
                          rows; or name the column in --channels to read it as a channel",
                         i + 1,
@@ -1385,7 +1385,8 @@ impl OpenDate {
 ///
 /// A time of day alone (`23:59:59.99`, then `00:00:00.00`) goes on past midnight the same way:
 /// a step back to a clock at most an hour after midnight from one at most an hour before it
-/// is the next day (`clock_days`), not a restart.
+/// is the next day (`clock_days`), not a restart; and a step from such a clock after midnight
+/// to one before it (a late row, a clock set back a little) is the day before again.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(default)]
 pub struct DateOrder {
@@ -1400,9 +1401,12 @@ impl DateOrder {
     /// The days a time of day alone (`secs`, seconds since its midnight) has passed since the
     /// first row: one more at each midnight.
     fn clock_days(&mut self, secs: f64) -> i64 {
+        const HOUR: f64 = 3600.0;
         if let Some(last) = self.last_clock {
-            if secs < last && secs + 86_400.0 - last <= 3600.0 {
+            if last >= 86_400.0 - HOUR && secs <= HOUR {
                 self.clock_days += 1;
+            } else if last <= HOUR && secs >= 86_400.0 - HOUR && self.clock_days > 0 {
+                self.clock_days -= 1;
             }
         }
         self.last_clock = Some(secs);
@@ -3046,7 +3050,7 @@ mod tests {
         let opts = TextOptions::default();
         let e = refused(&rows("t,sensor_id,gx", 2, 0), "m.csv", &opts).unwrap();
         assert!(
-            e.contains("column 2 `sensor_id` numbers 2 sensors (0, 1) whose rows interleave")
+            e.contains("column 2 `sensor_id` numbers 2 sensors (0, 1) whose rows share the file")
                 && e.contains("`awk -F, '!/^[-+0-9.]/ || $2 == 0' m.csv > one.csv`"),
             "{e}"
         );
@@ -3581,6 +3585,14 @@ mod tests {
         };
         let night = ["23:59:59.50", "23:59:59.75", "00:00:00.00", "00:00:00.25"];
         assert_eq!(read(&night), (4, 0, 0));
+        // A row late across midnight is a step back of a quarter second, not a day's gap.
+        let late = ["23:59:59.50", "00:00:00.00", "23:59:59.75", "00:00:00.25"];
+        let (n, _, restarts) = read(&late);
+        assert_eq!((n < 8, restarts), (true, 0), "{n}");
+        // Across midnight with 45 minutes missing on each side: the next day, a gap.
+        let (n, back, restarts) = read(&["23:15:00.00", "23:15:00.25", "00:45:00.00"]);
+        // 5399.75 s from the second row to the third: 21598 samples missing.
+        assert_eq!((n, back, restarts), (3 + 21_598, 0, 0));
         let reset = ["15:00:00.00", "15:00:00.25", "00:00:00.00", "00:00:00.25"];
         let (n, _, restarts) = read(&reset);
         assert_eq!((n, restarts), (4, 1));

@@ -243,10 +243,15 @@ impl TimeColumn {
                 // 100 us only for a column whose name says so (Xsens's `SampleTimeFine`): it
                 // would otherwise hide a --tau0 ten times off.
                 let fine = crate::input::text::time_column_unit(&self.name) == Some(Some(1e-4));
+                // Days only within 5%: serial dates printed to too few decimals step by
+                // quanta 14% off the step (1e-7 days for 10 ms) and would invent gaps.
                 let found = SCALES
                     .iter()
                     .filter(|(s, _)| *s != 1e-4 || fine)
-                    .find(|(s, _)| (dt * s / self.tau0_s - 1.0).abs() <= STEP_TOLERANCE);
+                    .find(|(s, _)| {
+                        let tolerance = if *s == 86_400.0 { 0.05 } else { STEP_TOLERANCE };
+                        (dt * s / self.tau0_s - 1.0).abs() <= tolerance
+                    });
                 match found {
                     Some((s, unit)) => {
                         if *s != 1.0 {

@@ -318,7 +318,7 @@ fn ardupilot_imu_messages() {
         usage_error(
             &analyze(&q, extra),
             &[
-                "column 3 `I` numbers 2 sensors (0, 1) whose rows interleave",
+                "column 3 `I` numbers 2 sensors (0, 1) whose rows share the file",
                 "`awk -F, '!/^[-+0-9.]/ || $3 == 0' ",
             ],
         );
