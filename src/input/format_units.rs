@@ -277,16 +277,10 @@ mod tests {
     /// needed.
     #[test]
     fn uzh_fpv_imu_txt() {
-        let h = [
-            "# id",
-            "timestamp",
-            "ang_vel_x",
-            "ang_vel_y",
-            "ang_vel_z",
-            "lin_acc_x",
-            "lin_acc_y",
-            "lin_acc_z",
-        ];
+        let h: Vec<&str> = ["# id", "timestamp"]
+            .into_iter()
+            .chain(UZH_FPV_COLUMNS)
+            .collect();
         let f = file_format(&h, Path::new("imu.txt")).unwrap();
         assert_eq!(f, FileFormat::UzhFpv);
         assert_eq!(

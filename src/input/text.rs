@@ -2631,14 +2631,28 @@ mod tests {
 
     /// `text` read whole at `--tau0 0.01`: the reader at its end, and the values.
     fn read_stepped(text: &str) -> (TextReader<&[u8]>, Vec<f64>) {
+        read_at(text, 0.01)
+    }
+
+    /// `text` read whole at `--tau0 tau0_s`: the reader at its end, and the values.
+    fn read_at(text: &str, tau0_s: f64) -> (TextReader<&[u8]>, Vec<f64>) {
         let opts = TextOptions {
-            tau0_s: Some(0.01),
+            tau0_s: Some(tau0_s),
             ..TextOptions::default()
         };
         let mut r = TextReader::with_options(text.as_bytes(), Path::new("t.csv"), &opts).unwrap();
         let mut out = Vec::new();
         while r.read_rows(&mut out, 8).unwrap() > 0 {}
         (r, out)
+    }
+
+    /// A file of `header` over the stamps `rows`, each with its row number as the value.
+    fn stamped(header: &str, rows: &[&str]) -> String {
+        let mut text = format!("{header}\n");
+        for (i, r) in rows.iter().enumerate() {
+            text += &format!("{r},{i}\n");
+        }
+        text
     }
 
     #[test]
@@ -3498,19 +3512,9 @@ mod tests {
     #[test]
     fn open_dates_take_the_order_the_rows_show() {
         let steps = |rows: &[&str]| {
-            let mut text = String::from("time,gx\n");
-            for (i, r) in rows.iter().enumerate() {
-                text += &format!("{r},{i}\n");
-            }
+            let text = stamped("time,gx", rows);
             // With the step, a jump of the stamps would be a gap of missing samples.
-            let opts = TextOptions {
-                tau0_s: Some(if rows.len() > 2 { 0.25 } else { 1.0 }),
-                ..TextOptions::default()
-            };
-            let mut r =
-                TextReader::with_options(text.as_bytes(), Path::new("d.csv"), &opts).unwrap();
-            let mut out = Vec::new();
-            while r.read_rows(&mut out, 64).unwrap() > 0 {}
+            let (r, out) = read_at(&text, if rows.len() > 2 { 0.25 } else { 1.0 });
             assert_eq!(out.len(), rows.len(), "{rows:?}");
             let l = &r.layout;
             let stamps: Vec<f64> = rows.iter().map(|x| l.stamp(x).unwrap()).collect();
@@ -3568,18 +3572,8 @@ mod tests {
     #[test]
     fn a_time_of_day_goes_on_past_midnight() {
         let read = |rows: &[&str]| {
-            let mut text = String::from("Time,gx\n");
-            for (i, r) in rows.iter().enumerate() {
-                text += &format!("{r},{i}\n");
-            }
-            let opts = TextOptions {
-                tau0_s: Some(0.25),
-                ..TextOptions::default()
-            };
-            let mut r =
-                TextReader::with_options(text.as_bytes(), Path::new("d.csv"), &opts).unwrap();
-            let mut out = Vec::new();
-            while r.read_rows(&mut out, 64).unwrap() > 0 {}
+            let text = stamped("Time,gx", rows);
+            let (r, out) = read_at(&text, 0.25);
             let st = r.position().time.unwrap();
             (out.len(), st.backwards, st.discontinuities)
         };

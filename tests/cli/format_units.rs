@@ -7,11 +7,11 @@
 //! several sensors interleaved, and DataFlash logs themselves, are usage errors saying what to
 //! do.
 
-use crate::common::{exe, tmp_in};
-use std::path::{Path, PathBuf};
+use crate::common::tmp_in;
+use std::path::PathBuf;
 use std::process::Output;
 
-use allanscope::sink::records::{CurveRecord, Record};
+use allanscope::sink::records::CurveRecord;
 
 /// A deterministic value in [-0.5, 0.5) for row `i`, column `k`.
 fn noise(i: u64, k: u64) -> f64 {
@@ -25,17 +25,9 @@ fn write(name: &str, text: &str) -> PathBuf {
     p
 }
 
-fn analyze(path: &Path, extra: &[&str]) -> Output {
-    exe()
-        .arg("analyze")
-        .arg(path)
-        .args(["--fit", "none", "--stats", "avar", "--json"])
-        .args(extra)
-        .env("ALLANSCOPE_LOG", "info")
-        .output()
-        .unwrap()
-}
+use crate::common::analyze_avar as analyze;
 
+/// The final curves of a run that must succeed.
 fn curves(out: &Output) -> Vec<CurveRecord> {
     assert_eq!(
         out.status.code(),
@@ -43,13 +35,7 @@ fn curves(out: &Output) -> Vec<CurveRecord> {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    crate::common::records_of(out)
-        .into_iter()
-        .filter_map(|r| match r {
-            Record::Curve(c) if c.r#final => Some(c),
-            _ => None,
-        })
-        .collect()
+    crate::common::final_curve_records(out)
 }
 
 fn curve<'a>(cs: &'a [CurveRecord], channel: &str) -> &'a CurveRecord {

@@ -6,10 +6,10 @@
 //! `--unit` overrides the headers.
 
 use crate::common::{exe, tmp_in};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Output;
 
-use allanscope::sink::records::{CurveRecord, Record};
+use allanscope::sink::records::CurveRecord;
 
 /// A file of `header` over 400 rows of three deterministic, unequal columns with a time column
 /// first (10 ms steps).
@@ -26,27 +26,7 @@ fn file(name: &str, header: &str) -> PathBuf {
     p
 }
 
-fn analyze(path: &Path, extra: &[&str]) -> Output {
-    exe()
-        .arg("analyze")
-        .arg(path)
-        .args(["--fit", "none", "--stats", "avar", "--json"])
-        .args(extra)
-        .env("ALLANSCOPE_LOG", "info")
-        .output()
-        .unwrap()
-}
-
-/// The final curves, by channel.
-fn curves(out: &Output) -> Vec<CurveRecord> {
-    crate::common::records_of(out)
-        .into_iter()
-        .filter_map(|r| match r {
-            Record::Curve(c) if c.r#final => Some(c),
-            _ => None,
-        })
-        .collect()
-}
+use crate::common::{analyze_avar as analyze, final_curve_records as curves};
 
 fn curve<'a>(cs: &'a [CurveRecord], channel: &str) -> &'a CurveRecord {
     cs.iter()

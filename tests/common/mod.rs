@@ -16,6 +16,32 @@ pub fn exe() -> std::process::Command {
     std::process::Command::new(env!("CARGO_BIN_EXE_allanscope"))
 }
 
+/// `allanscope analyze PATH EXTRA...` of text columns with the Allan deviation alone, no fit,
+/// JSON lines and the log at info level: the run the tests of what a header says compare.
+pub fn analyze_avar(path: &Path, extra: &[&str]) -> std::process::Output {
+    exe()
+        .arg("analyze")
+        .arg(path)
+        .args(["--fit", "none", "--stats", "avar", "--json"])
+        .args(extra)
+        .env("ALLANSCOPE_LOG", "info")
+        .output()
+        .unwrap()
+}
+
+/// The final curve records of a run's standard output.
+pub fn final_curve_records(
+    out: &std::process::Output,
+) -> Vec<allanscope::sink::records::CurveRecord> {
+    records_of(out)
+        .into_iter()
+        .filter_map(|r| match r {
+            allanscope::sink::records::Record::Curve(c) if c.r#final => Some(c),
+            _ => None,
+        })
+        .collect()
+}
+
 /// Runs `cmd` and returns its standard output; fails the test, showing the command's standard
 /// error, unless it exits 0.
 pub fn stdout_of(cmd: &mut std::process::Command) -> String {
