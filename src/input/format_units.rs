@@ -10,9 +10,15 @@
 //! - UZH-FPV's `imu.txt`: `ang_vel_x` ... in rad/s, `lin_acc_x` ... in m/s^2;
 //! - the Sensor Logger phone app's per-sensor files: `time,seconds_elapsed,z,y,x` in
 //!   `Gyroscope.csv` (rad/s) or `Accelerometer.csv`, `TotalAcceleration.csv`, `Gravity.csv`
-//!   (m/s^2), the units of the phone's sensor interface.
+//!   (m/s^2), the units of the phone's sensor interface;
+//! - ArduPilot's `IMU` (and batch `GYR`, `ACC`) messages as pymavlink's `mavlogdump.py --format
+//!   csv` writes them, told by `TimeUS` or `TimeMS` beside `GyrX` or `AccX`: `GyrX` in rad/s,
+//!   `AccX` in m/s^2, `T` the IMU's temperature in degC.
 //!
-//! A unit in a column's own name rules over its format's (`super::header_unit::units_from_headers`).
+//! A format also names its columns that are no channels ([`FileFormat::other_column`]: Xsens's
+//! orientation increments, its velocity increments beside rates; ArduPilot's instance number,
+//! error counts, health flags and rates) and its temperature ([`FileFormat::temperature`]). A
+//! unit in a column's own name rules over its format's (`super::header_unit::units_from_headers`).
 
 use super::header_unit::HeaderUnit;
 use super::temperature_column::{TemperatureScale, CELSIUS};

@@ -513,10 +513,9 @@ impl Layout {
         // clipping, ids) are no channels either (`super::px4_export`).
         let px4 = header && px4_export::is_export(&source_names);
         let bookkeeping = |i: usize| px4 && px4_export::bookkeeping(&source_names[i]);
-        // A magnetometer's or a barometer's column by its unit (`mag_x [uT]`), or a status
-        // word, a magnetic field or a magnitude by its name (`Status`, `Mag_X`, `Absolute`): no
-        // channel. `(what it holds, whether its unit says so)`.
-        // And the fields a format fixes as no channel. `(what it holds, what says so)`.
+        // A magnetometer's or a barometer's column by its unit (`mag_x [uT]`), a status word, a
+        // magnetic field or a magnitude by its name (`Status`, `Mag_X`, `Absolute`), and the
+        // fields a format fixes, are no channels: `(what it holds, what says so)`.
         let other_quantity = |i: usize| {
             let n = &source_names[i];
             header
