@@ -2447,6 +2447,12 @@ impl<R: BufRead> TextReader<R> {
                         continue;
                     }
                     let gap = match &mut self.time {
+                        // A sample whose stamp is missing (an empty time cell) takes its step:
+                        // the next stamp is then one step on, not a gap of one.
+                        Some(c) if p.1.is_nan() => {
+                            c.step_inserted();
+                            0
+                        }
                         Some(c) => c.missing_before(p.1, &self.path, self.line_no),
                         None => 0,
                     };
@@ -3564,6 +3570,20 @@ mod tests {
             day(&fresh().resume(&text.as_bytes()[end..], &forgot)),
             86_400.0
         );
+    }
+
+    /// A sample whose time cell is empty takes its step: the row after it is one step on, no
+    /// gap (a review found one missing sample inserted after it, every later sample a step
+    /// late); a row empty in every cell is no sample, and the gap it leaves is one.
+    #[test]
+    fn a_sample_without_its_stamp_takes_its_step() {
+        let (r, out) = read_at("time,gx\n0.00,1\n0.01,2\n,3\n0.03,4\n0.04,5\n", 0.01);
+        assert_eq!(out, [1.0, 2.0, 3.0, 4.0, 5.0]);
+        assert_eq!(r.position().time.unwrap().missing, 0);
+        let (r, out) = read_at("time,gx\n0.00,1\n0.01,2\n,\n0.03,4\n", 0.01);
+        assert_eq!(out.len(), 4);
+        assert!(out[2].is_nan());
+        assert_eq!(r.position().time.unwrap().missing, 1);
     }
 
     /// A time of day alone goes on past midnight (no step back, no gap); a clock set back to
