@@ -120,7 +120,9 @@ impl FileFormat {
                 "Acc_X" | "Acc_Y" | "Acc_Z" | "FreeAcc_X" | "FreeAcc_Y" | "FreeAcc_Z" => {
                     ("m/s", true, "m/s^2, by its Xsens export")
                 }
-                "dv[1]" | "dv[2]" | "dv[3]" => ("m/s", false, "m/s, by its Xsens export"),
+                "dv[1]" | "dv[2]" | "dv[3]" | "VelInc_X" | "VelInc_Y" | "VelInc_Z" => {
+                    ("m/s", false, "m/s, by its Xsens export")
+                }
                 _ => return None,
             },
             FileFormat::UzhFpv => match n.rsplit_once('_')? {
@@ -181,6 +183,27 @@ impl FileFormat {
                 "velocity increments beside the rates (analyse them alone: --columns \
                  dv[1],dv[2],dv[3])",
             ),
+            (FileFormat::Xsens { rates: true }, "VelInc_X" | "VelInc_Y" | "VelInc_Z") => Some(
+                "velocity increments beside the rates (analyse them alone: --columns \
+                 VelInc_X,VelInc_Y,VelInc_Z)",
+            ),
+            // What the unit's filter and receiver compute from its sensors: no sensor output.
+            (FileFormat::Xsens { .. }, n)
+                if n.starts_with("Quat_")
+                    || n.starts_with("OriInc_")
+                    || n.starts_with("Euler_")
+                    || n.starts_with("Mat[")
+                    || matches!(n, "Roll" | "Pitch" | "Yaw") =>
+            {
+                Some("an orientation the unit's filter computes")
+            }
+            (FileFormat::Xsens { .. }, n)
+                if n.starts_with("Vel_")
+                    || n.starts_with("UTC_")
+                    || matches!(n, "Latitude" | "Longitude" | "Altitude" | "Pressure") =>
+            {
+                Some("a navigation, time or air-data output, no inertial sensor's")
+            }
             (FileFormat::ArduPilot, "EG" | "EA") => Some("an error count"),
             (FileFormat::ArduPilot, "GH" | "AH") => Some("a health flag"),
             (FileFormat::ArduPilot, "GHz" | "AHz") => Some("a sensor's sampling rate"),
@@ -268,6 +291,24 @@ mod tests {
         );
         // The orientation increments are no channel; the velocity increments only beside rates.
         assert!(d.other_column("dq_X").is_some() && d.other_column("dv[1]").is_none());
+        // An MTi-G's filter and receiver outputs are no channels either; an MTw's VelInc_X are
+        // velocity increments.
+        for n in [
+            "Quat_q0",
+            "Roll",
+            "Euler_X",
+            "Mat[1][1]",
+            "Vel_E",
+            "Latitude",
+            "UTC_Nano",
+        ] {
+            assert!(f.other_column(n).is_some(), "{n}");
+        }
+        assert_eq!(
+            units(d, &["VelInc_Y", "Gyr_X"]),
+            [some("m/s", false), some("rad", true)]
+        );
+        assert!(f.other_column("VelInc_Y").is_some() && f.other_column("Gyr_X").is_none());
         assert!(f
             .other_column("dv[1]")
             .unwrap()
