@@ -29,7 +29,6 @@ use allanscope::analysis::ChannelSetup;
 use allanscope::analysis::{AnalysisOptions, InputKind};
 use allanscope::error::UsageError;
 use allanscope::frame::FrameDescriptor;
-use allanscope::input::format_units;
 use allanscope::input::header_unit::{header_unit, units_from_headers, HeaderUnit};
 use allanscope::input::px4_export;
 use allanscope::input::text::{ColumnPick, TextOptions, TextReader};
@@ -753,7 +752,7 @@ impl DataArgs {
             .collect();
         // A name that carries no unit may be in the unit its file's format fixes: a PX4
         // sensor_gyro's `x` (by its message), Kalibr's `omega_x`, an Xsens export's `Gyr_X`.
-        let format = format_units::file_format(reader.header_names(), Path::new(input));
+        let format = reader.file_format();
         let fixed: Vec<Option<HeaderUnit>> = ours
             .iter()
             .map(|&(_, name)| {

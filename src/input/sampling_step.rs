@@ -52,16 +52,7 @@ pub struct InferredStep {
 
 impl std::fmt::Display for InferredStep {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let unit = [
-            (1e-9, "ns"),
-            (1e-6, "us"),
-            (1e-4, "100us"),
-            (1e-3, "ms"),
-            (SECONDS_PER_DAY, "day"),
-        ]
-        .into_iter()
-        .find(|(u, _)| *u == self.unit_s)
-        .map_or("s", |(_, name)| name);
+        let unit = super::time_column::unit_name(self.unit_s);
         if self.steps == 0 {
             // Not read off stamps: a header's step (`Delta_X`).
             return write!(

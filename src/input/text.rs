@@ -25,6 +25,7 @@ use std::str::FromStr;
 
 use crate::error::UsageError;
 use crate::input::px4_export;
+use crate::input::sampling_step::SECONDS_PER_DAY;
 use crate::input::time_column::{TimeColumn, TimeState};
 
 /// Rows per batch handed to the analysis.
@@ -191,12 +192,29 @@ fn camel_words(name: &str) -> String {
 /// `field.header.seq`, `frame_count`), not a channel: it steps by one and wraps.
 const COUNTER_WORDS: [&str; 7] = ["counter", "count", "cnt", "seq", "sequence", "index", "idx"];
 
+/// A column's name as the word rules read it: without a comment's `#` or `%` and its unit in
+/// brackets, camel-case words split with `_`, in lower case (`PacketCounter` ->
+/// `packet_counter`, `gx (count)` -> `gx`).
+fn lower_words(name: &str) -> String {
+    camel_words(base_name(name.trim_start_matches(['#', '%']))).to_ascii_lowercase()
+}
+
 /// Whether `name` names a counter of samples or packets ([`COUNTER_WORDS`]).
 pub fn counter_column(name: &str) -> bool {
     // `gx (count)`, `gx [cnt]`: counts are the unit there, not a counter.
-    let n = camel_words(base_name(name.trim_start_matches(['#', '%']))).to_ascii_lowercase();
-    n.split(|c: char| !c.is_alphanumeric())
+    lower_words(name)
+        .split(|c: char| !c.is_alphanumeric())
         .any(|w| COUNTER_WORDS.contains(&w))
+}
+
+/// Whether `name` names the number of the sensor a row is of ([`INSTANCE_NAMES`]); a bare `I`
+/// only where `bare_i` (ArduPilot's messages: elsewhere it may be a current or an in-phase
+/// signal).
+fn instance_column(name: &str, bare_i: bool) -> bool {
+    match lower_words(name).as_str() {
+        "i" => bare_i,
+        n => INSTANCE_NAMES.contains(&n),
+    }
 }
 
 /// Words that make a column something other than an inertial channel, and what it holds: a
@@ -220,17 +238,18 @@ const QUANTITY_WORDS: [(&str, &str); 9] = [
 /// the rows are of, but a bare `I`, which may as well be a current or an in-phase signal, only
 /// in ArduPilot's messages, `super::format_units`); `None` for any other name.
 pub fn named_quantity(name: &str) -> Option<&'static str> {
-    let n = camel_words(base_name(name.trim_start_matches(['#', '%']))).to_ascii_lowercase();
-    if n != "i" && INSTANCE_NAMES.contains(&n.as_str()) {
+    if instance_column(name, false) {
         return Some("the number of the sensor its rows are of");
     }
-    n.split(|c: char| !c.is_alphanumeric()).find_map(|w| {
-        let bare = w.strip_suffix(['x', 'y', 'z']).filter(|b| b.len() >= 3);
-        QUANTITY_WORDS
-            .iter()
-            .find(|(k, _)| w == *k || bare == Some(*k))
-            .map(|(_, q)| *q)
-    })
+    lower_words(name)
+        .split(|c: char| !c.is_alphanumeric())
+        .find_map(|w| {
+            let bare = w.strip_suffix(['x', 'y', 'z']).filter(|b| b.len() >= 3);
+            QUANTITY_WORDS
+                .iter()
+                .find(|(k, _)| w == *k || bare == Some(*k))
+                .map(|(_, q)| *q)
+        })
 }
 
 /// [`time_column_unit`], and whether the name is one of [`TIME_COLUMN_NAMES`] (preferred
@@ -393,6 +412,9 @@ struct Layout {
     counter_clock: bool,
     /// How the time column's open dates are read, as its rows have decided so far.
     dates: std::cell::Cell<DateOrder>,
+    /// The format the header (and the file's name) tells, which fixes some columns' units and
+    /// roles (`super::format_units`).
+    format: Option<super::format_units::FileFormat>,
 }
 
 fn input_error(path: &Path, line: u64, problem: String) -> UsageError {
@@ -628,6 +650,7 @@ impl Layout {
             px4,
             counter_clock,
             dates: Default::default(),
+            format,
         })
     }
 
@@ -795,14 +818,9 @@ impl Layout {
         if opts.columns.is_some() || opts.phase || self.sep == Sep::Labelled {
             return self;
         }
-        let rows: Vec<Vec<&str>> = std::iter::once(t)
-            .chain(ahead.iter().map(String::as_str))
-            .map(|r| self.split(r.trim()))
-            .filter(|f| f.len() == self.width_in)
-            .collect();
-        if rows.len() < INDEX_ROWS {
+        let Some(rows) = self.rows_to_judge(t, ahead) else {
             return self;
-        }
+        };
         let counts_rows = |i: usize| {
             let mut last: Option<f64> = None;
             rows.iter().all(|f| match parse_field(f[i]) {
@@ -844,6 +862,17 @@ impl Layout {
         self
     }
 
+    /// The first data row `t` and the rows `ahead` of this layout's width, split, when there
+    /// are [`INDEX_ROWS`] of them to judge a column's role by; `None` with fewer.
+    fn rows_to_judge<'a>(&self, t: &'a str, ahead: &'a [String]) -> Option<Vec<Vec<&'a str>>> {
+        let rows: Vec<Vec<&str>> = std::iter::once(t)
+            .chain(ahead.iter().map(String::as_str))
+            .map(|r| self.split(r.trim()))
+            .filter(|f| f.len() == self.width_in)
+            .collect();
+        (rows.len() >= INDEX_ROWS).then_some(rows)
+    }
+
     /// An error when a column named as an instance number ([`INSTANCE_NAMES`]: ArduPilot's `I`
     /// in a `mavlogdump.py` CSV, a `sensor_id`) holds 2 to [`INSTANCE_MAX`] whole numbers, each
     /// on several of the first row `t` and the rows `ahead`: the rows of as many sensors
@@ -860,8 +889,7 @@ impl Layout {
         if self.sep == Sep::Labelled {
             return Ok(());
         }
-        let ardupilot = super::format_units::file_format(&self.source_names, path)
-            == Some(super::format_units::FileFormat::ArduPilot);
+        let ardupilot = self.format == Some(super::format_units::FileFormat::ArduPilot);
         // A column the run names is a channel, as the run says.
         let named = |n: &str| {
             opts.channels
@@ -872,24 +900,11 @@ impl Layout {
                     .as_ref()
                     .is_some_and(|c| c.iter().any(|p| p.source == n))
         };
-        let rows: Vec<Vec<&str>> = std::iter::once(t)
-            .chain(ahead.iter().map(String::as_str))
-            .map(|r| self.split(r.trim()))
-            .filter(|f| f.len() == self.width_in)
-            .collect();
-        if rows.len() < INDEX_ROWS {
+        let Some(rows) = self.rows_to_judge(t, ahead) else {
             return Ok(());
-        }
+        };
         for (i, name) in self.source_names.iter().enumerate() {
-            let n =
-                camel_words(base_name(name.trim_start_matches(['#', '%']))).to_ascii_lowercase();
-            // A bare `I` only in ArduPilot's messages (elsewhere a current, an in-phase signal).
-            let instance = if n == "i" {
-                ardupilot
-            } else {
-                INSTANCE_NAMES.contains(&n.as_str())
-            };
-            if !instance || named(name) {
+            if !instance_column(name, ardupilot) || named(name) {
                 continue;
             }
             let mut seen: Vec<(i64, usize)> = Vec::new();
@@ -1021,15 +1036,10 @@ impl Layout {
     /// A time stamp written as a date and time ([`date_time`]), an open date (`03/12/2026`)
     /// read in the order the file's rows decide ([`DateOrder`]).
     fn stamp(&self, field: &str) -> Option<f64> {
-        let (date, secs) = date_time_parts(field)?;
         let mut order = self.dates.get();
-        let days = match date {
-            DatePart::None => Some(order.clock_days(secs)),
-            DatePart::Days(d) => Some(d),
-            DatePart::Open(d) => order.days(d),
-        };
+        let t = order.stamp(field);
         self.dates.set(order);
-        Some(days? as f64 * 86_400.0 + secs)
+        t
     }
 
     /// The fields of a row: split at the header's separator, or, when that does not give the
@@ -1106,9 +1116,8 @@ const INDEX_ROWS: usize = 16;
 
 /// Names (lower case, camel case split with `_`) of a column that numbers the sensor a row is
 /// of, when one file holds several ([`Layout::check_interleaved`]): ArduPilot's `I` (`IMU`,
-/// `GYR`, `ACC` messages), `instance`, `sensor_id`, `imu_id`.
-const INSTANCE_NAMES: [&str; 10] = [
-    "i",
+/// `GYR`, `ACC` messages: [`instance_column`]), `instance`, `sensor_id`, `imu_id`.
+const INSTANCE_NAMES: [&str; 9] = [
     "inst",
     "instance",
     "imu_id",
@@ -1335,13 +1344,7 @@ fn fortran_exponent(t: &str) -> Option<f64> {
 /// US). Without a zone the clock's own time, read as UTC (only steps matter). A time of day
 /// alone (`01:02:03.456`) is seconds since its midnight. `None` for anything else.
 fn date_time(t: &str) -> Option<f64> {
-    let (date, secs) = date_time_parts(t)?;
-    let days = match date {
-        DatePart::None => 0,
-        DatePart::Days(d) => d,
-        DatePart::Open(d) => d.days(true).or_else(|| d.days(false))?,
-    };
-    Some(days as f64 * 86_400.0 + secs)
+    DateOrder::default().stamp(t)
 }
 
 /// The date of a stamp, as far as its row tells it.
@@ -1397,14 +1400,26 @@ pub struct DateOrder {
 }
 
 impl DateOrder {
+    /// A time stamp written as a date and time ([`date_time`]), in seconds, its open date and
+    /// its time of day alone read as the rows before it decided (which it may decide further).
+    fn stamp(&mut self, field: &str) -> Option<f64> {
+        let (date, secs) = date_time_parts(field)?;
+        let days = match date {
+            DatePart::None => self.clock_days(secs),
+            DatePart::Days(d) => d,
+            DatePart::Open(d) => self.days(d)?,
+        };
+        Some(days as f64 * SECONDS_PER_DAY + secs)
+    }
+
     /// The days a time of day alone (`secs`, seconds since its midnight) has passed since the
     /// first row: one more at each midnight.
     fn clock_days(&mut self, secs: f64) -> i64 {
         const HOUR: f64 = 3600.0;
         if let Some(last) = self.last_clock {
-            if last >= 86_400.0 - HOUR && secs <= HOUR {
+            if last >= SECONDS_PER_DAY - HOUR && secs <= HOUR {
                 self.clock_days += 1;
-            } else if last <= HOUR && secs >= 86_400.0 - HOUR && self.clock_days > 0 {
+            } else if last <= HOUR && secs >= SECONDS_PER_DAY - HOUR && self.clock_days > 0 {
                 self.clock_days -= 1;
             }
         }
@@ -2277,6 +2292,12 @@ impl<R: BufRead> TextReader<R> {
         &self.layout.source_names
     }
 
+    /// The format the header (and the file's name) tells, fixing some columns' units and roles
+    /// (`super::format_units::file_format`).
+    pub fn file_format(&self) -> Option<super::format_units::FileFormat> {
+        self.layout.format
+    }
+
     /// The sampling step a LabVIEW Measurement file's header gives (`Delta_X`, s), if it is one.
     pub fn lvm_delta_x(&self) -> Option<f64> {
         self.lvm.as_ref().and_then(|h| h.delta_x)
@@ -2356,7 +2377,7 @@ impl<R: BufRead> TextReader<R> {
     /// [`super::format_units::FileFormat::temperature`]); `None` for the other channels.
     pub fn temperatures(&self) -> Vec<Option<super::temperature_column::TemperatureScale>> {
         use super::temperature_column::temperature_column;
-        let format = super::format_units::file_format(&self.layout.source_names, &self.path);
+        let format = self.layout.format;
         self.layout
             .keep
             .iter()

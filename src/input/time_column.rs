@@ -16,16 +16,28 @@
 //! not a backward step, and the clock restarts there, so the gaps after it are found again. Before (session 29), every row after a reset
 //! was counted backwards and no later gap was found.
 
-/// Seconds per unit tried for the column, in order: s, ms, us, ns.
+use super::sampling_step::SECONDS_PER_DAY;
+
+/// Seconds per unit tried for the column, in order: s, days, ms, 100 us (a column named so), us,
+/// ns.
 const SCALES: [(f64, &str); 6] = [
     (1.0, "s"),
     // Serial dates (Excel's, MATLAB's datenum): a step of tau0 / 86400 is found only in days.
-    (86_400.0, "day"),
+    (SECONDS_PER_DAY, "day"),
     (1e-3, "ms"),
     (1e-4, "100us"),
     (1e-6, "us"),
     (1e-9, "ns"),
 ];
+
+/// The name of a time column's unit of `scale` seconds ([`SCALES`]: `ns`, `100us`, `day`);
+/// `s` for any other.
+pub fn unit_name(scale: f64) -> &'static str {
+    SCALES
+        .iter()
+        .find(|(s, _)| *s == scale)
+        .map_or("s", |(_, name)| name)
+}
 
 /// How far a step may be from a whole number of `tau0` before it is counted irregular.
 const STEP_TOLERANCE: f64 = 0.25;
@@ -249,7 +261,11 @@ impl TimeColumn {
                     .iter()
                     .filter(|(s, _)| *s != 1e-4 || fine)
                     .find(|(s, _)| {
-                        let tolerance = if *s == 86_400.0 { 0.05 } else { STEP_TOLERANCE };
+                        let tolerance = if *s == SECONDS_PER_DAY {
+                            0.05
+                        } else {
+                            STEP_TOLERANCE
+                        };
                         (dt * s / self.tau0_s - 1.0).abs() <= tolerance
                     });
                 match found {
