@@ -448,10 +448,6 @@ pub(crate) fn sniff_head(input: &str, head: &[u8], frames: Option<&FrameDescript
 /// in place of text columns (a spreadsheet, a MATLAB or NumPy file, a ROS or PX4 log), and how
 /// to get text columns out of it; `None` for anything else.
 fn container(head: &[u8]) -> Option<(&'static str, &'static str)> {
-    // What to do with an ArduPilot log, binary or text.
-    const MAVLOGDUMP: &str = "export its IMU messages as CSV first with pymavlink: \
-                              `mavlogdump.py --types IMU --format csv F > imu.csv` (README, \
-                              ArduPilot)";
     const KINDS: [(&[u8], &str, &str); 12] = [
         (
             b"PK\x03\x04",
@@ -503,12 +499,12 @@ fn container(head: &[u8]) -> Option<(&'static str, &'static str)> {
         (
             &[0xa3, 0x95, 0x80],
             "an ArduPilot DataFlash log (.bin)",
-            MAVLOGDUMP,
+            allanscope::input::format_units::MAVLOGDUMP,
         ),
         (
             b"FMT, ",
             "an ArduPilot DataFlash log as text (.log: messages of many kinds)",
-            MAVLOGDUMP,
+            allanscope::input::format_units::MAVLOGDUMP,
         ),
         (
             b"ULog\x01\x12\x35",

@@ -452,6 +452,15 @@ impl Layout {
         }
         for (j, n) in source_names.iter().enumerate() {
             if let Some(i) = source_names[..j].iter().position(|m| m == n) {
+                // A DataFlash text log's first line (`FMT, 128, 89, FMT, BBnNZ, ...`) read as
+                // a header names `FMT` twice: say what the file is, as its start's sniff does.
+                if source_names[0] == "FMT" {
+                    return Err(err(format!(
+                        "an ArduPilot DataFlash log as text (.log: messages of many kinds), \
+                         not text columns; {}",
+                        super::format_units::MAVLOGDUMP
+                    )));
+                }
                 return Err(err(format!(
                     "duplicate column name `{n}`: columns {} and {}",
                     i + 1,

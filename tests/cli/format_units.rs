@@ -334,6 +334,24 @@ fn ardupilot_imu_messages() {
             &[what, "mavlogdump.py --types IMU --format csv"],
         );
     }
+    // With --tau0 no look at the start is needed, and standard input has none to look at: the
+    // header the log's first line makes names `FMT` twice, and says what the file is.
+    let needles = ["as text (.log", "mavlogdump.py --types IMU --format csv"];
+    usage_error(&analyze(&text, &["--tau0", "0.0025"]), &needles);
+    let mut child = crate::common::exe()
+        .args(["analyze", "-", "--tau0", "0.0025", "--json"])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    use std::io::Write;
+    let _ = child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(&std::fs::read(&text).unwrap());
+    usage_error(&child.wait_with_output().unwrap(), &needles);
 }
 
 /// phyphox's `Absolute (rad/s)`, the norm of the three axes, is no channel though its unit is a
