@@ -15,7 +15,8 @@
 use std::io::Write;
 
 use allanscope::gap::diagnose::diagnose_with_temperature;
-use allanscope::gap::temperature::fit_temperature;
+use allanscope::gap::problem::{GapProblem, ModelSpec};
+use allanscope::gap::temperature::{enter_temperature, fit_temperature};
 use allanscope::gap::{DiagnoseOptions, EffectParams, GapConfig, GapEvidence, Verdict};
 use allanscope::sim::{SimModel, Simulator};
 
@@ -28,6 +29,9 @@ struct Row {
     verdict: Verdict,
     kinds: String,
     z: f64,
+    /// `z` once the coefficient is refitted with its AVAR in the curve's model, as the
+    /// diagnosis judges it (`enter_temperature` with no threshold).
+    z_settled: f64,
 }
 
 fn arg(args: &[String], key: &str, default: &str) -> String {
@@ -91,7 +95,22 @@ fn run(m: &SimModel, seed: u64, steps: u64) -> Row {
             &[],
         )
         .map_or(f64::NAN, |f| f.z),
+        z_settled: settled_z(&a, &b),
     }
+}
+
+/// The temperature's `z` as the diagnosis judges it: refitted with its AVAR in the curve's
+/// model until it settles, on the base model of the channel's own curve.
+fn settled_z(
+    a: &allanscope::gap::evidence::EvidenceSnapshot,
+    b: &allanscope::gap::evidence::EvidenceSnapshot,
+) -> f64 {
+    let Ok(prob) = GapProblem::new(a, &DiagnoseOptions::default()) else {
+        return f64::NAN;
+    };
+    prob.gls(&ModelSpec::default())
+        .and_then(|base| enter_temperature(&prob, a, b, &base, 0.0))
+        .map_or(f64::NAN, |(t, _)| t.finding.z)
 }
 
 fn main() {
@@ -125,12 +144,16 @@ fn main() {
     rows.sort_by_key(|r| r.seed);
     if !csv.is_empty() {
         let mut f = std::fs::File::create(&csv).expect("csv");
-        writeln!(f, "seed,named,coefficient,lo,hi,z,verdict,effects").unwrap();
+        writeln!(
+            f,
+            "seed,named,coefficient,lo,hi,z,z_settled,verdict,effects"
+        )
+        .unwrap();
         for r in &rows {
             writeln!(
                 f,
-                "{},{},{},{},{},{},{:?},{}",
-                r.seed, r.named, r.coefficient, r.lo, r.hi, r.z, r.verdict, r.kinds
+                "{},{},{},{},{},{},{},{:?},{}",
+                r.seed, r.named, r.coefficient, r.lo, r.hi, r.z, r.z_settled, r.verdict, r.kinds
             )
             .unwrap();
         }
@@ -173,20 +196,28 @@ fn main() {
     others.sort();
     others.dedup();
     println!("effect lists seen: {others:?}");
-    let mut az: Vec<f64> = rows
-        .iter()
-        .map(|r| r.z.abs())
-        .filter(|z| z.is_finite())
-        .collect();
-    az.sort_by(f64::total_cmp);
-    if !az.is_empty() {
-        let q = |p: f64| az[((az.len() as f64 - 1.0) * p).round() as usize];
-        println!(
-            "|z| of the first pass: median {:.2}, q95 {:.2}, q99 {:.2}, max {:.2}",
-            q(0.5),
-            q(0.95),
-            q(0.99),
-            q(1.0)
-        );
+    for (what, z) in [
+        (
+            "the first pass",
+            rows.iter().map(|r| r.z).collect::<Vec<f64>>(),
+        ),
+        ("settled", rows.iter().map(|r| r.z_settled).collect()),
+    ] {
+        let mut az: Vec<f64> = z
+            .iter()
+            .map(|z| z.abs())
+            .filter(|z| z.is_finite())
+            .collect();
+        az.sort_by(f64::total_cmp);
+        if !az.is_empty() {
+            let q = |p: f64| az[((az.len() as f64 - 1.0) * p).round() as usize];
+            println!(
+                "|z| of {what}: median {:.2}, q95 {:.2}, q99 {:.2}, max {:.2}",
+                q(0.5),
+                q(0.95),
+                q(0.99),
+                q(1.0)
+            );
+        }
     }
 }
