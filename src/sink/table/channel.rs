@@ -246,6 +246,13 @@ pub(super) fn limit_cells(limits: &[&LimitResult], style: &TableStyle) -> Vec<St
         .collect()
 }
 
+/// A `gof` above this says the five-term model does not hold: when it holds, `gof` is about
+/// chi-squared over its `nu = J - p` degrees of freedom (docs/fit.md: mean 1.00, 95th
+/// percentile 1.6-1.7 at `nu` near 16), and 3 is beyond its 99.99th percentile there. Seen:
+/// a real MEMS gyro's internal filter over all taus (10^3-10^4, docs/fit.md) and a counter
+/// whose LSB is tens of times its noise (3e5, with `B` 32 times the truth).
+const GOF_MISFIT: f64 = 3.0;
+
 pub(super) fn channel_block(
     h: &mut String,
     res: &Results,
@@ -299,6 +306,19 @@ pub(super) fn channel_block(
         ]);
     }
     h.push_str(&aligned(&rows, "  "));
+    if let Some(g) = f.gof.filter(|g| *g > GOF_MISFIT) {
+        let _ = writeln!(
+            h,
+            "  {}",
+            style.bold(&format!(
+                "gof {}: the five-term model does not describe this curve (about 1 when it \
+                 does), so the fit's values can be far off and its intervals too narrow; the \
+                 read-outs come from the curve alone, and `diagnose` says where the curve \
+                 departs and why",
+                sig3(g)
+            ))
+        );
+    }
     if let Some(q) = f.q_over_lsb {
         let _ = writeln!(
             h,
