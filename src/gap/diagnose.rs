@@ -935,8 +935,15 @@ fn settle(
 /// model then `consistent` in 94 of 100 two-hour runs, with the warm-up test of that day); on
 /// session 18's benchmark keeping them took the jump draws from 17 to 30 of 120 against the
 /// fair jump ceiling's 35 (docs/gap.md, "Bookkeeping", "Jumps kept in time (session 18)").
+/// Since session 35 the temperature too (its coefficient's `|z| > 4` on the block means, a
+/// regressor given, not searched: none of 100 clean runs above 3.4): a blind check's 34-minute
+/// gyro with a temperature cycle had `|z|` 14.8 and the coefficient within 2% of the truth,
+/// and was dropped because its curve's gap (0.63) was already under 1 and did not fall.
 fn kept_in_time(kind: EffectKind) -> bool {
-    matches!(kind, EffectKind::Warmup | EffectKind::BiasJumps)
+    matches!(
+        kind,
+        EffectKind::Warmup | EffectKind::BiasJumps | EffectKind::Temperature
+    )
 }
 
 /// The curve's upper profile bound on `K^2` (u^2/s^3) at `WARMUP_K_DELTA` for the model `spec`

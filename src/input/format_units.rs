@@ -40,13 +40,13 @@ pub enum FileFormat {
     ArduPilot,
 }
 
-/// The header of Kalibr's `imu0.csv`.
 /// What to do with an ArduPilot DataFlash log, binary or text: the reader takes the CSV that
 /// pymavlink writes of its `IMU` messages.
 pub const MAVLOGDUMP: &str = "export its IMU messages as CSV first with pymavlink: \
                               `mavlogdump.py --types IMU --format csv F > imu.csv` (README, \
                               ArduPilot)";
 
+/// The header of Kalibr's `imu0.csv`.
 pub const KALIBR_HEADER: [&str; 7] = [
     "timestamp",
     "omega_x",

@@ -83,7 +83,10 @@ fn run(extra: &str, seed: u64) -> Diagnosis {
 pub(crate) fn assert_bookkeeping(d: &Diagnosis) {
     let mut prev = d.gap_before;
     for e in &d.effects {
-        let in_time = matches!(e.params.kind(), EffectKind::Warmup | EffectKind::BiasJumps);
+        let in_time = matches!(
+            e.params.kind(),
+            EffectKind::Warmup | EffectKind::BiasJumps | EffectKind::Temperature
+        );
         assert!(
             e.gap_after < prev || (in_time && e.gap_after == prev && e.delta_chi2 == 0.0),
             "{e:?} did not lower the gap from {prev}"
