@@ -3,7 +3,9 @@
 
 use crate::common::{exe, first_record, parse_lines_of, simulate_to, write_vog4_model};
 
-fn tmp(name: &str) -> std::path::PathBuf {
+use std::path::PathBuf;
+
+fn tmp(name: &str) -> PathBuf {
     crate::common::tmp_in("diag", name)
 }
 
@@ -165,6 +167,24 @@ fn analyze_and_diagnose_read_the_same_gaps() {
     assert_eq!(&from_diagnose, from_analyze);
 }
 
+/// A model file of one channel (`channel`: its keys) in a chamber whose temperature settles
+/// from `start_c` to `final_c` with time constant `tc_s` while it cycles `amp_c` degC every
+/// `period_s` s (`[start_c, final_c, tc_s, amp_c, period_s]`).
+fn chamber_unit(name: &str, tau0_s: f64, chamber: [f64; 5], channel: &str) -> PathBuf {
+    let [start_c, final_c, tc_s, amp_c, period_s] = chamber;
+    let p = tmp(name);
+    std::fs::write(
+        &p,
+        format!(
+            "tau0_s = {tau0_s}\n[temperature]\nstart_c = {start_c}\nfinal_c = {final_c}\n\
+             time_constant_s = {tc_s}\nsine_amplitude_c = {amp_c}\nsine_period_s = {period_s}\n\
+             [[channel]]\n{channel}"
+        ),
+    )
+    .unwrap();
+    p
+}
+
 /// A temperature logged more slowly than the rates (a 1 Hz `temperature_c` beside 100 Hz
 /// increments, the other rows empty), or missing at a few rows, is still used: each step
 /// without one takes the last known value, and the diagnosis names `temperature` as with the
@@ -175,15 +195,13 @@ fn analyze_and_diagnose_read_the_same_gaps() {
 /// within 3% with the whole column).
 #[test]
 fn a_temperature_logged_slowly_is_held_between_its_values() {
-    let truth = tmp("temp-slow.toml");
-    std::fs::write(
-        &truth,
-        "tau0_s = 0.01\n[temperature]\nstart_c = 25.0\nfinal_c = 45.0\ntime_constant_s = 2400.0\n\
-         sine_amplitude_c = 1.5\nsine_period_s = 900.0\n[[channel]]\nname = \"gz\"\n\
-         unit = \"deg\"\nN = 5.0e-3\nB = 1.4e-3\nK = 1.4e-5\nflicker_band_s = [0.01, 1.0e5]\n\
-         temperature_coefficient = 0.005\n",
-    )
-    .unwrap();
+    let truth = chamber_unit(
+        "temp-slow.toml",
+        0.01,
+        [25.0, 45.0, 2400.0, 1.5, 900.0],
+        "name = \"gz\"\nunit = \"deg\"\nN = 5.0e-3\nB = 1.4e-3\nK = 1.4e-5\n\
+         flicker_band_s = [0.01, 1.0e5]\ntemperature_coefficient = 0.005\n",
+    );
     let full = tmp("temp-slow-full.csv");
     simulate_to(
         &truth,
@@ -251,22 +269,20 @@ fn a_temperature_logged_slowly_is_held_between_its_values() {
 /// the truth.
 #[test]
 fn a_temperature_the_curve_does_not_show_is_kept_on_its_time_domain_evidence() {
-    let truth = tmp("temp-kept.toml");
-    std::fs::write(
-        &truth,
-        "tau0_s = 0.04\n[temperature]\nstart_c = 22.0\nfinal_c = 30.0\ntime_constant_s = 1500.0\n\
-         sine_amplitude_c = 2.5\nsine_period_s = 1043.0\n[[channel]]\nname = \"g\"\n\
-         unit = \"rad\"\nN = 1.22e-4\nB = 2.9e-5\nK = 1.0e-6\nflicker_band_s = [0.04, 1.0e5]\n\
-         temperature_coefficient = 7.7e-5\n",
-    )
-    .unwrap();
+    let truth = chamber_unit(
+        "temp-kept.toml",
+        0.04,
+        [22.0, 30.0, 1500.0, 2.5, 1043.0],
+        "name = \"g\"\nunit = \"rad\"\nN = 1.22e-4\nB = 2.9e-5\nK = 1.0e-6\n\
+         flicker_band_s = [0.04, 1.0e5]\ntemperature_coefficient = 7.7e-5\n",
+    );
     let csv = tmp("temp-kept.csv");
     simulate_to(
         &truth,
         &["--duration", "2026s", "--seed", "2", "--format", "csv"],
         &csv,
     );
-    let d = crate::common::first_record(exe().arg("diagnose").args([
+    let d = first_record(exe().arg("diagnose").args([
         csv.to_str().unwrap(),
         "--tau0",
         "0.04",
