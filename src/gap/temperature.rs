@@ -43,6 +43,12 @@ const Z95: f64 = 1.959_963_984_540_054;
 /// temperature profile and no coefficient (docs/gap.md, "Temperature").
 pub const TEMPERATURE_Z: f64 = 4.0;
 
+/// The `|z|` at which the temperature is kept on its time-domain evidence alone when the
+/// curve's gap does not fall with it in (the bookkeeping, `diagnose.rs::kept_in_time`):
+/// twice [`TEMPERATURE_Z`], above the 4.1-5.2 that slow signals of the bias resembling the
+/// temperature reached on runs without a coefficient (docs/gap.md, "Bookkeeping").
+pub const TEMPERATURE_Z_ALONE: f64 = 8.0;
+
 /// A temperature coefficient fitted to the block means.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TemperatureFinding {

@@ -305,6 +305,50 @@ fn a_temperature_the_curve_does_not_show_is_kept_on_its_time_domain_evidence() {
     assert_eq!(d["verdict"], "explained", "{d}");
 }
 
+/// The other side of keeping the temperature in time (a review, session 35): the same unit
+/// with no temperature coefficient but a sinusoid of its own (1e-4 rad/s every 1300 s) beside
+/// the chamber's 1043-s cycle. Over 34 minutes the two are alike, and the coefficient's `|z|`
+/// reaches 4-5; the curve's gap does not fall with the temperature in. Kept on time alone at
+/// that `|z|` it was named (seeds 2 and 11 of 16); now the time-domain evidence alone must
+/// reach twice the threshold (`TEMPERATURE_Z_ALONE`), and it is not named.
+#[test]
+fn an_unrelated_slow_sinusoid_is_not_named_temperature_on_time_alone() {
+    for (seed, phase) in [(2, 4.798), (11, 1.257)] {
+        let truth = chamber_unit(
+            &format!("temp-sine-{seed}.toml"),
+            0.04,
+            [22.0, 30.0, 1500.0, 2.5, 1043.0],
+            &format!(
+                "name = \"g\"\nunit = \"rad\"\nN = 1.22e-4\nB = 2.9e-5\nK = 1.0e-6\n\
+                 flicker_band_s = [0.04, 1.0e5]\n\
+                 sinusoid = {{ amplitude = 1.0e-4, frequency = 0.000769, phase = {phase} }}\n"
+            ),
+        );
+        let csv = tmp(&format!("temp-sine-{seed}.csv"));
+        let seed_s = seed.to_string();
+        simulate_to(
+            &truth,
+            &["--duration", "2026s", "--seed", &seed_s, "--format", "csv"],
+            &csv,
+        );
+        let d = first_record(exe().arg("diagnose").args([
+            csv.to_str().unwrap(),
+            "--tau0",
+            "0.04",
+            "--unit",
+            "rad",
+        ]));
+        assert!(
+            !d["effects"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|e| e["kind"] == "temperature"),
+            "seed {seed}: {d}"
+        );
+    }
+}
+
 /// A uniform draw in [-0.5, 0.5) from a 64-bit LCG (deterministic white noise).
 fn uniform(state: &mut u64) -> f64 {
     *state = state
