@@ -975,8 +975,8 @@ fn kept_in_time(params: &EffectParams) -> bool {
             lo,
             hi,
         } => {
-            // The interval is c +- 1.96 se (temperature.rs).
-            let se = (hi - lo) / (2.0 * 1.959_963_984_540_054);
+            // The interval is c +- Z95 se (temperature.rs).
+            let se = (hi - lo) / (2.0 * super::temperature::Z95);
             se > 0.0 && (coefficient / se).abs() >= TEMPERATURE_Z_ALONE
         }
         _ => false,

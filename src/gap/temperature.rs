@@ -36,7 +36,7 @@ use super::warmup::warmup_block_shape;
 use crate::sim::effects::TemperatureProfile;
 
 /// The two-sided 97.5% normal quantile of the 95% interval.
-const Z95: f64 = 1.959_963_984_540_054;
+pub const Z95: f64 = 1.959_963_984_540_054;
 
 /// The temperature effect is taken in when `|z|` exceeds this. The regressor is given, not
 /// searched, so under the null `z` is about N(0, 1); the threshold was set on clean runs with a
