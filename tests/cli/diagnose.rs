@@ -185,6 +185,24 @@ fn chamber_unit(name: &str, tau0_s: f64, chamber: [f64; 5], channel: &str) -> Pa
     p
 }
 
+/// 2026 s of the 25 Hz unit `truth` (rad) simulated at `seed` into `name`, and its diagnosis.
+fn chamber_run(truth: &std::path::Path, name: &str, seed: u64) -> serde_json::Value {
+    let csv = tmp(name);
+    let seed = seed.to_string();
+    simulate_to(
+        truth,
+        &["--duration", "2026s", "--seed", &seed, "--format", "csv"],
+        &csv,
+    );
+    first_record(exe().arg("diagnose").args([
+        csv.to_str().unwrap(),
+        "--tau0",
+        "0.04",
+        "--unit",
+        "rad",
+    ]))
+}
+
 /// A temperature logged more slowly than the rates (a 1 Hz `temperature_c` beside 100 Hz
 /// increments, the other rows empty), or missing at a few rows, is still used: each step
 /// without one takes the last known value, and the diagnosis names `temperature` as with the
@@ -276,19 +294,7 @@ fn a_temperature_the_curve_does_not_show_is_kept_on_its_time_domain_evidence() {
         "name = \"g\"\nunit = \"rad\"\nN = 1.22e-4\nB = 2.9e-5\nK = 1.0e-6\n\
          flicker_band_s = [0.04, 1.0e5]\ntemperature_coefficient = 7.7e-5\n",
     );
-    let csv = tmp("temp-kept.csv");
-    simulate_to(
-        &truth,
-        &["--duration", "2026s", "--seed", "2", "--format", "csv"],
-        &csv,
-    );
-    let d = first_record(exe().arg("diagnose").args([
-        csv.to_str().unwrap(),
-        "--tau0",
-        "0.04",
-        "--unit",
-        "rad",
-    ]));
+    let d = chamber_run(&truth, "temp-kept.csv", 2);
     let effects = d["effects"].as_array().unwrap();
     let t = effects
         .iter()
@@ -324,20 +330,7 @@ fn an_unrelated_slow_sinusoid_is_not_named_temperature_on_time_alone() {
                  sinusoid = {{ amplitude = 1.0e-4, frequency = 0.000769, phase = {phase} }}\n"
             ),
         );
-        let csv = tmp(&format!("temp-sine-{seed}.csv"));
-        let seed_s = seed.to_string();
-        simulate_to(
-            &truth,
-            &["--duration", "2026s", "--seed", &seed_s, "--format", "csv"],
-            &csv,
-        );
-        let d = first_record(exe().arg("diagnose").args([
-            csv.to_str().unwrap(),
-            "--tau0",
-            "0.04",
-            "--unit",
-            "rad",
-        ]));
+        let d = chamber_run(&truth, &format!("temp-sine-{seed}.csv"), seed);
         assert!(
             !d["effects"]
                 .as_array()
