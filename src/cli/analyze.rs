@@ -503,7 +503,7 @@ fn container(head: &[u8]) -> Option<(&'static str, &'static str)> {
         ),
         (
             b"FMT, ",
-            "an ArduPilot DataFlash log as text (.log: messages of many kinds)",
+            allanscope::input::format_units::DATAFLASH_TEXT,
             allanscope::input::format_units::MAVLOGDUMP,
         ),
         (

@@ -707,11 +707,12 @@ fn diagnose_curve_once(
                         *o -= e;
                     }
                     block_means = snap.block_means.clone();
-                    if let Some(f) = prob.gls(&spec_from(&prob, &effects, &offset)) {
+                    let without = spec_from(&prob, &effects, &offset);
+                    if let Some(f) = prob.gls(&without) {
                         for e in effects.iter_mut() {
                             e.gap_after = f.gap();
                         }
-                        spec = spec_from(&prob, &effects, &offset);
+                        spec = without;
                         cur = f;
                     }
                 }

@@ -46,6 +46,11 @@ pub const MAVLOGDUMP: &str = "export its IMU messages as CSV first with pymavlin
                               `mavlogdump.py --types IMU --format csv F > imu.csv` (README, \
                               ArduPilot)";
 
+/// What a DataFlash log in text is called where it is refused (the file's start, or the header
+/// its first line makes).
+pub const DATAFLASH_TEXT: &str =
+    "an ArduPilot DataFlash log as text (.log: messages of many kinds)";
+
 /// The header of Kalibr's `imu0.csv`.
 pub const KALIBR_HEADER: [&str; 7] = [
     "timestamp",

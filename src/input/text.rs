@@ -456,8 +456,8 @@ impl Layout {
                 // a header names `FMT` twice: say what the file is, as its start's sniff does.
                 if source_names[0] == "FMT" {
                     return Err(err(format!(
-                        "an ArduPilot DataFlash log as text (.log: messages of many kinds), \
-                         not text columns; {}",
+                        "{}, not text columns; {}",
+                        super::format_units::DATAFLASH_TEXT,
                         super::format_units::MAVLOGDUMP
                     )));
                 }
