@@ -962,12 +962,12 @@ fn settle(
 /// session 18's benchmark keeping them took the jump draws from 17 to 30 of 120 against the
 /// fair jump ceiling's 35 (docs/gap.md, "Bookkeeping", "Jumps kept in time (session 18)").
 /// Since session 35 the temperature too, when its time-domain evidence alone is strong:
-/// `|z| >= TEMPERATURE_Z_ALONE` (twice the threshold that names it). A blind check's 34-minute
+/// `|z| >= TEMPERATURE_Z_ALONE` (6 since session 36, 8 before). A blind check's 34-minute
 /// gyro with a temperature cycle had `|z|` 14.8 and the coefficient within 2%, and was dropped
 /// because its curve's gap (0.63) was already under 1 and did not fall. A slow signal of the
 /// bias that the model lacks and that resembles the temperature (an unrelated sinusoid near the
 /// chamber's cycle, a jump beside a temperature step) raised `|z|` to 4.1-5.2 in a review's
-/// runs with no coefficient, where the curve's gap kept it out; at twice the threshold none.
+/// runs with no coefficient, where the curve's gap kept it out; at 6 and at 8 none.
 fn kept_in_time(params: &EffectParams) -> bool {
     match *params {
         EffectParams::Warmup { .. } | EffectParams::BiasJumps { .. } => true,
@@ -987,7 +987,7 @@ fn kept_in_time(params: &EffectParams) -> bool {
 /// The curve's upper profile bound on `K^2` (u^2/s^3) at `WARMUP_K_DELTA` for the model `spec`
 /// fitted as `fit`, never below the fit's own `K^2`; the fit's `K^2` when the bound cannot be
 /// formed. The null's random walk of the time-domain tests goes up to it.
-fn k2_upper(prob: &GapProblem, spec: &ModelSpec, fit: &GlsFit) -> f64 {
+pub(crate) fn k2_upper(prob: &GapProblem, spec: &ModelSpec, fit: &GlsFit) -> f64 {
     let k2 = fit.coef.get(3).copied().unwrap_or(0.0);
     prob.upper_bound(spec, fit, 3, WARMUP_K_DELTA)
         .map_or(k2, |k| k.max(k2))
