@@ -15,7 +15,9 @@ use allanscope::gap::lsb::LsbEstimator;
 use allanscope::gap::temperature::settling_profile;
 use allanscope::gap::unit_model::{fitted_channel, fitted_unit, ChannelFacts};
 use allanscope::gap::EffectParams;
-use allanscope::gap::{holdout_gap, DiagnoseOptions, DiagnosisRecord, GapConfig, GapEvidence};
+use allanscope::gap::{
+    holdout_gap_with_temperature, DiagnoseOptions, DiagnosisRecord, GapConfig, GapEvidence,
+};
 use allanscope::input::text::{TextReader, BATCH_ROWS};
 use allanscope::pipeline::decode::DecodeStage;
 use allanscope::plan::unit::{InputPlan, UnitPlan, UnitRequest};
@@ -357,6 +359,9 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
     };
     let mut fitted = Vec::new();
     let temp_snap = main.temperature.as_mut().map(|t| t.snapshot());
+    let held_temp = held
+        .as_mut()
+        .and_then(|h| h.temperature.as_mut().map(|t| t.snapshot()));
     // The recorded temperature as the simulator's settling profile (for --model-out).
     let profile = temp_snap
         .as_ref()
@@ -386,7 +391,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
         let holdout = held.as_mut().and_then(|h| {
             let j = h.names.iter().position(|n| n == name)?;
             let snap2 = h.evidence[j].snapshot();
-            holdout_gap(&diag, &snap2, &opts)
+            holdout_gap_with_temperature(&diag, &snap2, held_temp.as_ref(), &opts)
                 .map_err(|e| tracing::warn!("{}: holdout channel {name}: {e}", a.input))
                 .ok()
         });

@@ -4,9 +4,11 @@
 //! record says which effects carried and, plainly, when none did.
 
 use super::diagnose::{DiagnoseError, DiagnoseOptions, Diagnosis};
+use super::effects::EffectParams;
 use super::effects::{params_column, EffectKind};
 use super::evidence::EvidenceSnapshot;
 use super::problem::{GapProblem, ModelSpec};
+use super::temperature::{fixed_coefficient_drop, temperature_avar, temperature_blocks};
 
 /// One effect of the fitting run on the held-out run.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -42,7 +44,8 @@ pub struct HoldoutGap {
     pub gap_before: f64,
     /// With the effects that carried; never above `gap_before`.
     pub gap_after: f64,
-    /// The fitting run's effects in their order (bias jumps, events of one run, are left out).
+    /// The fitting run's effects in their order (bias jumps, events of one run, are left out;
+    /// so is a temperature when the held-out run has none to judge it by).
     pub effects: Vec<HeldEffect>,
 }
 
@@ -58,10 +61,29 @@ impl HoldoutGap {
 /// the seed paper's table 2 shows). The effects are added in the fitting run's order, each kept
 /// only if it [`carries`]: it lowers the held-out `r' S^-1 r` of the model with those kept
 /// before it by at least the fitting run's `add_chi2`. Bias jumps are events of one run and are
-/// not carried over.
+/// not carried over. A temperature effect needs the held-out run's temperature
+/// ([`holdout_gap_with_temperature`]); without it, it is left out.
 pub fn holdout_gap(
     fitted: &Diagnosis,
     snap: &EvidenceSnapshot,
+    opts: &DiagnoseOptions,
+) -> Result<HoldoutGap, DiagnoseError> {
+    holdout_gap_with_temperature(fitted, snap, None, opts)
+}
+
+/// [`holdout_gap`] with the held-out run's temperature (its evidence, fed `T tau0` per step as
+/// the fitting run's was). The fitting run's coefficient, held fixed, enters the held-out curve
+/// as `c^2` times the held-out temperature's AVAR and is judged as the other effects are; where
+/// the curve's gap does not fall with it (the five terms take a slow temperature-driven wander
+/// as `K` and `R`, as on the fitting run, whose bookkeeping then keeps it on its time-domain
+/// evidence), it carries when `c T` taken out of the held-out block means lowers their
+/// whitened residual sum of squares by `add_chi2` on the scale of the residuals
+/// ([`fixed_coefficient_drop`]; the same argument as [`carries`]), its `gap_after` then the gap
+/// before it and its `delta_chi2` 0, as the fitting run records an effect kept in time.
+pub fn holdout_gap_with_temperature(
+    fitted: &Diagnosis,
+    snap: &EvidenceSnapshot,
+    temperature: Option<&EvidenceSnapshot>,
     opts: &DiagnoseOptions,
 ) -> Result<HoldoutGap, DiagnoseError> {
     let prob = GapProblem::new(snap, opts)?.with_sawtooth(snap, opts, false)?;
@@ -79,9 +101,24 @@ pub fn holdout_gap(
     for e in &fitted.effects {
         let kind = e.params.kind();
         let mut trial = spec.clone();
-        match kind {
-            EffectKind::BiasJumps => continue,
-            k if k.is_filter() => trial.filter = e.params.lowpass(),
+        // The temperature's held-out series: its block means over the channel's blocks (degC).
+        let mut temp_blocks = None;
+        match e.params {
+            EffectParams::BiasJumps { .. } => continue,
+            EffectParams::Temperature { coefficient, .. } => {
+                let Some((ts, avar)) =
+                    temperature.and_then(|ts| Some((ts, temperature_avar(ts, &prob.ms)?)))
+                else {
+                    continue;
+                };
+                if let Some(off) = trial.offset.as_mut() {
+                    for (o, v) in off.iter_mut().zip(avar) {
+                        *o += coefficient * coefficient * v;
+                    }
+                }
+                temp_blocks = Some((temperature_blocks(snap, ts), coefficient));
+            }
+            _ if kind.is_filter() => trial.filter = e.params.lowpass(),
             _ => {
                 let a = e.params.amplitude();
                 let col = params_column(&e.params, &prob.ms, prob.tau0_s, prob.n_inc);
@@ -102,6 +139,33 @@ pub fn holdout_gap(
             spec = trial;
             gap = trial_gap;
             chi2 = trial_chi2;
+        } else if let Some((blocks_c, coefficient)) = temp_blocks {
+            // In time: the held-out block means with `c T` out, under the model kept so far.
+            let in_time = prob.gls(&spec).and_then(|cur| {
+                let c5: [f64; 5] = std::array::from_fn(|i| cur.coef.get(i).copied().unwrap_or(0.0));
+                let k2_hi = super::diagnose::k2_upper(&prob, &spec, &cur);
+                let block_s = snap.block_len as f64 * snap.tau0_s;
+                let (drop, scale) = fixed_coefficient_drop(
+                    &snap.block_means,
+                    &blocks_c,
+                    block_s,
+                    &c5,
+                    &[],
+                    coefficient,
+                    k2_hi,
+                )?;
+                tracing::debug!(drop, scale, "the held-out temperature in time");
+                Some(drop / scale.max(1.0) >= opts.thresholds.add_chi2)
+            });
+            if in_time == Some(true) {
+                effects.push(HeldEffect {
+                    kind,
+                    gap_after: gap,
+                    delta_chi2: 0.0,
+                    carried: true,
+                });
+                continue;
+            }
         }
         effects.push(HeldEffect {
             kind,

@@ -61,6 +61,6 @@ pub mod warmup_profile;
 pub use diagnose::{diagnose, DiagnoseOptions, Diagnosis, Verdict};
 pub use effects::{EffectKind, EffectParams};
 pub use evidence::{EvidenceSnapshot, GapConfig, GapEvidence};
-pub use holdout::holdout_gap;
+pub use holdout::{holdout_gap, holdout_gap_with_temperature};
 pub use record::DiagnosisRecord;
 pub use thresholds::Thresholds;

@@ -184,6 +184,61 @@ impl TemperatureInModel {
     }
 }
 
+/// The time-domain test of a coefficient fitted on another run, held fixed on a held-out run
+/// (`gap::holdout`): the drop of the whitened residual sum of squares of the held-out block
+/// means' first differences when `c (T_{i+1} - T_i)` is taken out, the drift fitted either way,
+/// and the residual variance with it out (`rss / (n - 1)`, about 1 when the noise model is
+/// right). The noise covariance is the held-out model's (`c5`, `effects`) with the random walk
+/// at least the maximum likelihood `K^2` of the block means with `c T` taken out, on
+/// `[0, k2_hi]` (as [`TemperatureInModel::refit`]). For a fixed known signal of whitened size
+/// `delta` the drop is about `N(delta^2, 4 delta^2)` when the held-out run has it and
+/// `N(-delta^2, 4 delta^2)` when it has not (`holdout::carries`). `None` when the series are
+/// not usable.
+pub fn fixed_coefficient_drop(
+    block_means: &[f64],
+    temperature: &[f64],
+    block_s: f64,
+    c5: &[f64; 5],
+    effects: &[EffectParams],
+    coefficient: f64,
+    k2_hi: f64,
+) -> Option<(f64, f64)> {
+    let nb = block_means.len();
+    if !usable_block_means(block_means)
+        || temperature.len() != nb
+        || !temperature.iter().all(|t| t.is_finite())
+        || !coefficient.is_finite()
+    {
+        return None;
+    }
+    let rest: Vec<f64> = block_means
+        .iter()
+        .zip(temperature)
+        .map(|(b, t)| b - coefficient * t)
+        .collect();
+    let mut c = *c5;
+    if let Some(k2) = profile_k2(&rest, block_s, &c, effects, k2_hi) {
+        c[3] = c[3].max(k2);
+    }
+    let diff = |v: &[f64]| DVector::from_iterator(nb - 1, v.windows(2).map(|p| p[1] - p[0]));
+    let chol = block_diff_covariance(nb, block_s, &c, effects)?.cholesky()?;
+    let l = chol.l();
+    let u = l.solve_lower_triangular(&DVector::from_element(nb - 1, 1.0))?;
+    let uu = u.norm_squared();
+    if uu <= 0.0 {
+        return None;
+    }
+    // The whitened residual sum of squares with the drift fitted.
+    let rss = |v: &[f64]| -> Option<f64> {
+        let y = l.solve_lower_triangular(&diff(v))?;
+        let uy = u.dot(&y);
+        Some(y.norm_squared() - uy * uy / uu)
+    };
+    let (rss0, rss1) = (rss(block_means)?, rss(&rest)?);
+    let dof = (nb - 1).saturating_sub(1).max(1) as f64;
+    Some((rss0 - rss1, rss1 / dof))
+}
+
 /// The five terms of a GLS fit (squared coefficients, as the block covariance takes them).
 fn c5_of(fit: &GlsFit) -> [f64; 5] {
     std::array::from_fn(|i| fit.coef.get(i).copied().unwrap_or(0.0))

@@ -311,6 +311,72 @@ fn a_temperature_the_curve_does_not_show_is_kept_on_its_time_domain_evidence() {
     assert_eq!(d["verdict"], "explained", "{d}");
 }
 
+/// `--holdout` judges a temperature with the held-out file's own temperature column (session
+/// 36; before, the temperature's offset was never added on the held-out run and its record
+/// always said `carried: false`). The unit of the test above fitted on seed 2, where its
+/// temperature is kept in time: held fixed on seed 3 of the same unit it carries (in time, the
+/// held-out gap left as it was); on seed 4 of the same unit with no temperature coefficient it
+/// does not, and its curve's gap with it in says why (1.5 -> 4.5 through this binary).
+#[test]
+fn a_temperature_carries_to_a_held_out_run_of_its_unit_and_not_to_another() {
+    let unit = |name: &str, coef: &str| {
+        chamber_unit(
+            name,
+            0.04,
+            [22.0, 30.0, 1500.0, 2.5, 1043.0],
+            &format!(
+                "name = \"g\"\nunit = \"rad\"\nN = 1.22e-4\nB = 2.9e-5\nK = 1.0e-6\n\
+                 flicker_band_s = [0.04, 1.0e5]\ntemperature_coefficient = {coef}\n"
+            ),
+        )
+    };
+    let (with, without) = (unit("temp-ho.toml", "7.7e-5"), unit("temp-ho0.toml", "0.0"));
+    let csv = |m: &std::path::Path, name: &str, seed: &str| {
+        let p = tmp(name);
+        simulate_to(
+            m,
+            &["--duration", "2026s", "--seed", seed, "--format", "csv"],
+            &p,
+        );
+        p
+    };
+    let run = csv(&with, "temp-ho-2.csv", "2");
+    for (held, carried) in [
+        (csv(&with, "temp-ho-3.csv", "3"), true),
+        (csv(&without, "temp-ho0-4.csv", "4"), false),
+    ] {
+        let d = first_record(exe().arg("diagnose").args([
+            run.to_str().unwrap(),
+            "--holdout",
+            held.to_str().unwrap(),
+            "--tau0",
+            "0.04",
+            "--unit",
+            "rad",
+        ]));
+        let h = &d["holdout"];
+        let t = h["effects"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|e| e["kind"] == "temperature")
+            .unwrap_or_else(|| panic!("no held-out temperature: {d}"));
+        assert_eq!(t["carried"], carried, "{h}");
+        assert_eq!(h["carried"], carried, "{h}");
+        let before = h["gap_before"].as_f64().unwrap();
+        assert_eq!(h["gap_after"].as_f64().unwrap(), before, "{h}");
+        if carried {
+            assert_eq!(
+                t["gap_after"].as_f64().unwrap(),
+                before,
+                "kept in time: {h}"
+            );
+        } else {
+            assert!(t["gap_after"].as_f64().unwrap() > 2.0 * before, "{h}");
+        }
+    }
+}
+
 /// The other side of keeping the temperature in time (a review, session 35): the same unit
 /// with no temperature coefficient but a sinusoid of its own (1e-4 rad/s every 1300 s) beside
 /// the chamber's 1043-s cycle. Over 34 minutes the two are alike, and the coefficient's `|z|`
