@@ -98,6 +98,8 @@ pub fn holdout_gap_with_temperature(
     let mut gap = base.gap();
     let mut chi2 = base.chi2;
     let mut effects = Vec::new();
+    // The stationary effects that carried, in the noise covariance of the time-domain test.
+    let mut carried_params: Vec<EffectParams> = Vec::new();
     for e in &fitted.effects {
         let kind = e.params.kind();
         let mut trial = spec.clone();
@@ -139,6 +141,9 @@ pub fn holdout_gap_with_temperature(
             spec = trial;
             gap = trial_gap;
             chi2 = trial_chi2;
+            if temp_blocks.is_none() {
+                carried_params.push(e.params);
+            }
         } else if let Some((blocks_c, coefficient)) = temp_blocks {
             // In time: the held-out block means with `c T` out, under the model kept so far.
             let in_time = prob.gls(&spec).and_then(|cur| {
@@ -150,7 +155,7 @@ pub fn holdout_gap_with_temperature(
                     &blocks_c,
                     block_s,
                     &c5,
-                    &[],
+                    &carried_params,
                     coefficient,
                     k2_hi,
                 )?;
