@@ -962,12 +962,12 @@ fn settle(
 /// session 18's benchmark keeping them took the jump draws from 17 to 30 of 120 against the
 /// fair jump ceiling's 35 (docs/gap.md, "Bookkeeping", "Jumps kept in time (session 18)").
 /// Since session 35 the temperature too, when its time-domain evidence alone is strong:
-/// `|z| >= TEMPERATURE_Z_ALONE` (6 since session 36, 8 before). A blind check's 34-minute
+/// `|z| >= TEMPERATURE_Z_ALONE` (twice the threshold that names it). A blind check's 34-minute
 /// gyro with a temperature cycle had `|z|` 14.8 and the coefficient within 2%, and was dropped
 /// because its curve's gap (0.63) was already under 1 and did not fall. A slow signal of the
 /// bias that the model lacks and that resembles the temperature (an unrelated sinusoid near the
 /// chamber's cycle, a jump beside a temperature step) raised `|z|` to 4.1-5.2 in a review's
-/// runs with no coefficient, where the curve's gap kept it out; at 6 and at 8 none.
+/// runs with no coefficient, where the curve's gap kept it out; at twice the threshold none.
 fn kept_in_time(params: &EffectParams) -> bool {
     match *params {
         EffectParams::Warmup { .. } | EffectParams::BiasJumps { .. } => true,

@@ -382,7 +382,7 @@ fn a_temperature_carries_to_a_held_out_run_of_its_unit_and_not_to_another() {
 /// the chamber's 1043-s cycle. Over 34 minutes the two are alike, and the coefficient's `|z|`
 /// reaches 4-5; the curve's gap does not fall with the temperature in. Kept on time alone at
 /// that `|z|` it was named (seeds 2 and 11 of 16); now the time-domain evidence alone must
-/// reach `TEMPERATURE_Z_ALONE` (8 in session 35, 6 since session 36), and it is not named.
+/// reach twice the threshold (`TEMPERATURE_Z_ALONE`), and it is not named.
 #[test]
 fn an_unrelated_slow_sinusoid_is_not_named_temperature_on_time_alone() {
     for (seed, phase) in [(2, 4.798), (11, 1.257)] {
