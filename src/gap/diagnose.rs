@@ -586,7 +586,7 @@ fn diagnose_curve_once(
     // (the warm-up test and the jump search both take it).
     let mut k_up_kept: Option<f64> = None;
     if opts.candidates.contains(&EffectKind::Warmup) {
-        let mut c5: [f64; 5] = std::array::from_fn(|i| cur.coef.get(i).copied().unwrap_or(0.0));
+        let mut c5 = cur.five_terms();
         // The null's random walk: a K fitted low (often 0) leaves the block means' slow wander
         // out of the covariance, and the scan over T reads it as a warm-up (docs/gap.md, "The
         // warm-up's null level"). K^2 is profiled on the block means under both hypotheses,
@@ -675,7 +675,7 @@ fn diagnose_curve_once(
             // the warm-up's block shape as a column beside it.
             if let Some(t) = temp_in.as_mut() {
                 let shape = w.block_curve(snap.block_means.len(), block_s);
-                let c5: [f64; 5] = std::array::from_fn(|i| cur.coef.get(i).copied().unwrap_or(0.0));
+                let c5 = cur.five_terms();
                 let entered_offset = t.curve_offset();
                 t.refit(&snap.block_means, block_s, &c5, &stat_params, &[shape]);
                 if t.finding.z.abs() > TEMPERATURE_Z {
@@ -726,7 +726,7 @@ fn diagnose_curve_once(
             Some(wc) => block_means.iter().zip(wc).map(|(b, w)| b - w).collect(),
             None => block_means.clone(),
         };
-        let c5: [f64; 5] = std::array::from_fn(|i| cur.coef.get(i).copied().unwrap_or(0.0));
+        let c5 = cur.five_terms();
         let stat_params: Vec<EffectParams> = effects
             .iter()
             .map(|e| e.params)

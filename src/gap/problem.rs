@@ -170,6 +170,12 @@ impl GlsFit {
     pub fn gap(&self) -> f64 {
         self.chi2 / self.expected.max(1.0)
     }
+
+    /// The five terms' squares `(Q^2, N^2, B^2, K^2, R^2)` (0 where the fit has fewer), as the
+    /// block covariance of the time-domain tests takes them.
+    pub fn five_terms(&self) -> [f64; 5] {
+        std::array::from_fn(|i| self.coef.get(i).copied().unwrap_or(0.0))
+    }
 }
 
 impl GapProblem {
