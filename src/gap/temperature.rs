@@ -170,20 +170,35 @@ impl TemperatureInModel {
         effects: &[EffectParams],
         extra: &[Vec<f64>],
     ) {
-        let mut c = *c;
         let mut rest = self.remove_from(block_means);
         for e in extra {
             for (r, v) in rest.iter_mut().zip(e) {
                 *r -= v;
             }
         }
-        if let Some(k2) = profile_k2(&rest, block_s, &c, effects, self.k2_hi) {
-            c[3] = c[3].max(k2);
-        }
+        let c = with_block_random_walk(c, &rest, block_s, effects, self.k2_hi);
         if let Some(f) = fit_temperature(block_means, &self.blocks_c, block_s, &c, effects, extra) {
             self.finding = f;
         }
     }
+}
+
+/// `c` (squared five terms) with `K^2` raised, never lowered, to the maximum likelihood `K^2`
+/// on `[0, k2_hi]` of the block means `rest` (the temperature-driven bias taken out): the
+/// random walk the unit's block means show stays in the covariance the coefficient is judged
+/// with ([`profile_k2`]; [`TemperatureInModel::refit`], [`fixed_coefficient_drop`]).
+fn with_block_random_walk(
+    c: &[f64; 5],
+    rest: &[f64],
+    block_s: f64,
+    effects: &[EffectParams],
+    k2_hi: f64,
+) -> [f64; 5] {
+    let mut c = *c;
+    if let Some(k2) = profile_k2(rest, block_s, &c, effects, k2_hi) {
+        c[3] = c[3].max(k2);
+    }
+    c
 }
 
 /// The time-domain test of a coefficient fitted on another run, held fixed on a held-out run
@@ -218,10 +233,7 @@ pub fn fixed_coefficient_drop(
         .zip(temperature)
         .map(|(b, t)| b - coefficient * t)
         .collect();
-    let mut c = *c5;
-    if let Some(k2) = profile_k2(&rest, block_s, &c, effects, k2_hi) {
-        c[3] = c[3].max(k2);
-    }
+    let c = with_block_random_walk(c5, &rest, block_s, effects, k2_hi);
     let diff = |v: &[f64]| DVector::from_iterator(nb - 1, v.windows(2).map(|p| p[1] - p[0]));
     let chol = block_diff_covariance(nb, block_s, &c, effects)?.cholesky()?;
     let l = chol.l();
@@ -239,11 +251,6 @@ pub fn fixed_coefficient_drop(
     let (rss0, rss1) = (rss(block_means)?, rss(&rest)?);
     let dof = (nb - 1).saturating_sub(1).max(1) as f64;
     Some((rss0 - rss1, rss1 / dof))
-}
-
-/// The five terms of a GLS fit (squared coefficients, as the block covariance takes them).
-fn c5_of(fit: &GlsFit) -> [f64; 5] {
-    std::array::from_fn(|i| fit.coef.get(i).copied().unwrap_or(0.0))
 }
 
 /// Step 0 of the diagnosis: the temperature's coefficient on the block means with the base
@@ -269,7 +276,7 @@ pub fn enter_temperature(
         &snap.block_means,
         &blocks_c,
         block_s,
-        &c5_of(base),
+        &base.five_terms(),
         &[],
         &[],
     )?;
@@ -293,7 +300,7 @@ pub fn enter_temperature(
     for _ in 0..TEMPERATURE_ROUNDS {
         let z = t.finding.z;
         let fit = prob.gls(&spec(&t))?;
-        t.refit(&snap.block_means, block_s, &c5_of(&fit), &[], &[]);
+        t.refit(&snap.block_means, block_s, &fit.five_terms(), &[], &[]);
         tracing::debug!(
             coefficient = t.finding.coefficient,
             z = t.finding.z,
