@@ -100,8 +100,8 @@ pub fn holdout_gap_with_temperature(
         offset: Some(vec![0.0; j]),
         ..ModelSpec::default()
     };
-    let mut gap = base.gap();
-    let mut chi2 = base.chi2;
+    // The fit of the model with the effects that carried so far.
+    let mut cur = base.clone();
     let mut effects = Vec::new();
     // The stationary effects that carried, in the noise covariance of the time-domain test.
     let mut carried_params: Vec<EffectParams> = Vec::new();
@@ -136,17 +136,17 @@ pub fn holdout_gap_with_temperature(
                 }
             }
         }
-        let (trial_gap, trial_chi2) = prob
-            .gls(&trial)
+        let trial_fit = prob.gls(&trial);
+        let (trial_gap, trial_chi2) = trial_fit
+            .as_ref()
             .map_or((f64::INFINITY, f64::INFINITY), |f| (f.gap(), f.chi2));
-        let delta_chi2 = chi2 - trial_chi2;
+        let delta_chi2 = cur.chi2 - trial_chi2;
         // Never above the gap without it (the bookkeeping's rule) and a drop that means something.
-        let by_curve = trial_gap < gap && carries(delta_chi2, trial_gap, opts);
+        let by_curve = trial_gap < cur.gap() && carries(delta_chi2, trial_gap, opts);
         // A temperature in time: the held-out block means with `c T` out, under the model kept
         // so far; the drop of their whitened residuals over its scale (`None`: not judged).
         let time_drop = temp_blocks.as_ref().and_then(|(blocks_c, coefficient)| {
-            let cur = prob.gls(&spec)?;
-            let c5: [f64; 5] = std::array::from_fn(|i| cur.coef.get(i).copied().unwrap_or(0.0));
+            let c5 = cur.five_terms();
             let k2_hi = super::diagnose::k2_upper(&prob, &spec, &cur);
             let block_s = snap.block_len as f64 * snap.tau0_s;
             let (drop, scale) = fixed_coefficient_drop(
@@ -176,16 +176,15 @@ pub fn holdout_gap_with_temperature(
         if carried && in_time {
             effects.push(HeldEffect {
                 kind,
-                gap_after: gap,
+                gap_after: cur.gap(),
                 delta_chi2: 0.0,
                 carried: true,
             });
             continue;
         }
-        if carried {
+        if let Some(f) = trial_fit.filter(|_| carried) {
             spec = trial;
-            gap = trial_gap;
-            chi2 = trial_chi2;
+            cur = f;
             if temp_blocks.is_none() {
                 carried_params.push(e.params);
             }
@@ -199,7 +198,7 @@ pub fn holdout_gap_with_temperature(
     }
     Ok(HoldoutGap {
         gap_before: base.gap(),
-        gap_after: gap,
+        gap_after: cur.gap(),
         effects,
     })
 }
