@@ -185,8 +185,8 @@ fn chamber_unit(name: &str, tau0_s: f64, chamber: [f64; 5], channel: &str) -> Pa
     p
 }
 
-/// 2026 s of the 25 Hz unit `truth` (rad) simulated at `seed` into `name`, and its diagnosis.
-fn chamber_run(truth: &std::path::Path, name: &str, seed: u64) -> serde_json::Value {
+/// 2026 s of the 25 Hz unit `truth` (rad) simulated at `seed` into `name`.
+fn chamber_csv(truth: &std::path::Path, name: &str, seed: u64) -> PathBuf {
     let csv = tmp(name);
     let seed = seed.to_string();
     simulate_to(
@@ -194,6 +194,12 @@ fn chamber_run(truth: &std::path::Path, name: &str, seed: u64) -> serde_json::Va
         &["--duration", "2026s", "--seed", &seed, "--format", "csv"],
         &csv,
     );
+    csv
+}
+
+/// [`chamber_csv`] and its diagnosis.
+fn chamber_run(truth: &std::path::Path, name: &str, seed: u64) -> serde_json::Value {
+    let csv = chamber_csv(truth, name, seed);
     first_record(exe().arg("diagnose").args([
         csv.to_str().unwrap(),
         "--tau0",
@@ -331,19 +337,10 @@ fn a_temperature_carries_to_a_held_out_run_of_its_unit_and_not_to_another() {
         )
     };
     let (with, without) = (unit("temp-ho.toml", "7.7e-5"), unit("temp-ho0.toml", "0.0"));
-    let csv = |m: &std::path::Path, name: &str, seed: &str| {
-        let p = tmp(name);
-        simulate_to(
-            m,
-            &["--duration", "2026s", "--seed", seed, "--format", "csv"],
-            &p,
-        );
-        p
-    };
-    let run = csv(&with, "temp-ho-2.csv", "2");
+    let run = chamber_csv(&with, "temp-ho-2.csv", 2);
     for (held, carried) in [
-        (csv(&with, "temp-ho-3.csv", "3"), true),
-        (csv(&without, "temp-ho0-4.csv", "4"), false),
+        (chamber_csv(&with, "temp-ho-3.csv", 3), true),
+        (chamber_csv(&without, "temp-ho0-4.csv", 4), false),
     ] {
         let d = first_record(exe().arg("diagnose").args([
             run.to_str().unwrap(),
