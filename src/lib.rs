@@ -177,6 +177,7 @@
 //!     status.rs            the one-line status of a live run
 //!   status_area.rs         the terminal line kept for a live run's status
 //!   effect_text.rs         an effect of a diagnosis as a person reads it
+//!   alternative_words.rs   the other explanations about as good as the choice, in words
 //!   band_words.rs          how far a measured curve leaves the ensemble bands, in words
 //!   taken_out.rs           what a diagnosis set aside (outliers, stuck stretches), in words
 //!   results.rs             the records `plot` and `report` read, labelled

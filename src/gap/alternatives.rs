@@ -20,10 +20,16 @@
 //! Each alternative is refitted (generalised least squares, the same covariance) and given with
 //! its effects, its gap `G`, its `delta_chi2` against the chosen model (positive: it fits worse
 //! by that much) and its five terms.
+//!
+//! A temperature and a warm-up are found in time, on the block means, and are compared there
+//! ([`temperature_alternatives`]): a temperature that only settles has a warm-up's shape.
 
 use super::diagnose::{spec_from, AddedEffect, DiagnoseOptions};
-use super::effects::{EffectKind, EffectParams};
+use super::effects::{effect_column, EffectKind, EffectParams};
+use super::evidence::EvidenceSnapshot;
 use super::problem::{GapProblem, GlsFit, ModelSpec};
+use super::temperature::{fit_shape, TemperatureInModel, TEMPERATURE_Z, Z95};
+use super::warmup::warmup_block_shape;
 
 /// Margin on the score (drop of `r' S^-1 r` per parameter) within which two decisions are
 /// "about equal". A score is a likelihood-ratio statistic per parameter, so 2 is a likelihood
@@ -177,4 +183,153 @@ pub fn alternatives(
     }
     out.sort_by(|a, b| a.delta_chi2.total_cmp(&b.delta_chi2));
     out
+}
+
+/// The alternatives of a temperature that the block means cannot tell from a warm-up, or that
+/// its own evidence names but the diagnosis did not keep (docs/gap.md, "Alternatives"). The
+/// temperature and the warm-up are judged in time, on the block means, not on the curve, so
+/// these are read there too; each is then refitted on the curve like the others (its gap, its
+/// `delta_chi2` against the chosen model, its five terms):
+/// - the temperature named, no warm-up: when the warm-up of the temperature's own settling
+///   shape would take its place ([`TemperatureInModel::warmup_lookalike`]: beside it the
+///   temperature's `|z|` is at most [`TEMPERATURE_Z`], the rule that drops a temperature beside
+///   a warm-up the diagnosis found, and the warm-up's own `|z|` is above it, so it carries what
+///   the temperature did), the final model with that warm-up in place of the temperature. A chamber that only settles gives the bias
+///   a warm-up's shape (session 36: a bias warm-up of 2200 s beside a temperature settling over
+///   1500 s, no coefficient, named as a temperature at `|z|` 6.1-7.9);
+/// - a warm-up named, no temperature: when the temperature fitted alone (the warm-up out)
+///   explains the block means about as well as the warm-up with the same noise (Akaike's drop,
+///   `z^2` less two per parameter, within [`AIC_MARGIN`] of the warm-up's, its time constant
+///   counted) and is beyond the 95% level itself (`|z| > 1.96`), the final model with that
+///   temperature in place of the warm-up. A warm-up of about the settling's time constant is
+///   what the warm-up test finds where the temperature's own `|z|` stayed below
+///   [`TEMPERATURE_Z`] (a MEMS gyro settling 25 degC, session 37);
+/// - neither named: when the temperature fitted alone has `|z|` above [`TEMPERATURE_Z`] (the
+///   curve did not show it and its time-domain evidence is below
+///   [`TEMPERATURE_Z_ALONE`](super::temperature::TEMPERATURE_Z_ALONE)), the final model with
+///   the temperature added.
+///
+/// Each is listed only where the curve does not reject it: its gap at most `gap_bar` (the
+/// critical gap, or the chosen model's when that is above it). A temperature whose block means
+/// say `|z|` 4.3 but whose `c^2 AVAR_T` at that coefficient lifts the curve's gap from 0.65 to
+/// 4.4 (a 25 Hz gyro settling 8 degC in 34 minutes, seed 6 of tests/cli/diagnose.rs's unit) is
+/// not "about as good".
+///
+/// `named` is the temperature the diagnosis kept, `in_curve` the exact curve offsets of the
+/// time-domain effects whose offsets are in the final model `fit`, `k2_hi` the top of the block
+/// means' random walk ([`TemperatureInModel::k2_hi`]).
+#[allow(clippy::too_many_arguments)]
+pub fn temperature_alternatives(
+    prob: &GapProblem,
+    snap: &EvidenceSnapshot,
+    temp: &EvidenceSnapshot,
+    named: Option<&TemperatureInModel>,
+    effects: &[AddedEffect],
+    in_curve: &[(EffectKind, Vec<f64>)],
+    fit: &GlsFit,
+    k2_hi: f64,
+    gap_bar: f64,
+) -> Vec<Alternative> {
+    let has = |k: EffectKind| effects.iter().any(|e| e.params.kind() == k);
+    let c5 = fit.five_terms();
+    let params: Vec<EffectParams> = effects.iter().map(|e| e.params).collect();
+    let block_s = snap.block_len as f64 * snap.tau0_s;
+    // The final model's offset without `out`'s, with `add` in.
+    let offset_with = |out: Option<EffectKind>, add: &[f64]| -> Vec<f64> {
+        let mut o = add.to_vec();
+        for (_, v) in in_curve.iter().filter(|(k, _)| Some(*k) != out) {
+            for (a, b) in o.iter_mut().zip(v) {
+                *a += b;
+            }
+        }
+        o
+    };
+    // The temperature fitted alone with the final model's noise (the warm-up out).
+    let alone = || {
+        let t = TemperatureInModel::fitted(prob, snap, temp, &c5, &params, k2_hi);
+        tracing::debug!(finding = ?t.as_ref().map(|t| t.finding), "the temperature alone");
+        t
+    };
+    // The temperature in place of the warm-up found: when, with the same noise, it explains the
+    // block means about as well (Akaike's drop, `z^2` less two per parameter, within
+    // [`AIC_MARGIN`] of the warm-up's, whose time constant was scanned: `z_T^2 >= z_W^2 - 6`)
+    // and is itself beyond the 95% level.
+    let about_as_well = |t: &Option<TemperatureInModel>| -> Option<TemperatureInModel> {
+        let t = t.as_ref()?;
+        let (amp, tc) = effects.iter().find_map(|e| match e.params {
+            EffectParams::Warmup {
+                amplitude,
+                time_constant_s,
+            } => Some((amplitude, time_constant_s)),
+            _ => None,
+        })?;
+        let shape: Vec<f64> = (0..snap.block_means.len())
+            .map(|i| warmup_block_shape(i, block_s, tc))
+            .collect();
+        let w = fit_shape(&snap.block_means, &shape, block_s, &c5, &params, k2_hi)?;
+        tracing::debug!(
+            amp,
+            z_w = w.z,
+            z_t = t.finding.z,
+            "the temperature against the warm-up"
+        );
+        let (zt2, zw2) = (t.finding.z.powi(2), w.z.powi(2));
+        (t.finding.z.abs() > Z95 && zt2 - 2.0 >= zw2 - 4.0 - AIC_MARGIN).then(|| t.clone())
+    };
+    let mut alt = effects.to_vec();
+    let out = match (has(EffectKind::Temperature), has(EffectKind::Warmup)) {
+        (true, false) => {
+            let Some(t) = named else {
+                return Vec::new();
+            };
+            let w = t.warmup_lookalike(&snap.block_means, block_s, &c5, &params);
+            tracing::debug!(?w, "the warm-up of the temperature's shape");
+            let Some(w) = w.filter(|w| {
+                w.z_temperature_beside.abs() <= TEMPERATURE_Z
+                    && w.z.abs() > w.z_temperature_beside.abs()
+            }) else {
+                return Vec::new();
+            };
+            let col = effect_column(
+                EffectKind::Warmup,
+                w.time_constant_s,
+                &prob.ms,
+                prob.tau0_s,
+                prob.n_inc,
+            );
+            let warm: Vec<f64> = col.iter().map(|c| w.amplitude * w.amplitude * c).collect();
+            for e in alt.iter_mut() {
+                if e.params.kind() == EffectKind::Temperature {
+                    e.params = EffectParams::Warmup {
+                        amplitude: w.amplitude,
+                        time_constant_s: w.time_constant_s,
+                    };
+                }
+            }
+            offset_with(Some(EffectKind::Temperature), &warm)
+        }
+        (false, true) => {
+            let Some(t) = about_as_well(&alone()) else {
+                return Vec::new();
+            };
+            for e in alt.iter_mut() {
+                if e.params.kind() == EffectKind::Warmup {
+                    e.params = t.finding.params();
+                }
+            }
+            offset_with(Some(EffectKind::Warmup), &t.curve_offset())
+        }
+        (false, false) => {
+            let Some(t) = alone().filter(|t| t.finding.z.abs() > TEMPERATURE_Z) else {
+                return Vec::new();
+            };
+            alt.push(placeholder(t.finding.params()));
+            offset_with(None, &t.curve_offset())
+        }
+        (true, true) => return Vec::new(),
+    };
+    refit(prob, &alt, &out, fit)
+        .filter(|a| a.gap <= gap_bar)
+        .into_iter()
+        .collect()
 }

@@ -42,7 +42,9 @@
 //! block-mean covariance of [`super::block_cov`]; [`super::segments`] tests homogeneity across
 //! segments and [`super::holdout`] judges a held-out run. This file orchestrates them.
 
-use super::alternatives::{alternatives, Alternative, CandidateScore, FirstScan, AIC_MARGIN};
+use super::alternatives::{
+    alternatives, temperature_alternatives, Alternative, CandidateScore, FirstScan, AIC_MARGIN,
+};
 use super::effects::{effect_column, EffectKind, EffectParams};
 use super::evidence::EvidenceSnapshot;
 use super::outliers::OutlierCount;
@@ -795,7 +797,12 @@ fn diagnose_curve_once(
     }
     // 4. The bookkeeping: the effects found, in order, each kept only if it lowers the gap of
     // the model with the effects kept before it; its `gap_after` is that model's gap.
-    let (effects, cur, final_spec) = settle(&prob, &effects, &time_offsets, &base);
+    let Settled {
+        effects,
+        fit: cur,
+        spec: final_spec,
+        in_curve,
+    } = settle(&prob, &effects, &time_offsets, &base);
     let mut jumps = jumps;
     if !effects
         .iter()
@@ -830,9 +837,32 @@ fn diagnose_curve_once(
         .as_ref()
         .map(|fs| fs.scores.clone())
         .unwrap_or_default();
-    let alternatives = first_scan
+    let mut alternatives = first_scan
         .map(|fs| alternatives(&prob, opts, &fs, &effects, &final_spec, &cur))
         .unwrap_or_default();
+    if let Some(ts) = temperature.filter(|_| opts.candidates.contains(&EffectKind::Temperature)) {
+        let named = temp_in.as_ref().filter(|_| {
+            effects
+                .iter()
+                .any(|e| e.params.kind() == EffectKind::Temperature)
+        });
+        let k2_hi = temp_in.as_ref().map_or_else(
+            || k2_upper(&prob, &ModelSpec::default(), &base),
+            |t| t.k2_hi,
+        );
+        alternatives.extend(temperature_alternatives(
+            &prob,
+            snap,
+            ts,
+            named,
+            &effects,
+            &in_curve,
+            &cur,
+            k2_hi,
+            th.gap_crit_given(has_filter(&effects)).max(gap_after),
+        ));
+        alternatives.sort_by(|a, b| a.delta_chi2.total_cmp(&b.delta_chi2));
+    }
     let effect_intervals = super::intervals::effect_intervals(&prob, &final_spec, &cur, &effects);
     let regions_after = prob.regions(&cur.model, th.band_z);
     let residual_shape = (verdict == Verdict::Unexplained).then(|| describe(&regions_after));
@@ -912,14 +942,16 @@ fn settle(
     effects: &[AddedEffect],
     time_offsets: &[(EffectKind, Vec<f64>)],
     base: &GlsFit,
-) -> (Vec<AddedEffect>, GlsFit, ModelSpec) {
+) -> Settled {
     let mut kept: Vec<AddedEffect> = Vec::new();
+    let mut in_curve: Vec<(EffectKind, Vec<f64>)> = Vec::new();
     let mut offset = vec![0.0; prob.len()];
     let mut cur = base.clone();
     let mut spec = ModelSpec::default();
     for e in effects {
         let mut trial_offset = offset.clone();
-        if let Some((_, o)) = time_offsets.iter().find(|(k, _)| *k == e.params.kind()) {
+        let time_offset = time_offsets.iter().find(|(k, _)| *k == e.params.kind());
+        if let Some((_, o)) = time_offset {
             for (t, v) in trial_offset.iter_mut().zip(o) {
                 *t += v;
             }
@@ -938,6 +970,7 @@ fn settle(
                 });
                 offset = trial_offset;
                 cur = fit;
+                in_curve.extend(time_offset.cloned());
             }
             // Found in time, by its own calibrated test on the block means: kept on that
             // evidence even where the curve does not show it (a short warm-up or a few jumps
@@ -951,7 +984,22 @@ fn settle(
             _ => {}
         }
     }
-    (kept, cur, spec)
+    Settled {
+        effects: kept,
+        fit: cur,
+        spec,
+        in_curve,
+    }
+}
+
+/// The effects kept by [`settle`], the final model's fit and spec, and the time-domain effects
+/// whose exact curve offsets are in that model (those kept in time with the curve not showing
+/// them are not).
+struct Settled {
+    effects: Vec<AddedEffect>,
+    fit: GlsFit,
+    spec: ModelSpec,
+    in_curve: Vec<(EffectKind, Vec<f64>)>,
 }
 
 /// The effects found in time by a test of their own that the bookkeeping keeps on that

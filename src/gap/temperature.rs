@@ -183,6 +183,104 @@ impl TemperatureInModel {
     }
 }
 
+/// A warm-up that the temperature-driven bias resembles: `A e^{-t/T}` at the time constant of
+/// the temperature's own settling ([`settling_profile`]) fitted to the block means in the
+/// temperature's place ([`TemperatureInModel::warmup_lookalike`]; docs/gap.md, "Alternatives").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WarmupLookalike {
+    /// `A`, u/s.
+    pub amplitude: f64,
+    /// `T`, s: the temperature's settling time constant.
+    pub time_constant_s: f64,
+    /// The warm-up's `A / se` on the block means, alone.
+    pub z: f64,
+    /// The temperature's `z` fitted beside it.
+    pub z_temperature_beside: f64,
+}
+
+impl TemperatureInModel {
+    /// The temperature found on `block_means` (u/s per block) with the noise of `c` (squared
+    /// five terms) and the stationary `effects`, refitted once with the random walk the block
+    /// means show ([`TemperatureInModel::refit`]). `None` when the test cannot be formed.
+    pub fn fitted(
+        prob: &GapProblem,
+        snap: &EvidenceSnapshot,
+        temp: &EvidenceSnapshot,
+        c: &[f64; 5],
+        effects: &[EffectParams],
+        k2_hi: f64,
+    ) -> Option<Self> {
+        let block_s = snap.block_len as f64 * snap.tau0_s;
+        let blocks_c = temperature_blocks(snap, temp);
+        let avar_c2 = temperature_avar(temp, &prob.ms)?;
+        let finding = fit_shape(&snap.block_means, &blocks_c, block_s, c, effects, k2_hi)?;
+        Some(TemperatureInModel {
+            finding,
+            blocks_c,
+            avar_c2,
+            k2_hi,
+        })
+    }
+
+    /// The warm-up of the temperature's own settling shape, fitted to `block_means` in its
+    /// place, and the temperature's `z` fitted beside it (the noise as in
+    /// [`TemperatureInModel::refit`]). When the temperature only settles, `c T(t)` is `c (T_end +
+    /// (T_0 - T_end) e^{-t/T})`, a warm-up of amplitude `c (T_0 - T_end)`: the block means
+    /// cannot tell the two apart and the temperature's `z` beside it falls to noise; a cycle (or
+    /// any change of the temperature that is not one exponential) keeps it. `None` when the
+    /// temperature's block means have no settling profile.
+    pub fn warmup_lookalike(
+        &self,
+        block_means: &[f64],
+        block_s: f64,
+        c: &[f64; 5],
+        effects: &[EffectParams],
+    ) -> Option<WarmupLookalike> {
+        let tc = settling_profile(&self.blocks_c, block_s)?.time_constant_s;
+        let shape: Vec<f64> = (0..block_means.len())
+            .map(|i| warmup_block_shape(i, block_s, tc))
+            .collect();
+        let mut beside = self.clone();
+        beside.refit(
+            block_means,
+            block_s,
+            c,
+            effects,
+            std::slice::from_ref(&shape),
+        );
+        let alone = fit_shape(block_means, &shape, block_s, c, effects, self.k2_hi)?;
+        Some(WarmupLookalike {
+            amplitude: alone.coefficient,
+            time_constant_s: tc,
+            z: alone.z,
+            z_temperature_beside: beside.finding.z,
+        })
+    }
+}
+
+/// The amplitude of a given block curve `shape` in `block_means` ([`fit_temperature`] with
+/// `shape` as the regressor: a temperature in degC gives its coefficient, a warm-up's block
+/// shape its amplitude), refitted once with the random walk the block means show with it taken
+/// out, as [`TemperatureInModel::refit`] does: the same noise for either explanation, so their
+/// `z` compare.
+pub fn fit_shape(
+    block_means: &[f64],
+    shape: &[f64],
+    block_s: f64,
+    c: &[f64; 5],
+    effects: &[EffectParams],
+    k2_hi: f64,
+) -> Option<TemperatureFinding> {
+    let first = fit_temperature(block_means, shape, block_s, c, effects, &[])?;
+    let rest: Vec<f64> = block_means
+        .iter()
+        .zip(shape)
+        .map(|(b, s)| b - first.coefficient * s)
+        .collect();
+    let c = with_block_random_walk(c, &rest, block_s, effects, k2_hi);
+    fit_temperature(block_means, shape, block_s, &c, effects, &[]).or(Some(first))
+}
+
 /// `c` (squared five terms) with `K^2` raised, never lowered, to the maximum likelihood `K^2`
 /// on `[0, k2_hi]` of the block means `rest` (the temperature-driven bias taken out): the
 /// random walk the unit's block means show stays in the covariance the coefficient is judged

@@ -6,11 +6,13 @@
 //! and labelled by run, for [`plot`] (Allan-deviation panels), [`dynamic`] (the time x tau
 //! view) and [`report`] (the HTML page); [`page_file`] writes those without overwriting;
 //! [`output`] opens result files, [`effect_text`] words a diagnosis's effects and
-//! [`band_words`] its ensemble band, [`export`] writes the noise model for other tools,
+//! [`band_words`] its ensemble band, [`alternative_words`] the other explanations it found
+//! about as good, [`export`] writes the noise model for other tools,
 //! [`metrics`] serves live figures, [`status_area`] keeps a live run's status line under its log
 //! lines. [`unit_record`] tags the records of a run of several units with their unit's name and
 //! takes the tag off again for the readers.
 
+pub mod alternative_words;
 pub mod band_words;
 #[cfg(feature = "plot")]
 pub mod dynamic;

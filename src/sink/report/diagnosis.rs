@@ -128,6 +128,18 @@ pub(super) fn diagnosis(h: &mut String, res: &Results) {
                 esc(&w)
             );
         }
+        let mut effects_cell = if effects.is_empty() {
+            "none".to_string()
+        } else {
+            effects.join("<br>")
+        };
+        if let Some(w) = crate::sink::alternative_words::alternative_words(d, &unit, &tick) {
+            let _ = write!(
+                effects_cell,
+                "<br><span class=\"small\">about as well: {}</span>",
+                esc(&w)
+            );
+        }
         let _ = writeln!(
             h,
             "<tr>{}<td class=\"l\">{}</td><td class=\"l\"><b>{}</b>{shape}</td><td>{:.2}</td><td>{:.2}</td><td class=\"l\">{}</td><td class=\"l\">{}</td></tr>",
@@ -140,7 +152,7 @@ pub(super) fn diagnosis(h: &mut String, res: &Results) {
             esc(&verdict),
             d.gap_before,
             d.gap_after,
-            if effects.is_empty() { "none".into() } else { effects.join("<br>") },
+            effects_cell,
             if regions.is_empty() { "nowhere".into() } else { regions.join("<br>") }
         );
     }
