@@ -84,7 +84,10 @@ pub fn holdout_gap(
 /// ([`fixed_coefficient_drop`]; the evidence the fitting run asks of a temperature kept in
 /// time), its `gap_after` then the gap before it and its `delta_chi2` 0, as the fitting run
 /// records an effect kept in time. Carried by the curve, it must also lower them by
-/// `TEMPERATURE_Z^2`, the evidence that names a temperature on the fitting run.
+/// `TEMPERATURE_Z^2`, the evidence that names a temperature on the fitting run. A held-out
+/// run that could not lower them by that much even if it had the coefficient (its temperature
+/// constant or changing too little, too few blocks) cannot judge it: the temperature is left
+/// out, as without a temperature.
 pub fn holdout_gap_with_temperature(
     fitted: &Diagnosis,
     snap: &EvidenceSnapshot,
@@ -108,8 +111,8 @@ pub fn holdout_gap_with_temperature(
     for e in &fitted.effects {
         let kind = e.params.kind();
         let mut trial = spec.clone();
-        // The temperature's held-out series: its block means over the channel's blocks (degC).
-        let mut temp_blocks = None;
+        // The temperature's drop in time, over its scale (`Some` for a temperature only).
+        let mut time_drop = None;
         match e.params {
             EffectParams::BiasJumps { .. } => continue,
             EffectParams::Temperature { coefficient, .. } => {
@@ -118,12 +121,43 @@ pub fn holdout_gap_with_temperature(
                 else {
                     continue;
                 };
+                // In time: the held-out block means with `c T` out, under the model kept so
+                // far. Left out, as without a temperature, when the held-out run cannot show it
+                // at the level asked below: too short for block means, a temperature missing
+                // there, or one that changes so little that `c T` taken out would lower the
+                // residuals by less than `TEMPERATURE_Z^2` even if the run had it (a chamber
+                // held constant): `carried: false` would then say the run disowned it.
+                let blocks_c = temperature_blocks(snap, ts);
+                let block_s = snap.block_len as f64 * snap.tau0_s;
+                let judged = fixed_coefficient_drop(
+                    &snap.block_means,
+                    &blocks_c,
+                    block_s,
+                    &cur.five_terms(),
+                    &carried_params,
+                    coefficient,
+                    super::diagnose::k2_upper(&prob, &spec, &cur),
+                );
+                let Some((drop, scale, expected)) =
+                    judged.filter(|j| j.2 >= TEMPERATURE_Z * TEMPERATURE_Z)
+                else {
+                    tracing::warn!(
+                        expected = judged.map(|j| j.2),
+                        "the held-out run's temperature cannot show the temperature coefficient \
+                         fitted on the other run (too short, missing, or changing too little: a \
+                         carried one would lower its block means' residuals by less than {}): \
+                         left out of the held-out effects",
+                        TEMPERATURE_Z * TEMPERATURE_Z
+                    );
+                    continue;
+                };
+                tracing::debug!(drop, scale, expected, "the held-out temperature in time");
+                time_drop = Some(drop / scale.max(1.0));
                 if let Some(off) = trial.offset.as_mut() {
                     for (o, v) in off.iter_mut().zip(avar) {
                         *o += coefficient * coefficient * v;
                     }
                 }
-                temp_blocks = Some((temperature_blocks(snap, ts), coefficient));
             }
             _ if kind.is_filter() => trial.filter = e.params.lowpass(),
             _ => {
@@ -143,24 +177,6 @@ pub fn holdout_gap_with_temperature(
         let delta_chi2 = cur.chi2 - trial_chi2;
         // Never above the gap without it (the bookkeeping's rule) and a drop that means something.
         let by_curve = trial_gap < cur.gap() && carries(delta_chi2, trial_gap, opts);
-        // A temperature in time: the held-out block means with `c T` out, under the model kept
-        // so far; the drop of their whitened residuals over its scale (`None`: not judged).
-        let time_drop = temp_blocks.as_ref().and_then(|(blocks_c, coefficient)| {
-            let c5 = cur.five_terms();
-            let k2_hi = super::diagnose::k2_upper(&prob, &spec, &cur);
-            let block_s = snap.block_len as f64 * snap.tau0_s;
-            let (drop, scale) = fixed_coefficient_drop(
-                &snap.block_means,
-                blocks_c,
-                block_s,
-                &c5,
-                &carried_params,
-                *coefficient,
-                k2_hi,
-            )?;
-            tracing::debug!(drop, scale, "the held-out temperature in time");
-            Some(drop / scale.max(1.0))
-        });
         // The held-out temperature is asked what the fitting run asks of it: the block means'
         // evidence of a named one (`|z| > TEMPERATURE_Z`, a drop of `delta^2` for a fixed signal
         // of whitened size `delta`) beside the curve's, or on its own that of one kept in time
@@ -168,7 +184,6 @@ pub fn holdout_gap_with_temperature(
         // 600-s temperature cycle, no coefficient, carried by the curve alone (3 of 3 runs), and
         // one of 1100 s beside a 1043-s cycle carried in time at `add_chi2` (drops 11-54).
         let (carried, in_time) = match time_drop {
-            None if temp_blocks.is_some() => (false, false),
             None => (by_curve, false),
             Some(d) if by_curve && d >= TEMPERATURE_Z * TEMPERATURE_Z => (true, false),
             Some(d) => (d >= TEMPERATURE_Z_ALONE * TEMPERATURE_Z_ALONE, true),
@@ -185,7 +200,7 @@ pub fn holdout_gap_with_temperature(
         if let Some(f) = trial_fit.filter(|_| carried) {
             spec = trial;
             cur = f;
-            if temp_blocks.is_none() {
+            if time_drop.is_none() {
                 carried_params.push(e.params);
             }
         }

@@ -307,8 +307,10 @@ fn with_block_random_walk(
 /// at least the maximum likelihood `K^2` of the block means with `c T` taken out, on
 /// `[0, k2_hi]` (as [`TemperatureInModel::refit`]). For a fixed known signal of whitened size
 /// `delta` the drop is about `N(delta^2, 4 delta^2)` when the held-out run has it and
-/// `N(-delta^2, 4 delta^2)` when it has not (`holdout::carries`). `None` when the series are
-/// not usable.
+/// `N(-delta^2, 4 delta^2)` when it has not (`holdout::carries`). Returns the drop, the scale
+/// and `delta^2`, the drop expected if the held-out run has the effect (the whitened size of
+/// `c (T_{i+1} - T_i)` with the drift fitted out, squared): how much the held-out run can show
+/// at all. `None` when the series are not usable.
 pub fn fixed_coefficient_drop(
     block_means: &[f64],
     temperature: &[f64],
@@ -317,7 +319,7 @@ pub fn fixed_coefficient_drop(
     effects: &[EffectParams],
     coefficient: f64,
     k2_hi: f64,
-) -> Option<(f64, f64)> {
+) -> Option<(f64, f64, f64)> {
     let nb = block_means.len();
     if !usable_block_means(block_means)
         || temperature.len() != nb
@@ -347,8 +349,10 @@ pub fn fixed_coefficient_drop(
         Some(y.norm_squared() - uy * uy / uu)
     };
     let (rss0, rss1) = (rss(block_means)?, rss(&rest)?);
+    let signal: Vec<f64> = temperature.iter().map(|t| coefficient * t).collect();
+    let expected = rss(&signal)?;
     let dof = (nb - 1).saturating_sub(1).max(1) as f64;
-    Some((rss0 - rss1, rss1 / dof))
+    Some((rss0 - rss1, rss1 / dof, expected))
 }
 
 /// Step 0 of the diagnosis: the temperature's coefficient on the block means with the base

@@ -193,8 +193,13 @@ fn a_day_of_temperature_driven_bias_without_the_temperature_never_ends_above_the
 /// `coef` arcsec/s per degC, two hours, simulated through the library: the channel's and the
 /// temperature's evidence.
 fn mems_evidence(coef: f64, seed: u64) -> (EvidenceSnapshot, EvidenceSnapshot) {
+    mems_evidence_from(20.0, coef, seed)
+}
+
+/// [`mems_evidence`] with the chamber starting at `start_c` degC (45: held constant).
+fn mems_evidence_from(start_c: f64, coef: f64, seed: u64) -> (EvidenceSnapshot, EvidenceSnapshot) {
     let text = format!(
-        "tau0_s = 0.005\n[temperature]\nstart_c = 20.0\nfinal_c = 45.0\n\
+        "tau0_s = 0.005\n[temperature]\nstart_c = {start_c}\nfinal_c = 45.0\n\
          time_constant_s = 1800.0\nsine_amplitude_c = 0.0\nsine_period_s = 1800.0\n\
          [[channel]]\nname = \"gz\"\nunit = \"arcsec\"\nbias = 15.0\nrate_lsb = 3.6\n\
          N = 18.0\nB = 10.0\nK = 0.05\nflicker_band_s = [0.005, 1.0e4]\n\
@@ -253,6 +258,15 @@ fn a_temperature_kept_in_time_is_judged_in_time_on_the_held_out_run() {
             .iter()
             .all(|e| e.kind != EffectKind::Temperature));
     }
+    // Nor with a temperature held constant on the held-out run (session 37: before, it read
+    // `carried: false`, as if the run had disowned a coefficient it could not show): the same
+    // unit at 10 arcsec/s per degC in a chamber held at 45 degC.
+    let (a, b) = mems_evidence_from(45.0, 10.0, 17);
+    let h = holdout_gap_with_temperature(&d, &a, Some(&b), &opts).expect("held out");
+    assert!(
+        h.effects.iter().all(|e| e.kind != EffectKind::Temperature),
+        "{h:?}"
+    );
 }
 
 /// The random walk the curve's fit sets to 0 once the temperature's AVAR is in (session 36): a
