@@ -24,8 +24,8 @@
 //! A temperature and a warm-up are found in time, on the block means, and are compared there
 //! ([`temperature_alternatives`]): a temperature that only settles has a warm-up's shape.
 
-use super::diagnose::{spec_from, AddedEffect, DiagnoseOptions};
-use super::effects::{effect_column, EffectKind, EffectParams};
+use super::diagnose::{spec_from, warmup_curve_offset, AddedEffect, DiagnoseOptions};
+use super::effects::{EffectKind, EffectParams};
 use super::evidence::EvidenceSnapshot;
 use super::problem::{GapProblem, GlsFit, ModelSpec};
 use super::temperature::{fit_shape, TemperatureInModel, TEMPERATURE_Z, Z95};
@@ -190,11 +190,14 @@ pub fn alternatives(
 /// temperature and the warm-up are judged in time, on the block means, not on the curve, so
 /// these are read there too; each is then refitted on the curve like the others (its gap, its
 /// `delta_chi2` against the chosen model, its five terms):
-/// - the temperature named, no warm-up: when the warm-up of the temperature's own settling
-///   shape would take its place ([`TemperatureInModel::warmup_lookalike`]: beside it the
-///   temperature's `|z|` is at most [`TEMPERATURE_Z`], the rule that drops a temperature beside
-///   a warm-up the diagnosis found, and the warm-up's own `|z|` is above it, so it carries what
-///   the temperature did), the final model with that warm-up in place of the temperature. A chamber that only settles gives the bias
+/// - the temperature named, no warm-up: when a warm-up could take its place
+///   ([`TemperatureInModel::warmup_lookalike`]: beside the warm-up of the temperature's own
+///   settling time constant the temperature's `|z|` is at most [`TEMPERATURE_Z`], the rule
+///   that drops a temperature beside a warm-up the diagnosis found), the final model with a
+///   warm-up in place of the temperature: of the one at the settling's time constant and the
+///   one that fits the block means best (its time constant scanned), each carrying what the
+///   temperature did (its own `|z|` above the temperature's beside it), the one the curve fits
+///   better. A chamber that only settles gives the bias
 ///   a warm-up's shape (session 36: a bias warm-up of 2200 s beside a temperature settling over
 ///   1500 s, no coefficient, named as a temperature at `|z|` 6.1-7.9);
 /// - a warm-up named, no temperature: when the temperature fitted alone (the warm-up out)
@@ -209,11 +212,14 @@ pub fn alternatives(
 ///   [`TEMPERATURE_Z_ALONE`](super::temperature::TEMPERATURE_Z_ALONE)), the final model with
 ///   the temperature added.
 ///
-/// Each is listed only where the curve does not reject it: its gap at most `gap_bar` (the
-/// critical gap, or the chosen model's when that is above it). A temperature whose block means
-/// say `|z|` 4.3 but whose `c^2 AVAR_T` at that coefficient lifts the curve's gap from 0.65 to
-/// 4.4 (a 25 Hz gyro settling 8 degC in 34 minutes, seed 6 of tests/cli/diagnose.rs's unit) is
-/// not "about as good".
+/// Each is listed only where the curve does not reject it and fits it about as well: its gap
+/// at most `gap_bar` (the critical gap, or the chosen model's when that is above it) and its
+/// `delta_chi2` at most [`AIC_MARGIN`] (the same number of free amplitudes on the curve: the
+/// time-domain effects enter it as fixed offsets). A temperature whose block means say `|z|`
+/// 4.3 but whose `c^2 AVAR_T` at that coefficient lifts the curve's gap from 0.65 to 4.4 (a 25
+/// Hz gyro settling 8 degC in 34 minutes, seed 6 of tests/cli/diagnose.rs's unit) is not
+/// "about as good", nor one that lifts a consistent run's gap from 0.995 to 1.39
+/// (`delta_chi2` 6.7: a review's slow bias sinusoid, no coefficient).
 ///
 /// `named` is the temperature the diagnosis kept, `in_curve` the exact curve offsets of the
 /// time-domain effects whose offsets are in the final model `fit`, `k2_hi` the top of the block
@@ -276,60 +282,67 @@ pub fn temperature_alternatives(
         let (zt2, zw2) = (t.finding.z.powi(2), w.z.powi(2));
         (t.finding.z.abs() > Z95 && zt2 - 2.0 >= zw2 - 4.0 - AIC_MARGIN).then(|| t.clone())
     };
-    let mut alt = effects.to_vec();
-    let out = match (has(EffectKind::Temperature), has(EffectKind::Warmup)) {
+    // The models to refit: the effects and the curve's offset of each.
+    let mut trials: Vec<(Vec<AddedEffect>, Vec<f64>)> = Vec::new();
+    match (has(EffectKind::Temperature), has(EffectKind::Warmup)) {
         (true, false) => {
             let Some(t) = named else {
                 return Vec::new();
             };
             let w = t.warmup_lookalike(&snap.block_means, block_s, &c5, &params);
-            tracing::debug!(?w, "the warm-up of the temperature's shape");
-            let Some(w) = w.filter(|w| {
-                w.z_temperature_beside.abs() <= TEMPERATURE_Z
-                    && w.z.abs() > w.z_temperature_beside.abs()
-            }) else {
+            tracing::debug!(?w, "the warm-ups in the temperature's place");
+            let Some(w) = w.filter(|w| w.z_temperature_beside.abs() <= TEMPERATURE_Z) else {
                 return Vec::new();
             };
-            let col = effect_column(
-                EffectKind::Warmup,
-                w.time_constant_s,
-                &prob.ms,
-                prob.tau0_s,
-                prob.n_inc,
-            );
-            let warm: Vec<f64> = col.iter().map(|c| w.amplitude * w.amplitude * c).collect();
-            for e in alt.iter_mut() {
-                if e.params.kind() == EffectKind::Temperature {
-                    e.params = EffectParams::Warmup {
-                        amplitude: w.amplitude,
-                        time_constant_s: w.time_constant_s,
-                    };
+            for wi in w
+                .warmups
+                .iter()
+                .filter(|wi| wi.z.abs() > w.z_temperature_beside.abs())
+            {
+                let mut alt = effects.to_vec();
+                for e in alt.iter_mut() {
+                    if e.params.kind() == EffectKind::Temperature {
+                        e.params = EffectParams::Warmup {
+                            amplitude: wi.amplitude,
+                            time_constant_s: wi.time_constant_s,
+                        };
+                    }
                 }
+                let warm = warmup_curve_offset(prob, wi.amplitude, wi.time_constant_s);
+                trials.push((alt, offset_with(Some(EffectKind::Temperature), &warm)));
             }
-            offset_with(Some(EffectKind::Temperature), &warm)
         }
         (false, true) => {
             let Some(t) = about_as_well(&alone()) else {
                 return Vec::new();
             };
+            let mut alt = effects.to_vec();
             for e in alt.iter_mut() {
                 if e.params.kind() == EffectKind::Warmup {
                     e.params = t.finding.params();
                 }
             }
-            offset_with(Some(EffectKind::Warmup), &t.curve_offset())
+            trials.push((
+                alt,
+                offset_with(Some(EffectKind::Warmup), &t.curve_offset()),
+            ));
         }
         (false, false) => {
             let Some(t) = alone().filter(|t| t.finding.z.abs() > TEMPERATURE_Z) else {
                 return Vec::new();
             };
+            let mut alt = effects.to_vec();
             alt.push(placeholder(t.finding.params()));
-            offset_with(None, &t.curve_offset())
+            trials.push((alt, offset_with(None, &t.curve_offset())));
         }
-        (true, true) => return Vec::new(),
+        (true, true) => {}
     };
-    refit(prob, &alt, &out, fit)
-        .filter(|a| a.gap <= gap_bar)
+    // The one the curve fits best, where it does not reject it.
+    trials
+        .iter()
+        .filter_map(|(alt, out)| refit(prob, alt, out, fit))
+        .filter(|a| a.gap <= gap_bar && a.delta_chi2 <= AIC_MARGIN)
+        .min_by(|a, b| a.delta_chi2.total_cmp(&b.delta_chi2))
         .into_iter()
         .collect()
 }

@@ -623,14 +623,7 @@ fn diagnose_curve_once(
         }
         if let Some(w) = warm.filter(|w| th.warmup_found(w)) {
             // Its AVAR, exact for the estimator on this record, enters as a fixed offset.
-            let col = effect_column(
-                EffectKind::Warmup,
-                w.time_constant_s,
-                &prob.ms,
-                prob.tau0_s,
-                prob.n_inc,
-            );
-            let warm_offset: Vec<f64> = col.iter().map(|c| w.amplitude * w.amplitude * c).collect();
+            let warm_offset = warmup_curve_offset(&prob, w.amplitude, w.time_constant_s);
             for (o, c) in offset.iter_mut().zip(&warm_offset) {
                 *o += c;
             }
@@ -1030,6 +1023,26 @@ fn kept_in_time(params: &EffectParams) -> bool {
         }
         _ => false,
     }
+}
+
+/// A warm-up's AVAR (u^2/s^2) at each of the curve's cluster sizes, exact for the estimator on
+/// this record (`A^2` times its column, [`effect_column`]): the fixed offset it enters the curve
+/// fit as.
+pub(crate) fn warmup_curve_offset(
+    prob: &GapProblem,
+    amplitude: f64,
+    time_constant_s: f64,
+) -> Vec<f64> {
+    effect_column(
+        EffectKind::Warmup,
+        time_constant_s,
+        &prob.ms,
+        prob.tau0_s,
+        prob.n_inc,
+    )
+    .iter()
+    .map(|c| amplitude * amplitude * c)
+    .collect()
 }
 
 /// The curve's upper profile bound on `K^2` (u^2/s^3) at `WARMUP_K_DELTA` for the model `spec`

@@ -119,6 +119,10 @@ pub fn holdout_gap_with_temperature(
                 let Some((ts, avar)) =
                     temperature.and_then(|ts| Some((ts, temperature_avar(ts, &prob.ms)?)))
                 else {
+                    tracing::warn!(
+                        "the held-out run has no temperature to judge the temperature \
+                         coefficient fitted on the other run by: left out of the held-out effects"
+                    );
                     continue;
                 };
                 // In time: the held-out block means with `c T` out, under the model kept so

@@ -4,17 +4,21 @@
 //! [`alternative_words`], so the ambiguity is not left in the JSON alone.
 
 use crate::gap::record::{DiagnosisRecord, RecordedEffect};
-use crate::sink::effect_text::effect_parts;
+use crate::sink::effect_text::{effect_bracketed, effect_parts};
 
 /// Each alternative as the change from the chosen model and its gap, `; `-joined: `warm-up drift
 /// [amplitude -271 deg/h (-271 arcsec/s), time constant 1798 s] in place of temperature
 /// sensitivity (gap 1.21)`, `without Gauss-Markov ... (gap 1.04)`, `with temperature sensitivity
-/// [...] (gap 0.73)`, `the five terms alone (gap ...)`; `None` when the record lists none. `unit` is the channel's unit; `number` formats a value.
+/// [...] (gap 0.73)`, `the five terms alone (gap ...)`; `None` when the record lists none.
+/// `pair` joins a parameter's name and value, as the effects beside it are written (" " in the
+/// terminal's table, " = " in the report). `unit` is the channel's unit; `number` formats a value.
 pub fn alternative_words(
     d: &DiagnosisRecord,
     unit: &str,
     number: &dyn Fn(f64) -> String,
+    pair: &str,
 ) -> Option<String> {
+    let bracketed = |e: &RecordedEffect| effect_bracketed(e, unit, number, pair);
     let chosen: Vec<&RecordedEffect> = d.effects.iter().map(|e| &e.effect).collect();
     let name = |e: &RecordedEffect| effect_parts(e, unit, number).0;
     let parts: Vec<String> = d
@@ -27,7 +31,7 @@ pub fn alternative_words(
                 .effects
                 .iter()
                 .filter(|e| !in_chosen(e.kind_name()))
-                .map(|e| bracketed(e, unit, number))
+                .map(bracketed)
                 .collect();
             let gone: Vec<String> = chosen
                 .iter()
@@ -43,26 +47,13 @@ pub fn alternative_words(
                 (true, true) => a
                     .effects
                     .iter()
-                    .map(|e| bracketed(e, unit, number))
+                    .map(bracketed)
                     .collect::<Vec<_>>()
                     .join(" + "),
             };
-            format!("{change} (gap {})", number(a.gap))
+            // Two decimals, as the chosen effects' gaps are given in the table and the report.
+            format!("{change} (gap {:.2})", a.gap)
         })
         .collect();
     (!parts.is_empty()).then(|| parts.join("; "))
-}
-
-/// `name [p1 v1, p2 v2]` (as the terminal's effects read), or the name alone when it has no
-/// parameters.
-fn bracketed(e: &RecordedEffect, unit: &str, number: &dyn Fn(f64) -> String) -> String {
-    let (name, ps) = effect_parts(e, unit, number);
-    if ps.is_empty() {
-        return name;
-    }
-    let list: Vec<String> = ps
-        .iter()
-        .map(|p| format!("{} {}", p.name, p.value))
-        .collect();
-    format!("{name} [{}]", list.join(", "))
 }

@@ -226,6 +226,25 @@ pub fn rate_words(v: f64, unit: &str, number: &dyn Fn(f64) -> String) -> String 
     }
 }
 
+/// `name [p1 v1, p2 v2]` (`pair` " ", the terminal's form) or `name [p1 = v1, p2 = v2]` (" = ",
+/// the report's), or the name alone when it has no parameters.
+pub fn effect_bracketed(
+    effect: &RecordedEffect,
+    unit: &str,
+    number: &dyn Fn(f64) -> String,
+    pair: &str,
+) -> String {
+    let (name, ps) = effect_parts(effect, unit, number);
+    if ps.is_empty() {
+        return name;
+    }
+    let list: Vec<String> = ps
+        .iter()
+        .map(|p| format!("{}{pair}{}", p.name, p.value))
+        .collect();
+    format!("{name} [{}]", list.join(", "))
+}
+
 /// `name: p1 = v1, p2 = v2` in one line.
 pub fn effect_line(effect: &RecordedEffect, unit: &str, number: &dyn Fn(f64) -> String) -> String {
     let (name, ps) = effect_parts(effect, unit, number);

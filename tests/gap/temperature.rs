@@ -88,7 +88,14 @@ fn evidence_of(m: &SimModel, seconds: f64, seed: u64) -> (EvidenceSnapshot, Evid
 }
 
 fn temperature_of(d: &Diagnosis) -> Option<(f64, f64, f64)> {
-    d.effects.iter().find_map(|e| match e.params {
+    temperature_in(d.effects.iter().map(|e| &e.params))
+}
+
+/// The temperature among `effects`: its coefficient and interval.
+fn temperature_in<'a>(
+    mut effects: impl Iterator<Item = &'a EffectParams>,
+) -> Option<(f64, f64, f64)> {
+    effects.find_map(|p| match *p {
         EffectParams::Temperature {
             coefficient,
             lo,
@@ -312,16 +319,7 @@ fn a_temperature_below_the_bar_is_listed_as_an_alternative() {
     let listed: Vec<(f64, f64, f64)> = d
         .alternatives
         .iter()
-        .filter_map(|a| {
-            a.effects.iter().find_map(|p| match *p {
-                EffectParams::Temperature {
-                    coefficient,
-                    lo,
-                    hi,
-                } => Some((coefficient, lo, hi)),
-                _ => None,
-            })
-        })
+        .filter_map(|a| temperature_in(a.effects.iter()))
         .collect();
     assert_eq!(listed.len(), 1, "{:?}", d.alternatives);
     let (c, lo, hi) = listed[0];

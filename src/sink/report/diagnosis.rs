@@ -133,7 +133,7 @@ pub(super) fn diagnosis(h: &mut String, res: &Results) {
         } else {
             effects.join("<br>")
         };
-        if let Some(w) = crate::sink::alternative_words::alternative_words(d, &unit, &tick) {
+        if let Some(w) = crate::sink::alternative_words::alternative_words(d, &unit, &tick, " = ") {
             let _ = write!(
                 effects_cell,
                 "<br><span class=\"small\">about as well: {}</span>",

@@ -6,15 +6,7 @@ use super::*;
 /// An effect in a few words with its parameters named and in units, rates in datasheet units
 /// beside the record's u/s (sink::effect_text).
 pub fn effect_brief(effect: &RecordedEffect, unit: &str) -> String {
-    let (name, ps) = crate::sink::effect_text::effect_parts(effect, unit, &sig3);
-    if ps.is_empty() {
-        return name;
-    }
-    let list: Vec<String> = ps
-        .iter()
-        .map(|p| format!("{} {}", p.name, p.value))
-        .collect();
-    format!("{name} [{}]", list.join(", "))
+    crate::sink::effect_text::effect_bracketed(effect, unit, &sig3, " ")
 }
 
 /// The diagnosis in one line: the verdict, what explains the gap, and the gap before and after.
@@ -67,7 +59,7 @@ pub fn diagnosis_line(d: &DiagnosisRecord, unit: &str, style: &TableStyle) -> St
     if let Some(w) = crate::sink::taken_out::taken_out_words(d, unit, &sig3) {
         let _ = write!(line, "; set aside: {w}");
     }
-    if let Some(w) = crate::sink::alternative_words::alternative_words(d, unit, &sig3) {
+    if let Some(w) = crate::sink::alternative_words::alternative_words(d, unit, &sig3, " ") {
         let _ = write!(line, "; about as well: {w}");
     }
     if let Some(ho) = &d.holdout {
