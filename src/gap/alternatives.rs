@@ -197,9 +197,9 @@ pub fn alternatives(
 ///   warm-up in place of the temperature: of the one at the settling's time constant and the
 ///   one that fits the block means best (its time constant scanned), each carrying what the
 ///   temperature did (its own `|z|` above the temperature's beside it), the one the curve fits
-///   better. A chamber that only settles gives the bias
-///   a warm-up's shape (session 36: a bias warm-up of 2200 s beside a temperature settling over
-///   1500 s, no coefficient, named as a temperature at `|z|` 6.1-7.9);
+///   better. A chamber that only settles gives the bias a warm-up's shape (session 36: a bias
+///   warm-up of 2200 s beside a temperature settling over 1500 s, no coefficient, named as a
+///   temperature at `|z|` 6.1-7.9);
 /// - a warm-up named, no temperature: when the temperature fitted alone (the warm-up out)
 ///   explains the block means about as well as the warm-up with the same noise (Akaike's drop,
 ///   `z^2` less two per parameter, within [`AIC_MARGIN`] of the warm-up's, its time constant
