@@ -234,26 +234,27 @@ pub fn effect_bracketed(
     number: &dyn Fn(f64) -> String,
     pair: &str,
 ) -> String {
-    let (name, ps) = effect_parts(effect, unit, number);
-    if ps.is_empty() {
-        return name;
-    }
-    let list: Vec<String> = ps
-        .iter()
-        .map(|p| format!("{}{pair}{}", p.name, p.value))
-        .collect();
-    format!("{name} [{}]", list.join(", "))
+    let (name, list) = name_and_list(effect, unit, number, pair);
+    list.map_or(name.clone(), |l| format!("{name} [{l}]"))
 }
 
 /// `name: p1 = v1, p2 = v2` in one line.
 pub fn effect_line(effect: &RecordedEffect, unit: &str, number: &dyn Fn(f64) -> String) -> String {
+    let (name, list) = name_and_list(effect, unit, number, " = ");
+    list.map_or(name.clone(), |l| format!("{name}: {l}"))
+}
+
+/// The effect's name and its parameters `p1{pair}v1, p2{pair}v2` (`None` when it has none).
+fn name_and_list(
+    effect: &RecordedEffect,
+    unit: &str,
+    number: &dyn Fn(f64) -> String,
+    pair: &str,
+) -> (String, Option<String>) {
     let (name, ps) = effect_parts(effect, unit, number);
-    if ps.is_empty() {
-        return name;
-    }
     let list: Vec<String> = ps
         .iter()
-        .map(|p| format!("{} = {}", p.name, p.value))
+        .map(|p| format!("{}{pair}{}", p.name, p.value))
         .collect();
-    format!("{name}: {}", list.join(", "))
+    (name, (!list.is_empty()).then(|| list.join(", ")))
 }
