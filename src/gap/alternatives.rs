@@ -24,12 +24,12 @@
 //! A temperature and a warm-up are found in time, on the block means, and are compared there
 //! ([`temperature_alternatives`]): a temperature that only settles has a warm-up's shape.
 
-use super::diagnose::{spec_from, warmup_curve_offset, AddedEffect, DiagnoseOptions};
+use super::diagnose::{coef5, spec_from, warmup_curve_offset, AddedEffect, DiagnoseOptions};
 use super::effects::{EffectKind, EffectParams};
 use super::evidence::EvidenceSnapshot;
 use super::problem::{GapProblem, GlsFit, ModelSpec};
 use super::temperature::{fit_shape, TemperatureInModel, TEMPERATURE_Z, Z95};
-use super::warmup::warmup_block_shape;
+use super::warmup::warmup_block_curve;
 
 /// Margin on the score (drop of `r' S^-1 r` per parameter) within which two decisions are
 /// "about equal". A score is a likelihood-ratio statistic per parameter, so 2 is a likelihood
@@ -119,7 +119,7 @@ fn refit(
         effects: params,
         gap: fit.gap(),
         delta_chi2: fit.chi2 - chosen.chi2,
-        coef: std::array::from_fn(|i| fit.coef.get(i).copied().unwrap_or(0.0).max(0.0).sqrt()),
+        coef: coef5(&fit.coef),
     })
 }
 
@@ -260,8 +260,7 @@ pub fn temperature_alternatives(
     // block means about as well (Akaike's drop, `z^2` less two per parameter, within
     // [`AIC_MARGIN`] of the warm-up's, whose time constant was scanned: `z_T^2 >= z_W^2 - 6`)
     // and is itself beyond the 95% level.
-    let about_as_well = |t: &Option<TemperatureInModel>| -> Option<TemperatureInModel> {
-        let t = t.as_ref()?;
+    let about_as_well = |t: TemperatureInModel| -> Option<TemperatureInModel> {
         let (amp, tc) = effects.iter().find_map(|e| match e.params {
             EffectParams::Warmup {
                 amplitude,
@@ -269,9 +268,7 @@ pub fn temperature_alternatives(
             } => Some((amplitude, time_constant_s)),
             _ => None,
         })?;
-        let shape: Vec<f64> = (0..snap.block_means.len())
-            .map(|i| warmup_block_shape(i, block_s, tc))
-            .collect();
+        let shape = warmup_block_curve(snap.block_means.len(), block_s, tc);
         let w = fit_shape(&snap.block_means, &shape, block_s, &c5, &params, k2_hi)?;
         tracing::debug!(
             amp,
@@ -280,7 +277,7 @@ pub fn temperature_alternatives(
             "the temperature against the warm-up"
         );
         let (zt2, zw2) = (t.finding.z.powi(2), w.z.powi(2));
-        (t.finding.z.abs() > Z95 && zt2 - 2.0 >= zw2 - 4.0 - AIC_MARGIN).then(|| t.clone())
+        (t.finding.z.abs() > Z95 && zt2 - 2.0 >= zw2 - 4.0 - AIC_MARGIN).then_some(t)
     };
     // The models to refit: the effects and the curve's offset of each.
     let mut trials: Vec<(Vec<AddedEffect>, Vec<f64>)> = Vec::new();
@@ -313,7 +310,7 @@ pub fn temperature_alternatives(
             }
         }
         (false, true) => {
-            let Some(t) = about_as_well(&alone()) else {
+            let Some(t) = alone().and_then(about_as_well) else {
                 return Vec::new();
             };
             let mut alt = effects.to_vec();

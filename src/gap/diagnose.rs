@@ -225,7 +225,7 @@ pub struct Diagnosis {
 }
 
 /// Five-term `(Q, N, B, K, R)` from `c`.
-fn coef5(c: &[f64]) -> [f64; 5] {
+pub(crate) fn coef5(c: &[f64]) -> [f64; 5] {
     std::array::from_fn(|i| c.get(i).copied().unwrap_or(0.0).max(0.0).sqrt())
 }
 

@@ -385,6 +385,25 @@ pub struct Grid {
 }
 
 impl Grid {
+    /// The point of the least `score` over the grid (`None` where it cannot be formed; the
+    /// first on ties), then over 40 times finer steps within a grid step around it (960 per
+    /// decade, up to `cap`): a log-grid search for a time constant (the settling profile of a
+    /// temperature, the warm-up that best fits block means). `None` when no point scores.
+    pub fn refined_min(&self, cap: f64, score: impl Fn(f64) -> Option<f64>) -> Option<f64> {
+        let better = |a: Option<(f64, f64)>, b: Option<(f64, f64)>| match (a, b) {
+            (Some(a), Some(b)) => Some(if b.0 < a.0 { b } else { a }),
+            (a, b) => a.or(b),
+        };
+        let at = |t: f64| score(t).map(|s| (s, t));
+        let coarse = self.points().into_iter().map(at).fold(None, better)?;
+        let fine = (-20..=20)
+            .map(|k| coarse.1 * 10f64.powf(k as f64 / 960.0))
+            .filter(|t| *t <= cap)
+            .map(at)
+            .fold(Some(coarse), better)?;
+        Some(fine.1)
+    }
+
     pub fn points(&self) -> Vec<f64> {
         if !(self.lo > 0.0 && self.hi > self.lo) {
             return Vec::new();

@@ -34,7 +34,7 @@ use super::effects::EffectParams;
 use super::evidence::EvidenceSnapshot;
 use super::k_profile::profile_k2;
 use super::problem::{GapProblem, GlsFit, ModelSpec};
-use super::warmup::warmup_block_shape;
+use super::warmup::{best_warmup_time_constant, warmup_block_curve};
 use crate::sim::effects::TemperatureProfile;
 
 /// The two-sided 97.5% normal quantile of the 95% interval.
@@ -250,11 +250,7 @@ impl TemperatureInModel {
         effects: &[EffectParams],
     ) -> Option<WarmupLookalike> {
         let settling_tc = settling_profile(&self.blocks_c, block_s)?.time_constant_s;
-        let shape_of = |tc: f64| -> Vec<f64> {
-            (0..block_means.len())
-                .map(|i| warmup_block_shape(i, block_s, tc))
-                .collect()
-        };
+        let shape_of = |tc: f64| warmup_block_curve(block_means.len(), block_s, tc);
         let settling_shape = shape_of(settling_tc);
         let mut beside = self.clone();
         beside.refit(
@@ -292,67 +288,6 @@ impl TemperatureInModel {
             warmups,
         })
     }
-}
-
-/// The time constant (s) of the warm-up `A e^{-t/T}` that best fits `block_means` (u/s per
-/// block of `block_s` s) by generalised least squares of their first differences on a drift
-/// and the warm-up's (the covariance of `c`, squared five terms, and the stationary
-/// `effects`, as [`fit_temperature`]'s): the largest drop of the whitened residual sum of
-/// squares over a log grid of `T` from a block to the run's length (24 per decade, then 960
-/// per decade around the best, as [`settling_profile`]). Unlike the warm-up test's scan
-/// (`super::warmup`, up to a quarter of the run) it reaches the slow settlings a temperature
-/// gives; beyond the run a warm-up is a bend of the rate the run does not show as one (a
-/// 25 Hz run of 2026 s put its best at 21 000 s with an amplitude a hundred times the
-/// settling's). `None` when the block means cannot carry it.
-pub fn best_warmup_time_constant(
-    block_means: &[f64],
-    block_s: f64,
-    c: &[f64; 5],
-    effects: &[EffectParams],
-) -> Option<f64> {
-    let nb = block_means.len();
-    if !usable_block_means(block_means) {
-        return None;
-    }
-    let diff = |v: &[f64]| DVector::from_iterator(nb - 1, v.windows(2).map(|p| p[1] - p[0]));
-    let chol = block_diff_covariance(nb, block_s, c, effects)?.cholesky()?;
-    let l = chol.l();
-    let u = l.solve_lower_triangular(&DVector::from_element(nb - 1, 1.0))?;
-    let uu = u.norm_squared();
-    if uu <= 0.0 {
-        return None;
-    }
-    // Whitened, with the drift projected out.
-    let project = |v: DVector<f64>| -> DVector<f64> {
-        let k = u.dot(&v) / uu;
-        v - &u * k
-    };
-    let y = project(l.solve_lower_triangular(&diff(block_means))?);
-    let drop = |tc: f64| -> Option<(f64, f64)> {
-        let shape: Vec<f64> = (0..nb)
-            .map(|i| warmup_block_shape(i, block_s, tc))
-            .collect();
-        let x = project(l.solve_lower_triangular(&diff(&shape))?);
-        let xx = x.norm_squared();
-        (xx > 0.0).then(|| (x.dot(&y).powi(2) / xx, tc))
-    };
-    let better = |a: Option<(f64, f64)>, b: Option<(f64, f64)>| match (a, b) {
-        (Some(a), Some(b)) => Some(if b.0 > a.0 { b } else { a }),
-        (a, b) => a.or(b),
-    };
-    let run_s = block_s * nb as f64;
-    let grid = super::effects::Grid {
-        lo: block_s,
-        hi: run_s,
-        per_decade: 24.0,
-    };
-    let coarse = grid.points().into_iter().map(drop).fold(None, better)?;
-    let fine = (-20..=20)
-        .map(|k| coarse.1 * 10f64.powf(k as f64 / 960.0))
-        .filter(|tc| *tc <= run_s)
-        .map(drop)
-        .fold(Some(coarse), better)?;
-    Some(fine.1)
 }
 
 /// The amplitude of a given block curve `shape` in `block_means` ([`fit_temperature`] with
@@ -538,22 +473,14 @@ pub fn settling_profile(blocks_c: &[f64], block_s: f64) -> Option<TemperaturePro
         per_decade: 24.0,
     };
     let y = DVector::from_column_slice(blocks_c);
-    let at = |tc: f64| -> Option<(f64, f64, f64, f64)> {
-        let e = DVector::from_iterator(nb, (0..nb).map(|i| warmup_block_shape(i, block_s, tc)));
+    let at = |tc: f64| -> Option<(f64, f64, f64)> {
+        let e = DVector::from_vec(warmup_block_curve(nb, block_s, tc));
         let x = DMatrix::from_columns(&[DVector::from_element(nb, 1.0), e]);
         let beta = (x.transpose() * &x).try_inverse()? * x.transpose() * &y;
-        Some(((&y - &x * &beta).norm_squared(), tc, beta[0], beta[1]))
+        Some(((&y - &x * &beta).norm_squared(), beta[0], beta[1]))
     };
-    let better = |a: Option<(f64, f64, f64, f64)>, b: Option<(f64, f64, f64, f64)>| match (a, b) {
-        (Some(a), Some(b)) => Some(if b.0 < a.0 { b } else { a }),
-        (a, b) => a.or(b),
-    };
-    let coarse = grid.points().into_iter().map(at).fold(None, better)?;
-    // Then 40 times finer around the best grid point.
-    let fine = (-20..=20)
-        .map(|k| at(coarse.1 * 10f64.powf(k as f64 / 960.0)))
-        .fold(Some(coarse), better);
-    let (_, tc, final_c, settle) = fine?;
+    let tc = grid.refined_min(f64::INFINITY, |tc| at(tc).map(|a| a.0))?;
+    let (_, final_c, settle) = at(tc)?;
     Some(TemperatureProfile {
         start_c: final_c + settle,
         final_c,

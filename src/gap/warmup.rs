@@ -51,10 +51,42 @@ const WARMUP_NULL_SEED: u64 = 0x3a7e_0b1f;
 impl WarmupFinding {
     /// The warm-up's mean over each block.
     pub fn block_curve(&self, n_blocks: usize, block_s: f64) -> Vec<f64> {
-        (0..n_blocks)
-            .map(|i| self.amplitude * warmup_block_shape(i, block_s, self.time_constant_s))
+        warmup_block_curve(n_blocks, block_s, self.time_constant_s)
+            .into_iter()
+            .map(|e| self.amplitude * e)
             .collect()
     }
+}
+
+/// [`warmup_block_shape`] over blocks `0..n_blocks`: the block means of `e^{-t/T}`.
+pub fn warmup_block_curve(n_blocks: usize, tb: f64, t: f64) -> Vec<f64> {
+    (0..n_blocks)
+        .map(|i| warmup_block_shape(i, tb, t))
+        .collect()
+}
+
+/// The time constant (s) of the warm-up `A e^{-t/T}` that best fits `block_means` (u/s per
+/// block of `block_s` s) beside a drift, as [`fit_warmup`] fits one (the covariance of `c`,
+/// squared five terms, and the stationary `effects`): the least residual sum of squares over a
+/// log grid of `T` from a block to the run's length (24 per decade, then 960 per decade around
+/// the best: [`Grid::refined_min`]). Unlike [`fit_warmup`]'s scan (up to a quarter of the run)
+/// it reaches the slow settlings a temperature gives; beyond the run a warm-up is a bend of the
+/// rate the run does not show as one (a 25 Hz run of 2026 s put its best at 21 000 s with an
+/// amplitude a hundred times the settling's). `None` when the block means cannot carry it.
+pub fn best_warmup_time_constant(
+    block_means: &[f64],
+    block_s: f64,
+    c: &[f64; 5],
+    effects: &[EffectParams],
+) -> Option<f64> {
+    let fitter = WarmupFitter::new(block_means, block_s, c, effects)?;
+    let run_s = block_s * block_means.len() as f64;
+    let grid = Grid {
+        lo: block_s,
+        hi: run_s,
+        per_decade: 24.0,
+    };
+    grid.refined_min(run_s, |t| fitter.at(t).map(|(_, rss, _)| rss))
 }
 
 /// Mean of `e^{-t/T}` over block `i` of length `tb`: `(T/tb)(e^{-i tb/T} - e^{-(i+1) tb/T})`.
@@ -208,9 +240,7 @@ impl WarmupFitter {
     /// the null draws.
     fn at(&self, t: f64) -> Option<(f64, f64, NullColumn)> {
         let n = self.yw.len();
-        let e: Vec<f64> = (0..=n)
-            .map(|i| warmup_block_shape(i, self.block_s, t))
-            .collect();
+        let e = warmup_block_curve(n + 1, self.block_s, t);
         let de = DVector::from_iterator(n, e.windows(2).map(|p| p[1] - p[0]));
         let ew = self.chol.l().solve_lower_triangular(&de)?;
         let x = DMatrix::from_columns(&[self.ones.clone(), ew.clone()]);

@@ -21,7 +21,7 @@
 use super::block_cov::usable_block_means;
 use super::effects::{EffectParams, Grid};
 use super::k_profile::KRotation;
-use super::warmup::{log_mean_exp, warmup_block_shape, WarmupFinding, WARMUP_NULL_DRAWS};
+use super::warmup::{log_mean_exp, warmup_block_curve, WarmupFinding, WARMUP_NULL_DRAWS};
 use nalgebra::{DMatrix, DVector};
 
 /// Seed of the bootstrap draws (fixed: the same evidence gives the same p-value).
@@ -60,7 +60,7 @@ pub fn fit_warmup_profiled(
     let mut ts = Vec::new();
     let mut rows: Vec<DVector<f64>> = Vec::new();
     for t in grid.points() {
-        let e: Vec<f64> = (0..=n).map(|i| warmup_block_shape(i, block_s, t)).collect();
+        let e = warmup_block_curve(n + 1, block_s, t);
         let de = DVector::from_iterator(n, e.windows(2).map(|p| p[1] - p[0]));
         rows.push(rot.rotate(de)?);
         ts.push(t);
