@@ -248,11 +248,30 @@ pub fn infer_tau0<R: BufRead>(
         .map(|w| w[1] - w[0])
         .filter(|d| d.is_finite() && *d > 0.0)
         .collect();
+    // Steps of 0 between rows that are not the same row twice (those are passed over): stamps
+    // written more coarsely than the rows come (to the second at 100 Hz; a host's stamp on
+    // each packet of samples), whose steps forward are not the sampling step.
+    let zeros = stamps.windows(2).filter(|w| w[1] == w[0]).count();
     if steps.len() < 2 {
+        let read = stamps.iter().filter(|t| t.is_finite()).count();
+        let problem = match reader.unread_stamp() {
+            Some(cell) if read < 2 => format!(
+                "its stamps are neither numbers nor times this reads (the first: `{cell}`; a \
+                 time of day is read with its seconds, `10:41:07.25`, or at the minute after a \
+                 date, `2026-12-03 10:41`)"
+            ),
+            _ if zeros > 0 => format!(
+                "it repeats its stamps ({zeros} of the steps between its first {} rows are 0, \
+                 fewer than two forward): it is written more coarsely than the rows come",
+                stamps.len()
+            ),
+            _ => format!(
+                "it has fewer than two steps forward in its first {} rows",
+                stamps.len()
+            ),
+        };
         return Err(usage(format!(
-            "--tau0 is required: the time column `{column}` has fewer than two steps forward in \
-             its first {} rows",
-            stamps.len()
+            "--tau0 is required: the time column `{column}`: {problem}"
         )));
     }
     steps.sort_by(f64::total_cmp);
@@ -304,6 +323,28 @@ pub fn infer_tau0<R: BufRead>(
             },
         },
     };
+    // Stamps that repeat where the rows go on (more than 1 step in 100 of 0) and whose span
+    // gives a mean step below their steps forward: the steps forward are the stamps'
+    // resolution, not the sampling step (a clock jittering about its step, with steps of 0
+    // and of two steps, keeps its mean at the median and is read as before).
+    let total = steps.len() + zeros;
+    if zeros * 100 > total {
+        let finite: Vec<f64> = stamps.iter().copied().filter(|t| t.is_finite()).collect();
+        let span_mean = (finite[finite.len() - 1] - finite[0]) / total as f64;
+        if span_mean > 0.0 && span_mean < median * (1.0 - 0.05) {
+            let s = |x: f64| crate::ranges::show(round_significant(x, 4));
+            return Err(usage(format!(
+                "--tau0 is required: the time column `{column}` repeats its stamps ({zeros} of \
+                 the {total} steps between its first rows are 0, the median step forward {} \
+                 s): the rows come about one each {} s by the stamps' span ({} Hz), more often \
+                 than the stamps resolve (their smallest step {} s); give --tau0",
+                s(median * unit_s),
+                s(span_mean * unit_s),
+                s(1.0 / (span_mean * unit_s)),
+                s(steps[0] * unit_s),
+            )));
+        }
+    }
     // The shortest decimal step within the stamps' resolution: stamps read as f64 (a clock
     // since 1970 in ns is resolved to 256 ns) make 5,000,000 ns steps look like 4,999,936, and
     // seconds from 0 printed to the ms make 0.005 s steps 0.00499999999999989 by 18 s. The
@@ -680,6 +721,115 @@ mod tests {
         // 104 Hz, not a round step: kept to the digits the stamps tell (0.0096154 s).
         let s = infer(&jittered(1.0 / 104.0)).unwrap();
         assert!((s.tau0_s * 104.0 - 1.0).abs() < 1e-5, "{}", s.tau0_s);
+    }
+
+    /// Stamps written more coarsely than the rows come are refused with the rate their span
+    /// gives; a clock jittering about its step by its resolution, and rows written twice, keep
+    /// their step; stamps that are no time say which.
+    #[test]
+    fn stamps_coarser_than_the_rows_are_refused() {
+        let file = |n: usize, stamp: &dyn Fn(usize) -> String| {
+            let mut t = String::from("time,gx\n");
+            for k in 0..n {
+                t.push_str(&format!("{},{}\n", stamp(k), k % 7));
+            }
+            t
+        };
+        // 100 Hz stamped to the second (`2026-12-03 10:00:07`): the median step forward is 1 s.
+        let clock = |s: f64| {
+            format!(
+                "2026-12-03 {:02}:{:02}:{:02}",
+                10 + (s / 3600.0) as u64,
+                (s % 3600.0 / 60.0) as u64,
+                (s % 60.0) as u64
+            )
+        };
+        let e = infer(&file(5000, &|k| clock(k as f64 * 0.01)))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("repeats its stamps"), "{e}");
+        assert!(e.contains("their smallest step 1 s"), "{e}");
+        assert!(
+            e.contains("about one each 0.01 s") && e.contains("100 Hz"),
+            "{e}"
+        );
+        // 2 kHz stamped to the ms: half the steps 0, the others 1 ms (was read as 1 ms).
+        let e = infer(&file(4001, &|k| format!("{:.3}", (k / 2) as f64 * 0.001)))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("about one each 5e-4 s") && e.contains("2000 Hz"),
+            "{e}"
+        );
+        // 1 kHz stamped to the ms with a jitter of up to a ms: steps of 0, 1 and 2 ms whose
+        // median forward is 2 ms (read as the step before); the span tells 1000 Hz.
+        let jitter = |k: usize| ((k as f64 * 0.618_033_988_75) % 1.0) * 0.0009;
+        let e = infer(&file(4001, &|k| {
+            format!("{:.3}", k as f64 * 0.001 + jitter(k))
+        }))
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("about one each 0.001 s") && e.contains("(1000 Hz)"),
+            "{e}"
+        );
+        // A clock at 1 kHz stamped to the ms without jitter is read as before.
+        let s = infer(&file(4001, &|k| format!("{:.3}", k as f64 * 0.001))).unwrap();
+        assert_eq!(s.tau0_s, 0.001);
+        // Every row written twice (a logger's repeat, the same stamp and values): passed over
+        // as the run does; two rows to a stamp with their own values are two samples.
+        let pairs = infer(&file(4000, &|k| format!("{:.2}", (k / 2) as f64 * 0.01)));
+        let twice = {
+            let mut t = String::from("time,gx\n");
+            for k in 0..2000 {
+                let row = format!("{:.2},{}\n", k as f64 * 0.01, k % 7);
+                t.push_str(&row);
+                t.push_str(&row);
+            }
+            t
+        };
+        assert!(
+            pairs.is_err(),
+            "rows with one stamp and two values are not a repeat"
+        );
+        assert_eq!(infer(&twice).unwrap().tau0_s, 0.01);
+        // A time this does not read: said, with the cell.
+        let e = infer(&file(100, &|k| format!("day {k}:x")))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("neither numbers nor times") && e.contains("`day 0:x`"),
+            "{e}"
+        );
+    }
+
+    /// Short dates with a two-digit year (Excel's `12/3/26 10:41:07.250`, Europe's
+    /// `03.12.26`) give the step as the four-digit ones do, across midnight.
+    #[test]
+    fn two_digit_years_give_the_step() {
+        for (fmt, day) in [("12/{d}/26", "3"), ("{d}.12.26", "03")] {
+            let mut t = String::from("time,gx\n");
+            for k in 0..3000u64 {
+                // From 23:59:50 on the 3rd, 100 Hz: midnight after 1000 rows.
+                let ms = (86_390_000 + k * 10) % 86_400_000;
+                let d = if k < 1000 {
+                    day.to_string()
+                } else {
+                    format!("{:0w$}", 4, w = day.len())
+                };
+                t.push_str(&format!(
+                    "{} {:02}:{:02}:{:02}.{:03},1\n",
+                    fmt.replace("{d}", &d),
+                    ms / 3_600_000,
+                    ms / 60_000 % 60,
+                    ms / 1000 % 60,
+                    ms % 1000
+                ));
+            }
+            let s = infer(&t).unwrap();
+            assert_eq!((s.tau0_s, s.regular), (0.01, s.steps), "{fmt}");
+            assert_eq!(s.steps, 2999, "{fmt}: the step over midnight is one step");
+        }
     }
 
     /// A slow stream on the odd rows (the first row empty) with a 1-s dropout: its own step,

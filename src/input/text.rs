@@ -412,6 +412,9 @@ struct Layout {
     counter_clock: bool,
     /// How the time column's open dates are read, as its rows have decided so far.
     dates: std::cell::Cell<DateOrder>,
+    /// The first time cell that was neither a number nor a time this reads (for a refusal to
+    /// quote it).
+    unread_stamp: std::cell::RefCell<Option<String>>,
     /// The format the header (and the file's name) tells, which fixes some columns' units and
     /// roles (`super::format_units`).
     format: Option<super::format_units::FileFormat>,
@@ -659,6 +662,7 @@ impl Layout {
             px4,
             counter_clock,
             dates: Default::default(),
+            unread_stamp: Default::default(),
             format,
         })
     }
@@ -1029,15 +1033,20 @@ impl Layout {
                     .join("`, `")
             ));
         }
-        let time = self
-            .time
-            .and_then(|i| {
-                parse_field(fields[i])
-                    .ok()
-                    .or_else(|| self.stamp(fields[i]))
-            })
-            .unwrap_or(f64::NAN);
-        Ok((values, time))
+        let time = self.time.and_then(|i| {
+            let t = parse_field(fields[i])
+                .ok()
+                .or_else(|| self.stamp(fields[i]));
+            let cell = fields[i].trim();
+            if t.is_none() && !cell.is_empty() {
+                let mut first = self.unread_stamp.borrow_mut();
+                if first.is_none() {
+                    *first = Some(cell.chars().take(40).collect());
+                }
+            }
+            t
+        });
+        Ok((values, time.unwrap_or(f64::NAN)))
     }
 }
 
@@ -1348,7 +1357,10 @@ fn fortran_exponent(t: &str) -> Option<f64> {
 /// (`2026/12/03 01:02:03`), day first with points (`03.12.2026 01:02:03,456`), with the
 /// month's name (MATLAB's `03-Dec-2026 01:02:03.456`), or `03/12/2026` and `03-12-2026`, whose
 /// order (day or month first) a row alone does not tell: read here day first when that is a
-/// date, else month first (`12/31/2026`); a file's rows decide it ([`DateOrder`]). A clock of
+/// date, else month first (`12/31/2026`); a file's rows decide it ([`DateOrder`]). Short dates
+/// with a two-digit year (`12/3/26`, `03.12.26`, `03-Dec-26`) are read as POSIX reads `%y`
+/// (69-99 in the 1900s, 00-68 in the 2000s); after a date a clock may stop at the minute
+/// (`2026-12-03 10:41`). A clock of
 /// 12 hours takes `AM` or `PM` (`12/3/2026 7:51:28.665 PM`, as Excel and LabVIEW write in the
 /// US). Without a zone the clock's own time, read as UTC (only steps matter). A time of day
 /// alone (`01:02:03.456`) is seconds since its midnight. `None` for anything else.
@@ -1516,14 +1528,23 @@ fn date_time_parts(t: &str) -> Option<(DatePart, f64)> {
             } else if c.len() == 4 && num(b).is_none() {
                 // A month by name: day first.
                 (num(c)?, month(b)?, num(a)?)
-            } else if c.len() == 4 && a.len() <= 2 && b.len() <= 2 {
+            } else if c.len() == 2 && a.len() <= 2 && d.contains('.') {
+                // `03.12.26`: day first with a two-digit year, as Europe writes the short date.
+                (two_digit_year(num(c)?), num(b)?, num(a)?)
+            } else if c.len() == 2 && a.len() <= 2 && num(b).is_none() {
+                // `03-Dec-26`: a month by name, day first, a two-digit year.
+                (two_digit_year(num(c)?), month(b)?, num(a)?)
+            } else if (c.len() == 4 || c.len() == 2) && a.len() <= 2 && b.len() <= 2 {
+                // `12/3/2026`, or the short date `12/3/26` (Excel's in the US, `03/12/26` in
+                // Europe): day or month first, as the file's rows decide.
+                let y = num(c)?;
                 let open = OpenDate {
                     a: num(a)?,
                     b: num(b)?,
-                    y: num(c)?,
+                    y: if c.len() == 2 { two_digit_year(y) } else { y },
                 };
                 open.days(true).or_else(|| open.days(false))?;
-                return Some((DatePart::Open(open), clock_seconds(time)?));
+                return Some((DatePart::Open(open), clock_seconds(time, true)?));
             } else {
                 return None;
             };
@@ -1534,12 +1555,25 @@ fn date_time_parts(t: &str) -> Option<(DatePart, f64)> {
         }
         None => DatePart::None,
     };
-    Some((date, clock_seconds(time)?))
+    let dated = date != DatePart::None;
+    Some((date, clock_seconds(time, dated)?))
+}
+
+/// The year of a two-digit year `yy`: 1969-1999 for 69-99, 2000-2068 for 00-68 (POSIX
+/// `strptime`'s `%y`, as spreadsheets read a short date too).
+fn two_digit_year(yy: i64) -> i64 {
+    if yy >= 69 {
+        1900 + yy
+    } else {
+        2000 + yy
+    }
 }
 
 /// The seconds of the day of a clock `HH:MM:SS[.fff]`, with `AM` or `PM` after it or a zone
-/// (`Z`, `+01:00`, `-0500`), UTC.
-fn clock_seconds(time: &str) -> Option<f64> {
+/// (`Z`, `+01:00`, `-0500`), UTC. After a date (`dated`) a clock may stop at the minute
+/// (`2026-12-03 10:41`, a logger's stamp each minute); alone, `10:41` could as well be
+/// minutes and seconds, and is not read.
+fn clock_seconds(time: &str, dated: bool) -> Option<f64> {
     // A clock of 12 hours: `7:51:28 PM`, `12:00:01 AM` (just after midnight).
     let upper = time.to_ascii_uppercase();
     let (time, half) = match ["AM", "PM"].iter().find(|h| upper.ends_with(*h)) {
@@ -1574,7 +1608,11 @@ fn clock_seconds(time: &str) -> Option<f64> {
         None => (time, 0.0),
     };
     let parts: Vec<&str> = clock.split(':').collect();
-    let [h, m, sec] = parts[..] else { return None };
+    let (h, m, sec) = match parts[..] {
+        [h, m, sec] => (h, m, sec),
+        [h, m] if dated => (h, m, "0"),
+        _ => return None,
+    };
     let int = |x: &str, max: i64| {
         (!x.is_empty() && x.len() <= 2 && x.bytes().all(|b| b.is_ascii_digit()))
             .then(|| x.parse::<i64>().ok())
@@ -2312,6 +2350,12 @@ impl<R: BufRead> TextReader<R> {
         self.lvm.as_ref().and_then(|h| h.delta_x)
     }
 
+    /// The first time cell read so far that was neither a number nor a time this reads (at
+    /// most 40 characters of it).
+    pub fn unread_stamp(&self) -> Option<String> {
+        self.layout.unread_stamp.borrow().clone()
+    }
+
     /// The header name of the time column, if the input has one.
     pub fn time_column_name(&self) -> Option<&str> {
         self.layout
@@ -2333,8 +2377,23 @@ impl<R: BufRead> TextReader<R> {
             Err(_) => vec![false; strict.len()],
         };
         let mut rows = Vec::new();
-        if let Some((row, t)) = self.pending.take() {
-            rows.push((t, present(&row, &self.layout.strict)));
+        // The row before, to pass over a row written twice (the same stamp and values) as the
+        // run does ([`TextReader::is_repeat`]).
+        let mut last: Option<Row> = None;
+        let same_row = |a: &Row, b: &Row| match (&a.0, &b.0) {
+            (Ok(x), Ok(y)) => {
+                a.1.is_finite()
+                    && a.1 == b.1
+                    && x.len() == y.len()
+                    && x.iter()
+                        .zip(y)
+                        .all(|(p, q)| p.to_bits() == q.to_bits() || (p.is_nan() && q.is_nan()))
+            }
+            _ => false,
+        };
+        if let Some(p) = self.pending.take() {
+            rows.push((p.1, present(&p.0, &self.layout.strict)));
+            last = Some(p);
         }
         while rows.len() < max_rows {
             match self.next_row()? {
@@ -2344,7 +2403,11 @@ impl<R: BufRead> TextReader<R> {
                     if self.layout.time.is_some()
                         && p.1.is_nan()
                         && empty_row(&p, &self.layout.strict) => {}
-                Some((row, t)) => rows.push((t, present(&row, &self.layout.strict))),
+                Some(p) if last.as_ref().is_some_and(|l| same_row(l, &p)) => {}
+                Some(p) => {
+                    rows.push((p.1, present(&p.0, &self.layout.strict)));
+                    last = Some(p);
+                }
                 None => break,
             }
         }
@@ -3498,7 +3561,9 @@ mod tests {
     }
 
     /// Dates as spreadsheets and MATLAB write them: the same instant however written; an order
-    /// a row alone cannot tell (`03/12/2026`, `03-12-2026`: day or month first) is not read.
+    /// a row alone cannot tell (`03/12/2026`, `03-12-2026`: day or month first) is read day
+    /// first when that is a date; short dates with a two-digit year; a clock at the minute
+    /// after a date, not alone.
     #[test]
     fn dates_with_month_names() {
         let iso = date_time("2026-12-03 07:51:28.665").unwrap();
@@ -3512,15 +3577,43 @@ mod tests {
         }
         let oct = date_time("2026-10-03 07:51:28").unwrap();
         assert_eq!(date_time("03-OCT-2026 07:51:28"), Some(oct));
+        // A clock alone at the minute (`07:51` could be minutes and seconds) is not read.
         for t in [
             "03-Foo-2026 07:51:28",
             "13/13/2026 07:51:28",
-            "03/12/26 07:51:28",
+            "07:51",
             "12/3/2026 13:51:28 PM",
             "12/3/2026 0:51:28 AM",
+            "03/12/126 07:51:28",
         ] {
             assert_eq!(date_time(t), None, "{t}");
         }
+        // Short dates with a two-digit year (POSIX's `%y`: 69-99 the 1900s), and a clock at
+        // the minute after a date.
+        for t in [
+            "03/12/26 07:51:28.665",
+            "3/12/26 7:51:28.665 AM",
+            "03.12.26 07:51:28,665",
+            "03-Dec-26 07:51:28.665",
+        ] {
+            assert_eq!(date_time(t), Some(iso), "{t}");
+        }
+        assert_eq!(
+            date_time("31/12/99 23:59:59"),
+            date_time("1999-12-31 23:59:59")
+        );
+        assert_eq!(
+            date_time("2026-12-03 07:51"),
+            date_time("2026-12-03 07:51:00")
+        );
+        assert_eq!(
+            date_time("03/12/2026 19:51"),
+            date_time("2026-12-03 19:51:00")
+        );
+        assert_eq!(
+            date_time("3/12/2026 7:51 PM"),
+            date_time("2026-12-03 19:51:00")
+        );
         // A row alone reads an open date day first, or month first when only that is a date;
         // a clock of 12 hours.
         let dec3 = date_time("2026-12-03 19:51:28.665").unwrap();
