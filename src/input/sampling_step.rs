@@ -216,7 +216,7 @@ pub fn infer_tau0<R: BufRead>(
                 .into(),
         ));
     };
-    let rows = reader
+    let (rows, repeats) = reader
         .take_stamps(LOOK_ROWS)
         .map_err(|e| usage(e.to_string()))?;
     // A file that merges a slower stream with faster ones: channels with a value on every k-th
@@ -250,8 +250,20 @@ pub fn infer_tau0<R: BufRead>(
         .collect();
     // Steps of 0 between rows that are not the same row twice (those are passed over): stamps
     // written more coarsely than the rows come (to the second at 100 Hz; a host's stamp on
-    // each packet of samples), whose steps forward are not the sampling step.
-    let zeros = stamps.windows(2).filter(|w| w[1] == w[0]).count();
+    // each packet of samples), whose steps forward are not the sampling step. A burst of rows
+    // under the first stamp (a buffer flushed at the start) is not counted when the stamps
+    // after it do not repeat.
+    let zeros_in = |s: &[f64]| s.windows(2).filter(|w| w[1] == w[0]).count();
+    let lead = stamps
+        .windows(2)
+        .take_while(|w| w[1] == w[0] || !w[0].is_finite())
+        .count();
+    let after_lead = zeros_in(&stamps[lead..]);
+    let zeros = if lead > 0 && after_lead * 100 <= steps.len() + after_lead {
+        after_lead
+    } else {
+        zeros_in(&stamps)
+    };
     if steps.len() < 2 {
         let read = stamps.iter().filter(|t| t.is_finite()).count();
         let problem = match reader.unread_stamp() {
@@ -323,21 +335,33 @@ pub fn infer_tau0<R: BufRead>(
             },
         },
     };
-    // Stamps that repeat where the rows go on (more than 1 step in 100 of 0) and whose span
-    // gives a mean step below their steps forward: the steps forward are the stamps'
-    // resolution, not the sampling step (a clock jittering about its step, with steps of 0
-    // and of two steps, keeps its mean at the median and is read as before).
-    let total = steps.len() + zeros;
-    if zeros * 100 > total {
-        let finite: Vec<f64> = stamps.iter().copied().filter(|t| t.is_finite()).collect();
-        let span_mean = (finite[finite.len() - 1] - finite[0]) / total as f64;
-        if span_mean > 0.0 && span_mean < median * (1.0 - 0.05) {
+    // Stamps that repeat where the rows go on (more than 1 step in 100 of 0) and whose mean
+    // step, zeros counted, is below their median step forward: the steps forward are the
+    // stamps' resolution, not the sampling step (a clock jittering about its step, with steps of
+    // 0 and of two steps, keeps its mean at the median and is read as before). The mean is that
+    // of the steps of 0 and those forward up to three median steps: a dropout or a clock's
+    // restart among the rows looked at is no step of the rows. Where stamps repeat so, rows that
+    // repeat a stamp with the same values (passed over as written twice) are counted as steps of
+    // 0 too: on a channel of few values (a counter), two samples under one stamp often agree.
+    let total_of = |zeros: usize| {
+        let near: Vec<f64> = steps
+            .iter()
+            .copied()
+            .filter(|d| *d <= 3.0 * median)
+            .collect();
+        let n = near.len() + zeros;
+        (n, near.iter().sum::<f64>() / n as f64)
+    };
+    if zeros * 100 > steps.len() + zeros {
+        let (total, span_mean) = total_of(zeros + repeats);
+        let zeros = zeros + repeats;
+        if span_mean > 0.0 && span_mean < median * (1.0 - 0.005) {
             let s = |x: f64| crate::ranges::show(round_significant(x, 4));
             return Err(usage(format!(
                 "--tau0 is required: the time column `{column}` repeats its stamps ({zeros} of \
                  the {total} steps between its first rows are 0, the median step forward {} \
-                 s): the rows come about one each {} s by the stamps' span ({} Hz), more often \
-                 than the stamps resolve (their smallest step {} s); give --tau0",
+                 s): the rows come about one each {} s by the mean step ({} Hz), more often \
+                 than the stamps resolve (their smallest step forward {} s); give --tau0",
                 s(median * unit_s),
                 s(span_mean * unit_s),
                 s(1.0 / (span_mean * unit_s)),
@@ -748,7 +772,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("repeats its stamps"), "{e}");
-        assert!(e.contains("their smallest step 1 s"), "{e}");
+        assert!(e.contains("their smallest step forward 1 s"), "{e}");
         assert!(
             e.contains("about one each 0.01 s") && e.contains("100 Hz"),
             "{e}"
@@ -793,6 +817,48 @@ mod tests {
             "rows with one stamp and two values are not a repeat"
         );
         assert_eq!(infer(&twice).unwrap().tau0_s, 0.01);
+        // 104 Hz stamped to 0.01 s: 4 steps in 100 of 0 (was read as 0.01 s, 4% off).
+        let e = infer(&file(4001, &|k| {
+            format!("{:.2}", (k as f64 / 104.0 * 100.0).floor() / 100.0)
+        }))
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("(104 Hz)"), "{e}");
+        // 1.5 kHz stamped to the ms with 2300 samples missing, and 1.1 kHz with a clock that
+        // restarts: neither the dropout nor the restart is a step of the rows (the first
+        // version's span read them as such).
+        let mut t = String::from("time,gx\n");
+        for k in (0..6000).filter(|k| !(1000..3300).contains(k)) {
+            t.push_str(&format!(
+                "{:.3},{}\n",
+                (k as f64 / 1.5).floor() / 1000.0,
+                k % 7
+            ));
+        }
+        let e = infer(&t).unwrap_err().to_string();
+        assert!(e.contains("(1500 Hz)"), "{e}");
+        let e = infer(&file(4001, &|k| {
+            let k = if k < 3000 { k } else { k - 3000 };
+            format!("{:.3}", (k as f64 / 1.1).floor() / 1000.0)
+        }))
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("(1100 Hz)"), "{e}");
+        // 2 kHz stamped to the ms on a channel of few values: two samples under one stamp often
+        // agree, and count as samples, not as a row written twice.
+        let e = infer(
+            &file(4001, &|k| format!("{:.3}", (k / 2) as f64 * 0.001)).replace(",1\n", ",0\n"),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("(2000 Hz)"), "{e}");
+        // A burst of rows under the first stamp (a buffer flushed at the start), then 100 Hz:
+        // read as 100 Hz.
+        let s = infer(&file(4001, &|k| {
+            format!("{:.3}", k.saturating_sub(250) as f64 * 0.01)
+        }))
+        .unwrap();
+        assert_eq!(s.tau0_s, 0.01);
         // A time this does not read: said, with the cell.
         let e = infer(&file(100, &|k| format!("day {k}:x")))
             .unwrap_err()

@@ -1223,6 +1223,10 @@ fn empty_row(p: &Row, strict: &[bool]) -> bool {
 /// A row as read: its values or what is wrong with it, and its time stamp (NaN if none).
 type Row = (Result<Vec<f64>, String>, f64);
 
+/// A row's time stamp (NaN when it has none) and which analysed channels hold a value there
+/// ([`TextReader::take_stamps`]).
+pub type RowStamp = (f64, Vec<bool>);
+
 pub struct TextReader<R> {
     src: R,
     path: PathBuf,
@@ -1380,12 +1384,15 @@ enum DatePart {
 }
 
 /// A date written `a/b/yyyy` or `a-b-yyyy`: day first (`03/12/2026`, most of Europe) or month
-/// first (the US); which, only a file's rows tell ([`DateOrder`]).
+/// first (the US); which, only a file's rows tell ([`DateOrder`]). A short date (`a/b/yy`,
+/// `short`) may also be year first (`26/12/03`, as some East Asian loggers write it).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 struct OpenDate {
     a: i64,
     b: i64,
     y: i64,
+    #[serde(default)]
+    short: bool,
 }
 
 impl OpenDate {
@@ -1397,6 +1404,14 @@ impl OpenDate {
             (self.b, self.a)
         };
         ((1..=12).contains(&m) && (1..=31).contains(&d)).then(|| days_since_1970(self.y, m, d))
+    }
+
+    /// Days since 1970-01-01 of a short date read year first (`26/12/03`: 2026-12-03); `None`
+    /// for a date with four digits of year or when that is no date.
+    fn days_year_first(self) -> Option<i64> {
+        let (m, d) = (self.b, self.y % 100);
+        (self.short && (1..=12).contains(&m) && (1..=31).contains(&d))
+            .then(|| days_since_1970(two_digit_year(self.a), m, d))
     }
 }
 
@@ -1418,6 +1433,8 @@ pub struct DateOrder {
     offset_days: i64,
     last_clock: Option<f64>,
     clock_days: i64,
+    /// Short dates read year first, decided when the date moved at midnight by a day only so.
+    year_first: bool,
 }
 
 impl DateOrder {
@@ -1451,6 +1468,10 @@ impl DateOrder {
     /// The days of `d` read in the file's order (deciding it if `d` does), since 1970-01-01
     /// (plus the offset of a late decision); `None` when `d` is no date in that order.
     fn days(&mut self, d: OpenDate) -> Option<i64> {
+        if self.year_first {
+            self.last = Some(d);
+            return Some(d.days_year_first()? + self.offset_days);
+        }
         if self.day_first.is_none() {
             let decided = match (d.days(true), d.days(false)) {
                 (None, None) => return None,
@@ -1474,11 +1495,28 @@ impl DateOrder {
             }
             self.day_first = decided;
         }
-        self.last = Some(d);
-        match self.day_first {
-            Some(false) => Some(d.days(false)? + self.offset_days),
-            _ => d.days(true),
+        let read = |o: &Self, x: OpenDate| match o.day_first {
+            Some(false) => x.days(false).map(|v| v + o.offset_days),
+            _ => x.days(true),
+        };
+        // A short date that moves by other than a day in the order read but by one day read
+        // year first (`26/12/03` to `26/12/04` at midnight, a year's jump read day first): year
+        // first from here on, going on from where the rows before left off.
+        if let Some(l) = self.last.filter(|l| d.short && *l != d) {
+            let moved = read(self, l).zip(read(self, d)).map(|(p, q)| q - p);
+            if let (Some(p), Some(py), Some(qy)) =
+                (read(self, l), l.days_year_first(), d.days_year_first())
+            {
+                if moved != Some(1) && qy - py == 1 {
+                    self.year_first = true;
+                    self.offset_days = p - py;
+                    self.last = Some(d);
+                    return Some(qy + self.offset_days);
+                }
+            }
         }
+        self.last = Some(d);
+        read(self, d)
     }
 }
 
@@ -1528,6 +1566,10 @@ fn date_time_parts(t: &str) -> Option<(DatePart, f64)> {
             } else if c.len() == 4 && num(b).is_none() {
                 // A month by name: day first.
                 (num(c)?, month(b)?, num(a)?)
+            } else if c.len() == 2 && a.len() == 2 && num(a)? > 31 && num(b).is_some() {
+                // `27/01/03`: a first field no day or month can be is a two-digit year (year
+                // first, as East Asian loggers write the short date).
+                (two_digit_year(num(a)?), num(b)?, num(c)?)
             } else if c.len() == 2 && a.len() <= 2 && d.contains('.') {
                 // `03.12.26`: day first with a two-digit year, as Europe writes the short date.
                 (two_digit_year(num(c)?), num(b)?, num(a)?)
@@ -1542,6 +1584,7 @@ fn date_time_parts(t: &str) -> Option<(DatePart, f64)> {
                     a: num(a)?,
                     b: num(b)?,
                     y: if c.len() == 2 { two_digit_year(y) } else { y },
+                    short: c.len() == 2,
                 };
                 open.days(true).or_else(|| open.days(false))?;
                 return Some((DatePart::Open(open), clock_seconds(time, true)?));
@@ -2366,8 +2409,10 @@ impl<R: BufRead> TextReader<R> {
     /// The time stamps of the next `max_rows` rows (NaN where a row has none), and for each
     /// row which channels the run analyses hold a value there (in the order of
     /// [`TextReader::names`]; a bad row holds none), consuming them: for a look at the start of
-    /// an input (`super::sampling_step`), not for a run.
-    pub fn take_stamps(&mut self, max_rows: usize) -> std::io::Result<Vec<(f64, Vec<bool>)>> {
+    /// an input (`super::sampling_step`), not for a run. Rows written twice (the same stamp and
+    /// values as the row before) are passed over as the run passes them over; the second value
+    /// is how many were.
+    pub fn take_stamps(&mut self, max_rows: usize) -> std::io::Result<(Vec<RowStamp>, usize)> {
         let present = |row: &Result<Vec<f64>, String>, strict: &[bool]| match row {
             Ok(v) => v
                 .iter()
@@ -2380,6 +2425,7 @@ impl<R: BufRead> TextReader<R> {
         // The row before, to pass over a row written twice (the same stamp and values) as the
         // run does ([`TextReader::is_repeat`]).
         let mut last: Option<Row> = None;
+        let mut repeats = 0;
         let same_row = |a: &Row, b: &Row| match (&a.0, &b.0) {
             (Ok(x), Ok(y)) => {
                 a.1.is_finite()
@@ -2403,7 +2449,7 @@ impl<R: BufRead> TextReader<R> {
                     if self.layout.time.is_some()
                         && p.1.is_nan()
                         && empty_row(&p, &self.layout.strict) => {}
-                Some(p) if last.as_ref().is_some_and(|l| same_row(l, &p)) => {}
+                Some(p) if last.as_ref().is_some_and(|l| same_row(l, &p)) => repeats += 1,
                 Some(p) => {
                     rows.push((p.1, present(&p.0, &self.layout.strict)));
                     last = Some(p);
@@ -2411,7 +2457,7 @@ impl<R: BufRead> TextReader<R> {
                 None => break,
             }
         }
-        Ok(rows)
+        Ok((rows, repeats))
     }
 
     /// Whether the line `t` is the header (or the row of units under it) again.
@@ -3603,6 +3649,10 @@ mod tests {
             date_time("1999-12-31 23:59:59")
         );
         assert_eq!(
+            date_time("32/01/03 10:00:00"),
+            date_time("2032-01-03 10:00:00")
+        );
+        assert_eq!(
             date_time("2026-12-03 07:51"),
             date_time("2026-12-03 07:51:00")
         );
@@ -3665,6 +3715,32 @@ mod tests {
             "04/12/2026 00:00:00",
         ];
         assert_eq!(steps(&eu), (vec![0.25, 0.25], Some(true)));
+        // Short dates across the year's end in all three orders: day first, month first, and
+        // year first (decided when only that reads the midnight as one day).
+        for rows in [
+            [
+                "31/12/26 23:59:59.5",
+                "31/12/26 23:59:59.75",
+                "01/01/27 00:00:00",
+            ],
+            [
+                "12/31/26 23:59:59.5",
+                "12/31/26 23:59:59.75",
+                "01/01/27 00:00:00",
+            ],
+            [
+                "26/12/31 23:59:59.5",
+                "26/12/31 23:59:59.75",
+                "27/01/01 00:00:00",
+            ],
+            [
+                "26/12/03 23:59:59.5",
+                "26/12/03 23:59:59.75",
+                "26/12/04 00:00:00",
+            ],
+        ] {
+            assert_eq!(steps(&rows).0, vec![0.25, 0.25], "{rows:?}");
+        }
         let (d, order) = steps(&["12/13/2026 10:00:00", "12/13/2026 10:00:01"]);
         assert_eq!((d, order), (vec![1.0], Some(false)));
         let (d, order) = steps(&["03/12/2026 10:00:00", "03/12/2026 10:00:01"]);
