@@ -122,6 +122,7 @@
 //!   problem.rs             the GLS problem on one measured curve
 //!   filter_scan.rs         shape scans of the filter candidates
 //!   temperature.rs         a bias that follows the unit's temperature
+//!   temperature_check.rs   the temperature's coefficient bounded when none is named
 //!   k_profile.rs           the random walk's K^2 read off the block means
 //!   warmup.rs              a warm-up found in time
 //!   warmup_profile.rs      the warm-up test with the random walk profiled on the block means

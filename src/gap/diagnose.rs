@@ -208,6 +208,9 @@ pub struct Diagnosis {
     pub quantization: Option<QuantizationFinding>,
     /// Other explanations that fit about as well as the one chosen ([`super::alternatives`]).
     pub alternatives: Vec<Alternative>,
+    /// The temperature's coefficient and why it is or is not named, when the input has a
+    /// temperature ([`super::temperature_check`]).
+    pub temperature_check: Option<super::temperature_check::TemperatureCheck>,
     /// 95% intervals of each effect's parameters, in the order of `effects`
     /// ([`super::intervals`]).
     pub effect_intervals: Vec<super::intervals::Intervals>,
@@ -833,6 +836,7 @@ fn diagnose_curve_once(
     let mut alternatives = first_scan
         .map(|fs| alternatives(&prob, opts, &fs, &effects, &final_spec, &cur))
         .unwrap_or_default();
+    let mut temperature_check = None;
     if let Some(ts) = temperature.filter(|_| opts.candidates.contains(&EffectKind::Temperature)) {
         let named = temp_in.as_ref().filter(|_| {
             effects
@@ -855,6 +859,16 @@ fn diagnose_curve_once(
             th.gap_crit_given(has_filter(&effects)).max(gap_after),
         ));
         alternatives.sort_by(|a, b| a.delta_chi2.total_cmp(&b.delta_chi2));
+        temperature_check = super::temperature_check::check_temperature(
+            &prob,
+            snap,
+            ts,
+            &effects,
+            &cur,
+            named,
+            jumps.as_ref(),
+            k2_hi,
+        );
     }
     let effect_intervals = super::intervals::effect_intervals(&prob, &final_spec, &cur, &effects);
     let regions_after = prob.regions(&cur.model, th.band_z);
@@ -885,6 +899,7 @@ fn diagnose_curve_once(
             .lsb
             .and_then(|l| judge_quantization(&prob, &final_spec, &cur, l)),
         alternatives,
+        temperature_check,
         effect_intervals,
         first_scores,
         limit_cycles: Vec::new(),

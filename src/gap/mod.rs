@@ -53,6 +53,7 @@ pub mod step_null;
 pub mod steps;
 pub mod stuck;
 pub mod temperature;
+pub mod temperature_check;
 pub mod thresholds;
 pub mod unit_model;
 pub mod warmup;

@@ -221,6 +221,13 @@ pub struct DiagnosisRecord {
     /// choice is clear.
     #[serde(default)]
     pub alternatives: Vec<AlternativeRecord>,
+    /// When the input has a temperature: the coefficient the block means allow (u/s per degC,
+    /// with its 95% interval and `z`) and why a temperature is or is not named (`outcome`:
+    /// `named`, `not_shown`, `straight`, `not_kept`, `constant`, `too_short`), with the
+    /// temperature's change (degC) and its bend from a straight line (docs/gap.md, "The
+    /// temperature's check"); absent without a temperature.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub temperature_check: Option<super::temperature_check::TemperatureCheck>,
     /// Run index (0-based) when several inputs are analyzed, as in the other records.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub run: Option<usize>,
@@ -396,6 +403,7 @@ impl DiagnosisRecord {
             stuck: d.stuck,
             quantization: d.quantization,
             alternatives: d.alternatives.iter().map(AlternativeRecord::new).collect(),
+            temperature_check: d.temperature_check,
             run: None,
             unit: None,
             quantization_limited: d.quantization_limited.map(|q| QuantizationRecord {

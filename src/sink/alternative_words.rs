@@ -1,7 +1,8 @@
 //! The other explanations a diagnosis found about as good as its choice (the record's
 //! `alternatives`: docs/gap.md, "Alternatives"), in words a person reads beside the verdict: the
 //! terminal table (sink::table) and the report (sink::report) say them through
-//! [`alternative_words`], so the ambiguity is not left in the JSON alone.
+//! [`alternative_words`], so the ambiguity is not left in the JSON alone; and, beside them, why
+//! the unit's temperature was not named ([`temperature_check_words`]).
 
 use crate::gap::record::{DiagnosisRecord, RecordedEffect};
 use crate::sink::effect_text::{effect_bracketed, effect_parts};
@@ -56,4 +57,55 @@ pub fn alternative_words(
         })
         .collect();
     (!parts.is_empty()).then(|| parts.join("; "))
+}
+
+/// The temperature's check when no temperature is named (the record's `temperature_check`;
+/// docs/gap.md, "The temperature's check"), in words: `temperature not shown (z 1.30):
+/// coefficient 4.62e-5 [-2.36e-5, 1.16e-4] rad/s per deg C`, `temperature not determined: it
+/// changed as a straight line (bend 0.19% of its 1.86 deg C), which a rate ramp takes as well;
+/// ...`, `temperature shown in time (z 5.10) but not kept by the curve; ...`, `temperature
+/// constant`; `None` when the record has no check or names the temperature (its effect says it).
+pub fn temperature_check_words(
+    d: &DiagnosisRecord,
+    unit: &str,
+    number: &dyn Fn(f64) -> String,
+) -> Option<String> {
+    use crate::gap::temperature_check::TemperatureOutcome as O;
+    let t = d.temperature_check.as_ref()?;
+    let coefficient = || -> String {
+        match (t.coefficient, t.interval) {
+            (Some(c), Some([lo, hi])) => {
+                let e = RecordedEffect::Known(crate::gap::effects::EffectParams::Temperature {
+                    coefficient: c,
+                    lo,
+                    hi,
+                });
+                let (_, params) = crate::sink::effect_text::effect_parts(&e, unit, number);
+                params
+                    .first()
+                    .map(|p| format!("coefficient {}", p.value))
+                    .unwrap_or_default()
+            }
+            _ => String::new(),
+        }
+    };
+    let z = || t.z.map(|z| format!("{z:.2}")).unwrap_or_default();
+    Some(match t.outcome {
+        O::Named => return None,
+        O::NotShown => format!("temperature not shown (z {}): {}", z(), coefficient()),
+        O::Straight => format!(
+            "temperature not determined: it changed as a straight line (bend {}% of its {} deg \
+             C), which a rate ramp takes as well: {}",
+            number(100.0 * t.bend.unwrap_or(0.0)),
+            number(t.change_c),
+            coefficient()
+        ),
+        O::NotKept => format!(
+            "temperature shown in time (z {}) but not kept by the curve: {}",
+            z(),
+            coefficient()
+        ),
+        O::Constant => "temperature constant: its coefficient cannot be told".to_string(),
+        O::TooShort => "temperature not judged: too few blocks".to_string(),
+    })
 }

@@ -440,6 +440,51 @@ fn a_temperature_that_only_settles_is_listed_beside_the_warm_up_it_cannot_be_tol
     );
 }
 
+/// A chamber warming so slowly (22 degC toward 60 with a time constant of 40 000 s: 1.86 degC
+/// in the 2026 s run, bent from a straight line by 0.2% of that) that the bias it drives is a
+/// rate ramp: no temperature is named, and the record's `temperature_check` says why
+/// (`straight`) with an interval that covers the truth (3e-4 rad/s per degC); the report says
+/// it in words beside the effects (session 38; before, nothing was said of the temperature).
+#[test]
+fn a_temperature_that_changes_as_a_straight_line_is_said_not_determined() {
+    let ramp = chamber_unit(
+        "temp-ramp.toml",
+        0.04,
+        [22.0, 60.0, 40_000.0, 0.0, 1043.0],
+        "name = \"g\"\nunit = \"rad\"\nN = 1.22e-4\nB = 2.9e-5\nK = 1.0e-6\n\
+         flicker_band_s = [0.04, 1.0e5]\ntemperature_coefficient = 3.0e-4\n",
+    );
+    let csv = chamber_csv(&ramp, "temp-ramp-1.csv", 1);
+    let out = tmp("temp-ramp-1.jsonl");
+    let _ = std::fs::remove_file(&out);
+    stdout_of(
+        exe()
+            .arg("diagnose")
+            .arg(&csv)
+            .args(["--tau0", "0.04", "--unit", "rad", "--out"])
+            .arg(&out),
+    );
+    let text = std::fs::read_to_string(&out).unwrap();
+    let d: serde_json::Value = serde_json::from_str(text.lines().next().unwrap()).unwrap();
+    assert_eq!(d["effects"].as_array().unwrap().len(), 0, "{d}");
+    let t = &d["temperature_check"];
+    assert_eq!(t["outcome"], "straight", "{t}");
+    assert!((t["change_c"].as_f64().unwrap() - 1.86).abs() < 0.02, "{t}");
+    let (lo, hi) = (
+        t["interval"][0].as_f64().unwrap(),
+        t["interval"][1].as_f64().unwrap(),
+    );
+    assert!(lo < 3.0e-4 && 3.0e-4 < hi, "{t}");
+    let html = tmp("temp-ramp-1.html");
+    let _ = std::fs::remove_file(&html);
+    stdout_of(exe().arg("report").arg(&out).arg("-o").arg(&html));
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(
+        page.contains("temperature not determined: it changed as a straight line (bend 0.19"),
+        "the report does not say why no temperature is named"
+    );
+}
+
 /// `--holdout` judges a temperature with the held-out file's own temperature column (session
 /// 36; before, the temperature's offset was never added on the held-out run and its record
 /// always said `carried: false`). The unit of the test above fitted on seed 2, where its

@@ -7,6 +7,7 @@
 
 use allanscope::gap::diagnose::diagnose_with_temperature;
 use allanscope::gap::temperature::fit_temperature;
+use allanscope::gap::temperature_check::TemperatureOutcome;
 use allanscope::gap::{
     holdout_gap_with_temperature, DiagnoseOptions, Diagnosis, EffectKind, EffectParams,
     EvidenceSnapshot, GapConfig, GapEvidence,
@@ -145,12 +146,77 @@ fn a_temperature_cycle_the_base_fit_takes_as_random_walk_is_named_once_refitted(
     }
 }
 
+/// Without a coefficient none is named, and the record's check says so with an interval that
+/// rules out a coefficient of half the study's (the chamber's cycles let the block means bound
+/// it), covering 0 unless `|z|` is beyond 1.96.
 #[test]
 fn without_a_temperature_driven_bias_none_is_named() {
     for seed in [1, 2, 3] {
         let d = run(0.0, seed);
         assert!(temperature_of(&d).is_none(), "seed {seed}: {:?}", d.effects);
+        let t = d.temperature_check.expect("a check");
+        assert_eq!(
+            t.outcome,
+            TemperatureOutcome::NotShown,
+            "seed {seed}: {t:?}"
+        );
+        let [lo, hi] = t.interval.expect("an interval");
+        assert!(lo > -TRUTH / 2.0 && hi < TRUTH / 2.0, "seed {seed}: {t:?}");
+        assert_eq!(lo <= 0.0 && 0.0 <= hi, t.z.unwrap().abs() <= 1.96, "{t:?}");
     }
+}
+
+/// A chamber that settles with a time constant ten times the run (20 to 40 degC over 72 000 s;
+/// 1.9 degC in the two hours, bent from a straight line by 0.4% of that): the bias it drives is a
+/// rate ramp, which the test's drift takes as well. The check says `straight`, its interval
+/// covers the truth (0.2 arcsec/s per degC) and is too wide to name it (the curve gives the ramp
+/// to `R` or `K`).
+/// A chamber held at 25 degC: `constant`, no coefficient. A named temperature's check is the
+/// effect's own interval.
+#[test]
+fn the_temperature_check_says_why_no_temperature_is_named() {
+    let ramp = Chamber {
+        tc_s: 72_000.0,
+        amp_c: 0.0,
+        period_s: 600.0,
+    };
+    for seed in [1, 2] {
+        let (d, _) = run_in(TRUTH, &ramp, 7200.0, seed);
+        assert!(temperature_of(&d).is_none(), "seed {seed}: {:?}", d.effects);
+        let t = d.temperature_check.expect("a check");
+        assert_eq!(
+            t.outcome,
+            TemperatureOutcome::Straight,
+            "seed {seed}: {t:?}"
+        );
+        assert!((t.change_c - 1.90).abs() < 0.05, "seed {seed}: {t:?}");
+        assert!(t.bend.unwrap() < 0.01, "seed {seed}: {t:?}");
+        let [lo, hi] = t.interval.unwrap();
+        assert!(lo <= TRUTH && TRUTH <= hi, "seed {seed}: {t:?}");
+    }
+    let text = |coef: f64| {
+        format!(
+            "tau0_s = {TAU0}\n[temperature]\nstart_c = 25.0\nfinal_c = 25.0\n\
+             time_constant_s = 100.0\nsine_amplitude_c = 0.0\nsine_period_s = 600.0\n\
+             [[channel]]\nname = \"g\"\nunit = \"arcsec\"\nlsb = 0.004\nbias = 15.0\n\
+             N = 0.254\nB = 0.225\nK = 1.826e-2\nflicker_band_s = [0.004, 1.0e4]\n\
+             temperature_coefficient = {coef}\n"
+        )
+    };
+    let m = SimModel::from_toml_str(&text(TRUTH), Path::new("<test>")).expect("model");
+    let (a, b) = evidence_of(&m, 1800.0, 4);
+    let d = diagnose_with_temperature(&a, Some(&b), &DiagnoseOptions::default()).expect("d");
+    let t = d.temperature_check.expect("a check");
+    assert_eq!(
+        (t.outcome, t.change_c, t.coefficient),
+        (TemperatureOutcome::Constant, 0.0, None),
+        "{t:?}"
+    );
+    let d = run(TRUTH, 1);
+    let t = d.temperature_check.expect("a check");
+    let (c, lo, hi) = temperature_of(&d).expect("named");
+    assert_eq!(t.outcome, TemperatureOutcome::Named);
+    assert_eq!((t.coefficient, t.interval), (Some(c), Some([lo, hi])));
 }
 
 /// Issue 13: a day of a unit whose bias follows its temperature (a daily cycle of 6 degC over

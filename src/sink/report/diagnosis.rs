@@ -140,6 +140,9 @@ pub(super) fn diagnosis(h: &mut String, res: &Results) {
                 esc(&w)
             );
         }
+        if let Some(w) = crate::sink::alternative_words::temperature_check_words(d, &unit, &tick) {
+            let _ = write!(effects_cell, "<br><span class=\"small\">{}</span>", esc(&w));
+        }
         let _ = writeln!(
             h,
             "<tr>{}<td class=\"l\">{}</td><td class=\"l\"><b>{}</b>{shape}</td><td>{:.2}</td><td>{:.2}</td><td class=\"l\">{}</td><td class=\"l\">{}</td></tr>",

@@ -62,6 +62,9 @@ pub fn diagnosis_line(d: &DiagnosisRecord, unit: &str, style: &TableStyle) -> St
     if let Some(w) = crate::sink::alternative_words::alternative_words(d, unit, &sig3, " ") {
         let _ = write!(line, "; about as well: {w}");
     }
+    if let Some(w) = crate::sink::alternative_words::temperature_check_words(d, unit, &sig3) {
+        let _ = write!(line, "; {w}");
+    }
     if let Some(ho) = &d.holdout {
         let _ = write!(
             line,
