@@ -369,6 +369,31 @@ pub fn infer_tau0<R: BufRead>(
             )));
         }
     }
+    // Stamps that step by one or two of their resolution (833 Hz stamped to the ms: steps of
+    // 1 ms, and of 2 ms one in five): the median is the resolution, and each longer step would
+    // be read as a missing sample. When more than one step in ten is longer than the median
+    // beyond the tolerance (up to three medians) and the mean step, zeros counted, is 5% above
+    // it, the rows do not come at the median step: refused, as a file missing one sample in a
+    // few would be (its step is then for the user to say).
+    let longer = steps
+        .iter()
+        .filter(|d| **d > median * (1.0 + TOLERANCE) && **d <= 3.0 * median)
+        .count();
+    let (total, mean_step) = total_of(zeros);
+    if longer * 10 > total && mean_step > median * 1.05 {
+        let s = |x: f64| crate::ranges::show(round_significant(x, 4));
+        return Err(usage(format!(
+            "--tau0 is required: the time column `{column}` steps by its median {} s in only \
+             {regular} of {total} steps and by up to three times that in {longer}: the rows \
+             come about one each {} s by the mean step ({} Hz), with stamps written to {} s, \
+             or one sample in {} is missing; give --tau0",
+            s(median * unit_s),
+            s(mean_step * unit_s),
+            s(1.0 / (mean_step * unit_s)),
+            s(median * unit_s),
+            (total as f64 / longer as f64).round()
+        )));
+    }
     // The shortest decimal step within the stamps' resolution: stamps read as f64 (a clock
     // since 1970 in ns is resolved to 256 ns) make 5,000,000 ns steps look like 4,999,936, and
     // seconds from 0 printed to the ms make 0.005 s steps 0.00499999999999989 by 18 s. The
@@ -852,6 +877,23 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.contains("(2000 Hz)"), "{e}");
+        // 833 Hz stamped to the ms: steps of 1 and 2 ms, no zeros (was read as 1 ms, with a
+        // missing sample at each 2 ms step); a clean file missing one sample in a hundred is
+        // read as before.
+        let e = infer(&file(4001, &|k| {
+            format!("{:.3}", (k as f64 / 833.0 * 1000.0).floor() / 1000.0)
+        }))
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("(833") && e.contains("one sample in 5 is missing"),
+            "{e}"
+        );
+        let s = infer(&file(4001, &|k| {
+            format!("{:.3}", (k + k / 99) as f64 * 0.001)
+        }))
+        .unwrap();
+        assert_eq!(s.tau0_s, 0.001);
         // A burst of rows under the first stamp (a buffer flushed at the start), then 100 Hz:
         // read as 100 Hz.
         let s = infer(&file(4001, &|k| {
