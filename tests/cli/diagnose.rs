@@ -209,6 +209,27 @@ fn chamber_run(truth: &std::path::Path, name: &str, seed: u64) -> serde_json::Va
     ]))
 }
 
+/// [`chamber_csv`] at `seed` into `STEM.csv`, diagnosed into `STEM.jsonl` and reported into
+/// `STEM.html`: the diagnosis record and the report's text.
+fn chamber_report(truth: &std::path::Path, stem: &str, seed: u64) -> (serde_json::Value, String) {
+    let csv = chamber_csv(truth, &format!("{stem}.csv"), seed);
+    let (out, html) = (tmp(&format!("{stem}.jsonl")), tmp(&format!("{stem}.html")));
+    for f in [&out, &html] {
+        let _ = std::fs::remove_file(f);
+    }
+    stdout_of(
+        exe()
+            .arg("diagnose")
+            .arg(&csv)
+            .args(["--tau0", "0.04", "--unit", "rad", "--out"])
+            .arg(&out),
+    );
+    let text = std::fs::read_to_string(&out).unwrap();
+    let d = serde_json::from_str(text.lines().next().unwrap()).unwrap();
+    stdout_of(exe().arg("report").arg(&out).arg("-o").arg(&html));
+    (d, std::fs::read_to_string(&html).unwrap())
+}
+
 /// A temperature logged more slowly than the rates (a 1 Hz `temperature_c` beside 100 Hz
 /// increments, the other rows empty), or missing at a few rows, is still used: each step
 /// without one takes the last known value, and the diagnosis names `temperature` as with the
@@ -373,18 +394,7 @@ fn a_temperature_that_only_settles_is_listed_beside_the_warm_up_it_cannot_be_tol
     // Seed 4: the temperature named; the curve prefers the warm-up that fits the block means
     // best (1153 s), whose change over the run is that of the temperature-driven bias within
     // the noise (30%); the report says it.
-    let csv = chamber_csv(&settle, "temp-settle-4.csv", 4);
-    let out = tmp("temp-settle-4.jsonl");
-    let _ = std::fs::remove_file(&out);
-    stdout_of(
-        exe()
-            .arg("diagnose")
-            .arg(&csv)
-            .args(["--tau0", "0.04", "--unit", "rad", "--out"])
-            .arg(&out),
-    );
-    let text = std::fs::read_to_string(&out).unwrap();
-    let d: serde_json::Value = serde_json::from_str(text.lines().next().unwrap()).unwrap();
+    let (d, page) = chamber_report(&settle, "temp-settle-4", 4);
     assert_eq!(kinds(&d["effects"]), ["temperature"], "{d}");
     let c = param(&d["effects"][0], "coefficient");
     let (amp, tc) = listed_warmup(&d);
@@ -396,13 +406,9 @@ fn a_temperature_that_only_settles_is_listed_beside_the_warm_up_it_cannot_be_tol
         (change / expected - 1.0).abs() < 0.3,
         "change over the run {change}, the temperature's {expected}"
     );
-    let html = tmp("temp-settle-4.html");
-    let _ = std::fs::remove_file(&html);
-    stdout_of(exe().arg("report").arg(&out).arg("-o").arg(&html));
-    let text = std::fs::read_to_string(&html).unwrap();
     assert!(
-        text.contains("about as well: warm-up drift [amplitude ")
-            && text.contains("in place of temperature sensitivity (gap "),
+        page.contains("about as well: warm-up drift [amplitude ")
+            && page.contains("in place of temperature sensitivity (gap "),
         "the report does not say the alternative"
     );
 
@@ -454,18 +460,7 @@ fn a_temperature_that_changes_as_a_straight_line_is_said_not_determined() {
         "name = \"g\"\nunit = \"rad\"\nN = 1.22e-4\nB = 2.9e-5\nK = 1.0e-6\n\
          flicker_band_s = [0.04, 1.0e5]\ntemperature_coefficient = 3.0e-4\n",
     );
-    let csv = chamber_csv(&ramp, "temp-ramp-1.csv", 1);
-    let out = tmp("temp-ramp-1.jsonl");
-    let _ = std::fs::remove_file(&out);
-    stdout_of(
-        exe()
-            .arg("diagnose")
-            .arg(&csv)
-            .args(["--tau0", "0.04", "--unit", "rad", "--out"])
-            .arg(&out),
-    );
-    let text = std::fs::read_to_string(&out).unwrap();
-    let d: serde_json::Value = serde_json::from_str(text.lines().next().unwrap()).unwrap();
+    let (d, page) = chamber_report(&ramp, "temp-ramp-1", 1);
     assert_eq!(d["effects"].as_array().unwrap().len(), 0, "{d}");
     let t = &d["temperature_check"];
     assert_eq!(t["outcome"], "straight", "{t}");
@@ -475,10 +470,6 @@ fn a_temperature_that_changes_as_a_straight_line_is_said_not_determined() {
         t["interval"][1].as_f64().unwrap(),
     );
     assert!(lo < 3.0e-4 && 3.0e-4 < hi, "{t}");
-    let html = tmp("temp-ramp-1.html");
-    let _ = std::fs::remove_file(&html);
-    stdout_of(exe().arg("report").arg(&out).arg("-o").arg(&html));
-    let page = std::fs::read_to_string(&html).unwrap();
     assert!(
         page.contains("temperature not determined: it changed as a straight line (bend 0.19"),
         "the report does not say why no temperature is named"
