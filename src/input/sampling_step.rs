@@ -353,9 +353,9 @@ pub fn infer_tau0<R: BufRead>(
         (n, near.iter().sum::<f64>() / n as f64)
     };
     if zeros * 100 > steps.len() + zeros {
-        let (total, span_mean) = total_of(zeros + repeats);
+        let (total, mean) = total_of(zeros + repeats);
         let zeros = zeros + repeats;
-        if span_mean > 0.0 && span_mean < median * (1.0 - 0.005) {
+        if mean > 0.0 && mean < median * (1.0 - 0.005) {
             let s = |x: f64| crate::ranges::show(round_significant(x, 4));
             return Err(usage(format!(
                 "--tau0 is required: the time column `{column}` repeats its stamps ({zeros} of \
@@ -363,8 +363,8 @@ pub fn infer_tau0<R: BufRead>(
                  s): the rows come about one each {} s by the mean step ({} Hz), more often \
                  than the stamps resolve (their smallest step forward {} s); give --tau0",
                 s(median * unit_s),
-                s(span_mean * unit_s),
-                s(1.0 / (span_mean * unit_s)),
+                s(mean * unit_s),
+                s(1.0 / (mean * unit_s)),
                 s(steps[0] * unit_s),
             )));
         }
@@ -772,8 +772,8 @@ mod tests {
         assert!((s.tau0_s * 104.0 - 1.0).abs() < 1e-5, "{}", s.tau0_s);
     }
 
-    /// Stamps written more coarsely than the rows come are refused with the rate their span
-    /// gives; a clock jittering about its step by its resolution, and rows written twice, keep
+    /// Stamps written more coarsely than the rows come are refused with the rate their mean
+    /// step gives; a clock at its resolution, rows written twice and a burst at the start keep
     /// their step; stamps that are no time say which.
     #[test]
     fn stamps_coarser_than_the_rows_are_refused() {

@@ -61,10 +61,11 @@ pub fn alternative_words(
 
 /// The temperature's check when no temperature is named (the record's `temperature_check`;
 /// docs/gap.md, "The temperature's check"), in words: `temperature not shown (z 1.30):
-/// coefficient 4.62e-5 [-2.36e-5, 1.16e-4] rad/s per deg C`, `temperature not determined: it
-/// changed as a straight line (bend 0.19% of its 1.86 deg C), which a rate ramp takes as well;
-/// ...`, `temperature shown in time (z 5.10) but not kept by the curve; ...`, `temperature
-/// constant`; `None` when the record has no check or names the temperature (its effect says it).
+/// coefficient 9.53 [-4.87, 23.9] deg/h per deg C (4.62e-5 [-2.36e-5, 1.16e-4] rad/s per deg C)`,
+/// `temperature not determined: it changed as a straight line (bend 0.192% of its 1.86 deg C),
+/// which a rate ramp takes as well: coefficient ...`, `temperature shown in time (z 5.10) but not
+/// kept by the curve: coefficient ...`, `temperature constant: ...`; `None` when the record has
+/// no check or names the temperature (its effect says it).
 pub fn temperature_check_words(
     d: &DiagnosisRecord,
     unit: &str,
@@ -80,7 +81,7 @@ pub fn temperature_check_words(
                     lo,
                     hi,
                 });
-                let (_, params) = crate::sink::effect_text::effect_parts(&e, unit, number);
+                let (_, params) = effect_parts(&e, unit, number);
                 params
                     .first()
                     .map(|p| format!("coefficient {}", p.value))
