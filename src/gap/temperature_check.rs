@@ -26,14 +26,21 @@ use super::effects::{EffectKind, EffectParams};
 use super::evidence::EvidenceSnapshot;
 use super::problem::{GapProblem, GlsFit};
 use super::steps::JumpFinding;
-use super::temperature::{temperature_blocks, TemperatureInModel, TEMPERATURE_Z, Z95};
-use super::warmup::warmup_block_curve;
+use super::temperature::{
+    fit_shape, temperature_avar, temperature_blocks, TemperatureFinding, TemperatureInModel,
+    TEMPERATURE_Z, Z95,
+};
+use super::warmup::{best_warmup_time_constant, warmup_block_curve};
 
 /// Below this rms departure from a straight line, as a share of its change (max - min of the
 /// block means), the temperature is read as a straight line: a settling whose time constant is
 /// 30 times the run bends by 0.12% (`e^{-x}` on `[0, r]` departs from its line by about
 /// `0.037 r` of its change for small `r`), twice the run by 1.9%, the run's length by 3.7%.
 pub const STRAIGHT_BEND: f64 = 0.02;
+
+/// A change of the temperature's block means below this (degC) is none: the resolution of a
+/// chamber's own sensor, and far below any change that could show a coefficient.
+pub const CONSTANT_C: f64 = 0.01;
 
 /// Why the check came out as it did ([module doc](self)).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -98,12 +105,25 @@ pub fn check_temperature(
             (a.min(t), b.max(t))
         });
     // Block means of a constant temperature differ by rounding alone (6e-13 degC at 25 degC
-    // over 30 minutes): a change below a part in 1e9 of the temperature is none.
+    // over 30 minutes), a held chamber's by its sensor's dither (1e-4 degC for a column of
+    // 25.000 and 25.001, which gave coefficients of 0.1-0.4 rad/s per degC on a review's run):
+    // a change below CONSTANT_C is none.
     let change_c = Some(hi_c - lo_c)
-        .filter(|d| *d > 1e-9 * lo_c.abs().max(hi_c.abs()).max(1.0))
+        .filter(|d| *d >= CONSTANT_C)
         .unwrap_or(0.0);
+    // A temperature that varies within the blocks far more than their means show (a cycle of
+    // seconds under blocks of tens of seconds) is no straight line, whatever its block means do.
+    let within_blocks = temperature_avar(temp, &prob.ms).map_or(0.0, |avar| {
+        prob.ms
+            .iter()
+            .zip(&avar)
+            .filter(|(m, _)| (**m as f64) < snap.block_len as f64)
+            .map(|(_, v)| v.max(0.0).sqrt())
+            .fold(0.0, f64::max)
+    });
     let bend = straight_line_bend(&blocks_c).filter(|_| change_c > 0.0);
-    let from = |outcome, f: &super::temperature::TemperatureFinding| TemperatureCheck {
+    let straight = bend.is_some_and(|b| b < STRAIGHT_BEND) && within_blocks < 0.25 * change_c;
+    let from = |outcome, f: &TemperatureFinding| TemperatureCheck {
         outcome,
         coefficient: Some(f.coefficient),
         interval: Some([
@@ -181,14 +201,38 @@ pub fn check_temperature(
     if !extra.is_empty() {
         t.refit(&snap.block_means, block_s, &c5, &params, &extra);
     }
+    // Without a named warm-up: the coefficient again beside the warm-up that fits the block
+    // means best (a settling chamber makes the temperature-driven bias a warm-up's shape, and a
+    // unit's own warm-up then poses as a coefficient: a review's unit, warm-up 5e-4 rad/s over
+    // 300 s, no coefficient, chamber settling over 1500 s, had its interval exclude 0 in 17 of
+    // 20 runs). The interval given is the union of the two: what the run allows either way.
+    let beside_warmup = (!has(EffectKind::Warmup))
+        .then(|| best_warmup_time_constant(&snap.block_means, block_s, &c5, &params))
+        .flatten()
+        .and_then(|tc| {
+            let shape = warmup_block_curve(nb, block_s, tc);
+            let w = fit_shape(&snap.block_means, &shape, block_s, &c5, &params, k2_hi)?;
+            let mut tw = t.clone();
+            let mut cols = extra.clone();
+            cols.push(shape.iter().map(|v| w.coefficient * v).collect());
+            tw.refit(&snap.block_means, block_s, &c5, &params, &cols);
+            Some(tw.finding)
+        });
     let outcome = if t.finding.z.abs() > TEMPERATURE_Z {
         TemperatureOutcome::NotKept
-    } else if bend.is_some_and(|b| b < STRAIGHT_BEND) {
+    } else if straight {
         TemperatureOutcome::Straight
     } else {
         TemperatureOutcome::NotShown
     };
-    Some(from(outcome, &t.finding))
+    let mut check = from(outcome, &t.finding);
+    if let (Some(w), Some([lo, hi])) = (beside_warmup, check.interval) {
+        check.interval = Some([
+            lo.min(w.coefficient - Z95 * w.std_error),
+            hi.max(w.coefficient + Z95 * w.std_error),
+        ]);
+    }
+    Some(check)
 }
 
 /// The rms departure of `v` (one value per block, NaN where missing) from its least-squares

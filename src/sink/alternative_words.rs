@@ -60,7 +60,8 @@ pub fn alternative_words(
 }
 
 /// The temperature's check when no temperature is named (the record's `temperature_check`;
-/// docs/gap.md, "The temperature's check"), in words: `temperature not shown (z 1.30):
+/// docs/gap.md, "The temperature's check"), in words: `temperature not named (z 1.30, under the
+/// bar 4):
 /// coefficient 9.53 [-4.87, 23.9] deg/h per deg C (4.62e-5 [-2.36e-5, 1.16e-4] rad/s per deg C)`,
 /// `temperature not determined: it changed as a straight line (bend 0.192% of its 1.86 deg C),
 /// which a rate ramp takes as well: coefficient ...`, `temperature shown in time (z 5.10) but not
@@ -93,7 +94,12 @@ pub fn temperature_check_words(
     let z = || t.z.map(|z| format!("{z:.2}")).unwrap_or_default();
     Some(match t.outcome {
         O::Named => return None,
-        O::NotShown => format!("temperature not shown (z {}): {}", z(), coefficient()),
+        O::NotShown => format!(
+            "temperature not named (z {}, under the bar {}): {}",
+            z(),
+            crate::gap::temperature::TEMPERATURE_Z,
+            coefficient()
+        ),
         O::Straight => format!(
             "temperature not determined: it changed as a straight line (bend {}% of its {} deg \
              C), which a rate ramp takes as well: {}",
