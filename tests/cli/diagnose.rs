@@ -185,6 +185,11 @@ fn chamber_unit(name: &str, tau0_s: f64, chamber: [f64; 5], channel: &str) -> Pa
     p
 }
 
+/// The 25 Hz flicker-dominated gyro of the chamber tests (rad), its channel's lines before its
+/// temperature coefficient or effects.
+const GYRO25: &str = "name = \"g\"\nunit = \"rad\"\nN = 1.22e-4\nB = 2.9e-5\nK = 1.0e-6\n\
+                      flicker_band_s = [0.04, 1.0e5]\n";
+
 /// 2026 s of the 25 Hz unit `truth` (rad) simulated at `seed` into `name`.
 fn chamber_csv(truth: &std::path::Path, name: &str, seed: u64) -> PathBuf {
     let csv = tmp(name);
@@ -318,8 +323,7 @@ fn a_temperature_the_curve_does_not_show_is_kept_on_its_time_domain_evidence() {
         "temp-kept.toml",
         0.04,
         [22.0, 30.0, 1500.0, 2.5, 1043.0],
-        "name = \"g\"\nunit = \"rad\"\nN = 1.22e-4\nB = 2.9e-5\nK = 1.0e-6\n\
-         flicker_band_s = [0.04, 1.0e5]\ntemperature_coefficient = 7.7e-5\n",
+        &format!("{GYRO25}temperature_coefficient = 7.7e-5\n"),
     );
     let d = chamber_run(&truth, "temp-kept.csv", 2);
     let effects = d["effects"].as_array().unwrap();
@@ -349,8 +353,7 @@ fn a_temperature_the_curve_does_not_show_is_kept_on_its_time_domain_evidence() {
 /// of the test above) no warm-up is listed: the cycles tell them apart.
 #[test]
 fn a_temperature_that_only_settles_is_listed_beside_the_warm_up_it_cannot_be_told_from() {
-    let channel = "name = \"g\"\nunit = \"rad\"\nN = 1.22e-4\nB = 2.9e-5\nK = 1.0e-6\n\
-                   flicker_band_s = [0.04, 1.0e5]\n";
+    let channel = GYRO25;
     let settle = chamber_unit(
         "temp-settle.toml",
         0.04,
@@ -457,8 +460,7 @@ fn a_temperature_that_changes_as_a_straight_line_is_said_not_determined() {
         "temp-ramp.toml",
         0.04,
         [22.0, 60.0, 40_000.0, 0.0, 1043.0],
-        "name = \"g\"\nunit = \"rad\"\nN = 1.22e-4\nB = 2.9e-5\nK = 1.0e-6\n\
-         flicker_band_s = [0.04, 1.0e5]\ntemperature_coefficient = 3.0e-4\n",
+        &format!("{GYRO25}temperature_coefficient = 3.0e-4\n"),
     );
     let (d, page) = chamber_report(&ramp, "temp-ramp-1", 1);
     assert_eq!(d["effects"].as_array().unwrap().len(), 0, "{d}");
@@ -489,10 +491,7 @@ fn a_temperature_carries_to_a_held_out_run_of_its_unit_and_not_to_another() {
             name,
             0.04,
             [22.0, 30.0, 1500.0, 2.5, 1043.0],
-            &format!(
-                "name = \"g\"\nunit = \"rad\"\nN = 1.22e-4\nB = 2.9e-5\nK = 1.0e-6\n\
-                 flicker_band_s = [0.04, 1.0e5]\ntemperature_coefficient = {coef}\n"
-            ),
+            &format!("{GYRO25}temperature_coefficient = {coef}\n"),
         )
     };
     let (with, without) = (unit("temp-ho.toml", "7.7e-5"), unit("temp-ho0.toml", "0.0"));
@@ -547,9 +546,7 @@ fn an_unrelated_slow_sinusoid_is_not_named_temperature_on_time_alone() {
             0.04,
             [22.0, 30.0, 1500.0, 2.5, 1043.0],
             &format!(
-                "name = \"g\"\nunit = \"rad\"\nN = 1.22e-4\nB = 2.9e-5\nK = 1.0e-6\n\
-                 flicker_band_s = [0.04, 1.0e5]\n\
-                 sinusoid = {{ amplitude = 1.0e-4, frequency = 0.000769, phase = {phase} }}\n"
+                "{GYRO25}sinusoid = {{ amplitude = 1.0e-4, frequency = 0.000769, phase = {phase} }}\n"
             ),
         );
         let d = chamber_run(&truth, &format!("temp-sine-{seed}.csv"), seed);
