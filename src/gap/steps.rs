@@ -56,20 +56,35 @@ impl JumpFinding {
     /// size `s` at time `t` lowers each block after it by `s` and the block it falls in by `s`
     /// times the share of that block after `t`.
     pub fn remove_from(&self, block_means: &[f64]) -> Vec<f64> {
-        let bs = self.block_s;
         block_means
             .iter()
             .enumerate()
             .map(|(i, &b)| {
-                let end = (i + 1) as f64 * bs;
                 b - self
                     .times_s
                     .iter()
                     .zip(&self.sizes)
-                    .map(|(&t, &s)| s * ((end - t) / bs).clamp(0.0, 1.0))
+                    .map(|(&t, &s)| s * self.step_share(i, t))
                     .sum::<f64>()
             })
             .collect()
+    }
+
+    /// Each jump's block curve over `n_blocks` blocks: its size on each block after it, and on
+    /// the block it falls in times the share of that block after it (what [`Self::remove_from`]
+    /// takes out, one jump at a time).
+    pub fn step_curves(&self, n_blocks: usize) -> Vec<Vec<f64>> {
+        self.times_s
+            .iter()
+            .zip(&self.sizes)
+            .map(|(&t, &s)| (0..n_blocks).map(|i| s * self.step_share(i, t)).collect())
+            .collect()
+    }
+
+    /// The share of block `i` after time `t` (s): 0 before it, 1 after it.
+    fn step_share(&self, i: usize, t: f64) -> f64 {
+        let end = (i + 1) as f64 * self.block_s;
+        ((end - t) / self.block_s).clamp(0.0, 1.0)
     }
 
     /// The jumps that pass the rule "at least `k` jumps with `z >= z_crit[k - 1]`" for the

@@ -28,7 +28,7 @@ use super::problem::{GapProblem, GlsFit};
 use super::steps::JumpFinding;
 use super::temperature::{
     fit_shape, temperature_avar, temperature_blocks, TemperatureFinding, TemperatureInModel,
-    TEMPERATURE_Z, Z95,
+    TEMPERATURE_Z,
 };
 use super::warmup::{best_warmup_time_constant, warmup_block_curve};
 
@@ -126,18 +126,13 @@ pub fn check_temperature(
     let from = |outcome, f: &TemperatureFinding| TemperatureCheck {
         outcome,
         coefficient: Some(f.coefficient),
-        interval: Some([
-            f.coefficient - Z95 * f.std_error,
-            f.coefficient + Z95 * f.std_error,
-        ]),
+        interval: Some(f.interval().into()),
         z: Some(f.z),
         change_c,
         bend,
     };
-    let kept = effects
-        .iter()
-        .any(|e| e.params.kind() == EffectKind::Temperature);
-    if let Some(t) = named.filter(|_| kept) {
+    let has = |k: EffectKind| effects.iter().any(|e| e.params.kind() == k);
+    if let Some(t) = named.filter(|_| has(EffectKind::Temperature)) {
         return Some(from(TemperatureOutcome::Named, &t.finding));
     }
     let unjudged = |outcome| TemperatureCheck {
@@ -169,7 +164,6 @@ pub fn check_temperature(
     // each a column of its block curve at its fitted size.
     let block_s = snap.block_len as f64 * snap.tau0_s;
     let nb = snap.block_means.len();
-    let has = |k: EffectKind| effects.iter().any(|e| e.params.kind() == k);
     let mut extra: Vec<Vec<f64>> = effects
         .iter()
         .filter_map(|e| match e.params {
@@ -186,17 +180,7 @@ pub fn check_temperature(
         })
         .collect();
     if let Some(j) = jumps.filter(|_| has(EffectKind::BiasJumps)) {
-        for (&at, &size) in j.times_s.iter().zip(&j.sizes) {
-            let one = JumpFinding {
-                times_s: vec![at],
-                sizes: vec![size],
-                z_scores: vec![0.0],
-                block_s: j.block_s,
-            };
-            let zero = vec![0.0; nb];
-            // The step's block curve: what taking it out of zero leaves, negated.
-            extra.push(one.remove_from(&zero).iter().map(|v| -v).collect());
-        }
+        extra.extend(j.step_curves(nb));
     }
     if !extra.is_empty() {
         t.refit(&snap.block_means, block_s, &c5, &params, &extra);
@@ -227,10 +211,8 @@ pub fn check_temperature(
     };
     let mut check = from(outcome, &t.finding);
     if let (Some(w), Some([lo, hi])) = (beside_warmup, check.interval) {
-        check.interval = Some([
-            lo.min(w.coefficient - Z95 * w.std_error),
-            hi.max(w.coefficient + Z95 * w.std_error),
-        ]);
+        let (wlo, whi) = w.interval();
+        check.interval = Some([lo.min(wlo), hi.max(whi)]);
     }
     Some(check)
 }

@@ -1223,6 +1223,13 @@ fn empty_row(p: &Row, strict: &[bool]) -> bool {
 /// A row as read: its values or what is wrong with it, and its time stamp (NaN if none).
 type Row = (Result<Vec<f64>, String>, f64);
 
+/// Whether two rows' values and stamps are the same record written twice: a finite stamp equal
+/// to the other's, and the values bit for bit (NaN equal to NaN).
+fn same_record((a, ta): (&[f64], f64), (b, tb): (&[f64], f64)) -> bool {
+    let same = |x: &f64, y: &f64| x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan());
+    ta.is_finite() && ta == tb && a.len() == b.len() && a.iter().zip(b).all(|(x, y)| same(x, y))
+}
+
 /// A row's time stamp (NaN when it has none) and which analysed channels hold a value there
 /// ([`TextReader::take_stamps`]).
 pub type RowStamp = (f64, Vec<bool>);
@@ -2427,14 +2434,7 @@ impl<R: BufRead> TextReader<R> {
         let mut last: Option<Row> = None;
         let mut repeats = 0;
         let same_row = |a: &Row, b: &Row| match (&a.0, &b.0) {
-            (Ok(x), Ok(y)) => {
-                a.1.is_finite()
-                    && a.1 == b.1
-                    && x.len() == y.len()
-                    && x.iter()
-                        .zip(y)
-                        .all(|(p, q)| p.to_bits() == q.to_bits() || (p.is_nan() && q.is_nan()))
-            }
+            (Ok(x), Ok(y)) => same_record((x, a.1), (y, b.1)),
             _ => false,
         };
         if let Some(p) = self.pending.take() {
@@ -2642,12 +2642,7 @@ impl<R: BufRead> TextReader<R> {
         let (Some(c), Some((lv, lt)), Ok(v)) = (&self.time, &self.last_row, &p.0) else {
             return false;
         };
-        let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
-        c.in_use()
-            && p.1.is_finite()
-            && p.1 == *lt
-            && v.len() == lv.len()
-            && v.iter().zip(lv).all(|(a, b)| same(*a, *b))
+        c.in_use() && same_record((v, p.1), (lv, *lt))
     }
 
     /// The next row of the input, `None` at its end (comment lines skipped).
