@@ -40,6 +40,17 @@ pub fn carries(delta_chi2: f64, gap_with: f64, opts: &DiagnoseOptions) -> bool {
     gap_with.is_finite() && t.lr_stat(delta_chi2, gap_with) >= t.add_chi2
 }
 
+/// Whether a held-out run whose block means would drop by `expected` (`delta^2`, the whitened
+/// size of `c T` squared, [`fixed_coefficient_drop`]) with a temperature coefficient held fixed
+/// shows it at the fitting run's level (a drop of `TEMPERATURE_Z_ALONE^2`) in at least 95% of
+/// runs that have it: the drop is then about `N(delta^2, 4 delta^2)`, so
+/// `delta^2 - 1.645 (2 delta) >= TEMPERATURE_Z_ALONE^2`, `delta^2 >= 96.3`.
+fn could_show_in_time(expected: f64) -> bool {
+    let bar = TEMPERATURE_Z_ALONE * TEMPERATURE_Z_ALONE;
+    let delta = expected.max(0.0).sqrt();
+    expected - 2.0 * 1.645 * delta >= bar
+}
+
 /// The gap on a held-out run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HoldoutGap {
@@ -87,7 +98,9 @@ pub fn holdout_gap(
 /// `TEMPERATURE_Z^2`, the evidence that names a temperature on the fitting run. A held-out
 /// run that could not lower them by that much even if it had the coefficient (its temperature
 /// constant or changing too little, too few blocks) cannot judge it: the temperature is left
-/// out, as without a temperature.
+/// out, as without a temperature; so is one whose drop lies between 0 (below it the run
+/// disowns it: `carried: false`) and `TEMPERATURE_Z_ALONE^2` on a run too weak to reach that
+/// reliably with it ([`could_show_in_time`]).
 pub fn holdout_gap_with_temperature(
     fitted: &Diagnosis,
     snap: &EvidenceSnapshot,
@@ -156,7 +169,8 @@ pub fn holdout_gap_with_temperature(
                     continue;
                 };
                 tracing::debug!(drop, scale, expected, "the held-out temperature in time");
-                time_drop = Some(drop / scale.max(1.0));
+                // Both on the scale of the residuals.
+                time_drop = Some((drop / scale.max(1.0), expected / scale.max(1.0)));
                 if let Some(off) = trial.offset.as_mut() {
                     for (o, v) in off.iter_mut().zip(avar) {
                         *o += coefficient * coefficient * v;
@@ -189,8 +203,29 @@ pub fn holdout_gap_with_temperature(
         // one of 1100 s beside a 1043-s cycle carried in time at `add_chi2` (drops 11-54).
         let (carried, in_time) = match time_drop {
             None => (by_curve, false),
-            Some(d) if by_curve && d >= TEMPERATURE_Z * TEMPERATURE_Z => (true, false),
-            Some(d) => (d >= TEMPERATURE_Z_ALONE * TEMPERATURE_Z_ALONE, true),
+            Some((d, _)) if by_curve && d >= TEMPERATURE_Z * TEMPERATURE_Z => (true, false),
+            Some((d, expected)) => {
+                let bar = TEMPERATURE_Z_ALONE * TEMPERATURE_Z_ALONE;
+                if d < bar && d >= 0.0 && !could_show_in_time(expected) {
+                    // Neither shown at the fitting run's level nor disowned (the drop is about
+                    // N(-delta^2, 4 delta^2) without the effect, so one at or above 0 is
+                    // 2 delta standard deviations above that), on a run that could not show
+                    // it there reliably even with it: not judged, as a run that cannot show it
+                    // at all. Said `carried: false` before: the MEMS gyro of the held-out test
+                    // at 10 arcsec/s per degC in a chamber settling from 27 or 30 degC had drops
+                    // 20-56 (expected 20-53) with the coefficient, -8 to -27 without.
+                    tracing::warn!(
+                        drop = d,
+                        expected,
+                        "the held-out run's block means neither show the temperature coefficient \
+                         fitted on the other run as plainly as that run needs (a drop of {bar}) \
+                         nor disown it (a drop below 0), and with its temperature they could not \
+                         have shown it reliably: left out of the held-out effects"
+                    );
+                    continue;
+                }
+                (d >= bar, true)
+            }
         };
         if carried && in_time {
             effects.push(HeldEffect {
