@@ -8,9 +8,20 @@
 pub const KEEP: usize = 20_000;
 /// Fewest values for an estimate.
 const MIN_VALUES: usize = 100;
-/// Tolerance on `value / lsb` being a whole number (decimal text read back as f64 is off by a
-/// few ulps; a floating value is off by a uniform fraction).
-const TOL: f64 = 1e-6;
+/// Tolerance on `value / lsb` being a whole number, in LSBs, beside [`TOL_REL`]: decimal text
+/// read back as f64 is off by a few ulps; a floating value is off by a uniform fraction, so that
+/// the kept values all pass by chance with probability about `(2 tol)^n`.
+const TOL: f64 = 1e-3;
+/// The part of the tolerance that grows with the count (`TOL_REL |k|`; at most 0.017 LSB at
+/// [`MAX_COUNT`]).
+const TOL_REL: f64 = 1e-9;
+/// The largest count (`|value| / lsb`) the check is made at: 2^24, a 24-bit converter's full
+/// scale. Above it the smallest difference of floating values is no step: a MEMS gyro's
+/// increments written as floats near 0.6 deg (a bias of 620 deg/s at 1 kHz) differed by as
+/// little as 1.6e-8 deg among a million samples, every value then 4e7 such steps, and with the
+/// tolerance relative to the count (1e-6 of it, 40 steps) the check passed and the record gave
+/// a quantization of 1.6e-8 deg (a review, session 39).
+const MAX_COUNT: f64 = 16_777_216.0;
 
 /// Estimates the LSB of one channel's values (increments, or rate samples).
 #[derive(Debug, Clone, Default)]
@@ -69,18 +80,18 @@ impl LsbEstimator {
     }
 
     /// The step (same unit as the values) when every kept value is a whole multiple of the
-    /// smallest difference seen, and the counts are not so large that the check means nothing
-    /// (below 2^40); `None` otherwise.
+    /// smallest difference seen (its shortest decimal, [`snap_decimal`]), and the counts are not
+    /// so large that the check means nothing (at most [`MAX_COUNT`]); `None` otherwise.
     pub fn estimate(&self) -> Option<f64> {
-        let q = self.min_step;
-        if self.kept.len() < MIN_VALUES || !(q.is_finite() && q > 0.0) {
+        if self.kept.len() < MIN_VALUES || !(self.min_step.is_finite() && self.min_step > 0.0) {
             return None;
         }
+        let q = snap_decimal(self.min_step);
         let whole = self.kept.iter().all(|&v| {
             let k = v / q;
-            k.abs() < (1u64 << 40) as f64 && (k - k.round()).abs() <= TOL * k.abs().max(1.0)
+            k.abs() <= MAX_COUNT && (k - k.round()).abs() <= TOL + TOL_REL * k.abs()
         });
-        whole.then_some(snap_decimal(q))
+        whole.then_some(q)
     }
 }
 
@@ -116,6 +127,29 @@ mod tests {
         let est = q.estimate().expect("quantized");
         assert_eq!(est, lsb, "the decimal LSB itself");
         assert_eq!(f.estimate(), None);
+    }
+
+    /// Floating values far from zero (increments near 0.62 deg, a bias of 620 deg/s at 1 kHz,
+    /// noise 2e-3 deg): the smallest difference among 100 000 of them is about 1e-8 deg, each
+    /// value then some 1e7-1e8 such steps; no step is found (a review found one of 1.6e-8 deg).
+    /// Counted values with a large offset (a 16-bit gyro's rate samples near 30 000 LSB) are
+    /// found.
+    #[test]
+    fn floating_values_far_from_zero_have_no_step() {
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(9);
+        let mut f = LsbEstimator::new();
+        let mut q = LsbEstimator::new();
+        let lsb = 0.007_629_394_531_25; // 250 deg/s over 2^15
+        for _ in 0..100_000 {
+            let v = -0.6239 + 2e-3 * (rng.random::<f64>() - 0.5) * 3.46;
+            f.push(format!("{v:e}").parse::<f64>().unwrap());
+            let count: i64 = 30_000 + rng.random_range(-40..=40);
+            q.push(format!("{}", count as f64 * lsb).parse::<f64>().unwrap());
+        }
+        assert!(f.min_step < 1e-7, "{}", f.min_step);
+        assert_eq!(f.estimate(), None);
+        let est = q.estimate().expect("counted");
+        assert!((est / lsb - 1.0).abs() < 1e-9, "{est}");
     }
 
     /// Too few values, or constant values, give no estimate.
