@@ -12,6 +12,7 @@ use super::temperature::{
     fixed_coefficient_drop, temperature_avar, temperature_blocks, TEMPERATURE_Z,
     TEMPERATURE_Z_ALONE,
 };
+use super::warmup::warmup_block_curve;
 
 /// One effect of the fitting run on the held-out run.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -40,13 +41,28 @@ pub fn carries(delta_chi2: f64, gap_with: f64, opts: &DiagnoseOptions) -> bool {
     gap_with.is_finite() && t.lr_stat(delta_chi2, gap_with) >= t.add_chi2
 }
 
+/// The time-domain judgement of an effect the fitting run found in time, held fixed on the
+/// held-out run ([`fixed_coefficient_drop`]), on the scale of the residuals.
+#[derive(Debug, Clone, Copy)]
+struct TimeDrop {
+    /// The drop of the held-out block means' whitened residuals with the effect taken out.
+    drop: f64,
+    /// `delta^2`: the drop expected if the held-out run has the effect.
+    expected: f64,
+    /// The drop that carries it on its own (a temperature: `TEMPERATURE_Z_ALONE^2`; a warm-up:
+    /// `add_chi2`).
+    bar: f64,
+    /// The drop that carries it beside the curve's rule (a temperature: `TEMPERATURE_Z^2`; a
+    /// warm-up: any).
+    beside_curve: f64,
+}
+
 /// Whether a held-out run whose block means would drop by `expected` (`delta^2`, the whitened
-/// size of `c T` squared, [`fixed_coefficient_drop`]) with a temperature coefficient held fixed
-/// shows it at the fitting run's level (a drop of `TEMPERATURE_Z_ALONE^2`) in at least 95% of
-/// runs that have it: the drop is then about `N(delta^2, 4 delta^2)`, so
-/// `delta^2 - 1.645 (2 delta) >= TEMPERATURE_Z_ALONE^2`, `delta^2 >= 96.3`.
-fn could_show_in_time(expected: f64) -> bool {
-    let bar = TEMPERATURE_Z_ALONE * TEMPERATURE_Z_ALONE;
+/// size of the effect held fixed, [`fixed_coefficient_drop`]) shows it at the level `bar` in at
+/// least 95% of runs that have it: the drop is then about `N(delta^2, 4 delta^2)`, so
+/// `delta^2 - 1.645 (2 delta) >= bar` (a temperature's 64: `delta^2 >= 96.3`; a warm-up's 3:
+/// `delta^2 >= 16.3`).
+fn could_show_in_time(expected: f64, bar: f64) -> bool {
     let delta = expected.max(0.0).sqrt();
     expected - 2.0 * 1.645 * delta >= bar
 }
@@ -124,8 +140,9 @@ pub fn holdout_gap_with_temperature(
     for e in &fitted.effects {
         let kind = e.params.kind();
         let mut trial = spec.clone();
-        // The temperature's drop in time, over its scale (`Some` for a temperature only).
-        let mut time_drop = None;
+        // The drop in time of an effect the fitting run found in time (a temperature, a
+        // warm-up), over its scale (`Some` for those only).
+        let mut time_drop: Option<TimeDrop> = None;
         match e.params {
             EffectParams::BiasJumps { .. } => continue,
             EffectParams::Temperature { coefficient, .. } => {
@@ -170,7 +187,12 @@ pub fn holdout_gap_with_temperature(
                 };
                 tracing::debug!(drop, scale, expected, "the held-out temperature in time");
                 // Both on the scale of the residuals.
-                time_drop = Some((drop / scale.max(1.0), expected / scale.max(1.0)));
+                time_drop = Some(TimeDrop {
+                    drop: drop / scale.max(1.0),
+                    expected: expected / scale.max(1.0),
+                    bar: TEMPERATURE_Z_ALONE * TEMPERATURE_Z_ALONE,
+                    beside_curve: TEMPERATURE_Z * TEMPERATURE_Z,
+                });
                 if let Some(off) = trial.offset.as_mut() {
                     for (o, v) in off.iter_mut().zip(avar) {
                         *o += coefficient * coefficient * v;
@@ -178,6 +200,47 @@ pub fn holdout_gap_with_temperature(
                 }
             }
             _ if kind.is_filter() => trial.filter = e.params.lowpass(),
+            EffectParams::Warmup {
+                amplitude,
+                time_constant_s,
+            } => {
+                // In time too, as the fitting run found it: its block curve, held fixed, taken
+                // out of the held-out block means (both runs timed from their first block).
+                // On the curve alone the five terms take a warm-up's slow fall as K and R: a
+                // review's MA4 with a warm-up of 3e-3 m/s^2 over 600 s (75 times its B), named
+                // on one run, carried on none of three runs of the same unit (curve drops
+                // -1.8 to 1.9).
+                let block_s = snap.block_len as f64 * snap.tau0_s;
+                let shape: Vec<f64> =
+                    warmup_block_curve(snap.block_means.len(), block_s, time_constant_s)
+                        .into_iter()
+                        .map(|v| amplitude * v)
+                        .collect();
+                let judged = fixed_coefficient_drop(
+                    &snap.block_means,
+                    &shape,
+                    block_s,
+                    &cur.five_terms(),
+                    &carried_params,
+                    1.0,
+                    super::diagnose::k2_upper(&prob, &spec, &cur),
+                );
+                if let Some((drop, scale, expected)) = judged {
+                    tracing::debug!(drop, scale, expected, "the held-out warm-up in time");
+                    time_drop = Some(TimeDrop {
+                        drop: drop / scale.max(1.0),
+                        expected: expected / scale.max(1.0),
+                        bar: opts.thresholds.add_chi2,
+                        beside_curve: f64::NEG_INFINITY,
+                    });
+                }
+                let col = params_column(&e.params, &prob.ms, prob.tau0_s, prob.n_inc);
+                if let Some(off) = trial.offset.as_mut() {
+                    for (o, c) in off.iter_mut().zip(col) {
+                        *o += amplitude * amplitude * c;
+                    }
+                }
+            }
             _ => {
                 let a = e.params.amplitude();
                 let col = params_column(&e.params, &prob.ms, prob.tau0_s, prob.n_inc);
@@ -201,12 +264,19 @@ pub fn holdout_gap_with_temperature(
         // (`TEMPERATURE_Z_ALONE`). A review found a held-out bias sinusoid of 650 s beside a
         // 600-s temperature cycle, no coefficient, carried by the curve alone (3 of 3 runs), and
         // one of 1100 s beside a 1043-s cycle carried in time at `add_chi2` (drops 11-54).
+        // A warm-up carries on the curve as the other effects do, or in time on a drop of
+        // `add_chi2`, the curve's own rule for a fixed signal (an absent one reaches it with
+        // probability at most 4.2%, `carries`).
         let (carried, in_time) = match time_drop {
             None => (by_curve, false),
-            Some((d, _)) if by_curve && d >= TEMPERATURE_Z * TEMPERATURE_Z => (true, false),
-            Some((d, expected)) => {
-                let bar = TEMPERATURE_Z_ALONE * TEMPERATURE_Z_ALONE;
-                if d < bar && d >= 0.0 && !could_show_in_time(expected) {
+            Some(t) if by_curve && t.drop >= t.beside_curve => (true, false),
+            Some(TimeDrop {
+                drop: d,
+                expected,
+                bar,
+                ..
+            }) => {
+                if d < bar && d >= 0.0 && !could_show_in_time(expected, bar) {
                     // Neither shown at the fitting run's level nor disowned (the drop is about
                     // N(-delta^2, 4 delta^2) without the effect, so one at or above 0 is
                     // 2 delta standard deviations above that), on a run that could not show
@@ -217,10 +287,11 @@ pub fn holdout_gap_with_temperature(
                     tracing::warn!(
                         drop = d,
                         expected,
-                        "the held-out run's block means neither show the temperature coefficient \
-                         fitted on the other run as plainly as that run needs (a drop of {bar}) \
-                         nor disown it (a drop below 0), and with its temperature they could not \
-                         have shown it reliably: left out of the held-out effects"
+                        "the held-out run's block means neither show the {} fitted on the other \
+                         run as plainly as that run needs (a drop of {bar}) nor disown it (a drop \
+                         below 0), and they could not have shown it reliably: left out of the \
+                         held-out effects",
+                        kind.name()
                     );
                     continue;
                 }
