@@ -3,7 +3,9 @@
 //! active five-term coefficients, of each effect column's amplitude squared and of each shape
 //! parameter, `J = d ln AVAR_model / d theta` (shapes by central differences), the covariance
 //! of `theta_hat` is `(J' S^-1 J)^-1`, scaled up (never down) by the final gap `G` as a
-//! residual variance. Each interval is `p exp(+-1.96 sd(ln p))`, so it stays positive.
+//! residual variance. Each interval is `p exp(+-1.96 sd(ln p))`, so it stays positive. Where a
+//! sinusoid is in the model each tau's standard deviation is widened by its cross term with
+//! the noise (`sqrt(1 + 2 A_s / A_n)`, below), which the noise's covariance lacks.
 //! The temperature's interval is its own (gap::temperature); warm-ups and jumps get none. The
 //! filters' shapes get theirs the same way (the covariance is exact for them since
 //! [`super::filter_cov`]; coverage in docs/gap.md), the moving average's whole taps by the
@@ -143,10 +145,41 @@ pub fn effect_intervals(
             );
         }
     }
+    // A sinusoid is a fixed signal, not noise: its AVAR estimate's error is the cross term of
+    // the signal with the noise, which the curve's covariance (of the noise's five terms) lacks.
+    // For a signal of AVAR `A_s` beside noise of AVAR `A_n` the estimate's variance is about
+    // `(2 A_n^2 + 4 A_s A_n) / M` (M differences; the noise part `2 A_n^2 / M`), so each tau's
+    // standard deviation is widened by `sqrt(1 + 2 A_s / A_n)`. Without it a sinusoid of about
+    // the noise's ADEV at its hump (a MEMS gyro at 200 Hz, 0.05 Hz, two hours) had its amplitude
+    // covered in 23 of 30 runs, the estimates' spread 1.8 times the interval's standard error
+    // (docs/gap.md, "Parameter intervals", session 39).
+    let mut sine_share = vec![0.0; j];
+    let mut extra_col = 5;
+    for p in &params {
+        let kind = p.kind();
+        if kind.is_stationary() && !kind.is_filter() {
+            if kind == EffectKind::Sinusoid {
+                if let Some(c) = coef_col.get(extra_col).copied().flatten() {
+                    for (sh, v) in sine_share.iter_mut().zip(&cols[c]) {
+                        *sh += v.max(0.0);
+                    }
+                }
+            }
+            extra_col += 1;
+        }
+    }
+    let widen: Vec<f64> = sine_share
+        .iter()
+        .map(|&sh| {
+            let sh = sh.min(0.99);
+            (1.0 + 2.0 * sh / (1.0 - sh)).sqrt()
+        })
+        .collect();
     let k = cols.len();
     let mut jw = DMatrix::zeros(j, k);
     for (c, col) in cols.iter().enumerate() {
-        let w = prob.whiten(&DVector::from_vec(col.clone()));
+        let scaled: Vec<f64> = col.iter().zip(&widen).map(|(v, w)| v / w).collect();
+        let w = prob.whiten(&DVector::from_vec(scaled));
         jw.set_column(c, &w);
     }
     let cov = (jw.transpose() * &jw).try_inverse();

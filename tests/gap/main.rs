@@ -22,6 +22,7 @@ mod reference;
 mod rounding;
 mod second_order_polish;
 mod sinusoid_behind_filter;
+mod sinusoid_interval;
 mod temperature;
 mod warmup_null;
 mod warmup_profile;
