@@ -207,9 +207,9 @@ pub fn holdout_gap_with_temperature(
                 // In time too, as the fitting run found it: its block curve, held fixed, taken
                 // out of the held-out block means (both runs timed from their first block).
                 // On the curve alone the five terms take a warm-up's slow fall as K and R: a
-                // review's MA4 with a warm-up of 3e-3 m/s^2 over 600 s (75 times its B), named
-                // on one run, carried on none of three runs of the same unit (curve drops
-                // -1.8 to 1.9).
+                // review's MA4 with a warm-up of 1e-3 or 3e-3 m/s^2 over 600 s (25 and 75 times
+                // its B), named on one run, carried on none of three runs of the same unit that
+                // had it (curve drops -1.8 to 1.9).
                 let block_s = snap.block_len as f64 * snap.tau0_s;
                 let shape: Vec<f64> =
                     warmup_block_curve(snap.block_means.len(), block_s, time_constant_s)

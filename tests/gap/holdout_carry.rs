@@ -7,8 +7,8 @@
 
 use super::diagnosis::{model, TAU0};
 use allanscope::gap::{
-    diagnose, holdout_gap, DiagnoseOptions, DiagnosisRecord, EffectKind, EvidenceSnapshot,
-    GapConfig, GapEvidence, Verdict,
+    diagnose, holdout_gap, DiagnoseOptions, Diagnosis, DiagnosisRecord, EffectKind,
+    EvidenceSnapshot, GapConfig, GapEvidence, Verdict,
 };
 use allanscope::sim::{SimModel, Simulator};
 use std::path::Path;
@@ -26,6 +26,17 @@ fn halves(extra: &str, seed: u64) -> (EvidenceSnapshot, EvidenceSnapshot) {
 
 const WARMUP: &str = "warmup = { amplitude = 3.0, time_constant = 60.0 }";
 
+/// The fitting run named a warm-up.
+fn assert_names_a_warm_up(d: &Diagnosis) {
+    assert!(
+        d.effects
+            .iter()
+            .any(|e| e.params.kind() == EffectKind::Warmup),
+        "{:?}",
+        d.effects
+    );
+}
+
 /// Seed 4: the warm-up is named on the first hour; on the second it lowers the held-out gap a
 /// little (1.17 -> 1.07, a drop of r' S^-1 r of 1.8), which before this rule was reported as
 /// carried. The record now says plainly that nothing carried.
@@ -34,13 +45,7 @@ fn a_settled_warmup_does_not_carry_on_a_negligible_gain() {
     let opts = DiagnoseOptions::default();
     let (a, b) = halves(WARMUP, 4);
     let d = diagnose(&a, &opts).expect("diagnosis");
-    assert!(
-        d.effects
-            .iter()
-            .any(|e| e.params.kind() == EffectKind::Warmup),
-        "{:?}",
-        d.effects
-    );
+    assert_names_a_warm_up(&d);
     let h = holdout_gap(&d, &b, &opts).expect("holdout");
     let w = h
         .effects
@@ -120,13 +125,7 @@ fn a_warm_up_from_power_on_carries_in_time_to_a_run_of_its_unit() {
     let without = text("");
     let opts = DiagnoseOptions::default();
     let d = diagnose(&run(&with, 11), &opts).expect("diagnosis");
-    assert!(
-        d.effects
-            .iter()
-            .any(|e| e.params.kind() == EffectKind::Warmup),
-        "{:?}",
-        d.effects
-    );
+    assert_names_a_warm_up(&d);
     for seed in [101, 102] {
         for (t, carries) in [(&with, true), (&without, false)] {
             let h = holdout_gap(&d, &run(t, seed), &opts).expect("holdout");
