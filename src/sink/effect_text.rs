@@ -101,6 +101,12 @@ fn known(kind: &str) -> Option<(&'static str, &'static [ParamSpec])> {
     })
 }
 
+/// A person's name for an effect kind of the record (`warmup`: "warm-up drift"); an unknown
+/// kind with its underscores as spaces.
+pub fn kind_words(kind: &str) -> String {
+    known(kind).map_or_else(|| kind.replace('_', " "), |(name, _)| name.to_string())
+}
+
 /// One parameter as shown: `name`, and its value with unit(s) (`0.541 deg/h (0.541 arcsec/s)`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ParamText {

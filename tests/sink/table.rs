@@ -561,3 +561,47 @@ fn the_diagnose_table_says_how_far_the_twin_matches() {
     assert!(!bare.contains("simulated runs"), "{bare}");
     assert!(row(&bare, "g4 [arcsec]  diagnosis:").ends_with("(gap 21.5 -> 1.10)"));
 }
+
+/// The held-out run in words (session 39): which of the fitting run's effects carried, since
+/// one carried in time (a warm-up, a temperature) leaves the held-out gap as it was.
+#[test]
+fn the_diagnose_table_says_which_effects_carried_to_the_held_out_run() {
+    let rec = |holdout: serde_json::Value| {
+        json!({"type": "diagnosis", "channel": "a4", "unit": "m/s", "gap_before": 1.6,
+            "gap_after": 1.38, "verdict": "explained", "regions": [],
+            "effects": [{"kind": "output_filter", "params": {"time_constant": 0.0305}, "gap_after": 1.39},
+                        {"kind": "warmup", "params": {"amplitude": 9.19e-4, "time_constant": 699.0}, "gap_after": 1.38}],
+            "final": true, "t_data": 7200.0, "tau_span": [0.004, 655.0],
+            "base_coef": [6.87e-4, 2.8e-4, 0.0, 0.0, 0.0], "final_coef": [6.87e-4, 2.8e-4, 0.0, 0.0, 0.0],
+            "holdout": holdout})
+    };
+    let both = |filter: bool, warm: bool| {
+        json!({"gap_before": 1.41, "gap_after": 1.41, "carried": filter || warm, "effects": [
+            {"kind": "output_filter", "gap_after": 1.52, "carried": filter, "delta_chi2": -10.0},
+            {"kind": "warmup", "gap_after": 1.41, "carried": warm, "delta_chi2": 0.0}]})
+    };
+    for (holdout, words) in [
+        (
+            both(false, true),
+            "on the held-out run gap 1.41 -> 1.41 (carried: warm-up drift; did not carry: output \
+             low-pass filter)",
+        ),
+        (
+            both(false, false),
+            "on the held-out run gap 1.41 -> 1.41 (did not carry: output low-pass filter, \
+             warm-up drift)",
+        ),
+        (
+            json!({"gap_before": 1.41, "gap_after": 1.41, "carried": false}),
+            "on the held-out run gap 1.41 -> 1.41 (did not carry)",
+        ),
+    ] {
+        let out = Shared::default();
+        let mut w = TableWriter::new(out.clone(), TableStyle::default(), None);
+        writeln!(w, "{}", rec(holdout)).unwrap();
+        drop(w);
+        let t = out.text();
+        let a = row(&t, "a4 [m/s]  diagnosis:");
+        assert!(a.contains(words), "{a}");
+    }
+}

@@ -68,11 +68,28 @@ pub fn diagnosis_line(d: &DiagnosisRecord, unit: &str, style: &TableStyle) -> St
     if let Some(ho) = &d.holdout {
         let _ = write!(
             line,
-            "; on the held-out run gap {} -> {}{}",
+            "; on the held-out run gap {} -> {}",
             sig3(ho.gap_before),
-            sig3(ho.gap_after),
-            if ho.carried { "" } else { " (did not carry)" }
+            sig3(ho.gap_after)
         );
+        // Which effects carried: one carried in time (a warm-up, a temperature) leaves the
+        // held-out gap as it was, so the gaps alone do not say it.
+        let kinds = |carried: bool| -> String {
+            ho.effects
+                .iter()
+                .filter(|e| e.carried == carried)
+                .map(|e| crate::sink::effect_text::kind_words(&e.kind))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let (yes, no) = (kinds(true), kinds(false));
+        let _ = match (yes.is_empty(), no.is_empty()) {
+            (true, true) if !ho.carried => write!(line, " (did not carry)"),
+            (true, true) => Ok(()),
+            (false, true) => write!(line, " (carried: {yes})"),
+            (true, false) => write!(line, " (did not carry: {no})"),
+            (false, false) => write!(line, " (carried: {yes}; did not carry: {no})"),
+        };
     }
     // `diagnose --ensemble N`: how far the five terms alone and the twin match the curve.
     if let (Some(e), Some(words)) = (&d.ensemble, crate::sink::band_words::band_sentence(d)) {
