@@ -12,7 +12,7 @@ use super::temperature::{
     fixed_coefficient_drop, temperature_avar, temperature_blocks, TEMPERATURE_Z,
     TEMPERATURE_Z_ALONE,
 };
-use super::warmup::warmup_block_curve;
+use super::warmup::warmup_block_means;
 
 /// One effect of the fitting run on the held-out run.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -57,6 +57,44 @@ struct TimeDrop {
     beside_curve: f64,
 }
 
+impl TimeDrop {
+    /// From [`fixed_coefficient_drop`]'s `(drop, scale, expected)`: the drop and `delta^2` both
+    /// on the scale of the residuals.
+    fn scaled((drop, scale, expected): (f64, f64, f64), bar: f64, beside_curve: f64) -> Self {
+        TimeDrop {
+            drop: drop / scale.max(1.0),
+            expected: expected / scale.max(1.0),
+            bar,
+            beside_curve,
+        }
+    }
+}
+
+/// A warm-up held fixed on the held-out run, judged in time: its block curve taken out of the
+/// held-out block means (both runs timed from their first block), under the held-out model
+/// (`c5`, the stationary `effects` that carried, the random walk up to `k2_hi`); it carries on
+/// its own on a drop of `bar`. On the curve alone the five terms take a warm-up's slow fall as
+/// K and R: a review's MA4 with a warm-up of 1e-3 or 3e-3 m/s^2 over 600 s (25 and 75 times
+/// its B), named on one run, carried on none of three runs of the same unit that had it (curve
+/// drops -1.8 to 1.9).
+fn warmup_in_time(
+    snap: &EvidenceSnapshot,
+    amplitude: f64,
+    time_constant_s: f64,
+    c5: &[f64; 5],
+    effects: &[EffectParams],
+    k2_hi: f64,
+    bar: f64,
+) -> Option<TimeDrop> {
+    let block_s = snap.block_len as f64 * snap.tau0_s;
+    let shape = warmup_block_means(snap.block_means.len(), block_s, amplitude, time_constant_s);
+    let judged =
+        fixed_coefficient_drop(&snap.block_means, &shape, block_s, c5, effects, 1.0, k2_hi)?;
+    let (drop, scale, expected) = judged;
+    tracing::debug!(drop, scale, expected, "the held-out warm-up in time");
+    Some(TimeDrop::scaled(judged, bar, f64::NEG_INFINITY))
+}
+
 /// Whether a held-out run whose block means would drop by `expected` (`delta^2`, the whitened
 /// size of the effect held fixed, [`fixed_coefficient_drop`]) shows it at the level `bar` in at
 /// least 95% of runs that have it: the drop is then about `N(delta^2, 4 delta^2)`, so
@@ -83,6 +121,12 @@ impl HoldoutGap {
     /// Whether any effect carried ([`carries`]).
     pub fn carried(&self) -> bool {
         self.effects.iter().any(|e| e.carried)
+    }
+
+    /// The fitting run's effect of `kind` as judged here; `None` when it was left out (bias
+    /// jumps; a temperature or a warm-up this run cannot judge) or not fitted.
+    pub fn effect(&self, kind: EffectKind) -> Option<&HeldEffect> {
+        self.effects.iter().find(|e| e.kind == kind)
     }
 }
 
@@ -186,13 +230,11 @@ pub fn holdout_gap_with_temperature(
                     continue;
                 };
                 tracing::debug!(drop, scale, expected, "the held-out temperature in time");
-                // Both on the scale of the residuals.
-                time_drop = Some(TimeDrop {
-                    drop: drop / scale.max(1.0),
-                    expected: expected / scale.max(1.0),
-                    bar: TEMPERATURE_Z_ALONE * TEMPERATURE_Z_ALONE,
-                    beside_curve: TEMPERATURE_Z * TEMPERATURE_Z,
-                });
+                time_drop = Some(TimeDrop::scaled(
+                    (drop, scale, expected),
+                    TEMPERATURE_Z_ALONE * TEMPERATURE_Z_ALONE,
+                    TEMPERATURE_Z * TEMPERATURE_Z,
+                ));
                 if let Some(off) = trial.offset.as_mut() {
                     for (o, v) in off.iter_mut().zip(avar) {
                         *o += coefficient * coefficient * v;
@@ -200,48 +242,24 @@ pub fn holdout_gap_with_temperature(
                 }
             }
             _ if kind.is_filter() => trial.filter = e.params.lowpass(),
-            EffectParams::Warmup {
-                amplitude,
-                time_constant_s,
-            } => {
-                // In time too, as the fitting run found it: its block curve, held fixed, taken
-                // out of the held-out block means (both runs timed from their first block).
-                // On the curve alone the five terms take a warm-up's slow fall as K and R: a
-                // review's MA4 with a warm-up of 1e-3 or 3e-3 m/s^2 over 600 s (25 and 75 times
-                // its B), named on one run, carried on none of three runs of the same unit that
-                // had it (curve drops -1.8 to 1.9).
-                let block_s = snap.block_len as f64 * snap.tau0_s;
-                let shape: Vec<f64> =
-                    warmup_block_curve(snap.block_means.len(), block_s, time_constant_s)
-                        .into_iter()
-                        .map(|v| amplitude * v)
-                        .collect();
-                let judged = fixed_coefficient_drop(
-                    &snap.block_means,
-                    &shape,
-                    block_s,
-                    &cur.five_terms(),
-                    &carried_params,
-                    1.0,
-                    super::diagnose::k2_upper(&prob, &spec, &cur),
-                );
-                if let Some((drop, scale, expected)) = judged {
-                    tracing::debug!(drop, scale, expected, "the held-out warm-up in time");
-                    time_drop = Some(TimeDrop {
-                        drop: drop / scale.max(1.0),
-                        expected: expected / scale.max(1.0),
-                        bar: opts.thresholds.add_chi2,
-                        beside_curve: f64::NEG_INFINITY,
-                    });
-                }
-                let col = params_column(&e.params, &prob.ms, prob.tau0_s, prob.n_inc);
-                if let Some(off) = trial.offset.as_mut() {
-                    for (o, c) in off.iter_mut().zip(col) {
-                        *o += amplitude * amplitude * c;
-                    }
-                }
-            }
             _ => {
+                // A warm-up in time too, as the fitting run found it ([`warmup_in_time`]); on
+                // the curve (below) as the other effects.
+                if let EffectParams::Warmup {
+                    amplitude,
+                    time_constant_s,
+                } = e.params
+                {
+                    time_drop = warmup_in_time(
+                        snap,
+                        amplitude,
+                        time_constant_s,
+                        &cur.five_terms(),
+                        &carried_params,
+                        super::diagnose::k2_upper(&prob, &spec, &cur),
+                        opts.thresholds.add_chi2,
+                    );
+                }
                 let a = e.params.amplitude();
                 let col = params_column(&e.params, &prob.ms, prob.tau0_s, prob.n_inc);
                 if let Some(off) = trial.offset.as_mut() {

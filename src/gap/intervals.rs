@@ -153,19 +153,26 @@ pub fn effect_intervals(
     // the noise's ADEV at its hump (a MEMS gyro at 200 Hz, 0.05 Hz, two hours) had its amplitude
     // covered in 23 of 30 runs, the estimates' spread 1.8 times the interval's standard error
     // (docs/gap.md, "Parameter intervals", session 39).
-    let mut sine_share = vec![0.0; j];
-    let mut extra_col = 5;
-    for p in &params {
-        let kind = p.kind();
-        if kind.is_stationary() && !kind.is_filter() {
-            if kind == EffectKind::Sinusoid {
-                if let Some(c) = coef_col.get(extra_col).copied().flatten() {
-                    for (sh, v) in sine_share.iter_mut().zip(&cols[c]) {
-                        *sh += v.max(0.0);
-                    }
-                }
+    // Each effect's amplitude column in `cols`: the extra coefficients follow the five terms
+    // in the order of the stationary non-filter effects.
+    let mut extra = 5;
+    let amp_col: Vec<Option<usize>> = params
+        .iter()
+        .map(|p| {
+            let kind = p.kind();
+            if !kind.is_stationary() || kind.is_filter() {
+                return None;
             }
-            extra_col += 1;
+            extra += 1;
+            coef_col.get(extra - 1).copied().flatten()
+        })
+        .collect();
+    let mut sine_share = vec![0.0; j];
+    for (p, c) in params.iter().zip(&amp_col) {
+        if let (EffectKind::Sinusoid, Some(c)) = (p.kind(), *c) {
+            for (sh, v) in sine_share.iter_mut().zip(&cols[c]) {
+                *sh += v.max(0.0);
+            }
         }
     }
     let widen: Vec<f64> = sine_share
@@ -188,25 +195,20 @@ pub fn effect_intervals(
             .map_or(f64::NAN, |m| (m[(c, c)].max(0.0) * scale).sqrt())
     };
     let interval = |v: f64, s: f64| [v * (-Z95 * s).exp(), v * (Z95 * s).exp()];
-    // The extra columns follow the five terms in the order of the stationary non-filter effects.
-    let mut extra = 5;
     params
         .iter()
         .enumerate()
         .map(|(e, p)| {
             let mut out: Intervals = Vec::new();
             let kind = p.kind();
-            if kind.is_stationary() && !kind.is_filter() {
+            if let Some(c) = amp_col[e] {
                 let amp_name = if matches!(kind, EffectKind::GaussMarkov | EffectKind::BandNoise) {
                     "sigma"
                 } else {
                     "amplitude"
                 };
                 // ln amplitude = ln c / 2
-                if let Some(c) = coef_col.get(extra).copied().flatten() {
-                    out.push((amp_name, interval(p.amplitude(), sd(c) / 2.0)));
-                }
-                extra += 1;
+                out.push((amp_name, interval(p.amplitude(), sd(c) / 2.0)));
             }
             for (i, (name, v)) in shapes(p).iter().enumerate() {
                 if let Some(&c) = shape_col[e].get(i) {

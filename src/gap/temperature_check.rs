@@ -30,7 +30,7 @@ use super::temperature::{
     fit_shape, temperature_avar, temperature_blocks, TemperatureFinding, TemperatureInModel,
     TEMPERATURE_Z,
 };
-use super::warmup::{best_warmup_time_constant, warmup_block_curve};
+use super::warmup::{best_warmup_time_constant, warmup_block_curve, warmup_block_means};
 
 /// Below this rms departure from a straight line, as a share of its change (max - min of the
 /// block means), the temperature is read as a straight line: a settling whose time constant is
@@ -170,12 +170,7 @@ pub fn check_temperature(
             EffectParams::Warmup {
                 amplitude,
                 time_constant_s,
-            } => Some(
-                warmup_block_curve(nb, block_s, time_constant_s)
-                    .iter()
-                    .map(|v| amplitude * v)
-                    .collect(),
-            ),
+            } => Some(warmup_block_means(nb, block_s, amplitude, time_constant_s)),
             _ => None,
         })
         .collect();

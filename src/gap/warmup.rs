@@ -51,11 +51,17 @@ const WARMUP_NULL_SEED: u64 = 0x3a7e_0b1f;
 impl WarmupFinding {
     /// The warm-up's mean over each block.
     pub fn block_curve(&self, n_blocks: usize, block_s: f64) -> Vec<f64> {
-        warmup_block_curve(n_blocks, block_s, self.time_constant_s)
-            .into_iter()
-            .map(|e| self.amplitude * e)
-            .collect()
+        warmup_block_means(n_blocks, block_s, self.amplitude, self.time_constant_s)
     }
+}
+
+/// The block means of the warm-up `amplitude e^{-t/T}` (u/s) over blocks `0..n_blocks` of `tb`
+/// s: [`warmup_block_curve`] scaled.
+pub fn warmup_block_means(n_blocks: usize, tb: f64, amplitude: f64, t: f64) -> Vec<f64> {
+    warmup_block_curve(n_blocks, tb, t)
+        .into_iter()
+        .map(|e| amplitude * e)
+        .collect()
 }
 
 /// [`warmup_block_shape`] over blocks `0..n_blocks`: the block means of `e^{-t/T}`.

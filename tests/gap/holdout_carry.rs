@@ -47,11 +47,7 @@ fn a_settled_warmup_does_not_carry_on_a_negligible_gain() {
     let d = diagnose(&a, &opts).expect("diagnosis");
     assert_names_a_warm_up(&d);
     let h = holdout_gap(&d, &b, &opts).expect("holdout");
-    let w = h
-        .effects
-        .iter()
-        .find(|e| e.kind == EffectKind::Warmup)
-        .expect("held warm-up");
+    let w = h.effect(EffectKind::Warmup).expect("held warm-up");
     assert!(!w.carried, "{h:?}");
     assert!(w.delta_chi2 < opts.thresholds.add_chi2, "{h:?}");
     assert!(!h.carried(), "{h:?}");
@@ -78,9 +74,7 @@ fn a_gauss_markov_term_carries_and_the_settled_warmup_beside_it_does_not() {
         assert_ne!(d.verdict, Verdict::Consistent, "seed {seed}");
         let h = holdout_gap(&d, &b, &opts).expect("holdout");
         let held = |k: EffectKind| {
-            h.effects
-                .iter()
-                .find(|e| e.kind == k)
+            h.effect(k)
                 .unwrap_or_else(|| panic!("seed {seed}: no held {k:?}: {h:?}"))
         };
         let gm = held(EffectKind::GaussMarkov);
@@ -130,9 +124,7 @@ fn a_warm_up_from_power_on_carries_in_time_to_a_run_of_its_unit() {
         for (t, carries) in [(&with, true), (&without, false)] {
             let h = holdout_gap(&d, &run(t, seed), &opts).expect("holdout");
             let w = h
-                .effects
-                .iter()
-                .find(|e| e.kind == EffectKind::Warmup)
+                .effect(EffectKind::Warmup)
                 .unwrap_or_else(|| panic!("seed {seed}: no held warm-up: {h:?}"));
             assert_eq!(w.carried, carries, "seed {seed}, {carries}: {h:?}");
             assert!(h.gap_after <= h.gap_before, "seed {seed}: {h:?}");

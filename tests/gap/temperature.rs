@@ -355,9 +355,7 @@ fn a_temperature_kept_in_time_is_judged_in_time_on_the_held_out_run() {
         let (a, b) = mems_evidence(coef, seed);
         let h = holdout_gap_with_temperature(&d, &a, Some(&b), &opts).expect("held out");
         let e = h
-            .effects
-            .iter()
-            .find(|e| e.kind == EffectKind::Temperature)
+            .effect(EffectKind::Temperature)
             .unwrap_or_else(|| panic!("seed {seed}: {h:?}"));
         assert_eq!(e.carried, carries, "seed {seed}: {h:?}");
         assert!(h.gap_after <= h.gap_before, "seed {seed}: {h:?}");
@@ -392,7 +390,7 @@ fn a_temperature_kept_in_time_is_judged_in_time_on_the_held_out_run() {
         for (coef, judged) in [(10.0, false), (0.0, true)] {
             let (a, b) = mems_evidence_from(27.0, coef, seed);
             let h = holdout_gap_with_temperature(&d, &a, Some(&b), &opts).expect("held out");
-            let t = h.effects.iter().find(|e| e.kind == EffectKind::Temperature);
+            let t = h.effect(EffectKind::Temperature);
             assert_eq!(t.is_some(), judged, "seed {seed}, {coef}: {h:?}");
             assert!(t.is_none_or(|e| !e.carried), "seed {seed}, {coef}: {h:?}");
         }
