@@ -227,6 +227,13 @@ pub struct Diagnosis {
     pub sawtooth: Option<super::sawtooth::Sawtooth>,
 }
 
+impl Diagnosis {
+    /// Whether an effect of this kind is kept in the model.
+    pub fn names(&self, kind: EffectKind) -> bool {
+        self.effects.iter().any(|e| e.params.kind() == kind)
+    }
+}
+
 /// Five-term `(Q, N, B, K, R)` from `c`.
 pub(crate) fn coef5(c: &[f64]) -> [f64; 5] {
     std::array::from_fn(|i| c.get(i).copied().unwrap_or(0.0).max(0.0).sqrt())
@@ -542,12 +549,11 @@ fn diagnose_curve_once(
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
     let (d, entered) = diagnose_curve_pass(snap, temperature, opts, true)?;
-    let has = |d: &Diagnosis, k: EffectKind| d.effects.iter().any(|e| e.params.kind() == k);
-    if !entered || has(&d, EffectKind::Temperature) || has(&d, EffectKind::Warmup) {
+    if !entered || d.names(EffectKind::Temperature) || d.names(EffectKind::Warmup) {
         return Ok(d);
     }
     let (again, _) = diagnose_curve_pass(snap, temperature, opts, false)?;
-    let warm = has(&again, EffectKind::Warmup);
+    let warm = again.names(EffectKind::Warmup);
     tracing::debug!(
         warm,
         "the temperature entered first and was not kept: the pass again without it"

@@ -28,13 +28,7 @@ const WARMUP: &str = "warmup = { amplitude = 3.0, time_constant = 60.0 }";
 
 /// The fitting run named a warm-up.
 fn assert_names_a_warm_up(d: &Diagnosis) {
-    assert!(
-        d.effects
-            .iter()
-            .any(|e| e.params.kind() == EffectKind::Warmup),
-        "{:?}",
-        d.effects
-    );
+    assert!(d.names(EffectKind::Warmup), "{:?}", d.effects);
 }
 
 /// Seed 4: the warm-up is named on the first hour; on the second it lowers the held-out gap a

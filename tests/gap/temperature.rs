@@ -449,13 +449,7 @@ fn a_temperature_below_the_bar_is_listed_as_an_alternative() {
 
     let (d, t) = mems_run(0.0, 10);
     assert!(t.is_none());
-    assert!(
-        d.effects
-            .iter()
-            .any(|e| e.params.kind() == EffectKind::Warmup),
-        "{:?}",
-        d.effects
-    );
+    assert!(d.names(EffectKind::Warmup), "{:?}", d.effects);
     assert!(
         d.alternatives.iter().all(|a| a
             .effects
