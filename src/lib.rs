@@ -98,6 +98,7 @@
 //!   batch.rs               the textbook batch formulas, the tests' reference
 //! model/                   the five-term noise model                       Curve -> FitResult
 //!   terms.rs               closed forms of each term's Allan variance
+//!   term_values.rs         five values keyed Q..R; a coefficient with its interval
 //!   avar_cov/              covariance of AVAR estimates between cluster sizes
 //!     pair.rs              the lag sums of one pair of cluster sizes
 //!     lag_covariance.rs    each random term's covariance of two second differences at a lag

@@ -357,6 +357,26 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
         Some(h) => Some(gather(h, a, desc.as_ref(), tau0)?),
         None => None,
     };
+    // The held-out run is matched to the input by channel name: one with none of the input's
+    // channels would judge nothing, and say nothing of it.
+    if let (Some(h), Some(path)) = (&held, &a.holdout) {
+        let missing: Vec<&String> = main.names.iter().filter(|n| !h.names.contains(n)).collect();
+        if missing.len() == main.names.len() {
+            return Err(usage(format!(
+                "--holdout {path}: none of the channels of {} ({}) is in it (it has {}); the \
+                 held-out run is matched by channel name",
+                a.input,
+                main.names.join(", "),
+                h.names.join(", ")
+            )));
+        }
+        for n in missing {
+            tracing::warn!(
+                "--holdout {path}: no channel {n}; that channel is diagnosed without a held-out \
+                 run"
+            );
+        }
+    }
     let mut fitted = Vec::new();
     let temp_snap = main.temperature.as_mut().map(|t| t.snapshot());
     let held_temp = held

@@ -175,6 +175,9 @@ pub struct Diagnosis {
     pub base_coef: [f64; 5],
     /// The five terms with the effects in.
     pub final_coef: [f64; 5],
+    /// Their 95% intervals ([`super::intervals::TermInterval`]); `None` where none could be
+    /// computed.
+    pub final_terms: [Option<super::intervals::TermInterval>; 5],
     /// The five terms `(Q, N, B, K, R)` whose analytic covariance is the `S` of `G`: the plain
     /// fit's, or after a filter the previous pass's `final_coef` (docs/gap.md, "The
     /// covariance's five terms after a filter (session 19)").
@@ -909,7 +912,10 @@ fn diagnose_curve_pass(
             k2_hi,
         );
     }
-    let effect_intervals = super::intervals::effect_intervals(&prob, &final_spec, &cur, &effects);
+    let super::intervals::FitIntervals {
+        effects: effect_intervals,
+        terms: final_terms,
+    } = super::intervals::fit_intervals(&prob, &final_spec, &cur, &effects);
     let regions_after = prob.regions(&cur.model, th.band_z);
     let residual_shape = (verdict == Verdict::Unexplained).then(|| describe(&regions_after));
     let entered = temp_in.is_some();
@@ -922,6 +928,7 @@ fn diagnose_curve_pass(
         effects,
         base_coef: coef5(&base.coef),
         final_coef: coef5(&cur.coef),
+        final_terms,
         cov_coef: coef5(&prob.c_cov),
         tau_span_s: (prob.tau[0], prob.tau[j - 1]),
         n_taus: j,

@@ -1,4 +1,5 @@
-//! 95% intervals of the accepted effects' parameters (docs/gap.md, "Parameter intervals"), from
+//! 95% intervals of the accepted effects' parameters and of the five terms (docs/gap.md,
+//! "Parameter intervals"; the terms: [`term_interval`]), from
 //! the Fisher information of the final GLS fit on the curve: with `theta` the logs of the
 //! active five-term coefficients, of each effect column's amplitude squared and of each shape
 //! parameter, `J = d ln AVAR_model / d theta` (shapes by central differences), the covariance
@@ -14,6 +15,7 @@
 use super::diagnose::AddedEffect;
 use super::effects::{EffectKind, EffectParams};
 use super::problem::{GapProblem, GlsFit, ModelSpec};
+use crate::model::fit::QUANTITATION_FRACTION;
 use nalgebra::{DMatrix, DVector};
 
 /// Two-sided 95% normal quantile.
@@ -23,6 +25,27 @@ const H: f64 = 1e-3;
 
 /// One effect's intervals: `(parameter name of docs/records.md, [lo, hi])`.
 pub type Intervals = Vec<(&'static str, [f64; 2])>;
+
+/// One of the five terms of the final fit with its 95% interval (docs/theory.md section 2 units).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct TermInterval {
+    /// The estimate (0 when the fit set the term to zero).
+    pub value: f64,
+    /// The interval; `lo` 0 when the curve does not exclude zero.
+    pub lo: f64,
+    pub hi: f64,
+    /// Its interval excludes zero and reaches no lower than `QUANTITATION_FRACTION` of the
+    /// value, as in the `fit` record (docs/fit.md, "Which terms are determined").
+    pub determined: bool,
+}
+
+/// The 95% intervals of the final fit: each accepted effect's parameters and the five terms'
+/// (`[Q, N, B, K, R]`; `None` where no fit could be made).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct FitIntervals {
+    pub effects: Vec<Intervals>,
+    pub terms: [Option<TermInterval>; 5],
+}
 
 /// The shape parameters of an effect that the Fisher information covers, with their values.
 fn shapes(p: &EffectParams) -> Vec<(&'static str, f64)> {
@@ -91,20 +114,25 @@ fn spec_of(prob: &GapProblem, effects: &[EffectParams], offset: &Option<Vec<f64>
     spec
 }
 
-/// The intervals of each of `effects` (in order; empty for those without), from the final
-/// fit `fit` of the spec `spec` they make.
-pub fn effect_intervals(
+/// The intervals of each of `effects` (in order; empty for those without) and of the five
+/// terms, from the final fit `fit` of the spec `spec` they make. A term's interval has the
+/// effects' amplitudes and shapes as nuisance parameters, so a flicker term beside a
+/// Gauss-Markov hump it trades with shows how little the curve fixes it.
+pub fn fit_intervals(
     prob: &GapProblem,
     spec: &ModelSpec,
     fit: &GlsFit,
     effects: &[AddedEffect],
-) -> Vec<Intervals> {
+) -> FitIntervals {
     let params: Vec<EffectParams> = effects.iter().map(|e| e.params).collect();
     let j = prob.len();
     let scale = fit.gap().max(1.0);
     let m0: Vec<f64> = prob.model_of(spec, &fit.coef);
     if m0.iter().any(|v| v.is_nan() || *v <= 0.0) {
-        return vec![Vec::new(); effects.len()];
+        return FitIntervals {
+            effects: vec![Vec::new(); effects.len()],
+            terms: [None; 5],
+        };
     }
     // Columns of J: active coefficients, then the shapes.
     let mut cols: Vec<Vec<f64>> = Vec::new();
@@ -195,7 +223,14 @@ pub fn effect_intervals(
             .map_or(f64::NAN, |m| (m[(c, c)].max(0.0) * scale).sqrt())
     };
     let interval = |v: f64, s: f64| [v * (-Z95 * s).exp(), v * (Z95 * s).exp()];
-    params
+    // ln term = ln c / 2, as the amplitudes below.
+    let fisher: [Option<[f64; 2]>; 5] = std::array::from_fn(|c| {
+        let col = coef_col.get(c).copied().flatten()?;
+        let iv = interval(fit.coef[c].sqrt(), sd(col) / 2.0);
+        iv.iter().all(|x| x.is_finite()).then_some(iv)
+    });
+    let terms = std::array::from_fn(|c| term_interval(prob, spec, fit, c, fisher[c], scale));
+    let effects = params
         .iter()
         .enumerate()
         .map(|(e, p)| {
@@ -223,7 +258,70 @@ pub fn effect_intervals(
             }
             out
         })
-        .collect()
+        .collect();
+    FitIntervals { effects, terms }
+}
+
+/// The 95% interval of the five-term coefficient `term` of the final fit `fit` of `spec`, in
+/// the term's own units (the square root of the coefficient `c`). Two readings are joined,
+/// the wider at each end:
+/// - the profile of `r' S^-1 r` in `c` (the other terms and the effects' amplitudes refitted,
+///   non-negative; the effects' shapes held): the values where it rises by `3.84 scale`, the
+///   two-sided 95% likelihood-ratio interval (Wilks; Pawitan, "In All Likelihood", section
+///   2.6), scaled by the final gap as the Fisher covariance is. It holds where the Fisher
+///   reading does not: a term beside another the fit set to zero (a rate random walk K whose
+///   flicker B went to zero took the long taus with an interval three times too narrow), a term
+///   near its bound, a term set to zero itself (its upper end only);
+/// - the Fisher interval `fisher`, whose covariance has the effects' shapes as nuisance.
+fn term_interval(
+    prob: &GapProblem,
+    spec: &ModelSpec,
+    fit: &GlsFit,
+    term: usize,
+    fisher: Option<[f64; 2]>,
+    scale: f64,
+) -> Option<TermInterval> {
+    let c_hat = fit.coef.get(term).copied()?.max(0.0);
+    let delta = Z95 * Z95 * scale;
+    let target = fit.chi2 + delta;
+    let hi_c = prob.upper_bound(spec, fit, term, delta)?;
+    let chi2_at = |k: f64| {
+        prob.gls_fixed(spec, term, k)
+            .map_or(f64::INFINITY, |f| f.chi2)
+    };
+    let lo_c = if c_hat <= 0.0 || chi2_at(0.0) < target {
+        0.0
+    } else {
+        // Bisection on [0, c_hat] for the least value still within `delta`.
+        let (mut below, mut within) = (0.0, c_hat);
+        for _ in 0..40 {
+            let mid = 0.5 * (below + within);
+            if chi2_at(mid) < target {
+                within = mid;
+            } else {
+                below = mid;
+            }
+            if within - below <= 0.005 * within {
+                break;
+            }
+        }
+        within
+    };
+    let value = c_hat.sqrt();
+    let (mut lo, mut hi) = (lo_c.sqrt(), hi_c.max(c_hat).sqrt());
+    if let Some([f_lo, f_hi]) = fisher {
+        lo = lo.min(f_lo);
+        hi = hi.max(f_hi);
+    }
+    if !(lo.is_finite() && hi.is_finite()) {
+        return None;
+    }
+    Some(TermInterval {
+        value,
+        lo,
+        hi,
+        determined: value > 0.0 && lo > 0.0 && lo >= QUANTITATION_FRACTION * value,
+    })
 }
 
 /// Whole taps whose fit's `r' S^-1 r` is within `3.84 scale` of the best, around `taps`.

@@ -912,8 +912,35 @@ impl GapProblem {
 
     /// Generalised least squares with model-based weights, coefficients `>= 0`.
     pub fn gls(&self, spec: &ModelSpec) -> Option<GlsFit> {
+        self.gls_with(spec, None)
+    }
+
+    /// [`Self::gls`] with the five-term coefficient `term` (`Q^2 .. R^2`) held at `k`: its
+    /// column a fixed offset `k x_term`, the others free. The profile of `r' S^-1 r` in that
+    /// coefficient, for its interval ([`super::intervals`]).
+    pub fn gls_fixed(&self, spec: &ModelSpec, term: usize, k: f64) -> Option<GlsFit> {
+        let col = self.columns(spec).column(term).clone_owned();
+        let mut s = spec.clone();
+        let base = s.offset.take().unwrap_or_else(|| vec![0.0; self.len()]);
+        s.offset = Some(
+            base.iter()
+                .zip(col.iter())
+                .map(|(o, x)| o + k * x)
+                .collect(),
+        );
+        let mut fit = self.gls_with(&s, Some(term))?;
+        if let Some(c) = fit.coef.get_mut(term) {
+            *c = k;
+        }
+        Some(fit)
+    }
+
+    fn gls_with(&self, spec: &ModelSpec, held: Option<usize>) -> Option<GlsFit> {
         let j = self.len();
-        let x = self.columns(spec);
+        let mut x = self.columns(spec);
+        if let Some(t) = held {
+            x.column_mut(t).fill(0.0);
+        }
         let k = x.ncols();
         // The rounding after the filter depends on the fit's own N (`floor_n2`): it starts at
         // the floor's value and is solved for the fixed point where the N it is computed at is

@@ -12,6 +12,7 @@ use super::effects::{nullable_f64, EffectParams};
 use super::holdout::HoldoutGap;
 use super::limit_cycle::LimitCycle;
 use super::quantization::QuantizationFinding;
+use crate::model::term_values::{CoefValue, Terms};
 use serde::{Deserialize, Serialize};
 
 /// One region of the record.
@@ -191,6 +192,10 @@ pub struct DiagnosisRecord {
     pub base_coef: [f64; 5],
     #[serde(default)]
     pub final_coef: [f64; 5],
+    /// `final_coef` with 95% intervals, as the `fit` record's `coef`: `{Q, N, B, K, R}`, each
+    /// `{value, lo, hi, determined}`, `value` null where not determined (since session 40).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub final_terms: Option<Terms<CoefValue>>,
     #[serde(default)]
     pub segments: Vec<SegmentRecord>,
     #[serde(skip_serializing_if = "Option::is_none", default)]
@@ -367,6 +372,17 @@ impl DiagnosisRecord {
             tau_span: [d.tau_span_s.0, d.tau_span_s.1],
             base_coef: d.base_coef,
             final_coef: d.final_coef,
+            final_terms: d.final_terms.iter().all(Option::is_some).then(|| {
+                Terms::from_fn(|i| {
+                    let t = d.final_terms[i].unwrap_or_default();
+                    CoefValue {
+                        value: t.determined.then_some(t.value),
+                        lo: Some(t.lo),
+                        hi: Some(t.hi),
+                        determined: t.determined,
+                    }
+                })
+            }),
             segments: d
                 .segment_tests
                 .iter()

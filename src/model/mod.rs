@@ -8,5 +8,6 @@ pub mod limits;
 pub mod lowpass;
 pub mod nnls;
 pub mod readout;
+pub mod term_values;
 pub mod terms;
 pub mod units;

@@ -747,3 +747,33 @@ fn a_frozen_stretch_is_taken_out_as_a_gap() {
     let n = |r: &serde_json::Value| r["base_coef"][1].as_f64().unwrap();
     assert!((n(&f) / n(&g) - 1.0).abs() < 0.02, "{} vs {}", n(&f), n(&g));
 }
+
+/// A held-out run is matched by channel name: one with none of the input's channels is a usage
+/// error naming both sets (it used to judge nothing and say nothing: exit 0, no `holdout`).
+#[test]
+fn a_held_out_run_without_the_input_s_channels_is_a_usage_error() {
+    let run = simulate(&model(false), 3, "named_g4.csv");
+    let text = std::fs::read_to_string(&run).expect("csv");
+    let (head, body) = text.split_once('\n').expect("a header");
+    assert!(head.contains("g4"), "{head}");
+    let held = tmp("named_g5.csv");
+    std::fs::write(&held, format!("{}\n{body}", head.replace("g4", "g5"))).expect("write");
+    let out = exe()
+        .args(["diagnose", run.to_str().unwrap(), "--holdout"])
+        .arg(&held)
+        .args(["--tau0", "0.004", "--json"])
+        .output()
+        .expect("run");
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--holdout") && err.contains("g4") && err.contains("g5"),
+        "{err}"
+    );
+    let line = err
+        .lines()
+        .find(|l| l.starts_with("allanscope:"))
+        .expect("the error line");
+    assert!(!line.contains("  "), "{line}");
+    assert!(out.stdout.is_empty(), "{out:?}");
+}

@@ -24,5 +24,6 @@ mod second_order_polish;
 mod sinusoid_behind_filter;
 mod sinusoid_interval;
 mod temperature;
+mod term_intervals;
 mod warmup_null;
 mod warmup_profile;

@@ -126,7 +126,7 @@ pub(super) fn diagnosis_only(
             diagnosis_line(d, unit, style)
         );
         // The five terms refitted with the effects in, in datasheet units when the unit is known
-        // (terms the fit set to zero are left out).
+        // (in records before session 40, without intervals, terms the fit set to zero left out).
         let (factors, units) = match IncrementUnit::parse(unit) {
             Some(iu) => (
                 datasheet_factors(&iu),
@@ -134,17 +134,38 @@ pub(super) fn diagnosis_only(
             ),
             None => ([1.0; 5], native_units(unit)),
         };
-        let terms: Vec<String> = (0..5)
-            .filter(|&i| d.final_coef[i] > 0.0)
-            .map(|i| {
-                format!(
-                    "{} {} {}",
-                    TERM_NAMES[i],
-                    sig3(d.final_coef[i] * factors[i]),
-                    units[i]
-                )
-            })
-            .collect();
+        // With intervals (records since session 40): a determined term with its 95% interval,
+        // the others by their upper end.
+        let terms: Vec<String> = match &d.final_terms {
+            Some(t) => (0..5)
+                .filter_map(|i| {
+                    let c = t.by_index(i);
+                    let f = factors[i];
+                    let text = match (c.value, c.lo, c.hi) {
+                        (Some(v), lo, hi) => format!(
+                            "{} {} {}",
+                            sig3(v * f),
+                            interval(lo.map(|x| x * f), hi.map(|x| x * f)),
+                            units[i]
+                        ),
+                        (None, _, Some(h)) if h > 0.0 => format!("< {} {}", sig3(h * f), units[i]),
+                        _ => return None,
+                    };
+                    Some(format!("{} {text}", TERM_NAMES[i]))
+                })
+                .collect(),
+            None => (0..5)
+                .filter(|&i| d.final_coef[i] > 0.0)
+                .map(|i| {
+                    format!(
+                        "{} {} {}",
+                        TERM_NAMES[i],
+                        sig3(d.final_coef[i] * factors[i]),
+                        units[i]
+                    )
+                })
+                .collect(),
+        };
         let _ = writeln!(
             h,
             "  {}",
