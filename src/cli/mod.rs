@@ -97,7 +97,8 @@ pub struct DiagnoseArgs {
     /// Only these channels (comma-separated).
     #[arg(long, value_delimiter = ',')]
     pub channel: Option<Vec<String>>,
-    /// A second run of the same unit, on which the effects fitted on INPUT are judged.
+    /// A second run of the same unit, on which the effects fitted on INPUT are judged (its
+    /// channels matched to INPUT's by name).
     #[arg(long)]
     pub holdout: Option<String>,
     /// Write the fitted unit (five terms, LSB, tau0, accepted effects) as a model file that

@@ -1099,17 +1099,7 @@ impl GapProblem {
             s.offset = Some(base.iter().zip(&col).map(|(o, x)| o + k * x).collect());
             self.gls(&s).map_or(f64::INFINITY, |f| f.chi2)
         };
-        // The largest value: the term alone at the data's level where it is largest.
-        let k_max = self
-            .y
-            .iter()
-            .zip(&col)
-            .filter(|(_, x)| **x > 0.0)
-            .map(|(y, x)| y / x)
-            .fold(f64::INFINITY, f64::min);
-        if !(k_max.is_finite() && k_max > 0.0) {
-            return None;
-        }
+        let k_max = self.term_ceiling(spec, term, 0.0)?;
         let target = fit.chi2 + delta;
         if chi2_at(k_max) < target {
             return Some(k_max.max(c0));
@@ -1131,6 +1121,22 @@ impl GapProblem {
             }
         }
         Some(lo.max(c0))
+    }
+
+    /// The largest value of the five-term coefficient `term` (`Q^2 .. R^2`) the curve allows:
+    /// the term alone at the data's level where it comes closest to them, each point raised by
+    /// `z` of its standard deviation (`exp(z sqrt(S_jj))`; `z = 0` the points themselves);
+    /// `None` when its column is zero at every tau.
+    pub fn term_ceiling(&self, spec: &ModelSpec, term: usize, z: f64) -> Option<f64> {
+        let k_max = self
+            .y
+            .iter()
+            .zip(&self.s_diag)
+            .zip(self.columns(spec).column(term).iter())
+            .filter(|(_, x)| **x > 0.0)
+            .map(|((y, s), x)| y * (z * s.max(0.0).sqrt()).exp() / x)
+            .fold(f64::INFINITY, f64::min);
+        (k_max.is_finite() && k_max > 0.0).then_some(k_max)
     }
 
     /// Per-tau `z_j = r_j / sqrt(S_jj)` of a model.
