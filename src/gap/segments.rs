@@ -2,7 +2,7 @@
 //! the per-segment AVAR at each octave tau against the segments' weighted mean, scaled by the
 //! model's relative variance. Part of [`super::diagnose`](mod@super::diagnose)'s record; decides nothing.
 
-use super::evidence::EvidenceSnapshot;
+use super::evidence::{EvidenceSnapshot, OVERLAP_L};
 use crate::model::avar_cov::{AvarCovariance, CovPoint};
 use crate::model::terms::basis;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
@@ -46,8 +46,15 @@ pub fn segment_tests(snap: &EvidenceSnapshot, c: &[f64; 5]) -> Vec<SegmentTest> 
             .iter()
             .filter_map(|s| {
                 let (v, _) = s.avar(m)?;
+                // The segments' levels are taken at the evidence's bounded overlap, stride
+                // `m / L` at these octave sizes (powers of two), and the count is the span's
+                // full one (`matrix_strided`). Full overlap at every level made the variance far
+                // too small where white phase noise rules: every clean two-hour run of the seed
+                // paper's MA4 had a p-value of 0 (docs/gap.md, "The segments' variance").
                 let count = (s.len + 1).saturating_sub(2 * m).max(1);
-                let var = cov.matrix(tau0, &[CovPoint { m, count }], c)[(0, 0)] / (a * a);
+                let stride = (m / OVERLAP_L).max(1);
+                let var = cov.matrix_strided(tau0, &[CovPoint { m, count }], &[stride], c)[(0, 0)]
+                    / (a * a);
                 (v > 0.0 && var > 0.0).then_some((v.ln(), var))
             })
             .collect();

@@ -44,7 +44,46 @@ fn ma4_clean_runs_are_consistent() {
         // The base model's gap is near 1 (its null median is 1.0; docs/gap.md), not the
         // 9.5-25 the full-overlap covariance gave on these runs.
         assert!(d.gap_before < 1.6, "seed {seed}: G {}", d.gap_before);
+        // The segments' homogeneity at the evidence's strides: before session 40 their
+        // variance took full overlap and some tau of every clean MA4 run had p = 0. 13 taus by
+        // 5 seeds at 1e-4: a false failure in about 0.7% of seed sets.
+        assert!(
+            d.segment_tests.len() >= 10,
+            "seed {seed}: {:?}",
+            d.segment_tests
+        );
+        for t in &d.segment_tests {
+            assert!(t.p_value > 1e-4, "seed {seed}: {t:?}");
+        }
     }
+}
+
+/// The segments' test still sees a unit whose white noise doubles halfway through a two-hour
+/// run (N 1e-3 then 2e-3 m/s/sqrt(s), 250 Hz): at the shortest tau each segment's AVAR is 1 or
+/// 4 times the other half's, with some 1e5 differences in each.
+#[test]
+fn the_segments_see_a_white_noise_that_doubles_halfway() {
+    let half = |n: f64, seed: u64| {
+        let text = format!("tau0_s = 0.004\n[[channel]]\nname = \"a\"\nunit = \"m/s\"\nN = {n}\n");
+        let m = SimModel::from_toml_str(&text, Path::new("<test>")).expect("model");
+        let mut sim = Simulator::new(&m, seed);
+        let mut inc = vec![0.0; (3600.0 / m.tau0_s) as usize];
+        sim.fill_channel(0, &mut inc);
+        inc
+    };
+    let mut inc = half(1e-3, 5);
+    inc.extend(half(2e-3, 6));
+    let mut ev = GapEvidence::from_increments(GapConfig::new(0.004), &inc);
+    let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
+    let first = d.segment_tests.first().expect("segment tests");
+    assert!(first.p_value < 1e-9, "{first:?}");
+    // The worst segment's ADEV is sqrt(2) or 1/sqrt(2) times the segments' geometric mean
+    // (N and 2N in equal shares).
+    assert!(
+        (first.worst_ratio - 2f64.sqrt()).abs() < 0.1
+            || (first.worst_ratio - 1.0 / 2f64.sqrt()).abs() < 0.1,
+        "{first:?}"
+    );
 }
 
 /// One unit of each family of examples/family_gap.rs at the middle of its ranges (docs/gap.md,
