@@ -928,17 +928,19 @@ impl GapProblem {
                 .map(|(o, x)| o + k * x)
                 .collect(),
         );
-        let mut fit = self.gls_with(&s, Some(term))?;
+        let mut fit = self.gls_with(&s, Some((term, k)))?;
         if let Some(c) = fit.coef.get_mut(term) {
             *c = k;
         }
         Some(fit)
     }
 
-    fn gls_with(&self, spec: &ModelSpec, held: Option<usize>) -> Option<GlsFit> {
+    /// `held`: a five-term coefficient held at a value (its column zeroed here, its part in
+    /// the spec's offset).
+    fn gls_with(&self, spec: &ModelSpec, held: Option<(usize, f64)>) -> Option<GlsFit> {
         let j = self.len();
         let mut x = self.columns(spec);
-        if let Some(t) = held {
+        if let Some((t, _)) = held {
             x.column_mut(t).fill(0.0);
         }
         let k = x.ncols();
@@ -983,7 +985,12 @@ impl GapProblem {
             coef = DVector::from_fn(k, |c, _| sol.x[c] / norms[c]);
             let mut done = false;
             if floor_in {
-                let g = coef[1].max(0.0);
+                // The N the rounding acts on: the held value when N is the term held.
+                let g = match held {
+                    Some((1, k)) => k,
+                    _ => coef[1],
+                }
+                .max(0.0);
                 let converged = (g - n_off).abs() <= FLOOR_N2_TOL * g.max(n_off).max(n_start)
                     || g.max(n_off) <= n_none;
                 done = converged && pass + 1 >= GLS_PASSES;
