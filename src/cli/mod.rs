@@ -778,6 +778,41 @@ impl DataArgs {
                     carried.join(", ")
                 );
             }
+            // A header that says rates while the options read increments (or the reverse)
+            // is most often a forgotten --rate: the results would be 1 / tau0 times too large
+            // (or too small). --unit overrides the headers, so this is said, not refused.
+            let by_header = ours.iter().zip(&fixed).find_map(|(&(_, n), f)| {
+                match header_unit(n) {
+                    Some(Ok(u)) => Some(u),
+                    _ => f.clone(),
+                }
+                .map(|u| (n, u))
+            });
+            if let Some((n, u)) = by_header {
+                let reads_rate = settings.kind == InputKind::Rate;
+                if settings.kind != InputKind::Phase && u.rate != reads_rate {
+                    let (says, reads, hint) = if u.rate {
+                        (
+                            "rate samples",
+                            "increments (the change over each sample)",
+                            "add --rate if they are rates",
+                        )
+                    } else {
+                        (
+                            "increments",
+                            "rate samples",
+                            "leave out --rate if they are increments",
+                        )
+                    };
+                    tracing::warn!(
+                        "{input}: column `{n}` holds {says} by its header unit `{}`, but the \
+                         options read {reads} in {}: {hint}, or the results are off by a \
+                         factor of the sampling rate",
+                        u.text,
+                        self.unit_or_default()
+                    );
+                }
+            }
             return Ok((setups, settings.kind));
         }
         let read = units_from_headers(&ours, &fixed, self.rate, self.phase)

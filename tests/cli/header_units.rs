@@ -76,13 +76,27 @@ fn rates_and_increments_are_read_from_the_headers() {
     // Rate samples, not increments: at m = 1, sigma of rate samples y is that of the
     // increments y * tau0 divided by tau0 (both in u/s), so read as increments it would be
     // 100 times larger at tau0 = 10 ms.
-    let as_increments = curves(&analyze(
-        &p,
-        &["--columns", "gyro_x (deg/s)", "--unit", "deg"],
-    ))
-    .remove(0);
+    let out = analyze(&p, &["--columns", "gyro_x (deg/s)", "--unit", "deg"]);
+    let as_increments = curves(&out).remove(0);
     let ratio = as_increments.sigma[0] / gyro.sigma[0];
     assert!((ratio - 100.0).abs() < 1e-9, "{ratio}");
+    // Told so: the header says rates and the options read increments (session 40: a review's
+    // MEMS gyro came out 200 times too noisy with an INFO line only).
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("WARN")
+            && err.contains(
+                "column `gyro_x (deg/s)` holds rate samples by its header unit `deg/s`, but the \
+                 options read increments"
+            )
+            && err.contains("add --rate if they are rates"),
+        "{err}"
+    );
+    let told_rate = analyze(
+        &p,
+        &["--columns", "gyro_x (deg/s)", "--rate", "--unit", "deg"],
+    );
+    assert!(!String::from_utf8_lossy(&told_rate.stderr).contains("WARN"));
 
     // The increments alone: as `--unit deg`; `--phase` takes them too.
     let inc = ["--columns", "dtheta [deg]"];
@@ -216,6 +230,12 @@ fn headers_that_cannot_be_read_or_contradict_the_options_are_usage_errors() {
     let err = String::from_utf8_lossy(&out.stderr).to_string();
     assert!(
         err.contains("--unit mrad given: the units in the headers of `dth_x [rad]`"),
+        "{err}"
+    );
+    assert!(
+        err.contains(
+            "holds increments by its header unit `rad`, but the options read rate samples"
+        ) && err.contains("leave out --rate if they are increments"),
         "{err}"
     );
     assert!(curves(&out).iter().all(|c| c.unit == "mrad"));
