@@ -203,17 +203,37 @@ pub fn run(a: &ExportArgs) -> Result<()> {
                 accel: noise(&accel, SensorKind::Accel)?,
                 update_rate_hz: 1.0 / tau0,
             };
+            // Warned about: only the terms this format writes (Kalibr, OpenVINS and VINS take N
+            // and K; KF-GINS N and B of each axis), and a kind without three axes for KF-GINS.
+            let per_axis = format == ExportFormat::KfGins;
             for k in [&imu.gyro, &imu.accel].into_iter().flatten() {
-                for (name, t) in [
-                    ("N", k.white),
-                    ("K", k.random_walk),
-                    ("B", k.bias_instability),
-                ] {
-                    if t.bound {
+                if per_axis {
+                    for (c, (n, b)) in k.channels.iter().zip(&k.per_axis) {
+                        for (name, t) in [("N", n), ("B", b)] {
+                            if t.bound {
+                                tracing::warn!(
+                                    "{c}: {name} is not determined; its upper 95% bound is \
+                                     exported"
+                                );
+                            }
+                        }
+                    }
+                    if k.per_axis.len() != 3 {
                         tracing::warn!(
-                            "{}: {name} is not determined; its upper 95% bound is exported",
-                            k.channels.join(",")
+                            "{}: {} channel(s) where KF-GINS takes three axes: the largest is \
+                             written for every axis",
+                            k.channels.join(","),
+                            k.per_axis.len()
                         );
+                    }
+                } else {
+                    for (name, t) in [("N", k.white), ("K", k.random_walk)] {
+                        if t.bound {
+                            tracing::warn!(
+                                "{}: {name} is not determined; its upper 95% bound is exported",
+                                k.channels.join(",")
+                            );
+                        }
                     }
                 }
             }

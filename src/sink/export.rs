@@ -289,6 +289,38 @@ pub fn vins(imu: &ImuNoise) -> Result<String, String> {
     Ok(o)
 }
 
+/// What a KF-GINS line's comment adds for its three values `v` of `k`'s channels: which axes
+/// are upper bounds (a term not determined), and that one figure stands for every axis when
+/// the unit does not have exactly three channels of that kind (a dead axis left out, say).
+fn triad_note(k: &KindNoise, v: &[Taken; 3]) -> String {
+    let mut out = String::new();
+    if k.per_axis.len() != 3 {
+        let _ = write!(
+            out,
+            "; the largest over {} on every axis",
+            k.channels.join(", ")
+        );
+        if v[0].bound {
+            out.push_str(note(&v[0]));
+        }
+    } else {
+        let bounds: Vec<String> = v
+            .iter()
+            .zip(&k.channels)
+            .filter(|(t, _)| t.bound)
+            .map(|(_, c)| c.clone())
+            .collect();
+        if !bounds.is_empty() {
+            let _ = write!(
+                out,
+                "; not determined on {}: its upper 95% bound",
+                bounds.join(", ")
+            );
+        }
+    }
+    out
+}
+
 /// Three values per axis: the channels' own when there are exactly three, else the largest
 /// three times.
 fn triad(k: &KindNoise, pick: impl Fn(&(Taken, Taken)) -> Taken, all: Taken) -> [Taken; 3] {
@@ -307,25 +339,36 @@ fn triad(k: &KindNoise, pick: impl Fn(&(Taken, Taken)) -> Taken, all: Taken) -> 
 /// not measured here and are written as zeros, commented, since KF-GINS requires the keys.
 pub fn kf_gins(imu: &ImuNoise) -> Result<String, String> {
     let (g, a) = (need(&imu.gyro, "gyro")?, need(&imu.accel, "accel")?);
-    let arw = triad(g, |p| p.0, g.white).map(|t| t.si.to_degrees() * 60.0);
-    let vrw = triad(a, |p| p.0, a.white).map(|t| t.si * 60.0);
-    let gb = triad(g, |p| p.1, g.bias_instability).map(|t| t.si.to_degrees() * 3600.0);
+    let conv = |f: fn(f64) -> f64| move |t: Taken| Taken { si: f(t.si), ..t };
+    let arw = triad(g, |p| p.0, g.white).map(conv(|x| x.to_degrees() * 60.0));
+    let vrw = triad(a, |p| p.0, a.white).map(conv(|x| x * 60.0));
+    let gb = triad(g, |p| p.1, g.bias_instability).map(conv(|x| x.to_degrees() * 3600.0));
     // 1 mGal = 1e-5 m/s^2.
-    let ab = triad(a, |p| p.1, a.bias_instability).map(|t| t.si / 1e-5);
+    let ab = triad(a, |p| p.1, a.bias_instability).map(conv(|x| x / 1e-5));
     let corr_h = g
         .tau_min_s
         .into_iter()
         .chain(a.tau_min_s)
         .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.max(t))))
         .map_or(1.0, |s| s / 3600.0);
-    let v3 = |v: [f64; 3]| format!("[{:e}, {:e}, {:e}]", v[0], v[1], v[2]);
+    let v3 = |v: [Taken; 3]| format!("[{:e}, {:e}, {:e}]", v[0].si, v[1].si, v[2].si);
     let mut o = String::new();
     source_comment(&mut o, imu);
     let _ = writeln!(o, "imunoise:");
-    let _ = writeln!(o, "  arw: {}  # deg/sqrt(hr)", v3(arw));
-    let _ = writeln!(o, "  vrw: {}  # m/s/sqrt(hr)", v3(vrw));
-    let _ = writeln!(o, "  gbstd: {}  # deg/hr", v3(gb));
-    let _ = writeln!(o, "  abstd: {}  # mGal", v3(ab));
+    let _ = writeln!(
+        o,
+        "  arw: {}  # deg/sqrt(hr){}",
+        v3(arw),
+        triad_note(g, &arw)
+    );
+    let _ = writeln!(
+        o,
+        "  vrw: {}  # m/s/sqrt(hr){}",
+        v3(vrw),
+        triad_note(a, &vrw)
+    );
+    let _ = writeln!(o, "  gbstd: {}  # deg/hr{}", v3(gb), triad_note(g, &gb));
+    let _ = writeln!(o, "  abstd: {}  # mGal{}", v3(ab), triad_note(a, &ab));
     // KF-GINS reads the scale-factor keys with the others and refuses the block without them;
     // an Allan analysis does not measure them (docs/export.md): zeros, said so here and by the
     // command's warning.

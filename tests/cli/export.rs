@@ -117,6 +117,12 @@ fn close(a: f64, b: f64) -> bool {
 fn kalibr_yaml_by_hand() {
     let (o, path) = export("kalibr", "imu.yaml", &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // Kalibr takes N and K only: no warning about B, which it does not hold.
+    assert!(
+        !String::from_utf8_lossy(&o.stderr).contains("B is not determined"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let res = results();
     let y = &YamlLoader::load_from_str(&std::fs::read_to_string(&path).unwrap()).unwrap()[0];
     let num = |k: &str| y[k].as_f64().unwrap_or_else(|| panic!("{k}: {:?}", y[k]));
@@ -259,6 +265,49 @@ fn kf_gins_by_hand() {
         "{}",
         String::from_utf8_lossy(&o.stderr)
     );
+    // One channel of each kind where KF-GINS takes three axes: said on each line and warned
+    // (a review's unit with a dead gyro axis left out had x's value on all three, unsaid); a
+    // B the fit left undetermined is said to be its upper bound on its own line.
+    let text = std::fs::read_to_string(&path).unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    let line = |k: &str| {
+        text.lines()
+            .find(|l| l.trim_start().starts_with(k))
+            .unwrap()
+    };
+    assert!(
+        line("arw:").contains("the largest over gx on every axis"),
+        "{text}"
+    );
+    assert!(
+        line("abstd:").contains("the largest over ax on every axis"),
+        "{text}"
+    );
+    assert!(
+        err.contains("gx: 1 channel(s) where KF-GINS takes three axes"),
+        "{err}"
+    );
+    for (ch, key) in [("gx", "gbstd:"), ("ax", "abstd:")] {
+        let fits = std::fs::read_to_string(&res).unwrap();
+        let fit: Value = fits
+            .lines()
+            .rev()
+            .map(|l| serde_json::from_str::<Value>(l).unwrap())
+            .find(|v| v["type"] == "fit" && v["final"] == true && v["channel"] == ch)
+            .unwrap();
+        let undetermined = fit["coef"]["B"]["value"].is_null();
+        assert_eq!(
+            line(key).contains("not determined: its upper 95% bound"),
+            undetermined,
+            "{ch}: {}",
+            line(key)
+        );
+        assert_eq!(
+            err.contains(&format!("{ch}: B is not determined")),
+            undetermined,
+            "{err}"
+        );
+    }
     // A channel that is not in the file is named.
     let (o, _) = export("kf-gins", "kf-bad.yaml", &["--gyro", "gz"]);
     assert_eq!(o.status.code(), Some(2));
