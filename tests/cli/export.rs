@@ -76,14 +76,18 @@ fn make_results() -> std::path::PathBuf {
     res
 }
 
-fn fit_coef(res: &std::path::Path, ch: &str, c: &str) -> f64 {
+/// The final `fit` record of channel `ch`.
+fn final_fit(res: &std::path::Path, ch: &str) -> Value {
     let text = std::fs::read_to_string(res).unwrap();
-    let fit: Value = text
-        .lines()
+    text.lines()
         .rev()
         .map(|l| serde_json::from_str::<Value>(l).unwrap())
         .find(|v| v["type"] == "fit" && v["final"] == true && v["channel"] == ch)
-        .unwrap();
+        .unwrap()
+}
+
+fn fit_coef(res: &std::path::Path, ch: &str, c: &str) -> f64 {
+    let fit = final_fit(res, ch);
     let e = &fit["coef"][c];
     e["value"]
         .as_f64()
@@ -288,14 +292,7 @@ fn kf_gins_by_hand() {
         "{err}"
     );
     for (ch, key) in [("gx", "gbstd:"), ("ax", "abstd:")] {
-        let fits = std::fs::read_to_string(&res).unwrap();
-        let fit: Value = fits
-            .lines()
-            .rev()
-            .map(|l| serde_json::from_str::<Value>(l).unwrap())
-            .find(|v| v["type"] == "fit" && v["final"] == true && v["channel"] == ch)
-            .unwrap();
-        let undetermined = fit["coef"]["B"]["value"].is_null();
+        let undetermined = final_fit(&res, ch)["coef"]["B"]["value"].is_null();
         assert_eq!(
             line(key).contains("not determined: its upper 95% bound"),
             undetermined,
