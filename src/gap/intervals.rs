@@ -266,7 +266,8 @@ pub fn fit_intervals(
 /// the term's own units (the square root of the coefficient `c`). Two readings are joined,
 /// the wider at each end:
 /// - the profile of `r' S^-1 r` in `c` (the other terms and the effects' amplitudes refitted,
-///   non-negative; the effects' shapes held): the values where it rises by `3.84 scale`, the
+///   non-negative; the effects' shapes held; [`GapProblem::lower_bound`],
+///   [`GapProblem::upper_bound`]): the values where it rises by `3.84 scale`, the
 ///   two-sided 95% likelihood-ratio interval (Wilks; Pawitan, "In All Likelihood", section
 ///   2.6), scaled by the final gap as the Fisher covariance is. It holds where the Fisher
 ///   reading does not: a term beside another the fit set to zero (a rate random walk K whose
@@ -285,30 +286,8 @@ fn term_interval(
 ) -> Option<TermInterval> {
     let c_hat = fit.coef.get(term).copied()?.max(0.0);
     let delta = Z95 * Z95 * scale;
-    let target = fit.chi2 + delta;
     let hi_c = prob.upper_bound(spec, fit, term, delta)?;
-    let chi2_at = |k: f64| {
-        prob.gls_fixed(spec, term, k)
-            .map_or(f64::INFINITY, |f| f.chi2)
-    };
-    let lo_c = if c_hat <= 0.0 || chi2_at(0.0) < target {
-        0.0
-    } else {
-        // Bisection on [0, c_hat] for the least value still within `delta`.
-        let (mut below, mut within) = (0.0, c_hat);
-        for _ in 0..40 {
-            let mid = 0.5 * (below + within);
-            if chi2_at(mid) < target {
-                within = mid;
-            } else {
-                below = mid;
-            }
-            if within - below <= 0.005 * within {
-                break;
-            }
-        }
-        within
-    };
+    let lo_c = prob.lower_bound(spec, fit, term, delta);
     let value = c_hat.sqrt();
     let (mut lo, mut hi) = (lo_c.sqrt(), hi_c.max(c_hat).sqrt());
     if let Some([f_lo, f_hi]) = fisher {

@@ -178,6 +178,15 @@ impl GlsFit {
     }
 }
 
+/// `spec` with `k col` added to its fixed offset: a five-term coefficient held at `k` (or, its
+/// column still free, at `k` or above).
+fn with_term_offset(spec: &ModelSpec, col: &[f64], k: f64) -> ModelSpec {
+    let mut s = spec.clone();
+    let base = s.offset.take().unwrap_or_else(|| vec![0.0; col.len()]);
+    s.offset = Some(base.iter().zip(col).map(|(o, x)| o + k * x).collect());
+    s
+}
+
 impl GapProblem {
     /// Builds the problem from the dense curve of `snap`.
     pub fn new(snap: &EvidenceSnapshot, opts: &DiagnoseOptions) -> Result<Self, DiagnoseError> {
@@ -915,26 +924,6 @@ impl GapProblem {
         self.gls_with(spec, None)
     }
 
-    /// [`Self::gls`] with the five-term coefficient `term` (`Q^2 .. R^2`) held at `k`: its
-    /// column a fixed offset `k x_term`, the others free. The profile of `r' S^-1 r` in that
-    /// coefficient, for its interval ([`super::intervals`]).
-    pub fn gls_fixed(&self, spec: &ModelSpec, term: usize, k: f64) -> Option<GlsFit> {
-        let col = self.columns(spec).column(term).clone_owned();
-        let mut s = spec.clone();
-        let base = s.offset.take().unwrap_or_else(|| vec![0.0; self.len()]);
-        s.offset = Some(
-            base.iter()
-                .zip(col.iter())
-                .map(|(o, x)| o + k * x)
-                .collect(),
-        );
-        let mut fit = self.gls_with(&s, Some((term, k)))?;
-        if let Some(c) = fit.coef.get_mut(term) {
-            *c = k;
-        }
-        Some(fit)
-    }
-
     /// `held`: a five-term coefficient held at a value (its column zeroed here, its part in
     /// the spec's offset).
     fn gls_with(&self, spec: &ModelSpec, held: Option<(usize, f64)>) -> Option<GlsFit> {
@@ -1101,10 +1090,8 @@ impl GapProblem {
         let col: Vec<f64> = self.columns(spec).column(term).iter().copied().collect();
         let c0 = fit.coef.get(term).copied()?.max(0.0);
         let chi2_at = |k: f64| -> f64 {
-            let mut s = spec.clone();
-            let base = s.offset.take().unwrap_or_else(|| vec![0.0; self.len()]);
-            s.offset = Some(base.iter().zip(&col).map(|(o, x)| o + k * x).collect());
-            self.gls(&s).map_or(f64::INFINITY, |f| f.chi2)
+            self.gls(&with_term_offset(spec, &col, k))
+                .map_or(f64::INFINITY, |f| f.chi2)
         };
         let k_max = self.term_ceiling(spec, term, 0.0)?;
         let target = fit.chi2 + delta;
@@ -1128,6 +1115,37 @@ impl GapProblem {
             }
         }
         Some(lo.max(c0))
+    }
+
+    /// Lower profile bound on the five-term coefficient `term` (`Q^2 .. R^2`) of the fit `fit`
+    /// of `spec`: the least `k <= fit.coef[term]` at which holding the coefficient at exactly
+    /// `k` (a fixed offset `k x_term`, its column out of the fit, the others refitted) raises
+    /// `r' S^-1 r` by less than `delta`; 0 when even `k = 0` does. Bisection on `[0, c]` to
+    /// 0.5%. The twin of [`Self::upper_bound`] for the intervals of [`super::intervals`].
+    pub fn lower_bound(&self, spec: &ModelSpec, fit: &GlsFit, term: usize, delta: f64) -> f64 {
+        let c_hat = fit.coef.get(term).copied().unwrap_or(0.0).max(0.0);
+        let col: Vec<f64> = self.columns(spec).column(term).iter().copied().collect();
+        let target = fit.chi2 + delta;
+        let within = |k: f64| {
+            self.gls_with(&with_term_offset(spec, &col, k), Some((term, k)))
+                .is_some_and(|f| f.chi2 < target)
+        };
+        if c_hat <= 0.0 || within(0.0) {
+            return 0.0;
+        }
+        let (mut below, mut inside) = (0.0, c_hat);
+        for _ in 0..40 {
+            let mid = 0.5 * (below + inside);
+            if within(mid) {
+                inside = mid;
+            } else {
+                below = mid;
+            }
+            if inside - below <= 0.005 * inside {
+                break;
+            }
+        }
+        inside
     }
 
     /// The largest value of the five-term coefficient `term` (`Q^2 .. R^2`) the curve allows:
