@@ -60,7 +60,8 @@ pub struct QuantizationFinding {
     /// White rate of rounded rate samples, `lsb / sqrt(12 tau0)` (u/sqrt(s)).
     #[serde(deserialize_with = "nullable_f64")]
     pub n_q: f64,
-    /// The unit's own white rate when the kind is `rate`: `sqrt(N^2 - N_q^2)` (u/sqrt(s)).
+    /// The unit's own white rate: `sqrt(N^2 - N_q^2)` (u/sqrt(s)); `N` itself when the kind is
+    /// `angle` (nothing rounds the rate).
     #[serde(deserialize_with = "nullable_f64")]
     pub n_unit: f64,
     /// White phase of a counter with carry, `lsb / sqrt(12)` (u).
@@ -69,7 +70,8 @@ pub struct QuantizationFinding {
     /// The same step as a rate, `lsb / tau0` (u/s).
     #[serde(deserialize_with = "nullable_f64")]
     pub rate_lsb: f64,
-    /// `N_q^2 / N^2` of the final fit (the share of the white rate that is rounding).
+    /// `N_q^2 / N^2` of the final fit (the share of the white rate that is rounding); not a
+    /// number (`null`) when the kind is `angle`.
     #[serde(deserialize_with = "nullable_f64")]
     pub share_of_n2: f64,
 }
@@ -127,7 +129,13 @@ pub fn judge_quantization(
     let floor_in = spec.filter.is_some() && prob.filter_floor.is_some();
     let n2_col = fit.coef.get(1).copied().unwrap_or(0.0).max(0.0);
     let n2 = if floor_in { n2_col + n_q * n_q } else { n2_col };
-    let share = if n2 > 0.0 {
+    // A counter with carry (`angle`) rounds no rate sample: none of its white rate is rounding,
+    // so the share is not a number and the unit's own white rate is all of it (the share was
+    // 2000-7000 on the review's pulse counters, N fitted near zero, which read as nonsense).
+    let angle = kind == QuantKind::Angle;
+    let share = if angle {
+        f64::NAN
+    } else if n2 > 0.0 {
         n_q * n_q / n2
     } else {
         f64::INFINITY
@@ -141,6 +149,10 @@ pub fn judge_quantization(
         delta_chi2_angle: d_angle,
         delta_chi2_rate: d_rate,
         share_of_n2: share,
-        n_unit: (n2 - n_q * n_q).max(0.0).sqrt(),
+        n_unit: if angle {
+            n2.sqrt()
+        } else {
+            (n2 - n_q * n_q).max(0.0).sqrt()
+        },
     })
 }

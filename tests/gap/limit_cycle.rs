@@ -410,3 +410,43 @@ fn a_quantization_limited_counter_behind_a_filter_is_read_whole() {
     assert_first_order_with_its_sawtooth(&d, t_f, 0.01, 1.7921091513986337e-4);
     assert!(d.gap_after <= 2.2, "G {}", d.gap_after);
 }
+
+/// A pendulous accelerometer counting velocity pulses with carry (the session-41 review's
+/// family): 1e-3 m/s a pulse, 250 Hz, 3 hours, 0.3 g of input (11.77 pulses a sample), white
+/// rate 1e-4 m/s/sqrt(s) (10 micro-g/sqrt(Hz)), flicker 5 micro-g and a rate ramp of 30
+/// micro-g/h that moves the pulse fraction through the run. Its noise is 0.006 pulse per sample,
+/// so the counter's error is white only beyond about 42 s (`quant_limit`, e^-8 of its lag
+/// correlation left), and below that its lines wander with the fraction, which no sawtooth of
+/// one frequency describes. The fits of the short taus follow those lines; one from 65 s on
+/// made Q twice the LSB's and called the quantization white, and the whole curve was read:
+/// `unexplained` (G 5.4 -> 3.2), its lines named as band noise and a sinusoid. Since session 41
+/// (`check_quantization`, CREDIBLE_FIT_GAP) the curve is read from its white tau (asserted
+/// between 20 and 100 s), with the verdict `consistent`, and the flicker floor covered.
+#[test]
+fn a_fine_pulse_counter_is_read_from_its_white_tau() {
+    let tau0 = 0.004;
+    let (n, b) = (9.80665e-5, 4.903325e-5);
+    let text = format!(
+        "tau0_s = {tau0}\n[[channel]]\nname = \"a1\"\nunit = \"m/s\"\nlsb = 1e-3\n\
+         bias = 2.941995\nN = {n:e}\nB = {b:e}\nR = 8.172208e-8\nflicker_band_s = [0.004, 2.0e4]\n"
+    );
+    let out = super::diagnosis::simulate_text(&text, tau0, 3.0 * 3600.0, 2);
+    let snap = GapEvidence::from_increments(GapConfig::new(tau0), &out).snapshot();
+    let d = diagnose(&snap, &DiagnoseOptions::default()).expect("diagnosis");
+    let limit = d.quantization_limited.expect("quantization-limited");
+    assert!(
+        (20.0..100.0).contains(&limit.tau_white_s),
+        "white from {} s",
+        limit.tau_white_s
+    );
+    assert!(d.model_tau_s[0] >= limit.tau_white_s, "{:?}", d.model_tau_s);
+    assert_eq!(d.verdict, Verdict::Consistent, "{:?}", d.effects);
+    let v: serde_json::Value =
+        serde_json::from_str(&DiagnosisRecord::new("a1", &d, None, true).to_json_line())
+            .expect("json");
+    let bt = &v["final_terms"]["B"];
+    assert!(
+        bt["lo"].as_f64().unwrap() <= b && b <= bt["hi"].as_f64().unwrap(),
+        "{bt}"
+    );
+}
