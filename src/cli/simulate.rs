@@ -75,7 +75,16 @@ pub fn run(s: &SimulateArgs) -> Result<()> {
             std::fs::rename(&partial, &s.out).with_context(|| {
                 format!("cannot rename {} to {}", partial.display(), s.out.display())
             })?;
-            tracing::info!("{}: {steps} steps written", s.out.display());
+            match desc {
+                // Text columns carry no time: say the step they must be read at.
+                None => tracing::info!(
+                    "{}: {steps} steps written, {} s apart (read it with --tau0 {})",
+                    s.out.display(),
+                    model.tau0_s,
+                    model.tau0_s
+                ),
+                Some(_) => tracing::info!("{}: {steps} steps written", s.out.display()),
+            }
             Ok(())
         }
         Err(e) => {

@@ -1980,6 +1980,37 @@ fn labelled_start(t: &str, ahead: &[String]) -> Option<Labelled> {
     })
 }
 
+/// The names of a header split at spaces, a unit in brackets kept with the name before it:
+/// `ax [m/s^2]` is one column, `gx [rad s^-1] gy [rad s^-1]` two, as a person reads them.
+fn spaced_names(words: &[&str]) -> Vec<String> {
+    let mut names: Vec<String> = Vec::new();
+    // The bracket a unit opened and has not closed yet.
+    let mut open: Option<char> = None;
+    for w in words {
+        let w = w.trim().trim_matches('"');
+        let starts_unit = w.starts_with(['[', '(']) && !names.is_empty();
+        match (open, names.last_mut()) {
+            (Some(close), Some(last)) => {
+                last.push(' ');
+                last.push_str(w);
+                if w.ends_with(close) {
+                    open = None;
+                }
+            }
+            (None, Some(last)) if starts_unit => {
+                last.push(' ');
+                last.push_str(w);
+                let close = if w.starts_with('[') { ']' } else { ')' };
+                if !w.ends_with(close) {
+                    open = Some(close);
+                }
+            }
+            _ => names.push(w.to_string()),
+        }
+    }
+    names
+}
+
 /// A row's fields by the row alone: commas, else semicolons, else spaces and tabs.
 fn split(line: &str) -> Vec<&str> {
     if line.contains(',') {
@@ -2229,10 +2260,14 @@ impl<R: BufRead> TextReader<R> {
                                 Layout::new(names, header, sep, opts, path, line_no)?
                                     .first_row(t, &mut src, &mut ahead, opts, path, line_no)?
                             } else {
-                                let mut names: Vec<String> = fields
-                                    .iter()
-                                    .map(|f| f.trim().trim_matches('"').trim().to_string())
-                                    .collect();
+                                let mut names: Vec<String> = if sep == Sep::Spaces {
+                                    spaced_names(&fields)
+                                } else {
+                                    fields
+                                        .iter()
+                                        .map(|f| f.trim().trim_matches('"').trim().to_string())
+                                        .collect()
+                                };
                                 header_rows.push(names.clone());
                                 layout_line = line_no;
                                 // A LabVIEW file's names made the reader's, its units read.
@@ -2809,6 +2844,20 @@ mod tests {
             assert!(a == &b || (a.is_nan() && b.is_nan()), "{v:?}");
         }
         assert_eq!(bad, 1);
+    }
+
+    #[test]
+    fn a_unit_in_brackets_stays_with_its_name_between_spaces() {
+        // One column whose name holds a space: one column, not two (the rows were all bad).
+        let (names, v, bad) = read_all("ax [m/s^2]\n0.25\n-0.5\n");
+        assert_eq!(names, ["ax [m/s^2]"]);
+        assert_eq!((v, bad), (vec![0.25, -0.5], 0));
+        // Units with spaces inside their brackets, columns between spaces.
+        let (names, v, bad) = read_all("t gx [rad s^-1] gy (deg/s)\n0 1 2\n0.01 3 4\n");
+        // (`t` is the time column, not a channel.)
+        assert_eq!(names, ["gx [rad s^-1]", "gy (deg/s)"]);
+        assert_eq!(v, [1.0, 2.0, 3.0, 4.0]);
+        assert_eq!(bad, 0);
     }
 
     #[test]

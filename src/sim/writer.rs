@@ -12,6 +12,8 @@ use std::fmt::Write as _;
 use std::io::Write;
 
 use crate::error::UsageError;
+use crate::input::header_unit::bracketed;
+use crate::model::units::{g_seconds_base, IncrementUnit};
 
 use super::{SimModel, Simulator};
 
@@ -52,7 +54,11 @@ fn write_csv(model: &SimModel, steps: u64, seed: u64, out: impl Write) -> anyhow
         .map(|c| c.lsb.map(DecimalLsb::new))
         .collect();
     let mut line = String::with_capacity(256);
-    let names: Vec<&str> = model.channels.iter().map(|c| c.name.as_str()).collect();
+    let names: Vec<String> = model
+        .channels
+        .iter()
+        .map(|c| column_header(&c.name, &c.unit))
+        .collect();
     line.push_str(&names.join(","));
     if model.temperature.is_some() {
         line.push_str(",temperature_c");
@@ -80,6 +86,29 @@ fn write_csv(model: &SimModel, steps: u64, seed: u64, out: impl Write) -> anyhow
     }
     out.flush()?;
     Ok(())
+}
+
+/// The header of a channel's column. A name without a unit in brackets is written as it is.
+/// A name with one (a twin from `diagnose --model-out` of `ax [m/s^2]`, whose values were rates)
+/// would tell a reader its increments are rates: the brackets then hold the channel's increment
+/// unit (`ax [m/s]`, `ax [g*s]`), or nothing when that unit is not one a header names.
+fn column_header(name: &str, unit: &str) -> String {
+    let Some((base, _)) = bracketed(name) else {
+        return name.to_string();
+    };
+    let written = if let Some(g) = g_seconds_base(unit) {
+        format!("{base} [{g}*s]")
+    } else if IncrementUnit::parse(unit).is_some() {
+        format!("{base} [{}]", unit.trim())
+    } else {
+        base.to_string()
+    };
+    if written != name {
+        tracing::info!(
+            "channel `{name}`: its column is headed `{written}`, the unit of its increments"
+        );
+    }
+    written
 }
 
 /// An LSB as `digits * 10^exp10`, from its shortest decimal form.
@@ -138,7 +167,27 @@ impl DecimalLsb {
 
 #[cfg(test)]
 mod tests {
-    use super::DecimalLsb;
+    use super::{column_header, DecimalLsb};
+    use crate::input::header_unit::header_unit;
+
+    /// A twin's channel named after rates (`ax [m/s^2]`) is headed by the unit of the increments
+    /// it writes, and reading that header back gives the increment unit, not a rate.
+    #[test]
+    fn a_unit_in_a_name_becomes_the_increment_s() {
+        for (name, unit, want, inc) in [
+            ("ax [m/s^2]", "m/s", "ax [m/s]", Some("m/s")),
+            ("gx (deg/s)", "deg", "gx [deg]", Some("deg")),
+            ("acc_x[g]", "g", "acc_x [g*s]", Some("g")),
+            ("gz [rad s^-1]", "u", "gz", None),
+            ("g1", "arcsec", "g1", None),
+        ] {
+            let h = column_header(name, unit);
+            assert_eq!(h, want);
+            let read = header_unit(&h).map(|r| r.unwrap());
+            assert_eq!(read.as_ref().map(|r| r.rate), inc.map(|_| false), "{h}");
+            assert_eq!(read.as_ref().map(|r| r.unit.as_str()), inc, "{h}");
+        }
+    }
 
     /// Exact decimals of count * lsb, checked by hand.
     #[test]

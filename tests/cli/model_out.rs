@@ -355,3 +355,64 @@ fn the_ensemble_band_shows_the_twin_matching() {
         .unwrap();
     assert_eq!(bad.status.code(), Some(2));
 }
+
+/// A twin of rate columns (`time,ax [m/s^2]`, a MEMS logger's file): the model file keeps the
+/// channel's name, and `simulate` heads the twin's column by the unit of the increments it
+/// writes (`ax [m/s]`), so the twin's run reads back without `--unit` as increments in m/s. Read
+/// by the old header it would have been rates, N 1/tau0 = 200 times too large. The twin's N is
+/// within 5% of the truth (white rate noise N 1e-3 m/s/sqrt(s), 20 minutes at 200 Hz; the
+/// estimate's own spread is about 0.2%).
+#[test]
+fn a_twin_of_rate_columns_reads_back_as_increments() {
+    let n = 1e-3;
+    let truth = tmp("rate-truth.toml");
+    std::fs::write(
+        &truth,
+        format!("rate_hz = 200\n[[channel]]\nname = \"ax\"\nunit = \"m/s\"\nN = {n}\n"),
+    )
+    .unwrap();
+    let inc = tmp("rate-inc.csv");
+    simulate_to(&truth, &["--duration", "20min", "--seed", "3"], &inc);
+    // The logger's file: a time column and the rates (m/s^2) the increments average.
+    let mut text = String::from("time,ax [m/s^2]\n");
+    for (i, v) in std::fs::read_to_string(&inc)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .enumerate()
+    {
+        let v: f64 = v.parse().unwrap();
+        text.push_str(&format!("{:.3},{:e}\n", i as f64 * 0.005, v / 0.005));
+    }
+    let rates = tmp("rate-run.csv");
+    std::fs::write(&rates, text).unwrap();
+    let twin = tmp("rate-twin.toml");
+    let _ = std::fs::remove_file(&twin);
+    let d1 = first_record(
+        exe()
+            .arg("diagnose")
+            .arg(&rates)
+            .arg("--model-out")
+            .arg(&twin),
+    );
+    assert_eq!(d1["unit"], "m/s");
+    assert!(std::fs::read_to_string(&twin)
+        .unwrap()
+        .contains("name = \"ax [m/s^2]\""));
+    let twin_run = tmp("rate-twin.csv");
+    simulate_to(&twin, &["--duration", "20min", "--seed", "4"], &twin_run);
+    let head = std::fs::read_to_string(&twin_run).unwrap();
+    assert_eq!(head.lines().next(), Some("ax [m/s]"));
+    let d2 = first_record(
+        exe()
+            .arg("diagnose")
+            .arg(&twin_run)
+            .args(["--tau0", "0.005"]),
+    );
+    assert_eq!(
+        (&d2["channel"], &d2["unit"]),
+        (&"ax [m/s]".into(), &"m/s".into())
+    );
+    let n2 = d2["final_terms"]["N"]["value"].as_f64().unwrap();
+    assert!(rel(n2, n) < 0.05, "the twin's N {n2} against {n}");
+}
