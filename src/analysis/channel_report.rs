@@ -64,7 +64,7 @@ impl ChannelReport {
             readouts: self
                 .readouts
                 .as_ref()
-                .map(|r| Box::new(ReadoutsRecord::new(r, &self.unit))),
+                .map(|r| Box::new(ReadoutsRecord::new(r, &self.unit, Some(f.c)))),
             q_over_lsb: self
                 .counts_lsb
                 .filter(|_| q.determined)

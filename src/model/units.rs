@@ -119,7 +119,20 @@ pub fn increment_unit_label(unit: &str, rate: bool) -> String {
 pub const COEF_NAMES: [&str; 5] = ["Q", "N", "B", "K", "R"];
 
 /// Native unit of each coefficient for a channel in `u` (docs/theory.md section 2 table).
+///
+/// An accelerometer counted in g (`g`, `mg`, `ug`, alone or as `g*s`) has increments of g*s,
+/// so its labels are written out in the g unit itself: Q g*s, N g*sqrt(s) (= g/sqrt(Hz)), B g,
+/// K g/sqrt(s), R g/s; `g/sqrt(s)` for N would be off by a second.
 pub fn native_units(u: &str) -> [String; 5] {
+    if let Some(g) = g_seconds_base(u) {
+        return [
+            format!("{g}*s"),
+            format!("{g}*sqrt(s)"),
+            g.to_string(),
+            format!("{g}/sqrt(s)"),
+            format!("{g}/s"),
+        ];
+    }
     [
         u.to_string(),
         format!("{u}/sqrt(s)"),
@@ -127,6 +140,18 @@ pub fn native_units(u: &str) -> [String; 5] {
         format!("{u}/s/sqrt(s)"),
         format!("{u}/s^2"),
     ]
+}
+
+/// The g unit (`g`, `mg`, `ug`) of an increment unit that is that unit times a second, as
+/// [`IncrementUnit::parse`] reads `g`, `g*s`, `mg`, ...; `None` for any other unit.
+pub fn g_seconds_base(u: &str) -> Option<&'static str> {
+    let t = u.trim().replace('µ', "u").replace(['·', '.', ' '], "*");
+    match t.as_str() {
+        "g" | "g*s" => Some("g"),
+        "mg" | "mg*s" => Some("mg"),
+        "ug" | "ug*s" => Some("ug"),
+        _ => None,
+    }
 }
 
 /// Datasheet unit labels of each kind, Q..R.
@@ -345,5 +370,13 @@ mod tests {
         // As a channel unit g is a velocity (m/s), not an acceleration.
         let u = channel_unit("g").unwrap();
         assert_eq!((u.length, u.time), (1.0, -1.0));
+        // N of an increment in g*s is g*sqrt(s) (g/sqrt(Hz)), B is g; other units keep u/...
+        assert_eq!(
+            native_units("mg"),
+            ["mg*s", "mg*sqrt(s)", "mg", "mg/sqrt(s)", "mg/s"].map(String::from)
+        );
+        assert_eq!(native_units("g*s")[1], "g*sqrt(s)");
+        assert_eq!(native_units("deg")[1], "deg/sqrt(s)");
+        assert_eq!(native_units("m/s")[2], "m/s/s");
     }
 }

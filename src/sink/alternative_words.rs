@@ -53,7 +53,15 @@ pub fn alternative_words(
                     .join(" + "),
             };
             // Two decimals, as the chosen effects' gaps are given in the table and the report.
-            format!("{change} (gap {:.2})", a.gap)
+            // A model with more in it that fits better (`delta_chi2` < 0) was short of the bar
+            // for naming what it adds (docs/gap.md, "Alternatives"): said, so that a lower gap
+            // is not read as a better choice missed.
+            let short = if a.delta_chi2 < 0.0 && !new.is_empty() {
+                ", short of the bar to be named"
+            } else {
+                ""
+            };
+            format!("{change} (gap {:.2}{short})", a.gap)
         })
         .collect();
     (!parts.is_empty()).then(|| parts.join("; "))

@@ -10,7 +10,7 @@
 //! shown by its record names and values.
 
 use crate::gap::record::RecordedEffect;
-use crate::model::units::{datasheet_factors, datasheet_units, IncrementUnit};
+use crate::model::units::{datasheet_factors, datasheet_units, native_units, IncrementUnit};
 
 /// What a parameter measures, which decides its unit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -148,6 +148,7 @@ pub fn effect_parts(
     };
     let u = if unit.is_empty() { "u" } else { unit };
     let ds = datasheet_rate(u);
+    let ru = &native_units(u)[2];
     // `lo`, `hi` (a kind with one rate, e.g. temperature): that rate's 95% interval.
     let bounds = (param("lo"), param("hi"));
     let rate = |v: f64, per: &str| -> String {
@@ -157,13 +158,13 @@ pub fn effect_parts(
         };
         match ds {
             Some((f, du)) => format!(
-                "{}{} {du}{per} ({}{} {u}/s{per})",
+                "{}{} {du}{per} ({}{} {ru}{per})",
                 number(v * f),
                 iv(f),
                 number(v),
                 iv(1.0)
             ),
-            None => format!("{}{} {u}/s{per}", number(v), iv(1.0)),
+            None => format!("{}{} {ru}{per}", number(v), iv(1.0)),
         }
     };
     let Some((name, keys)) = known(kind) else {
@@ -226,9 +227,10 @@ fn datasheet_rate(unit: &str) -> Option<(f64, &'static str)> {
 /// (5.83e-4 deg/s)`, or in u/s alone when `unit` is not known.
 pub fn rate_words(v: f64, unit: &str, number: &dyn Fn(f64) -> String) -> String {
     let u = if unit.is_empty() { "u" } else { unit };
+    let ru = &native_units(u)[2];
     match datasheet_rate(u) {
-        Some((f, du)) => format!("{} {du} ({} {u}/s)", number(v * f), number(v)),
-        None => format!("{} {u}/s", number(v)),
+        Some((f, du)) => format!("{} {du} ({} {ru})", number(v * f), number(v)),
+        None => format!("{} {ru}", number(v)),
     }
 }
 

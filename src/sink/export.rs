@@ -16,7 +16,7 @@
 
 use std::fmt::Write as _;
 
-use crate::model::units::{IncrementUnit, SensorKind};
+use crate::model::units::{native_units, IncrementUnit, SensorKind};
 use crate::sink::records::{CurveRecord, FitRecord};
 
 /// The export targets.
@@ -430,7 +430,7 @@ pub fn stable32(curves: &[&CurveRecord]) -> String {
             other => other,
         };
         let _ = writeln!(o, "# allanscope (Stable32 column layout)");
-        let _ = writeln!(o, "# Channel: {} ({}/s)", c.channel, c.unit);
+        let _ = writeln!(o, "# Channel: {} ({})", c.channel, native_units(&c.unit)[2]);
         let _ = writeln!(o, "# Sigma Type: {kind}");
         let _ = writeln!(o, "# Confidence Factor = 0.95");
         let _ = writeln!(o, "#");

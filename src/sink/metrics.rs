@@ -39,6 +39,7 @@ use prometheus_client::registry::Registry;
 use crate::frame::Health;
 use crate::model::limits::{channel_matches, conversion, decide, LimitSpec, Scope, Verdict};
 use crate::model::terms::TERM_NAMES;
+use crate::model::units::native_units;
 use crate::sink::records::{FitRecord, Record};
 
 /// Label pairs of one series.
@@ -270,7 +271,11 @@ impl Metrics {
         let determined = f.coef.N.determined;
         let value = match ds {
             Some(d) => d.value.map(|v| (v, d.unit.clone())),
-            None => f.coef.N.value.map(|v| (v, format!("{}/sqrt(s)", f.unit))),
+            None => f
+                .coef
+                .N
+                .value
+                .map(|v| (v, native_units(&f.unit)[1].clone())),
         }
         .filter(|_| determined);
         let mut l = lock(&self.latest);

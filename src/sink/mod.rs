@@ -32,3 +32,14 @@ pub mod status_area;
 pub mod table;
 pub mod taken_out;
 pub mod unit_record;
+
+/// A channel's name with its unit for a heading or caption: `g4 [arcsec]`; a name that carries
+/// its own unit in brackets (a logger's `ax [m/s^2]`, whose rates were read as increments in
+/// m/s) gets the increment unit said, not a second bracket: `ax [m/s^2] (u = m/s)`.
+pub fn channel_with_unit(channel: &str, unit: &str) -> String {
+    match crate::input::header_unit::bracketed(channel) {
+        Some((_, inner)) if inner == unit => channel.to_string(),
+        Some(_) => format!("{channel} (u = {unit})"),
+        None => format!("{channel} [{unit}]"),
+    }
+}

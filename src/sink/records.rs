@@ -15,6 +15,7 @@ use crate::model::aggregate::{CoefAggregate, RunCoefs};
 use crate::model::fit::FitResult;
 use crate::model::readout::{Readout, Readouts};
 pub use crate::model::term_values::{CoefValue, Terms};
+use crate::model::terms::basis;
 use crate::model::units::{datasheet_factors, datasheet_units, native_units, IncrementUnit};
 
 /// A non-finite number (an undefined edf or interval) is written as JSON `null`.
@@ -417,6 +418,28 @@ pub struct ReadoutRecord {
     pub slope: f64,
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub datasheet: Option<ReadoutDatasheet>,
+    /// Bias instability only: the fitted flicker term's share of the fitted Allan variance at
+    /// the read-out's tau, `0.4413 B^2 / AVAR_fit(tau)` (docs/theory.md section 2). The read-out
+    /// is `B / sqrt(share)`: near 1 the minimum is a flicker floor and reads B; well below it
+    /// the minimum is where white rate and random walk meet, and the read-out is only an upper
+    /// bound on B (IEEE 952's slope method on a unit without flicker).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub flicker_share: Option<f64>,
+}
+
+/// At or above this [`ReadoutRecord::flicker_share`] the bias-instability read-out is read as the
+/// flicker floor: the flicker holds at least half the variance at the minimum, and the read-out
+/// is at most `1/sqrt(0.5) - 1` = 41% above B. Below it, the read-out is only an upper bound.
+/// (Half, not more: the share comes from the fit, and on a 40-minute run whose true share is
+/// 0.83 the fitted one was 0.59.)
+pub const FLICKER_FLOOR_SHARE: f64 = 0.5;
+
+impl ReadoutRecord {
+    /// Whether this read-out is only an upper bound on B (a bias instability whose minimum the
+    /// fitted flicker does not dominate, [`FLICKER_FLOOR_SHARE`]).
+    pub fn is_upper_bound(&self) -> bool {
+        self.flicker_share.is_some_and(|s| s < FLICKER_FLOOR_SHARE)
+    }
 }
 
 /// A read-out in datasheet units (the entries in the order of [`ReadoutRecord`]'s).
@@ -443,8 +466,9 @@ pub struct ReadoutsRecord {
 }
 
 impl ReadoutsRecord {
-    /// The record of a curve's read-outs for a channel in `unit`.
-    pub fn new(r: &Readouts, unit: &str) -> ReadoutsRecord {
+    /// The record of a curve's read-outs for a channel in `unit`; `model_c`, the fitted
+    /// `(Q^2, N^2, B^2, K^2, R^2)`, gives the bias instability's flicker share.
+    pub fn new(r: &Readouts, unit: &str, model_c: Option<[f64; 5]>) -> ReadoutsRecord {
         let inc = IncrementUnit::parse(unit);
         let native = native_units(unit);
         // ARW is the N coefficient, bias instability B, RRW K (indices 1, 2, 3).
@@ -466,11 +490,22 @@ impl ReadoutsRecord {
                         unit: datasheet_units(u.kind)[i].to_string(),
                     }
                 }),
+                flicker_share: None,
             })
         };
+        let share = |tau: f64| {
+            let c = model_c?;
+            let b = basis(tau);
+            let total: f64 = (0..5).map(|k| c[k].max(0.0) * b[k]).sum();
+            (total > 0.0).then(|| c[2].max(0.0) * b[2] / total)
+        };
+        let mut bias_instability = one(&r.bias_instability, 2);
+        if let Some(bi) = bias_instability.as_mut() {
+            bi.flicker_share = share(bi.tau);
+        }
         ReadoutsRecord {
             arw: one(&r.arw, 1),
-            bias_instability: one(&r.bias_instability, 2),
+            bias_instability,
             rrw: one(&r.rrw, 3),
         }
     }
@@ -717,6 +752,7 @@ mod tests {
                 sigma: 0.2,
                 slope: -0.5,
                 datasheet: None,
+                flicker_share: None,
             }),
             ..Default::default()
         };

@@ -298,9 +298,13 @@ impl Results {
     /// A curve's caption: channel and unit, with the run's label when there are several runs.
     pub fn curve_caption(&self, c: &Labelled<CurveRecord>) -> String {
         if self.several_runs() {
-            format!("{} [{}] \u{2014} {}", c.rec.channel, c.rec.unit, c.label)
+            format!(
+                "{} \u{2014} {}",
+                super::channel_with_unit(&c.rec.channel, &c.rec.unit),
+                c.label
+            )
         } else {
-            format!("{} [{}]", c.rec.channel, c.rec.unit)
+            super::channel_with_unit(&c.rec.channel, &c.rec.unit)
         }
     }
 

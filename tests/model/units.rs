@@ -186,6 +186,11 @@ fn readouts_and_datasheet_of_a_simulated_gyro() {
     }
     // The fitted N agrees with the read-out within their intervals.
     assert!(f(&fit["coef"]["N"]["lo"]) <= f(&arw["hi"]));
+    // No flicker: the minimum is where N and K meet, and the record says the bias-instability
+    // read-out is no flicker floor (the fitted flicker is a small share of the variance there;
+    // a true share of 0, up to the fit's noise).
+    let bi = &ro["bias_instability"];
+    assert!(f(&bi["flicker_share"]) < 0.3, "{bi}");
 }
 
 /// An accelerometer in m/s: white rate N and flicker B, with K so the curve has a minimum. The
@@ -211,6 +216,15 @@ fn bias_instability_readout_of_a_simulated_accelerometer() {
     // The floor is B itself within the N and K contributions at the minimum (< 30% here).
     assert!((f(&bi["value"]) / b - 1.0).abs() < 0.3, "{bi}");
     assert_eq!(bi["unit"], "m/s/s");
+    // The flicker's share of the variance at the read-out's tau, against the closed form with
+    // the true terms (0.83 at 328 s; the fit's share is noisier than the curve, 0.59 on this
+    // seed): a floor, read as B, not as a bound (records::FLICKER_FLOOR_SHARE, 0.5).
+    let share = c * b * b / (n * n / tau + c * b * b + k * k * tau / 3.0);
+    assert!(
+        (f(&bi["flicker_share"]) - share).abs() < 0.3,
+        "{bi} vs {share}"
+    );
+    assert!(f(&bi["flicker_share"]) >= 0.5, "{bi}");
     assert_eq!(bi["datasheet"]["unit"], "micro-g");
     assert!((f(&bi["datasheet"]["value"]) / (f(&bi["value"]) / 9.80665e-6) - 1.0).abs() < HAND_REL);
 }
@@ -246,4 +260,24 @@ fn rate_unit_names_the_increment() {
     assert_eq!(curve["unit"], "deg");
     let fit = final_fit(&recs);
     assert_eq!(fit["datasheet"]["N"]["unit"], "deg/sqrt(h)");
+}
+
+/// An accelerometer counted in mg: its increment is mg*s, so N reads in mg*sqrt(s) (mg/sqrt(Hz))
+/// and the flicker floor in mg, not "mg/sqrt(s)" and "mg/s". The read-out of N lies within 5%
+/// of the simulated value and its datasheet figure is N * 9.80665e-3 * 60 m/s/sqrt(h).
+#[test]
+fn an_accelerometer_in_mg_reads_in_mg_seconds() {
+    let n = 0.08;
+    let model = format!("rate_hz = 100.0\n[[channel]]\nname = \"ax\"\nunit = \"mg\"\nN = {n}\n");
+    let recs = run_analyze("readout-mg", &model, "20min", &["--unit", "mg"]);
+    let fit = final_fit(&recs);
+    let arw = &fit["readouts"]["arw"];
+    assert_eq!(arw["unit"], "mg*sqrt(s)");
+    assert!((f(&arw["value"]) / n - 1.0).abs() < 0.05, "{arw}");
+    let si = f(&arw["value"]) * 9.80665e-3 * 60.0;
+    assert!(
+        (f(&arw["datasheet"]["value"]) / si - 1.0).abs() < HAND_REL,
+        "{arw}"
+    );
+    assert_eq!(arw["datasheet"]["unit"], "m/s/sqrt(h)");
 }

@@ -356,7 +356,11 @@ fn the_ieee_952_readouts_are_shown_with_units_intervals_and_taus() {
         })
         .collect();
     let mut f = fit_of("g4", "arcsec", [0.0, 0.254, 0.225, 0.0, 0.0]);
-    f.readouts = Some(Box::new(ReadoutsRecord::new(&readouts(&points), "arcsec")));
+    f.readouts = Some(Box::new(ReadoutsRecord::new(
+        &readouts(&points),
+        "arcsec",
+        None,
+    )));
     let files = vec![ResultFile {
         name: "vog4.jsonl".into(),
         records: vec![

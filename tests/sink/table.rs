@@ -81,7 +81,11 @@ fn gyro() -> FitRecord {
         }),
         rrw: None,
     };
-    f.readouts = Some(Box::new(ReadoutsRecord::new(&r, "arcsec")));
+    // The fit behind it: N 0.24 arcsec/sqrt(s), B 0.02 arcsec/s. At 100 s the flicker is
+    // 0.4413 * 0.02^2 / (0.24^2 / 100 + 0.4413 * 0.02^2) = 23% of the variance: the minimum is
+    // no flicker floor and the read-out an upper bound on B.
+    let c = [0.0, 0.24f64.powi(2), 0.02f64.powi(2), 0.0, 0.0];
+    f.readouts = Some(Box::new(ReadoutsRecord::new(&r, "arcsec", Some(c))));
     f
 }
 
@@ -181,7 +185,7 @@ fn the_table_shows_datasheet_units_intervals_readouts_limits_and_the_diagnosis()
         b.contains("deg/h ") && b.contains("0.125 [0.0625, 0.500]"),
         "{b}"
     );
-    assert!(b.contains("0.100 [0.0800, 0.130] min at 100 s"), "{b}");
+    assert!(b.contains("0.100 [0.0800, 0.130] min at 100 s; an upper bound on B: the fitted flicker is 23% of the variance there"), "{b}");
     // K not determined: its 95% upper bound, 1.0 arcsec/s/sqrt(s) = 60 deg/h/sqrt(h).
     let k = row(&t, "K  rate random walk");
     assert!(
@@ -604,4 +608,36 @@ fn the_diagnose_table_says_which_effects_carried_to_the_held_out_run() {
         let a = row(&t, "a4 [m/s]  diagnosis:");
         assert!(a.contains(words), "{a}");
     }
+}
+
+/// A channel named with its own unit in brackets (a logger's rates read as increments in m/s)
+/// is headed with the increment unit said once, not a second bracket; an alternative that fits
+/// better than the choice (`delta_chi2` < 0: a Gauss-Markov term just short of its threshold)
+/// says it was short of the bar, one that fits worse does not.
+#[test]
+fn the_diagnose_table_heads_a_unit_in_the_name_and_says_an_alternative_fell_short() {
+    let rec = |ch: &str, delta: f64| {
+        json!({"type": "diagnosis", "channel": ch, "unit": "m/s", "gap_before": 1.2,
+            "gap_after": 1.2, "verdict": "consistent", "regions": [], "effects": [],
+            "final": true, "t_data": 600.0, "tau_span": [0.01, 60.0],
+            "base_coef": [0.0, 0.01, 0.0, 0.0, 0.0], "final_coef": [0.0, 0.01, 0.0, 0.0, 0.0],
+            "alternatives": [{"coef": [0.0, 0.01, 0.0, 0.0, 0.0], "delta_chi2": delta,
+                "effects": [{"kind": "gauss_markov", "params": {"sigma": 1e-4, "tau_c": 20.0}}],
+                "gap": 0.9}]})
+    };
+    let out = Shared::default();
+    let mut w = TableWriter::new(out.clone(), TableStyle::default(), None);
+    writeln!(w, "{}\n{}", rec("ax [m/s^2]", -9.55), rec("ay", 1.0)).unwrap();
+    drop(w);
+    let t = out.text();
+    let ax = row(&t, "ax [m/s^2] (u = m/s)  diagnosis:");
+    assert!(
+        ax.contains("(gap 0.90, short of the bar to be named)"),
+        "{ax}"
+    );
+    let ay = row(&t, "ay [m/s]  diagnosis:");
+    assert!(
+        ay.contains("(gap 0.90)") && !ay.contains("short of"),
+        "{ay}"
+    );
 }

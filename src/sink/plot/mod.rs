@@ -84,7 +84,7 @@ pub fn panels_by_unit<'a>(series: Vec<Series<'a>>) -> Vec<Vec<Series<'a>>> {
 pub fn default_title(series: &[Series], files: &[String]) -> String {
     let mut chans: Vec<String> = Vec::new();
     for s in series {
-        let c = format!("{} [{}]", s.curve.channel, s.curve.unit);
+        let c = crate::sink::channel_with_unit(&s.curve.channel, &s.curve.unit);
         if !chans.contains(&c) {
             chans.push(c);
         }

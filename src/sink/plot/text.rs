@@ -3,6 +3,7 @@
 //! as a person reads them, and XML escaping.
 
 use crate::gap::DiagnosisRecord;
+use crate::model::units::{g_seconds_base, native_units};
 
 pub fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
@@ -47,15 +48,9 @@ pub(super) fn decade_label(k: i32) -> String {
 }
 
 /// The native unit of each coefficient `(Q, N, B, K, R)` for a channel in `u`
-/// (docs/theory.md section 2).
+/// (docs/theory.md section 2; g-counted accelerometers as [`native_units`] writes them).
 pub fn coef_units(u: &str) -> [String; 5] {
-    [
-        u.to_string(),
-        format!("{u}/sqrt(s)"),
-        format!("{u}/s"),
-        format!("{u}/s/sqrt(s)"),
-        format!("{u}/s^2"),
-    ]
+    native_units(u)
 }
 
 /// What a channel unit measures, for a panel's heading.
@@ -97,9 +92,12 @@ pub fn ratio_text(r: f64) -> String {
     }
 }
 
-/// The unit of sigma for a channel in `u`: `u/s` (`(m/s)/s` for a compound unit).
+/// The unit of sigma for a channel in `u`: `u/s` (`(m/s)/s` for a compound unit; `g` for
+/// increments in g*s).
 pub fn sigma_unit(u: &str) -> String {
-    if u.contains('/') {
+    if let Some(g) = g_seconds_base(u) {
+        g.to_string()
+    } else if u.contains('/') {
         format!("({u})/s")
     } else {
         format!("{u}/s")

@@ -237,13 +237,20 @@ pub(super) fn readouts_table(h: &mut String, finals: &[&Labelled<FitRecord>], se
                         };
                         let _ = write!(
                             h,
-                            "<td data-readout=\"{key}\" data-value=\"{v:e}\" data-lo=\"{lo:e}\" data-hi=\"{hi:e}\" data-unit=\"{u}\" data-tau=\"{t:e}\">{} [{}, {}]<br><span class=\"small\">{u}; {point} at &tau; = {} s</span></td>",
+                            "<td data-readout=\"{key}\" data-value=\"{v:e}\" data-lo=\"{lo:e}\" data-hi=\"{hi:e}\" data-unit=\"{u}\" data-tau=\"{t:e}\">{} [{}, {}]<br><span class=\"small\">{u}; {point} at &tau; = {} s{bound}</span></td>",
                             tick(v),
                             tick(lo),
                             tick(hi),
                             tick(r.tau),
                             u = esc(&unit),
-                            t = r.tau
+                            t = r.tau,
+                            bound = match r.flicker_share {
+                                Some(share) if r.is_upper_bound() => format!(
+                                    "<br><b>an upper bound on B</b>: the fitted flicker is {:.0}% of the variance there",
+                                    100.0 * share
+                                ),
+                                _ => String::new(),
+                            }
                         );
                     }
                     None => {

@@ -82,7 +82,14 @@ pub(super) fn readout_cell(r: Option<&ReadoutRecord>, which: usize) -> String {
     } else {
         format!("at {}", tau_text(r.tau))
     };
-    format!("{} {} {at}", sig3(v), interval(Some(lo), Some(hi)))
+    let bound = match r.flicker_share {
+        Some(share) if r.is_upper_bound() => format!(
+            "; an upper bound on B: the fitted flicker is {:.0}% of the variance there",
+            100.0 * share
+        ),
+        _ => String::new(),
+    };
+    format!("{} {} {at}{bound}", sig3(v), interval(Some(lo), Some(hi)))
 }
 
 /// The heading of a run: what was read, how much, whether to its end, and the decoder's health.

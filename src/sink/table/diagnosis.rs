@@ -117,12 +117,12 @@ pub(super) fn diagnosis_only(
         let unit = d.unit.as_deref().unwrap_or("u");
         let _ = writeln!(
             h,
-            "\n{}{}  diagnosis: {}",
-            style.bold(ch),
-            d.unit
-                .as_deref()
-                .map(|u| format!(" [{u}]"))
-                .unwrap_or_default(),
+            "\n{}  diagnosis: {}",
+            style.bold(
+                &d.unit
+                    .as_deref()
+                    .map_or(ch.to_string(), |u| crate::sink::channel_with_unit(ch, u))
+            ),
             diagnosis_line(d, unit, style)
         );
         // The five terms refitted with the effects in, in datasheet units when the unit is known

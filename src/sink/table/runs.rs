@@ -85,7 +85,11 @@ pub(super) fn aggregates(h: &mut String, res: &Results, runs: &Results, style: &
         }));
         rows.push(stat("sd", &|a, f| a.sd.and_then(fin).map(|m| sig3(m * f))));
         rows.push(stat("runs determined", &|a, _| Some(a.n.to_string())));
-        let _ = writeln!(h, "\n{} [{unit}]", style.bold(&ch));
+        let _ = writeln!(
+            h,
+            "\n{}",
+            style.bold(&crate::sink::channel_with_unit(&ch, &unit))
+        );
         h.push_str(&aligned_right(&rows, "  "));
     }
     let run_limits: Vec<&LimitResult> = res
