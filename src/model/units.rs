@@ -45,8 +45,7 @@ impl IncrementUnit {
     /// `m/s`, `mm/s`, `ft/s`, `g`, `mg`, `ug` (velocity; `g` as an increment is g*s, also
     /// written `g*s`, `g.s` or `g s`, likewise `mg*s`, `ug*s`; `µg` is `ug`). `None` for anything else (e.g. the default `u`).
     pub fn parse(unit: &str) -> Option<IncrementUnit> {
-        let t = unit.trim().replace('µ', "u").replace(['·', '.', ' '], "*");
-        let (kind, si) = match t.as_str() {
+        let (kind, si) = match normalized(unit).as_str() {
             "rad" => (SensorKind::Gyro, 1.0),
             "mrad" => (SensorKind::Gyro, 1e-3),
             "urad" => (SensorKind::Gyro, 1e-6),
@@ -142,11 +141,16 @@ pub fn native_units(u: &str) -> [String; 5] {
     ]
 }
 
+/// An increment unit as [`IncrementUnit::parse`] matches it: trimmed, `µ` as `u`, and `·`, `.`
+/// or a space between factors as `*`.
+fn normalized(unit: &str) -> String {
+    unit.trim().replace('µ', "u").replace(['·', '.', ' '], "*")
+}
+
 /// The g unit (`g`, `mg`, `ug`) of an increment unit that is that unit times a second, as
 /// [`IncrementUnit::parse`] reads `g`, `g*s`, `mg`, ...; `None` for any other unit.
 pub fn g_seconds_base(u: &str) -> Option<&'static str> {
-    let t = u.trim().replace('µ', "u").replace(['·', '.', ' '], "*");
-    match t.as_str() {
+    match normalized(u).as_str() {
         "g" | "g*s" => Some("g"),
         "mg" | "mg*s" => Some("mg"),
         "ug" | "ug*s" => Some("ug"),

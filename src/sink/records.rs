@@ -440,6 +440,16 @@ impl ReadoutRecord {
     pub fn is_upper_bound(&self) -> bool {
         self.flicker_share.is_some_and(|s| s < FLICKER_FLOOR_SHARE)
     }
+
+    /// Why the read-out is only an upper bound on B, for the tables and the report: `the
+    /// fitted flicker is 23% of the variance there`; `None` when it is not one.
+    pub fn upper_bound_reason(&self) -> Option<String> {
+        let share = self.flicker_share.filter(|_| self.is_upper_bound())?;
+        Some(format!(
+            "the fitted flicker is {:.0}% of the variance there",
+            100.0 * share
+        ))
+    }
 }
 
 /// A read-out in datasheet units (the entries in the order of [`ReadoutRecord`]'s).

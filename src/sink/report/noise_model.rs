@@ -244,13 +244,10 @@ pub(super) fn readouts_table(h: &mut String, finals: &[&Labelled<FitRecord>], se
                             tick(r.tau),
                             u = esc(&unit),
                             t = r.tau,
-                            bound = match r.flicker_share {
-                                Some(share) if r.is_upper_bound() => format!(
-                                    "<br><b>an upper bound on B</b>: the fitted flicker is {:.0}% of the variance there",
-                                    100.0 * share
-                                ),
-                                _ => String::new(),
-                            }
+                            bound = r
+                                .upper_bound_reason()
+                                .map(|why| format!("<br><b>an upper bound on B</b>: {why}"))
+                                .unwrap_or_default()
                         );
                     }
                     None => {

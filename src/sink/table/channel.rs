@@ -82,13 +82,10 @@ pub(super) fn readout_cell(r: Option<&ReadoutRecord>, which: usize) -> String {
     } else {
         format!("at {}", tau_text(r.tau))
     };
-    let bound = match r.flicker_share {
-        Some(share) if r.is_upper_bound() => format!(
-            "; an upper bound on B: the fitted flicker is {:.0}% of the variance there",
-            100.0 * share
-        ),
-        _ => String::new(),
-    };
+    let bound = r
+        .upper_bound_reason()
+        .map(|why| format!("; an upper bound on B: {why}"))
+        .unwrap_or_default();
     format!("{} {} {at}{bound}", sig3(v), interval(Some(lo), Some(hi)))
 }
 
