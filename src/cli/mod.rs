@@ -191,6 +191,8 @@ pub struct DataArgs {
     /// Text columns: the header name of the time column (by default a column named time, t,
     /// timestamp or time_s, in any case): not a channel; a jump of more than 1.5 tau0 in it is
     /// a gap of the missing samples (seconds, or ms, us, ns when its first step says so).
+    /// `none`: such a column is skipped and not read, the rows taken as consecutive samples at
+    /// --tau0 (a clock in a unit this cannot tell).
     #[arg(long, value_name = "NAME")]
     pub time_column: Option<String>,
     /// Text columns: only these, in this order, renamed with `=`: `gx=g1,gy` reads column
@@ -345,17 +347,29 @@ fn text_tau0(d: &mut DataArgs, inputs: &[&str]) -> Result<()> {
     if d.format != "csv" {
         return Ok(());
     }
-    if d.tau0.is_some() {
-        // Given the step, the look at the start only finds a merged multi-rate file's rows.
+    let no_clock = d.time_column.as_deref() == Some(allanscope::input::text::NO_TIME_COLUMN);
+    if let Some(tau0) = d.tau0 {
+        // Given the step, the look at the start finds a merged multi-rate file's rows, and a
+        // time column that contradicts the step.
         for &input in inputs {
             if input == "-" || read_once(input) {
                 continue;
             }
             if let Ok(Ok(step)) = look_at_start(input, d) {
+                if !no_clock {
+                    clock_agrees(input, &step, tau0)?;
+                }
                 say_rows(input, &step, d);
             }
         }
         return Ok(());
+    }
+    if no_clock {
+        return Err(usage(
+            "--time-column none: the rows are read as consecutive samples, so their step must \
+             be given with --tau0"
+                .to_string(),
+        ));
     }
     let mut found: Option<(&str, allanscope::input::sampling_step::InferredStep)> = None;
     for &input in inputs {
@@ -379,6 +393,40 @@ fn text_tau0(d: &mut DataArgs, inputs: &[&str]) -> Result<()> {
     }
     d.tau0 = found.map(|(_, s)| s.tau0_s);
     Ok(())
+}
+
+/// A usage error when `--tau0` and the time column's step (the median of its first steps,
+/// read in seconds, or in ms, us, ns or days as the reader would read it: `time_column.rs`,
+/// `step_scale`) disagree by more than a quarter: a wrong tau0 scales every coefficient (N by
+/// the square root of the ratio), and the reader would not find the gaps either. Before
+/// (session 42) the run went on at `--tau0` with a warning, its N 41% off for a step twice the
+/// time column's. A file whose channels hold a value on every k-th row is left to
+/// [`say_rows`].
+fn clock_agrees(
+    input: &str,
+    step: &allanscope::input::sampling_step::InferredStep,
+    tau0: f64,
+) -> Result<()> {
+    if step.steps == 0 || step.every > 1 || !(step.tau0_s > 0.0 && step.unit_s > 0.0) {
+        return Ok(());
+    }
+    let raw = step.tau0_s / step.unit_s;
+    if allanscope::input::time_column::step_scale(&step.column, raw, tau0).is_some()
+        || allanscope::input::time_column::step_scale(&step.column, step.tau0_s, tau0).is_some()
+    {
+        return Ok(());
+    }
+    let show = allanscope::ranges::show;
+    Err(usage(format!(
+        "{input}: --tau0 is {} s, but {step}: {} times that, nor does the column's step read in \
+         ms, us or ns give {} s. A wrong tau0 scales the coefficients (N by {:.3}); leave out \
+         --tau0 to take the time column's step, or, if the column is a clock in another unit, \
+         give --time-column none to read the rows as consecutive samples at --tau0",
+        show(tau0),
+        show((step.tau0_s / tau0 * 1e4).round() / 1e4),
+        show(tau0),
+        (step.tau0_s / tau0).sqrt()
+    )))
 }
 
 /// The sampling step and rows found at the start of `input` by

@@ -187,6 +187,8 @@ pub struct Diagnosis {
     pub n_taus: usize,
     pub t_data_s: f64,
     pub segment_tests: Vec<SegmentTest>,
+    /// The bias jumps named (empty when none was kept), their times in s from the record's
+    /// first sample (not from the block tests' first block, as [`JumpFinding`] has them).
     pub jumps: Option<JumpFinding>,
     /// A word on what is left when the verdict is `unexplained`.
     pub residual_shape: Option<String>,
@@ -994,7 +996,12 @@ fn diagnose_curve_pass(
         n_taus: j,
         t_data_s: snap.n_increments as f64 * snap.tau0_s,
         segment_tests: segment_tests(snap, &prob.c_init),
-        jumps,
+        // The block tests' time 0 is their first kept block; the record's is its first sample.
+        jumps: jumps.map(|mut f| {
+            let lead_s = (snap.block_first as u64 * snap.block_len) as f64 * snap.tau0_s;
+            f.times_s.iter_mut().for_each(|t| *t += lead_s);
+            f
+        }),
         residual_shape,
         model_tau_s: prob.tau[..j].to_vec(),
         model_base_avar: base.model.clone(),

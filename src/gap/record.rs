@@ -209,6 +209,12 @@ pub struct DiagnosisRecord {
     pub model_base: Vec<f64>,
     #[serde(default)]
     pub model_effects: Vec<f64>,
+    /// The bias jumps named (docs/gap.md, "Jumps kept in time (session 18)"): each step's time
+    /// (s from the record's first sample, at a block boundary: the step lies within `block_s`
+    /// of it), size (u/s, the rate after less the rate before) and z score when the search
+    /// added it; absent when no jump was named.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub jumps: Option<JumpsRecord>,
     /// Outliers found and replaced before the curve was computed (docs/gap.md, "Outliers").
     #[serde(default)]
     pub outliers: OutliersRecord,
@@ -298,6 +304,40 @@ pub struct QuantizationRecord {
     pub lsb: f64,
     pub ratio: f64,
     pub tau_white: f64,
+}
+
+/// The extra field `jumps`: the search's block length (s), which is the resolution of each
+/// step's time, and the steps in time order.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct JumpsRecord {
+    pub block_s: f64,
+    pub steps: Vec<JumpStepRecord>,
+}
+
+/// One bias jump: its time (s from the record's first sample), size (u/s) and z score.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct JumpStepRecord {
+    pub time_s: f64,
+    pub size: f64,
+    pub z: f64,
+}
+
+impl JumpsRecord {
+    /// The steps of `f` in time order, or `None` when it holds none.
+    fn new(f: &super::steps::JumpFinding) -> Option<Self> {
+        let mut steps: Vec<JumpStepRecord> = (0..f.sizes.len())
+            .map(|i| JumpStepRecord {
+                time_s: f.times_s[i],
+                size: f.sizes[i],
+                z: f.z_scores.get(i).copied().unwrap_or(f64::NAN),
+            })
+            .collect();
+        steps.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
+        (!steps.is_empty()).then_some(Self {
+            block_s: f.block_s,
+            steps,
+        })
+    }
 }
 
 /// The `outliers` object: how many, how often (per second of data), their rms and largest size
@@ -406,6 +446,7 @@ impl DiagnosisRecord {
                 .iter()
                 .map(|v| v.max(0.0).sqrt())
                 .collect(),
+            jumps: d.jumps.as_ref().and_then(JumpsRecord::new),
             outliers: OutliersRecord {
                 count: d.outliers.count,
                 rate: if d.t_data_s > 0.0 {

@@ -363,10 +363,16 @@ impl FromStr for ColumnPick {
     }
 }
 
+/// `--time-column none`: a column named as a time's is still no channel, but the rows are
+/// taken as consecutive samples at `--tau0` and its stamps are not read (a clock in a unit this
+/// reader cannot tell, whose step is not `--tau0` in s, ms, us or ns).
+pub const NO_TIME_COLUMN: &str = "none";
+
 /// How the columns of a text input become channels.
 #[derive(Debug, Clone, Default)]
 pub struct TextOptions {
-    /// The header name of the time column (skipped); `None` looks for [`TIME_COLUMN_NAMES`].
+    /// The header name of the time column (skipped); `None` looks for [`TIME_COLUMN_NAMES`];
+    /// [`NO_TIME_COLUMN`] looks for them too but does not read their stamps.
     pub time_column: Option<String>,
     /// Only these columns, in this order, renamed; `None` keeps every column but the time one.
     pub columns: Option<Vec<ColumnPick>>,
@@ -492,7 +498,7 @@ impl Layout {
             .flatten();
         let clock =
             |n: &str| time_name(n).filter(|_| format.and_then(|f| f.temperature(n)).is_none());
-        let time = match &opts.time_column {
+        let time = match opts.time_column.as_deref().filter(|t| *t != NO_TIME_COLUMN) {
             Some(t) => Some(find(t).ok_or_else(|| {
                 err(format!(
                     "--time-column `{t}`: no such column (the header has {})",
@@ -2315,7 +2321,9 @@ impl<R: BufRead> TextReader<R> {
                 continue;
             }
             let layout = found;
-            let mut time = match (layout.time, opts.tau0_s) {
+            // `--time-column none`: a time column is skipped, never read as a clock.
+            let read_clock = opts.time_column.as_deref() != Some(NO_TIME_COLUMN);
+            let mut time = match (layout.time.filter(|_| read_clock), opts.tau0_s) {
                 (Some(i), Some(_)) if layout.counter_clock => {
                     Some(TimeColumn::counter(&layout.source_names[i]))
                 }

@@ -39,6 +39,26 @@ pub fn unit_name(scale: f64) -> &'static str {
         .map_or("s", |(_, name)| name)
 }
 
+/// The unit ([`SCALES`]) in which a time column named `name` stepping by `dt` steps by
+/// `tau0_s` seconds, if any. 100 us only for a column whose name says so (Xsens's
+/// `SampleTimeFine`): it would otherwise hide a --tau0 ten times off. Days only within 5%:
+/// serial dates printed to too few decimals step by quanta 14% off the step (1e-7 days for
+/// 10 ms) and would invent gaps.
+pub fn step_scale(name: &str, dt: f64, tau0_s: f64) -> Option<&'static (f64, &'static str)> {
+    let fine = crate::input::text::time_column_unit(name) == Some(Some(1e-4));
+    SCALES
+        .iter()
+        .filter(|(s, _)| *s != 1e-4 || fine)
+        .find(|(s, _)| {
+            let tolerance = if *s == SECONDS_PER_DAY {
+                0.05
+            } else {
+                STEP_TOLERANCE
+            };
+            (dt * s / tau0_s - 1.0).abs() <= tolerance
+        })
+}
+
 /// How far a step may be from a whole number of `tau0` before it is counted irregular.
 const STEP_TOLERANCE: f64 = 0.25;
 
@@ -252,23 +272,7 @@ impl TimeColumn {
                 }
             }
             None => {
-                // 100 us only for a column whose name says so (Xsens's `SampleTimeFine`): it
-                // would otherwise hide a --tau0 ten times off.
-                let fine = crate::input::text::time_column_unit(&self.name) == Some(Some(1e-4));
-                // Days only within 5%: serial dates printed to too few decimals step by
-                // quanta 14% off the step (1e-7 days for 10 ms) and would invent gaps.
-                let found = SCALES
-                    .iter()
-                    .filter(|(s, _)| *s != 1e-4 || fine)
-                    .find(|(s, _)| {
-                        let tolerance = if *s == SECONDS_PER_DAY {
-                            0.05
-                        } else {
-                            STEP_TOLERANCE
-                        };
-                        (dt * s / self.tau0_s - 1.0).abs() <= tolerance
-                    });
-                match found {
+                match step_scale(&self.name, dt, self.tau0_s) {
                     Some((s, unit)) => {
                         if *s != 1.0 {
                             // As read: stamps of a clock since 1970 in ns are resolved to

@@ -19,6 +19,7 @@ pub mod dynamic;
 pub mod effect_text;
 pub mod export;
 pub mod json;
+pub mod jump_words;
 pub mod metrics;
 pub mod output;
 pub mod page_file;

@@ -849,3 +849,66 @@ fn a_slower_stream_merged_into_the_rows_is_read_at_its_own_rate() {
         assert!((x - y).abs() <= 1e-12 * y, "{x} vs {y}");
     }
 }
+
+#[test]
+fn a_tau0_the_time_column_contradicts_is_refused_and_none_reads_the_rows_at_it() {
+    // The time column steps by 0.01 s; --tau0 0.02 says otherwise. Before (session 42) the run
+    // went on at 0.02 s with a warning and every coefficient scaled (N by sqrt 2).
+    let p = write(
+        "time_against_tau0.csv",
+        format!("time,gx,gy\n{}", rows(",", true)).as_bytes(),
+    );
+    let out = exe()
+        .args(["analyze", p.to_str().unwrap(), "--tau0", "0.02"])
+        .args(["--fit", "none", "--stats", "avar"])
+        .output()
+        .unwrap();
+    usage_error(
+        &out,
+        &[
+            "--tau0 is 0.02 s",
+            "tau0 0.01 s from the time column `time`",
+            "0.5 times that",
+            "--time-column none",
+        ],
+    );
+    assert!(out.stdout.is_empty(), "no records before the refusal");
+    assert_eq!(
+        String::from_utf8_lossy(&out.stderr)
+            .matches("--tau0 is")
+            .count(),
+        1,
+        "said once"
+    );
+    // `--time-column none`: the time column is still no channel, the rows are samples at
+    // 0.02 s. Increments read at twice the step give the same curve at twice the taus, its
+    // deviations halved (sigma = rms second difference of the phase / (sqrt 2 tau)).
+    let (pc, _) = plain();
+    let out = exe()
+        .args(["analyze", p.to_str().unwrap(), "--tau0", "0.02"])
+        .args(["--time-column", "none", "--fit", "none", "--stats", "avar"])
+        .output()
+        .unwrap();
+    let (c, s) = parsed(&out);
+    assert_eq!(s.channels, ["gx", "gy"]);
+    assert_eq!(s.tau0, 0.02);
+    assert_eq!(c.len(), pc.len());
+    for (a, b) in c.iter().zip(&pc) {
+        for (x, y) in a.sigma.iter().zip(&b.sigma) {
+            assert!((x / y - 0.5).abs() < 1e-12, "{x} vs {y}");
+        }
+    }
+    // A clock in ms without a unit in its name (0, 10, 20, ...) agrees with --tau0 0.01.
+    let mut text = String::from("time,gx,gy\n");
+    for (i, line) in rows(",", false).lines().enumerate() {
+        text += &format!("{},{line}\n", i * 10);
+    }
+    let (c, _) = parsed(&analyze(&write("time_in_ms.csv", text.as_bytes()), &[]));
+    assert_eq!(c[0].sigma, pc[0].sigma);
+    // Without --tau0, `none` has no step to read the rows at.
+    let out = exe()
+        .args(["analyze", p.to_str().unwrap(), "--time-column", "none"])
+        .output()
+        .unwrap();
+    usage_error(&out, &["--time-column none", "--tau0"]);
+}

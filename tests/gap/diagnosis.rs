@@ -308,6 +308,61 @@ fn a_jump_the_curve_does_not_show_is_kept_on_its_time_domain_evidence() {
 }
 
 #[test]
+fn the_record_gives_each_jump_its_time_from_the_first_sample_and_its_size() {
+    // The run of the test above behind a leading gap of 2.6 blocks (a logger that started
+    // late): the block tests leave out the three short blocks at the start and count time from
+    // the first block they keep; the record's `jumps` counts it from the record's first sample,
+    // as the run's other times are. Before, the diagnosis knew the step's time and the record
+    // did not carry it (count and rms size only).
+    let (t_step, size) = (1800.3, 1.6);
+    let inc = clean_with_step(12, t_step, size);
+    let streamed = |lead: u64| {
+        let mut ev = GapEvidence::new(GapConfig::new(TAU0));
+        ev.push_gap(lead);
+        for &x in &inc {
+            ev.push_increment(x);
+        }
+        ev.snapshot()
+    };
+    let block_len = streamed(0).block_len;
+    let lead = block_len * 26 / 10;
+    let snap = streamed(lead);
+    assert_eq!(
+        (snap.block_len, snap.block_first),
+        (block_len, 3),
+        "the short blocks left out"
+    );
+    let d = diagnose(&snap, &DiagnoseOptions::default()).expect("diagnosis");
+    assert_bookkeeping(&d);
+    let rec = DiagnosisRecord::new("g", &d, None, true);
+    let j = rec.jumps.as_ref().expect("the record's jumps");
+    assert_eq!(j.steps.len(), 1, "{j:?}");
+    let want_s = lead as f64 * TAU0 + t_step;
+    assert!(
+        (j.steps[0].time_s - want_s).abs() <= j.block_s,
+        "time {} s vs {want_s} s (block {} s)",
+        j.steps[0].time_s,
+        j.block_s
+    );
+    assert!(rel(j.steps[0].size, size) < TOL_AMP, "size {:?}", j.steps);
+    // The jump rule's one-step level is 4.5 (docs/gap.md); this step stands far above it.
+    assert!(j.steps[0].z > 4.5, "z {}", j.steps[0].z);
+    // The terminal and the report say it in words, with the channel's datasheet unit.
+    let words = allanscope::sink::jump_words::jump_words(&rec, "arcsec", &|v| format!("{v:.0}"))
+        .expect("words");
+    assert!(
+        words.starts_with(&format!(
+            "jump (times to within {:.0} s): at {:.0} s, +",
+            j.block_s, j.steps[0].time_s
+        )) && words.contains("deg/h"),
+        "{words}"
+    );
+    // Without a jump named, no `jumps` at all.
+    let clean = DiagnosisRecord::new("g", &diagnosed(&simulate("", 12)), None, true);
+    assert!(clean.jumps.is_none(), "{:?}", clean.jumps);
+}
+
+#[test]
 fn held_out_gap_shrinks_as_on_the_fitting_run() {
     let extra = "gauss_markov = { sigma = 0.5, tau_c = 2.0 }";
     let d = run(extra, 8);

@@ -190,6 +190,7 @@ fn several_runs_give_table_2_with_the_aggregate_records_values() {
         .find("<table class=\"table2\" data-channel=\"g4\"")
         .expect("table 2 for g4");
     let table = &html[t0..t0 + html[t0..].find("</table>").unwrap()];
+    assert!(table.contains("<caption>g4 [arcsec]</caption>"), "caption");
     // Columns in the paper's order, R K B N Q.
     let heads: Vec<&str> = table
         .match_indices("data-coef=\"")

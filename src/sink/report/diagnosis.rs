@@ -121,6 +121,9 @@ pub(super) fn diagnosis(h: &mut String, res: &Results) {
                 )
             })
             .unwrap_or_default();
+        if let Some(w) = crate::sink::jump_words::jump_words(d, &unit, &tick) {
+            let _ = write!(shape, "<br><span class=\"small\">bias {}</span>", esc(&w));
+        }
         if let Some(w) = crate::sink::taken_out::taken_out_words(d, &unit, &tick) {
             let _ = write!(
                 shape,

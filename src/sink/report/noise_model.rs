@@ -85,10 +85,9 @@ pub(super) fn noise_model(h: &mut String, res: &Results) {
             .collect();
         let _ = write!(
             h,
-            "<table class=\"table2\" data-channel=\"{}\"><caption>{} [{}]</caption><tr><th class=\"l\">run</th>",
+            "<table class=\"table2\" data-channel=\"{}\"><caption>{}</caption><tr><th class=\"l\">run</th>",
             esc(&ch),
-            esc(&ch),
-            esc(&unit)
+            esc(&crate::sink::channel_with_unit(&ch, &unit))
         );
         for (c, &i) in PAPER_ORDER.iter().enumerate() {
             let e = scales[c];

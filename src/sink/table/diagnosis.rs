@@ -56,6 +56,9 @@ pub fn diagnosis_line(d: &DiagnosisRecord, unit: &str, style: &TableStyle) -> St
             s
         }
     };
+    if let Some(w) = crate::sink::jump_words::jump_words(d, unit, &sig3) {
+        let _ = write!(line, "; {w}");
+    }
     if let Some(w) = crate::sink::taken_out::taken_out_words(d, unit, &sig3) {
         let _ = write!(line, "; set aside: {w}");
     }
