@@ -589,6 +589,7 @@ fn draw_unit(
                 EffectParams::SecondOrderFilter {
                     natural_frequency_hz: log_uniform(rng, odr / 20.0, odr / 4.0),
                     damping: log_uniform(rng, 0.5, 1.0),
+                    bilinear: false,
                 }
             } else {
                 EffectParams::MovingAverage {
@@ -656,6 +657,7 @@ fn draw_unit(
             let filter = EffectParams::SecondOrderFilter {
                 natural_frequency_hz: log_uniform(rng, odr / 10.0, odr / 4.0),
                 damping: log_uniform(rng, 0.5, 1.0),
+                bilinear: false,
             };
             u.intrinsic = Some(filter);
             let rho0 = rho0_of(filter, u.tau0);

@@ -182,6 +182,7 @@
 //!   alternative_words.rs   the other explanations about as good as the choice, in words
 //!   band_words.rs          how far a measured curve leaves the ensemble bands, in words
 //!   taken_out.rs           what a diagnosis set aside (outliers, stuck stretches), in words
+//!   jump_words.rs          the bias jumps a diagnosis named, when and how large, in words
 //!   results.rs             the records `plot` and `report` read, labelled
 //!   plot/                  Allan-deviation figures (SVG)
 //!     panel.rs             one panel per unit: curves, heading, legend

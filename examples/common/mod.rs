@@ -165,6 +165,7 @@ pub fn effect_toml(effect: Option<EffectParams>) -> String {
         Some(EffectParams::SecondOrderFilter {
             natural_frequency_hz,
             damping,
+            ..
         }) => format!(
             "second_order_filter = {{ natural_frequency = {natural_frequency_hz:e}, damping = {damping:e} }}\n"
         ),
@@ -358,6 +359,7 @@ pub fn draw_effect_params(
             natural_frequency_hz: 1.0
                 / (2.0 * std::f64::consts::PI * log_uniform(rng, tau0, 10.0 * tau0)),
             damping: log_uniform(rng, 0.2, 2.0),
+            bilinear: false,
         },
         EffectKind::ZeroPhaseFilter => EffectParams::ZeroPhaseFilter {
             time_constant_s: log_uniform(rng, tau0, FILTER_TAU_PRIOR * tau0),

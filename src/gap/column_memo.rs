@@ -36,7 +36,12 @@ impl FilterKey {
             LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
-            } => FilterKey(2, natural_frequency_hz.to_bits(), damping.to_bits()),
+                bilinear,
+            } => FilterKey(
+                if bilinear { 4 } else { 2 },
+                natural_frequency_hz.to_bits(),
+                damping.to_bits(),
+            ),
             LowPass::ZeroPhase { time_constant_s } => FilterKey(3, time_constant_s.to_bits(), 0),
         }
     }

@@ -1724,6 +1724,7 @@ mod tests {
         let second = EffectParams::SecondOrderFilter {
             natural_frequency_hz: 2.0,
             damping: 1.0,
+            bilinear: false,
         };
         let sin = EffectParams::Sinusoid {
             amplitude: 6e-4,

@@ -147,7 +147,11 @@ pub enum EffectParams {
         stages: u32,
         taps: u32,
     },
+    /// `bilinear` (written only when true: the records of the pole-mapped form are as before)
+    /// is the form [`LowPass::SecondOrder`] describes.
     SecondOrderFilter {
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        bilinear: bool,
         #[serde(deserialize_with = "nullable_f64")]
         damping: f64,
         #[serde(rename = "natural_frequency", deserialize_with = "nullable_f64")]
@@ -202,9 +206,11 @@ impl EffectParams {
             EffectParams::SecondOrderFilter {
                 natural_frequency_hz,
                 damping,
+                bilinear,
             } => Some(LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
+                bilinear,
             }),
             EffectParams::ZeroPhaseFilter { time_constant_s } => {
                 Some(LowPass::ZeroPhase { time_constant_s })
@@ -223,9 +229,11 @@ impl EffectParams {
             LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
+                bilinear,
             } => EffectParams::SecondOrderFilter {
                 natural_frequency_hz,
                 damping,
+                bilinear,
             },
             LowPass::ZeroPhase { time_constant_s } => {
                 EffectParams::ZeroPhaseFilter { time_constant_s }
@@ -320,10 +328,17 @@ impl EffectParams {
             EffectParams::SecondOrderFilter {
                 damping,
                 natural_frequency_hz,
-            } => vec![
-                ("damping", damping),
-                ("natural_frequency", natural_frequency_hz),
-            ],
+                bilinear,
+            } => {
+                let mut v = vec![
+                    ("damping", damping),
+                    ("natural_frequency", natural_frequency_hz),
+                ];
+                if bilinear {
+                    v.insert(0, ("bilinear", 1.0));
+                }
+                v
+            }
             EffectParams::BandNoise {
                 frequency_hz,
                 sigma,
@@ -429,6 +444,7 @@ pub fn canonical_lowpass(kind: EffectKind, shape: f64) -> LowPass {
         EffectKind::SecondOrderFilter => LowPass::SecondOrder {
             natural_frequency_hz: shape,
             damping: 1.0,
+            bilinear: false,
         },
         EffectKind::ZeroPhaseFilter => LowPass::ZeroPhase {
             time_constant_s: shape,

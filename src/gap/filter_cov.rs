@@ -208,6 +208,7 @@ mod tests {
             LowPass::SecondOrder {
                 natural_frequency_hz: 6.0,
                 damping: 0.4,
+                bilinear: false,
             },
         ] {
             let rho = lp.autocorrelation(tau0);

@@ -59,6 +59,7 @@ fn shapes(p: &EffectParams) -> Vec<(&'static str, f64)> {
         EffectParams::SecondOrderFilter {
             natural_frequency_hz,
             damping,
+            ..
         } => vec![
             ("natural_frequency", natural_frequency_hz),
             ("damping", damping),
@@ -85,6 +86,7 @@ fn scaled(p: &EffectParams, i: usize, f: f64) -> EffectParams {
         EffectParams::SecondOrderFilter {
             natural_frequency_hz: a,
             damping: b,
+            ..
         }
         | EffectParams::BandNoise {
             frequency_hz: a,

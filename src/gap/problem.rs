@@ -523,6 +523,7 @@ impl GapProblem {
     /// average, the period of a second order), the sawtooth fitted at each
     /// ([`GapProblem::set_sawtooth`]).
     fn filter_behind_counter(&mut self, snap: &EvidenceSnapshot, lp: LowPass) -> LowPass {
+        let tau0_s = self.tau0_s;
         let scaled = |g: f64| match lp {
             LowPass::FirstOrder { time_constant_s } => LowPass::FirstOrder {
                 time_constant_s: time_constant_s * g,
@@ -537,9 +538,16 @@ impl GapProblem {
             LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
+                bilinear,
             } => LowPass::SecondOrder {
-                natural_frequency_hz: natural_frequency_hz / g,
+                // (the bilinear form is defined below Nyquist only)
+                natural_frequency_hz: if bilinear {
+                    (natural_frequency_hz / g).min(0.45 / tau0_s)
+                } else {
+                    natural_frequency_hz / g
+                },
                 damping,
+                bilinear,
             },
         };
         let (lo, hi) = BEHIND_MEMORY_SPAN;

@@ -529,6 +529,7 @@ mod tests {
             EffectParams::SecondOrderFilter {
                 natural_frequency_hz: 20.0,
                 damping: 0.7,
+                bilinear: false,
             },
             EffectParams::ZeroPhaseFilter {
                 time_constant_s: 0.02,

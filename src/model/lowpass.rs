@@ -20,10 +20,18 @@ pub enum LowPass {
     /// the Bartlett window).
     MovingAverage { taps: u32, stages: u32 },
     /// `y_k = a1 y_{k-1} + a2 y_{k-2} + (1 - a1 - a2) d_k` with the poles of the continuous
-    /// `w^2 / (s^2 + 2 zeta w s + w^2)`, `w = 2 pi f_n`, mapped by `z = e^{s tau0}`.
+    /// `w^2 / (s^2 + 2 zeta w s + w^2)`, `w = 2 pi f_n`, mapped by `z = e^{s tau0}`. With
+    /// `bilinear`, the digital biquad most units and tools build instead (scipy's `butter`,
+    /// PX4's `LowPassFilter2p`, the audio cookbook's low-pass; Butterworth at `zeta = 1/sqrt 2`):
+    /// the same prototype by the bilinear transform with `f_n` prewarped,
+    /// `K = tan(pi f_n tau0)`, `D = 1 + 2 zeta K + K^2`,
+    /// `H(z) = K^2 (1 + z^-1)^2 / (D + (2 K^2 - 2) z^-1 + (1 - 2 zeta K + K^2) z^-2)`: two zeros
+    /// at Nyquist, which the pole-mapped form lacks (docs/gap.md, "The bilinear second order
+    /// (session 42)").
     SecondOrder {
         natural_frequency_hz: f64,
         damping: f64,
+        bilinear: bool,
     },
     /// The first-order filter run forward then backward over the record: the symmetric impulse
     /// response `(1 - a)/(1 + a) a^|k|`, `|H|^2` the first order's squared, no phase.
@@ -39,6 +47,11 @@ pub const MAX_TAPS: u32 = 100_000;
 pub const MAX_STAGES: u32 = 4;
 
 impl LowPass {
+    /// Whether this is the bilinear second order ([`LowPass::SecondOrder`]).
+    pub fn is_bilinear(&self) -> bool {
+        matches!(self, LowPass::SecondOrder { bilinear: true, .. })
+    }
+
     /// Shape parameters the diagnosis fits (the moving average's stage count is a discrete
     /// choice and not counted).
     pub fn n_shape(&self) -> usize {
@@ -67,12 +80,18 @@ impl LowPass {
             LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
+                bilinear,
             } => {
                 if !(natural_frequency_hz > 0.0 && natural_frequency_hz.is_finite()) {
                     Some(format!(
                         "natural frequency {natural_frequency_hz} must be > 0"
                     ))
-                } else if 2.0 * PI * natural_frequency_hz * tau0_s > 2.5 {
+                } else if bilinear && natural_frequency_hz * tau0_s >= 0.49 {
+                    Some(format!(
+                        "natural frequency {natural_frequency_hz} Hz must be below Nyquist \
+                         (f tau0 must be < 0.49)"
+                    ))
+                } else if !bilinear && 2.0 * PI * natural_frequency_hz * tau0_s > 2.5 {
                     Some(format!(
                         "natural frequency {natural_frequency_hz} Hz is too close to Nyquist \
                          (2 pi f tau0 must be <= 2.5)"
@@ -88,11 +107,24 @@ impl LowPass {
 
     /// The AR(2) coefficients `(a1, a2)` of the recursive filters (the zero-phase filter's
     /// autocorrelation is that of two first-order stages in cascade: its `|H|^2` is theirs).
-    fn ar2(&self, tau0_s: f64) -> Option<(f64, f64)> {
+    pub fn ar2(&self, tau0_s: f64) -> Option<(f64, f64)> {
         match *self {
             LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
+                bilinear: true,
+            } => {
+                let k = (PI * natural_frequency_hz * tau0_s).tan();
+                let d = 1.0 + 2.0 * damping * k + k * k;
+                Some((
+                    2.0 * (1.0 - k * k) / d,
+                    -(1.0 - 2.0 * damping * k + k * k) / d,
+                ))
+            }
+            LowPass::SecondOrder {
+                natural_frequency_hz,
+                damping,
+                bilinear: false,
             } => {
                 let w = 2.0 * PI * natural_frequency_hz;
                 if damping < 1.0 {
@@ -170,9 +202,9 @@ impl LowPass {
                     (a1.abs() + disc.sqrt()) / 2.0
                 };
                 let n = lags_for(slow);
-                let mut out = Vec::with_capacity(n);
+                let mut out = Vec::with_capacity(n + 2);
                 let (mut r_prev, mut r) = (f64::NAN, 1.0);
-                for k in 0..n {
+                for k in 0..n + 2 {
                     out.push(g0 * r);
                     let next = if k == 0 {
                         a1 / (1.0 - a2)
@@ -182,7 +214,19 @@ impl LowPass {
                     r_prev = r;
                     r = next;
                 }
-                out
+                if !self.is_bilinear() {
+                    out.truncate(n);
+                    return out;
+                }
+                // The numerator (1 + 2 z^-1 + z^-2) / 4 (DC gain 1) on the all-pole part:
+                // its autocorrelation (6, 4, 1) / 16 at lags 0, +-1, +-2 convolved with the
+                // all-pole part's (even in the lag).
+                let at = |k: i64| out[k.unsigned_abs() as usize];
+                (0..n as i64)
+                    .map(|k| {
+                        (6.0 * at(k) + 4.0 * (at(k - 1) + at(k + 1)) + at(k - 2) + at(k + 2)) / 16.0
+                    })
+                    .collect()
             }
         }
     }
@@ -268,13 +312,19 @@ impl LowPass {
                 };
                 (g * g).powi(stages.max(1) as i32)
             }
-            LowPass::SecondOrder { .. } => {
+            LowPass::SecondOrder { bilinear, .. } => {
                 let (a1, a2) = self.ar2(tau0_s).unwrap_or((0.0, 0.0));
                 let g = 1.0 - a1 - a2;
                 // |1 - a1 e^{-iw} - a2 e^{-2iw}|^2
                 let re = 1.0 - a1 * w.cos() - a2 * (2.0 * w).cos();
                 let im = a1 * w.sin() + a2 * (2.0 * w).sin();
-                g * g / (re * re + im * im)
+                // |(1 + e^{-iw}) / 2|^4 = cos^4(w / 2): the bilinear form's zeros at Nyquist
+                let zeros = if bilinear {
+                    (w / 2.0).cos().powi(4)
+                } else {
+                    1.0
+                };
+                zeros * g * g / (re * re + im * im)
             }
         }
     }
@@ -292,9 +342,25 @@ impl LowPass {
                 time_constant_s
             }
             LowPass::MovingAverage { taps, stages } => (taps * stages) as f64 * tau0_s,
+            LowPass::SecondOrder { bilinear: true, .. } => {
+                // the slower pole's time constant, from its modulus
+                let (a1, a2) = self.ar2(tau0_s).unwrap_or((0.0, 0.0));
+                let disc = a1 * a1 + 4.0 * a2;
+                let slow = if disc < 0.0 {
+                    (-a2).sqrt()
+                } else {
+                    (a1.abs() + disc.sqrt()) / 2.0
+                };
+                if slow > 0.0 && slow < 1.0 {
+                    -tau0_s / slow.ln()
+                } else {
+                    tau0_s
+                }
+            }
             LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
+                bilinear: false,
             } => {
                 let w = 2.0 * PI * natural_frequency_hz;
                 if damping <= 1.0 {
@@ -440,6 +506,7 @@ mod tests {
             let lp = LowPass::SecondOrder {
                 natural_frequency_hz: f0,
                 damping: zeta,
+                bilinear: false,
             };
             let r = lp.autocorrelation(tau0);
             let mem = lp.memory_s(tau0);
@@ -461,9 +528,83 @@ mod tests {
         let lp = LowPass::SecondOrder {
             natural_frequency_hz: 35.0,
             damping: 5.0,
+            bilinear: false,
         };
         let t = 2.0 * 5.0 / (2.0 * PI * 35.0);
         assert!((lp.memory_s(tau0) / t - 1.0).abs() < 0.02);
+    }
+
+    /// The bilinear biquad against its own recursion run by hand: the autocorrelation of the
+    /// impulse response of `y_k = a1 y_{k-1} + a2 y_{k-2} + K^2/D (x_k + 2 x_{k-1} + x_{k-2})`
+    /// (scipy's `butter(2, f_c)` at `zeta = 1/sqrt 2`), DC gain 1, `|H(f_c)|^2 = 1/2` exactly
+    /// for the prewarped Butterworth, zero gain at Nyquist, and Parseval.
+    #[test]
+    fn the_bilinear_second_order_is_the_biquad_it_names() {
+        let tau0 = 0.005;
+        for (fc, zeta) in [
+            (20.0, std::f64::consts::FRAC_1_SQRT_2),
+            (40.0, 0.4),
+            (5.0, 2.0),
+        ] {
+            let lp = LowPass::SecondOrder {
+                natural_frequency_hz: fc,
+                damping: zeta,
+                bilinear: true,
+            };
+            let k = (PI * fc * tau0).tan();
+            let d = 1.0 + 2.0 * zeta * k + k * k;
+            let (b, a1, a2) = (
+                k * k / d,
+                2.0 * (1.0 - k * k) / d,
+                -(1.0 - 2.0 * zeta * k + k * k) / d,
+            );
+            let mut h = vec![0.0f64; 20_000];
+            for i in 0..h.len() {
+                let x = |j: usize| if j == 0 { 1.0 } else { 0.0 };
+                let mut y = b * x(i);
+                if i >= 1 {
+                    y += a1 * h[i - 1] + 2.0 * b * x(i - 1);
+                }
+                if i >= 2 {
+                    y += a2 * h[i - 2] + b * x(i - 2);
+                }
+                h[i] = y;
+            }
+            assert!((h.iter().sum::<f64>() - 1.0).abs() < 1e-9, "DC gain");
+            let r = lp.autocorrelation(tau0);
+            for lag in [0usize, 1, 2, 3, 7, 40] {
+                let want: f64 = h.iter().zip(&h[lag..]).map(|(x, y)| x * y).sum();
+                assert!(
+                    (r[lag] - want).abs() <= 1e-9 * want.abs().max(1e-6 * r[0]),
+                    "{lp:?} lag {lag}: {} vs {want}",
+                    r[lag]
+                );
+            }
+            let s = r[0] + 2.0 * r[1..].iter().sum::<f64>();
+            assert!((s - 1.0).abs() < 1e-9, "{lp:?}: {s}");
+            assert!(lp.power_gain(tau0, 0.5 / tau0) < 1e-20, "zero at Nyquist");
+            let n = 20_000;
+            let mean: f64 = (0..n)
+                .map(|i| lp.power_gain(tau0, (i as f64 + 0.5) / n as f64 / (2.0 * tau0)))
+                .sum::<f64>()
+                / n as f64;
+            assert!(
+                (mean / r[0] - 1.0).abs() < 1e-6,
+                "{lp:?}: {mean} vs {}",
+                r[0]
+            );
+        }
+        let butter = LowPass::SecondOrder {
+            natural_frequency_hz: 20.0,
+            damping: std::f64::consts::FRAC_1_SQRT_2,
+            bilinear: true,
+        };
+        assert!((butter.power_gain(tau0, 20.0) - 0.5).abs() < 1e-12);
+        // Its memory: the poles' modulus, |p|^2 = -a2, per lag.
+        let k = (PI * 20.0 * tau0).tan();
+        let a2 = -(1.0 - 2.0f64.sqrt() * k + k * k) / (1.0 + 2.0f64.sqrt() * k + k * k);
+        let want = -tau0 / (-a2).sqrt().ln();
+        assert!((butter.memory_s(tau0) / want - 1.0).abs() < 1e-12);
     }
 
     /// The generic form reproduces the first-order closed form of `terms`.
@@ -494,10 +635,12 @@ mod tests {
             LowPass::SecondOrder {
                 natural_frequency_hz: 5.0,
                 damping: 0.3,
+                bilinear: false,
             },
             LowPass::SecondOrder {
                 natural_frequency_hz: 5.0,
                 damping: 2.0,
+                bilinear: false,
             },
             LowPass::ZeroPhase {
                 time_constant_s: 0.02,
@@ -561,6 +704,7 @@ mod tests {
             LowPass::SecondOrder {
                 natural_frequency_hz: 8.0,
                 damping: 0.3,
+                bilinear: false,
             },
         ] {
             let v = lp.flicker_rate_avar(tau0, &[1, 100_000]);
@@ -583,6 +727,7 @@ mod tests {
             LowPass::SecondOrder {
                 natural_frequency_hz: 10.0,
                 damping: 0.5,
+                bilinear: false,
             },
             LowPass::ZeroPhase {
                 time_constant_s: 0.01,
@@ -611,6 +756,7 @@ mod tests {
             LowPass::SecondOrder {
                 natural_frequency_hz: 3.0,
                 damping: 0.4,
+                bilinear: false,
             },
             LowPass::MovingAverage { taps: 7, stages: 2 },
         ] {

@@ -25,12 +25,17 @@ pub enum LowPassGen {
         since_exact: usize,
         started: bool,
     },
+    /// `y_k = a1 y_{k-1} + a2 y_{k-2} + g d_k`, or with `bilinear`
+    /// `g (d_k + 2 d_{k-1} + d_{k-2}) / 4` in place of `g d_k` ([`LowPass::SecondOrder`]).
     SecondOrder {
         a1: f64,
         a2: f64,
         g: f64,
         y1: f64,
         y2: f64,
+        bilinear: bool,
+        x1: f64,
+        x2: f64,
         started: bool,
     },
     /// Symmetric weights `w[|k|]`, `k = -L..=L`, over a window of `2L + 1` inputs.
@@ -53,29 +58,19 @@ impl LowPassGen {
                 since_exact: 0,
                 started: false,
             }),
-            LowPass::SecondOrder {
-                natural_frequency_hz,
-                damping,
-            } => {
+            LowPass::SecondOrder { bilinear, .. } => {
                 // The same poles as the AVAR's (model::lowpass): its autocorrelation is of
                 // this recursion.
-                let w = 2.0 * std::f64::consts::PI * natural_frequency_hz;
-                let (a1, a2) = if damping < 1.0 {
-                    let r = (-damping * w * tau0_s).exp();
-                    let th = w * tau0_s * (1.0 - damping * damping).sqrt();
-                    (2.0 * r * th.cos(), -r * r)
-                } else {
-                    let d = (damping * damping - 1.0).sqrt();
-                    let p1 = (w * (-damping + d) * tau0_s).exp();
-                    let p2 = (w * (-damping - d) * tau0_s).exp();
-                    (p1 + p2, -p1 * p2)
-                };
+                let (a1, a2) = lp.ar2(tau0_s)?;
                 Some(LowPassGen::SecondOrder {
                     a1,
                     a2,
                     g: 1.0 - a1 - a2,
                     y1: 0.0,
                     y2: 0.0,
+                    bilinear,
+                    x1: 0.0,
+                    x2: 0.0,
                     started: false,
                 })
             }
@@ -175,12 +170,19 @@ impl LowPassGen {
                 }
             }
             LowPassGen::SecondOrder {
-                y1, y2, started, ..
+                y1,
+                y2,
+                x1,
+                x2,
+                started,
+                ..
             } => {
                 if !*started {
                     *started = true;
                     *y1 = level;
                     *y2 = level;
+                    *x1 = level;
+                    *x2 = level;
                 }
             }
             LowPassGen::ZeroPhase {
@@ -227,9 +229,24 @@ impl LowPassGen {
                 x
             }
             LowPassGen::SecondOrder {
-                a1, a2, g, y1, y2, ..
+                a1,
+                a2,
+                g,
+                y1,
+                y2,
+                bilinear,
+                x1,
+                x2,
+                ..
             } => {
-                let y = *a1 * *y1 + *a2 * *y2 + *g * d;
+                let input = if *bilinear {
+                    (d + 2.0 * *x1 + *x2) / 4.0
+                } else {
+                    d
+                };
+                *x2 = *x1;
+                *x1 = d;
+                let y = *a1 * *y1 + *a2 * *y2 + *g * input;
                 *y2 = *y1;
                 *y1 = y;
                 y
@@ -266,6 +283,7 @@ mod tests {
             LowPass::SecondOrder {
                 natural_frequency_hz: 8.0,
                 damping: 0.4,
+                bilinear: false,
             },
             LowPass::ZeroPhase {
                 time_constant_s: 0.012,

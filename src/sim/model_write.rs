@@ -145,12 +145,14 @@ fn channel_toml(s: &mut String, c: &ChannelModel) {
         Some(LowPass::SecondOrder {
             natural_frequency_hz,
             damping,
+            bilinear,
         }) => {
             let _ = writeln!(
                 s,
-                "[channel.second_order_filter]\nnatural_frequency = {}\ndamping = {}",
+                "[channel.second_order_filter]\nnatural_frequency = {}\ndamping = {}{}",
                 num(natural_frequency_hz),
-                num(damping)
+                num(damping),
+                if bilinear { "\nbilinear = true" } else { "" }
             );
         }
         Some(LowPass::ZeroPhase { time_constant_s }) => {
@@ -249,5 +251,22 @@ outliers = { rate = 0.001, size = 3.5 }
         let back = read(&model_toml(&m, "quote \" inside", &[]));
         assert_eq!(m, back);
         assert_eq!(back.channels[0].name, "g x\\y");
+    }
+
+    /// The second order's bilinear form is written (`bilinear = true`) and read back as such;
+    /// the pole-mapped form is written without the key, as before.
+    #[test]
+    fn the_bilinear_second_order_round_trips() {
+        for (extra, bilinear) in [(", bilinear = true", true), ("", false)] {
+            let m = read(&format!(
+                "tau0_s = 0.005\n[[channel]]\nname = \"gx\"\nunit = \"deg\"\nN = 0.01\n\
+                 second_order_filter = {{ natural_frequency = 20.0, damping = 0.7{extra} }}\n"
+            ));
+            let text = model_toml(&m, "t", &[]);
+            assert_eq!(text.contains("bilinear = true"), bilinear, "{text}");
+            let back = read(&text);
+            assert_eq!(m, back);
+            assert_eq!(back.channels[0].lowpass.map(|l| l.is_bilinear()), Some(bilinear));
+        }
     }
 }

@@ -167,7 +167,7 @@ pub fn effect_parts(
             None => format!("{}{} {ru}{per}", number(v), iv(1.0)),
         }
     };
-    let Some((name, keys)) = known(kind) else {
+    let Some((mut name, keys)) = known(kind).map(|(n, k)| (n.to_string(), k)) else {
         let kv = params
             .iter()
             .map(|(k, v)| ParamText {
@@ -177,6 +177,11 @@ pub fn effect_parts(
             .collect();
         return (kind.replace('_', " "), kv);
     };
+    // The second order's bilinear form (`bilinear: true`) is said in its name, not as a number.
+    let bilinear = kind == "second_order_filter" && param("bilinear").is_some_and(|b| b != 0.0);
+    if bilinear {
+        name += " (bilinear biquad, zeros at Nyquist: scipy's butter, PX4's LowPassFilter2p)";
+    }
     let mut out = Vec::new();
     for (key, pname, dim) in keys {
         let text = match (dim, param(key)) {
@@ -207,14 +212,15 @@ pub fn effect_parts(
     for (k, v) in &params {
         let with_rate =
             (*k == "lo" || *k == "hi") && one_rate && bounds.0.is_some() && bounds.1.is_some();
-        if !with_rate && !keys.iter().any(|(key, _, _)| key == k) {
+        let said = keys.iter().any(|(key, _, _)| key == k) || (bilinear && *k == "bilinear");
+        if !with_rate && !said {
             out.push(ParamText {
                 name: k.replace('_', " "),
                 value: shown(*v),
             });
         }
     }
-    (name.to_string(), out)
+    (name, out)
 }
 
 /// A rate in datasheet units: the factor and unit of the bias-instability coefficient (u/s),

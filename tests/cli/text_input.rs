@@ -541,9 +541,26 @@ fn a_time_column_that_goes_backwards_or_is_not_uniform_is_reported() {
         (0, 0, 1, 2)
     );
     // A time column that is not in steps of tau0 (here --tau0 is 0.01, the column steps 0.02)
-    // is reported and only skipped.
-    let p = write("wrong_tau0.csv", stamped("time", 2.0, 0..0).as_bytes());
-    let out = analyze(&p, &[]);
+    // is refused in a file (a_tau0_the_time_column_contradicts_is_refused_and_none_reads_the_
+    // rows_at_it); on standard input, which is not looked at before the run, it is reported and
+    // only skipped.
+    let mut child = exe()
+        .args([
+            "analyze", "-", "--tau0", "0.01", "--fit", "none", "--stats", "avar",
+        ])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    {
+        use std::io::Write;
+        let mut stdin = child.stdin.take().unwrap();
+        stdin
+            .write_all(stamped("time", 2.0, 0..0).as_bytes())
+            .unwrap();
+    }
+    let out = child.wait_with_output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr).to_string();
     let (_, s) = parsed(&out);
     assert!(

@@ -140,6 +140,7 @@ fn a_slow_line_beside_a_second_order_filter_is_kept_by_the_bookkeeping() {
             EffectParams::SecondOrderFilter {
                 natural_frequency_hz,
                 damping,
+                ..
             } => {
                 (natural_frequency_hz / 25.0 - 1.0).abs() < 0.05
                     && (damping / 0.6 - 1.0).abs() < 0.1

@@ -279,6 +279,7 @@ fn a_second_order_unit_keeps_its_rounding_floor() {
         let EffectParams::SecondOrderFilter {
             natural_frequency_hz,
             damping,
+            ..
         } = d.effects[0].params
         else {
             panic!("seed {seed}: named {:?}", d.effects);

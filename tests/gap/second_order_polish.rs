@@ -35,6 +35,7 @@ fn a_second_order_filter_near_the_sampling_rate_is_fitted_to_its_valley_floor() 
     let EffectParams::SecondOrderFilter {
         natural_frequency_hz,
         damping,
+        ..
     } = first.params
     else {
         panic!("first effect {:?}", d.effects);

@@ -265,6 +265,18 @@ fn second_order_filter_on_white_rate() {
     });
 }
 
+/// The bilinear biquad (a Butterworth at 40 Hz: scipy's `butter`, PX4's `LowPassFilter2p`),
+/// simulated by its recursion with the numerator `(1 + 2 z^-1 + z^-2) / 4`, against the AVAR of
+/// its autocorrelation (src/model/lowpass.rs).
+#[test]
+fn bilinear_second_order_filter_on_white_rate() {
+    check_ensemble("bilinear", |_| {
+        channel(
+            "N = 0.5\nsecond_order_filter = { natural_frequency = 40.0, damping = 0.7071, bilinear = true }",
+        )
+    });
+}
+
 #[test]
 fn zero_phase_filter_on_white_rate() {
     check_ensemble("zero_phase", |s| {

@@ -303,12 +303,16 @@ fn parse_lowpass(
         let natural_frequency_hz = e.required("natural_frequency", f, errs);
         let z = e.num_pos("damping", true, errs);
         let damping = e.required("damping", z, errs);
+        // The bilinear biquad (scipy's butter, PX4's LowPassFilter2p) in place of the
+        // pole-mapped form (model::lowpass).
+        let bilinear = e.boolean("bilinear", errs).unwrap_or(false);
         e.finish(errs);
         found.push((
             p,
             LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
+                bilinear,
             },
         ));
     }
@@ -334,6 +338,7 @@ fn parse_lowpass(
             LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
+                ..
             } => natural_frequency_hz.is_finite() && damping.is_finite(),
             LowPass::ZeroPhase { time_constant_s } => time_constant_s.is_finite(),
             _ => true,

@@ -83,6 +83,21 @@ impl<'a> Keys<'a> {
         x.unwrap_or(f64::NAN)
     }
 
+    /// A boolean, if present.
+    pub(super) fn boolean(&mut self, key: &'static str, errs: &mut Collector) -> Option<bool> {
+        let v = self.get(key)?;
+        match v.as_bool() {
+            Some(b) => Some(b),
+            None => {
+                errs.bad(
+                    self.path(key),
+                    format!("expected true or false, found {}", v.type_str()),
+                );
+                None
+            }
+        }
+    }
+
     pub(super) fn string(&mut self, key: &'static str, errs: &mut Collector) -> Option<&'a str> {
         let v = self.get(key)?;
         match v.as_str() {
