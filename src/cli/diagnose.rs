@@ -517,8 +517,11 @@ fn ensemble_record(
     }
 }
 
-/// `--model-out` never replaces a file: refused before any input is read (exit 2).
+/// `--model-out` never replaces a file, and must be one that can be created: an existing file,
+/// a directory or a folder that does not exist is refused before any input is read (exit 2),
+/// not found once the whole diagnosis has run.
 fn check_model_out(p: &Path) -> Result<()> {
+    allanscope::sink::page_file::check_target(p, "--model-out")?;
     if p.exists() {
         return Err(usage(format!(
             "--model-out {}: the file exists; remove it or choose another name",
