@@ -36,6 +36,7 @@ use allanscope::model::fit::FitMethod;
 use allanscope::plan::checkpoint_setup::CheckpointRequest;
 use allanscope::plan::settings::DataSettings;
 use allanscope::plan::unit::UnitRequest;
+use allanscope::sink::output::{ReadFile, WrittenFile};
 
 #[derive(Debug, Parser)]
 #[command(
@@ -319,6 +320,9 @@ where
         }
         anyhow::Error::new(UsageError::Option(e.to_string()))
     })?;
+    // Before anything is read or opened: no output may be one of the inputs.
+    let (inputs, outputs) = cli.command.files();
+    allanscope::sink::output::refuse_outputs_over_inputs(&outputs, &inputs)?;
     match cli.command {
         Command::Analyze(mut a) => {
             let inputs: Vec<&str> = a.inputs.iter().map(String::as_str).collect();
@@ -338,6 +342,112 @@ where
         Command::Report(r) => report::run(&r),
         Command::Aggregate(a) => aggregate::run(&a),
         Command::Export(e) => export::run(&e),
+    }
+}
+
+impl Command {
+    /// The files the command reads and the files it writes, named as the options name them, for
+    /// [`allanscope::sink::output::refuse_outputs_over_inputs`]. `run` reads its stand config
+    /// for them (`run::run`, the same check).
+    fn files(&self) -> (Vec<ReadFile>, Vec<WrittenFile>) {
+        let mut inputs = Vec::new();
+        let mut outputs = Vec::new();
+        let written = |option: &str, path: &Path| WrittenFile {
+            option: option.into(),
+            path: path.to_path_buf(),
+        };
+        match self {
+            Command::Analyze(a) => {
+                inputs.extend(a.inputs.iter().map(|i| read_file("the input", i)));
+                a.data.files(&mut inputs, &mut outputs);
+            }
+            Command::Listen(l) => {
+                inputs.extend(l.input.as_deref().map(|i| read_file("the input", i)));
+                outputs.extend(l.capture.as_deref().map(|p| written("--capture", p)));
+                l.data.files(&mut inputs, &mut outputs);
+            }
+            Command::Run(_) => {}
+            Command::Simulate(s) => {
+                inputs.push(read_file("--model", &s.model.to_string_lossy()));
+                inputs.push(read_file("--format", &s.format));
+                outputs.push(written("-o", &s.out));
+            }
+            Command::Diagnose(d) => {
+                inputs.push(read_file("the input", &d.input));
+                inputs.extend(d.holdout.as_deref().map(|h| read_file("--holdout", h)));
+                outputs.extend(d.model_out.as_deref().map(|p| written("--model-out", p)));
+                d.data.files(&mut inputs, &mut outputs);
+            }
+            Command::Plot(p) => {
+                inputs.extend(
+                    p.inputs
+                        .iter()
+                        .map(|i| read_file("the input", &i.to_string_lossy())),
+                );
+                outputs.push(written("-o", &p.out));
+            }
+            Command::Report(r) => {
+                inputs.extend(
+                    r.inputs
+                        .iter()
+                        .map(|i| read_file("the input", &i.to_string_lossy())),
+                );
+                outputs.push(written("-o", &r.out));
+            }
+            Command::Aggregate(a) => {
+                inputs.extend(
+                    a.inputs
+                        .iter()
+                        .map(|i| read_file("the input", &i.to_string_lossy())),
+                );
+                outputs.extend(a.out.as_deref().map(|p| written("--out", p)));
+            }
+            Command::Export(e) => {
+                inputs.push(read_file("the input", &e.input.to_string_lossy()));
+                outputs.push(written("-o", &e.out));
+            }
+        }
+        (inputs, outputs)
+    }
+}
+
+/// An input as messages name it (`the input run.csv`, `--holdout h.csv`); `-` is standard
+/// input, compared as the file it may be redirected from (`/dev/stdin`).
+fn read_file(named: &str, input: &str) -> ReadFile {
+    if input == "-" {
+        return ReadFile {
+            named: "standard input".into(),
+            path: PathBuf::from("/dev/stdin"),
+        };
+    }
+    ReadFile {
+        named: format!("{named} {input}"),
+        path: PathBuf::from(input),
+    }
+}
+
+impl DataArgs {
+    /// The files the data options read (`--limits`, a descriptor given as a path in
+    /// `--format`) and write (`--out`, and its checkpoint with `--checkpoint-every`).
+    fn files(&self, inputs: &mut Vec<ReadFile>, outputs: &mut Vec<WrittenFile>) {
+        if let Some(l) = &self.limits {
+            inputs.push(read_file("--limits", &l.to_string_lossy()));
+        }
+        if self.format != "csv" {
+            inputs.push(read_file("--format", &self.format));
+        }
+        if let Some(out) = &self.out {
+            outputs.push(WrittenFile {
+                option: "--out".into(),
+                path: out.clone(),
+            });
+            if self.checkpoint_every.is_some() {
+                outputs.push(WrittenFile {
+                    option: "the checkpoint".into(),
+                    path: allanscope::pipeline::checkpoint::path_for(out),
+                });
+            }
+        }
     }
 }
 
