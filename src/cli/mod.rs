@@ -177,9 +177,10 @@ pub struct DataArgs {
     /// Text columns hold phase (the running sum of increments, u).
     #[arg(long)]
     pub phase: bool,
-    /// Unit of the increment of text columns, also with --rate or --phase (with --rate, `deg/s`
-    /// means `deg`): deg, rad, mrad, arcsec, m/s, ft/s, g (g*s), mg, ug give datasheet units.
-    /// Without it, a unit in brackets in a column's header (`w_RS_S_x [rad s^-1]`, `acc_x[g]`)
+    /// Unit of the increment of text columns, also with --rate or --phase: deg, rad, mrad,
+    /// arcsec, m/s, ft/s, g (g*s), mg, ug give datasheet units. A rate unit (`deg/s`, `dps`,
+    /// `m/s^2`, `deg/h`) reads the columns as rate samples, --rate or not, in its increment unit
+    /// (`deg/s` means `deg`). Without it, a unit in brackets in a column's header (`w_RS_S_x [rad s^-1]`, `acc_x[g]`)
     /// is read, rates or increments as it says; else `u`.
     #[arg(long, value_name = "U")]
     pub unit: Option<String>,
@@ -812,17 +813,30 @@ impl DataArgs {
         if let Some(e) = self.every {
             allanscope::ranges::check_interval(e).map_err(|p| usage(format!("--every {p}")))?;
         }
+        // A rate unit (`deg/s`) reads the columns as rate samples, `--rate` or not, as a
+        // header's `[deg/s]` does; phase is never in one.
+        let rate_unit = self.rate_unit();
+        if let (Some(_), true) = (&rate_unit, self.phase) {
+            return Err(usage(format!(
+                "--phase, but --unit {} is a rate: phase is the running sum of increments; give \
+                 its increment unit (--unit {}), or --rate instead of --phase",
+                self.unit_or_default(),
+                rate_unit.as_deref().unwrap_or("u")
+            )));
+        }
         Ok(DataSettings {
-            kind: if self.rate {
+            kind: if self.rate || rate_unit.is_some() {
                 InputKind::Rate
             } else if self.phase {
                 InputKind::Phase
             } else {
                 InputKind::Increments
             },
-            // `--unit` names the increment's unit; with `--rate` the rate's own unit (`deg/s`)
-            // means the same (docs: README "--unit").
-            unit: allanscope::model::units::increment_unit_label(self.unit_or_default(), self.rate),
+            // `--unit` names the increment's unit; a rate's own unit (`deg/s`) means the same
+            // (docs: README "--unit").
+            unit: rate_unit.unwrap_or_else(|| {
+                allanscope::model::units::increment_unit_label(self.unit_or_default(), self.rate)
+            }),
             taus,
             overlap,
             stats,
@@ -836,6 +850,14 @@ impl DataArgs {
             channels: self.channels.clone(),
             text: self.text_options(),
         })
+    }
+
+    /// The increment unit of a `--unit` that names a rate (`deg/s`: `deg`), which reads the
+    /// columns as rate samples (`allanscope::input::header_unit::option_rate_unit`).
+    pub(crate) fn rate_unit(&self) -> Option<String> {
+        self.unit
+            .as_deref()
+            .and_then(allanscope::input::header_unit::option_rate_unit)
     }
 
     /// `--unit`, or `u` when not given.
@@ -923,6 +945,13 @@ impl DataArgs {
             })
             .collect();
         if self.unit.is_some() {
+            if let (Some(u), false) = (self.rate_unit(), self.rate) {
+                tracing::info!(
+                    "{input}: --unit {} is a rate: the columns are read as rate samples (u = \
+                     {u}); give --unit {u} for increments",
+                    self.unit_or_default()
+                );
+            }
             let carried: Vec<String> = ours
                 .iter()
                 .zip(&fixed)
