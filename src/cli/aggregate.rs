@@ -18,6 +18,8 @@ use allanscope::sink::results::ResultFile;
 
 pub fn run(a: &AggregateArgs) -> Result<()> {
     let mut runs: Vec<Vec<RunCoefs>> = Vec::new();
+    // Each run as messages name it: its file, and its run index when the file holds several.
+    let mut names: Vec<String> = Vec::new();
     for path in &a.inputs {
         if !path.is_file() {
             return Err(anyhow::Error::new(allanscope::error::UsageError::Input {
@@ -33,8 +35,17 @@ pub fn run(a: &AggregateArgs) -> Result<()> {
                 path.display()
             )));
         }
-        runs.extend(found);
+        let several = found.len() > 1;
+        for (run, coefs) in found {
+            names.push(match run {
+                Some(r) if several => format!("{} run {r}", path.display()),
+                _ => path.display().to_string(),
+            });
+            runs.push(coefs);
+        }
     }
+    // Refused before the output is opened: an earlier result stays as it was.
+    let aggregates = aggregate_channels(&runs).map_err(|e| unit_mismatch(&e, &names))?;
     let mut sink = match &a.out {
         Some(p) => {
             // An earlier result is refused unless --force, and replaced only at the first
@@ -62,19 +73,39 @@ pub fn run(a: &AggregateArgs) -> Result<()> {
                 .collect()
         })),
     };
-    for agg in aggregate_channels(&runs) {
-        sink.write(&Record::from(AggregateRecord::new(&agg)))?;
+    for agg in &aggregates {
+        sink.write(&Record::from(AggregateRecord::new(agg)))?;
     }
     sink.flush()?;
     Ok(())
 }
 
+/// The usage error (exit status 2) of runs whose channel is in different units, naming the runs
+/// by `names` (a file, or an input of `analyze`): the statistics would average numbers in two
+/// units under one.
+pub(crate) fn unit_mismatch(
+    e: &allanscope::model::aggregate::UnitMismatch,
+    names: &[String],
+) -> anyhow::Error {
+    let name = |r: usize| names.get(r).cloned().unwrap_or_else(|| format!("run {r}"));
+    usage(format!(
+        "{}: channel {} is in {} where {} has it in {}: the runs cannot be aggregated; analyse \
+         them with one --unit",
+        name(e.run),
+        e.channel,
+        e.unit,
+        name(e.first_run),
+        e.first_unit
+    ))
+}
+
 /// One run's channels as read so far: (is the record final, its coefficients).
 type RunSoFar = (Option<usize>, Vec<(bool, RunCoefs)>);
 
-/// The runs in one file: per run index (absent: one run), each channel's final fit. A file of
-/// a run of several units (`[[unit]]`) holds one run per unit: the unit-to-unit statistics.
-fn runs_of_file(path: &Path) -> Result<Vec<Vec<RunCoefs>>> {
+/// The runs in one file: per run index (absent: one run), the index and each channel's final
+/// fit. A file of a run of several units (`[[unit]]`) holds one run per unit: the unit-to-unit
+/// statistics.
+fn runs_of_file(path: &Path) -> Result<Vec<(Option<usize>, Vec<RunCoefs>)>> {
     // A file of several units holds one run per unit (`units_as_runs`); its fit records are read
     // typed, and one that does not parse is an error.
     let (values, _) = allanscope::sink::results::units_as_runs(&read_json_lines(path)?);
@@ -116,7 +147,7 @@ fn runs_of_file(path: &Path) -> Result<Vec<Vec<RunCoefs>>> {
     Ok(runs
         .into_iter()
         .map(|(run, chans)| {
-            chans
+            let coefs = chans
                 .into_iter()
                 .map(|(is_final, c)| {
                     if !is_final {
@@ -129,7 +160,8 @@ fn runs_of_file(path: &Path) -> Result<Vec<Vec<RunCoefs>>> {
                     }
                     c
                 })
-                .collect()
+                .collect();
+            (run, coefs)
         })
         .collect())
 }

@@ -180,7 +180,9 @@ fn analyze_all(a: &AnalyzeArgs, queue: &RecordQueue, ctl: &RunControl) -> Result
         fits.push(outcome.analysis.last_fits());
     }
     if several {
-        let aggregates = aggregate_channels(&run_coefs(&fits));
+        // Each run's own records are written; runs in different units are not averaged.
+        let aggregates = aggregate_channels(&run_coefs(&fits))
+            .map_err(|e| super::aggregate::unit_mismatch(&e, &a.inputs))?;
         for a in &aggregates {
             queue.push_final(Record::Aggregate(AggregateRecord::new(a)));
         }

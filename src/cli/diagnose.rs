@@ -31,6 +31,9 @@ struct Gathered {
     /// Each channel's unit (the descriptor's, or `--unit` for text columns).
     units: Vec<String>,
     evidence: Vec<GapEvidence>,
+    /// The values were rate samples (`--rate`, a rate `--unit` or the headers' units), whose
+    /// step is no LSB of the increments.
+    rate: bool,
     /// The quantization step of each channel's increments and their sum (u), for the model file.
     lsb: Vec<LsbEstimator>,
     sums: Vec<f64>,
@@ -141,6 +144,7 @@ fn gather(
     let mut g = Gathered {
         names: Vec::new(),
         units: Vec::new(),
+        rate: a.data.rate,
         evidence: Vec::new(),
         lsb: Vec::new(),
         sums: Vec::new(),
@@ -172,6 +176,7 @@ fn gather(
             .map_err(anyhow::Error::new)?;
             let (setups, kind) = a.data.text_channels(input, &reader, &settings)?;
             settings.kind = kind;
+            g.rate = kind == allanscope::analysis::InputKind::Rate;
             let plan = UnitPlan::new(
                 InputPlan::Text {
                     input: input.into(),
@@ -424,7 +429,11 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
                 unit: main.units[i].clone(),
                 // The step of rate samples is not a phase LSB (it is the rate-sample
                 // quantization of a MEMS part), so only increments and phase give one.
-                lsb: if d.rate { None } else { main.lsb[i].estimate() },
+                lsb: if main.rate {
+                    None
+                } else {
+                    main.lsb[i].estimate()
+                },
                 bias: if t_run > 0.0 {
                     main.sums[i] / t_run
                 } else {
@@ -517,8 +526,11 @@ fn ensemble_record(
     }
 }
 
-/// `--model-out` never replaces a file: refused before any input is read (exit 2).
+/// `--model-out` never replaces a file, and must be one that can be created: an existing file,
+/// a directory or a folder that does not exist is refused before any input is read (exit 2),
+/// not found once the whole diagnosis has run.
 fn check_model_out(p: &Path) -> Result<()> {
+    allanscope::sink::page_file::check_target(p, "--model-out")?;
     if p.exists() {
         return Err(usage(format!(
             "--model-out {}: the file exists; remove it or choose another name",

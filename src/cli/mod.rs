@@ -36,6 +36,7 @@ use allanscope::model::fit::FitMethod;
 use allanscope::plan::checkpoint_setup::CheckpointRequest;
 use allanscope::plan::settings::DataSettings;
 use allanscope::plan::unit::UnitRequest;
+use allanscope::sink::output::{ReadFile, WrittenFile};
 
 #[derive(Debug, Parser)]
 #[command(
@@ -176,9 +177,10 @@ pub struct DataArgs {
     /// Text columns hold phase (the running sum of increments, u).
     #[arg(long)]
     pub phase: bool,
-    /// Unit of the increment of text columns, also with --rate or --phase (with --rate, `deg/s`
-    /// means `deg`): deg, rad, mrad, arcsec, m/s, ft/s, g (g*s), mg, ug give datasheet units.
-    /// Without it, a unit in brackets in a column's header (`w_RS_S_x [rad s^-1]`, `acc_x[g]`)
+    /// Unit of the increment of text columns, also with --rate or --phase: deg, rad, mrad,
+    /// arcsec, m/s, ft/s, g (g*s), mg, ug give datasheet units. A rate unit (`deg/s`, `dps`,
+    /// `m/s^2`, `deg/h`) reads the columns as rate samples, --rate or not, in its increment unit
+    /// (`deg/s` means `deg`). Without it, a unit in brackets in a column's header (`w_RS_S_x [rad s^-1]`, `acc_x[g]`)
     /// is read, rates or increments as it says; else `u`.
     #[arg(long, value_name = "U")]
     pub unit: Option<String>,
@@ -319,6 +321,9 @@ where
         }
         anyhow::Error::new(UsageError::Option(e.to_string()))
     })?;
+    // Before anything is read or opened: no output may be one of the inputs.
+    let (inputs, outputs) = cli.command.files();
+    allanscope::sink::output::refuse_outputs_over_inputs(&outputs, &inputs)?;
     match cli.command {
         Command::Analyze(mut a) => {
             let inputs: Vec<&str> = a.inputs.iter().map(String::as_str).collect();
@@ -338,6 +343,112 @@ where
         Command::Report(r) => report::run(&r),
         Command::Aggregate(a) => aggregate::run(&a),
         Command::Export(e) => export::run(&e),
+    }
+}
+
+impl Command {
+    /// The files the command reads and the files it writes, named as the options name them, for
+    /// [`allanscope::sink::output::refuse_outputs_over_inputs`]. `run` reads its stand config
+    /// for them (`run::run`, the same check).
+    fn files(&self) -> (Vec<ReadFile>, Vec<WrittenFile>) {
+        let mut inputs = Vec::new();
+        let mut outputs = Vec::new();
+        let written = |option: &str, path: &Path| WrittenFile {
+            option: option.into(),
+            path: path.to_path_buf(),
+        };
+        match self {
+            Command::Analyze(a) => {
+                inputs.extend(a.inputs.iter().map(|i| read_file("the input", i)));
+                a.data.files(&mut inputs, &mut outputs);
+            }
+            Command::Listen(l) => {
+                inputs.extend(l.input.as_deref().map(|i| read_file("the input", i)));
+                outputs.extend(l.capture.as_deref().map(|p| written("--capture", p)));
+                l.data.files(&mut inputs, &mut outputs);
+            }
+            Command::Run(_) => {}
+            Command::Simulate(s) => {
+                inputs.push(read_file("--model", &s.model.to_string_lossy()));
+                inputs.push(read_file("--format", &s.format));
+                outputs.push(written("-o", &s.out));
+            }
+            Command::Diagnose(d) => {
+                inputs.push(read_file("the input", &d.input));
+                inputs.extend(d.holdout.as_deref().map(|h| read_file("--holdout", h)));
+                outputs.extend(d.model_out.as_deref().map(|p| written("--model-out", p)));
+                d.data.files(&mut inputs, &mut outputs);
+            }
+            Command::Plot(p) => {
+                inputs.extend(
+                    p.inputs
+                        .iter()
+                        .map(|i| read_file("the input", &i.to_string_lossy())),
+                );
+                outputs.push(written("-o", &p.out));
+            }
+            Command::Report(r) => {
+                inputs.extend(
+                    r.inputs
+                        .iter()
+                        .map(|i| read_file("the input", &i.to_string_lossy())),
+                );
+                outputs.push(written("-o", &r.out));
+            }
+            Command::Aggregate(a) => {
+                inputs.extend(
+                    a.inputs
+                        .iter()
+                        .map(|i| read_file("the input", &i.to_string_lossy())),
+                );
+                outputs.extend(a.out.as_deref().map(|p| written("--out", p)));
+            }
+            Command::Export(e) => {
+                inputs.push(read_file("the input", &e.input.to_string_lossy()));
+                outputs.push(written("-o", &e.out));
+            }
+        }
+        (inputs, outputs)
+    }
+}
+
+/// An input as messages name it (`the input run.csv`, `--holdout h.csv`); `-` is standard
+/// input, compared as the file it may be redirected from (`/dev/stdin`).
+fn read_file(named: &str, input: &str) -> ReadFile {
+    if input == "-" {
+        return ReadFile {
+            named: "standard input".into(),
+            path: PathBuf::from("/dev/stdin"),
+        };
+    }
+    ReadFile {
+        named: format!("{named} {input}"),
+        path: PathBuf::from(input),
+    }
+}
+
+impl DataArgs {
+    /// The files the data options read (`--limits`, a descriptor given as a path in
+    /// `--format`) and write (`--out`, and its checkpoint with `--checkpoint-every`).
+    fn files(&self, inputs: &mut Vec<ReadFile>, outputs: &mut Vec<WrittenFile>) {
+        if let Some(l) = &self.limits {
+            inputs.push(read_file("--limits", &l.to_string_lossy()));
+        }
+        if self.format != "csv" {
+            inputs.push(read_file("--format", &self.format));
+        }
+        if let Some(out) = &self.out {
+            outputs.push(WrittenFile {
+                option: "--out".into(),
+                path: out.clone(),
+            });
+            if self.checkpoint_every.is_some() {
+                outputs.push(WrittenFile {
+                    option: "the checkpoint".into(),
+                    path: allanscope::pipeline::checkpoint::path_for(out),
+                });
+            }
+        }
     }
 }
 
@@ -702,17 +813,30 @@ impl DataArgs {
         if let Some(e) = self.every {
             allanscope::ranges::check_interval(e).map_err(|p| usage(format!("--every {p}")))?;
         }
+        // A rate unit (`deg/s`) reads the columns as rate samples, `--rate` or not, as a
+        // header's `[deg/s]` does; phase is never in one.
+        let rate_unit = self.rate_unit();
+        if let (Some(_), true) = (&rate_unit, self.phase) {
+            return Err(usage(format!(
+                "--phase, but --unit {} is a rate: phase is the running sum of increments; give \
+                 its increment unit (--unit {}), or --rate instead of --phase",
+                self.unit_or_default(),
+                rate_unit.as_deref().unwrap_or("u")
+            )));
+        }
         Ok(DataSettings {
-            kind: if self.rate {
+            kind: if self.rate || rate_unit.is_some() {
                 InputKind::Rate
             } else if self.phase {
                 InputKind::Phase
             } else {
                 InputKind::Increments
             },
-            // `--unit` names the increment's unit; with `--rate` the rate's own unit (`deg/s`)
-            // means the same (docs: README "--unit").
-            unit: allanscope::model::units::increment_unit_label(self.unit_or_default(), self.rate),
+            // `--unit` names the increment's unit; a rate's own unit (`deg/s`) means the same
+            // (docs: README "--unit").
+            unit: rate_unit.unwrap_or_else(|| {
+                allanscope::model::units::increment_unit_label(self.unit_or_default(), self.rate)
+            }),
             taus,
             overlap,
             stats,
@@ -726,6 +850,14 @@ impl DataArgs {
             channels: self.channels.clone(),
             text: self.text_options(),
         })
+    }
+
+    /// The increment unit of a `--unit` that names a rate (`deg/s`: `deg`), which reads the
+    /// columns as rate samples (`allanscope::input::header_unit::option_rate_unit`).
+    pub(crate) fn rate_unit(&self) -> Option<String> {
+        self.unit
+            .as_deref()
+            .and_then(allanscope::input::header_unit::option_rate_unit)
     }
 
     /// `--unit`, or `u` when not given.
@@ -813,6 +945,13 @@ impl DataArgs {
             })
             .collect();
         if self.unit.is_some() {
+            if let (Some(u), false) = (self.rate_unit(), self.rate) {
+                tracing::info!(
+                    "{input}: --unit {} is a rate: the columns are read as rate samples (u = \
+                     {u}); give --unit {u} for increments",
+                    self.unit_or_default()
+                );
+            }
             let carried: Vec<String> = ours
                 .iter()
                 .zip(&fixed)

@@ -50,6 +50,7 @@ pub fn run(r: &RunArgs) -> Result<()> {
         abort_after_frames: r.abort_after_frames,
     };
     let mut plan = RunPlan::from_stand(&cfg, &super::descriptor_dirs(), &flags)?;
+    refuse_outputs_over_inputs(r, &plan)?;
     if plan.named {
         return run_units(r, &cfg, plan);
     }
@@ -120,6 +121,64 @@ pub fn run(r: &RunArgs) -> Result<()> {
     if !live && !outcome.read_to_end {
         return Err(super::interrupted(&name, &ctl.progress));
     }
+    Ok(())
+}
+
+/// No output of the stand config (`[output] path`, a unit's capture or checkpoint) may be a file
+/// the run reads (the config, a replayed source): checked as `main_with_args` checks the other
+/// commands, before anything is opened.
+fn refuse_outputs_over_inputs(r: &RunArgs, plan: &RunPlan) -> Result<()> {
+    use allanscope::sink::output::{ReadFile, WrittenFile};
+    let mut inputs = vec![ReadFile {
+        named: format!("the stand config {}", r.config.display()),
+        path: r.config.clone(),
+    }];
+    let mut outputs: Vec<WrittenFile> = plan
+        .output
+        .iter()
+        .map(|p| WrittenFile {
+            option: "[output] path".into(),
+            path: p.clone(),
+        })
+        .collect();
+    for u in &plan.units {
+        // Named as the config names them: `[run] capture` of one unit, `unit `imu07` capture`
+        // of a `[[unit]]` table.
+        let (source, capture) = match &u.unit_name {
+            Some(n) => (format!("unit `{n}` source"), format!("unit `{n}` capture")),
+            None => ("[source] path".to_string(), "[run] capture".to_string()),
+        };
+        match &u.input {
+            InputPlan::Frames {
+                spec: SourceSpec::File { path, .. },
+                ..
+            } => inputs.push(ReadFile {
+                named: format!("{source} {}", path.display()),
+                path: path.clone(),
+            }),
+            InputPlan::Frames {
+                spec: SourceSpec::Stdin { .. },
+                ..
+            } => inputs.push(ReadFile {
+                named: "standard input".into(),
+                path: "/dev/stdin".into(),
+            }),
+            _ => {}
+        }
+        if let Some(c) = &u.capture {
+            outputs.push(WrittenFile {
+                option: capture,
+                path: c.clone(),
+            });
+        }
+        if let Some(c) = u.checkpoint_path() {
+            outputs.push(WrittenFile {
+                option: "the checkpoint".into(),
+                path: c.to_path_buf(),
+            });
+        }
+    }
+    allanscope::sink::output::refuse_outputs_over_inputs(&outputs, &inputs)?;
     Ok(())
 }
 

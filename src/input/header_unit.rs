@@ -45,6 +45,26 @@ pub fn header_unit(name: &str) -> Option<Result<HeaderUnit, String>> {
     }
 }
 
+/// The increment unit of a `--unit` that is unambiguously a rate, read as a header's unit is
+/// (`deg/s`, `rad s^-1`, `dps`, `m/s^2`, `m/s2`, `deg/h`: `deg`, `rad`, `deg`, `m/s`, `m/s`,
+/// `arcsec`), or one that `--rate` takes as the rate's own (`deg/sec`, `g/s`:
+/// [`crate::model::units::increment_unit_label`]). `None` for an increment unit (`deg`, `m/s`,
+/// and `g`, `mg`, `ug`, which as an option are g*s: `IncrementUnit::parse`) and for a unit not
+/// known. Before (session 42) a rate unit without `--rate` was read as increments, N 1 / tau0
+/// times too large, while a header `gx [deg/s]` was read as rates.
+pub fn option_rate_unit(unit: &str) -> Option<String> {
+    use crate::model::units::{increment_unit_label, IncrementUnit};
+    let t = unit.trim();
+    if IncrementUnit::parse(t).is_some() {
+        return None;
+    }
+    if let Some(u) = parse(t).filter(|u| u.rate) {
+        return Some(u.unit);
+    }
+    let label = increment_unit_label(t, true);
+    (label != t && IncrementUnit::parse(&label).is_some()).then_some(label)
+}
+
 /// A column's name split at the brackets that end it: the name before them and what they hold,
 /// both trimmed (`gyro_x (deg/s)` -> `gyro_x`, `deg/s`); `None` when the name does not end in a
 /// bracket, or holds nothing before it. The one reading of a unit in brackets: the header's
@@ -393,6 +413,32 @@ mod tests {
             "angular_velocity",
         ] {
             assert!(header_unit(name).is_none(), "{name}");
+        }
+    }
+
+    /// `--unit` as a rate (its increment unit) or not: `g` stays the increment g*s it is
+    /// documented as, `m/s` a velocity increment, `G` (a gauss) and `u` no unit of either.
+    #[test]
+    fn option_units_that_are_rates() {
+        let rate = |u: &str| option_rate_unit(u);
+        for (u, inc) in [
+            ("deg/s", "deg"),
+            ("deg/sec", "deg"),
+            ("rad/s", "rad"),
+            ("rad s^-1", "rad"),
+            ("dps", "deg"),
+            ("deg/h", "arcsec"),
+            ("m/s^2", "m/s"),
+            ("m/s2", "m/s"),
+            ("m/s/s", "m/s"),
+            ("g/s", "g"),
+        ] {
+            assert_eq!(rate(u).as_deref(), Some(inc), "{u}");
+        }
+        for u in [
+            "deg", "rad", "m/s", "ft/s", "g", "mg", "ug", "g*s", "u", "G", "uT",
+        ] {
+            assert_eq!(rate(u), None, "{u}");
         }
     }
 

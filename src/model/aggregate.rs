@@ -102,20 +102,47 @@ pub struct CoefAggregate {
     pub stats: Option<RunStats>,
 }
 
+/// A channel in one unit in one run and another in a later run (deg and rad, u and rad): its
+/// coefficients cannot be averaged, nor labelled with either unit. Runs are indices into the
+/// caller's runs, which it names (a file, an input).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("channel {channel} is in {unit} in run {run} where run {first_run} has it in {first_unit}")]
+pub struct UnitMismatch {
+    pub channel: String,
+    /// The first run with the channel, and its unit there.
+    pub first_run: usize,
+    pub first_unit: String,
+    /// The first run with the channel in another unit, and that unit.
+    pub run: usize,
+    pub unit: String,
+}
+
 /// The seed paper's table 2 for every channel and coefficient: `runs[r]` holds run r's channels.
 /// Channels are matched by name across runs and listed in the order they first appear; a run
-/// without a channel counts as "-" for it.
-pub fn aggregate_channels(runs: &[Vec<RunCoefs>]) -> Vec<CoefAggregate> {
-    let mut channels: Vec<(&str, &str)> = Vec::new();
-    for run in runs {
+/// without a channel counts as "-" for it. A channel whose unit differs between runs is refused
+/// ([`UnitMismatch`]): before (session 42) its runs were averaged under the first run's unit.
+pub fn aggregate_channels(runs: &[Vec<RunCoefs>]) -> Result<Vec<CoefAggregate>, UnitMismatch> {
+    // Each channel: its name, unit and the first run that has it.
+    let mut channels: Vec<(&str, &str, usize)> = Vec::new();
+    for (r, run) in runs.iter().enumerate() {
         for c in run {
-            if !channels.iter().any(|(n, _)| *n == c.channel) {
-                channels.push((&c.channel, &c.unit));
+            match channels.iter().find(|(n, _, _)| *n == c.channel) {
+                None => channels.push((&c.channel, &c.unit, r)),
+                Some(&(_, unit, first_run)) if unit != c.unit => {
+                    return Err(UnitMismatch {
+                        channel: c.channel.clone(),
+                        first_run,
+                        first_unit: unit.to_string(),
+                        run: r,
+                        unit: c.unit.clone(),
+                    })
+                }
+                Some(_) => {}
             }
         }
     }
     let mut out = Vec::with_capacity(channels.len() * 5);
-    for (name, unit) in channels {
+    for (name, unit, _) in channels {
         let per_run: Vec<[Option<f64>; 5]> = runs
             .iter()
             .map(|run| {
@@ -134,5 +161,5 @@ pub fn aggregate_channels(runs: &[Vec<RunCoefs>]) -> Vec<CoefAggregate> {
             });
         }
     }
-    out
+    Ok(out)
 }

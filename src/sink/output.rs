@@ -15,6 +15,12 @@
 //!   second run given the same file is refused (exit status 2) instead of interleaving its
 //!   records with the first run's.
 //!
+//! - **Never over the data.** An output that is one of the files the run reads (the input
+//!   itself, by a hard or symbolic link or another path to it, or standard input redirected
+//!   from it) is refused before anything is opened, `--force` or not ([`refuse_outputs_over_inputs`]):
+//!   `--force` replaces an earlier result, never the recording it would be computed from, which
+//!   the first record would cut short while it is being read.
+//!
 //! Special files (`/dev/null`, a FIFO, a terminal) are never truncated or refused.
 
 use std::fs::{File, OpenOptions};
@@ -22,6 +28,65 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use crate::error::UsageError;
+
+/// A file a command reads, as its messages name it: `the input run.csv`, `--holdout h.csv`,
+/// `standard input` (whose path is then `/dev/stdin`, the file it is redirected from).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ReadFile {
+    pub named: String,
+    pub path: PathBuf,
+}
+
+/// A file a command writes: the option that names it (`--out`, `--capture`, `-o`) and its path.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct WrittenFile {
+    pub option: String,
+    pub path: PathBuf,
+}
+
+/// Refuses (a usage error, exit status 2) an output that is one of the files the command reads,
+/// checked before any output is opened: a run with `--out run.csv --force` over its own input
+/// `run.csv` used to truncate the recording at its first record while still reading it, and end
+/// with exit status 0 over part of it. The first output found is named, with the input.
+pub fn refuse_outputs_over_inputs(
+    outputs: &[WrittenFile],
+    inputs: &[ReadFile],
+) -> Result<(), UsageError> {
+    for out in outputs {
+        if let Some(input) = inputs.iter().find(|i| same_file(&out.path, &i.path)) {
+            return Err(UsageError::Option(format!(
+                "{} {}: is the same file as {}: --force replaces an earlier result, never the \
+                 data it is computed from; write the result to another file",
+                out.option,
+                out.path.display(),
+                input.named
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Whether `a` and `b` are one regular file: the same (device, inode) where both exist (a hard
+/// link, a symbolic link, `dir/../name`); elsewhere than Unix, the same canonical path. A path
+/// that does not exist is no file a run reads; special files (`/dev/null`, a FIFO) are not
+/// compared.
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    let (Ok(ma), Ok(mb)) = (std::fs::metadata(a), std::fs::metadata(b)) else {
+        return false;
+    };
+    if !(ma.is_file() && mb.is_file()) {
+        return false;
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        ma.dev() == mb.dev() && ma.ino() == mb.ino()
+    }
+    #[cfg(not(unix))]
+    {
+        matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y)
+    }
+}
 
 /// How a result file is opened.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

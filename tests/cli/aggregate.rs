@@ -222,3 +222,90 @@ fn analyze_then_aggregate() {
     assert!(determined >= 2, "{recs:?}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Runs whose channel is in different units (one analysed in deg, another in rad) are not
+/// averaged under the first run's unit: `aggregate` refuses them (exit 2), naming the run and
+/// both units, and writes no aggregate record; so does `analyze A B` before its run-to-run
+/// records.
+#[test]
+fn runs_in_different_units_are_not_aggregated() {
+    let dir = tmp_dir("agg-units");
+    let mut files = Vec::new();
+    for (r, unit) in ["deg", "rad", "deg"].iter().enumerate() {
+        let mut rec = fit_record(&MA4[r], true, None);
+        rec["channel"] = json!("gx");
+        rec["unit"] = json!(unit);
+        let p = dir.join(format!("agg{r}.jsonl"));
+        write_lines(&p, &[rec]);
+        files.push(p);
+    }
+    let paths: Vec<&Path> = files.iter().map(|p| p.as_path()).collect();
+    let (code, recs, err) = run_aggregate(&paths);
+    assert_eq!(code, 2, "stderr: {err}");
+    let expected = format!(
+        "{}: channel gx is in rad where {} has it in deg: the runs cannot be aggregated; \
+         analyse them with one --unit",
+        files[1].display(),
+        files[0].display()
+    );
+    assert!(err.contains(&expected), "{err}");
+    assert!(recs.is_empty(), "{recs:?}");
+    // The runs of one unit still aggregate: 0 and 2, both deg (n = 2 for B: 0.294, 0.477).
+    let (code, recs, err) = run_aggregate(&[paths[0], paths[2]]);
+    assert_eq!(code, 0, "stderr: {err}");
+    let b = recs.iter().find(|a| a.coef == "B").expect("B");
+    assert_eq!((b.n, b.unit.as_str()), (2, "deg"));
+    assert!((b.mean.unwrap() - 0.3855e-4).abs() < 1e-12, "{b:?}");
+
+    // `analyze A B`: Kalibr's imu0.csv, whose `omega_x` is in rad/s by its format, and a file
+    // of the same values under a header that is not Kalibr's (no unit: `u`).
+    let mut csvs = Vec::new();
+    for (name, accel) in [("imu0.csv", "alpha"), ("plain.csv", "a")] {
+        let mut s = 1u64;
+        let mut text = format!("timestamp,omega_x,omega_y,omega_z,{accel}_x,{accel}_y,{accel}_z\n");
+        for i in 0..6000u64 {
+            text += &format!("{}", 1_385_030_208_736_607_488u64 + i * 5_000_000);
+            for _ in 0..6 {
+                s = s
+                    .wrapping_mul(6_364_136_223_846_793_005)
+                    .wrapping_add(1_442_695_040_888_963_407);
+                text += &format!(
+                    ",{:e}",
+                    ((s >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 1e-3
+                );
+            }
+            text.push('\n');
+        }
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        csvs.push(p);
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_allanscope"))
+        .args([
+            "analyze",
+            "--channels",
+            "omega_x",
+            "--stats",
+            "avar",
+            "--json",
+        ])
+        .args(&csvs)
+        .output()
+        .expect("run analyze");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    let expected = format!(
+        "{}: channel omega_x is in u where {} has it in rad: the runs cannot be aggregated",
+        csvs[1].display(),
+        csvs[0].display()
+    );
+    assert!(err.contains(&expected), "{err}");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(!text.contains("\"type\":\"aggregate\""), "{text}");
+    // Each run's own records are written (they are right in their unit).
+    let fits = text
+        .lines()
+        .filter(|l| l.contains("\"type\":\"fit\"") && l.contains("\"final\":true"))
+        .count();
+    assert_eq!(fits, 2, "{text}");
+}

@@ -264,3 +264,103 @@ fn diagnose_reads_the_header_units() {
         .unwrap();
     usage_error(&out, &["column 3 `gy [rad/h]`: unit `rad/h`"]);
 }
+
+/// White rate noise of N = 0.5 u/sqrt(s) sampled at 100 Hz for 20 minutes, as rate samples in
+/// one column `gx`: each sample is N / sqrt(tau0) z = 5 z (u/s) for a standard normal z (seeded
+/// LCG + Box-Muller).
+fn white_rates(name: &str) -> PathBuf {
+    const N: f64 = 0.5;
+    const TAU0_S: f64 = 0.01;
+    let mut s = 0x9e37_79b9_7f4a_7c15u64;
+    let mut u = || {
+        s = s
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        ((s >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    };
+    let mut text = String::from("gx\n");
+    for _ in 0..120_000 {
+        let (a, b) = (u(), u());
+        let z = (-2.0 * a.ln()).sqrt() * (2.0 * std::f64::consts::PI * b).cos();
+        text += &format!("{:e}\n", N / TAU0_S.sqrt() * z);
+    }
+    let p = tmp_in("cli_header_units", name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// The final fit's unit and N of a run of `white_rates` with `extra`.
+fn fitted_n(p: &std::path::Path, extra: &[&str]) -> (String, f64, String) {
+    let out = exe()
+        .arg("analyze")
+        .arg(p)
+        .args(["--tau0", "0.01", "--stats", "avar", "--json"])
+        .args(extra)
+        .env("ALLANSCOPE_LOG", "info")
+        .output()
+        .unwrap();
+    let fit = crate::common::records_of(&out)
+        .into_iter()
+        .find_map(|r| match r {
+            allanscope::sink::records::Record::Fit(f) if f.r#final => Some(f),
+            _ => None,
+        })
+        .expect("a final fit");
+    let n = fit.coef.by_index(1).value.expect("N");
+    (
+        fit.unit,
+        n,
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// Relative tolerance of N fitted to 120000 white rate samples: its AVAR at tau0 alone has
+/// some 1e5 degrees of freedom (0.3% in N); 3% leaves room for the fit and no room for a
+/// factor of the sampling rate.
+const N_REL: f64 = 0.03;
+
+/// `--unit deg/s` names a rate: the column is read as rate samples, as a header `gx [deg/s]`
+/// is (before, as increments: N 1 / tau0 = 100 times too large). `--unit g` stays the
+/// increment unit g*s it is documented as; `--phase` with a rate unit is refused.
+#[test]
+fn a_rate_unit_option_reads_rate_samples() {
+    let p = white_rates("white_rates.csv");
+    let (unit, n, err) = fitted_n(&p, &["--unit", "deg/s"]);
+    assert_eq!(unit, "deg");
+    assert!(
+        (n / 0.5 - 1.0).abs() < N_REL,
+        "N = {n} deg/sqrt(s), truth 0.5"
+    );
+    assert!(
+        err.contains(
+            "--unit deg/s is a rate: the columns are read as rate samples (u = deg); give \
+             --unit deg for increments"
+        ),
+        "{err}"
+    );
+    // As `--rate --unit deg/s` (and `--rate --unit deg`) read it, to the last bit.
+    assert_eq!(fitted_n(&p, &["--rate", "--unit", "deg/s"]).1, n);
+    assert_eq!(fitted_n(&p, &["--rate", "--unit", "deg"]).1, n);
+    // Other spellings of a rate: a MEMS accelerometer's m/s^2 (u = m/s), `dps`, `rad s^-1`.
+    for (option, increment) in [("m/s^2", "m/s"), ("dps", "deg"), ("rad s^-1", "rad")] {
+        let (unit, n_other, _) = fitted_n(&p, &["--unit", option]);
+        assert_eq!((unit.as_str(), n_other), (increment, n), "--unit {option}");
+    }
+    // `g` as an option is the increment g*s (README): the same values as increments, N 100
+    // times larger (sigma of an increment over tau0 = 0.01 s is that of the rate times 100).
+    let (unit, n_g, _) = fitted_n(&p, &["--unit", "g"]);
+    assert_eq!(unit, "g");
+    assert!(
+        (n_g / 50.0 - 1.0).abs() < N_REL,
+        "N = {n_g} g*sqrt(s), as increments 50"
+    );
+    usage_error(
+        &exe()
+            .arg("analyze")
+            .arg(&p)
+            .args(["--tau0", "0.01", "--phase", "--unit", "deg/s"])
+            .output()
+            .unwrap(),
+        &["--phase", "--unit deg/s is a rate"],
+    );
+}

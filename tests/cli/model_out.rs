@@ -416,3 +416,41 @@ fn a_twin_of_rate_columns_reads_back_as_increments() {
     let n2 = d2["final_terms"]["N"]["value"].as_f64().unwrap();
     assert!(rel(n2, n) < 0.05, "the twin's N {n2} against {n}");
 }
+
+/// `--model-out` in a folder that does not exist is refused at the start (exit 2, the option,
+/// the file and the folder named), as `-o` is: before, the whole diagnosis ran and then the
+/// model file could not be created (exit 1).
+#[test]
+fn a_model_out_in_a_missing_folder_is_refused_before_the_diagnosis() {
+    let run = tmp("missing-folder.csv");
+    let mut text = String::from("gx\n");
+    let mut s = 7u64;
+    for _ in 0..20_000 {
+        s = s
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        text += &format!(
+            "{:e}\n",
+            ((s >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 1e-3
+        );
+    }
+    std::fs::write(&run, text).unwrap();
+    let target = tmp("nodir").join("t.toml");
+    let out = exe()
+        .arg("diagnose")
+        .arg(&run)
+        .args(["--tau0", "0.004", "--model-out"])
+        .arg(&target)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    let expected = format!(
+        "--model-out {}: the folder {} does not exist",
+        target.display(),
+        tmp("nodir").display()
+    );
+    assert!(err.contains(&expected), "{err}");
+    assert!(out.stdout.is_empty(), "diagnosed before the refusal");
+    assert!(!tmp("nodir").exists());
+}

@@ -299,3 +299,174 @@ fn json_lines_to_a_full_standard_output_say_so() {
     );
     assert!(e.contains("No space left on device"), "{e}");
 }
+
+/// 3000 rows (30 s at 10 ms) of white increments in one column `gx`: a recording to protect.
+fn recording(path: &Path) -> Vec<u8> {
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut text = String::from("gx\n");
+    for _ in 0..3000 {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        let u = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+        text += &format!("{:e}\n", u * 1e-3);
+    }
+    std::fs::write(path, &text).unwrap();
+    text.into_bytes()
+}
+
+/// `o` was refused (exit 2) before it wrote or truncated anything: `data` still holds `bytes`,
+/// and the message names the output option, the file the run reads and why.
+fn refused_over_input(o: &Output, data: &Path, bytes: &[u8], needles: &[&str]) {
+    let e = stderr(o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    for n in needles {
+        assert!(e.contains(n), "`{n}` not in: {e}");
+    }
+    assert!(
+        e.contains("--force replaces an earlier result, never the data"),
+        "{e}"
+    );
+    assert!(
+        std::fs::read(data).unwrap() == bytes,
+        "the recording changed"
+    );
+    assert!(o.stdout.is_empty(), "records written before the refusal");
+}
+
+#[test]
+fn an_output_that_is_an_input_is_refused_even_with_force() {
+    let dir = crate::common::fresh_dir("outputs-self");
+    let data = dir.join("self.csv");
+    let bytes = recording(&data);
+    let analyze = |out: &Path, extra: &[&str]| {
+        let mut cmd = exe();
+        cmd.args(["analyze", s(&data), "--tau0", "0.01", "--every", "10"])
+            .args(extra)
+            .arg("--out")
+            .arg(out)
+            .arg("--force")
+            .current_dir(&dir)
+            .stderr(Stdio::piped())
+            .stdout(Stdio::piped())
+            .output()
+            .unwrap()
+    };
+    // Named as given: before, the first interim record truncated the file being read, and
+    // the run ended with exit 0 and `read_to_end: true` over part of it.
+    let o = analyze(&data, &[]);
+    let named = format!(
+        "--out {}: is the same file as the input {}",
+        s(&data),
+        s(&data)
+    );
+    refused_over_input(&o, &data, &bytes, &[&named]);
+    // By a relative path through a folder, a hard link and a symbolic link.
+    std::fs::create_dir_all(dir.join("sub")).unwrap();
+    let hard = dir.join("hard.csv");
+    let soft = dir.join("soft.csv");
+    let _ = std::fs::remove_file(&hard);
+    let _ = std::fs::remove_file(&soft);
+    std::fs::hard_link(&data, &hard).unwrap();
+    std::os::unix::fs::symlink(&data, &soft).unwrap();
+    for out in [Path::new("sub/../self.csv"), &hard, &soft] {
+        let o = analyze(out, &[]);
+        let named = format!("--out {}: is the same file as the input", out.display());
+        refused_over_input(&o, &data, &bytes, &[&named]);
+    }
+    // Standard input redirected from the file.
+    let o = exe()
+        .args([
+            "analyze",
+            "-",
+            "--tau0",
+            "0.01",
+            "--force",
+            "--out",
+            s(&data),
+        ])
+        .stdin(std::fs::File::open(&data).unwrap())
+        .output()
+        .unwrap();
+    refused_over_input(&o, &data, &bytes, &["is the same file as standard input"]);
+    // The checkpoint beside --out (`--out x` -> `x.ckpt`).
+    let ckpt = dir.join("x.ckpt");
+    std::fs::write(&ckpt, &bytes).unwrap();
+    let o = exe()
+        .args(["analyze", s(&ckpt), "--tau0", "0.01", "--force"])
+        .args(["--checkpoint-every", "10", "--out", s(&dir.join("x"))])
+        .output()
+        .unwrap();
+    refused_over_input(&o, &ckpt, &bytes, &["checkpoint"]);
+
+    // diagnose: --out over its --holdout, --model-out is new by rule (refused when it exists).
+    let held = dir.join("held.csv");
+    std::fs::write(&held, &bytes).unwrap();
+    let o = exe()
+        .args([
+            "diagnose",
+            s(&data),
+            "--tau0",
+            "0.01",
+            "--holdout",
+            s(&held),
+        ])
+        .args(["--out", s(&held), "--force"])
+        .output()
+        .unwrap();
+    refused_over_input(&o, &held, &bytes, &["is the same file as --holdout"]);
+
+    // The commands that read JSON lines: aggregate, plot, report, export.
+    let results = dir.join("results.jsonl");
+    let o = exe()
+        .args(["analyze", s(&data), "--tau0", "0.01", "--out", s(&results)])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let kept = std::fs::read(&results).unwrap();
+    let r = s(&results);
+    for args in [
+        vec!["aggregate", r, r, "--out", r, "--force"],
+        vec!["plot", r, "-o", r, "--force"],
+        vec!["report", r, "-o", r, "--force"],
+        vec!["export", r, "--to", "csv", "-o", r, "--force"],
+    ] {
+        let o = exe().args(&args).output().unwrap();
+        refused_over_input(&o, &results, &kept, &["is the same file as the input"]);
+    }
+    // simulate over its own model file.
+    let model = dir.join("model.toml");
+    crate::common::write_vog4_model(&model, "");
+    let model_bytes = std::fs::read(&model).unwrap();
+    let o = exe()
+        .args(["simulate", "--model", s(&model), "--duration", "10s"])
+        .args(["-o", s(&model), "--force"])
+        .output()
+        .unwrap();
+    refused_over_input(&o, &model, &model_bytes, &["is the same file as --model"]);
+    // run: a stand config whose capture is its own replayed source.
+    let capture = dir.join("cap.siu8");
+    std::fs::write(&capture, siu8_fixture()).unwrap();
+    let cap_bytes = std::fs::read(&capture).unwrap();
+    let config = dir.join("stand.toml");
+    std::fs::write(
+        &config,
+        format!(
+            "[source]\nkind = \"file\"\npath = \"{}\"\nformat = \"siu8\"\n\n[run]\ncapture = \
+             \"{}\"\n",
+            s(&capture),
+            s(&capture)
+        ),
+    )
+    .unwrap();
+    let o = exe()
+        .args(["run", "--config", s(&config), "--force"])
+        .output()
+        .unwrap();
+    refused_over_input(
+        &o,
+        &capture,
+        &cap_bytes,
+        &["capture", "is the same file as"],
+    );
+}

@@ -209,7 +209,7 @@ fn run_to_run_limits_on_table_2() {
         run(0.436, Some(0.210)),
         run(0.477, Some(0.278)),
     ];
-    let agg = aggregate_channels(&runs);
+    let agg = aggregate_channels(&runs).unwrap();
     let specs: Vec<LimitSpec> = toml::from_str::<StandLimits>(
         r#"
 [[limits]]

@@ -165,7 +165,7 @@ fn several_runs_give_table_2_with_the_aggregate_records_values() {
             None,
         ));
     }
-    for a in aggregate_channels(&runs) {
+    for a in aggregate_channels(&runs).unwrap() {
         let s = a.stats.as_ref();
         records.push(
             json!({"type": "aggregate", "channel": a.channel, "unit": a.unit, "coef": a.coef,

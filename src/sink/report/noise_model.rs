@@ -49,7 +49,10 @@ pub(super) fn noise_model(h: &mut String, res: &Results) {
             }
         }
         let runs: Vec<Vec<RunCoefs>> = runs.into_iter().map(|(_, v)| v).collect();
+        // Runs whose channel is in different units have no mean (`aggregate` refuses them);
+        // each run's row is still shown.
         aggs = aggregate_channels(&runs)
+            .unwrap_or_default()
             .iter()
             .map(AggregateRecord::new)
             .collect();
