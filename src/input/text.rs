@@ -199,12 +199,45 @@ fn lower_words(name: &str) -> String {
     camel_words(base_name(name.trim_start_matches(['#', '%']))).to_ascii_lowercase()
 }
 
-/// Whether `name` names a counter of samples or packets ([`COUNTER_WORDS`]).
+/// Whether `name` names a counter of samples or packets ([`COUNTER_WORDS`]), not the counts of
+/// an axis: a name that also holds an axis or a sensor (`gz_cnt`, `cnt_x`, `accel_count`) is
+/// that sensor's pulse count, a channel. Before (session 42) `gz_cnt` was taken for the file's
+/// sample counter: a gyro counting 0-3 pulses a row invented 19,703 missing samples and broke
+/// the other channel into 13,639 stretches.
 pub fn counter_column(name: &str) -> bool {
     // `gx (count)`, `gx [cnt]`: counts are the unit there, not a counter.
-    lower_words(name)
+    let lower = lower_words(name);
+    let words: Vec<&str> = lower
         .split(|c: char| !c.is_alphanumeric())
-        .any(|w| COUNTER_WORDS.contains(&w))
+        .filter(|w| !w.is_empty())
+        .collect();
+    words.iter().any(|w| COUNTER_WORDS.contains(w)) && !words.iter().any(|w| axis_word(w))
+}
+
+/// An axis (`x`, `gz`, `wy`, `ax`) or a sensor's quantity (`gyro`, `accel`, `dtheta`) in a
+/// column's name ([`counter_column`]).
+fn axis_word(w: &str) -> bool {
+    const SENSOR: [&str; 14] = [
+        "gyro",
+        "gyr",
+        "acc",
+        "accel",
+        "gyroscope",
+        "accelerometer",
+        "dtheta",
+        "dvel",
+        "theta",
+        "angle",
+        "omega",
+        "rate",
+        "vel",
+        "velocity",
+    ];
+    match w.as_bytes() {
+        [b'x' | b'y' | b'z'] => true,
+        [b'g' | b'a' | b'w', b'x' | b'y' | b'z'] => true,
+        _ => SENSOR.contains(&w),
+    }
 }
 
 /// Whether `name` names the number of the sensor a row is of ([`INSTANCE_NAMES`]); a bare `I`
@@ -3200,6 +3233,13 @@ mod tests {
         assert_eq!(time_column_unit("GpsTime"), Some(None));
         assert!(counter_column("field.header.seq") && counter_column("frame_count"));
         assert!(!counter_column("gyro_x_counts") && !counter_column("gx"));
+        // An axis's pulse counts are a channel, not the sample counter.
+        for n in ["gz_cnt", "cnt_x", "accel_count", "GyroZCount", "dtheta_cnt"] {
+            assert!(!counter_column(n), "{n}");
+        }
+        for n in ["PacketCounter", "sample_idx", "seq", "frame_count"] {
+            assert!(counter_column(n), "{n}");
+        }
     }
 
     /// Names that say a column holds no inertial channel, and names that only look alike:

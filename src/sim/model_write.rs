@@ -266,7 +266,10 @@ outliers = { rate = 0.001, size = 3.5 }
             assert_eq!(text.contains("bilinear = true"), bilinear, "{text}");
             let back = read(&text);
             assert_eq!(m, back);
-            assert_eq!(back.channels[0].lowpass.map(|l| l.is_bilinear()), Some(bilinear));
+            assert_eq!(
+                back.channels[0].lowpass.map(|l| l.is_bilinear()),
+                Some(bilinear)
+            );
         }
     }
 }

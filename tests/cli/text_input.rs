@@ -929,3 +929,27 @@ fn a_tau0_the_time_column_contradicts_is_refused_and_none_reads_the_rows_at_it()
         .unwrap();
     usage_error(&out, &["--time-column none", "--tau0"]);
 }
+
+/// A gyro's pulse counts in a column named `gz_cnt` (running, 0-3 pulses a row) beside `gx`: a
+/// channel, not the file's sample counter. Before (session 42) its name made it the counter:
+/// every step other than one was read as missing samples or a step back, `gx` broken into
+/// stretches and the run's time stretched.
+#[test]
+fn an_axis_count_column_is_a_channel_not_the_sample_counter() {
+    let (a, _) = columns();
+    let mut text = String::from("gx,gz_cnt\n");
+    let mut count = 0u64;
+    for (i, x) in a.iter().enumerate() {
+        count += [1u64, 3, 0, 2][i % 4];
+        text += &format!("{x:e},{count}\n");
+    }
+    let (c, s) = parsed(&analyze(&write("axis_count.csv", text.as_bytes()), &[]));
+    assert_eq!(s.channels, ["gx", "gz_cnt"]);
+    assert_eq!(s.samples, [401, 401]);
+    assert_eq!(s.segments, [1, 1]);
+    assert_eq!(s.t_data, 4.0);
+    assert!(s.time_column.is_none(), "{:?}", s.time_column);
+    // gx reads as in the plain file.
+    let (pc, _) = plain();
+    assert_eq!(c[0].sigma, pc[0].sigma);
+}
