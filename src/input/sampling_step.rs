@@ -394,6 +394,27 @@ pub fn infer_tau0<R: BufRead>(
             (total as f64 / longer as f64).round()
         )));
     }
+    // Stamps that alternate about the step (4 and 6 ms for a 5 ms stream: a clock of 1 ms
+    // stamping 200 Hz, or two stamps a packet): the median is the longer of the two, half the
+    // steps are then within the tolerance of it, and each shorter one would be read as a
+    // sample off its step. When more than one step in ten is shorter than the median beyond
+    // the tolerance and the mean step is 5% below it: refused. Before (session 42) a `time_ms`
+    // of 4, 6, 4, 6 read as 6 ms, N 9% low and the run 20% long.
+    let shorter = steps
+        .iter()
+        .filter(|d| **d < median * (1.0 - TOLERANCE))
+        .count();
+    if shorter * 10 > total && mean_step < median * 0.95 {
+        let s = |x: f64| crate::ranges::show(round_significant(x, 4));
+        return Err(usage(format!(
+            "--tau0 is required: the time column `{column}` steps by its median {} s in only \
+             {regular} of {total} steps and by less in {shorter}: the rows come about one each \
+             {} s by the mean step ({} Hz); give --tau0",
+            s(median * unit_s),
+            s(mean_step * unit_s),
+            s(1.0 / (mean_step * unit_s)),
+        )));
+    }
     // The shortest decimal step within the stamps' resolution: stamps read as f64 (a clock
     // since 1970 in ns is resolved to 256 ns) make 5,000,000 ns steps look like 4,999,936, and
     // seconds from 0 printed to the ms make 0.005 s steps 0.00499999999999989 by 18 s. The
@@ -894,6 +915,23 @@ mod tests {
         }))
         .unwrap();
         assert_eq!(s.tau0_s, 0.001);
+        // Stamps alternating 4 and 6 ms about a 5 ms stream (was read as 6 ms: half the steps
+        // within a quarter of the median passed): refused with the mean step's rate.
+        let e = infer(&file(4001, &|k| {
+            format!("{:.3}", (5 * k - k % 2) as f64 * 0.001)
+        }))
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("about one each 0.005 s") && e.contains("(200 Hz)"),
+            "{e}"
+        );
+        // A clock jittering about its step keeps its step.
+        let s = infer(&file(4001, &|k| {
+            format!("{:.4}", k as f64 * 0.005 + [0.0, 0.0003, -0.0002][k % 3])
+        }))
+        .unwrap();
+        assert_eq!(s.tau0_s, 0.005);
         // A burst of rows under the first stamp (a buffer flushed at the start), then 100 Hz:
         // read as 100 Hz.
         let s = infer(&file(4001, &|k| {
