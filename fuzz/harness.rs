@@ -308,7 +308,11 @@ pub fn configs(data: &[u8]) {
     if let Some(t) = c.parse(text) {
         if let Some(toml::Value::Array(a)) = t.get("limits") {
             let specs = allanscope::model::limits::from_tables(a, "limits", &mut c, "limits file");
-            let _ = allanscope::model::limits::check_channels(&specs, "fuzz", &["g1", "a1"]);
+            let _ = allanscope::model::limits::check_channels(
+                &specs,
+                "fuzz",
+                &[("g1", "arcsec"), ("a1", "m/s")],
+            );
         }
     }
     if !c.is_empty() {

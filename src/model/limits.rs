@@ -29,7 +29,8 @@
 //! of `arcsec`, `deg`, `rad`, `mrad`, `urad`, `m`, `mm`, `s`, `min`, `h`, `g`, `mg`, `ug` (also
 //! written `micro-g`), with `^n` powers and `sqrt(...)`, e.g. `deg/h/sqrt(h)`, `m/s/sqrt(h)`,
 //! `micro-g`. A bound in a unit whose dimension is not the coefficient's (given the channel's
-//! unit) is reported `invalid`.
+//! unit) is refused before the run, at its file, line and key ([`check_channels`]; exit 2),
+//! and reported `invalid` where it is judged without that check (a limit built in code).
 //!
 //! # The rule
 //!
@@ -587,26 +588,50 @@ pub struct LimitOrigin {
 pub fn check_channels(
     specs: &[LimitSpec],
     input: &str,
-    channels: &[&str],
+    channels: &[(&str, &str)],
 ) -> Result<(), crate::toml_check::ConfigErrors> {
     let mut what = "limits";
     let mut problems = Vec::new();
     for l in specs {
-        if channels.iter().any(|c| channel_matches(&l.channel, c)) {
-            continue;
-        }
-        let problem = format!(
-            "`{}` matches no channel of {input} (it has: {})",
-            l.channel,
-            channels.join(", ")
-        );
+        let matched: Vec<&(&str, &str)> = channels
+            .iter()
+            .filter(|(c, _)| channel_matches(&l.channel, c))
+            .collect();
+        // A bound in a unit whose dimension is not the coefficient's for the channel's unit
+        // (a gyro's N in m/s/sqrt(h)) could never be judged: every verdict would be `invalid`
+        // for the whole run. Refused here, at its table's line, with the key `unit`. Before
+        // (session 42) a stand ran for hours judging nothing, exit 0.
+        let unit_problem = matched.iter().find_map(|(c, u)| {
+            conversion(u, l.coef, l.unit.as_deref())
+                .err()
+                .map(|p| format!("limit on {} of `{c}` (in {u}): {p}", l.coef.name()))
+        });
+        let (problem, key_end) = match (matched.is_empty(), unit_problem) {
+            (true, _) => (
+                format!(
+                    "`{}` matches no channel of {input} (it has: {})",
+                    l.channel,
+                    channels
+                        .iter()
+                        .map(|(c, _)| *c)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+                None,
+            ),
+            (false, Some(p)) => (p, Some("unit")),
+            (false, None) => continue,
+        };
         problems.push(match &l.origin {
             Some(o) => {
                 what = o.what;
                 crate::error::UsageError::Config {
                     file: o.file.clone(),
                     line: o.line,
-                    key: o.key.clone(),
+                    key: match key_end {
+                        Some(k) => format!("{}.{k}", o.key.trim_end_matches(".channel")),
+                        None => o.key.clone(),
+                    },
                     problem,
                 }
             }

@@ -182,7 +182,10 @@ pub fn start_analysis(
 ) -> Result<RunAnalysis> {
     // A limit that no channel matches would never be judged: a misspelt name, refused here,
     // at the file and line it was written on.
-    let names: Vec<&str> = setups.iter().map(|c| c.name.as_str()).collect();
+    let names: Vec<(&str, &str)> = setups
+        .iter()
+        .map(|c| (c.name.as_str(), c.unit.as_str()))
+        .collect();
     crate::model::limits::check_channels(&opts.limits, input, &names)?;
     match resume {
         None => Ok(RunAnalysis::new(input, setups, opts)),

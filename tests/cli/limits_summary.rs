@@ -109,6 +109,47 @@ fn a_bad_limits_file_names_the_key_and_exits_2() {
     );
 }
 
+/// A bound in a unit of the wrong dimension for the channel (a gyro's N in m/s/sqrt(h)) is
+/// refused before the run, at its file, line and key, once; before (session 42) the run went on
+/// and every verdict of that limit was `invalid`, exit 0. A bound in the channel's own terms
+/// (deg/sqrt(h) for arcsec) is judged.
+#[test]
+fn a_limit_in_a_unit_the_channel_cannot_have_is_refused_before_the_run() {
+    let limits = tmp("wrong_dimension.toml");
+    std::fs::write(
+        &limits,
+        "[[limits]]\nchannel = \"g4\"\ncoef = \"N\"\nmax = 0.3\nunit = \"m/s/sqrt(h)\"\n",
+    )
+    .unwrap();
+    let run = |limits: &std::path::Path| {
+        exe()
+            .args(["analyze", run_csv(9).to_str().unwrap(), "--tau0", "0.004"])
+            .args(["--unit", "arcsec", "--limits"])
+            .arg(limits)
+            .output()
+            .unwrap()
+    };
+    let out = run(&limits);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("wrong_dimension.toml:2: key `limits[0].unit`")
+            && err.contains("`m/s/sqrt(h)` is not a unit of N for a channel in arcsec"),
+        "{err}"
+    );
+    assert_eq!(err.matches("m/s/sqrt(h)").count(), 1, "said once: {err}");
+    assert!(out.stdout.is_empty(), "no records");
+    let fine = tmp("right_dimension.toml");
+    std::fs::write(
+        &fine,
+        "[[limits]]\nchannel = \"g4\"\ncoef = \"N\"\nmax = 0.3\nunit = \"deg/sqrt(h)\"\n",
+    )
+    .unwrap();
+    let s = summaries(&run(&fine));
+    // N = 0.25 arcsec/sqrt(s) = 0.25 * 60 / 3600 = 0.00417 deg/sqrt(h), far below 0.3: pass.
+    assert_eq!(s[0]["limits"][0]["verdict"], "pass", "{}", s[0]);
+}
+
 #[test]
 fn a_stand_config_judges_its_limits_in_the_summary() {
     // The 5-minute siu8 fixture: g4 carries the seed paper's VOG4 N = 0.254 arcsec/sqrt(s).
