@@ -35,9 +35,16 @@ pub const BATCH_ROWS: usize = 8192;
 /// file with no line ends) is skipped as it streams by, never held whole in memory.
 pub const MAX_LINE_BYTES: usize = 1 << 20;
 
+/// The most bytes one call of [`read_line_bounded`] consumes of a line without an end: past
+/// them the rest of the line is read as the next one (both long, bad rows). A stream with no
+/// line ends (`/dev/zero`, a binary file given as text) otherwise held the reader inside one
+/// line for ever, and a run told to stop (SIGTERM, Ctrl-C) kept reading it: 9.5 minutes at
+/// 90% CPU in a review (session 42) until a second signal.
+pub const MAX_LINE_CONSUMED: usize = 64 << 20;
+
 /// Reads one line, through its `\n`, into `buf` (emptied first), keeping at most `max` bytes
 /// of it; returns the bytes consumed (0 at the end of the input) and whether the line was
-/// longer than `max`.
+/// longer than `max`. A line is cut after [`MAX_LINE_CONSUMED`] bytes.
 fn read_line_bounded<R: BufRead>(
     src: &mut R,
     buf: &mut Vec<u8>,
@@ -63,7 +70,7 @@ fn read_line_bounded<R: BufRead>(
         buf.extend_from_slice(&avail[..n.min(room)]);
         src.consume(n);
         consumed += n;
-        if done {
+        if done || consumed >= MAX_LINE_CONSUMED {
             return Ok((consumed, long));
         }
     }
@@ -2836,6 +2843,26 @@ impl<R: BufRead> TextReader<R> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A stream with no line end (`/dev/zero`) gives back a long line after
+    /// `MAX_LINE_CONSUMED` bytes instead of reading for ever, keeping only `max` of them; the
+    /// rest is the next line.
+    #[test]
+    fn a_line_without_an_end_is_cut() {
+        let mut src = std::io::BufReader::new(std::io::Read::take(std::io::repeat(0), 1 << 40));
+        let mut buf = Vec::new();
+        let (got, long) = read_line_bounded(&mut src, &mut buf, 1000).unwrap();
+        assert_eq!((got, long, buf.len()), (MAX_LINE_CONSUMED, true, 1000));
+        let (got, long) = read_line_bounded(&mut src, &mut buf, 1000).unwrap();
+        assert_eq!((got, long), (MAX_LINE_CONSUMED, true));
+        // A line with its end is read whole, as before.
+        let mut src = std::io::BufReader::new(&b"1,2\n3,4\n"[..]);
+        assert_eq!(
+            read_line_bounded(&mut src, &mut buf, 1000).unwrap(),
+            (4, false)
+        );
+        assert_eq!(buf, b"1,2\n");
+    }
 
     fn read_all(text: &str) -> (Vec<String>, Vec<f64>, u64) {
         let mut r = TextReader::new(text.as_bytes(), Path::new("t.csv")).unwrap();

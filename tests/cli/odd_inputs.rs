@@ -387,3 +387,35 @@ fn tiny_values_scale_down_to_1e_minus_100_and_below_are_refused() {
     assert!(err.contains("6000 values are numbers beyond"), "{err}");
     assert!(err.contains("non-zero below 1e-100"), "{err}");
 }
+
+/// A stream with no line end given as text (`/dev/zero`): refused as no text columns (exit 2)
+/// once its first line passes the reader's cut, instead of being read for ever (session 42: the
+/// run kept reading through a SIGTERM). The process is killed and the test fails if it has not
+/// ended within two minutes.
+#[test]
+fn a_stream_without_line_ends_is_refused_not_read_for_ever() {
+    let mut child = exe()
+        .args(["analyze", "/dev/zero", "--tau0", "0.01"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break Some(s);
+        }
+        if start.elapsed() > std::time::Duration::from_secs(120) {
+            let _ = child.kill();
+            break None;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(status.and_then(|s| s.code()), Some(2), "{err}");
+    assert!(
+        err.contains("/dev/zero: line 1: a line longer than 1 MiB"),
+        "{err}"
+    );
+}
