@@ -1351,6 +1351,7 @@ fn parse_field(t: &str) -> Result<f64, ()> {
     }
     t.parse::<f64>()
         .or_else(|e| decimal_comma(t).ok_or(e))
+        .or_else(|e| thousands(t).ok_or(e))
         .or_else(|e| fortran_exponent(t).ok_or(e))
         .map_err(|_| ())
 }
@@ -1747,7 +1748,8 @@ fn units_row(fields: &[&str]) -> bool {
 
 /// `0,25` or `-1,5e-3` read as `0.25`, `-1.5e-3`: a decimal comma, as spreadsheets in many
 /// languages write it. Only a comma between two digits, with no point in the field, is taken;
-/// such a field can only arise where the columns are separated by semicolons or tabs.
+/// such a field can only arise where the columns are separated by semicolons or tabs, or in
+/// double quotes (`"0,25"`, [`split_quoted`]).
 fn decimal_comma(t: &str) -> Option<f64> {
     let (int, frac) = t.split_once(',')?;
     let digit_before = int.bytes().last().is_some_and(|b| b.is_ascii_digit());
@@ -1756,6 +1758,43 @@ fn decimal_comma(t: &str) -> Option<f64> {
         return None;
     }
     format!("{int}.{frac}").parse().ok()
+}
+
+/// `2,001.52` or `-1,234,567.5` (and `2.001,52`, as a decimal-comma spreadsheet writes it)
+/// read as `2001.52`, `-1234567.5`: digits grouped by thousands, as spreadsheets export them in
+/// double quotes (`"2,001.52"`). Taken only where it cannot be read otherwise: both marks
+/// stand, the last one is the decimal mark, and the other one groups the digits in threes
+/// after one to three leading ones. `2,001` (no point) stays a decimal comma, 2.001
+/// ([`decimal_comma`]), and `2,00.5` or `20,01.5` are no numbers: a decimal comma is never read
+/// as a thousands separator. Before (session 42), `"2,001.52"` was no number.
+fn thousands(t: &str) -> Option<f64> {
+    let (sign, body) = match t.strip_prefix(['-', '+']) {
+        Some(b) => (&t[..1], b),
+        None => ("", t),
+    };
+    let (point, group) = match (body.rfind('.'), body.rfind(',')) {
+        (Some(p), Some(c)) if p > c => ('.', ','),
+        (Some(_), Some(_)) => (',', '.'),
+        _ => return None,
+    };
+    let (int, frac) = body.rsplit_once(point)?;
+    let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    if int.contains(point) || !digits(frac) {
+        return None;
+    }
+    let mut groups = int.split(group);
+    let lead = groups.next()?;
+    if !digits(lead) || lead.len() > 3 {
+        return None;
+    }
+    let mut whole = lead.to_string();
+    for g in groups {
+        if g.len() != 3 || !digits(g) {
+            return None;
+        }
+        whole += g;
+    }
+    format!("{sign}{whole}.{frac}").parse().ok()
 }
 
 /// The column names of a `#` line taken as the header of data rows `width` wide: as many
@@ -1815,7 +1854,10 @@ fn labelled_cells(line: &str) -> Option<Vec<(&str, &str)>> {
 }
 
 impl Sep {
+    /// The separator of `line`, told by the characters outside its double quotes
+    /// ([`unquoted`]): `"0,25";"1,5"` is two columns, `0.00,"ok; nominal",1.72` three.
     fn of(line: &str) -> Sep {
+        let line = &*unquoted(line);
         if line.contains(';') {
             Sep::Semicolon
         } else if line.contains('\t') && line.trim().split('\t').all(|f| !f.trim().is_empty()) {
@@ -1827,15 +1869,129 @@ impl Sep {
         }
     }
 
+    /// The fields of `line`, a separator inside double quotes part of its field
+    /// ([`split_quoted`]).
     fn split(self, line: &str) -> Vec<&str> {
+        let quoted = line.contains('"');
         match self {
-            Sep::Semicolon => line.split(';').collect(),
-            Sep::Tab => line.split('\t').collect(),
-            Sep::Comma => line.split(',').collect(),
-            Sep::Spaces => line.split_whitespace().collect(),
+            Sep::Semicolon if !quoted => line.split(';').collect(),
+            Sep::Tab if !quoted => line.split('\t').collect(),
+            Sep::Comma if !quoted => line.split(',').collect(),
+            Sep::Spaces if !quoted => line.split_whitespace().collect(),
+            Sep::Semicolon => split_quoted(line, |c| c == ';', false),
+            Sep::Tab => split_quoted(line, |c| c == '\t', false),
+            Sep::Comma => split_quoted(line, |c| c == ',', false),
+            Sep::Spaces => split_quoted(line, char::is_whitespace, true),
             // Laid out by [`Layout::labelled_fields`]; a line that is not such, as it suggests.
             Sep::Labelled => split(line),
         }
+    }
+}
+
+/// The fields of `line` between separators (`is_sep`; with `runs`, a run of them is one and
+/// those at the ends are dropped, as `split_whitespace` does), by the CSV quoting rule (RFC
+/// 4180): a field that starts with `"` (after spaces) runs to the next `"` that is not doubled,
+/// the separators inside it its own, and is handed on without its quotes (`"ok, nominal"` ->
+/// `ok, nominal`, `"0,25"` -> `0,25`, read as a decimal comma, `"2,001.52"` -> `2,001.52`,
+/// read as [`thousands`]). A doubled `""` inside stays doubled in the field: only text holds
+/// one, and a header name is unescaped where it is made ([`header_name`]). A `"` inside a field
+/// that did not start with one is a character of it (`12"`). A line whose quotes do not close
+/// is split as if it had none. Before (session 42) every separator split: each row of
+/// `0.00,"ok, nominal",1.72` or `"0,00","1,727921"` was a bad row of 4 fields where the
+/// header has 3 (or 2), and the run stopped with no sample.
+fn split_quoted<'a>(line: &'a str, is_sep: impl Fn(char) -> bool, runs: bool) -> Vec<&'a str> {
+    let mut out = Vec::new();
+    let (mut start, mut at_start, mut in_quotes) = (0, true, false);
+    let mut chars = line.char_indices().peekable();
+    let push = |field: &'a str, out: &mut Vec<&'a str>| {
+        if !(runs && field.is_empty()) {
+            out.push(field);
+        }
+    };
+    while let Some((i, c)) = chars.next() {
+        if in_quotes {
+            if c == '"' {
+                if chars.peek().is_some_and(|&(_, n)| n == '"') {
+                    chars.next();
+                } else {
+                    in_quotes = false;
+                }
+            }
+        } else if is_sep(c) {
+            push(&line[start..i], &mut out);
+            start = i + c.len_utf8();
+            at_start = true;
+        } else if c == '"' && at_start {
+            in_quotes = true;
+            at_start = false;
+        } else if !c.is_whitespace() {
+            at_start = false;
+        }
+    }
+    if in_quotes {
+        return if runs {
+            line.split_whitespace().collect()
+        } else {
+            line.split(is_sep).collect()
+        };
+    }
+    push(&line[start..], &mut out);
+    out.into_iter()
+        .map(|f| {
+            let t = f.trim();
+            match t.strip_prefix('"').and_then(|q| q.strip_suffix('"')) {
+                Some(inner) if t.len() >= 2 => inner,
+                _ => f,
+            }
+        })
+        .collect()
+}
+
+/// `line` with the characters inside its double-quoted fields (as [`split_quoted`] reads them,
+/// a quote opening a field at the line's start or after a space or a separator) replaced by
+/// `x`, so that the separator is told by the characters outside them; `line` itself when it
+/// has no quotes or they do not close.
+fn unquoted(line: &str) -> std::borrow::Cow<'_, str> {
+    if !line.contains('"') {
+        return line.into();
+    }
+    let mut out = String::with_capacity(line.len());
+    let (mut in_quotes, mut prev) = (false, ' ');
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        if in_quotes {
+            if c == '"' {
+                if chars.peek() == Some(&'"') {
+                    chars.next();
+                    out.push('x');
+                } else {
+                    in_quotes = false;
+                    out.push(c);
+                }
+            } else {
+                out.push('x');
+            }
+        } else {
+            in_quotes = c == '"' && (prev.is_whitespace() || [',', ';'].contains(&prev));
+            out.push(c);
+        }
+        prev = c;
+    }
+    if in_quotes {
+        line.into()
+    } else {
+        out.into()
+    }
+}
+
+/// A header's name as its field holds it: without the quotes around it, a doubled `""` inside
+/// them one `"` (CSV's escape, [`split_quoted`]).
+fn header_name(field: &str) -> String {
+    let n = field.trim();
+    if n.contains("\"\"") {
+        n.replace("\"\"", "\"")
+    } else {
+        n.trim_matches('"').trim().to_string()
     }
 }
 
@@ -2017,14 +2173,16 @@ fn spaced_names(words: &[&str]) -> Vec<String> {
     names
 }
 
-/// A row's fields by the row alone: commas, else semicolons, else spaces and tabs.
+/// A row's fields by the row alone: commas, else semicolons, else spaces and tabs (outside
+/// double quotes, [`Sep::split`]).
 fn split(line: &str) -> Vec<&str> {
-    if line.contains(',') {
-        line.split(',').collect()
-    } else if line.contains(';') {
-        line.split(';').collect()
+    let bare = unquoted(line);
+    if bare.contains(',') {
+        Sep::Comma.split(line)
+    } else if bare.contains(';') {
+        Sep::Semicolon.split(line)
     } else {
-        line.split_whitespace().collect()
+        Sep::Spaces.split(line)
     }
 }
 
@@ -2269,10 +2427,7 @@ impl<R: BufRead> TextReader<R> {
                                 let mut names: Vec<String> = if sep == Sep::Spaces {
                                     spaced_names(&fields)
                                 } else {
-                                    fields
-                                        .iter()
-                                        .map(|f| f.trim().trim_matches('"').trim().to_string())
-                                        .collect()
+                                    fields.iter().map(|f| header_name(f)).collect()
                                 };
                                 header_rows.push(names.clone());
                                 layout_line = line_no;
@@ -3990,5 +4145,59 @@ mod tests {
         );
         let (names, v, _) = read_all("gx\n0,5\n1,5\n");
         assert_eq!((names, v), (vec!["gx".to_string()], vec![0.5, 1.5]));
+    }
+    /// CSV's quoting: a separator inside double quotes is the field's, the quotes are dropped,
+    /// a `""` inside stays in the (text) field and is one `"` in a header name; a `"` that
+    /// does not open a field is a character of it; quotes that do not close leave the line
+    /// split as if it had none. Quoted numbers read with a decimal comma or thousands; an
+    /// unquoted `2,001` in a `;` file stays a decimal comma. Before (session 42), each of
+    /// these rows was a bad row of too many fields.
+    #[test]
+    fn quoted_fields_keep_their_separators() {
+        assert_eq!(
+            Sep::Comma.split(r#"0.00,"ok, nominal",1.72"#),
+            ["0.00", "ok, nominal", "1.72"]
+        );
+        assert_eq!(
+            Sep::Comma.split(r#" "a ""b"", c" ,12",3"#),
+            [r#"a ""b"", c"#, "12\"", "3"]
+        );
+        assert_eq!(Sep::Comma.split(r#""a,b,c"#), [r#""a"#, "b", "c"]);
+        assert_eq!(Sep::Spaces.split(r#"  1 "a b"   2 "#), ["1", "a b", "2"]);
+        assert_eq!(Sep::of(r#""0,5";"1,5""#), Sep::Semicolon);
+        assert_eq!(Sep::of(r#"1,"a;b",2"#), Sep::Comma);
+        assert_eq!(split(r#""0,00","1,727921""#), ["0,00", "1,727921"]);
+        assert_eq!(header_name(r#"gx ""raw"""#), r#"gx "raw""#);
+        let (names, v, bad) =
+            read_all("time,status,gx\n0.00,\"ok, nominal\",1.72\n0.01,\"ok, nominal\",-0.5\n");
+        assert_eq!(
+            (names, v, bad),
+            (vec!["gx".to_string()], vec![1.72, -0.5], 0)
+        );
+        let (names, v, bad) =
+            read_all("gx,gy\n\"0,25\",\"2,001.52\"\n\"-1,5e-3\",\"1,234,567.5\"\n");
+        assert_eq!(
+            (names, v, bad),
+            (
+                vec!["gx".to_string(), "gy".to_string()],
+                vec![0.25, 2001.52, -1.5e-3, 1234567.5],
+                0
+            )
+        );
+        assert_eq!(
+            ["2.001,52", "-1.234.567,5", "2,001", "+2,001.5"].map(|t| parse_field(t).ok()),
+            [Some(2001.52), Some(-1234567.5), Some(2.001), Some(2001.5)]
+        );
+        // No grouping in threes, or two decimal marks: no number.
+        for t in [
+            "2,00.5",
+            "20,01.5",
+            "1234,567.5",
+            "2,001.5.2",
+            "2,001.",
+            ",001.5",
+        ] {
+            assert!(parse_field(t).is_err(), "{t}");
+        }
     }
 }

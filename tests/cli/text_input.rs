@@ -929,3 +929,69 @@ fn a_tau0_the_time_column_contradicts_is_refused_and_none_reads_the_rows_at_it()
         .unwrap();
     usage_error(&out, &["--time-column none", "--tau0"]);
 }
+
+/// Fields in double quotes that hold the separator are one field each, by CSV's rule: a quoted
+/// label with a comma (`"ok, nominal"`, and `""` for a quote inside) is a label column, quoted
+/// decimal commas (`"0,01","1,5e-2"`, as spreadsheets export them) and quoted thousands
+/// (`"2,001.523"`) are the numbers they write. Each reads as the same numbers written plainly,
+/// to the last bit of every `sigma`. Before (session 42), every row was split at the commas in
+/// the quotes, skipped as a row of too many fields, and the run stopped with exit 2.
+#[test]
+fn quoted_fields_holding_the_separator_read_as_the_plain_file() {
+    let (pc, ps) = plain();
+    let (a, b) = columns();
+    let (mut label, mut comma) = (
+        String::from("time,gx,status,gy\n"),
+        String::from("\"time\",\"gx\",\"gy\"\n"),
+    );
+    for i in 0..a.len() {
+        let t = format!("{:.2}", i as f64 * 0.01);
+        let status = if i % 7 == 0 {
+            "\"say \"\"hi\"\", ok\""
+        } else {
+            "\"ok, nominal\""
+        };
+        label += &format!("{t},{:e},{status},{:e}\n", a[i], b[i]);
+        let dc = |x: String| format!("\"{}\"", x.replace('.', ","));
+        comma += &format!(
+            "{},{},{}\n",
+            dc(t),
+            dc(format!("{:e}", a[i])),
+            dc(format!("{:e}", b[i]))
+        );
+    }
+    for (name, text) in [("quoted_label.csv", label), ("quoted_comma.csv", comma)] {
+        let (c, s) = parsed(&analyze(&write(name, text.as_bytes()), &[]));
+        assert_eq!(s.channels, ["gx", "gy"], "{name}");
+        assert_eq!(
+            (s.samples.as_slice(), s.bad_rows),
+            (ps.samples.as_slice(), 0)
+        );
+        let t = s.time_column.as_ref().expect("summary.time_column");
+        assert_eq!((t.used, t.gaps, t.irregular), (true, 0, 0), "{name}");
+        assert_eq!(c.len(), pc.len());
+        for (x, y) in c.iter().zip(&pc) {
+            assert_eq!((&x.channel, &x.sigma), (&y.channel, &y.sigma), "{name}");
+        }
+    }
+    // Thousands: 1950.000 .. 2050.000 written `"2,001.523"` against `2001.523`.
+    let big = |x: f64| format!("{:.3}", 2000.0 + 1e3 * x);
+    let grouped = |s: String| format!("\"{},{}\"", &s[..1], &s[1..]);
+    let (mut plain_big, mut quoted_big) = (String::from("gx,gy\n"), String::from("gx,gy\n"));
+    for i in 0..a.len() {
+        plain_big += &format!("{},{}\n", big(a[i]), big(b[i]));
+        quoted_big += &format!("{},{}\n", grouped(big(a[i])), grouped(big(b[i])));
+    }
+    assert!(quoted_big.contains("\n\"2,001.000\","), "{quoted_big:.80}");
+    let (want, _) = parsed(&analyze(&write("big.csv", plain_big.as_bytes()), &[]));
+    let (c, s) = parsed(&analyze(
+        &write("big_quoted.csv", quoted_big.as_bytes()),
+        &[],
+    ));
+    assert_eq!(s.channels, ["gx", "gy"]);
+    assert_eq!(s.bad_rows, 0);
+    assert_eq!(c.len(), want.len());
+    for (x, y) in c.iter().zip(&want) {
+        assert_eq!((&x.channel, &x.sigma), (&y.channel, &y.sigma));
+    }
+}
