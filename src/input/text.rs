@@ -444,13 +444,18 @@ impl Layout {
         line: u64,
     ) -> Result<Layout, UsageError> {
         let err = |p: String| input_error(path, line, p);
-        // A header field left empty: the last one is a trailing separator (`g1,g2,`), its
-        // column no channel; another is named by its column number, as without a header.
-        let trailing_empty =
-            header && source_names.len() > 1 && source_names.last().is_some_and(String::is_empty);
-        let last = source_names.len() - 1;
+        // Header fields left empty: those after the last name are trailing separators
+        // (`g1,g2,`, a spreadsheet's `gx;gy;;;`), their columns no channels unless the rows
+        // hold values there ([`Layout::with_unnamed_columns_that_hold_numbers`]); another is
+        // named by its column number, as without a header. Before (session 42), only the last
+        // was left out: `gx;gy;;;` gave channels `c3` and `c4` with empty curves.
+        let named_width = source_names
+            .iter()
+            .rposition(|n| !n.is_empty())
+            .map_or(source_names.len(), |j| j + 1);
+        let unnamed_tail = |j: usize| header && j >= named_width;
         for (j, n) in source_names.iter_mut().enumerate() {
-            if n.is_empty() && !(trailing_empty && j == last) {
+            if n.is_empty() && !unnamed_tail(j) {
                 *n = format!("c{}", j + 1);
                 tracing::warn!(
                     "{}: line {line}: column {} has no name in the header; called `{n}`",
@@ -459,7 +464,11 @@ impl Layout {
                 );
             }
         }
-        for (j, n) in source_names.iter().enumerate() {
+        for (j, n) in source_names
+            .iter()
+            .enumerate()
+            .filter(|(_, n)| !n.is_empty())
+        {
             if let Some(i) = source_names[..j].iter().position(|m| m == n) {
                 // A DataFlash text log's first line (`FMT, 128, 89, FMT, BBnNZ, ...`) read as
                 // a header names `FMT` twice: say what the file is, as its start's sniff does.
@@ -623,9 +632,7 @@ impl Layout {
                     );
                 }
                 (0..source_names.len())
-                    .filter(|&i| {
-                        Some(i) != time && !(trailing_empty && i == last) && !other_clock(i)
-                    })
+                    .filter(|&i| Some(i) != time && !unnamed_tail(i) && !other_clock(i))
                     .map(|i| (i, source_names[i].clone()))
                     .unzip()
             }
@@ -721,10 +728,11 @@ impl Layout {
         fill_ahead(src, ahead, AHEAD_LINES)
             .map_err(|e| input_error(path, line + 1, e.to_string()))?;
         let rows_ahead = ahead_text(ahead);
-        let l = if self.has_text_cells(t) {
-            self.without_label_columns(t, &rows_ahead, opts, path, line)?
+        let l = self.with_unnamed_columns_that_hold_numbers(t, &rows_ahead, opts, path, line);
+        let l = if l.has_text_cells(t) {
+            l.without_label_columns(t, &rows_ahead, opts, path, line)?
         } else {
-            self
+            l
         };
         let l = l.without_index_columns(t, &rows_ahead, opts, path, line);
         l.check_interleaved(t, &rows_ahead, opts, path, line)?;
@@ -732,6 +740,48 @@ impl Layout {
             Ok((v, time)) => ((Ok(v), time), l),
             Err(problem) => ((Err(problem), f64::NAN), l),
         })
+    }
+
+    /// The layout with the columns after the header's last name ([`Layout::new`]: no name, so
+    /// far no channel) that hold a number in the first data row `t` or a row `ahead` made
+    /// channels, named by their column number (`c3`) as an unnamed column before a name is. The
+    /// others are trailing separators and stay no channel (text in them, as a LabVIEW file's
+    /// `Comment` column or a second segment's names, is no number): a number in them after the
+    /// rows read ahead is not read.
+    fn with_unnamed_columns_that_hold_numbers(
+        mut self,
+        t: &str,
+        ahead: &[String],
+        opts: &TextOptions,
+        path: &Path,
+        line: u64,
+    ) -> Layout {
+        if opts.columns.is_some() || self.sep == Sep::Labelled {
+            return self;
+        }
+        let rows: Vec<Vec<&str>> = std::iter::once(t)
+            .chain(ahead.iter().map(String::as_str))
+            .map(|r| self.split(r.trim()))
+            .filter(|f| f.len() == self.width_in)
+            .collect();
+        for j in 0..self.width_in {
+            let held = |f: &Vec<&str>| parse_field(f[j]).is_ok_and(|v| !v.is_nan());
+            if !self.source_names[j].is_empty() || !rows.iter().any(held) {
+                continue;
+            }
+            let n = format!("c{}", j + 1);
+            tracing::warn!(
+                "{}: line {line}: column {} has no name in the header but holds numbers; \
+                 called `{n}`",
+                path.display(),
+                j + 1
+            );
+            self.source_names[j] = n.clone();
+            self.keep.push(j);
+            self.strict.push(analysed(&n, opts));
+            self.names.push(n);
+        }
+        self
     }
 
     /// Whether a column the run analyses holds in the first data row `t` a cell that is not a
@@ -1077,12 +1127,15 @@ impl Layout {
             None => {}
         }
         let mut fields = self.sep.split(t);
-        // A last column with no name and no values (LabVIEW's `Comment`): the tab before its
-        // empty cell was trimmed off with the line's white space.
-        if fields.len() + 1 == self.width_in
-            && self.source_names.last().is_some_and(String::is_empty)
+        // Last columns with no name and no values (LabVIEW's `Comment`, a spreadsheet's
+        // `gx;gy;;;`): the separators before their empty cells were trimmed off with the line's
+        // white space, or the row leaves them out.
+        if fields.len() < self.width_in
+            && self.source_names[fields.len()..]
+                .iter()
+                .all(String::is_empty)
         {
-            fields.push("");
+            fields.resize(self.width_in, "");
         }
         if fields.len() == self.width_in {
             fields
@@ -4146,6 +4199,7 @@ mod tests {
         let (names, v, _) = read_all("gx\n0,5\n1,5\n");
         assert_eq!((names, v), (vec!["gx".to_string()], vec![0.5, 1.5]));
     }
+
     /// CSV's quoting: a separator inside double quotes is the field's, the quotes are dropped,
     /// a `""` inside stays in the (text) field and is one `"` in a header name; a `"` that
     /// does not open a field is a character of it; quotes that do not close leave the line
@@ -4199,5 +4253,31 @@ mod tests {
         ] {
             assert!(parse_field(t).is_err(), "{t}");
         }
+    }
+
+    /// Columns after the header's last name with no values are no channels (any number of
+    /// them, the rows ending in fewer separators too); one holding numbers is a channel named
+    /// by its number. Before (session 42), `gx;gy;;;` gave `c3` and `c4`.
+    #[test]
+    fn trailing_empty_columns_are_no_channels() {
+        let (names, v, bad) = read_all("gx;gy;;;\r\n0,5;1,5;;;\r\n2;3;;\r\n4;5\r\n");
+        assert_eq!(
+            (names, v, bad),
+            (
+                vec!["gx".to_string(), "gy".into()],
+                vec![0.5, 1.5, 2.0, 3.0, 4.0, 5.0],
+                0
+            )
+        );
+        let (names, v, bad) = read_all("gx,gy,,\n1,2,,7\n3,4,,\n");
+        assert_eq!(
+            (names, &v[..5], bad),
+            (
+                vec!["gx".to_string(), "gy".into(), "c4".into()],
+                &[1.0, 2.0, 7.0, 3.0, 4.0][..],
+                0
+            )
+        );
+        assert!(v[5].is_nan());
     }
 }

@@ -995,3 +995,38 @@ fn quoted_fields_holding_the_separator_read_as_the_plain_file() {
         assert_eq!((&x.channel, &x.sigma), (&y.channel, &y.sigma));
     }
 }
+
+/// Trailing separators, several of them (`gx;gy;;;` and rows ending `;;;`, with CRLF and
+/// decimal commas, as a spreadsheet exports a sheet wider than its data), are no channels: the
+/// channels are exactly `gx`, `gy`, with the plain file's curves. A column after the last name
+/// that holds numbers is still a channel, named by its number (`c4`). Before (session 42), only
+/// the last empty column was left out: `c3`, `c4` came out as channels with empty curves.
+#[test]
+fn trailing_empty_columns_are_no_channels() {
+    let (pc, ps) = plain();
+    let comma = |x: f64| format!("{x:e}").replace('.', ",");
+    let (a, b) = columns();
+    let (mut semi, mut fourth) = (String::from("gx;gy;;;\r\n"), String::from("gx,gy,,\n"));
+    for i in 0..a.len() {
+        semi += &format!("{};{};;;\r\n", comma(a[i]), comma(b[i]));
+        fourth += &format!("{:e},{:e},,{:e}\n", a[i], b[i], b[i]);
+    }
+    let (c, s) = parsed(&analyze(&write("trailing3.csv", semi.as_bytes()), &[]));
+    assert_eq!(s.channels, ["gx", "gy"]);
+    assert_eq!(
+        (s.samples.as_slice(), s.bad_rows),
+        (ps.samples.as_slice(), 0)
+    );
+    assert_eq!(c.len(), pc.len());
+    for (x, y) in c.iter().zip(&pc) {
+        assert_eq!((&x.channel, &x.sigma), (&y.channel, &y.sigma));
+    }
+    let (c, s) = parsed(&analyze(&write("unnamed4.csv", fourth.as_bytes()), &[]));
+    assert_eq!(s.channels, ["gx", "gy", "c4"]);
+    let gy: Vec<_> = pc.iter().filter(|x| x.channel == "gy").collect();
+    let c4: Vec<_> = c.iter().filter(|x| x.channel == "c4").collect();
+    assert_eq!(c4.len(), gy.len());
+    for (x, y) in c4.iter().zip(&gy) {
+        assert_eq!(x.sigma, y.sigma);
+    }
+}
