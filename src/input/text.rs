@@ -26,7 +26,7 @@ use std::str::FromStr;
 use crate::error::UsageError;
 use crate::input::px4_export;
 use crate::input::sampling_step::SECONDS_PER_DAY;
-use crate::input::time_column::{TimeColumn, TimeState};
+use crate::input::time_column::{TimeColumn, TimeState, FIRST_STEPS};
 
 /// Rows per batch handed to the analysis.
 pub const BATCH_ROWS: usize = 8192;
@@ -1107,6 +1107,33 @@ impl Layout {
 }
 
 impl Layout {
+    /// The stamps of the first rows that are samples, as the reader meets them: `first` (the
+    /// first data row's) and those of the rows `ahead` ([`TextReader::not_a_sample`]'s rows
+    /// and rows that cannot be read left out, as are empty stamps), at most
+    /// [`FIRST_STEPS`]` + 1`. The rows are read again as they come: the order of the dates
+    /// read so far is left as it was.
+    fn first_stamps(&self, first: f64, ahead: &[String], sparse: bool) -> Vec<f64> {
+        let (dates, unread) = (self.dates.get(), self.unread_stamp.borrow().clone());
+        let mut stamps = vec![first];
+        for row in ahead {
+            if stamps.len() > FIRST_STEPS {
+                break;
+            }
+            let Ok((v, t)) = self.parse(row) else {
+                continue;
+            };
+            let p: Row = (Ok(v), t);
+            if t.is_nan() || (sparse && empty_row(&p, &self.strict)) {
+                continue;
+            }
+            stamps.push(t);
+        }
+        self.dates.set(dates);
+        *self.unread_stamp.borrow_mut() = unread;
+        stamps.retain(|t| !t.is_nan());
+        stamps
+    }
+
     /// A time stamp written as a date and time ([`date_time`]), an open date (`03/12/2026`)
     /// read in the order the file's rows decide ([`DateOrder`]).
     fn stamp(&self, field: &str) -> Option<f64> {
@@ -2539,7 +2566,11 @@ impl<R: BufRead> TextReader<R> {
                 _ => None,
             };
             if let Some(c) = &mut time {
-                // The first stamp starts the clock.
+                // The clock's unit from the first steps when the first is no tau0 (a sample
+                // missing right after the first, the first stamp written twice); then the
+                // first stamp starts the clock.
+                let first = layout.first_stamps(values.1, &ahead_text(&ahead), opts.sparse_rows);
+                c.unit_from_first_steps(&first, path);
                 c.missing_before(values.1, path, line_no);
             }
             return Ok(TextReader {

@@ -1030,3 +1030,65 @@ fn trailing_empty_columns_are_no_channels() {
         assert_eq!(x.sigma, y.sigma);
     }
 }
+
+/// A time column whose first step is not tau0 still finds the gaps: the 400 rows with row 1
+/// left out (the first step 0.02 s, one sample missing) and rows 200..210 left out read as the
+/// file with those 11 rows empty (the same curves to the last bit, t_data 4 s, 2 gaps of 1 and
+/// 10 samples); with the first stamp written twice (another value), the column is used too:
+/// one repeated stamp, the gap of 10, 401 samples (4.01 s). Before (session 42), the first step
+/// alone ruled the column out (`used: false`, no gap, t_data 3.89 s, the later gap joined).
+#[test]
+fn a_first_step_that_is_not_tau0_does_not_rule_the_time_column_out() {
+    let (a, b) = columns();
+    let missing = |i: usize| i == 1 || (200..210).contains(&i);
+    let (mut marked, mut skipped) = (String::from("gx,gy\n"), String::from("time,gx,gy\n"));
+    for i in 0..a.len() {
+        if missing(i) {
+            marked += "nan,nan\n";
+        } else {
+            marked += &format!("{:e},{:e}\n", a[i], b[i]);
+            skipped += &format!("{:.2},{:e},{:e}\n", i as f64 * 0.01, a[i], b[i]);
+        }
+    }
+    let (mc, ms) = parsed(&analyze(&write("first_marked.csv", marked.as_bytes()), &[]));
+    let (c, s) = parsed(&analyze(&write("first_gap.csv", skipped.as_bytes()), &[]));
+    assert_eq!((s.t_data, ms.t_data), (4.0, 4.0));
+    assert_eq!(s.samples, ms.samples);
+    let t = s.time_column.as_ref().expect("summary.time_column");
+    assert_eq!(
+        (t.used, t.unit.as_deref(), t.gaps, t.missing_samples),
+        (true, Some("s"), 2, 11)
+    );
+    assert_eq!((t.backwards, t.irregular, t.discontinuities), (0, 0, 0));
+    assert_eq!(c.len(), mc.len());
+    for (x, y) in c.iter().zip(&mc) {
+        assert_eq!(
+            (&x.channel, &x.count, &x.sigma),
+            (&y.channel, &y.count, &y.sigma)
+        );
+    }
+    // The first stamp twice, the second time with another value; rows 200..210 left out: 391
+    // rows, 401 steps with the gap's 10, and 393 phase points (391 rows in 2 segments).
+    let mut dup = String::from("time,gx,gy\n0.00,0.0123,-0.0456\n");
+    for i in (0..a.len()).filter(|i| !(200..210).contains(i)) {
+        dup += &format!("{:.2},{:e},{:e}\n", i as f64 * 0.01, a[i], b[i]);
+    }
+    let out = analyze(&write("first_dup.csv", dup.as_bytes()), &[]);
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    let (_, s) = parsed(&out);
+    assert!(
+        err.contains(
+            "line 3: the time column `time` goes nowhere (a repeated stamp) at its first step"
+        ),
+        "{err}"
+    );
+    let t = s.time_column.as_ref().expect("summary.time_column");
+    assert_eq!(
+        (t.used, t.gaps, t.missing_samples, t.backwards, t.irregular),
+        (true, 1, 10, 1, 0)
+    );
+    assert_eq!(
+        (s.t_data, s.samples.as_slice()),
+        (4.01, [393, 393].as_slice())
+    );
+}
