@@ -1,6 +1,10 @@
 //! Text columns: one row per sample, columns separated by commas, semicolons, tabs or spaces,
 //! an optional first row of channel names (otherwise `c1`, `c2`, ...; a UTF-8 byte-order mark
-//! before it is dropped, duplicate names are refused), `#` lines skipped (docs/records.md). A `#`
+//! before it is dropped, duplicate names are refused; columns after the last name that hold no
+//! number in the first rows are trailing separators, no channels:
+//! [`Layout::with_unnamed_columns_that_hold_numbers`]), `#` lines skipped (docs/records.md).
+//! A field in double quotes may hold the separator, by CSV's rule ([`split_quoted`]:
+//! `"ok, nominal"` one label, `"0,25"` a decimal comma, `"2,001.52"` read by [`thousands`]). A `#`
 //! line just before the first data row that names as many columns as the row has (`#timestamp
 //! [ns],w_RS_S_x [rad s^-1],...`, as EuRoC and TUM datasets write) is that header. A column
 //! whose first data row holds text (`imu_link`, `OK`) is a label and no channel unless the run
