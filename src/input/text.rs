@@ -1,6 +1,10 @@
 //! Text columns: one row per sample, columns separated by commas, semicolons, tabs or spaces,
 //! an optional first row of channel names (otherwise `c1`, `c2`, ...; a UTF-8 byte-order mark
-//! before it is dropped, duplicate names are refused), `#` lines skipped (docs/records.md). A `#`
+//! before it is dropped, duplicate names are refused; columns after the last name that hold no
+//! number in the first rows are trailing separators, no channels:
+//! [`Layout::with_unnamed_columns_that_hold_numbers`]), `#` lines skipped (docs/records.md).
+//! A field in double quotes may hold the separator, by CSV's rule ([`split_quoted`]:
+//! `"ok, nominal"` one label, `"0,25"` a decimal comma, `"2,001.52"` read by [`thousands`]). A `#`
 //! line just before the first data row that names as many columns as the row has (`#timestamp
 //! [ns],w_RS_S_x [rad s^-1],...`, as EuRoC and TUM datasets write) is that header. A column
 //! whose first data row holds text (`imu_link`, `OK`) is a label and no channel unless the run
@@ -26,7 +30,7 @@ use std::str::FromStr;
 use crate::error::UsageError;
 use crate::input::px4_export;
 use crate::input::sampling_step::SECONDS_PER_DAY;
-use crate::input::time_column::{TimeColumn, TimeState};
+use crate::input::time_column::{TimeColumn, TimeState, FIRST_STEPS};
 
 /// Rows per batch handed to the analysis.
 pub const BATCH_ROWS: usize = 8192;
@@ -484,13 +488,18 @@ impl Layout {
         line: u64,
     ) -> Result<Layout, UsageError> {
         let err = |p: String| input_error(path, line, p);
-        // A header field left empty: the last one is a trailing separator (`g1,g2,`), its
-        // column no channel; another is named by its column number, as without a header.
-        let trailing_empty =
-            header && source_names.len() > 1 && source_names.last().is_some_and(String::is_empty);
-        let last = source_names.len() - 1;
+        // Header fields left empty: those after the last name are trailing separators
+        // (`g1,g2,`, a spreadsheet's `gx;gy;;;`), their columns no channels unless the rows
+        // hold values there ([`Layout::with_unnamed_columns_that_hold_numbers`]); another is
+        // named by its column number, as without a header. Before (session 42), only the last
+        // was left out: `gx;gy;;;` gave channels `c3` and `c4` with empty curves.
+        let named_width = source_names
+            .iter()
+            .rposition(|n| !n.is_empty())
+            .map_or(source_names.len(), |j| j + 1);
+        let unnamed_tail = |j: usize| header && j >= named_width;
         for (j, n) in source_names.iter_mut().enumerate() {
-            if n.is_empty() && !(trailing_empty && j == last) {
+            if n.is_empty() && !unnamed_tail(j) {
                 *n = format!("c{}", j + 1);
                 tracing::warn!(
                     "{}: line {line}: column {} has no name in the header; called `{n}`",
@@ -499,7 +508,11 @@ impl Layout {
                 );
             }
         }
-        for (j, n) in source_names.iter().enumerate() {
+        for (j, n) in source_names
+            .iter()
+            .enumerate()
+            .filter(|(_, n)| !n.is_empty())
+        {
             if let Some(i) = source_names[..j].iter().position(|m| m == n) {
                 // A DataFlash text log's first line (`FMT, 128, 89, FMT, BBnNZ, ...`) read as
                 // a header names `FMT` twice: say what the file is, as its start's sniff does.
@@ -663,9 +676,7 @@ impl Layout {
                     );
                 }
                 (0..source_names.len())
-                    .filter(|&i| {
-                        Some(i) != time && !(trailing_empty && i == last) && !other_clock(i)
-                    })
+                    .filter(|&i| Some(i) != time && !unnamed_tail(i) && !other_clock(i))
                     .map(|i| (i, source_names[i].clone()))
                     .unzip()
             }
@@ -761,10 +772,11 @@ impl Layout {
         fill_ahead(src, ahead, AHEAD_LINES)
             .map_err(|e| input_error(path, line + 1, e.to_string()))?;
         let rows_ahead = ahead_text(ahead);
-        let l = if self.has_text_cells(t) {
-            self.without_label_columns(t, &rows_ahead, opts, path, line)?
+        let l = self.with_unnamed_columns_that_hold_numbers(t, &rows_ahead, opts, path, line);
+        let l = if l.has_text_cells(t) {
+            l.without_label_columns(t, &rows_ahead, opts, path, line)?
         } else {
-            self
+            l
         };
         let l = l.without_index_columns(t, &rows_ahead, opts, path, line);
         l.check_interleaved(t, &rows_ahead, opts, path, line)?;
@@ -772,6 +784,48 @@ impl Layout {
             Ok((v, time)) => ((Ok(v), time), l),
             Err(problem) => ((Err(problem), f64::NAN), l),
         })
+    }
+
+    /// The layout with the columns after the header's last name ([`Layout::new`]: no name, so
+    /// far no channel) that hold a number in the first data row `t` or a row `ahead` made
+    /// channels, named by their column number (`c3`) as an unnamed column before a name is. The
+    /// others are trailing separators and stay no channel (text in them, as a LabVIEW file's
+    /// `Comment` column or a second segment's names, is no number): a number in them after the
+    /// rows read ahead is not read.
+    fn with_unnamed_columns_that_hold_numbers(
+        mut self,
+        t: &str,
+        ahead: &[String],
+        opts: &TextOptions,
+        path: &Path,
+        line: u64,
+    ) -> Layout {
+        if opts.columns.is_some() || self.sep == Sep::Labelled {
+            return self;
+        }
+        let rows: Vec<Vec<&str>> = std::iter::once(t)
+            .chain(ahead.iter().map(String::as_str))
+            .map(|r| self.split(r.trim()))
+            .filter(|f| f.len() == self.width_in)
+            .collect();
+        for j in 0..self.width_in {
+            let held = |f: &Vec<&str>| parse_field(f[j]).is_ok_and(|v| !v.is_nan());
+            if !self.source_names[j].is_empty() || !rows.iter().any(held) {
+                continue;
+            }
+            let n = format!("c{}", j + 1);
+            tracing::warn!(
+                "{}: line {line}: column {} has no name in the header but holds numbers; \
+                 called `{n}`",
+                path.display(),
+                j + 1
+            );
+            self.source_names[j] = n.clone();
+            self.keep.push(j);
+            self.strict.push(analysed(&n, opts));
+            self.names.push(n);
+        }
+        self
     }
 
     /// Whether a column the run analyses holds in the first data row `t` a cell that is not a
@@ -1097,6 +1151,33 @@ impl Layout {
 }
 
 impl Layout {
+    /// The stamps of the first rows that are samples, as the reader meets them: `first` (the
+    /// first data row's) and those of the rows `ahead` ([`TextReader::not_a_sample`]'s rows
+    /// and rows that cannot be read left out, as are empty stamps), at most
+    /// [`FIRST_STEPS`]` + 1`. The rows are read again as they come: the order of the dates
+    /// read so far is left as it was.
+    fn first_stamps(&self, first: f64, ahead: &[String], sparse: bool) -> Vec<f64> {
+        let (dates, unread) = (self.dates.get(), self.unread_stamp.borrow().clone());
+        let mut stamps = vec![first];
+        for row in ahead {
+            if stamps.len() > FIRST_STEPS {
+                break;
+            }
+            let Ok((v, t)) = self.parse(row) else {
+                continue;
+            };
+            let p: Row = (Ok(v), t);
+            if t.is_nan() || (sparse && empty_row(&p, &self.strict)) {
+                continue;
+            }
+            stamps.push(t);
+        }
+        self.dates.set(dates);
+        *self.unread_stamp.borrow_mut() = unread;
+        stamps.retain(|t| !t.is_nan());
+        stamps
+    }
+
     /// A time stamp written as a date and time ([`date_time`]), an open date (`03/12/2026`)
     /// read in the order the file's rows decide ([`DateOrder`]).
     fn stamp(&self, field: &str) -> Option<f64> {
@@ -1117,12 +1198,15 @@ impl Layout {
             None => {}
         }
         let mut fields = self.sep.split(t);
-        // A last column with no name and no values (LabVIEW's `Comment`): the tab before its
-        // empty cell was trimmed off with the line's white space.
-        if fields.len() + 1 == self.width_in
-            && self.source_names.last().is_some_and(String::is_empty)
+        // Last columns with no name and no values (LabVIEW's `Comment`, a spreadsheet's
+        // `gx;gy;;;`): the separators before their empty cells were trimmed off with the line's
+        // white space, or the row leaves them out.
+        if fields.len() < self.width_in
+            && self.source_names[fields.len()..]
+                .iter()
+                .all(String::is_empty)
         {
-            fields.push("");
+            fields.resize(self.width_in, "");
         }
         if fields.len() == self.width_in {
             fields
@@ -1391,6 +1475,7 @@ fn parse_field(t: &str) -> Result<f64, ()> {
     }
     t.parse::<f64>()
         .or_else(|e| decimal_comma(t).ok_or(e))
+        .or_else(|e| thousands(t).ok_or(e))
         .or_else(|e| fortran_exponent(t).ok_or(e))
         .map_err(|_| ())
 }
@@ -1787,7 +1872,8 @@ fn units_row(fields: &[&str]) -> bool {
 
 /// `0,25` or `-1,5e-3` read as `0.25`, `-1.5e-3`: a decimal comma, as spreadsheets in many
 /// languages write it. Only a comma between two digits, with no point in the field, is taken;
-/// such a field can only arise where the columns are separated by semicolons or tabs.
+/// such a field can only arise where the columns are separated by semicolons or tabs, or in
+/// double quotes (`"0,25"`, [`split_quoted`]).
 fn decimal_comma(t: &str) -> Option<f64> {
     let (int, frac) = t.split_once(',')?;
     let digit_before = int.bytes().last().is_some_and(|b| b.is_ascii_digit());
@@ -1796,6 +1882,43 @@ fn decimal_comma(t: &str) -> Option<f64> {
         return None;
     }
     format!("{int}.{frac}").parse().ok()
+}
+
+/// `2,001.52` or `-1,234,567.5` (and `2.001,52`, as a decimal-comma spreadsheet writes it)
+/// read as `2001.52`, `-1234567.5`: digits grouped by thousands, as spreadsheets export them in
+/// double quotes (`"2,001.52"`). Taken only where it cannot be read otherwise: both marks
+/// stand, the last one is the decimal mark, and the other one groups the digits in threes
+/// after one to three leading ones. `2,001` (no point) stays a decimal comma, 2.001
+/// ([`decimal_comma`]), and `2,00.5` or `20,01.5` are no numbers: a decimal comma is never read
+/// as a thousands separator. Before (session 42), `"2,001.52"` was no number.
+fn thousands(t: &str) -> Option<f64> {
+    let (sign, body) = match t.strip_prefix(['-', '+']) {
+        Some(b) => (&t[..1], b),
+        None => ("", t),
+    };
+    let (point, group) = match (body.rfind('.'), body.rfind(',')) {
+        (Some(p), Some(c)) if p > c => ('.', ','),
+        (Some(_), Some(_)) => (',', '.'),
+        _ => return None,
+    };
+    let (int, frac) = body.rsplit_once(point)?;
+    let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    if int.contains(point) || !digits(frac) {
+        return None;
+    }
+    let mut groups = int.split(group);
+    let lead = groups.next()?;
+    if !digits(lead) || lead.len() > 3 {
+        return None;
+    }
+    let mut whole = lead.to_string();
+    for g in groups {
+        if g.len() != 3 || !digits(g) {
+            return None;
+        }
+        whole += g;
+    }
+    format!("{sign}{whole}.{frac}").parse().ok()
 }
 
 /// The column names of a `#` line taken as the header of data rows `width` wide: as many
@@ -1855,7 +1978,10 @@ fn labelled_cells(line: &str) -> Option<Vec<(&str, &str)>> {
 }
 
 impl Sep {
+    /// The separator of `line`, told by the characters outside its double quotes
+    /// ([`unquoted`]): `"0,25";"1,5"` is two columns, `0.00,"ok; nominal",1.72` three.
     fn of(line: &str) -> Sep {
+        let line = &*unquoted(line);
         if line.contains(';') {
             Sep::Semicolon
         } else if line.contains('\t') && line.trim().split('\t').all(|f| !f.trim().is_empty()) {
@@ -1867,15 +1993,129 @@ impl Sep {
         }
     }
 
+    /// The fields of `line`, a separator inside double quotes part of its field
+    /// ([`split_quoted`]).
     fn split(self, line: &str) -> Vec<&str> {
+        let quoted = line.contains('"');
         match self {
-            Sep::Semicolon => line.split(';').collect(),
-            Sep::Tab => line.split('\t').collect(),
-            Sep::Comma => line.split(',').collect(),
-            Sep::Spaces => line.split_whitespace().collect(),
+            Sep::Semicolon if !quoted => line.split(';').collect(),
+            Sep::Tab if !quoted => line.split('\t').collect(),
+            Sep::Comma if !quoted => line.split(',').collect(),
+            Sep::Spaces if !quoted => line.split_whitespace().collect(),
+            Sep::Semicolon => split_quoted(line, |c| c == ';', false),
+            Sep::Tab => split_quoted(line, |c| c == '\t', false),
+            Sep::Comma => split_quoted(line, |c| c == ',', false),
+            Sep::Spaces => split_quoted(line, char::is_whitespace, true),
             // Laid out by [`Layout::labelled_fields`]; a line that is not such, as it suggests.
             Sep::Labelled => split(line),
         }
+    }
+}
+
+/// The fields of `line` between separators (`is_sep`; with `runs`, a run of them is one and
+/// those at the ends are dropped, as `split_whitespace` does), by the CSV quoting rule (RFC
+/// 4180): a field that starts with `"` (after spaces) runs to the next `"` that is not doubled,
+/// the separators inside it its own, and is handed on without its quotes (`"ok, nominal"` ->
+/// `ok, nominal`, `"0,25"` -> `0,25`, read as a decimal comma, `"2,001.52"` -> `2,001.52`,
+/// read as [`thousands`]). A doubled `""` inside stays doubled in the field: only text holds
+/// one, and a header name is unescaped where it is made ([`header_name`]). A `"` inside a field
+/// that did not start with one is a character of it (`12"`). A line whose quotes do not close
+/// is split as if it had none. Before (session 42) every separator split: each row of
+/// `0.00,"ok, nominal",1.72` or `"0,00","1,727921"` was a bad row of 4 fields where the
+/// header has 3 (or 2), and the run stopped with no sample.
+fn split_quoted<'a>(line: &'a str, is_sep: impl Fn(char) -> bool, runs: bool) -> Vec<&'a str> {
+    let mut out = Vec::new();
+    let (mut start, mut at_start, mut in_quotes) = (0, true, false);
+    let mut chars = line.char_indices().peekable();
+    let push = |field: &'a str, out: &mut Vec<&'a str>| {
+        if !(runs && field.is_empty()) {
+            out.push(field);
+        }
+    };
+    while let Some((i, c)) = chars.next() {
+        if in_quotes {
+            if c == '"' {
+                if chars.peek().is_some_and(|&(_, n)| n == '"') {
+                    chars.next();
+                } else {
+                    in_quotes = false;
+                }
+            }
+        } else if is_sep(c) {
+            push(&line[start..i], &mut out);
+            start = i + c.len_utf8();
+            at_start = true;
+        } else if c == '"' && at_start {
+            in_quotes = true;
+            at_start = false;
+        } else if !c.is_whitespace() {
+            at_start = false;
+        }
+    }
+    if in_quotes {
+        return if runs {
+            line.split_whitespace().collect()
+        } else {
+            line.split(is_sep).collect()
+        };
+    }
+    push(&line[start..], &mut out);
+    out.into_iter()
+        .map(|f| {
+            let t = f.trim();
+            match t.strip_prefix('"').and_then(|q| q.strip_suffix('"')) {
+                Some(inner) if t.len() >= 2 => inner,
+                _ => f,
+            }
+        })
+        .collect()
+}
+
+/// `line` with the characters inside its double-quoted fields (as [`split_quoted`] reads them,
+/// a quote opening a field at the line's start or after a space or a separator) replaced by
+/// `x`, so that the separator is told by the characters outside them; `line` itself when it
+/// has no quotes or they do not close.
+fn unquoted(line: &str) -> std::borrow::Cow<'_, str> {
+    if !line.contains('"') {
+        return line.into();
+    }
+    let mut out = String::with_capacity(line.len());
+    let (mut in_quotes, mut prev) = (false, ' ');
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        if in_quotes {
+            if c == '"' {
+                if chars.peek() == Some(&'"') {
+                    chars.next();
+                    out.push('x');
+                } else {
+                    in_quotes = false;
+                    out.push(c);
+                }
+            } else {
+                out.push('x');
+            }
+        } else {
+            in_quotes = c == '"' && (prev.is_whitespace() || [',', ';'].contains(&prev));
+            out.push(c);
+        }
+        prev = c;
+    }
+    if in_quotes {
+        line.into()
+    } else {
+        out.into()
+    }
+}
+
+/// A header's name as its field holds it: without the quotes around it, a doubled `""` inside
+/// them one `"` (CSV's escape, [`split_quoted`]).
+fn header_name(field: &str) -> String {
+    let n = field.trim();
+    if n.contains("\"\"") {
+        n.replace("\"\"", "\"")
+    } else {
+        n.trim_matches('"').trim().to_string()
     }
 }
 
@@ -2057,14 +2297,16 @@ fn spaced_names(words: &[&str]) -> Vec<String> {
     names
 }
 
-/// A row's fields by the row alone: commas, else semicolons, else spaces and tabs.
+/// A row's fields by the row alone: commas, else semicolons, else spaces and tabs (outside
+/// double quotes, [`Sep::split`]).
 fn split(line: &str) -> Vec<&str> {
-    if line.contains(',') {
-        line.split(',').collect()
-    } else if line.contains(';') {
-        line.split(';').collect()
+    let bare = unquoted(line);
+    if bare.contains(',') {
+        Sep::Comma.split(line)
+    } else if bare.contains(';') {
+        Sep::Semicolon.split(line)
     } else {
-        line.split_whitespace().collect()
+        Sep::Spaces.split(line)
     }
 }
 
@@ -2309,10 +2551,7 @@ impl<R: BufRead> TextReader<R> {
                                 let mut names: Vec<String> = if sep == Sep::Spaces {
                                     spaced_names(&fields)
                                 } else {
-                                    fields
-                                        .iter()
-                                        .map(|f| f.trim().trim_matches('"').trim().to_string())
-                                        .collect()
+                                    fields.iter().map(|f| header_name(f)).collect()
                                 };
                                 header_rows.push(names.clone());
                                 layout_line = line_no;
@@ -2371,7 +2610,11 @@ impl<R: BufRead> TextReader<R> {
                 _ => None,
             };
             if let Some(c) = &mut time {
-                // The first stamp starts the clock.
+                // The clock's unit from the first steps when the first is no tau0 (a sample
+                // missing right after the first, the first stamp written twice); then the
+                // first stamp starts the clock.
+                let first = layout.first_stamps(values.1, &ahead_text(&ahead), opts.sparse_rows);
+                c.unit_from_first_steps(&first, path);
                 c.missing_before(values.1, path, line_no);
             }
             return Ok(TextReader {
@@ -4057,5 +4300,86 @@ mod tests {
         );
         let (names, v, _) = read_all("gx\n0,5\n1,5\n");
         assert_eq!((names, v), (vec!["gx".to_string()], vec![0.5, 1.5]));
+    }
+
+    /// CSV's quoting: a separator inside double quotes is the field's, the quotes are dropped,
+    /// a `""` inside stays in the (text) field and is one `"` in a header name; a `"` that
+    /// does not open a field is a character of it; quotes that do not close leave the line
+    /// split as if it had none. Quoted numbers read with a decimal comma or thousands; an
+    /// unquoted `2,001` in a `;` file stays a decimal comma. Before (session 42), each of
+    /// these rows was a bad row of too many fields.
+    #[test]
+    fn quoted_fields_keep_their_separators() {
+        assert_eq!(
+            Sep::Comma.split(r#"0.00,"ok, nominal",1.72"#),
+            ["0.00", "ok, nominal", "1.72"]
+        );
+        assert_eq!(
+            Sep::Comma.split(r#" "a ""b"", c" ,12",3"#),
+            [r#"a ""b"", c"#, "12\"", "3"]
+        );
+        assert_eq!(Sep::Comma.split(r#""a,b,c"#), [r#""a"#, "b", "c"]);
+        assert_eq!(Sep::Spaces.split(r#"  1 "a b"   2 "#), ["1", "a b", "2"]);
+        assert_eq!(Sep::of(r#""0,5";"1,5""#), Sep::Semicolon);
+        assert_eq!(Sep::of(r#"1,"a;b",2"#), Sep::Comma);
+        assert_eq!(split(r#""0,00","1,727921""#), ["0,00", "1,727921"]);
+        assert_eq!(header_name(r#"gx ""raw"""#), r#"gx "raw""#);
+        let (names, v, bad) =
+            read_all("time,status,gx\n0.00,\"ok, nominal\",1.72\n0.01,\"ok, nominal\",-0.5\n");
+        assert_eq!(
+            (names, v, bad),
+            (vec!["gx".to_string()], vec![1.72, -0.5], 0)
+        );
+        let (names, v, bad) =
+            read_all("gx,gy\n\"0,25\",\"2,001.52\"\n\"-1,5e-3\",\"1,234,567.5\"\n");
+        assert_eq!(
+            (names, v, bad),
+            (
+                vec!["gx".to_string(), "gy".to_string()],
+                vec![0.25, 2001.52, -1.5e-3, 1234567.5],
+                0
+            )
+        );
+        assert_eq!(
+            ["2.001,52", "-1.234.567,5", "2,001", "+2,001.5"].map(|t| parse_field(t).ok()),
+            [Some(2001.52), Some(-1234567.5), Some(2.001), Some(2001.5)]
+        );
+        // No grouping in threes, or two decimal marks: no number.
+        for t in [
+            "2,00.5",
+            "20,01.5",
+            "1234,567.5",
+            "2,001.5.2",
+            "2,001.",
+            ",001.5",
+        ] {
+            assert!(parse_field(t).is_err(), "{t}");
+        }
+    }
+
+    /// Columns after the header's last name with no values are no channels (any number of
+    /// them, the rows ending in fewer separators too); one holding numbers is a channel named
+    /// by its number. Before (session 42), `gx;gy;;;` gave `c3` and `c4`.
+    #[test]
+    fn trailing_empty_columns_are_no_channels() {
+        let (names, v, bad) = read_all("gx;gy;;;\r\n0,5;1,5;;;\r\n2;3;;\r\n4;5\r\n");
+        assert_eq!(
+            (names, v, bad),
+            (
+                vec!["gx".to_string(), "gy".into()],
+                vec![0.5, 1.5, 2.0, 3.0, 4.0, 5.0],
+                0
+            )
+        );
+        let (names, v, bad) = read_all("gx,gy,,\n1,2,,7\n3,4,,\n");
+        assert_eq!(
+            (names, &v[..5], bad),
+            (
+                vec!["gx".to_string(), "gy".into(), "c4".into()],
+                &[1.0, 2.0, 7.0, 3.0, 4.0][..],
+                0
+            )
+        );
+        assert!(v[5].is_nan());
     }
 }

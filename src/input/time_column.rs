@@ -5,10 +5,16 @@
 //! variances (docs/theory.md section 1) and `t_data` counts them.
 //!
 //! The column's unit is decided at its first step: seconds, or ms, us or ns when the step is
-//! `tau0` in one of those (logged). A first step that is none of these (a wrong `--tau0`, or a
-//! column that is not a time) is reported and the column is only skipped, never used. Later
-//! steps that go backwards or repeat (`dt <= 0`) and steps that are not whole multiples of
-//! `tau0` (more than a quarter step off) are counted and reported with their line numbers; a
+//! `tau0` in one of those (logged). When the first step is none of these but most of the
+//! [`FIRST_STEPS`] after it are `tau0` in one unit (a sample missing right after the first
+//! row, the first stamp written twice), that unit is taken and the first step read in it as any
+//! later one ([`TimeColumn::unit_from_first_steps`]). A column whose first steps agree on no
+//! unit (a wrong `--tau0`, or a column that is not a time) is reported and only skipped, never
+//! used. Before (session 42), one odd first step alone ruled the column out: a gap later in the
+//! file was joined, unseen.
+//!
+//! Later steps that go backwards or repeat (`dt <= 0`) and steps that are not whole multiples
+//! of `tau0` (more than a quarter step off) are counted and reported with their line numbers; a
 //! row stamped backwards is taken as the next sample (the clock moves on one step from where it
 //! was) and inserts nothing. When it went back by more than a step and the row after it steps
 //! on by one `tau0` from that backward stamp, the clock was reset or wrapped (a 32-bit
@@ -59,6 +65,11 @@ pub fn step_scale(name: &str, dt: f64, tau0_s: f64) -> Option<&'static (f64, &'s
         })
 }
 
+/// Steps after the first looked at for the column's unit when the first is no `tau0`
+/// ([`TimeColumn::unit_from_first_steps`]): a few, so that one odd step among them does not
+/// decide, and all within the rows the reader has read ahead at its start.
+pub const FIRST_STEPS: usize = 8;
+
 /// How far a step may be from a whole number of `tau0` before it is counted irregular.
 const STEP_TOLERANCE: f64 = 0.25;
 
@@ -95,6 +106,9 @@ pub struct TimeColumn {
     /// A counter of samples (`PacketCounter`, `field.header.seq`) stands in for a missing time
     /// column ([`TimeColumn::counter`]).
     counter: bool,
+    /// The unit was taken from the steps after the first ([`TimeColumn::unit_from_first_steps`])
+    /// and the first step is still to come.
+    odd_first: bool,
 }
 
 /// Where a time column stands, for a checkpoint (`TextPosition`), and what it found so far (the
@@ -161,6 +175,7 @@ impl TimeColumn {
             duplicates: 0,
             restart: None,
             counter: false,
+            odd_first: false,
         }
     }
 
@@ -173,6 +188,55 @@ impl TimeColumn {
             counter: true,
             ..TimeColumn::new(name, 1.0)
         }
+    }
+
+    /// The unit decided from the column's first `stamps` (column units, in the order of the
+    /// rows, the first row's first; NaN left out) before the first row is handed out, when its
+    /// first step is no `tau0` in any unit: the unit in which the first of the next
+    /// [`FIRST_STEPS`] steps that is `tau0` in one is, when most of them (more than half) are
+    /// `tau0` in it too. The first step is then read in that unit as a later one is: `k` steps
+    /// (`0.00, 0.02, 0.03` at 0.01 s) are `k - 1` missing samples, a gap; a stamp that repeats
+    /// the first (`0.00, 0.00, 0.01`, the first written twice with another value) or goes back
+    /// is counted backwards and the clock starts again at it (the next step is the first
+    /// sample's, not one more missing or repeated). A first step that is `tau0`, a counter, and
+    /// steps that agree on no unit (a column stepping 0.02 under `--tau0 0.01`) leave the
+    /// decision to the first step, as before.
+    pub fn unit_from_first_steps(&mut self, stamps: &[f64], file: &std::path::Path) {
+        if self.counter || self.scale.is_some() || stamps.len() < 3 {
+            return;
+        }
+        let (first, later) = (stamps[1] - stamps[0], &stamps[1..]);
+        if step_scale(&self.name, first, self.tau0_s).is_some() {
+            return;
+        }
+        let steps: Vec<f64> = later
+            .windows(2)
+            .take(FIRST_STEPS)
+            .map(|w| w[1] - w[0])
+            .collect();
+        let Some(&(scale, unit)) = steps
+            .iter()
+            .find_map(|&dt| step_scale(&self.name, dt, self.tau0_s))
+        else {
+            return;
+        };
+        let agree = steps
+            .iter()
+            .filter(|&&dt| step_scale(&self.name, dt, self.tau0_s).is_some_and(|s| s.0 == scale))
+            .count();
+        if 2 * agree <= steps.len() {
+            return;
+        }
+        tracing::info!(
+            "{}: time column `{}` read in {unit}: its first step is {first} {unit} = {:.3} \
+             tau0, {agree} of the {} after it are tau0",
+            file.display(),
+            self.name,
+            first * scale / self.tau0_s,
+            steps.len()
+        );
+        self.scale = Some(scale);
+        self.odd_first = true;
     }
 
     /// The state a resumed reader continues from.
@@ -306,6 +370,24 @@ impl TimeColumn {
             }
         };
         let steps = dt * scale / self.tau0_s;
+        // A first step that repeats or goes back, the unit read off the steps after it: the
+        // clock starts again at this row (moved on one step, as a later one is, every row
+        // after it would repeat its stamp).
+        if std::mem::take(&mut self.odd_first) && dt <= 0.0 {
+            self.backwards += 1;
+            tracing::warn!(
+                "{}: line {line}: the time column `{}` goes {} at its first step ({last} -> {t}); \
+                 the clock starts at this row, no gap inserted",
+                file.display(),
+                self.name,
+                if dt < 0.0 {
+                    "backwards"
+                } else {
+                    "nowhere (a repeated stamp)"
+                }
+            );
+            return 0;
+        }
         // A counter's wrap: from near the top of its range (a power of two) to near 0, the
         // counts across the wrap being the samples, so those between are missing.
         if self.counter && dt < 0.0 && t >= 0.0 && last >= 1.0 {
@@ -595,5 +677,54 @@ mod tests {
         c.missing_before(0.0, p, 2);
         c.missing_before(10.0, p, 3);
         assert_eq!(c.state().unit(), Some("100us"));
+    }
+
+    /// A first step that is no tau0, the steps after it tau0 in one unit: the unit is theirs
+    /// and the first step is read in it, a jump of 2 steps one missing sample (s; and ms at
+    /// 4 ms), a repeated first stamp one step backwards after which the clock reads on with no
+    /// more (before, each row after it repeated its stamp). Steps all 2 tau0, or half of them
+    /// odd, decide nothing: the first step rules the column out, as before (session 42: any
+    /// odd first step did).
+    #[test]
+    fn the_unit_from_the_steps_after_an_odd_first_one() {
+        let p = Path::new("x.csv");
+        let run = |c: &mut TimeColumn, stamps: &[f64]| -> Vec<u64> {
+            c.unit_from_first_steps(stamps, p);
+            let mut got = Vec::new();
+            for (i, &t) in stamps.iter().enumerate() {
+                let m = c.missing_before(t, p, i as u64 + 2);
+                if m > 0 {
+                    hand_out(c, m, t);
+                }
+                got.push(m);
+            }
+            got
+        };
+        let mut c = TimeColumn::new("time", 0.01);
+        assert_eq!(
+            run(&mut c, &[0.0, 0.02, 0.03, 0.04, 0.05, 0.08]),
+            [0, 1, 0, 0, 0, 2]
+        );
+        assert_eq!(
+            (c.in_use(), c.state().unit(), c.jumps, c.missing),
+            (true, Some("s"), 2, 3)
+        );
+        let mut c = TimeColumn::new("t", 0.004);
+        assert_eq!(run(&mut c, &[1000.0, 1008.0, 1012.0, 1016.0]), [0, 1, 0, 0]);
+        assert_eq!((c.state().unit(), c.missing), (Some("ms"), 1));
+        let mut c = TimeColumn::new("time", 0.01);
+        assert_eq!(
+            run(&mut c, &[0.0, 0.0, 0.01, 0.02, 0.03, 0.05]),
+            [0, 0, 0, 0, 0, 1]
+        );
+        assert_eq!((c.backwards, c.irregular, c.missing), (1, 0, 1));
+        for stamps in [
+            &[0.0, 0.02, 0.04, 0.06, 0.08][..],
+            &[0.0, 0.02, 0.03, 0.05, 0.07, 0.09],
+        ] {
+            let mut c = TimeColumn::new("time", 0.01);
+            assert_eq!(run(&mut c, stamps).iter().sum::<u64>(), 0, "{stamps:?}");
+            assert!(!c.in_use(), "{stamps:?}");
+        }
     }
 }

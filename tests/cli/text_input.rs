@@ -953,3 +953,166 @@ fn an_axis_count_column_is_a_channel_not_the_sample_counter() {
     let (pc, _) = plain();
     assert_eq!(c[0].sigma, pc[0].sigma);
 }
+
+/// Fields in double quotes that hold the separator are one field each, by CSV's rule: a quoted
+/// label with a comma (`"ok, nominal"`, and `""` for a quote inside) is a label column, quoted
+/// decimal commas (`"0,01","1,5e-2"`, as spreadsheets export them) and quoted thousands
+/// (`"2,001.523"`) are the numbers they write. Each reads as the same numbers written plainly,
+/// to the last bit of every `sigma`. Before (session 42), every row was split at the commas in
+/// the quotes, skipped as a row of too many fields, and the run stopped with exit 2.
+#[test]
+fn quoted_fields_holding_the_separator_read_as_the_plain_file() {
+    let (pc, ps) = plain();
+    let (a, b) = columns();
+    let (mut label, mut comma) = (
+        String::from("time,gx,status,gy\n"),
+        String::from("\"time\",\"gx\",\"gy\"\n"),
+    );
+    for i in 0..a.len() {
+        let t = format!("{:.2}", i as f64 * 0.01);
+        let status = if i % 7 == 0 {
+            "\"say \"\"hi\"\", ok\""
+        } else {
+            "\"ok, nominal\""
+        };
+        label += &format!("{t},{:e},{status},{:e}\n", a[i], b[i]);
+        let dc = |x: String| format!("\"{}\"", x.replace('.', ","));
+        comma += &format!(
+            "{},{},{}\n",
+            dc(t),
+            dc(format!("{:e}", a[i])),
+            dc(format!("{:e}", b[i]))
+        );
+    }
+    for (name, text) in [("quoted_label.csv", label), ("quoted_comma.csv", comma)] {
+        let (c, s) = parsed(&analyze(&write(name, text.as_bytes()), &[]));
+        assert_eq!(s.channels, ["gx", "gy"], "{name}");
+        assert_eq!(
+            (s.samples.as_slice(), s.bad_rows),
+            (ps.samples.as_slice(), 0)
+        );
+        let t = s.time_column.as_ref().expect("summary.time_column");
+        assert_eq!((t.used, t.gaps, t.irregular), (true, 0, 0), "{name}");
+        assert_eq!(c.len(), pc.len());
+        for (x, y) in c.iter().zip(&pc) {
+            assert_eq!((&x.channel, &x.sigma), (&y.channel, &y.sigma), "{name}");
+        }
+    }
+    // Thousands: 1950.000 .. 2050.000 written `"2,001.523"` against `2001.523`.
+    let big = |x: f64| format!("{:.3}", 2000.0 + 1e3 * x);
+    let grouped = |s: String| format!("\"{},{}\"", &s[..1], &s[1..]);
+    let (mut plain_big, mut quoted_big) = (String::from("gx,gy\n"), String::from("gx,gy\n"));
+    for i in 0..a.len() {
+        plain_big += &format!("{},{}\n", big(a[i]), big(b[i]));
+        quoted_big += &format!("{},{}\n", grouped(big(a[i])), grouped(big(b[i])));
+    }
+    assert!(quoted_big.contains("\n\"2,001.000\","), "{quoted_big:.80}");
+    let (want, _) = parsed(&analyze(&write("big.csv", plain_big.as_bytes()), &[]));
+    let (c, s) = parsed(&analyze(
+        &write("big_quoted.csv", quoted_big.as_bytes()),
+        &[],
+    ));
+    assert_eq!(s.channels, ["gx", "gy"]);
+    assert_eq!(s.bad_rows, 0);
+    assert_eq!(c.len(), want.len());
+    for (x, y) in c.iter().zip(&want) {
+        assert_eq!((&x.channel, &x.sigma), (&y.channel, &y.sigma));
+    }
+}
+
+/// Trailing separators, several of them (`gx;gy;;;` and rows ending `;;;`, with CRLF and
+/// decimal commas, as a spreadsheet exports a sheet wider than its data), are no channels: the
+/// channels are exactly `gx`, `gy`, with the plain file's curves. A column after the last name
+/// that holds numbers is still a channel, named by its number (`c4`). Before (session 42), only
+/// the last empty column was left out: `c3`, `c4` came out as channels with empty curves.
+#[test]
+fn trailing_empty_columns_are_no_channels() {
+    let (pc, ps) = plain();
+    let comma = |x: f64| format!("{x:e}").replace('.', ",");
+    let (a, b) = columns();
+    let (mut semi, mut fourth) = (String::from("gx;gy;;;\r\n"), String::from("gx,gy,,\n"));
+    for i in 0..a.len() {
+        semi += &format!("{};{};;;\r\n", comma(a[i]), comma(b[i]));
+        fourth += &format!("{:e},{:e},,{:e}\n", a[i], b[i], b[i]);
+    }
+    let (c, s) = parsed(&analyze(&write("trailing3.csv", semi.as_bytes()), &[]));
+    assert_eq!(s.channels, ["gx", "gy"]);
+    assert_eq!(
+        (s.samples.as_slice(), s.bad_rows),
+        (ps.samples.as_slice(), 0)
+    );
+    assert_eq!(c.len(), pc.len());
+    for (x, y) in c.iter().zip(&pc) {
+        assert_eq!((&x.channel, &x.sigma), (&y.channel, &y.sigma));
+    }
+    let (c, s) = parsed(&analyze(&write("unnamed4.csv", fourth.as_bytes()), &[]));
+    assert_eq!(s.channels, ["gx", "gy", "c4"]);
+    let gy: Vec<_> = pc.iter().filter(|x| x.channel == "gy").collect();
+    let c4: Vec<_> = c.iter().filter(|x| x.channel == "c4").collect();
+    assert_eq!(c4.len(), gy.len());
+    for (x, y) in c4.iter().zip(&gy) {
+        assert_eq!(x.sigma, y.sigma);
+    }
+}
+
+/// A time column whose first step is not tau0 still finds the gaps: the 400 rows with row 1
+/// left out (the first step 0.02 s, one sample missing) and rows 200..210 left out read as the
+/// file with those 11 rows empty (the same curves to the last bit, t_data 4 s, 2 gaps of 1 and
+/// 10 samples); with the first stamp written twice (another value), the column is used too:
+/// one repeated stamp, the gap of 10, 401 samples (4.01 s). Before (session 42), the first step
+/// alone ruled the column out (`used: false`, no gap, t_data 3.89 s, the later gap joined).
+#[test]
+fn a_first_step_that_is_not_tau0_does_not_rule_the_time_column_out() {
+    let (a, b) = columns();
+    let missing = |i: usize| i == 1 || (200..210).contains(&i);
+    let (mut marked, mut skipped) = (String::from("gx,gy\n"), String::from("time,gx,gy\n"));
+    for i in 0..a.len() {
+        if missing(i) {
+            marked += "nan,nan\n";
+        } else {
+            marked += &format!("{:e},{:e}\n", a[i], b[i]);
+            skipped += &format!("{:.2},{:e},{:e}\n", i as f64 * 0.01, a[i], b[i]);
+        }
+    }
+    let (mc, ms) = parsed(&analyze(&write("first_marked.csv", marked.as_bytes()), &[]));
+    let (c, s) = parsed(&analyze(&write("first_gap.csv", skipped.as_bytes()), &[]));
+    assert_eq!((s.t_data, ms.t_data), (4.0, 4.0));
+    assert_eq!(s.samples, ms.samples);
+    let t = s.time_column.as_ref().expect("summary.time_column");
+    assert_eq!(
+        (t.used, t.unit.as_deref(), t.gaps, t.missing_samples),
+        (true, Some("s"), 2, 11)
+    );
+    assert_eq!((t.backwards, t.irregular, t.discontinuities), (0, 0, 0));
+    assert_eq!(c.len(), mc.len());
+    for (x, y) in c.iter().zip(&mc) {
+        assert_eq!(
+            (&x.channel, &x.count, &x.sigma),
+            (&y.channel, &y.count, &y.sigma)
+        );
+    }
+    // The first stamp twice, the second time with another value; rows 200..210 left out: 391
+    // rows, 401 steps with the gap's 10, and 393 phase points (391 rows in 2 segments).
+    let mut dup = String::from("time,gx,gy\n0.00,0.0123,-0.0456\n");
+    for i in (0..a.len()).filter(|i| !(200..210).contains(i)) {
+        dup += &format!("{:.2},{:e},{:e}\n", i as f64 * 0.01, a[i], b[i]);
+    }
+    let out = analyze(&write("first_dup.csv", dup.as_bytes()), &[]);
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    let (_, s) = parsed(&out);
+    assert!(
+        err.contains(
+            "line 3: the time column `time` goes nowhere (a repeated stamp) at its first step"
+        ),
+        "{err}"
+    );
+    let t = s.time_column.as_ref().expect("summary.time_column");
+    assert_eq!(
+        (t.used, t.gaps, t.missing_samples, t.backwards, t.irregular),
+        (true, 1, 10, 1, 0)
+    );
+    assert_eq!(
+        (s.t_data, s.samples.as_slice()),
+        (4.01, [393, 393].as_slice())
+    );
+}
