@@ -625,13 +625,22 @@ pub fn check_channels(
         problems.push(match &l.origin {
             Some(o) => {
                 what = o.what;
+                let key = match key_end {
+                    Some(k) => format!("{}.{k}", o.key.trim_end_matches(".channel")),
+                    None => o.key.clone(),
+                };
+                // The line of that key, read again from its file (the origin keeps the
+                // channel's).
+                let line = key_end
+                    .and_then(|_| std::fs::read_to_string(&o.file).ok())
+                    .and_then(|text| {
+                        crate::toml_check::Collector::new(&o.file, &text).line_of(&key)
+                    })
+                    .or(o.line);
                 crate::error::UsageError::Config {
                     file: o.file.clone(),
-                    line: o.line,
-                    key: match key_end {
-                        Some(k) => format!("{}.{k}", o.key.trim_end_matches(".channel")),
-                        None => o.key.clone(),
-                    },
+                    line,
+                    key,
                     problem,
                 }
             }

@@ -99,12 +99,26 @@ impl UnitPlan {
             InputPlan::Text { input, .. } => (!req.wall_clock, input != "-"),
         };
         let channels = select_channels(all, wanted, &name).map_err(|e| match &req.config {
-            Some(file) => UsageError::Config {
-                file: file.clone(),
-                line: None,
-                key: "channels.include".into(),
-                problem: e.to_string(),
-            },
+            // In a stand config the choice is its `channels.include`: said at its line, not as
+            // the option `--channels` (session 42's review found neither).
+            Some(file) => {
+                let key = "channels.include";
+                let line = std::fs::read_to_string(file).ok().and_then(|text| {
+                    crate::toml_check::Collector::new(file, &text)
+                        .line_of(key)
+                        .filter(|_| text.contains("include"))
+                });
+                let problem = e.to_string();
+                UsageError::Config {
+                    file: file.clone(),
+                    line,
+                    key: key.into(),
+                    problem: problem
+                        .strip_prefix("--channels: ")
+                        .unwrap_or(&problem)
+                        .to_string(),
+                }
+            }
             None => e,
         })?;
         if !data_seconds {

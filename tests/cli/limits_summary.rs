@@ -133,7 +133,7 @@ fn a_limit_in_a_unit_the_channel_cannot_have_is_refused_before_the_run() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(
-        err.contains("wrong_dimension.toml:2: key `limits[0].unit`")
+        err.contains("wrong_dimension.toml:5: key `limits[0].unit`")
             && err.contains("`m/s/sqrt(h)` is not a unit of N for a channel in arcsec"),
         "{err}"
     );
