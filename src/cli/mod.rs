@@ -494,9 +494,6 @@ fn text_tau0(d: &mut DataArgs, inputs: &[&str]) -> Result<()> {
             Some(_) => {}
             None => {
                 tracing::info!("{input}: {step}");
-                if let Some(doubt) = &step.doubt {
-                    tracing::warn!("{input}: {doubt}");
-                }
                 say_rows(input, &step, d);
                 found = Some((input, step));
             }

@@ -45,9 +45,6 @@ pub struct InferredStep {
     /// Channels with values on every k-th row only beside channels with values on every row
     /// (name, k): analysed together with those, they have one-sample stretches and no curve.
     pub slow: Vec<(String, usize)>,
-    /// A doubt about the unit, to be said with the step: stamps that are whole numbers
-    /// stepping by 2 or more, read as seconds for want of a unit, may count ms or us.
-    pub doubt: Option<String>,
 }
 
 impl std::fmt::Display for InferredStep {
@@ -166,7 +163,6 @@ fn lvm_step(dx: f64) -> Result<InferredStep, String> {
         regular: 0,
         every: 1,
         slow: Vec::new(),
-        doubt: None,
     })
 }
 
@@ -487,19 +483,23 @@ pub fn infer_tau0<R: BufRead>(
         )));
     }
     // Whole-number stamps read as seconds for want of a unit (a counter of ms since boot
-    // stepping by 4 reads as tau0 4 s): said, since seconds may be right (a clock read each
-    // 2 s), with how to say otherwise.
+    // stepping by 4 reads as tau0 4 s): no inertial unit samples each 2 s or slower, so the
+    // step is asked for. Before (session 42) this was a warning and the run went on, every
+    // tau 1000 times too long for a `time` counting ms.
     let whole = stamps
         .iter()
         .filter(|t| t.is_finite())
         .all(|t| t.fract() == 0.0);
-    let doubt = (unit_guessed && whole && tau0_s >= 2.0).then(|| {
-        format!(
-            "the time column `{column}` holds whole numbers stepping by {}, read as seconds: if \
-             they count ms or us, name the unit (`{column} [ms]`) or give --tau0",
-            crate::ranges::show(tau0_s)
-        )
-    });
+    if unit_guessed && whole && tau0_s >= 2.0 {
+        return Err(usage(format!(
+            "--tau0 is required: the time column `{column}` holds whole numbers stepping by {}, \
+             which read as seconds would be a step of {} s: if they count ms or us, name the \
+             unit (`{column} [ms]`) or give --tau0 (--tau0 {} for ms)",
+            crate::ranges::show(step),
+            crate::ranges::show(tau0_s),
+            crate::ranges::show(tau0_s * 1e-3)
+        )));
+    }
     Ok(InferredStep {
         tau0_s,
         column,
@@ -509,7 +509,6 @@ pub fn infer_tau0<R: BufRead>(
         regular,
         every,
         slow,
-        doubt,
     })
 }
 
@@ -576,14 +575,13 @@ mod tests {
         assert_eq!(s.tau0_s, 0.004);
         assert_eq!(s.unit_s, 1e-6);
         assert!(s.unit_from.contains("PX4"), "{}", s.unit_from);
-        assert!(s.doubt.is_none());
         // A logger's `gyro[0]` beside seconds is no PX4 export: seconds stay seconds.
         let mut l = String::from("timestamp,gyro[0],gyro[1]\n");
         for k in 0..40 {
             l.push_str(&format!("{:.2},0.1,0.2\n", k as f64 * 0.01));
         }
         assert_eq!(infer(&l).unwrap().tau0_s, 0.01);
-        // The same stamps under a logger's header are seconds, with the doubt said.
+        // The same stamps under a logger's header are seconds: no sampling step, refused.
         let t = t.replacen("gyro_rad[0],gyro_integral_dt", "gx,gy", 1);
         let e = infer(&t).unwrap_err().to_string();
         assert!(e.contains("not a sampling step"), "{e}");
@@ -695,16 +693,21 @@ mod tests {
         assert_eq!(row_stride((0..10).map(|i| i % 2 == 0)), 1);
     }
 
-    /// Whole-number stamps stepping by 4 read as seconds are doubted aloud; a 1-s clock is not.
+    /// Whole-number stamps stepping by 4, which read as seconds would be a 4-s step, ask for
+    /// the step (were a warning before session 42); a 1-s clock is read.
     #[test]
     fn whole_number_stamps_are_doubted() {
-        let s = infer("time,gx\n1000,1\n1004,2\n1008,1\n1012,2\n").unwrap();
-        assert_eq!(s.tau0_s, 4.0);
-        assert!(s.doubt.unwrap().contains("`time [ms]`"));
+        let e = infer("time,gx\n1000,1\n1004,2\n1008,1\n1012,2\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("`time [ms]`") && e.contains("--tau0 0.004 for ms"),
+            "{e}"
+        );
         let s = infer("time,gx\n0,1\n1,2\n2,1\n3,2\n").unwrap();
-        assert_eq!((s.tau0_s, s.doubt), (1.0, None));
+        assert_eq!(s.tau0_s, 1.0);
         let s = infer("time_ms,gx\n0,1\n4,2\n8,1\n12,2\n").unwrap();
-        assert_eq!((s.tau0_s, s.doubt), (0.004, None));
+        assert_eq!(s.tau0_s, 0.004);
     }
 
     /// Serial dates in days (Excel's near 46000, MATLAB's datenum near 740000, printed to 10
