@@ -922,6 +922,17 @@ fn a_tau0_the_time_column_contradicts_is_refused_and_none_reads_the_rows_at_it()
     }
     let (c, _) = parsed(&analyze(&write("time_in_ms.csv", text.as_bytes()), &[]));
     assert_eq!(c[0].sigma, pc[0].sigma);
+    // A `time` that counts samples (0, 1, 2, ...) is no clock in another unit: read at
+    // --tau0, the column not used to find gaps (as before session 42), not refused.
+    let mut text = String::from("time,gx,gy\n");
+    for (i, line) in rows(",", false).lines().enumerate() {
+        text += &format!("{i},{line}\n");
+    }
+    let out = analyze(&write("time_in_samples.csv", text.as_bytes()), &[]);
+    let (c, s) = parsed(&out);
+    assert_eq!(c[0].sigma, pc[0].sigma);
+    let t = s.time_column.as_ref().expect("summary.time_column");
+    assert!(!t.used, "{t:?}");
     // Without --tau0, `none` has no step to read the rows at.
     let out = exe()
         .args(["analyze", p.to_str().unwrap(), "--time-column", "none"])
