@@ -383,6 +383,8 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
         }
     }
     let mut fitted = Vec::new();
+    // The twin's terms the run did not determine, said at the model file's top.
+    let mut notes: Vec<String> = Vec::new();
     let temp_snap = main.temperature.as_mut().map(|t| t.snapshot());
     let held_temp = held
         .as_mut()
@@ -464,7 +466,10 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
         }
         sink.write(&Record::from(rec))?;
         written += 1;
-        if a.model_out.is_some() {
+        if a.model_out.is_some() && twin.is_some() {
+            if let Some(n) = undetermined_note(name, &main.units[i], &diag) {
+                notes.push(n);
+            }
             fitted.extend(twin);
         }
     }
@@ -479,11 +484,12 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
     }
     if let Some(p) = &a.model_out {
         let model = fitted_unit(tau0, fitted, profile);
-        let header = vec![
+        let mut header = vec![
             format!("The unit fitted by `allanscope diagnose {}`.", a.input),
             "Five terms with the accepted effects in; a sinusoid's phase is not estimated (0)."
                 .to_string(),
         ];
+        header.extend(notes);
         let text = model_toml(&model, &format!("fitted from {}", a.input), &header);
         write_new(p, &text)?;
     }
@@ -551,4 +557,35 @@ fn write_new(p: &Path, text: &str) -> Result<()> {
     f.write_all(text.as_bytes())
         .and_then(|_| f.sync_all())
         .with_context(|| format!("--model-out {}: cannot write", p.display()))
+}
+
+/// A line for the model file's top naming the channel's terms that the run did not determine
+/// (the record's `final_terms`: an interval reaching zero or below a third of the value), each
+/// written at the fit's value, with its 95% interval in the record's units (docs/theory.md
+/// section 2); `None` when every term written is determined. A twin's undetermined R or K,
+/// simulated at its point value, draws a ramp or a walk the run did not show; the file says so
+/// rather than hiding it (session 42).
+fn undetermined_note(name: &str, unit: &str, diag: &allanscope::gap::Diagnosis) -> Option<String> {
+    let terms: Vec<String> = diag
+        .final_terms
+        .iter()
+        .enumerate()
+        .filter_map(|(i, t)| {
+            let t = t.filter(|t| !t.determined && t.value > 0.0)?;
+            Some(format!(
+                "{} {:.3e} (95% interval [{:.3e}, {:.3e}], {})",
+                allanscope::model::terms::TERM_NAMES[i],
+                t.value,
+                t.lo,
+                t.hi,
+                allanscope::model::units::native_units(unit)[i]
+            ))
+        })
+        .collect();
+    (!terms.is_empty()).then(|| {
+        format!(
+            "{name}: not determined by the run, written at the fit's value: {}",
+            terms.join("; ")
+        )
+    })
 }

@@ -92,6 +92,27 @@ fn a_sinusoid_survives_the_round_trip() {
         assert!(rel(f, 0.8) < 0.02, "frequency {f}");
         assert!(rel(a, 0.3) < 0.10, "amplitude {a}");
     }
+    // The terms the run did not determine are named at the file's top with the record's
+    // values and intervals (session 42); the determined N is not.
+    let notes: Vec<&str> = text.lines().filter(|l| l.starts_with("# ")).collect();
+    for (i, k) in ["Q", "N", "B", "K", "R"].iter().enumerate() {
+        let t = &d1["final_terms"][*k];
+        let loose = t["determined"] == false && d1["final_coef"][i].as_f64().unwrap() > 0.0;
+        let said = format!(
+            "{k} {:.3e} (95% interval [{:.3e}, {:.3e}]",
+            d1["final_coef"][i].as_f64().unwrap(),
+            t["lo"].as_f64().unwrap(),
+            t["hi"].as_f64().unwrap()
+        );
+        assert_eq!(
+            notes
+                .iter()
+                .any(|l| l.contains("not determined") && l.contains(&said)),
+            loose,
+            "{k}: {notes:?}"
+        );
+    }
+    assert!(d1["final_terms"]["N"]["determined"] == true);
     // N is the best-determined term: within 3% of the truth on the twin's run.
     let n2 = d2["final_coef"][1].as_f64().unwrap();
     assert!(rel(n2, 0.254) < 0.03, "N {n2}");
