@@ -64,6 +64,14 @@ impl Collector {
         }
     }
 
+    /// The line of `key` in the TOML file `file`, read again for it (an error found after the
+    /// file was loaded, against the run's channels: [`Collector::line_of`]); `None` when the
+    /// file cannot be read.
+    pub fn line_in_file(file: &Path, key: &str) -> Option<usize> {
+        let text = std::fs::read_to_string(file).ok()?;
+        Collector::new(file, &text).line_of(key)
+    }
+
     /// Records a problem with `key`.
     pub fn bad(&mut self, key: impl Into<String>, problem: impl Into<String>) {
         let key = key.into();

@@ -864,8 +864,7 @@ fn diagnose_curve_pass(
         let (mut positions, sizes) = f.merged_steps(prob.tau0_s);
         // The block tests' time 0 is the first block they kept (`EvidenceSnapshot::block_first`:
         // short blocks at the start are left out); the record's is its first sample.
-        let lead = snap.block_first as u64 * snap.block_len;
-        positions.iter_mut().for_each(|p| *p += lead);
+        positions.iter_mut().for_each(|p| *p += lead_samples(snap));
         let jump_offset: Vec<f64> = prob
             .ms
             .iter()
@@ -998,7 +997,7 @@ fn diagnose_curve_pass(
         segment_tests: segment_tests(snap, &prob.c_init),
         // The block tests' time 0 is their first kept block; the record's is its first sample.
         jumps: jumps.map(|mut f| {
-            let lead_s = (snap.block_first as u64 * snap.block_len) as f64 * snap.tau0_s;
+            let lead_s = lead_samples(snap) as f64 * snap.tau0_s;
             f.times_s.iter_mut().for_each(|t| *t += lead_s);
             f
         }),
@@ -1188,6 +1187,12 @@ pub(crate) fn k2_upper(prob: &GapProblem, spec: &ModelSpec, fit: &GlsFit) -> f64
 /// [`Thresholds::gap_crit_filtered`](super::thresholds::Thresholds::gap_crit_filtered)).
 fn has_filter(effects: &[AddedEffect]) -> bool {
     effects.iter().any(|e| e.params.kind().is_filter())
+}
+
+/// Samples before the block tests' first kept block (`EvidenceSnapshot::block_first`: short
+/// blocks at the start are left out): their time 0 is this far into the record.
+fn lead_samples(snap: &EvidenceSnapshot) -> u64 {
+    snap.block_first as u64 * snap.block_len
 }
 
 /// The stationary effects of `effects` still needed once `offset` (a warm-up's or jumps' exact

@@ -532,6 +532,21 @@ mod tests {
         c.handed_out(t);
     }
 
+    /// `stamps` fed to `c` as the reader does (the gap's steps handed out, then the row after
+    /// them sets the clock): the missing samples found before each.
+    fn clocked(c: &mut TimeColumn, stamps: &[f64]) -> Vec<u64> {
+        let p = Path::new("x.csv");
+        let mut got = Vec::new();
+        for (i, &t) in stamps.iter().enumerate() {
+            let m = c.missing_before(t, p, i as u64 + 2);
+            if m > 0 {
+                hand_out(c, m, t);
+            }
+            got.push(m);
+        }
+        got
+    }
+
     /// A counter of samples: a jump of k counts is k - 1 missing; a 16-bit wrap (65534 -> 1)
     /// has the counts across it missing (65535 and 0); a step back that is no wrap is no gap;
     /// a counter whose first step is not one is not used.
@@ -615,19 +630,7 @@ mod tests {
     /// A single stamp that goes back (a glitch) is still one backward step, no restart.
     #[test]
     fn a_clock_that_wraps_or_resets_restarts_and_a_glitch_does_not() {
-        let p = Path::new("x.csv");
-        // As the reader does: the gap steps, then the row after them sets the clock.
-        let run = |c: &mut TimeColumn, stamps: &[f64]| -> Vec<u64> {
-            let mut got = Vec::new();
-            for (i, &t) in stamps.iter().enumerate() {
-                let m = c.missing_before(t, p, i as u64 + 2);
-                if m > 0 {
-                    hand_out(c, m, t);
-                }
-                got.push(m);
-            }
-            got
-        };
+        let run = |c: &mut TimeColumn, stamps: &[f64]| clocked(c, stamps);
         let mut c = TimeColumn::new("t_us", 0.01);
         let b = 4_294_967_296.0 - 25_000.0;
         let wrap = [b, b + 1e4, b + 2e4, 5e3, 15e3, 45e3, 55e3];
@@ -687,18 +690,9 @@ mod tests {
     /// odd first step did).
     #[test]
     fn the_unit_from_the_steps_after_an_odd_first_one() {
-        let p = Path::new("x.csv");
-        let run = |c: &mut TimeColumn, stamps: &[f64]| -> Vec<u64> {
-            c.unit_from_first_steps(stamps, p);
-            let mut got = Vec::new();
-            for (i, &t) in stamps.iter().enumerate() {
-                let m = c.missing_before(t, p, i as u64 + 2);
-                if m > 0 {
-                    hand_out(c, m, t);
-                }
-                got.push(m);
-            }
-            got
+        let run = |c: &mut TimeColumn, stamps: &[f64]| {
+            c.unit_from_first_steps(stamps, Path::new("x.csv"));
+            clocked(c, stamps)
         };
         let mut c = TimeColumn::new("time", 0.01);
         assert_eq!(

@@ -632,10 +632,7 @@ pub fn check_channels(
                 // The line of that key, read again from its file (the origin keeps the
                 // channel's).
                 let line = key_end
-                    .and_then(|_| std::fs::read_to_string(&o.file).ok())
-                    .and_then(|text| {
-                        crate::toml_check::Collector::new(&o.file, &text).line_of(&key)
-                    })
+                    .and_then(|_| crate::toml_check::Collector::line_in_file(&o.file, &key))
                     .or(o.line);
                 crate::error::UsageError::Config {
                     file: o.file.clone(),

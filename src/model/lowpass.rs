@@ -194,14 +194,8 @@ impl LowPass {
                 // g^2 (1 - a2) / ((1 + a2)((1 - a2)^2 - a1^2)).
                 let g = 1.0 - a1 - a2;
                 let g0 = g * g * (1.0 - a2) / ((1.0 + a2) * ((1.0 - a2).powi(2) - a1 * a1));
-                // the slowest pole sets the decay: the larger root of z^2 - a1 z - a2
-                let disc = a1 * a1 + 4.0 * a2;
-                let slow = if disc < 0.0 {
-                    (-a2).sqrt()
-                } else {
-                    (a1.abs() + disc.sqrt()) / 2.0
-                };
-                let n = lags_for(slow);
+                // the slowest pole sets the decay
+                let n = lags_for(slow_pole(a1, a2));
                 let mut out = Vec::with_capacity(n + 2);
                 let (mut r_prev, mut r) = (f64::NAN, 1.0);
                 for k in 0..n + 2 {
@@ -345,12 +339,7 @@ impl LowPass {
             LowPass::SecondOrder { bilinear: true, .. } => {
                 // the slower pole's time constant, from its modulus
                 let (a1, a2) = self.ar2(tau0_s).unwrap_or((0.0, 0.0));
-                let disc = a1 * a1 + 4.0 * a2;
-                let slow = if disc < 0.0 {
-                    (-a2).sqrt()
-                } else {
-                    (a1.abs() + disc.sqrt()) / 2.0
-                };
+                let slow = slow_pole(a1, a2);
                 if slow > 0.0 && slow < 1.0 {
                     -tau0_s / slow.ln()
                 } else {
@@ -407,6 +396,18 @@ fn flicker_phase_table<T>(longest: usize, body: impl FnOnce(Option<&[f64]>) -> T
         }
         body(Some(&table[..]))
     })
+}
+
+/// The modulus of the slower pole of `y_k = a1 y_{k-1} + a2 y_{k-2} + ...`: the larger root of
+/// `z^2 - a1 z - a2` (both of modulus `sqrt(-a2)` when complex), which sets how fast its
+/// autocorrelation and its memory of a start decay.
+pub fn slow_pole(a1: f64, a2: f64) -> f64 {
+    let disc = a1 * a1 + 4.0 * a2;
+    if disc < 0.0 {
+        (-a2).sqrt()
+    } else {
+        (a1.abs() + disc.sqrt()) / 2.0
+    }
 }
 
 /// Lags kept for a geometric decay of ratio `r`.

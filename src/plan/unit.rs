@@ -103,11 +103,7 @@ impl UnitPlan {
             // the option `--channels` (session 42's review found neither).
             Some(file) => {
                 let key = "channels.include";
-                let line = std::fs::read_to_string(file).ok().and_then(|text| {
-                    crate::toml_check::Collector::new(file, &text)
-                        .line_of(key)
-                        .filter(|_| text.contains("include"))
-                });
+                let line = crate::toml_check::Collector::line_in_file(file, key);
                 let problem = e.to_string();
                 UsageError::Config {
                     file: file.clone(),

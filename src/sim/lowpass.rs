@@ -107,12 +107,7 @@ impl LowPassGen {
             LowPassGen::ZeroPhase { weights, .. } => 2 * (weights.len() - 1) + 1,
             LowPassGen::SecondOrder { a1, a2, .. } => {
                 // poles: roots of z^2 - a1 z - a2
-                let disc = a1 * a1 + 4.0 * a2;
-                let r = if disc < 0.0 {
-                    (-a2).sqrt()
-                } else {
-                    (a1.abs() + disc.sqrt()) / 2.0
-                };
+                let r = crate::model::lowpass::slow_pole(*a1, *a2);
                 if r <= 0.0 {
                     2
                 } else if r >= 1.0 {
