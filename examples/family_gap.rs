@@ -590,6 +590,7 @@ fn draw_unit(
                     natural_frequency_hz: log_uniform(rng, odr / 20.0, odr / 4.0),
                     damping: log_uniform(rng, 0.5, 1.0),
                     bilinear: false,
+                    zero: None,
                 }
             } else {
                 EffectParams::MovingAverage {
@@ -658,6 +659,7 @@ fn draw_unit(
                 natural_frequency_hz: log_uniform(rng, odr / 10.0, odr / 4.0),
                 damping: log_uniform(rng, 0.5, 1.0),
                 bilinear: false,
+                zero: None,
             };
             u.intrinsic = Some(filter);
             let rho0 = rho0_of(filter, u.tau0);

@@ -360,6 +360,7 @@ pub fn draw_effect_params(
                 / (2.0 * std::f64::consts::PI * log_uniform(rng, tau0, 10.0 * tau0)),
             damping: log_uniform(rng, 0.2, 2.0),
             bilinear: false,
+            zero: None,
         },
         EffectKind::ZeroPhaseFilter => EffectParams::ZeroPhaseFilter {
             time_constant_s: log_uniform(rng, tau0, FILTER_TAU_PRIOR * tau0),

@@ -12,7 +12,7 @@
 //! again, so a long search never holds more than a few megabytes. A clone of the problem starts
 //! with empty tables (they are keyed by the filter only and hold the problem's cluster sizes).
 
-use crate::model::lowpass::LowPass;
+use crate::model::lowpass::{LowPass, SecondOrderForm};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
@@ -24,25 +24,35 @@ pub const MAX_FLOORS: usize = 16384;
 
 /// A filter's identity: its kind and the bits of its parameters.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct FilterKey(u8, u64, u64);
+pub struct FilterKey(u8, u64, u64, u64);
 
 impl FilterKey {
     pub fn of(lp: &LowPass) -> Self {
         match *lp {
-            LowPass::FirstOrder { time_constant_s } => FilterKey(0, time_constant_s.to_bits(), 0),
+            LowPass::FirstOrder { time_constant_s } => {
+                FilterKey(0, time_constant_s.to_bits(), 0, 0)
+            }
             LowPass::MovingAverage { taps, stages } => {
-                FilterKey(1, u64::from(taps), u64::from(stages))
+                FilterKey(1, u64::from(taps), u64::from(stages), 0)
             }
             LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
-                bilinear,
-            } => FilterKey(
-                if bilinear { 4 } else { 2 },
-                natural_frequency_hz.to_bits(),
-                damping.to_bits(),
-            ),
-            LowPass::ZeroPhase { time_constant_s } => FilterKey(3, time_constant_s.to_bits(), 0),
+                form,
+            } => {
+                let (kind, extra) = match form {
+                    SecondOrderForm::PoleMapped => (2, 0),
+                    SecondOrderForm::Bilinear => (4, 0),
+                    SecondOrderForm::Sampled { zero } => (5, zero.to_bits()),
+                };
+                FilterKey(
+                    kind,
+                    natural_frequency_hz.to_bits(),
+                    damping.to_bits(),
+                    extra,
+                )
+            }
+            LowPass::ZeroPhase { time_constant_s } => FilterKey(3, time_constant_s.to_bits(), 0, 0),
         }
     }
 }

@@ -1730,6 +1730,7 @@ mod tests {
             natural_frequency_hz: 2.0,
             damping: 1.0,
             bilinear: false,
+            zero: None,
         };
         let sin = EffectParams::Sinusoid {
             amplitude: 6e-4,

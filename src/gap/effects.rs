@@ -3,7 +3,7 @@
 //! so a candidate is a column generator `shape -> column` plus the parameter names of
 //! docs/records.md's `diagnosis` record.
 
-use crate::model::lowpass::LowPass;
+use crate::model::lowpass::{LowPass, SecondOrderForm};
 use crate::model::terms;
 use crate::sim::band_noise::band_noise_avar;
 use serde::{Deserialize, Serialize};
@@ -148,10 +148,13 @@ pub enum EffectParams {
         taps: u32,
     },
     /// `bilinear` (written only when true: the records of the pole-mapped form are as before)
-    /// is the form [`LowPass::SecondOrder`] describes.
+    /// and `zero` (written only for the sampled form) are the form
+    /// [`LowPass::SecondOrder`] describes.
     SecondOrderFilter {
         #[serde(default, skip_serializing_if = "std::ops::Not::not")]
         bilinear: bool,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        zero: Option<f64>,
         #[serde(deserialize_with = "nullable_f64")]
         damping: f64,
         #[serde(rename = "natural_frequency", deserialize_with = "nullable_f64")]
@@ -207,10 +210,15 @@ impl EffectParams {
                 natural_frequency_hz,
                 damping,
                 bilinear,
+                zero,
             } => Some(LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
-                bilinear,
+                form: match (bilinear, zero) {
+                    (true, _) => SecondOrderForm::Bilinear,
+                    (false, Some(zero)) => SecondOrderForm::Sampled { zero },
+                    (false, None) => SecondOrderForm::PoleMapped,
+                },
             }),
             EffectParams::ZeroPhaseFilter { time_constant_s } => {
                 Some(LowPass::ZeroPhase { time_constant_s })
@@ -229,11 +237,15 @@ impl EffectParams {
             LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
-                bilinear,
+                form,
             } => EffectParams::SecondOrderFilter {
                 natural_frequency_hz,
                 damping,
-                bilinear,
+                bilinear: form == SecondOrderForm::Bilinear,
+                zero: match form {
+                    SecondOrderForm::Sampled { zero } => Some(zero),
+                    _ => None,
+                },
             },
             LowPass::ZeroPhase { time_constant_s } => {
                 EffectParams::ZeroPhaseFilter { time_constant_s }
@@ -329,6 +341,7 @@ impl EffectParams {
                 damping,
                 natural_frequency_hz,
                 bilinear,
+                zero,
             } => {
                 let mut v = vec![
                     ("damping", damping),
@@ -336,6 +349,9 @@ impl EffectParams {
                 ];
                 if bilinear {
                     v.insert(0, ("bilinear", 1.0));
+                }
+                if let Some(c) = zero {
+                    v.push(("zero", c));
                 }
                 v
             }
@@ -444,7 +460,7 @@ pub fn canonical_lowpass(kind: EffectKind, shape: f64) -> LowPass {
         EffectKind::SecondOrderFilter => LowPass::SecondOrder {
             natural_frequency_hz: shape,
             damping: 1.0,
-            bilinear: false,
+            form: SecondOrderForm::PoleMapped,
         },
         EffectKind::ZeroPhaseFilter => LowPass::ZeroPhase {
             time_constant_s: shape,

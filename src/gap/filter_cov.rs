@@ -208,7 +208,7 @@ mod tests {
             LowPass::SecondOrder {
                 natural_frequency_hz: 6.0,
                 damping: 0.4,
-                bilinear: false,
+                form: crate::model::lowpass::SecondOrderForm::PoleMapped,
             },
         ] {
             let rho = lp.autocorrelation(tau0);

@@ -8,7 +8,9 @@
 use super::effects::{EffectKind, EffectParams};
 use super::problem::{golden_section, GapProblem, GlsFit, ModelSpec};
 use super::simplex::nelder_mead_2d;
-use crate::model::lowpass::LowPass;
+use crate::model::lowpass::{
+    sampled_zero, LowPass, SecondOrderForm, CONTINUOUS_DECIMATION, MAX_ZERO,
+};
 use std::f64::consts::PI;
 
 /// Longest moving average scanned (taps).
@@ -165,20 +167,39 @@ fn scan_second_order(
     // biquad: docs/gap.md, "The bilinear second order (session 42)"): on the grid alone the
     // bilinear form beat a pole-mapped unit's own form at 8 Hz of 250 Hz and at 28 Hz of 200 Hz,
     // and its polished point then left a band beside it.
-    let poles = scan_second_order_form(prob, fit, false);
-    let bilinear = scan_second_order_form(prob, fit, true);
-    match (poles, bilinear) {
-        (Some(p), Some(b)) if b.1.chi2 < p.1.chi2 => Some(b),
-        (Some(p), _) => Some(p),
-        (None, b) => b,
+    //
+    // The third form, a filter run at an internal rate and read every few samples (docs/gap.md,
+    // "Filters run faster than the output (session 43)"), is scanned at a decimation near the
+    // continuous filter's ([`SAMPLED_START`]), and its decimation then polished with the
+    // frequency and damping.
+    // Its decimation is a third shape parameter and it holds the pole-mapped form (decimation
+    // 1), so it is taken only when it lowers `r' S^-1 r` by more than [`EXTRA_SHAPE_CHI2`]: a
+    // pole-mapped or bilinear unit stays named as such.
+    let mut best: Option<(LowPass, GlsFit)> = None;
+    for form in [SecondOrderForm::PoleMapped, SecondOrderForm::Bilinear] {
+        if let Some((lp, f)) = scan_second_order_form(prob, fit, form) {
+            best = better(best, lp, Some(f));
+        }
+    }
+    let sampled = SecondOrderForm::Sampled { zero: f64::NAN };
+    match (scan_second_order_form(prob, fit, sampled), best) {
+        (Some(s), Some(b)) if s.1.chi2 < b.1.chi2 - EXTRA_SHAPE_CHI2 => Some(s),
+        (Some(s), None) => Some(s),
+        (_, b) => b,
     }
 }
 
-/// [`scan_second_order`] in one form: the grid, golden sections, then the simplex.
+/// The drop in `r' S^-1 r` a third shape parameter must bring to be taken: chi-squared with one
+/// degree of freedom at 99%.
+const EXTRA_SHAPE_CHI2: f64 = 6.63;
+
+/// [`scan_second_order`] in one form: the grid, golden sections, then the simplex. The sampled
+/// form (its zero not read: NaN) is run with the continuous filter's zero at each point, and
+/// its zero is then polished too.
 fn scan_second_order_form(
     prob: &GapProblem,
     fit: &dyn Fn(LowPass) -> Option<GlsFit>,
-    bilinear: bool,
+    form: SecondOrderForm,
 ) -> Option<(LowPass, GlsFit)> {
     let fgrid = prob.grid(EffectKind::SecondOrderFilter).points();
     let (z_lo, z_hi) = DAMPING_RANGE;
@@ -187,10 +208,19 @@ fn scan_second_order_form(
         .map(|i| z_lo * (z_hi / z_lo).powf(i as f64 / nz as f64))
         .collect();
     let f_max = 2.5 / (2.0 * PI * prob.tau0_s);
-    let lp_of = |lf: f64, lz: f64| LowPass::SecondOrder {
+    let lp_at = |lf: f64, lz: f64, form: SecondOrderForm| LowPass::SecondOrder {
         natural_frequency_hz: lf.exp().min(f_max),
         damping: lz.exp().clamp(z_lo, z_hi),
-        bilinear,
+        form,
+    };
+    let tau0_s = prob.tau0_s;
+    let lp_of = |lf: f64, lz: f64| match form {
+        SecondOrderForm::Sampled { .. } => {
+            let (f, z) = (lf.exp().min(f_max), lz.exp().clamp(z_lo, z_hi));
+            let zero = sampled_zero(f, z, tau0_s, CONTINUOUS_DECIMATION).clamp(0.0, MAX_ZERO);
+            lp_at(lf, lz, SecondOrderForm::Sampled { zero })
+        }
+        _ => lp_at(lf, lz, form),
     };
     let mut best: Option<(LowPass, GlsFit)> = None;
     for &f in &fgrid {
@@ -230,6 +260,24 @@ fn scan_second_order_form(
         SIMPLEX_TOL,
     );
     let lp = lp_of(lf, lz);
+    let best = better(best, lp, fit(lp));
+    let SecondOrderForm::Sampled { .. } = form else {
+        return best;
+    };
+    // The zero by golden sections (0: the pole-mapped form), then the frequency and damping
+    // again by the simplex at it.
+    let with = |c: f64| SecondOrderForm::Sampled {
+        zero: c.clamp(0.0, MAX_ZERO),
+    };
+    let c = golden(|x| fit(lp_at(lf, lz, with(x))), 0.0, MAX_ZERO);
+    let ([lf, lz], _) = nelder_mead_2d(
+        |p| fit(lp_at(p[0], p[1], with(c))).map_or(f64::INFINITY, |r| r.chi2),
+        [lf, lz],
+        [df / 8.0, dz / 8.0],
+        SIMPLEX_EVALS,
+        SIMPLEX_TOL,
+    );
+    let lp = lp_at(lf, lz, with(c));
     better(best, lp, fit(lp))
 }
 

@@ -21,7 +21,7 @@ use super::sawtooth::{
 use crate::allan::CurvePoint;
 use crate::model::avar_cov::{AvarCovariance, CovPoint};
 use crate::model::fit::{fit, FitOptions};
-use crate::model::lowpass::LowPass;
+use crate::model::lowpass::{LowPass, SecondOrderForm};
 use crate::model::nnls::nnls;
 use crate::model::terms::basis;
 use nalgebra::{DMatrix, DVector};
@@ -538,16 +538,16 @@ impl GapProblem {
             LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
-                bilinear,
+                form,
             } => LowPass::SecondOrder {
                 // (the bilinear form is defined below Nyquist only)
-                natural_frequency_hz: if bilinear {
+                natural_frequency_hz: if form == SecondOrderForm::Bilinear {
                     (natural_frequency_hz / g).min(0.45 / tau0_s)
                 } else {
                     natural_frequency_hz / g
                 },
                 damping,
-                bilinear,
+                form,
             },
         };
         let (lo, hi) = BEHIND_MEMORY_SPAN;

@@ -530,6 +530,13 @@ mod tests {
                 natural_frequency_hz: 20.0,
                 damping: 0.7,
                 bilinear: false,
+                zero: None,
+            },
+            EffectParams::SecondOrderFilter {
+                natural_frequency_hz: 20.0,
+                damping: 0.7,
+                bilinear: false,
+                zero: Some(0.3),
             },
             EffectParams::ZeroPhaseFilter {
                 time_constant_s: 0.02,

@@ -21,22 +21,50 @@ pub enum LowPass {
     MovingAverage { taps: u32, stages: u32 },
     /// `y_k = a1 y_{k-1} + a2 y_{k-2} + (1 - a1 - a2) d_k` with the poles of the continuous
     /// `w^2 / (s^2 + 2 zeta w s + w^2)`, `w = 2 pi f_n`, mapped by `z = e^{s tau0}`. With
-    /// `bilinear`, the digital biquad most units and tools build instead (scipy's `butter`,
+    /// [`SecondOrderForm::Bilinear`], the digital biquad most units and tools build instead (scipy's `butter`,
     /// PX4's `LowPassFilter2p`, the audio cookbook's low-pass; Butterworth at `zeta = 1/sqrt 2`):
     /// the same prototype by the bilinear transform with `f_n` prewarped,
     /// `K = tan(pi f_n tau0)`, `D = 1 + 2 zeta K + K^2`,
     /// `H(z) = K^2 (1 + z^-1)^2 / (D + (2 K^2 - 2) z^-1 + (1 - 2 zeta K + K^2) z^-2)`: two zeros
     /// at Nyquist, which the pole-mapped form lacks (docs/gap.md, "The bilinear second order
-    /// (session 42)").
+    /// (session 42)"). With [`SecondOrderForm::Sampled`], the prototype run faster than the
+    /// output and read every so many samples, as MEMS parts filter at their internal rate and
+    /// deliver at the output rate: the pole-mapped poles and one zero.
     SecondOrder {
         natural_frequency_hz: f64,
         damping: f64,
-        bilinear: bool,
+        form: SecondOrderForm,
     },
     /// The first-order filter run forward then backward over the record: the symmetric impulse
     /// response `(1 - a)/(1 + a) a^|k|`, `|H|^2` the first order's squared, no phase.
     ZeroPhase { time_constant_s: f64 },
 }
+
+/// How the second order's continuous prototype becomes a filter on the samples
+/// ([`LowPass::SecondOrder`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SecondOrderForm {
+    /// The poles mapped by `z = e^{s tau0}`, no zeros: an AR(2) on the increments.
+    PoleMapped,
+    /// The bilinear transform with the frequency prewarped: two zeros at Nyquist.
+    Bilinear,
+    /// The prototype run at an internal rate above the output's and read every so many
+    /// samples: at the output rate an ARMA(2,1), the pole-mapped form's poles and the numerator
+    /// `(1 + zero z^-1) / (1 + zero)`. 0 is [`SecondOrderForm::PoleMapped`]; the pole-mapped
+    /// filter run `D` times faster gives the zero of [`sampled_zero`], from 0 at `D = 1` up to
+    /// the continuous filter sampled every `tau0` (0.268 for a Butterworth at 20 Hz read at
+    /// 200 Hz), and a bilinear biquad run 5 times faster about 0.30 (docs/gap.md, "Filters run
+    /// faster than the output (session 43)").
+    Sampled { zero: f64 },
+}
+
+/// Largest zero of [`SecondOrderForm::Sampled`] accepted (a bilinear biquad run twice as fast
+/// as the output gives 0.49).
+pub const MAX_ZERO: f64 = 0.9;
+
+/// The decimation at which [`sampled_zero`] stands for the continuous filter (its zero within
+/// 0.5% of the limit for a Butterworth at a tenth of the output rate).
+pub const CONTINUOUS_DECIMATION: f64 = 64.0;
 
 /// Autocorrelation terms below this fraction of the first are dropped (IIR filters).
 const TAIL: f64 = 1e-15;
@@ -49,13 +77,37 @@ pub const MAX_STAGES: u32 = 4;
 impl LowPass {
     /// Whether this is the bilinear second order ([`LowPass::SecondOrder`]).
     pub fn is_bilinear(&self) -> bool {
-        matches!(self, LowPass::SecondOrder { bilinear: true, .. })
+        matches!(
+            self,
+            LowPass::SecondOrder {
+                form: SecondOrderForm::Bilinear,
+                ..
+            }
+        )
+    }
+
+    /// The numerator taps `(b0, b1, b2)` of the second order, scaled to sum 1 (the poles' gain
+    /// `1 - a1 - a2` is apart): `(1, 0, 0)` pole-mapped, `(1, 2, 1) / 4` bilinear,
+    /// `(1, c, 0) / (1 + c)` sampled with the zero `c`. None for the other filters.
+    pub fn numerator(&self) -> Option<[f64; 3]> {
+        match *self {
+            LowPass::SecondOrder { form, .. } => Some(match form {
+                SecondOrderForm::PoleMapped => [1.0, 0.0, 0.0],
+                SecondOrderForm::Bilinear => [0.25, 0.5, 0.25],
+                SecondOrderForm::Sampled { zero: c } => [1.0 / (1.0 + c), c / (1.0 + c), 0.0],
+            }),
+            _ => None,
+        }
     }
 
     /// Shape parameters the diagnosis fits (the moving average's stage count is a discrete
     /// choice and not counted).
     pub fn n_shape(&self) -> usize {
         match self {
+            LowPass::SecondOrder {
+                form: SecondOrderForm::Sampled { .. },
+                ..
+            } => 3,
             LowPass::SecondOrder { .. } => 2,
             _ => 1,
         }
@@ -80,8 +132,14 @@ impl LowPass {
             LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
-                bilinear,
+                form,
             } => {
+                let bilinear = form == SecondOrderForm::Bilinear;
+                if let SecondOrderForm::Sampled { zero } = form {
+                    if !(0.0..=MAX_ZERO).contains(&zero) {
+                        return Some(format!("zero {zero} must be in [0, {MAX_ZERO}]"));
+                    }
+                }
                 if !(natural_frequency_hz > 0.0 && natural_frequency_hz.is_finite()) {
                     Some(format!(
                         "natural frequency {natural_frequency_hz} must be > 0"
@@ -112,7 +170,7 @@ impl LowPass {
             LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
-                bilinear: true,
+                form: SecondOrderForm::Bilinear,
             } => {
                 let k = (PI * natural_frequency_hz * tau0_s).tan();
                 let d = 1.0 + 2.0 * damping * k + k * k;
@@ -124,20 +182,8 @@ impl LowPass {
             LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
-                bilinear: false,
-            } => {
-                let w = 2.0 * PI * natural_frequency_hz;
-                if damping < 1.0 {
-                    let r = (-damping * w * tau0_s).exp();
-                    let th = w * tau0_s * (1.0 - damping * damping).sqrt();
-                    Some((2.0 * r * th.cos(), -r * r))
-                } else {
-                    let d = (damping * damping - 1.0).sqrt();
-                    let p1 = (w * (-damping + d) * tau0_s).exp();
-                    let p2 = (w * (-damping - d) * tau0_s).exp();
-                    Some((p1 + p2, -p1 * p2))
-                }
-            }
+                ..
+            } => Some(mapped_ar2(natural_frequency_hz, damping, tau0_s)),
             LowPass::ZeroPhase { time_constant_s } => {
                 let a = (-tau0_s / time_constant_s).exp();
                 Some((2.0 * a, -a * a))
@@ -208,17 +254,27 @@ impl LowPass {
                     r_prev = r;
                     r = next;
                 }
-                if !self.is_bilinear() {
-                    out.truncate(n);
-                    return out;
-                }
-                // The numerator (1 + 2 z^-1 + z^-2) / 4 (DC gain 1) on the all-pole part:
-                // its autocorrelation (6, 4, 1) / 16 at lags 0, +-1, +-2 convolved with the
-                // all-pole part's (even in the lag).
+                let b = match self.numerator() {
+                    Some(b) if b != [1.0, 0.0, 0.0] => b,
+                    _ => {
+                        out.truncate(n);
+                        return out;
+                    }
+                };
+                // The numerator on the all-pole part: its autocorrelation
+                // `q_j = sum_i b_i b_{i+j}` at lags 0, +-1, +-2 (bilinear (6, 4, 1) / 16)
+                // convolved with the all-pole part's (even in the lag).
+                let q = [
+                    b[0] * b[0] + b[1] * b[1] + b[2] * b[2],
+                    b[0] * b[1] + b[1] * b[2],
+                    b[0] * b[2],
+                ];
                 let at = |k: i64| out[k.unsigned_abs() as usize];
                 (0..n as i64)
                     .map(|k| {
-                        (6.0 * at(k) + 4.0 * (at(k - 1) + at(k + 1)) + at(k - 2) + at(k + 2)) / 16.0
+                        q[0] * at(k)
+                            + q[1] * (at(k - 1) + at(k + 1))
+                            + q[2] * (at(k - 2) + at(k + 2))
                     })
                     .collect()
             }
@@ -306,19 +362,18 @@ impl LowPass {
                 };
                 (g * g).powi(stages.max(1) as i32)
             }
-            LowPass::SecondOrder { bilinear, .. } => {
+            LowPass::SecondOrder { .. } => {
                 let (a1, a2) = self.ar2(tau0_s).unwrap_or((0.0, 0.0));
                 let g = 1.0 - a1 - a2;
                 // |1 - a1 e^{-iw} - a2 e^{-2iw}|^2
                 let re = 1.0 - a1 * w.cos() - a2 * (2.0 * w).cos();
                 let im = a1 * w.sin() + a2 * (2.0 * w).sin();
-                // |(1 + e^{-iw}) / 2|^4 = cos^4(w / 2): the bilinear form's zeros at Nyquist
-                let zeros = if bilinear {
-                    (w / 2.0).cos().powi(4)
-                } else {
-                    1.0
-                };
-                zeros * g * g / (re * re + im * im)
+                // |b0 + b1 e^{-iw} + b2 e^{-2iw}|^2: for the bilinear form
+                // cos^4(w / 2), its zeros at Nyquist
+                let b = self.numerator().unwrap_or([1.0, 0.0, 0.0]);
+                let nre = b[0] + b[1] * w.cos() + b[2] * (2.0 * w).cos();
+                let nim = b[1] * w.sin() + b[2] * (2.0 * w).sin();
+                (nre * nre + nim * nim) * g * g / (re * re + im * im)
             }
         }
     }
@@ -336,7 +391,10 @@ impl LowPass {
                 time_constant_s
             }
             LowPass::MovingAverage { taps, stages } => (taps * stages) as f64 * tau0_s,
-            LowPass::SecondOrder { bilinear: true, .. } => {
+            LowPass::SecondOrder {
+                form: SecondOrderForm::Bilinear,
+                ..
+            } => {
                 // the slower pole's time constant, from its modulus
                 let (a1, a2) = self.ar2(tau0_s).unwrap_or((0.0, 0.0));
                 let slow = slow_pole(a1, a2);
@@ -349,7 +407,7 @@ impl LowPass {
             LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
-                bilinear: false,
+                ..
             } => {
                 let w = 2.0 * PI * natural_frequency_hz;
                 if damping <= 1.0 {
@@ -407,6 +465,79 @@ pub fn slow_pole(a1: f64, a2: f64) -> f64 {
         (-a2).sqrt()
     } else {
         (a1.abs() + disc.sqrt()) / 2.0
+    }
+}
+
+/// The AR(2) coefficients `(a1, a2)` of the continuous prototype's poles
+/// `s = w (-zeta +- sqrt(zeta^2 - 1))`, `w = 2 pi f_n`, mapped by `z = e^{s step}`:
+/// `a1 = z1 + z2`, `a2 = -z1 z2`.
+pub fn mapped_ar2(natural_frequency_hz: f64, damping: f64, step_s: f64) -> (f64, f64) {
+    let w = 2.0 * PI * natural_frequency_hz;
+    if damping < 1.0 {
+        let r = (-damping * w * step_s).exp();
+        let th = w * step_s * (1.0 - damping * damping).sqrt();
+        (2.0 * r * th.cos(), -r * r)
+    } else {
+        let d = (damping * damping - 1.0).sqrt();
+        let p1 = (w * (-damping + d) * step_s).exp();
+        let p2 = (w * (-damping - d) * step_s).exp();
+        (p1 + p2, -p1 * p2)
+    }
+}
+
+/// The zero `c` of the second order run at the internal step `h = tau0 / decimation` and read
+/// every `decimation`-th sample ([`SecondOrderForm::Sampled`]), as the MA(1) numerator
+/// `(1 + c z^-1) / (1 + c)` beside the poles mapped at `tau0`.
+///
+/// The AR(2) at step `h` with poles `z_i = e^{s_i h}` has the autocorrelation
+/// `rho(k) = (z1 (1 - z2^2) z1^k - z2 (1 - z1^2) z2^k) / ((z1 - z2)(1 + z1 z2))` (Box, Jenkins
+/// and Reinsel, "Time Series Analysis", section 3.2.4), read at the lags `k = D j` as
+/// `R(j) = sum_i w_i e^{s_i tau0 j}`: a sum of the powers of the poles mapped at `tau0` for all
+/// `j >= 0`, which is the autocorrelation of an ARMA(2,1). Its MA part `u_k = y_k - a1 y_{k-1} -
+/// a2 y_{k-2}` has the autocovariances `gamma_u(l) = sum_{p,q} phi_p phi_q R(l + p - q)`,
+/// `phi = (1, -a1, -a2)`, zero beyond `l = 1`; with `r = gamma_u(1) / gamma_u(0)` the
+/// invertible zero is `c = (1 - sqrt(1 - 4 r^2)) / (2 r)`. At `decimation = 1` it is 0; as the
+/// decimation grows it tends to the continuous filter sampled every `tau0` (0.268 for a
+/// Butterworth at 20 Hz read at 200 Hz).
+pub fn sampled_zero(natural_frequency_hz: f64, damping: f64, tau0_s: f64, decimation: f64) -> f64 {
+    use rustfft::num_complex::Complex64 as C;
+    // critical damping's double pole: nudged apart (the weights' common factor 1 / (z1 - z2))
+    let zeta = if (damping - 1.0).abs() < 1e-6 {
+        1.0 + 1e-6
+    } else {
+        damping
+    };
+    let w = 2.0 * PI * natural_frequency_hz;
+    let root = C::new(zeta * zeta - 1.0, 0.0).sqrt();
+    let (s1, s2) = (w * (-zeta + root), w * (-zeta - root));
+    let h = tau0_s / decimation.max(1.0);
+    let (z1, z2) = ((s1 * h).exp(), (s2 * h).exp());
+    let (w1, w2) = (z1 * (1.0 - z2 * z2), -z2 * (1.0 - z1 * z1));
+    let (e1, e2) = ((s1 * tau0_s).exp(), (s2 * tau0_s).exp());
+    let r = |j: i64| -> f64 {
+        let j = j.unsigned_abs() as i32;
+        ((w1 * e1.powi(j) + w2 * e2.powi(j)) / (z1 - z2)).re
+    };
+    let (a1, a2) = ((e1 + e2).re, -(e1 * e2).re);
+    let phi = [1.0, -a1, -a2];
+    let gamma = |l: i64| -> f64 {
+        let mut g = 0.0;
+        for (p, fp) in phi.iter().enumerate() {
+            for (q, fq) in phi.iter().enumerate() {
+                g += fp * fq * r(l + p as i64 - q as i64);
+            }
+        }
+        g
+    };
+    let g0 = gamma(0);
+    if g0.is_nan() || g0 <= 0.0 {
+        return 0.0;
+    }
+    let ratio = (gamma(1) / g0).clamp(-0.5, 0.5);
+    if ratio.abs() < 1e-12 {
+        0.0
+    } else {
+        (1.0 - (1.0 - 4.0 * ratio * ratio).max(0.0).sqrt()) / (2.0 * ratio)
     }
 }
 
@@ -507,7 +638,7 @@ mod tests {
             let lp = LowPass::SecondOrder {
                 natural_frequency_hz: f0,
                 damping: zeta,
-                bilinear: false,
+                form: SecondOrderForm::PoleMapped,
             };
             let r = lp.autocorrelation(tau0);
             let mem = lp.memory_s(tau0);
@@ -529,7 +660,7 @@ mod tests {
         let lp = LowPass::SecondOrder {
             natural_frequency_hz: 35.0,
             damping: 5.0,
-            bilinear: false,
+            form: SecondOrderForm::PoleMapped,
         };
         let t = 2.0 * 5.0 / (2.0 * PI * 35.0);
         assert!((lp.memory_s(tau0) / t - 1.0).abs() < 0.02);
@@ -550,7 +681,7 @@ mod tests {
             let lp = LowPass::SecondOrder {
                 natural_frequency_hz: fc,
                 damping: zeta,
-                bilinear: true,
+                form: SecondOrderForm::Bilinear,
             };
             let k = (PI * fc * tau0).tan();
             let d = 1.0 + 2.0 * zeta * k + k * k;
@@ -598,7 +729,7 @@ mod tests {
         let butter = LowPass::SecondOrder {
             natural_frequency_hz: 20.0,
             damping: std::f64::consts::FRAC_1_SQRT_2,
-            bilinear: true,
+            form: SecondOrderForm::Bilinear,
         };
         assert!((butter.power_gain(tau0, 20.0) - 0.5).abs() < 1e-12);
         // Its memory: the poles' modulus, |p|^2 = -a2, per lag.
@@ -606,6 +737,83 @@ mod tests {
         let a2 = -(1.0 - 2.0f64.sqrt() * k + k * k) / (1.0 + 2.0f64.sqrt() * k + k * k);
         let want = -tau0 / (-a2).sqrt().ln();
         assert!((butter.memory_s(tau0) / want - 1.0).abs() < 1e-12);
+    }
+
+    /// The sampled form with the zero of [`sampled_zero`] against the filter it names, run by
+    /// hand: the pole-mapped recursion at
+    /// the internal step `tau0 / D`, its impulse response's autocorrelation read at the lags
+    /// `D k` and scaled to a total of 1. Under- and overdamped, D 2, 5 and 12, lags 0-60 within
+    /// 1e-8 of the first; Parseval on its `|H|^2`; the zero 0 at D = 1; and at D = 64 the
+    /// continuous filter sampled every `tau0` (its autocorrelation in closed form,
+    /// `e^{-zeta w t} (cos w_d t + zeta / sqrt(1 - zeta^2) sin w_d t)`), within 1% at lag 1.
+    #[test]
+    fn the_sampled_second_order_is_the_filter_read_every_d_samples() {
+        use std::f64::consts::FRAC_1_SQRT_2;
+        let tau0 = 0.005;
+        for (fc, zeta, d) in [
+            (20.0, FRAC_1_SQRT_2, 5usize),
+            (40.0, 0.3, 2),
+            (8.0, 2.5, 12),
+        ] {
+            let lp = LowPass::SecondOrder {
+                natural_frequency_hz: fc,
+                damping: zeta,
+                form: SecondOrderForm::Sampled {
+                    zero: sampled_zero(fc, zeta, tau0, d as f64),
+                },
+            };
+            let (a1, a2) = mapped_ar2(fc, zeta, tau0 / d as f64);
+            let mut h = vec![0.0f64; 400_000];
+            for i in 0..h.len() {
+                let mut y = if i == 0 { 1.0 } else { 0.0 };
+                if i >= 1 {
+                    y += a1 * h[i - 1];
+                }
+                if i >= 2 {
+                    y += a2 * h[i - 2];
+                }
+                h[i] = y;
+            }
+            let acf = |lag: usize| -> f64 { h.iter().zip(&h[lag..]).map(|(x, y)| x * y).sum() };
+            let read: Vec<f64> = (0..400).map(|k| acf(k * d)).collect();
+            let total = read[0] + 2.0 * read[1..].iter().sum::<f64>();
+            let r = lp.autocorrelation(tau0);
+            for lag in [0usize, 1, 2, 3, 10, 60] {
+                let want = read[lag] / total;
+                let got = r.get(lag).copied().unwrap_or(0.0);
+                assert!(
+                    (got - want).abs() <= 1e-8 * r[0],
+                    "{lp:?} lag {lag}: {got} vs {want}"
+                );
+            }
+            let n = 20_000;
+            let mean: f64 = (0..n)
+                .map(|i| lp.power_gain(tau0, (i as f64 + 0.5) / n as f64 / (2.0 * tau0)))
+                .sum::<f64>()
+                / n as f64;
+            assert!(
+                (mean / r[0] - 1.0).abs() < 1e-6,
+                "{lp:?}: {mean} vs {}",
+                r[0]
+            );
+        }
+        assert!(sampled_zero(20.0, FRAC_1_SQRT_2, tau0, 1.0).abs() < 1e-9);
+        let (zeta, w) = (FRAC_1_SQRT_2, 2.0 * PI * 20.0);
+        let wd = w * (1.0 - zeta * zeta).sqrt();
+        let cont = |t: f64| {
+            (-zeta * w * t).exp()
+                * ((wd * t).cos() + zeta / (1.0 - zeta * zeta).sqrt() * (wd * t).sin())
+        };
+        let lp = LowPass::SecondOrder {
+            natural_frequency_hz: 20.0,
+            damping: zeta,
+            form: SecondOrderForm::Sampled {
+                zero: sampled_zero(20.0, zeta, tau0, CONTINUOUS_DECIMATION),
+            },
+        };
+        let r = lp.autocorrelation(tau0);
+        let (got, want) = (r[1] / r[0], cont(tau0) / cont(0.0));
+        assert!((got / want - 1.0).abs() < 0.01, "{got} vs {want}");
     }
 
     /// The generic form reproduces the first-order closed form of `terms`.
@@ -636,12 +844,12 @@ mod tests {
             LowPass::SecondOrder {
                 natural_frequency_hz: 5.0,
                 damping: 0.3,
-                bilinear: false,
+                form: SecondOrderForm::PoleMapped,
             },
             LowPass::SecondOrder {
                 natural_frequency_hz: 5.0,
                 damping: 2.0,
-                bilinear: false,
+                form: SecondOrderForm::PoleMapped,
             },
             LowPass::ZeroPhase {
                 time_constant_s: 0.02,
@@ -705,7 +913,7 @@ mod tests {
             LowPass::SecondOrder {
                 natural_frequency_hz: 8.0,
                 damping: 0.3,
-                bilinear: false,
+                form: SecondOrderForm::PoleMapped,
             },
         ] {
             let v = lp.flicker_rate_avar(tau0, &[1, 100_000]);
@@ -728,7 +936,7 @@ mod tests {
             LowPass::SecondOrder {
                 natural_frequency_hz: 10.0,
                 damping: 0.5,
-                bilinear: false,
+                form: SecondOrderForm::PoleMapped,
             },
             LowPass::ZeroPhase {
                 time_constant_s: 0.01,
@@ -757,7 +965,7 @@ mod tests {
             LowPass::SecondOrder {
                 natural_frequency_hz: 3.0,
                 damping: 0.4,
-                bilinear: false,
+                form: SecondOrderForm::PoleMapped,
             },
             LowPass::MovingAverage { taps: 7, stages: 2 },
         ] {

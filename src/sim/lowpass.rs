@@ -25,15 +25,16 @@ pub enum LowPassGen {
         since_exact: usize,
         started: bool,
     },
-    /// `y_k = a1 y_{k-1} + a2 y_{k-2} + g d_k`, or with `bilinear`
-    /// `g (d_k + 2 d_{k-1} + d_{k-2}) / 4` in place of `g d_k` ([`LowPass::SecondOrder`]).
+    /// `y_k = a1 y_{k-1} + a2 y_{k-2} + g (b0 d_k + b1 d_{k-1} + b2 d_{k-2})` with the
+    /// numerator `b` of [`LowPass::numerator`] (`(1, 0, 0)` pole-mapped, `(1, 2, 1) / 4`
+    /// bilinear, `(1, c, 0) / (1 + c)` sampled; [`LowPass::SecondOrder`]).
     SecondOrder {
         a1: f64,
         a2: f64,
         g: f64,
         y1: f64,
         y2: f64,
-        bilinear: bool,
+        b: [f64; 3],
         x1: f64,
         x2: f64,
         started: bool,
@@ -58,9 +59,9 @@ impl LowPassGen {
                 since_exact: 0,
                 started: false,
             }),
-            LowPass::SecondOrder { bilinear, .. } => {
-                // The same poles as the AVAR's (model::lowpass): its autocorrelation is of
-                // this recursion.
+            LowPass::SecondOrder { .. } => {
+                // The same poles and zeros as the AVAR's (model::lowpass): its
+                // autocorrelation is of this recursion.
                 let (a1, a2) = lp.ar2(tau0_s)?;
                 Some(LowPassGen::SecondOrder {
                     a1,
@@ -68,7 +69,7 @@ impl LowPassGen {
                     g: 1.0 - a1 - a2,
                     y1: 0.0,
                     y2: 0.0,
-                    bilinear,
+                    b: lp.numerator()?,
                     x1: 0.0,
                     x2: 0.0,
                     started: false,
@@ -229,16 +230,12 @@ impl LowPassGen {
                 g,
                 y1,
                 y2,
-                bilinear,
+                b,
                 x1,
                 x2,
                 ..
             } => {
-                let input = if *bilinear {
-                    (d + 2.0 * *x1 + *x2) / 4.0
-                } else {
-                    d
-                };
+                let input = b[0] * d + b[1] * *x1 + b[2] * *x2;
                 *x2 = *x1;
                 *x1 = d;
                 let y = *a1 * *y1 + *a2 * *y2 + *g * input;
@@ -267,6 +264,7 @@ impl LowPassGen {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::lowpass::SecondOrderForm;
 
     /// Each filter passes a constant unchanged and has the impulse response its autocorrelation
     /// was computed from (checked on lag-0 energy of the response to a unit impulse).
@@ -278,7 +276,12 @@ mod tests {
             LowPass::SecondOrder {
                 natural_frequency_hz: 8.0,
                 damping: 0.4,
-                bilinear: false,
+                form: SecondOrderForm::PoleMapped,
+            },
+            LowPass::SecondOrder {
+                natural_frequency_hz: 30.0,
+                damping: 0.7,
+                form: SecondOrderForm::Sampled { zero: 0.3 },
             },
             LowPass::ZeroPhase {
                 time_constant_s: 0.012,

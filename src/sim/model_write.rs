@@ -6,7 +6,7 @@
 use std::fmt::Write as _;
 
 use super::model_file::{ChannelModel, SimModel};
-use crate::model::lowpass::LowPass;
+use crate::model::lowpass::{LowPass, SecondOrderForm};
 
 /// A number as TOML reads it back to the same `f64` (`{:?}` is the shortest round-trip form and
 /// always has a `.` or an exponent). Non-finite values have no TOML form a model file accepts;
@@ -145,14 +145,18 @@ fn channel_toml(s: &mut String, c: &ChannelModel) {
         Some(LowPass::SecondOrder {
             natural_frequency_hz,
             damping,
-            bilinear,
+            form,
         }) => {
             let _ = writeln!(
                 s,
                 "[channel.second_order_filter]\nnatural_frequency = {}\ndamping = {}{}",
                 num(natural_frequency_hz),
                 num(damping),
-                if bilinear { "\nbilinear = true" } else { "" }
+                match form {
+                    SecondOrderForm::PoleMapped => String::new(),
+                    SecondOrderForm::Bilinear => "\nbilinear = true".to_string(),
+                    SecondOrderForm::Sampled { zero } => format!("\nzero = {}", num(zero)),
+                }
             );
         }
         Some(LowPass::ZeroPhase { time_constant_s }) => {
@@ -253,22 +257,74 @@ outliers = { rate = 0.001, size = 3.5 }
         assert_eq!(back.channels[0].name, "g x\\y");
     }
 
-    /// The second order's bilinear form is written (`bilinear = true`) and read back as such;
-    /// the pole-mapped form is written without the key, as before.
+    /// The second order's bilinear and sampled forms are written (`bilinear = true`,
+    /// `zero = 0.25`) and read back as such; the pole-mapped form is written without either
+    /// key, as before.
     #[test]
-    fn the_bilinear_second_order_round_trips() {
-        for (extra, bilinear) in [(", bilinear = true", true), ("", false)] {
+    fn the_second_order_forms_round_trip() {
+        for (extra, form) in [
+            (", bilinear = true", SecondOrderForm::Bilinear),
+            (", zero = 0.25", SecondOrderForm::Sampled { zero: 0.25 }),
+            ("", SecondOrderForm::PoleMapped),
+        ] {
             let m = read(&format!(
                 "tau0_s = 0.005\n[[channel]]\nname = \"gx\"\nunit = \"deg\"\nN = 0.01\n\
                  second_order_filter = {{ natural_frequency = 20.0, damping = 0.7{extra} }}\n"
             ));
             let text = model_toml(&m, "t", &[]);
-            assert_eq!(text.contains("bilinear = true"), bilinear, "{text}");
+            assert_eq!(
+                text.contains("bilinear = true"),
+                form == SecondOrderForm::Bilinear,
+                "{text}"
+            );
+            assert_eq!(
+                text.contains("zero = 0.25"),
+                form != SecondOrderForm::Bilinear && form != SecondOrderForm::PoleMapped,
+                "{text}"
+            );
             let back = read(&text);
             assert_eq!(m, back);
-            assert_eq!(
-                back.channels[0].lowpass.map(|l| l.is_bilinear()),
-                Some(bilinear)
+            let Some(LowPass::SecondOrder { form: got, .. }) = back.channels[0].lowpass else {
+                panic!("{text}");
+            };
+            assert_eq!(got, form);
+        }
+    }
+
+    /// `decimation = 5` in a model file is the sampled form with the zero of the pole-mapped
+    /// filter run 5 times faster (0.2497 for a Butterworth at 20 Hz read at 200 Hz, the value
+    /// docs/gap.md's table gives); a decimation out of range, a zero beside a decimation and
+    /// either beside `bilinear = true` are refused at their key.
+    #[test]
+    fn a_decimation_gives_the_sampled_zero_and_conflicts_are_refused() {
+        let head = "tau0_s = 0.005\n[[channel]]\nname = \"gx\"\nunit = \"deg\"\nN = 0.01\n";
+        let m = read(&format!(
+            "{head}second_order_filter = {{ natural_frequency = 20.0, damping = 0.7071, decimation = 5 }}\n"
+        ));
+        let Some(LowPass::SecondOrder {
+            form: SecondOrderForm::Sampled { zero },
+            ..
+        }) = m.channels[0].lowpass
+        else {
+            panic!("{:?}", m.channels[0].lowpass);
+        };
+        assert!((zero - 0.2497).abs() < 5e-4, "zero {zero}");
+        for (extra, key) in [
+            ("decimation = 0.5", "decimation"),
+            ("decimation = 5, zero = 0.2", "decimation"),
+            ("bilinear = true, zero = 0.2", "zero"),
+            ("bilinear = true, decimation = 4", "decimation"),
+            ("zero = 0.95", "second_order_filter"),
+        ] {
+            let text = format!(
+                "{head}second_order_filter = {{ natural_frequency = 20.0, damping = 0.7, {extra} }}\n"
+            );
+            let err = SimModel::from_toml_str(&text, Path::new("t.toml"))
+                .expect_err(extra)
+                .to_string();
+            assert!(
+                err.contains(key) && err.contains("t.toml"),
+                "{extra}: {err}"
             );
         }
     }

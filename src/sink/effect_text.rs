@@ -182,6 +182,15 @@ pub fn effect_parts(
     if bilinear {
         name += " (bilinear biquad, zeros at Nyquist: scipy's butter, PX4's LowPassFilter2p)";
     }
+    // The sampled form (`zero`): a filter run faster than the output and read every so many
+    // samples, said in its name with its zero.
+    let zero = param("zero").filter(|_| kind == "second_order_filter");
+    if let Some(c) = zero {
+        name += &format!(
+            " (run faster than the output and read every few samples: zero at z = -{})",
+            number(c)
+        );
+    }
     let mut out = Vec::new();
     for (key, pname, dim) in keys {
         let text = match (dim, param(key)) {
@@ -212,7 +221,9 @@ pub fn effect_parts(
     for (k, v) in &params {
         let with_rate =
             (*k == "lo" || *k == "hi") && one_rate && bounds.0.is_some() && bounds.1.is_some();
-        let said = keys.iter().any(|(key, _, _)| key == k) || (bilinear && *k == "bilinear");
+        let said = keys.iter().any(|(key, _, _)| key == k)
+            || (bilinear && *k == "bilinear")
+            || (zero.is_some() && *k == "zero");
         if !with_rate && !said {
             out.push(ParamText {
                 name: k.replace('_', " "),

@@ -277,6 +277,19 @@ fn bilinear_second_order_filter_on_white_rate() {
     });
 }
 
+/// The sampled second order (a Butterworth prototype at 20 Hz run 5 times faster than the output and
+/// read every 5th sample: the pole-mapped poles and one zero, `decimation = 5` giving the zero),
+/// simulated by its ARMA(2,1) recursion, against the AVAR of its autocorrelation
+/// (src/model/lowpass.rs).
+#[test]
+fn sampled_second_order_filter_on_white_rate() {
+    check_ensemble("sampled", |_| {
+        channel(
+            "N = 0.5\nsecond_order_filter = { natural_frequency = 20.0, damping = 0.7071, decimation = 5 }",
+        )
+    });
+}
+
 #[test]
 fn zero_phase_filter_on_white_rate() {
     check_ensemble("zero_phase", |s| {

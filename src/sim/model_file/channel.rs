@@ -8,6 +8,7 @@ use super::{
     BandNoise, BiasJumps, ChannelModel, FlickerBank, GaussMarkov, IncrementUnit, LowPass, Outliers,
     OutputFilterSpec, Sinusoid, Warmup, FLICKER_BAND_DECADES_DEFAULT,
 };
+use crate::model::lowpass::{sampled_zero, SecondOrderForm, CONTINUOUS_DECIMATION};
 use crate::toml_check::Collector;
 
 fn parse_axis(v: &toml::Value, path: &str, errs: &mut Collector) -> Option<[f64; 3]> {
@@ -306,13 +307,53 @@ fn parse_lowpass(
         // The bilinear biquad (scipy's butter, PX4's LowPassFilter2p) in place of the
         // pole-mapped form (model::lowpass).
         let bilinear = e.boolean("bilinear", errs).unwrap_or(false);
+        // The filter run faster than the output and sampled
+        // (model::lowpass::SecondOrderForm::Sampled): its zero, or the decimation of a
+        // pole-mapped filter run that many times faster, from which the zero follows.
+        let zero = e.num_pos("zero", false, errs);
+        let decimation = e.num("decimation", errs);
+        let form = match (zero, decimation) {
+            (Some(_), Some(_)) => {
+                errs.bad(
+                    e.path("decimation"),
+                    "zero and decimation exclude each other (the decimation gives the zero)",
+                );
+                SecondOrderForm::PoleMapped
+            }
+            (Some(_), None) | (None, Some(_)) if bilinear => {
+                let key = if zero.is_some() { "zero" } else { "decimation" };
+                errs.bad(
+                    e.path(key),
+                    format!(
+                        "the bilinear form has its zeros at Nyquist: bilinear = true and {key} \
+                         exclude each other"
+                    ),
+                );
+                SecondOrderForm::Bilinear
+            }
+            (Some(zero), None) => SecondOrderForm::Sampled { zero },
+            (None, Some(d)) if (1.0..=CONTINUOUS_DECIMATION).contains(&d) => {
+                SecondOrderForm::Sampled {
+                    zero: sampled_zero(natural_frequency_hz, damping, tau0_s, d),
+                }
+            }
+            (None, Some(d)) => {
+                errs.bad(
+                    e.path("decimation"),
+                    format!("decimation {d} must be in [1, {CONTINUOUS_DECIMATION}]"),
+                );
+                SecondOrderForm::PoleMapped
+            }
+            (None, None) if bilinear => SecondOrderForm::Bilinear,
+            (None, None) => SecondOrderForm::PoleMapped,
+        };
         e.finish(errs);
         found.push((
             p,
             LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
-                bilinear,
+                form,
             },
         ));
     }

@@ -37,6 +37,8 @@
 //! output_filter = { time_constant = 0.01 }                          # s
 //! moving_average = { taps = 16, stages = 2 }     # or, in place of output_filter (one filter):
 //! second_order_filter = { natural_frequency = 20.0, damping = 0.7 }  # Hz, 1
+//!   # ... and optionally bilinear = true (the digital biquad), or zero = 0.27 / decimation = 5
+//!   # (run faster than the output and read every few samples; model::lowpass::SecondOrderForm)
 //! zero_phase_filter = { time_constant = 0.01 }   # s, forward-backward first order
 //! warmup = { amplitude = 0.5, time_constant = 600.0 }               # u/s, s
 //! bias_jumps = { mean_interval = 1800.0, rms_size = 0.01 }          # s, u/s
