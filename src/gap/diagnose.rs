@@ -728,6 +728,22 @@ fn diagnose_curve_pass(
                 "the warm-up test"
             );
         }
+        // A warm-up at the scan's shortest time constant (half a block) has decayed within the
+        // first block mean: that one mean is all it shows, its amplitude and time constant are
+        // not told apart (only their product), and one block's excursion of the noise (a slow
+        // Gauss-Markov wander) shows the same. Not named (docs/gap.md, "A warm-up at the scan's
+        // edge (session 43)").
+        let warm = warm.filter(|w| {
+            let at_edge = w.time_constant_s <= WARMUP_EDGE_BLOCKS * block_s;
+            if at_edge {
+                tracing::debug!(
+                    time_constant_s = w.time_constant_s,
+                    block_s,
+                    "a warm-up at the scan's shortest time constant is not named"
+                );
+            }
+            !at_edge
+        });
         if let Some(w) = warm.filter(|w| th.warmup_found(w)) {
             // Its AVAR, exact for the estimator on this record, enters as a fixed offset.
             let warm_offset = warmup_curve_offset(&prob, w.amplitude, w.time_constant_s);
@@ -1188,6 +1204,10 @@ pub(crate) fn k2_upper(prob: &GapProblem, spec: &ModelSpec, fit: &GlsFit) -> f64
 fn has_filter(effects: &[AddedEffect]) -> bool {
     effects.iter().any(|e| e.params.kind().is_filter())
 }
+
+/// A warm-up whose time constant is at most this many blocks (the profiled scan's shortest is
+/// half a block) is not named ([`diagnose`]'s warm-up step).
+const WARMUP_EDGE_BLOCKS: f64 = 0.5 * (1.0 + 1e-9);
 
 /// Samples before the block tests' first kept block (`EvidenceSnapshot::block_first`: short
 /// blocks at the start are left out): their time 0 is this far into the record.
