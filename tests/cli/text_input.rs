@@ -611,6 +611,38 @@ fn one_repeated_or_backward_stamp_mid_file_counts_once() {
     assert!((s.t_data - 4.02).abs() < 1e-9, "{}", s.t_data);
 }
 
+/// A recording whose last line was cut while written (no line end): a field short, or its last
+/// number cut (`0.00` where the rows write six decimals), is a bad row, counted in the summary's
+/// `bad_rows` and named with its file and line; the same line complete is read, line end or
+/// not. Before, the cut number was read as a sample (`bad_rows` 0).
+#[test]
+fn a_last_line_cut_while_written_is_counted_and_skipped() {
+    let (a, b) = columns();
+    let mut whole = String::from("time,gx,gy\n");
+    for i in 0..a.len() {
+        whole += &format!("{:.3},{:.6},{:.6}\n", i as f64 * 0.01, a[i], b[i]);
+    }
+    let last = format!("4.000,{:.6},0.012345", a[7]);
+    for (name, tail, bad, samples) in [
+        ("complete.csv", last.clone(), 0, 402),
+        ("complete_ended.csv", format!("{last}\n"), 0, 402),
+        ("cut_number.csv", last[..last.len() - 4].to_string(), 1, 401),
+        ("cut_field.csv", last[..last.len() - 9].to_string(), 1, 401),
+    ] {
+        let p = write(name, format!("{whole}{tail}").as_bytes());
+        let out = analyze(&p, &[]);
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        let (_, s) = parsed(&out);
+        assert_eq!((s.bad_rows, s.samples[1]), (bad, samples), "{name}: {err}");
+        let said = format!("{name}: line 402: ");
+        assert_eq!(
+            err.contains(&said) && err.contains("the last line, without its line end"),
+            bad == 1,
+            "{name}: {err}"
+        );
+    }
+}
+
 /// Rows written twice (stamp and values repeated, as a logger or driver repeats a record) are
 /// dropped and counted, and a later jump of the time column is still the gap it stands for:
 /// the file with rows 50, 120, 121 and 150 doubled and rows 200..210 missing reads as the same
