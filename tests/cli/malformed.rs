@@ -372,3 +372,31 @@ fn listing(dir: &Path) -> Vec<(String, u64)> {
     v.sort();
     v
 }
+
+/// `listen --help` shows no `--format` default that `listen` refuses: it said `[default: csv]`
+/// and "or `csv` for text columns", and `listen` given no `--format` (or `--format csv`) then
+/// refused "listen reads frames". The refusal is kept (the table above); the help now says a
+/// descriptor is required. `analyze --help` keeps its default, which analyze reads.
+#[test]
+fn listen_help_shows_no_format_default_it_refuses() {
+    let help = |cmd: &str| {
+        let out = Command::new(env!("CARGO_BIN_EXE_allanscope"))
+            .args([cmd, "--help"])
+            .output()
+            .expect("run");
+        assert_eq!(out.status.code(), Some(0), "{cmd} --help");
+        let text = String::from_utf8_lossy(&out.stdout).to_string();
+        text.lines()
+            .find(|l| l.trim_start().starts_with("--format "))
+            .unwrap_or_else(|| panic!("{cmd} --help has no --format: {text}"))
+            .to_string()
+    };
+    let listen = help("listen");
+    assert!(
+        !listen.contains("[default:") && !listen.contains("csv"),
+        "{listen}"
+    );
+    assert!(listen.contains("required"), "{listen}");
+    let analyze = help("analyze");
+    assert!(analyze.contains("[default: csv]"), "{analyze}");
+}
