@@ -17,8 +17,14 @@ use allanscope::plan::unit::{InputPlan, UnitPlan};
 use allanscope::sink::output::OutputMode;
 use allanscope::source::{Pace, SourceSpec};
 
+/// `listen` reads frames only: its `--format` shows no default (the shared one, `csv`, is text
+/// columns, which `listen` refuses; left out, the refusal says what to give).
 #[derive(Debug, Args)]
 #[command(group(ArgGroup::new("source").required(true).args(["serial", "udp", "input"])))]
+#[command(mut_arg("format", |a| a.hide_default_value(true).help(
+    "A frame descriptor (a name from config/frames, or a path); required: listen reads frames, \
+     not text columns"
+)))]
 pub struct ListenArgs {
     /// Serial port (e.g. /dev/ttyUSB0), 8N1; reopened with backoff when it disappears.
     #[arg(long)]

@@ -1215,6 +1215,38 @@ impl Layout {
         }
     }
 
+    /// The input column and text of the last cell of the row `t` as written (the one a line
+    /// cut while written ends in), `None` for a row not of the header's width. Last columns
+    /// with no name that the row leaves out ([`Layout::split`]) are not its cells.
+    fn last_cell<'a>(&self, t: &'a str) -> Option<(usize, &'a str)> {
+        if let Some(fields) = self.labelled_fields(t) {
+            fields.ok()?;
+            let (label, value) = *labelled_cells(t)?.last()?;
+            let i = self.source_names.iter().position(|n| n == label)?;
+            return Some((i, value));
+        }
+        let raw = self.sep.split(t);
+        let fields = if raw.len() < self.width_in
+            && self.source_names[raw.len()..].iter().all(String::is_empty)
+        {
+            raw
+        } else {
+            self.split(t)
+        };
+        if fields.is_empty() || fields.len() > self.width_in {
+            return None;
+        }
+        Some((fields.len() - 1, *fields.last()?))
+    }
+
+    /// The cell of input column `i` in the row `t`, if it has one.
+    fn cell_at<'a>(&self, t: &'a str, i: usize) -> Option<&'a str> {
+        match self.labelled_fields(t) {
+            Some(fields) => fields.ok()?.get(i).copied(),
+            None => self.split(t).get(i).copied(),
+        }
+    }
+
     /// A row of labelled values ([`Sep::Labelled`]) laid out under the names, in their order:
     /// each value under its label, a label left out an empty field (a gap); or what keeps it
     /// from being laid out (more values than names, a label none of the names, a label twice).
@@ -1395,6 +1427,11 @@ pub struct TextReader<R> {
     /// The values and stamp of the last row handed out, to tell a row written twice.
     last_row: Option<(Vec<f64>, f64)>,
     line: Vec<u8>,
+    /// The text of the last data row read whole, to tell a last line cut while the file was
+    /// written ([`TextReader::cut_last_line`]).
+    prev_text: String,
+    /// The last line, without its line end, was cut: its bad row is logged however many were.
+    cut_last: bool,
     bad_rows: u64,
     /// Values infinite or beyond `MAX_ABS_VALUE`, read as gaps.
     invalid_values: u64,
@@ -1443,6 +1480,10 @@ pub struct TextPosition {
     /// How the time column's open dates (`03/12/2026`) are read, as the rows so far decided.
     #[serde(default)]
     pub dates: DateOrder,
+    /// The text of the last data row read whole, that a last line without its end is judged
+    /// against ([`TextReader::cut_last_line`]) after a resume as in one reading.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub last_text: String,
 }
 
 /// Cells that mark a value as missing, read as gaps like an empty cell (any case): a logger's
@@ -1463,6 +1504,31 @@ const MISSING: [&str; 13] = [
     "1.#ind",
     "-1.#ind",
 ];
+
+/// Whether the number `cell` is written shorter than `before`, the same column's in the row
+/// before, as a number cut while written is: its exponent lost or with fewer digits, or fewer
+/// digits after its decimal point (or comma). Numbers written to a fixed width (`%.6f`, `%e`)
+/// never are; a writer of the shortest digits (`0.5` after `0.123`) may be.
+fn shorter_number(cell: &str, before: &str) -> bool {
+    let form = |s: &str| {
+        let s = s.trim_matches('"');
+        let (mantissa, exponent) = match s.find(['e', 'E', 'd', 'D']) {
+            Some(at) => (&s[..at], Some(&s[at + 1..])),
+            None => (s, None),
+        };
+        let digits = |x: &str| x.bytes().filter(u8::is_ascii_digit).count();
+        let decimals = mantissa
+            .rfind(['.', ','])
+            .map_or(0, |p| digits(&mantissa[p + 1..]));
+        (decimals, exponent.map(digits))
+    };
+    let ((decimals, exponent), (before_decimals, before_exponent)) = (form(cell), form(before));
+    match (exponent, before_exponent) {
+        (None, Some(_)) => true,
+        (Some(e), Some(b)) if e < b => true,
+        _ => decimals < before_decimals,
+    }
+}
 
 fn parse_field(t: &str) -> Result<f64, ()> {
     let mut t = t.trim();
@@ -2634,6 +2700,8 @@ impl<R: BufRead> TextReader<R> {
                 gap_left: 0,
                 time_reported: false,
                 last_row: None,
+                prev_text: String::from_utf8_lossy(&raw).trim().to_string(),
+                cut_last: false,
                 line: raw,
                 bad_rows: 0,
                 invalid_values: 0,
@@ -2671,6 +2739,8 @@ impl<R: BufRead> TextReader<R> {
             time_reported: false,
             last_row: pos.last_row.clone(),
             line: Vec::new(),
+            prev_text: pos.last_text.clone(),
+            cut_last: false,
             bad_rows: pos.bad_rows,
             invalid_values: pos.invalid_values,
             rows: pos.rows,
@@ -2696,6 +2766,7 @@ impl<R: BufRead> TextReader<R> {
             clocked: self.pending.is_some(),
             last_row: self.last_row.clone(),
             dates: self.layout.dates.get(),
+            last_text: self.prev_text.clone(),
         }
     }
 
@@ -3021,15 +3092,68 @@ impl<R: BufRead> TextReader<R> {
                 }
                 continue;
             }
-            return Ok(Some(if t.is_empty() {
-                (Ok(vec![f64::NAN; width]), f64::NAN)
-            } else {
-                match self.layout.parse(t) {
-                    Ok((v, time)) => (Ok(v), time),
-                    Err(e) => (Err(e), f64::NAN),
+            if t.is_empty() {
+                return Ok(Some((Ok(vec![f64::NAN; width]), f64::NAN)));
+            }
+            let mut row = match self.layout.parse(t) {
+                Ok((v, time)) => (Ok(v), time),
+                Err(e) => (Err(e), f64::NAN),
+            };
+            // Only the last line of the input can lack its end (a longer one is cut above).
+            if self.line.last() != Some(&b'\n') {
+                if let Some(why) = self.cut_last_line(t, &row) {
+                    self.cut_last = true;
+                    row = (
+                        Err(format!(
+                            "{why} (the last line, without its line end: cut while the file \
+                             was written?)"
+                        )),
+                        f64::NAN,
+                    );
                 }
-            }));
+            }
+            if row.0.is_ok() {
+                self.prev_text.clear();
+                self.prev_text.push_str(t);
+            }
+            return Ok(Some(row));
         }
+    }
+
+    /// What tells that the last line `t` of the input, read as `row`, was cut while the file
+    /// was written (the line has no end), if anything: a field short (any row's problem), its
+    /// last cell empty or no number where its column is read as one (a channel the run
+    /// analyses, or the time column), or that number shorter than the same column's in the row
+    /// before: fewer decimals, or its exponent lost or shorter (`0.00` of `0.001234`, `3.7` of
+    /// `3.75e-03`). A row whose last cell is read in full is used: many writers end a file
+    /// without a line end.
+    fn cut_last_line(&self, t: &str, row: &Row) -> Option<String> {
+        let values = match &row.0 {
+            Ok(v) => v,
+            Err(e) => return Some(e.clone()),
+        };
+        let (i, cell) = self.layout.last_cell(t)?;
+        let l = &self.layout;
+        let read = if l.time == Some(i) {
+            !row.1.is_nan()
+        } else {
+            let k = l.keep.iter().position(|&c| c == i)?;
+            if !l.strict[k] {
+                return None;
+            }
+            !values[k].is_nan() && values[k].to_bits() != WORD_CELL_BITS
+        };
+        let column = format!("column {} `{}`", i + 1, l.source_names[i]);
+        let cell = cell.trim();
+        if !read {
+            return Some(format!("{column}: `{cell}` is no number"));
+        }
+        let before = l.cell_at(&self.prev_text, i)?.trim();
+        // Numbers only: a date's form changes with its month's name (`30-Nov`, `01-Dec`).
+        let numbers = parse_field(cell).is_ok() && parse_field(before).is_ok();
+        (numbers && shorter_number(cell, before)).then(|| {
+            format!("{column}: `{cell}` is written shorter than `{before}` in the row before")
+        })
     }
 
     fn push_row(&mut self, out: &mut Vec<f64>, row: Result<Vec<f64>, String>) {
@@ -3070,7 +3194,7 @@ impl<R: BufRead> TextReader<R> {
             }
             Err(problem) => {
                 self.bad_rows += 1;
-                if self.bad_rows <= BAD_ROWS_LOGGED {
+                if self.bad_rows <= BAD_ROWS_LOGGED || self.cut_last {
                     tracing::warn!(
                         "{}: line {}: {problem}; row skipped as a gap",
                         self.path.display(),
@@ -3155,6 +3279,55 @@ mod tests {
             assert!(a == &b || (a.is_nan() && b.is_nan()), "{v:?}");
         }
         assert_eq!(bad, 1);
+    }
+
+    /// A last line without its line end, cut while the file was written: a field short, its
+    /// last cell empty or no number, or its last number shorter than the same column's in the
+    /// row before (fewer decimals, the exponent lost or cut) is a bad row, counted, its values
+    /// gaps; complete, it is read as any row. Before, every one of them was read as a sample
+    /// but the row a field short (`3.7` for `3.75e-03`, 1000 times too large).
+    #[test]
+    fn a_last_line_cut_while_written_is_a_bad_row() {
+        let head = "t,gx,gy\n0.000,0.001234,1.25e-03\n0.005,-0.002345,2.50e-03\n";
+        for (tail, bad) in [
+            ("0.010,0.003456,3.75e-03", 0),
+            ("0.010,0.003456,3.75e-03\n", 0),
+            ("0.010,0.003456,3.75e-03\r\n", 0),
+            ("0.010,0.003456", 1),
+            ("0.010,0.003456,", 1),
+            ("0.010,0.003456,-", 1),
+            ("0.010,0.003456,3.75e-0", 1),
+            ("0.010,0.003456,3.7", 1),
+        ] {
+            let (_, v, got) = read_all(&format!("{head}{tail}"));
+            assert_eq!((got, v.len()), (bad, 6), "{tail:?}");
+            let last = (v[4], v[5]);
+            if bad == 0 {
+                assert_eq!(last, (0.003456, 3.75e-3), "{tail:?}");
+            } else {
+                assert!(last.0.is_nan() && last.1.is_nan(), "{tail:?}: {v:?}");
+            }
+        }
+        // Fixed decimals, no exponent: `0.00` cut from a number of six decimals; a row with a
+        // line end keeps what it holds.
+        let (_, v, bad) = read_all("gx,gy\n0.001234,0.002345\n0.003456,0.00");
+        assert_eq!((bad, v.len()), (1, 4));
+        assert!(v[2].is_nan() && v[3].is_nan(), "{v:?}");
+        let (_, v, bad) = read_all("gx,gy\n0.001234,0.002345\n0.003456,0.00\n");
+        assert_eq!((bad, v), (0, vec![0.001234, 0.002345, 0.003456, 0.0]));
+        let (_, v, bad) = read_all("gx,gy\n0.001234,0.002345\n0.003456,0.004567");
+        assert_eq!((bad, v[3]), (0, 0.004567));
+        // A run resumed right before the cut line judges it as one reading does.
+        let text = "gx,gy\n0.001234,0.002345\n0.003456,0.004567\n0.005678,0.00";
+        let open = || TextReader::new(text.as_bytes(), Path::new("t.csv")).unwrap();
+        let mut r = open();
+        let mut out = Vec::new();
+        r.read_rows(&mut out, 2).unwrap();
+        let pos = r.position();
+        let mut r2 = r.resume(&text.as_bytes()[pos.offset as usize..], &pos);
+        while r2.read_rows(&mut out, 2).unwrap() > 0 {}
+        assert_eq!((r2.bad_rows(), out.len()), (1, 6));
+        assert!(out[4].is_nan() && out[5].is_nan(), "{out:?}");
     }
 
     #[test]

@@ -21,6 +21,12 @@
 //! microsecond counter every 71.6 minutes): the backward step is counted as a discontinuity,
 //! not a backward step, and the clock restarts there, so the gaps after it are found again. Before (session 29), every row after a reset
 //! was counted backwards and no later gap was found.
+//!
+//! A row that went backwards or repeated the stamp before it, followed by a row one step on from
+//! the stamp before it (`0.010, 0.010, 0.015` or `0.015, 0.012, 0.020` at 5 ms), was an extra
+//! row (a stamp written again with other values, a stray stamp): it stays a sample, counted once
+//! backwards, and the clock reads on from the row after it. Before, the clock stayed a step
+//! ahead of every later stamp: each later row was counted backwards (1998 of 2000 in ms).
 
 use super::sampling_step::SECONDS_PER_DAY;
 
@@ -103,6 +109,10 @@ pub struct TimeColumn {
     /// The stamp of the last row, when it went backwards: a restart of the clock if the next
     /// row steps on from it by one tau0 (module doc).
     restart: Option<f64>,
+    /// The stamp of the last row before one that went backwards or repeated its stamp: a next
+    /// row one step on from it (not from the clock moved on) tells the bad row was an extra row
+    /// (module doc).
+    behind: Option<f64>,
     /// A counter of samples (`PacketCounter`, `field.header.seq`) stands in for a missing time
     /// column ([`TimeColumn::counter`]).
     counter: bool,
@@ -138,6 +148,9 @@ pub struct TimeState {
     /// A backward stamp waiting to be told a clock restart (see [`TimeColumn`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub restart: Option<f64>,
+    /// The stamp before a row that went backwards or repeated (see [`TimeColumn`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub behind: Option<f64>,
     /// The column is a counter of samples, not a clock ([`TimeColumn::counter`]).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub counter: bool,
@@ -174,6 +187,7 @@ impl TimeColumn {
             discontinuities: 0,
             duplicates: 0,
             restart: None,
+            behind: None,
             counter: false,
             odd_first: false,
         }
@@ -252,6 +266,7 @@ impl TimeColumn {
             discontinuities: self.discontinuities,
             duplicates: self.duplicates,
             restart: self.restart,
+            behind: self.behind,
             counter: self.counter,
         }
     }
@@ -266,6 +281,7 @@ impl TimeColumn {
         self.discontinuities = s.discontinuities;
         self.duplicates = s.duplicates;
         self.restart = s.restart;
+        self.behind = s.behind;
         self.counter = s.counter;
     }
 
@@ -402,6 +418,7 @@ impl TimeColumn {
                 return missing;
             }
         }
+        let behind = self.behind.take();
         if let Some(back) = self.restart.take() {
             // The row before went back and this one steps on from it, one step or (while still
             // behind the old clock: no glitch's next row) a whole number of them: the clock
@@ -432,6 +449,18 @@ impl TimeColumn {
                 return missing;
             }
         }
+        if let Some(good) = behind {
+            // The rows since `good` went back or repeated their stamps, and this one is no
+            // step past the clock they moved on but is past `good`: they were extra rows (a
+            // stamp written again with other values, a stray stamp) and this row is on the old
+            // clock, which reads on from it. Counted once, at the bad row: before, the clock
+            // stayed a step ahead and every later row was counted backwards.
+            let since = (t - good) * scale / self.tau0_s;
+            if steps < 0.5 && since >= 0.5 {
+                self.off_step(since, file, line);
+                return 0;
+            }
+        }
         if dt <= 0.0 {
             self.backwards += 1;
             if self.backwards <= LOGGED {
@@ -445,25 +474,14 @@ impl TimeColumn {
             // The row is taken as the next sample: the clock moves on one step from where it
             // was, so one bad stamp makes no gap; the next row tells a restart (module doc).
             self.last = Some(last + self.tau0_s / scale);
+            self.behind = Some(behind.unwrap_or(last));
             // More than a step back (jitter or a swapped pair goes back less).
             if dt * scale < -self.tau0_s {
                 self.restart = Some(t);
             }
             return 0;
         }
-        let k = steps.round();
-        if (steps - k).abs() > STEP_TOLERANCE || k < 1.0 {
-            self.irregular += 1;
-            if self.irregular <= LOGGED {
-                tracing::warn!(
-                    "{}: line {line}: the time column `{}` steps by {:.3} tau0, not a whole number \
-                     of steps (the data are not uniformly sampled there)",
-                    file.display(),
-                    self.name,
-                    steps
-                );
-            }
-        }
+        let k = self.off_step(steps, file, line);
         if k < 2.0 {
             return 0;
         }
@@ -484,6 +502,25 @@ impl TimeColumn {
         // The clock is at the last step handed out: the gap steps move it on one by one.
         self.last = Some(last);
         missing
+    }
+
+    /// A step of `steps` tau0 at `line`, rounded; counted and logged when it is no whole number
+    /// of them (more than a quarter off, or less than one).
+    fn off_step(&mut self, steps: f64, file: &std::path::Path, line: u64) -> f64 {
+        let k = steps.round();
+        if (steps - k).abs() > STEP_TOLERANCE || k < 1.0 {
+            self.irregular += 1;
+            if self.irregular <= LOGGED {
+                tracing::warn!(
+                    "{}: line {line}: the time column `{}` steps by {:.3} tau0, not a whole number \
+                     of steps (the data are not uniformly sampled there)",
+                    file.display(),
+                    self.name,
+                    steps
+                );
+            }
+        }
+        k
     }
 
     /// The account logged at the end of the input.
@@ -653,6 +690,37 @@ mod tests {
         let wrap = [b, b + 1e4, b + 2e4, 5e3, 35e3, 45e3, 75e3];
         assert_eq!(run(&mut c, &wrap), [0, 0, 0, 0, 2, 0, 2]);
         assert_eq!((c.backwards, c.discontinuities, c.missing), (0, 1, 4));
+    }
+
+    /// A row in the middle that repeats the stamp before it with other values (an extra row), or
+    /// goes back once, is one step backwards: the rows after it are on the old clock and read
+    /// as they are, and a later gap keeps its size. Before, the clock moved on one step at the
+    /// bad row and every later row (1998 of 2000 in ms) repeated its stamp, counted backwards.
+    #[test]
+    fn one_repeated_or_backward_stamp_mid_file_is_one_count() {
+        // In ms at 5 ms (exact), a repeat at 10 then a jump of 3 steps (2 missing).
+        let mut c = TimeColumn::new("time_ms", 0.005);
+        let stamps = [0.0, 5.0, 10.0, 10.0, 15.0, 20.0, 25.0, 40.0, 45.0];
+        assert_eq!(clocked(&mut c, &stamps), [0, 0, 0, 0, 0, 0, 0, 2, 0]);
+        assert_eq!((c.backwards, c.irregular, c.missing, c.jumps), (1, 0, 2, 1));
+        // In s (not exact): 0.010 0.015 0.012 0.020 ...: one backward row, none after it.
+        let mut c = TimeColumn::new("time", 0.005);
+        let stamps: Vec<f64> = [0, 5, 10, 15, 12, 20, 25, 30, 35, 50, 55]
+            .iter()
+            .map(|&ms| f64::from(ms) * 1e-3)
+            .collect();
+        assert_eq!(clocked(&mut c, &stamps), [0, 0, 0, 0, 0, 0, 0, 0, 0, 2, 0]);
+        assert_eq!((c.backwards, c.irregular, c.missing), (1, 0, 2));
+        // The same stamp three times: two rows backwards, then read on.
+        let mut c = TimeColumn::new("time_ms", 0.005);
+        let stamps = [0.0, 5.0, 5.0, 5.0, 10.0, 15.0, 20.0];
+        assert_eq!(clocked(&mut c, &stamps).iter().sum::<u64>(), 0);
+        assert_eq!((c.backwards, c.irregular), (2, 0));
+        // An extra row stamped far back (0): one backward step, no restart, no more.
+        let mut c = TimeColumn::new("t", 0.01);
+        let stamps = [0.0, 0.01, 0.02, 0.0, 0.03, 0.04, 0.05];
+        assert_eq!(clocked(&mut c, &stamps).iter().sum::<u64>(), 0);
+        assert_eq!((c.backwards, c.discontinuities, c.irregular), (1, 0, 0));
     }
 
     /// 100 us is a scale only for a column named so (Xsens's `SampleTimeFine`): a `time_ms`

@@ -3,8 +3,10 @@
 //!
 //! Every problem is collected and reported together, each with the file, the key and what is
 //! wrong ([`StandConfigErrors`], exit status 2); unknown keys are rejected. Relative paths are
-//! taken from the working directory, as on the command line. `config/stand.toml` is the
-//! commented example.
+//! taken from the working directory, as on the command line, not from the config's folder. The
+//! capture a one-unit config's file source replays (`source.path`) must exist when the config is
+//! checked; in a `[[unit]]` config a capture that cannot be opened is that unit's failure, an
+//! `outage` record, while the others go on. `config/stand.toml` is the commented example.
 //!
 //! ```toml
 //! [source]

@@ -44,7 +44,16 @@ impl StandConfig {
                 ck.bad("source", "missing: the [source] table (or [[unit]] tables)")
             }
             None => {}
-            Some(s) => (source, format) = ck.source(s, "source", descriptor_dirs),
+            Some(s) => {
+                (source, format) = ck.source(s, "source", descriptor_dirs);
+                // One unit: a capture to replay that is not there is refused with the config,
+                // at its key. A unit of a `[[unit]]` config whose capture cannot be opened is
+                // recorded as failed (an `outage`) while the others go on (README, docs/
+                // records.md), so it is not checked here.
+                if let Some(crate::source::SourceSpec::File { path, .. }) = &source {
+                    ck.capture_exists(path, "source.path");
+                }
+            }
         }
 
         // [run]

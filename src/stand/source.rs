@@ -10,6 +10,23 @@ use crate::error::UsageError;
 use crate::source::{Pace, SourceSpec};
 
 impl Check {
+    /// The capture a file source replays, at `key`: refused when there is no such file. A
+    /// relative path is taken from the working directory, as every path of the config
+    /// (src/stand/mod.rs). Only a file source: a serial port may be plugged in after the check
+    /// (it is reopened with backoff), a UDP address is no file.
+    pub(super) fn capture_exists(&mut self, path: &std::path::Path, key: &str) {
+        if let Err(e) = std::fs::metadata(path) {
+            if e.kind() == std::io::ErrorKind::NotFound {
+                let relative = if path.is_relative() {
+                    " (a relative path is taken from the working directory)"
+                } else {
+                    ""
+                };
+                self.bad(key, format!("no such file `{}`{relative}", path.display()));
+            }
+        }
+    }
+
     /// A `[source]` table (at `prefix`: `source`, or `unit[i].source`): the source and its
     /// frame format, every problem recorded at its key.
     pub(super) fn source(

@@ -223,7 +223,9 @@ fn cases() -> Vec<Case> {
         case("stand format bad descriptor", vec![capture(), siu8_with("rate_hz = 250.0", "rate_hz = 1e-306"), text("stand.toml", "[source]\nkind = \"file\"\npath = \"cap.siu8\"\nformat = \"./d.toml\"\n")], &["run", "--config", "stand.toml"], "allanscope: stand config: 1 problem\n  ./d.toml:6: key `rate_hz`: must be from 1e-6 to 1e9 Hz, found 1e-306"),
         case("stand limit unit of another dimension", vec![capture(), stand("[[limits]]\nchannel = \"g4\"\ncoef = \"N\"\nmax = 1\nunit = \"m/s/sqrt(h)\"\n")], &["run", "--config", "stand.toml"], "allanscope: stand config: 1 problem\n  stand.toml:9: key `limits[0].unit`: limit on N of `g4` (in arcsec): `m/s/sqrt(h)` is not a unit of N for a channel in arcsec"),
         case("stand channels unknown", vec![capture(), stand("[channels]\ninclude = [\"g1\", \"g9\"]\n")], &["run", "--config", "stand.toml"], "allanscope: stand.toml:6: key `channels.include`: `g9` is not a channel of cap.siu8 (it has: g1, g2, g3, g4, a1, a2, a3, a4)"),
-        case("stand source missing", vec![text("stand.toml", "[source]\nkind = \"file\"\npath = \"none.siu8\"\nformat = \"siu8\"\n")], &["run", "--config", "stand.toml"], "allanscope: none.siu8: cannot open: No such file or directory (os error 2)"),
+        case("stand source missing", vec![text("stand.toml", "[source]\nkind = \"file\"\npath = \"none.siu8\"\nformat = \"siu8\"\n")], &["run", "--config", "stand.toml"], "allanscope: stand config: 1 problem\n  stand.toml:3: key `source.path`: no such file `none.siu8` (a relative path is taken from the working directory)"),
+        // Relative to the working directory, not to the config's folder (src/stand/mod.rs).
+        case("stand source beside the config", vec![("sub/cap.siu8", capture().1), text("sub/stand.toml", "[source]\nkind = \"file\"\npath = \"cap.siu8\"\nformat = \"siu8\"\n")], &["run", "--config", "sub/stand.toml"], "allanscope: stand config: 1 problem\n  sub/stand.toml:3: key `source.path`: no such file `cap.siu8` (a relative path is taken from the working directory)"),
         case("stand missing file", vec![], &["run", "--config", "none.toml"], "allanscope: stand config: 1 problem\n  none.toml: key `(file)`: cannot read: No such file or directory (os error 2)"),
         // Model files.
         case("model syntax", vec![text("m.toml", "rate_hz = \n")], &["simulate", "--model", "m.toml", "--duration", "10", "-o", "x.csv"], "allanscope: model file: 1 problem\n  m.toml:1: key `(syntax)`: not valid TOML: string values must be quoted, expected literal string"),
@@ -371,4 +373,32 @@ fn listing(dir: &Path) -> Vec<(String, u64)> {
         .collect();
     v.sort();
     v
+}
+
+/// `listen --help` shows no `--format` default that `listen` refuses: it said `[default: csv]`
+/// and "or `csv` for text columns", and `listen` given no `--format` (or `--format csv`) then
+/// refused "listen reads frames". The refusal is kept (the table above); the help now says a
+/// descriptor is required. `analyze --help` keeps its default, which analyze reads.
+#[test]
+fn listen_help_shows_no_format_default_it_refuses() {
+    let help = |cmd: &str| {
+        let out = Command::new(env!("CARGO_BIN_EXE_allanscope"))
+            .args([cmd, "--help"])
+            .output()
+            .expect("run");
+        assert_eq!(out.status.code(), Some(0), "{cmd} --help");
+        let text = String::from_utf8_lossy(&out.stdout).to_string();
+        text.lines()
+            .find(|l| l.trim_start().starts_with("--format "))
+            .unwrap_or_else(|| panic!("{cmd} --help has no --format: {text}"))
+            .to_string()
+    };
+    let listen = help("listen");
+    assert!(
+        !listen.contains("[default:") && !listen.contains("csv"),
+        "{listen}"
+    );
+    assert!(listen.contains("required"), "{listen}");
+    let analyze = help("analyze");
+    assert!(analyze.contains("[default: csv]"), "{analyze}");
 }

@@ -572,6 +572,77 @@ fn a_time_column_that_goes_backwards_or_is_not_uniform_is_reported() {
     assert_eq!((t.used, t.unit.as_deref(), t.gaps), (false, None, 0));
 }
 
+/// A row in the middle that repeats the stamp before it with other values (an extra row), and
+/// a stray row stamped 500 ms among 1200, 1210 ms, each count one step backwards; the
+/// rows after them are on their clock, and the gap of rows 200..210 keeps its 10 samples.
+/// Before, the repeat put the clock a step ahead of every later row (each counted backwards)
+/// and the stray row then read as a clock restart: 71 backwards, 80 samples missing.
+#[test]
+fn one_repeated_or_backward_stamp_mid_file_counts_once() {
+    let (a, b) = columns();
+    let mut text = String::from("time_ms,gx,gy\n");
+    for i in (0..a.len()).filter(|i| !(200..210).contains(i)) {
+        text += &format!("{},{:e},{:e}\n", i * 10, a[i], b[i]);
+        // Row 50 again with other values; a stray row stamped 500 ms after row 120.
+        if i == 50 {
+            text += "500,1e-3,-2e-3\n";
+        }
+        if i == 120 {
+            text += "500,3e-3,4e-3\n";
+        }
+    }
+    let out = analyze(&write("repeated_stamp.csv", text.as_bytes()), &[]);
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    let (_, s) = parsed(&out);
+    let t = s.time_column.as_ref().expect("summary.time_column");
+    assert_eq!(
+        (
+            t.backwards,
+            t.irregular,
+            t.gaps,
+            t.missing_samples,
+            t.duplicates
+        ),
+        (2, 0, 1, 10, 0),
+        "{err}"
+    );
+    assert!(err.contains("2 steps backwards or repeated"), "{err}");
+    // The two extra rows stay samples: 392 rows and the 10 missing, 4.02 s.
+    assert!((s.t_data - 4.02).abs() < 1e-9, "{}", s.t_data);
+}
+
+/// A recording whose last line was cut while written (no line end): a field short, or its last
+/// number cut (`0.00` where the rows write six decimals), is a bad row, counted in the summary's
+/// `bad_rows` and named with its file and line; the same line complete is read, line end or
+/// not. Before, the cut number was read as a sample (`bad_rows` 0).
+#[test]
+fn a_last_line_cut_while_written_is_counted_and_skipped() {
+    let (a, b) = columns();
+    let mut whole = String::from("time,gx,gy\n");
+    for i in 0..a.len() {
+        whole += &format!("{:.3},{:.6},{:.6}\n", i as f64 * 0.01, a[i], b[i]);
+    }
+    let last = format!("4.000,{:.6},0.012345", a[7]);
+    for (name, tail, bad, samples) in [
+        ("complete.csv", last.clone(), 0, 402),
+        ("complete_ended.csv", format!("{last}\n"), 0, 402),
+        ("cut_number.csv", last[..last.len() - 4].to_string(), 1, 401),
+        ("cut_field.csv", last[..last.len() - 9].to_string(), 1, 401),
+    ] {
+        let p = write(name, format!("{whole}{tail}").as_bytes());
+        let out = analyze(&p, &[]);
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        let (_, s) = parsed(&out);
+        assert_eq!((s.bad_rows, s.samples[1]), (bad, samples), "{name}: {err}");
+        let said = format!("{name}: line 402: ");
+        assert_eq!(
+            err.contains(&said) && err.contains("the last line, without its line end"),
+            bad == 1,
+            "{name}: {err}"
+        );
+    }
+}
+
 /// Rows written twice (stamp and values repeated, as a logger or driver repeats a record) are
 /// dropped and counted, and a later jump of the time column is still the gap it stands for:
 /// the file with rows 50, 120, 121 and 150 doubled and rows 200..210 missing reads as the same
