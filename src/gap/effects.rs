@@ -153,12 +153,13 @@ pub enum EffectParams {
     SecondOrderFilter {
         #[serde(default, skip_serializing_if = "std::ops::Not::not")]
         bilinear: bool,
-        #[serde(default, skip_serializing_if = "Option::is_none")]
-        zero: Option<f64>,
         #[serde(deserialize_with = "nullable_f64")]
         damping: f64,
         #[serde(rename = "natural_frequency", deserialize_with = "nullable_f64")]
         natural_frequency_hz: f64,
+        // last: the record's keys are in sorted order
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        zero: Option<f64>,
     },
     ZeroPhaseFilter {
         #[serde(rename = "time_constant", deserialize_with = "nullable_f64")]

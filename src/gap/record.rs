@@ -532,12 +532,6 @@ mod tests {
                 bilinear: false,
                 zero: None,
             },
-            EffectParams::SecondOrderFilter {
-                natural_frequency_hz: 20.0,
-                damping: 0.7,
-                bilinear: false,
-                zero: Some(0.3),
-            },
             EffectParams::ZeroPhaseFilter {
                 time_constant_s: 0.02,
             },
@@ -593,6 +587,33 @@ mod tests {
                 named[0]
             )));
         }
+    }
+
+    /// The second order's sampled form writes its zero after the other two parameters, and
+    /// `record_params` names them in that order; read back, it is the same form.
+    #[test]
+    fn the_sampled_second_order_writes_its_zero() {
+        let p = EffectParams::SecondOrderFilter {
+            natural_frequency_hz: 20.0,
+            damping: 0.7,
+            bilinear: false,
+            zero: Some(0.3),
+        };
+        let rec = EffectRecord {
+            effect: RecordedEffect::Known(p),
+            gap_after: 1.5,
+            intervals: BTreeMap::new(),
+            cause: None,
+        };
+        let line = serde_json::to_string(&rec).unwrap();
+        assert_eq!(
+            line,
+            r#"{"kind":"second_order_filter","params":{"damping":0.7,"natural_frequency":20.0,"zero":0.3},"gap_after":1.5}"#
+        );
+        let named: Vec<&str> = p.record_params().iter().map(|(k, _)| *k).collect();
+        assert_eq!(named, ["damping", "natural_frequency", "zero"]);
+        let back: EffectRecord = serde_json::from_str(&line).unwrap();
+        assert!(matches!(back.effect, RecordedEffect::Known(q) if q == p));
     }
 
     /// A kind a newer version wrote is kept with its numbers, and written back as it was.
