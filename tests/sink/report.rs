@@ -302,6 +302,25 @@ fn effects_are_named_with_units_and_only_the_final_diagnosis_is_in_the_main_tabl
     assert!(interim[..interim.find("</table>").unwrap()].contains("<td>1800</td>"));
 }
 
+/// A warm-up found in the block means alone leaves the gap as it was: the report says where it
+/// was seen and that the gap is unchanged; an effect that lowered the gap keeps its gap.
+#[test]
+fn an_effect_seen_in_time_alone_is_said_to_leave_the_gap() {
+    let mut files = one_run(json!([]), None);
+    files[0].records.push(json!({"type": "diagnosis", "channel": "g4", "gap_before": 2.5,
+        "gap_after": 1.2, "verdict": "explained", "regions": [], "final": true, "t_data": 3600.0,
+        "effects": [{"kind": "sinusoid", "params": {"amplitude": 0.3, "frequency": 0.8}, "gap_after": 1.2},
+                    {"kind": "warmup", "params": {"amplitude": 0.5, "time_constant": 300.0}, "gap_after": 1.2}]}));
+    let html = render_html(&files, "t", "now");
+    let main = &html[html.find("<table class=\"diagnosis\"").unwrap()..];
+    let main = &main[..main.find("</table>").unwrap()];
+    assert!(main.contains("(period 1.25 s) (gap 1.20)"), "{main}");
+    assert!(
+        main.contains("(seen in the block means over time; gap 1.20 unchanged)"),
+        "{main}"
+    );
+}
+
 /// The read-out cell `key` of `channel`'s row in the read-outs table: its `data-` attributes
 /// (value, lo, hi, unit, tau) by name, and its text under `text`.
 fn readout_cell(html: &str, channel: &str, key: &str) -> std::collections::HashMap<String, String> {

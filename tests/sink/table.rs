@@ -267,6 +267,26 @@ fn records_without_a_summary_are_printed_when_the_writer_is_dropped() {
     assert!(t.trim_end().ends_with("hint"), "{t}");
 }
 
+/// A warm-up found in the block means alone leaves the curve's gap as it was (a review's FOG,
+/// session 43: 1.089 before and after): the line says the gap is unchanged and where the
+/// effect was seen, not "1.09 -> 1.09" as if the curve had been mended.
+#[test]
+fn an_effect_seen_in_time_alone_says_the_gap_is_unchanged() {
+    let rec = json!({"type": "diagnosis", "channel": "gz", "gap_before": 1.089,
+        "gap_after": 1.089, "verdict": "explained", "regions": [], "effects": [{"kind": "warmup",
+        "params": {"amplitude": 0.027, "time_constant": 642.0}, "gap_after": 1.089}],
+        "final": true});
+    let d: allanscope::gap::record::DiagnosisRecord = serde_json::from_value(rec).unwrap();
+    let line = allanscope::sink::table::diagnosis_line(&d, "arcsec", &TableStyle::default());
+    assert!(
+        line.contains(
+            "(gap 1.09, unchanged: seen in the block means over time, not on the Allan curve)"
+        ),
+        "{line}"
+    );
+    assert!(!line.contains("->"), "{line}");
+}
+
 #[test]
 fn three_significant_digits() {
     assert_eq!(sig3(0.0041666), "0.00417");

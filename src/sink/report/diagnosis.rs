@@ -67,15 +67,24 @@ pub(super) fn diagnosis(h: &mut String, res: &Results) {
                 format!("<b>{}</b>: {w}", esc(ch))
             }
         }));
+        // An effect found in the block means alone leaves the gap as it was: said so, not as
+        // a gap it brought.
+        let mut prev = d.gap_before;
         let effects: Vec<String> = d
             .effects
             .iter()
             .map(|e| {
-                format!(
-                    "{} (gap {:.2})",
-                    esc(&effect_words(&e.effect, &unit)),
-                    e.gap_after
-                )
+                let words = esc(&effect_words(&e.effect, &unit));
+                let text = if e.gap_after == prev {
+                    format!(
+                        "{words} (seen in the block means over time; gap {:.2} unchanged)",
+                        e.gap_after
+                    )
+                } else {
+                    format!("{words} (gap {:.2})", e.gap_after)
+                };
+                prev = e.gap_after;
+                text
             })
             .collect();
         // The four regions the model misses most; the count of the others.

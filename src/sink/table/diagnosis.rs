@@ -13,6 +13,14 @@ pub fn effect_brief(effect: &RecordedEffect, unit: &str) -> String {
 pub fn diagnosis_line(d: &DiagnosisRecord, unit: &str, style: &TableStyle) -> String {
     let gap = if d.effects.is_empty() {
         format!("gap {}", sig3(d.gap_before))
+    } else if d.gap_after == d.gap_before {
+        // Effects found in time alone (a warm-up, jumps, a temperature kept on the block
+        // means' evidence) leave the curve's gap as it was: "explained" would read as if the
+        // curve had been mended.
+        format!(
+            "gap {}, unchanged: seen in the block means over time, not on the Allan curve",
+            sig3(d.gap_before)
+        )
     } else {
         format!("gap {} -> {}", sig3(d.gap_before), sig3(d.gap_after))
     };
