@@ -141,27 +141,8 @@ fn a_butterworth_biquad_is_named_bilinear_with_its_cutoff() {
     let extra =
         "second_order_filter = { natural_frequency = 40.0, damping = 0.7071, bilinear = true }";
     let d = diagnosed(extra, 3);
-    match d.effects.first().map(|e| e.params) {
-        Some(EffectParams::SecondOrderFilter {
-            natural_frequency_hz,
-            damping,
-            bilinear,
-            zero,
-        }) => {
-            assert!(bilinear && zero.is_none(), "{:?}", d.effects);
-            assert!(
-                rel(natural_frequency_hz, 40.0) < 0.05,
-                "f {natural_frequency_hz}"
-            );
-            assert!(
-                rel(damping, std::f64::consts::FRAC_1_SQRT_2) < 0.10,
-                "zeta {damping}"
-            );
-        }
-        p => panic!("{p:?}: {:?}", d.effects),
-    }
-    assert_eq!(d.effects.len(), 1, "{:?}", d.effects);
-    assert_eq!(d.verdict, Verdict::Explained);
+    let (bilinear, zero) = butterworth_at_40_hz_alone(&d);
+    assert!(bilinear && zero.is_none(), "{:?}", d.effects);
     // The pole-mapped form of the same prototype is still told from it.
     match first(
         "second_order_filter = { natural_frequency = 40.0, damping = 0.7071 }",
@@ -212,16 +193,24 @@ fn a_filter_run_faster_than_the_output_is_named_sampled() {
         .collect();
     let mut ev = GapEvidence::from_increments(GapConfig::new(TAU0), &inc);
     let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
-    match d.effects.first().map(|e| e.params) {
-        Some(EffectParams::SecondOrderFilter {
+    let (bilinear, zero) = butterworth_at_40_hz_alone(&d);
+    assert!(!bilinear, "{:?}", d.effects);
+    let c = zero.unwrap_or_else(|| panic!("no zero: {:?}", d.effects));
+    assert!((0.2..0.35).contains(&c), "zero {c}");
+}
+
+/// The diagnosis `d` is `explained` by one second-order filter alone, a Butterworth at 40 Hz: its
+/// cutoff within 5% and its damping within 10% of `1 / sqrt 2`. Its form: `(bilinear, zero)`.
+fn butterworth_at_40_hz_alone(d: &Diagnosis) -> (bool, Option<f64>) {
+    assert_eq!(d.effects.len(), 1, "{:?}", d.effects);
+    assert_eq!(d.verdict, Verdict::Explained);
+    match d.effects[0].params {
+        EffectParams::SecondOrderFilter {
             natural_frequency_hz,
             damping,
             bilinear,
             zero,
-        }) => {
-            assert!(!bilinear, "{:?}", d.effects);
-            let c = zero.unwrap_or_else(|| panic!("no zero: {:?}", d.effects));
-            assert!((0.2..0.35).contains(&c), "zero {c}");
+        } => {
             assert!(
                 rel(natural_frequency_hz, 40.0) < 0.05,
                 "f {natural_frequency_hz}"
@@ -230,11 +219,10 @@ fn a_filter_run_faster_than_the_output_is_named_sampled() {
                 rel(damping, std::f64::consts::FRAC_1_SQRT_2) < 0.10,
                 "zeta {damping}"
             );
+            (bilinear, zero)
         }
         p => panic!("{p:?}: {:?}", d.effects),
     }
-    assert_eq!(d.effects.len(), 1, "{:?}", d.effects);
-    assert_eq!(d.verdict, Verdict::Explained);
 }
 
 /// A zero-phase (forward-backward) first-order filter of 20 ms: named as such (not as the
