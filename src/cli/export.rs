@@ -99,6 +99,7 @@ pub fn run(a: &ExportArgs) -> Result<()> {
     }
     let mut fits: Vec<FitRecord> = Vec::new();
     let mut curves: Vec<CurveRecord> = Vec::new();
+    let mut diagnoses = 0usize;
     let mut tau0: Option<f64> = None;
     let tag = a.input.display().to_string();
     // A run of several units: one unit is exported (--stand-unit), by its name.
@@ -137,9 +138,21 @@ pub fn run(a: &ExportArgs) -> Result<()> {
                 curves.push(c);
             }
             Some("summary") => tau0 = v.get("tau0").and_then(|t| t.as_f64()).or(tau0),
+            Some("diagnosis") => diagnoses += 1,
             _ => {}
         }
     }
+    // `diagnose` writes diagnoses alone: say what to run for the records export reads.
+    let hint = if diagnoses > 0 {
+        format!(
+            " (it holds {diagnoses} diagnosis record{}, as `diagnose` writes: export reads the \
+             fit and curve records of `analyze`, `listen` or `run`; `allanscope analyze INPUT \
+             --out FILE` writes them, with `--diagnose` the diagnoses beside them)",
+            if diagnoses == 1 { "" } else { "s" }
+        )
+    } else {
+        String::new()
+    };
     match (&a.stand_unit, units.len()) {
         (None, n) if n > 1 => {
             return Err(usage(format!(
@@ -162,7 +175,9 @@ pub fn run(a: &ExportArgs) -> Result<()> {
     let text = match format {
         ExportFormat::Csv | ExportFormat::Stable32 => {
             if curves.is_empty() {
-                return Err(usage(format!("{tag}: no final curve records to export")));
+                return Err(usage(format!(
+                    "{tag}: no final curve records to export{hint}"
+                )));
             }
             let refs: Vec<&CurveRecord> = curves.iter().collect();
             if format == ExportFormat::Csv {
@@ -173,7 +188,9 @@ pub fn run(a: &ExportArgs) -> Result<()> {
         }
         _ => {
             if fits.is_empty() {
-                return Err(usage(format!("{tag}: no final fit records to export")));
+                return Err(usage(format!(
+                    "{tag}: no final fit records to export{hint}"
+                )));
             }
             let runs: std::collections::BTreeSet<Option<usize>> =
                 fits.iter().map(|f| f.run).collect();

@@ -389,3 +389,33 @@ fn a_missing_kind_names_the_input_and_its_fits() {
     assert_eq!(said, 1, "the error once: {err}");
     assert!(!out.exists());
 }
+
+/// `diagnose` writes diagnosis records alone: exporting them is refused (exit 2) with what to
+/// run instead, not only "no final fit records".
+#[test]
+fn diagnose_output_is_refused_with_what_to_run() {
+    let res = common::tmp_in("export", "diagnoses.jsonl");
+    std::fs::write(
+        &res,
+        "{\"type\":\"diagnosis\",\"channel\":\"gx\",\"gap_before\":1.0,\"gap_after\":1.0,\
+         \"verdict\":\"consistent\",\"regions\":[],\"effects\":[],\"final\":true}\n",
+    )
+    .unwrap();
+    let out = common::tmp_in("export", "from_diagnoses.yaml");
+    let _ = std::fs::remove_file(&out);
+    for to in ["kalibr", "csv"] {
+        let o = common::exe()
+            .args(["export", res.to_str().unwrap(), "--to", to])
+            .args(["-o", out.to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "{to}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains("it holds 1 diagnosis record, as `diagnose` writes")
+                && err.contains("`allanscope analyze INPUT --out FILE`"),
+            "{to}: {err}"
+        );
+        assert!(!out.exists(), "{to}");
+    }
+}
