@@ -59,11 +59,19 @@ fn shapes(p: &EffectParams) -> Vec<(&'static str, f64)> {
         EffectParams::SecondOrderFilter {
             natural_frequency_hz,
             damping,
+            zero,
             ..
-        } => vec![
-            ("natural_frequency", natural_frequency_hz),
-            ("damping", damping),
-        ],
+        } => {
+            let mut v = vec![
+                ("natural_frequency", natural_frequency_hz),
+                ("damping", damping),
+            ];
+            // the sampled form's zero, a third shape (in its logarithm: above 0 only)
+            if let Some(c) = zero.filter(|&c| c > 0.0) {
+                v.push(("zero", c));
+            }
+            v
+        }
         EffectParams::BandNoise {
             frequency_hz,
             width_hz,
@@ -83,6 +91,7 @@ fn scaled(p: &EffectParams, i: usize, f: f64) -> EffectParams {
         }
         | EffectParams::OutputFilter { time_constant_s: x }
         | EffectParams::ZeroPhaseFilter { time_constant_s: x } => *x *= f,
+        EffectParams::SecondOrderFilter { zero: Some(c), .. } if i == 2 => *c *= f,
         EffectParams::SecondOrderFilter {
             natural_frequency_hz: a,
             damping: b,

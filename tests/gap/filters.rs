@@ -197,6 +197,17 @@ fn a_filter_run_faster_than_the_output_is_named_sampled() {
     assert!(!bilinear, "{:?}", d.effects);
     let c = zero.unwrap_or_else(|| panic!("no zero: {:?}", d.effects));
     assert!((0.2..0.35).contains(&c), "zero {c}");
+    // the zero has its 95% interval beside the frequency's and the damping's
+    let iv = &d.effect_intervals[0];
+    let [lo, hi] = iv
+        .iter()
+        .find(|(k, _)| *k == "zero")
+        .unwrap_or_else(|| panic!("{iv:?}"))
+        .1;
+    assert!(
+        lo < c && c < hi && hi < 2.0 * lo,
+        "zero {c} in [{lo}, {hi}]"
+    );
 }
 
 /// The diagnosis `d` is `explained` by one second-order filter alone, a Butterworth at 40 Hz: its
