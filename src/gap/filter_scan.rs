@@ -1,9 +1,10 @@
 //! The shape scans of the filter candidates with more than one shape parameter (docs/gap.md,
 //! "Low-pass filters beyond first order"): the moving average (taps, whole, and one or two
-//! stages) and the second-order low-pass (natural frequency and damping). Each grid point is the
-//! GLS fit of [`GapProblem::gls`] with the N column taken through the filter; the best point is
-//! then polished (neighbouring whole taps; golden sections in `ln f_n` and `ln zeta` in turn, then
-//! a simplex in both, [`super::simplex`]).
+//! stages) and the second-order low-pass (natural frequency and damping, in three forms:
+//! pole-mapped, bilinear, and sampled with its zero). Each grid point is the GLS fit of
+//! [`GapProblem::gls`] with the N column taken through the filter; the best point is then
+//! polished (neighbouring whole taps; golden sections in `ln f_n` and `ln zeta` in turn, then a
+//! simplex in both, [`super::simplex`]).
 
 use super::effects::{EffectKind, EffectParams};
 use super::problem::{golden_section, GapProblem, GlsFit, ModelSpec};
@@ -169,11 +170,10 @@ fn scan_second_order(
     // and its polished point then left a band beside it.
     //
     // The third form, a filter run at an internal rate and read every few samples (docs/gap.md,
-    // "Filters run faster than the output (session 43)"), is scanned at a decimation near the
-    // continuous filter's ([`SAMPLED_START`]), and its decimation then polished with the
-    // frequency and damping.
-    // Its decimation is a third shape parameter and it holds the pole-mapped form (decimation
-    // 1), so it is taken only when it lowers `r' S^-1 r` by more than [`EXTRA_SHAPE_CHI2`]: a
+    // "Filters run faster than the output (session 43)"), is scanned with the continuous
+    // filter's zero at each grid point, and its zero then polished with the frequency and
+    // damping. The zero is a third shape parameter and the form holds the pole-mapped one (zero
+    // 0), so it is taken only when it lowers `r' S^-1 r` by more than [`EXTRA_SHAPE_CHI2`]: a
     // pole-mapped or bilinear unit stays named as such.
     let mut best: Option<(LowPass, GlsFit)> = None;
     for form in [SecondOrderForm::PoleMapped, SecondOrderForm::Bilinear] {
