@@ -803,11 +803,7 @@ impl Layout {
         if opts.columns.is_some() || self.sep == Sep::Labelled {
             return self;
         }
-        let rows: Vec<Vec<&str>> = std::iter::once(t)
-            .chain(ahead.iter().map(String::as_str))
-            .map(|r| self.split(r.trim()))
-            .filter(|f| f.len() == self.width_in)
-            .collect();
+        let rows = self.full_rows(t, ahead);
         for j in 0..self.width_in {
             let held = |f: &Vec<&str>| parse_field(f[j]).is_ok_and(|v| !v.is_nan());
             if !self.source_names[j].is_empty() || !rows.iter().any(held) {
@@ -978,12 +974,18 @@ impl Layout {
     /// The first data row `t` and the rows `ahead` of this layout's width, split, when there
     /// are [`INDEX_ROWS`] of them to judge a column's role by; `None` with fewer.
     fn rows_to_judge<'a>(&self, t: &'a str, ahead: &'a [String]) -> Option<Vec<Vec<&'a str>>> {
-        let rows: Vec<Vec<&str>> = std::iter::once(t)
+        let rows = self.full_rows(t, ahead);
+        (rows.len() >= INDEX_ROWS).then_some(rows)
+    }
+
+    /// The fields of the first data row `t` and of the rows read `ahead` that have the layout's
+    /// full width (a short or long row is left out).
+    fn full_rows<'a>(&self, t: &'a str, ahead: &'a [String]) -> Vec<Vec<&'a str>> {
+        std::iter::once(t)
             .chain(ahead.iter().map(String::as_str))
             .map(|r| self.split(r.trim()))
             .filter(|f| f.len() == self.width_in)
-            .collect();
-        (rows.len() >= INDEX_ROWS).then_some(rows)
+            .collect()
     }
 
     /// An error when a column named as an instance number ([`INSTANCE_NAMES`]: ArduPilot's `I`
