@@ -518,7 +518,7 @@ pub fn sampled_zero(natural_frequency_hz: f64, damping: f64, tau0_s: f64, decima
         let j = j.unsigned_abs() as i32;
         ((w1 * e1.powi(j) + w2 * e2.powi(j)) / (z1 - z2)).re
     };
-    let (a1, a2) = ((e1 + e2).re, -(e1 * e2).re);
+    let (a1, a2) = mapped_ar2(natural_frequency_hz, zeta, tau0_s);
     let phi = [1.0, -a1, -a2];
     let gamma = |l: i64| -> f64 {
         let mut g = 0.0;
