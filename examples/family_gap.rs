@@ -497,6 +497,7 @@ fn draw_unit(
             u.intrinsic = Some(EffectParams::MovingAverage {
                 taps: 1 << rng.random_range(1..=3u32),
                 stages: rng.random_range(1..=2u32),
+                decimation: 1,
             });
             u.rate_lsb = 0.05;
             if family == "adistemp" {
@@ -596,6 +597,7 @@ fn draw_unit(
                 EffectParams::MovingAverage {
                     taps: rng.random_range(2..=8u32),
                     stages: 3,
+                    decimation: 1,
                 }
             };
             u.intrinsic = Some(filter);
@@ -677,6 +679,7 @@ fn draw_unit(
             u.intrinsic = Some(EffectParams::MovingAverage {
                 taps: rng.random_range(2..=8u32),
                 stages: 3,
+                decimation: 1,
             });
             u.bias = rng.random_range(-9.81..9.81);
             u.rate_lsb = 3.9e-6 * 9.80665 * f64::from(1u32 << rng.random_range(0..=2u32));
@@ -705,6 +708,7 @@ fn draw_unit(
             let filter = EffectParams::MovingAverage {
                 taps: rng.random_range(2..=16u32),
                 stages: 2,
+                decimation: 1,
             };
             u.intrinsic = Some(filter);
             let rho0 = rho0_of(filter, u.tau0);
@@ -729,6 +733,7 @@ fn draw_unit(
                 EffectParams::MovingAverage {
                     taps: rng.random_range(4..=16u32),
                     stages: 2,
+                    decimation: 1,
                 }
             };
             u.intrinsic = Some(filter);
@@ -1461,12 +1466,17 @@ fn intrinsic_exact(o: &Outcome) -> bool {
     };
     o.named.iter().any(|p| match (i, p) {
         (
-            EffectParams::MovingAverage { taps, stages },
+            EffectParams::MovingAverage {
+                taps,
+                stages,
+                decimation,
+            },
             EffectParams::MovingAverage {
                 taps: t2,
                 stages: s2,
+                decimation: d2,
             },
-        ) => taps == *t2 && stages == *s2,
+        ) => taps == *t2 && stages == *s2 && decimation == *d2,
         (
             EffectParams::OutputFilter { time_constant_s },
             EffectParams::OutputFilter {

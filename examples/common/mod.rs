@@ -159,8 +159,12 @@ pub fn effect_toml(effect: Option<EffectParams>) -> String {
             amplitude,
             time_constant_s,
         }) => format!("warmup = {{ amplitude = {amplitude:e}, time_constant = {time_constant_s:e} }}\n"),
-        Some(EffectParams::MovingAverage { taps, stages }) => {
-            format!("moving_average = {{ taps = {taps}, stages = {stages} }}\n")
+        Some(EffectParams::MovingAverage {
+            taps,
+            stages,
+            decimation,
+        }) => {
+            format!("moving_average = {{ taps = {taps}, stages = {stages}, decimation = {decimation} }}\n")
         }
         Some(EffectParams::SecondOrderFilter {
             natural_frequency_hz,
@@ -354,6 +358,7 @@ pub fn draw_effect_params(
         EffectKind::MovingAverage => EffectParams::MovingAverage {
             taps: log_uniform(rng, 2.0, ma_taps_hi).round() as u32,
             stages: rng.random_range(1..=2u32),
+            decimation: 1,
         },
         EffectKind::SecondOrderFilter => EffectParams::SecondOrderFilter {
             natural_frequency_hz: 1.0

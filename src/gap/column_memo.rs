@@ -32,9 +32,11 @@ impl FilterKey {
             LowPass::FirstOrder { time_constant_s } => {
                 FilterKey(0, time_constant_s.to_bits(), 0, 0)
             }
-            LowPass::MovingAverage { taps, stages } => {
-                FilterKey(1, u64::from(taps), u64::from(stages), 0)
-            }
+            LowPass::MovingAverage {
+                taps,
+                stages,
+                decimation,
+            } => FilterKey(1, u64::from(taps), u64::from(stages), u64::from(decimation)),
             LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
@@ -172,7 +174,11 @@ mod tests {
         let memo = ColumnMemo::default();
         for i in 0..MAX_FLOORS + 10 {
             memo.floor(
-                &LowPass::MovingAverage { taps: 4, stages: 1 },
+                &LowPass::MovingAverage {
+                    taps: 4,
+                    stages: 1,
+                    decimation: 1,
+                },
                 i as f64,
                 1.0,
                 || vec![i as f64],

@@ -1530,6 +1530,7 @@ fn greedy_stationary(
                 continue;
             }
             if let Some((params, f)) = prob.scan_params(&spec, kind) {
+                tracing::trace!(?params, chi2 = f.chi2, gap = f.gap(), "candidate");
                 let score = (cur.chi2 - f.chi2) / kind.n_params() as f64;
                 let crit = if flagged_g {
                     th.add_chi2

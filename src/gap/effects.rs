@@ -143,7 +143,11 @@ pub enum EffectParams {
         #[serde(deserialize_with = "nullable_f64")]
         lo: f64,
     },
+    /// `decimation` (written only when above 1: the records of output-rate averages are as
+    /// before) is [`LowPass::MovingAverage`]'s: `taps` then counts the internal samples.
     MovingAverage {
+        #[serde(default = "one", skip_serializing_if = "is_one")]
+        decimation: u32,
         stages: u32,
         taps: u32,
     },
@@ -176,6 +180,14 @@ pub enum EffectParams {
     },
 }
 
+fn one() -> u32 {
+    1
+}
+
+fn is_one(v: &u32) -> bool {
+    *v == 1
+}
+
 /// Reads a number the writer may have printed as `null` (serde_json writes a non-finite f64 so)
 /// back as NaN, so a record holding one still parses.
 pub fn nullable_f64<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
@@ -204,9 +216,15 @@ impl EffectParams {
             EffectParams::OutputFilter { time_constant_s } => {
                 Some(LowPass::FirstOrder { time_constant_s })
             }
-            EffectParams::MovingAverage { taps, stages } => {
-                Some(LowPass::MovingAverage { taps, stages })
-            }
+            EffectParams::MovingAverage {
+                taps,
+                stages,
+                decimation,
+            } => Some(LowPass::MovingAverage {
+                taps,
+                stages,
+                decimation,
+            }),
             EffectParams::SecondOrderFilter {
                 natural_frequency_hz,
                 damping,
@@ -234,7 +252,15 @@ impl EffectParams {
             LowPass::FirstOrder { time_constant_s } => {
                 EffectParams::OutputFilter { time_constant_s }
             }
-            LowPass::MovingAverage { taps, stages } => EffectParams::MovingAverage { taps, stages },
+            LowPass::MovingAverage {
+                taps,
+                stages,
+                decimation,
+            } => EffectParams::MovingAverage {
+                taps,
+                stages,
+                decimation,
+            },
             LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
@@ -335,8 +361,16 @@ impl EffectParams {
                 hi,
                 lo,
             } => vec![("coefficient", coefficient), ("hi", hi), ("lo", lo)],
-            EffectParams::MovingAverage { stages, taps } => {
-                vec![("stages", f64::from(stages)), ("taps", f64::from(taps))]
+            EffectParams::MovingAverage {
+                stages,
+                taps,
+                decimation,
+            } => {
+                let mut v = vec![("stages", f64::from(stages)), ("taps", f64::from(taps))];
+                if decimation > 1 {
+                    v.insert(0, ("decimation", f64::from(decimation)));
+                }
+                v
             }
             EffectParams::SecondOrderFilter {
                 damping,
@@ -457,6 +491,7 @@ pub fn canonical_lowpass(kind: EffectKind, shape: f64) -> LowPass {
         EffectKind::MovingAverage => LowPass::MovingAverage {
             taps: shape.round().clamp(1.0, u32::MAX as f64) as u32,
             stages: 1,
+            decimation: 1,
         },
         EffectKind::SecondOrderFilter => LowPass::SecondOrder {
             natural_frequency_hz: shape,

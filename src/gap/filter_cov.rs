@@ -184,7 +184,14 @@ mod tests {
     /// so `e(0) = 1/2` and `e(t) = 0` for `|t| >= 1`.
     #[test]
     fn excess_of_two_taps() {
-        let e = excess(&LowPass::MovingAverage { taps: 2, stages: 1 }, 0.01);
+        let e = excess(
+            &LowPass::MovingAverage {
+                taps: 2,
+                stages: 1,
+                decimation: 1,
+            },
+            0.01,
+        );
         assert!((e[0] - 0.5).abs() < 1e-12, "{e:?}");
         assert!(e.iter().skip(1).all(|v| v.abs() < 1e-12), "{e:?}");
     }
@@ -204,7 +211,11 @@ mod tests {
             LowPass::FirstOrder {
                 time_constant_s: 0.03,
             },
-            LowPass::MovingAverage { taps: 4, stages: 2 },
+            LowPass::MovingAverage {
+                taps: 4,
+                stages: 2,
+                decimation: 1,
+            },
             LowPass::SecondOrder {
                 natural_frequency_hz: 6.0,
                 damping: 0.4,

@@ -1,7 +1,8 @@
 //! The shape scans of the filter candidates with more than one shape parameter (docs/gap.md,
 //! "Low-pass filters beyond first order"): the moving average (taps, whole, and one or two
 //! stages) and the second-order low-pass (natural frequency and damping, in three forms:
-//! pole-mapped, bilinear, and sampled with its zero). Each grid point is the GLS fit of
+//! pole-mapped, bilinear, and sampled with its zero), and the CIC decimators (a moving average
+//! run at the decimation times the output rate). Each grid point is the GLS fit of
 //! [`GapProblem::gls`] with the N column taken through the filter; the best point is then
 //! polished (neighbouring whole taps; golden sections in `ln f_n` and `ln zeta` in turn, then a
 //! simplex in both, [`super::simplex`]).
@@ -20,6 +21,12 @@ pub const MAX_TAPS: u32 = 256;
 /// sinc^3 of a third-order CIC decimator, the commonest MEMS decimation filter) and four, all the
 /// model and the simulator take (docs/gap.md, "Low-pass filters beyond first order").
 pub const STAGES: [u32; 4] = [1, 2, 3, 4];
+/// Decimations of the CIC decimators scanned (a moving average of `D` taps at `D` times the
+/// output rate, read every `D`-th sample, two to four stages: docs/gap.md, "Averages run faster
+/// than the output (session 44)"). At the output rate each spans as many samples as it has
+/// stages whatever `D`, and its shape tends to a B-spline's as `D` grows (within 1e-4 from 256),
+/// so a few decimations per octave to 64 cover them.
+pub const CIC_DECIMATIONS: [u32; 12] = [2, 3, 4, 5, 6, 8, 10, 12, 16, 24, 32, 64];
 /// Damping range of the second-order scan, and points per decade.
 pub const DAMPING_RANGE: (f64, f64) = (0.1, 5.0);
 const DAMPING_PER_DECADE: f64 = 6.0;
@@ -46,9 +53,11 @@ pub fn at_memory_end(prob: &GapProblem, p: &EffectParams) -> bool {
         | EffectParams::ZeroPhaseFilter { time_constant_s } => {
             time_constant_s >= grid.hi || near(time_constant_s, grid.hi)
         }
-        EffectParams::MovingAverage { taps, .. } => {
+        EffectParams::MovingAverage {
+            taps, decimation, ..
+        } => {
             let m_max = prob.ms.last().copied().unwrap_or(1);
-            taps as u64 >= (MAX_TAPS as u64).min(m_max / 10).max(2)
+            decimation == 1 && taps as u64 >= (MAX_TAPS as u64).min(m_max / 10).max(2)
         }
         EffectParams::SecondOrderFilter {
             natural_frequency_hz,
@@ -130,7 +139,11 @@ fn scan_moving_average(
     for &stages in &STAGES {
         let mut own: Option<(usize, f64)> = None;
         for (i, &t) in taps.iter().enumerate() {
-            let lp = LowPass::MovingAverage { taps: t, stages };
+            let lp = LowPass::MovingAverage {
+                taps: t,
+                stages,
+                decimation: 1,
+            };
             let f = fit(lp);
             if let Some(chi2) = f.as_ref().map(|f| f.chi2) {
                 if own.is_none_or(|(_, c)| chi2 < c) {
@@ -150,7 +163,25 @@ fn scan_moving_average(
             if taps.contains(&t) {
                 continue;
             }
-            let lp = LowPass::MovingAverage { taps: t, stages };
+            let lp = LowPass::MovingAverage {
+                taps: t,
+                stages,
+                decimation: 1,
+            };
+            best = better(best, lp, fit(lp));
+        }
+    }
+    // The CIC decimators: shorter at the output rate than any average of whole output samples
+    // with more than one stage (a sinc^3 read every D-th sample spans three samples; the
+    // three-stage average of two output samples four). Without them a CIC unit was named a
+    // bilinear second order at the scan's top frequency (session 43's review, 0 of 5).
+    for stages in 2..=*STAGES.last().unwrap_or(&1) {
+        for d in CIC_DECIMATIONS {
+            let lp = LowPass::MovingAverage {
+                taps: d,
+                stages,
+                decimation: d,
+            };
             best = better(best, lp, fit(lp));
         }
     }

@@ -261,8 +261,16 @@ pub fn fit_intervals(
                     out.push((name, interval(*v, sd(c))));
                 }
             }
-            if let EffectParams::MovingAverage { taps, stages } = *p {
-                out.push(("taps", taps_profile(prob, spec, fit, taps, stages, scale)));
+            if let EffectParams::MovingAverage {
+                taps,
+                stages,
+                decimation,
+            } = *p
+            {
+                out.push((
+                    "taps",
+                    taps_profile(prob, spec, fit, (taps, stages, decimation), scale),
+                ));
             }
             if let EffectParams::Temperature { lo, hi, .. } = *p {
                 out.push(("coefficient", [lo, hi]));
@@ -329,21 +337,27 @@ fn term_interval(
     })
 }
 
-/// Whole taps whose fit's `r' S^-1 r` is within `3.84 scale` of the best, around `taps`.
+/// Whole taps whose fit's `r' S^-1 r` is within `3.84 scale` of the best, around `taps` (of
+/// the average `(taps, stages, decimation)`). A CIC's decimation is its taps and moves with
+/// them (at least 2: one tap read every sample is no filter); otherwise the decimation is kept.
 fn taps_profile(
     prob: &GapProblem,
     spec: &ModelSpec,
     fit: &GlsFit,
-    taps: u32,
-    stages: u32,
+    (taps, stages, decimation): (u32, u32, u32),
     scale: f64,
 ) -> [f64; 2] {
     let limit = fit.chi2 + 3.84 * scale;
+    let cic = decimation > 1 && decimation == taps;
     let ok = |t: u32| {
-        t >= 1
+        t >= if cic { 2 } else { 1 }
             && prob
                 .gls(&ModelSpec {
-                    filter: Some(crate::model::lowpass::LowPass::MovingAverage { taps: t, stages }),
+                    filter: Some(crate::model::lowpass::LowPass::MovingAverage {
+                        taps: t,
+                        stages,
+                        decimation: if cic { t } else { decimation },
+                    }),
                     ..spec.clone()
                 })
                 .is_some_and(|f| f.chi2 <= limit)

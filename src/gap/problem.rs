@@ -531,9 +531,14 @@ impl GapProblem {
             LowPass::ZeroPhase { time_constant_s } => LowPass::ZeroPhase {
                 time_constant_s: time_constant_s * g,
             },
-            LowPass::MovingAverage { taps, stages } => LowPass::MovingAverage {
+            LowPass::MovingAverage {
+                taps,
+                stages,
+                decimation,
+            } => LowPass::MovingAverage {
                 taps: (taps as f64 * g).round().max(1.0) as u32,
                 stages,
+                decimation,
             },
             LowPass::SecondOrder {
                 natural_frequency_hz,

@@ -525,7 +525,11 @@ mod tests {
                 lo: f64::NAN,
                 hi: 0.03,
             },
-            EffectParams::MovingAverage { taps: 8, stages: 2 },
+            EffectParams::MovingAverage {
+                taps: 8,
+                stages: 2,
+                decimation: 1,
+            },
             EffectParams::SecondOrderFilter {
                 natural_frequency_hz: 20.0,
                 damping: 0.7,
@@ -589,31 +593,45 @@ mod tests {
         }
     }
 
-    /// The second order's sampled form writes its zero after the other two parameters, and
-    /// `record_params` names them in that order; read back, it is the same form.
+    /// The second order's sampled form writes its zero after the other two parameters, and a
+    /// moving average run faster than the output its decimation before its stages (the record's
+    /// keys sorted); `record_params` names them in that order; read back, each is the same.
     #[test]
-    fn the_sampled_second_order_writes_its_zero() {
-        let p = EffectParams::SecondOrderFilter {
-            natural_frequency_hz: 20.0,
-            damping: 0.7,
-            bilinear: false,
-            zero: Some(0.3),
-        };
-        let rec = EffectRecord {
-            effect: RecordedEffect::Known(p),
-            gap_after: 1.5,
-            intervals: BTreeMap::new(),
-            cause: None,
-        };
-        let line = serde_json::to_string(&rec).unwrap();
-        assert_eq!(
-            line,
-            r#"{"kind":"second_order_filter","params":{"damping":0.7,"natural_frequency":20.0,"zero":0.3},"gap_after":1.5}"#
-        );
-        let named: Vec<&str> = p.record_params().iter().map(|(k, _)| *k).collect();
-        assert_eq!(named, ["damping", "natural_frequency", "zero"]);
-        let back: EffectRecord = serde_json::from_str(&line).unwrap();
-        assert!(matches!(back.effect, RecordedEffect::Known(q) if q == p));
+    fn the_sampled_forms_write_their_extra_parameter() {
+        for (p, want, names) in [
+            (
+                EffectParams::SecondOrderFilter {
+                    natural_frequency_hz: 20.0,
+                    damping: 0.7,
+                    bilinear: false,
+                    zero: Some(0.3),
+                },
+                r#"{"kind":"second_order_filter","params":{"damping":0.7,"natural_frequency":20.0,"zero":0.3},"gap_after":1.5}"#,
+                &["damping", "natural_frequency", "zero"][..],
+            ),
+            (
+                EffectParams::MovingAverage {
+                    taps: 8,
+                    stages: 3,
+                    decimation: 8,
+                },
+                r#"{"kind":"moving_average","params":{"decimation":8,"stages":3,"taps":8},"gap_after":1.5}"#,
+                &["decimation", "stages", "taps"][..],
+            ),
+        ] {
+            let rec = EffectRecord {
+                effect: RecordedEffect::Known(p),
+                gap_after: 1.5,
+                intervals: BTreeMap::new(),
+                cause: None,
+            };
+            let line = serde_json::to_string(&rec).unwrap();
+            assert_eq!(line, want);
+            let named: Vec<&str> = p.record_params().iter().map(|(k, _)| *k).collect();
+            assert_eq!(named, names);
+            let back: EffectRecord = serde_json::from_str(&line).unwrap();
+            assert!(matches!(back.effect, RecordedEffect::Known(q) if q == p));
+        }
     }
 
     /// A kind a newer version wrote is kept with its numbers, and written back as it was.

@@ -17,8 +17,16 @@ pub enum LowPass {
     /// `y_k = a y_{k-1} + (1 - a) d_k`, `a = e^{-tau0/T}`.
     FirstOrder { time_constant_s: f64 },
     /// `stages` cascaded moving averages of `taps` increments each (1: boxcar; 2: triangular,
-    /// the Bartlett window).
-    MovingAverage { taps: u32, stages: u32 },
+    /// the Bartlett window), run at `decimation` times the output rate and read every
+    /// `decimation`-th sample: `taps` counts the internal samples. 1 is an average of the
+    /// output samples; `taps = decimation` with 3 stages is the sinc^3 of a CIC decimator, which
+    /// at the output rate spans three samples whatever its length (docs/gap.md, "Averages run
+    /// faster than the output (session 44)").
+    MovingAverage {
+        taps: u32,
+        stages: u32,
+        decimation: u32,
+    },
     /// `y_k = a1 y_{k-1} + a2 y_{k-2} + (1 - a1 - a2) d_k` with the poles of the continuous
     /// `w^2 / (s^2 + 2 zeta w s + w^2)`, `w = 2 pi f_n`, mapped by `z = e^{s tau0}`. With
     /// [`SecondOrderForm::Bilinear`], the digital biquad most units and tools build instead (scipy's `butter`,
@@ -73,6 +81,8 @@ pub const MAX_LAGS: usize = 2_000_000;
 /// Largest moving-average length and number of stages accepted.
 pub const MAX_TAPS: u32 = 100_000;
 pub const MAX_STAGES: u32 = 4;
+/// Largest decimation of a moving average (internal samples per output sample).
+pub const MAX_DECIMATION: u32 = 1024;
 
 impl LowPass {
     /// Whether this is the bilinear second order ([`LowPass::SecondOrder`]).
@@ -120,11 +130,19 @@ impl LowPass {
                 (!(time_constant_s > 0.0 && time_constant_s.is_finite()))
                     .then(|| format!("time constant {time_constant_s} must be > 0"))
             }
-            LowPass::MovingAverage { taps, stages } => {
+            LowPass::MovingAverage {
+                taps,
+                stages,
+                decimation,
+            } => {
                 if !(1..=MAX_TAPS).contains(&taps) {
                     Some(format!("taps {taps} must be 1..={MAX_TAPS}"))
                 } else if !(1..=MAX_STAGES).contains(&stages) {
                     Some(format!("stages {stages} must be 1..={MAX_STAGES}"))
+                } else if !(1..=MAX_DECIMATION).contains(&decimation) {
+                    Some(format!(
+                        "decimation {decimation} must be 1..={MAX_DECIMATION}"
+                    ))
                 } else {
                     None
                 }
@@ -210,6 +228,38 @@ impl LowPass {
         h
     }
 
+    /// `sum_i h_i h_{i + D j}`, `j = 0, 1, ...`: the autocovariance of a moving average's output
+    /// read every `D`-th sample for unit-variance white input at the internal rate (`h` its
+    /// impulse response there, DC gain 1).
+    fn decimated_autocovariance(taps: u32, stages: u32, decimation: u32) -> Vec<f64> {
+        let h = Self::fir(taps, stages);
+        (0..h.len())
+            .step_by(decimation.max(1) as usize)
+            .map(|k| h.iter().zip(&h[k..]).map(|(a, b)| a * b).sum())
+            .collect()
+    }
+
+    /// The factor on the output step's white-rate standard deviation that gives the internal
+    /// samples' for a filter run faster than the output (1 for the others): the output's
+    /// autocovariances then sum to the output step's white variance, so `N` is the output's
+    /// low-frequency white level, aliasing included, as the diagnosis fits it. For a CIC
+    /// (taps a multiple of `D`) it is `sqrt(D)`: the mean of `D` internal samples has the
+    /// output step's variance.
+    pub fn internal_white_scale(&self) -> f64 {
+        match *self {
+            LowPass::MovingAverage {
+                taps,
+                stages,
+                decimation,
+            } if decimation > 1 => {
+                let r = Self::decimated_autocovariance(taps, stages, decimation);
+                let total = r[0] + 2.0 * r[1..].iter().sum::<f64>();
+                1.0 / total.sqrt()
+            }
+            _ => 1.0,
+        }
+    }
+
     /// The normalised autocorrelation `rho(k)`, `k = 0, 1, ...` of the filter's impulse
     /// response: the filtered white increments have autocovariance `N^2 tau0 rho(|k|)`, and
     /// `rho(0) + 2 sum_{k>0} rho(k) = 1` (DC gain 1).
@@ -227,11 +277,22 @@ impl LowPass {
                 }
                 out
             }
-            LowPass::MovingAverage { taps, stages } => {
-                let h = Self::fir(taps, stages);
-                (0..h.len())
-                    .map(|k| h.iter().zip(&h[k..]).map(|(a, b)| a * b).sum())
-                    .collect()
+            LowPass::MovingAverage {
+                taps,
+                stages,
+                decimation,
+            } => {
+                // The impulse response at the internal rate, its autocorrelation read at every
+                // `decimation`-th lag (the output samples are every D-th internal one), scaled
+                // to a two-sided total of 1: the output's low-frequency white level is then the
+                // fitted N, aliasing included. A CIC (taps a multiple of D) needs no scaling
+                // beyond D: its zeros at the output rate's multiples leave nothing to alias.
+                let r = Self::decimated_autocovariance(taps, stages, decimation);
+                if decimation <= 1 {
+                    return r;
+                }
+                let total = r[0] + 2.0 * r[1..].iter().sum::<f64>();
+                r.iter().map(|v| v / total).collect()
             }
             LowPass::SecondOrder { .. } | LowPass::ZeroPhase { .. } => {
                 let (a1, a2) = self.ar2(tau0_s).unwrap_or((0.0, 0.0));
@@ -352,15 +413,31 @@ impl LowPass {
             LowPass::ZeroPhase { time_constant_s } => {
                 first_order_gain(time_constant_s, tau0_s, w).powi(2)
             }
-            LowPass::MovingAverage { taps, stages } => {
+            LowPass::MovingAverage {
+                taps,
+                stages,
+                decimation,
+            } => {
+                // at the internal rate `|sin(M x / 2) / (M sin(x / 2))|^(2 S)`; read every D-th
+                // sample, the D images `x = (w + 2 pi a) / D` fold onto `w`, scaled as the
+                // autocorrelation is (`sum_j R(D j) = sum_a |H(2 pi a / D)|^2 / D`, Poisson)
                 let m = taps.max(1) as f64;
-                let den = m * (w / 2.0).sin();
-                let g = if den.abs() < 1e-300 {
-                    1.0
-                } else {
-                    (m * w / 2.0).sin() / den
+                let d = decimation.max(1);
+                let internal = |x: f64| {
+                    let den = m * (x / 2.0).sin();
+                    let g = if den.abs() < 1e-300 {
+                        1.0
+                    } else {
+                        (m * x / 2.0).sin() / den
+                    };
+                    (g * g).powi(stages.max(1) as i32)
                 };
-                (g * g).powi(stages.max(1) as i32)
+                let folded = |w: f64| {
+                    (0..d)
+                        .map(|a| internal((w + 2.0 * PI * a as f64) / d as f64))
+                        .sum::<f64>()
+                };
+                folded(w) / folded(0.0)
             }
             LowPass::SecondOrder { .. } => {
                 let (a1, a2) = self.ar2(tau0_s).unwrap_or((0.0, 0.0));
@@ -390,7 +467,11 @@ impl LowPass {
             LowPass::FirstOrder { time_constant_s } | LowPass::ZeroPhase { time_constant_s } => {
                 time_constant_s
             }
-            LowPass::MovingAverage { taps, stages } => (taps * stages) as f64 * tau0_s,
+            LowPass::MovingAverage {
+                taps,
+                stages,
+                decimation,
+            } => (taps * stages) as f64 * tau0_s / decimation.max(1) as f64,
             LowPass::SecondOrder {
                 form: SecondOrderForm::Bilinear,
                 ..
@@ -816,10 +897,20 @@ mod tests {
     fn autocorrelations_sum_to_one() {
         let tau0 = 0.004;
         for lp in [
-            LowPass::MovingAverage { taps: 7, stages: 1 },
+            LowPass::MovingAverage {
+                taps: 7,
+                stages: 1,
+                decimation: 1,
+            },
             LowPass::MovingAverage {
                 taps: 16,
                 stages: 2,
+                decimation: 1,
+            },
+            LowPass::MovingAverage {
+                taps: 7,
+                stages: 3,
+                decimation: 3,
             },
             LowPass::SecondOrder {
                 natural_frequency_hz: 5.0,
@@ -864,6 +955,7 @@ mod tests {
         let lp = LowPass::MovingAverage {
             taps: mm,
             stages: 1,
+            decimation: 1,
         };
         let ms = [1u64, 9, 20, 500];
         let v = lp.white_rate_avar(tau0, &ms);
@@ -890,7 +982,11 @@ mod tests {
             LowPass::FirstOrder {
                 time_constant_s: 0.03,
             },
-            LowPass::MovingAverage { taps: 8, stages: 2 },
+            LowPass::MovingAverage {
+                taps: 8,
+                stages: 2,
+                decimation: 1,
+            },
             LowPass::SecondOrder {
                 natural_frequency_hz: 8.0,
                 damping: 0.3,
@@ -905,8 +1001,78 @@ mod tests {
         let f1 = g(2.0) / 4.0;
         let f2 = (g(1.0) + 2.0 * g(2.0) + g(3.0)) / 4.0;
         let want = (-8.0 * f1 + 2.0 * f2) / 2.0;
-        let got = LowPass::MovingAverage { taps: 2, stages: 1 }.flicker_rate_avar(tau0, &[1])[0];
+        let got = LowPass::MovingAverage {
+            taps: 2,
+            stages: 1,
+            decimation: 1,
+        }
+        .flicker_rate_avar(tau0, &[1])[0];
         assert!((got / want - 1.0).abs() < 1e-12, "{got} vs {want}");
+    }
+
+    /// A moving average run `D` times faster than the output and read every `D`-th sample:
+    /// its output is, for each phase `p` of the input within a sample, an average of that
+    /// phase's inputs with the taps `h_{qD+p}`. The autocovariance at output lag `j` is then
+    /// `sum_p sum_q h_{qD+p} h_{(q+j)D+p}` (the polyphase decomposition, by hand here), scaled
+    /// to a two-sided total of 1; and a CIC's total before the scaling is exactly `1 / D`.
+    #[test]
+    fn the_decimated_average_is_its_polyphase_parts() {
+        let tau0 = 0.004;
+        for (taps, stages, d) in [(8u32, 3u32, 8u32), (5, 2, 3), (2, 3, 2), (12, 1, 5)] {
+            let lp = LowPass::MovingAverage {
+                taps,
+                stages,
+                decimation: d,
+            };
+            let got = lp.autocorrelation(tau0);
+            let h = LowPass::fir(taps, stages);
+            let d = d as usize;
+            let at = |i: usize| h.get(i).copied().unwrap_or(0.0);
+            let q_max = h.len() / d + 1;
+            let cov = |j: usize| -> f64 {
+                (0..d)
+                    .map(|p| {
+                        (0..q_max)
+                            .map(|q| at(q * d + p) * at((q + j) * d + p))
+                            .sum::<f64>()
+                    })
+                    .sum()
+            };
+            let total = cov(0) + 2.0 * (1..q_max).map(cov).sum::<f64>();
+            if (taps as usize).is_multiple_of(d) {
+                assert!((total * d as f64 - 1.0).abs() < 1e-12, "{lp:?}: {total}");
+            }
+            for (j, g) in got.iter().enumerate() {
+                assert!((g - cov(j) / total).abs() < 1e-14, "{lp:?} lag {j}");
+            }
+            assert!(got.len() >= q_max - 1);
+        }
+    }
+
+    /// A CIC of `D` taps and `S` stages read every `D`-th sample tends, as `D` grows, to a
+    /// continuous boxcar of one output sample applied `S` times: its output autocorrelation is
+    /// the centred B-spline of order `2 S` at whole lags (sinc^3: 66/120, 26/120, 1/120;
+    /// sinc^2: 4/6, 1/6), and the boxcar alone (S = 1) leaves white noise white.
+    #[test]
+    fn a_long_cic_is_the_b_spline() {
+        for (stages, want) in [
+            (1u32, vec![1.0]),
+            (2, vec![4.0 / 6.0, 1.0 / 6.0]),
+            (3, vec![66.0 / 120.0, 26.0 / 120.0, 1.0 / 120.0]),
+        ] {
+            let d = 256;
+            let rho = LowPass::MovingAverage {
+                taps: d,
+                stages,
+                decimation: d,
+            }
+            .autocorrelation(0.001);
+            for (j, w) in want.iter().enumerate() {
+                // the discrete spline differs from the continuous one by O(1 / D^2)
+                assert!((rho[j] - w).abs() < 1e-4, "S {stages} lag {j}: {}", rho[j]);
+            }
+            assert!(rho[want.len()..].iter().all(|v| v.abs() < 1e-9));
+        }
     }
 
     /// The power gains integrate to the white-noise variance ratio `rho_0` (Parseval), the
@@ -915,7 +1081,21 @@ mod tests {
     fn power_gain_parseval() {
         let tau0 = 0.004;
         for lp in [
-            LowPass::MovingAverage { taps: 5, stages: 2 },
+            LowPass::MovingAverage {
+                taps: 5,
+                stages: 2,
+                decimation: 1,
+            },
+            LowPass::MovingAverage {
+                taps: 5,
+                stages: 2,
+                decimation: 3,
+            },
+            LowPass::MovingAverage {
+                taps: 8,
+                stages: 3,
+                decimation: 8,
+            },
             LowPass::SecondOrder {
                 natural_frequency_hz: 10.0,
                 damping: 0.5,
@@ -960,7 +1140,11 @@ mod tests {
                 damping: 0.4,
                 form: SecondOrderForm::PoleMapped,
             },
-            LowPass::MovingAverage { taps: 7, stages: 2 },
+            LowPass::MovingAverage {
+                taps: 7,
+                stages: 2,
+                decimation: 1,
+            },
         ] {
             let got = lp.flicker_rate_avar(tau0, &ms);
             // the sum written out with a logarithm per term, as docs/gap.md states it

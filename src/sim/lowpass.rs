@@ -19,11 +19,17 @@ use crate::model::lowpass::LowPass;
 pub enum LowPassGen {
     /// One ring buffer of the last `taps` inputs per stage, with its exact sum recomputed every
     /// `taps` steps (the running sum's rounding never accumulates).
+    /// With `decimation` above 1 the filter runs at the internal rate: the simulator feeds it
+    /// that many internal samples per output step ([`LowPassGen::decimation`]) and keeps the
+    /// last output.
     MovingAverage {
         taps: usize,
         stages: Vec<(VecDeque<f64>, f64)>,
         since_exact: usize,
         started: bool,
+        decimation: usize,
+        /// [`LowPass::internal_white_scale`].
+        white_scale: f64,
     },
     /// `y_k = a1 y_{k-1} + a2 y_{k-2} + g (b0 d_k + b1 d_{k-1} + b2 d_{k-2})` with the
     /// numerator `b` of [`LowPass::numerator`] (`(1, 0, 0)` pole-mapped, `(1, 2, 1) / 4`
@@ -53,11 +59,17 @@ impl LowPassGen {
     pub fn new(lp: &LowPass, tau0_s: f64) -> Option<Self> {
         match *lp {
             LowPass::FirstOrder { .. } => None,
-            LowPass::MovingAverage { taps, stages } => Some(LowPassGen::MovingAverage {
+            LowPass::MovingAverage {
+                taps,
+                stages,
+                decimation,
+            } => Some(LowPassGen::MovingAverage {
                 taps: taps.max(1) as usize,
                 stages: (0..stages.max(1)).map(|_| (VecDeque::new(), 0.0)).collect(),
                 since_exact: 0,
                 started: false,
+                decimation: decimation.max(1) as usize,
+                white_scale: lp.internal_white_scale(),
             }),
             LowPass::SecondOrder { .. } => {
                 // The same poles and zeros as the AVAR's (model::lowpass): its
@@ -87,6 +99,24 @@ impl LowPassGen {
                     started: false,
                 })
             }
+        }
+    }
+
+    /// Internal samples per output sample: [`Self::step`] takes internal samples, and the
+    /// output is every this-many-th one (1 for all but a decimated moving average).
+    pub fn decimation(&self) -> usize {
+        match self {
+            LowPassGen::MovingAverage { decimation, .. } => *decimation,
+            _ => 1,
+        }
+    }
+
+    /// The factor on the output step's white-rate standard deviation for the internal samples
+    /// ([`LowPass::internal_white_scale`]; 1 but for a decimated moving average).
+    pub fn white_scale(&self) -> f64 {
+        match self {
+            LowPassGen::MovingAverage { white_scale, .. } => *white_scale,
+            _ => 1.0,
         }
     }
 
@@ -140,6 +170,9 @@ impl LowPassGen {
             return;
         }
         self.start_at(level);
+        // at the internal rate a white sample's standard deviation is about sqrt(D) times the
+        // output step's ([`Self::white_scale`])
+        let white_sd = white_sd * self.white_scale();
         if white_sd != 0.0 {
             for _ in 0..self.memory_steps() {
                 self.step(level + white_sd * normal());
@@ -272,7 +305,11 @@ mod tests {
     fn dc_gain_and_impulse_energy() {
         let tau0 = 0.004;
         for lp in [
-            LowPass::MovingAverage { taps: 6, stages: 2 },
+            LowPass::MovingAverage {
+                taps: 6,
+                stages: 2,
+                decimation: 1,
+            },
             LowPass::SecondOrder {
                 natural_frequency_hz: 8.0,
                 damping: 0.4,

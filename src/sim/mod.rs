@@ -324,7 +324,27 @@ impl ChannelSim {
             d = f.step(d);
         }
         if let Some(f) = &mut self.lowpass {
-            d = f.step(d);
+            let dec = f.decimation();
+            if dec == 1 {
+                d = f.step(d);
+            } else {
+                // Run at the internal rate (LowPassGen::decimation): the slower parts are
+                // constant over the step, the white rate is drawn for each internal sample with
+                // about sqrt(D) times the step's standard deviation (LowPassGen::white_scale;
+                // the first is this step's draw), and the last internal output is the step's.
+                let level = d - white;
+                let sd = f.white_scale();
+                let mut y = f.step(level + sd * white);
+                for _ in 1..dec {
+                    let w = if self.white_rate != 0.0 {
+                        self.white_rate * normal(rng)
+                    } else {
+                        0.0
+                    };
+                    y = f.step(level + sd * w);
+                }
+                d = y;
+            }
         }
         if let Some((p, size)) = self.outliers {
             let u: f64 = rng.random();

@@ -136,10 +136,19 @@ fn channel_toml(s: &mut String, c: &ChannelModel) {
         );
     }
     match c.lowpass {
-        Some(LowPass::MovingAverage { taps, stages }) => {
+        Some(LowPass::MovingAverage {
+            taps,
+            stages,
+            decimation,
+        }) => {
             let _ = writeln!(
                 s,
-                "[channel.moving_average]\ntaps = {taps}\nstages = {stages}"
+                "[channel.moving_average]\ntaps = {taps}\nstages = {stages}{}",
+                if decimation > 1 {
+                    format!("\ndecimation = {decimation}")
+                } else {
+                    String::new()
+                }
             );
         }
         Some(LowPass::SecondOrder {
@@ -325,6 +334,42 @@ outliers = { rate = 0.001, size = 3.5 }
             assert!(
                 err.contains(key) && err.contains("t.toml"),
                 "{extra}: {err}"
+            );
+        }
+    }
+
+    /// A moving average run faster than the output (`decimation = 8`: a sinc^3 CIC decimator)
+    /// is written with its decimation and read back the same; an output-rate one without the
+    /// key, as before; a decimation of 0, 2.5 or beyond 1024 is refused at its key.
+    #[test]
+    fn the_decimated_average_round_trips_and_bad_decimations_are_refused() {
+        let head = "tau0_s = 0.004\n[[channel]]\nname = \"gx\"\nunit = \"deg\"\nN = 0.01\n";
+        for (extra, decimation) in [(", decimation = 8", 8u32), ("", 1)] {
+            let m = read(&format!(
+                "{head}moving_average = {{ taps = 8, stages = 3{extra} }}\n"
+            ));
+            let text = model_toml(&m, "t", &[]);
+            assert_eq!(text.contains("decimation = 8"), decimation == 8, "{text}");
+            assert!(!text.contains("decimation = 1"), "{text}");
+            let back = read(&text);
+            assert_eq!(m, back);
+            assert_eq!(
+                back.channels[0].lowpass,
+                Some(LowPass::MovingAverage {
+                    taps: 8,
+                    stages: 3,
+                    decimation
+                })
+            );
+        }
+        for bad in ["0", "2.5", "2000"] {
+            let text = format!("{head}moving_average = {{ taps = 8, decimation = {bad} }}\n");
+            let err = SimModel::from_toml_str(&text, Path::new("t.toml"))
+                .expect_err(bad)
+                .to_string();
+            assert!(
+                err.contains("decimation") && err.contains("t.toml"),
+                "{bad}: {err}"
             );
         }
     }

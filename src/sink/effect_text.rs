@@ -191,6 +191,20 @@ pub fn effect_parts(
             number(c)
         );
     }
+    // The average run faster than the output (`decimation`): said in its name, with the CIC
+    // decimator named when its taps are the decimation.
+    let decimation = param("decimation").filter(|&d| kind == "moving_average" && d > 1.0);
+    if let Some(d) = decimation {
+        name += &format!(
+            " run at {d:.0} times the output rate and read every {} sample, taps counted there",
+            crate::input::sampling_step::ordinal(d as usize)
+        );
+        if let (Some(t), Some(st)) = (param("taps"), param("stages")) {
+            if t == d && st >= 2.0 {
+                name += &format!(" (a sinc^{st:.0} CIC decimator)");
+            }
+        }
+    }
     let mut out = Vec::new();
     for (key, pname, dim) in keys {
         let text = match (dim, param(key)) {
@@ -282,4 +296,39 @@ fn name_and_list(
         .map(|p| format!("{}{pair}{}", p.name, p.value))
         .collect();
     (name, (!list.is_empty()).then(|| list.join(", ")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gap::EffectParams;
+
+    fn line(taps: u32, stages: u32, decimation: u32) -> String {
+        let e = RecordedEffect::Known(EffectParams::MovingAverage {
+            taps,
+            stages,
+            decimation,
+        });
+        effect_line(&e, "deg", &|v| format!("{v}"))
+    }
+
+    /// A moving average run faster than the output says so in its name, and a CIC (taps the
+    /// decimation) is named as one with its order; an output-rate average reads as before.
+    #[test]
+    fn a_decimated_average_is_named_with_its_rate() {
+        assert_eq!(
+            line(8, 3, 8),
+            "output moving average (FIR) run at 8 times the output rate and read every 8th \
+             sample, taps counted there (a sinc^3 CIC decimator): taps = 8, stages = 3, decimation = 8"
+        );
+        assert_eq!(
+            line(5, 2, 3),
+            "output moving average (FIR) run at 3 times the output rate and read every 3rd \
+             sample, taps counted there: taps = 5, stages = 2, decimation = 3"
+        );
+        assert_eq!(
+            line(16, 2, 1),
+            "output moving average (FIR): taps = 16, stages = 2"
+        );
+    }
 }

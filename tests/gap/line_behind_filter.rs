@@ -81,7 +81,13 @@ fn check(
 fn a_line_behind_a_two_tap_average_is_the_average_and_the_line() {
     let d = diagnosed("moving_average = { taps = 2, stages = 1 }", 20.0, 10105);
     let gain = (PI * 20.0 * TAU0).cos();
-    let ma2 = |p: &EffectParams| *p == EffectParams::MovingAverage { taps: 2, stages: 1 };
+    let ma2 = |p: &EffectParams| {
+        *p == EffectParams::MovingAverage {
+            taps: 2,
+            stages: 1,
+            decimation: 1,
+        }
+    };
     check(&d, EffectKind::MovingAverage, ma2, 20.0, gain);
 }
 
@@ -92,7 +98,13 @@ fn a_line_behind_a_four_tap_average_is_the_average_and_the_line() {
     let d = diagnosed("moving_average = { taps = 4, stages = 1 }", 5.0, 10102);
     let x = PI * 5.0 * TAU0;
     let gain = (4.0 * x).sin() / (4.0 * x.sin());
-    let ma4 = |p: &EffectParams| *p == EffectParams::MovingAverage { taps: 4, stages: 1 };
+    let ma4 = |p: &EffectParams| {
+        *p == EffectParams::MovingAverage {
+            taps: 4,
+            stages: 1,
+            decimation: 1,
+        }
+    };
     check(&d, EffectKind::MovingAverage, ma4, 5.0, gain);
 }
 

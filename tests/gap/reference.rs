@@ -70,7 +70,11 @@ fn adis16405_gyro_x_diagnosis() {
         .expect("a stationary effect");
     assert_eq!(
         filter.params,
-        EffectParams::MovingAverage { taps: 2, stages: 1 }
+        EffectParams::MovingAverage {
+            taps: 2,
+            stages: 1,
+            decimation: 1
+        }
     );
     assert!(
         filter.gap_after < 3.0,

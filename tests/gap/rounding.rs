@@ -28,7 +28,11 @@ fn the_rounding_after_a_moving_average_has_the_modelled_curve() {
     use rand_distr::StandardNormal;
     let tau0 = 0.001;
     let n2 = 1e-4;
-    let lp = LowPass::MovingAverage { taps: 8, stages: 1 };
+    let lp = LowPass::MovingAverage {
+        taps: 8,
+        stages: 1,
+        decimation: 1,
+    };
     let sigma = filtered_sigma(&lp, tau0, n2);
     let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(7);
     let sd_x = (n2 / tau0).sqrt();

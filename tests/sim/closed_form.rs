@@ -290,6 +290,33 @@ fn sampled_second_order_filter_on_white_rate() {
     });
 }
 
+/// Moving averages run faster than the output and read every `D`-th sample
+/// (src/model/lowpass.rs): a sinc^3 CIC decimator of 8 (the simulator draws 8 internal white
+/// samples per step, each with sqrt(8) times the step's standard deviation) and a Bartlett of 5
+/// internal taps read every 3rd, whose aliasing the simulator's white scale takes out so that N
+/// stays the output's white level. Against the AVAR of the autocorrelation read at every
+/// `D`-th lag. The criterion has teeth: the same data reject the average of 8 x 3 output
+/// samples at m = 1.
+#[test]
+fn decimated_moving_averages_on_white_rate() {
+    let e = check_ensemble("cic", |_| {
+        channel("N = 0.5\nmoving_average = { taps = 8, stages = 3, decimation = 8 }")
+    });
+    let slow = allanscope::model::lowpass::LowPass::MovingAverage {
+        taps: 8,
+        stages: 3,
+        decimation: 1,
+    }
+    .white_rate_avar(0.01, &e.ms[..1])[0]
+        * 0.25;
+    let z = e.z(0, slow);
+    println!("cic: z against the output-rate average at m = 1: {z:.1}");
+    assert!(z.abs() > 10.0 * z_limit(e.ms.len(), e.seeds), "{z}");
+    check_ensemble("decimated_bartlett", |_| {
+        channel("N = 0.5\nmoving_average = { taps = 5, stages = 2, decimation = 3 }")
+    });
+}
+
 #[test]
 fn zero_phase_filter_on_white_rate() {
     check_ensemble("zero_phase", |s| {

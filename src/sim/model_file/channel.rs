@@ -281,8 +281,15 @@ fn parse_lowpass(
         let t = e.num_pos("taps", true, errs);
         let taps = e.required("taps", t, errs);
         let stages = e.num_pos("stages", true, errs).unwrap_or(1.0);
+        // run faster than the output and read every `decimation`-th sample (a CIC decimator:
+        // taps = decimation)
+        let decimation = e.num_pos("decimation", true, errs).unwrap_or(1.0);
         e.finish(errs);
-        for (key, v) in [("taps", taps), ("stages", stages)] {
+        for (key, v) in [
+            ("taps", taps),
+            ("stages", stages),
+            ("decimation", decimation),
+        ] {
             if v.is_finite() && v.fract() != 0.0 {
                 errs.bad(
                     format!("{p}.{key}"),
@@ -295,6 +302,7 @@ fn parse_lowpass(
             LowPass::MovingAverage {
                 taps: taps.clamp(0.0, u32::MAX as f64) as u32,
                 stages: stages.clamp(0.0, u32::MAX as f64) as u32,
+                decimation: decimation.clamp(0.0, u32::MAX as f64) as u32,
             },
         ));
     }

@@ -36,6 +36,8 @@
 //! band_noise = [{ sigma = 0.3, frequency = 20.7, width = 2.0 }]     # u/s, Hz (< Nyquist), Hz
 //! output_filter = { time_constant = 0.01 }                          # s
 //! moving_average = { taps = 16, stages = 2 }     # or, in place of output_filter (one filter):
+//!   # ... and optionally decimation = 8 (run 8 times faster than the output, taps counted there,
+//!   # read every 8th sample: taps = decimation is a CIC decimator)
 //! second_order_filter = { natural_frequency = 20.0, damping = 0.7 }  # Hz, 1
 //!   # ... and optionally bilinear = true (the digital biquad), or zero = 0.27 / decimation = 5
 //!   # (run faster than the output and read every few samples; model::lowpass::SecondOrderForm)
