@@ -555,7 +555,11 @@ impl GapEvidence {
                 }
             })
             .collect();
-        if self.cur_block.1 > 0 && self.block_pos * 2 >= self.block_len {
+        // The block in progress only when nearly whole, as at the start: a block's mean is
+        // given a whole block's variance by the block tests (before session 44 from half full,
+        // which raised a jump's z at the record's end by up to sqrt 2).
+        if self.cur_block.1 > 0 && self.block_pos as f64 >= LEAD_BLOCK_FILL * self.block_len as f64
+        {
             block_means.push(self.cur_block.0 / (self.cur_block.1 as f64 * tau0));
         }
         // Short against the run's typical block (its median count), not a whole one: a run
@@ -651,5 +655,32 @@ mod tests {
         assert_eq!(late.block_len, clean.block_len);
         assert_eq!(late.block_first, 3);
         assert!(late.block_means.iter().all(|m| m.is_finite()));
+    }
+
+    /// The block in progress joins the block means only when at least [`LEAD_BLOCK_FILL`] full:
+    /// the block tests give each mean a whole block's variance. At 60% it is left out (before
+    /// session 44 it was kept from half full, and a clean gyro's last 60% block, its mean that
+    /// much noisier, was read as a jump of z 5.2); at 95% it is kept.
+    #[test]
+    fn the_block_in_progress_counts_only_when_nearly_whole() {
+        let feed = |n: u64, tail_from: u64| {
+            let mut ev = GapEvidence::new(GapConfig::new(0.01));
+            for k in 0..n {
+                ev.push_increment(if k >= tail_from { 0.05 } else { 0.01 });
+            }
+            ev.snapshot()
+        };
+        let l = feed(200_000, u64::MAX).block_len;
+        let whole = 200_000 / l * l;
+        for (share, kept) in [(0.6, false), (0.95, true)] {
+            let snap = feed(whole + (share * l as f64) as u64, whole);
+            assert_eq!(snap.block_len, l, "the block length this case was set at");
+            assert_eq!(snap.block_means.len() as u64, whole / l + u64::from(kept));
+            let last = *snap.block_means.last().unwrap();
+            assert!(
+                ((last - if kept { 5.0 } else { 1.0 }).abs()) < 1e-9,
+                "{share}: {last}"
+            );
+        }
     }
 }
