@@ -1589,6 +1589,33 @@ fn greedy_stationary(
         // tens of seconds): within the margin the curve does not tell them apart, and the
         // other kind is listed as an alternative (docs/gap.md, "The first order when the
         // kinds tie (session 26)").
+        // The scans' floor keeps a first order of sub-sample memory from being the reason a
+        // filter is named ("The scans' shortest shapes"). Once another kind is named, the
+        // first order competes for the kind over its whole grid: a second order at its top
+        // frequency with real poles is the first order below the floor in another form (a
+        // first order run at the internal rate and read every few samples is a first order at
+        // the output rate; docs/gap.md, "A first order below the floor (session 44)").
+        if let Some(k) = best_filter.filter(|&k| k != EffectKind::OutputFilter) {
+            let floor = prob.shape_floor(EffectKind::OutputFilter);
+            let lo = prob.grid(EffectKind::OutputFilter).lo;
+            if let Some((t, f)) = prob
+                .scan_from(&spec, EffectKind::OutputFilter, lo)
+                .filter(|(t, _)| *t < floor)
+            {
+                let fo = (
+                    EffectParams::OutputFilter { time_constant_s: t },
+                    f.clone(),
+                    (cur.chi2 - f.chi2) / EffectKind::OutputFilter.n_params() as f64,
+                );
+                let other = passed.iter().find(|p| p.0.kind() == k);
+                if other.is_some_and(|b| aic(b) <= aic(&fo) + AIC_MARGIN) {
+                    tracing::debug!(?k, time_constant_s = t, "a first order below the floor");
+                    passed.retain(|p| p.0.kind() != EffectKind::OutputFilter);
+                    passed.push(fo);
+                    best_filter = Some(EffectKind::OutputFilter);
+                }
+            }
+        }
         let passed_kind = |k: EffectKind| passed.iter().find(|p| p.0.kind() == k);
         if let (Some(k), Some(fo)) = (best_filter, passed_kind(EffectKind::OutputFilter)) {
             if k != EffectKind::OutputFilter

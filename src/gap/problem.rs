@@ -1352,7 +1352,16 @@ impl GapProblem {
     /// Best shape of one candidate on top of `base`: grid scan, then golden-section polish
     /// in `ln shape`. Returns `(shape, fit)`.
     pub fn scan(&self, base: &ModelSpec, kind: EffectKind) -> Option<(f64, GlsFit)> {
-        let floor = self.shape_floor(kind);
+        self.scan_from(base, kind, self.shape_floor(kind))
+    }
+
+    /// [`GapProblem::scan`] over the grid's points from `floor` up.
+    pub fn scan_from(
+        &self,
+        base: &ModelSpec,
+        kind: EffectKind,
+        floor: f64,
+    ) -> Option<(f64, GlsFit)> {
         let pts: Vec<f64> = self
             .grid(kind)
             .points()

@@ -5,7 +5,7 @@
 //! (against the model with white phase noise of either sign).
 
 use allanscope::gap::{
-    diagnose, DiagnoseOptions, Diagnosis, EffectParams, GapConfig, GapEvidence, Thresholds, Verdict,
+    diagnose, DiagnoseOptions, Diagnosis, GapConfig, GapEvidence, Thresholds, Verdict,
 };
 use allanscope::sim::{SimModel, Simulator};
 use std::path::Path;
@@ -38,19 +38,23 @@ fn run(seed: u64, filter_tail: bool) -> Diagnosis {
 /// Two clean runs (simulator seeds 128 and 163 of 260 tried; about 1 in 50 clean runs of this
 /// unit) on which a filter of sub-sample memory (time constant 0.36 tau0) passed its own
 /// likelihood-ratio threshold judged against the model before it: now `consistent`, and every
-/// filter's statistic beyond its tail is at most its plain drop. Since session 33 the filter
-/// scans start at tau0 / 2 (docs/gap.md, "The scans' shortest shapes"), so even the session-9
-/// rule names no filter on them: that rule's false alarm was such a sub-sample filter.
+/// filter's statistic beyond its tail is at most its plain drop.
+///
+/// From session 33 to 43 the scans' floor at tau0 / 2 (docs/gap.md, "The scans' shortest
+/// shapes") kept even the session-9 rule from naming a filter on them. Since session 44 the
+/// moving averages run faster than the output have short shapes the floor does not hold, and
+/// once one passes, a first order below the floor competes for the kind. Under the session-9
+/// rule seed 128 is then given a filter again (a first order of 0.45 tau0, G 0.53), so the
+/// filter's tail is what keeps these runs clean, as the test asserts.
 #[test]
 fn a_sub_sample_filter_on_a_clean_short_mems_run_is_not_claimed() {
+    let old_rule = run(128, false);
+    assert!(
+        old_rule.effects.iter().any(|e| e.params.kind().is_filter()),
+        "seed 128: the session-9 rule named {:?}",
+        old_rule.effects
+    );
     for seed in [128, 163] {
-        let before = run(seed, false);
-        assert!(
-            !before.effects.iter().any(|e| e.params.kind().is_filter()
-                && !matches!(e.params, EffectParams::MovingAverage { decimation, .. } if decimation > 1)),
-            "seed {seed}: the session-9 rule, with the scans' floor, named {:?}",
-            before.effects
-        );
         let d = run(seed, true);
         assert_eq!(
             d.verdict,
