@@ -1598,9 +1598,11 @@ fn greedy_stationary(
         if let Some(k) = best_filter.filter(|&k| k != EffectKind::OutputFilter) {
             let floor = prob.shape_floor(EffectKind::OutputFilter);
             let lo = prob.grid(EffectKind::OutputFilter).lo;
+            // (strictly inside the grid: a time constant at its short end is not located, a
+            // chance deficit of the first tau on a clean short run)
             if let Some((t, f)) = prob
                 .scan_from(&spec, EffectKind::OutputFilter, lo)
-                .filter(|(t, _)| *t < floor)
+                .filter(|(t, _)| *t < floor && *t > lo * (1.0 + super::filter_scan::END_TOL))
             {
                 let fo = (
                     EffectParams::OutputFilter { time_constant_s: t },

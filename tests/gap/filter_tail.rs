@@ -45,7 +45,10 @@ fn run(seed: u64, filter_tail: bool) -> Diagnosis {
 /// moving averages run faster than the output have short shapes the floor does not hold, and
 /// once one passes, a first order below the floor competes for the kind. Under the session-9
 /// rule seed 128 is then given a filter again (a first order of 0.45 tau0, G 0.53), so the
-/// filter's tail is what keeps these runs clean, as the test asserts.
+/// filter's tail is what keeps these runs clean, as the test asserts. Seed 31 is a third clean
+/// run: there the moving average of two samples passed, and a first order at the short end of
+/// its grid (0.30 tau0, not located) was named in its place until the first order below the
+/// floor was asked to lie inside its grid.
 #[test]
 fn a_sub_sample_filter_on_a_clean_short_mems_run_is_not_claimed() {
     let old_rule = run(128, false);
@@ -54,7 +57,7 @@ fn a_sub_sample_filter_on_a_clean_short_mems_run_is_not_claimed() {
         "seed 128: the session-9 rule named {:?}",
         old_rule.effects
     );
-    for seed in [128, 163] {
+    for seed in [128, 163, 31] {
         let d = run(seed, true);
         assert_eq!(
             d.verdict,
