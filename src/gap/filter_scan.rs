@@ -1,8 +1,8 @@
 //! The shape scans of the filter candidates with more than one shape parameter (docs/gap.md,
-//! "Low-pass filters beyond first order"): the moving average (taps, whole, and one or two
-//! stages) and the second-order low-pass (natural frequency and damping, in three forms:
-//! pole-mapped, bilinear, and sampled with its zero), and the CIC decimators (a moving average
-//! run at the decimation times the output rate). Each grid point is the GLS fit of
+//! "Low-pass filters beyond first order"): the moving average (taps, whole, and one to four
+//! stages; and run faster than the output: CIC decimators and decimated Bartletts) and the
+//! second-order low-pass (natural frequency and damping, in three forms: pole-mapped, bilinear,
+//! and sampled with its zero). Each grid point is the GLS fit of
 //! [`GapProblem::gls`] with the N column taken through the filter; the best point is then
 //! polished (neighbouring whole taps; golden sections in `ln f_n` and `ln zeta` in turn, then a
 //! simplex in both, [`super::simplex`]).

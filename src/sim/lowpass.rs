@@ -19,6 +19,7 @@ use crate::model::lowpass::LowPass;
 pub enum LowPassGen {
     /// One ring buffer of the last `taps` inputs per stage, with its exact sum recomputed every
     /// `taps` steps (the running sum's rounding never accumulates).
+    ///
     /// With `decimation` above 1 the filter runs at the internal rate: the simulator feeds it
     /// that many internal samples per output step ([`LowPassGen::decimation`]) and keeps the
     /// last output.
