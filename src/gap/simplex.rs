@@ -1,4 +1,4 @@
-//! A two-parameter Nelder-Mead simplex search for a minimum (Nelder and Mead, "A simplex method
+//! A Nelder-Mead simplex search for a minimum, in two parameters or more (Nelder and Mead, "A simplex method
 //! for function minimization", Computer Journal 7, 1965; the standard coefficients: reflection
 //! 1, expansion 2, contraction 1/2, shrink 1/2, as in Press et al., Numerical Recipes, section
 //! 10.5). The second-order filter's scan ([`super::filter_scan`]) polishes its best grid point
@@ -16,7 +16,19 @@ pub(crate) fn nelder_mead_2d(
     max_evals: usize,
     f_tol: f64,
 ) -> ([f64; 2], f64) {
-    let val = |x: [f64; 2]| {
+    nelder_mead(f, x0, step, max_evals, f_tol)
+}
+
+/// [`nelder_mead_2d`] in `N` parameters: the simplex `x0` and `x0` plus each step along its
+/// axis, and the same moves with the centroid of the `N` best points.
+pub(crate) fn nelder_mead<const N: usize>(
+    f: impl Fn([f64; N]) -> f64,
+    x0: [f64; N],
+    step: [f64; N],
+    max_evals: usize,
+    f_tol: f64,
+) -> ([f64; N], f64) {
+    let val = |x: [f64; N]| {
         let v = f(x);
         if v.is_nan() {
             f64::INFINITY
@@ -24,55 +36,70 @@ pub(crate) fn nelder_mead_2d(
             v
         }
     };
-    let mut pts = [x0, [x0[0] + step[0], x0[1]], [x0[0], x0[1] + step[1]]];
-    let mut fs = [val(pts[0]), val(pts[1]), val(pts[2])];
-    let mut evals = 3;
-    let at =
-        |a: [f64; 2], b: [f64; 2], t: f64| [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+    let at = |a: [f64; N], b: [f64; N], t: f64| -> [f64; N] {
+        std::array::from_fn(|i| a[i] + t * (b[i] - a[i]))
+    };
+    let mut pts: Vec<[f64; N]> = (0..=N)
+        .map(|k| {
+            let mut p = x0;
+            if k > 0 {
+                p[k - 1] += step[k - 1];
+            }
+            p
+        })
+        .collect();
+    let mut fs: Vec<f64> = pts.iter().map(|&p| val(p)).collect();
+    let mut evals = N + 1;
     while evals + 2 <= max_evals {
-        // Order: best, middle, worst.
-        let mut idx = [0usize, 1, 2];
+        // Order: best first, worst last.
+        let mut idx: Vec<usize> = (0..=N).collect();
         idx.sort_by(|&a, &b| fs[a].total_cmp(&fs[b]));
-        pts = [pts[idx[0]], pts[idx[1]], pts[idx[2]]];
-        fs = [fs[idx[0]], fs[idx[1]], fs[idx[2]]];
-        if fs[2] - fs[0] <= f_tol {
+        pts = idx.iter().map(|&i| pts[i]).collect();
+        fs = idx.iter().map(|&i| fs[i]).collect();
+        if fs[N] - fs[0] <= f_tol {
             break;
         }
-        let c = at(pts[0], pts[1], 0.5);
-        // Reflect the worst through the centroid of the other two.
-        let xr = at(pts[2], c, 2.0);
+        // The centroid of all but the worst, as running means.
+        let mut c = pts[0];
+        for (i, p) in pts.iter().enumerate().take(N).skip(1) {
+            c = at(c, *p, 1.0 / (i + 1) as f64);
+        }
+        // Reflect the worst through the centroid of the others.
+        let xr = at(pts[N], c, 2.0);
         let fr = val(xr);
         evals += 1;
         if fr < fs[0] {
-            let xe = at(pts[2], c, 3.0);
+            let xe = at(pts[N], c, 3.0);
             let fe = val(xe);
             evals += 1;
-            (pts[2], fs[2]) = if fe < fr { (xe, fe) } else { (xr, fr) };
-        } else if fr < fs[1] {
-            (pts[2], fs[2]) = (xr, fr);
+            (pts[N], fs[N]) = if fe < fr { (xe, fe) } else { (xr, fr) };
+        } else if fr < fs[N - 1] {
+            (pts[N], fs[N]) = (xr, fr);
         } else {
             // Contract toward the better of the worst and its reflection.
-            let (xc, fc) = if fr < fs[2] {
+            let (xc, fc) = if fr < fs[N] {
                 let x = at(c, xr, 0.5);
                 (x, val(x))
             } else {
-                let x = at(c, pts[2], 0.5);
+                let x = at(c, pts[N], 0.5);
                 (x, val(x))
             };
             evals += 1;
-            if fc < fs[2].min(fr) {
-                (pts[2], fs[2]) = (xc, fc);
+            if fc < fs[N].min(fr) {
+                (pts[N], fs[N]) = (xc, fc);
             } else {
                 // Shrink toward the best.
-                for i in 1..3 {
+                for i in 1..=N {
                     pts[i] = at(pts[0], pts[i], 0.5);
                     fs[i] = val(pts[i]);
                 }
-                evals += 2;
+                evals += N;
             }
         }
     }
-    let best = (0..3).min_by(|&a, &b| fs[a].total_cmp(&fs[b])).unwrap_or(0);
+    let best = (0..=N)
+        .min_by(|&a, &b| fs[a].total_cmp(&fs[b]))
+        .unwrap_or(0);
     (pts[best], fs[best])
 }
 
@@ -105,6 +132,23 @@ mod tests {
         let (x, _) = nelder_mead_2d(f, [0.0, 0.0], [0.05, 0.05], 400, 1e-12);
         assert!(
             (x[0] - 0.3).abs() < 1e-3 && (x[1] + 0.2).abs() < 1e-3,
+            "{x:?}"
+        );
+    }
+
+    /// In three parameters: a narrow valley along the diagonal of two of them with a third
+    /// coupled to it (the sampled second order's frequency, damping and zero), minimum at
+    /// (0.3, -0.2, 0.48), reached within 1e-3 from (0, 0, 0.3).
+    #[test]
+    fn follows_a_valley_in_three_parameters() {
+        let f = |p: [f64; 3]| {
+            let (u, v) = (p[0] - 0.3 + p[1] + 0.2, p[0] - 0.3 - (p[1] + 0.2));
+            let w = p[2] - 0.48 - 0.5 * (p[0] - 0.3);
+            1e4 * u * u + v * v + 1e2 * w * w
+        };
+        let (x, _) = nelder_mead(f, [0.0, 0.0, 0.3], [0.05, 0.05, 0.05], 3000, 1e-14);
+        assert!(
+            (x[0] - 0.3).abs() < 1e-3 && (x[1] + 0.2).abs() < 1e-3 && (x[2] - 0.48).abs() < 1e-3,
             "{x:?}"
         );
     }
