@@ -296,19 +296,7 @@ fn a_filter_run_faster_than_the_output_is_named_sampled() {
          {{ natural_frequency = 40.0, damping = 0.7071, bilinear = true }}\n",
         TAU0 / fast as f64
     );
-    let m = SimModel::from_toml_str(&text, std::path::Path::new("<test>")).expect("model");
-    let mut sim = Simulator::new(&m, 4);
-    let n = (3600.0 / TAU0) as usize;
-    let mut inner = vec![0.0; n * fast];
-    sim.fill_channel(0, &mut inner);
-    // each kept rate sample stands for the whole output step
-    let inc: Vec<f64> = inner
-        .iter()
-        .step_by(fast)
-        .map(|d| d * fast as f64)
-        .collect();
-    let mut ev = GapEvidence::from_increments(GapConfig::new(TAU0), &inc);
-    let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
+    let d = read_every(&text, 4, TAU0, fast, 3600.0);
     let (bilinear, zero) = butterworth_at_40_hz_alone(&d);
     assert!(!bilinear, "{:?}", d.effects);
     let c = zero.unwrap_or_else(|| panic!("no zero: {:?}", d.effects));
@@ -341,18 +329,7 @@ fn a_butterworth_near_nyquist_read_every_2nd_is_named_sampled() {
          second_order_filter = {{ natural_frequency = 220.0, damping = 0.7071, bilinear = true }}\n",
         tau0 / fast as f64
     );
-    let m = SimModel::from_toml_str(&text, std::path::Path::new("<test>")).expect("model");
-    let mut sim = Simulator::new(&m, 8);
-    let n = (1200.0 / tau0) as usize;
-    let mut inner = vec![0.0; n * fast];
-    sim.fill_channel(0, &mut inner);
-    let inc: Vec<f64> = inner
-        .iter()
-        .step_by(fast)
-        .map(|d| d * fast as f64)
-        .collect();
-    let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
-    let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
+    let d = read_every(&text, 8, tau0, fast, 1200.0);
     let named: Vec<EffectParams> = d.effects.iter().map(|e| e.params).collect();
     match named[..] {
         [EffectParams::SecondOrderFilter {
@@ -373,6 +350,24 @@ fn a_butterworth_near_nyquist_read_every_2nd_is_named_sampled() {
         _ => panic!("{named:?}, G {} -> {}", d.gap_before, d.gap_after),
     }
     assert_eq!(d.verdict, Verdict::Explained);
+}
+
+/// The diagnosis of the model file `text` (its step `tau0 / fast`) simulated for `seconds` with
+/// `seed` and read every `fast`-th rate sample, at step `tau0`: each kept rate sample stands for
+/// the whole output step.
+fn read_every(text: &str, seed: u64, tau0: f64, fast: usize, seconds: f64) -> Diagnosis {
+    let m = SimModel::from_toml_str(text, std::path::Path::new("<test>")).expect("model");
+    let mut sim = Simulator::new(&m, seed);
+    let n = (seconds / tau0) as usize;
+    let mut inner = vec![0.0; n * fast];
+    sim.fill_channel(0, &mut inner);
+    let inc: Vec<f64> = inner
+        .iter()
+        .step_by(fast)
+        .map(|d| d * fast as f64)
+        .collect();
+    let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
+    diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis")
 }
 
 /// The diagnosis `d` is `explained` by one second-order filter alone, a Butterworth at 40 Hz: its
