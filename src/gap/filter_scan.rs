@@ -266,15 +266,20 @@ fn scan_second_order_form(
     // gyro's record took 193 s, its simplex walking the frequency down; 4.0 s within them, the
     // record the same), where the scan's end is `at_memory_end` anyway.
     let f_min = fgrid.first().copied().unwrap_or(0.0).min(f_max);
-    let lp_at = |lf: f64, lz: f64, form: SecondOrderForm| LowPass::SecondOrder {
-        natural_frequency_hz: lf.exp().max(f_min).min(f_max),
-        damping: lz.exp().clamp(z_lo, z_hi),
-        form,
+    // (natural frequency, damping) at `(ln f, ln zeta)`, held within the scan's ranges
+    let clamped = |lf: f64, lz: f64| (lf.exp().max(f_min).min(f_max), lz.exp().clamp(z_lo, z_hi));
+    let lp_at = |lf: f64, lz: f64, form: SecondOrderForm| {
+        let (natural_frequency_hz, damping) = clamped(lf, lz);
+        LowPass::SecondOrder {
+            natural_frequency_hz,
+            damping,
+            form,
+        }
     };
     let tau0_s = prob.tau0_s;
     let lp_of = |lf: f64, lz: f64| match form {
         SecondOrderForm::Sampled { .. } => {
-            let (f, z) = (lf.exp().max(f_min).min(f_max), lz.exp().clamp(z_lo, z_hi));
+            let (f, z) = clamped(lf, lz);
             let zero = sampled_zero(f, z, tau0_s, CONTINUOUS_DECIMATION).clamp(0.0, MAX_ZERO);
             lp_at(lf, lz, SecondOrderForm::Sampled { zero })
         }

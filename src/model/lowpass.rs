@@ -253,8 +253,7 @@ impl LowPass {
                 decimation,
             } if decimation > 1 => {
                 let r = Self::decimated_autocovariance(taps, stages, decimation);
-                let total = r[0] + 2.0 * r[1..].iter().sum::<f64>();
-                1.0 / total.sqrt()
+                1.0 / two_sided_sum(&r).sqrt()
             }
             _ => 1.0,
         }
@@ -291,7 +290,7 @@ impl LowPass {
                 if decimation <= 1 {
                     return r;
                 }
-                let total = r[0] + 2.0 * r[1..].iter().sum::<f64>();
+                let total = two_sided_sum(&r);
                 r.iter().map(|v| v / total).collect()
             }
             LowPass::SecondOrder { .. } | LowPass::ZeroPhase { .. } => {
@@ -368,7 +367,7 @@ impl LowPass {
             .rposition(|v| v.abs() > 1e-9 * rho[0].abs())
             .map_or(1, |i| i + 1);
         let one: Vec<f64> = rho[..cut].to_vec();
-        let total = one[0] + 2.0 * one[1..].iter().sum::<f64>();
+        let total = two_sided_sum(&one);
         let m_exact = 200.0 * (self.memory_s(tau0_s) / tau0_s).max(cut as f64);
         // F(t) at whole lags t, with G_B read from the table where it reaches: F(0) needs
         // lags up to the cut even when every m is beyond m_exact (the table is per thread, and
@@ -499,6 +498,12 @@ impl LowPass {
             }
         }
     }
+}
+
+/// `r_0 + 2 sum_{k>0} r_k`: the total over both sides of an even sequence given from lag 0 (an
+/// autocorrelation, symmetric weights).
+pub fn two_sided_sum(r: &[f64]) -> f64 {
+    r[0] + 2.0 * r[1..].iter().sum::<f64>()
 }
 
 /// The flicker rate's generalised phase covariance `G_B(t) = t^2 ln|t| / (2 pi)` (0 at 0; lags

@@ -92,7 +92,7 @@ impl LowPassGen {
                 let a = (-tau0_s / time_constant_s).exp();
                 let l = ((1e-14f64.ln() / a.ln()).ceil() as usize).clamp(1, 1 << 20);
                 let mut w: Vec<f64> = (0..=l).map(|k| a.powi(k as i32)).collect();
-                let total = w[0] + 2.0 * w[1..].iter().sum::<f64>();
+                let total = crate::model::lowpass::two_sided_sum(&w);
                 w.iter_mut().for_each(|x| *x /= total);
                 Some(LowPassGen::ZeroPhase {
                     weights: w,
