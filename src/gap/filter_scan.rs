@@ -180,11 +180,16 @@ fn scan_moving_average(
     // sample than the output-rate one. Without them a CIC unit was named a bilinear second
     // order at the scan's top frequency (session 43's review, 0 of 5). One stage needs none:
     // a boxcar of `w D` taps read every D-th sample is the boxcar of `w` output samples.
+    // Each stage count's best span on the grid (its index in DECIMATED_SPANS). Grid points
+    // of more than half POLISH_TAPS taps are left to the polish (the long spans at the finest
+    // decimations: 72 of them cost a fifth of a filtered unit's diagnosis).
+    let mut spans: Vec<(u32, usize)> = Vec::with_capacity(STAGES.len());
     for stages in 2..=*STAGES.last().unwrap_or(&1) {
+        let mut own: Option<(usize, f64)> = None;
         for d in CIC_DECIMATIONS {
-            for span in DECIMATED_SPANS {
+            for (i, span) in DECIMATED_SPANS.into_iter().enumerate() {
                 let taps = span * f64::from(d);
-                if taps.fract() != 0.0 || taps < 1.0 {
+                if taps.fract() != 0.0 || taps < 1.0 || taps > f64::from(POLISH_TAPS) / 2.0 {
                     continue;
                 }
                 let lp = LowPass::MovingAverage {
@@ -192,17 +197,109 @@ fn scan_moving_average(
                     stages,
                     decimation: d,
                 };
-                best = better(best, lp, fit(lp));
+                let f = fit(lp);
+                if let Some(chi2) = f.as_ref().map(|f| f.chi2) {
+                    if own.is_none_or(|(_, c)| chi2 < c) {
+                        own = Some((i, chi2));
+                    }
+                }
+                best = better(best, lp, f);
             }
         }
+        if let Some((i, _)) = own {
+            spans.push((stages, i));
+        }
     }
-    best
+    // Spans between the powers of two (an ADIS16405 sets its taps apart from its output rate:
+    // 26 taps read every 8th): for each stage count, a golden section on the taps at the
+    // finest decimation, between its best span's neighbours. The finest decimation, not the
+    // best one: the curve is steep in the span (31 taps read every 4th fitted a simulated
+    // record at chi-squared 60, 32 at 572) and at a decimation of 2 the span moves by halves;
+    // at 64 the decimation barely shows in the shape (495 taps read every 64th fitted that
+    // record at 60). Long spans take a coarser one, for at most [`POLISH_TAPS`] taps (a span
+    // of 32 at 32, a resolution of 0.1%). The span is one more free parameter than the grid's,
+    // so the best polished average is taken only when it lowers the chi-squared by more than
+    // [`SPAN_PARAMETER_CHI2`] (a sinc^3 CIC of 10 and a Bartlett of 1.25 output samples fit
+    // one record within 0.03; the CIC, on the grid, stays).
+    let mut polished: Option<(LowPass, GlsFit)> = None;
+    for (stages, i) in spans {
+        let span_hi = DECIMATED_SPANS[(i + 1).min(DECIMATED_SPANS.len() - 1)];
+        let d = CIC_DECIMATIONS
+            .into_iter()
+            .filter(|&d| span_hi * f64::from(d) <= f64::from(POLISH_TAPS))
+            .max()
+            .unwrap_or(1);
+        let df = f64::from(d);
+        let at = |taps: u32| {
+            let lp = LowPass::MovingAverage {
+                taps,
+                stages,
+                decimation: d,
+            };
+            (lp, fit(lp))
+        };
+        let chi2_at = |taps: u32| at(taps).1.map_or(f64::INFINITY, |f| f.chi2);
+        let mid = (DECIMATED_SPANS[i] * df) as u32;
+        let lo = (DECIMATED_SPANS[i.saturating_sub(1)] * df).ceil().max(1.0) as u32;
+        let found = golden_whole(chi2_at, lo, (span_hi * df) as u32, (mid, chi2_at(mid)));
+        let (lp, f) = at(found);
+        tracing::trace!(?lp, chi2 = ?f.as_ref().map(|f| f.chi2), "the span between the grid's");
+        polished = better(polished, lp, f);
+    }
+    match (polished, best) {
+        (Some(p), Some(b)) if p.1.chi2 + SPAN_PARAMETER_CHI2 >= b.1.chi2 => Some(b),
+        (p, b) => p.or(b),
+    }
+}
+
+/// The drop of chi-squared a span between the grid's must bring over the best average on the
+/// grid: AIC's price of one parameter.
+const SPAN_PARAMETER_CHI2: f64 = 2.0;
+
+/// The most taps the span polish of the averages run faster than the output tries.
+const POLISH_TAPS: u32 = 1024;
+
+/// The whole number in `lo..=hi` that minimises `f`, by a golden section on whole numbers
+/// (every point once the bracket holds four or fewer), starting from the known point `known`
+/// `(x, f(x))`. `f` is taken as unimodal in the bracket.
+fn golden_whole(f: impl Fn(u32) -> f64, lo: u32, hi: u32, known: (u32, f64)) -> u32 {
+    let mut memo: Vec<(u32, f64)> = vec![known];
+    let mut eval = |x: u32| -> f64 {
+        if let Some(&(_, v)) = memo.iter().find(|(k, _)| *k == x) {
+            return v;
+        }
+        let v = f(x);
+        memo.push((x, v));
+        v
+    };
+    let (mut a, mut b) = (lo.min(hi), hi.max(lo));
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    while b - a > 3 {
+        let w = f64::from(b - a);
+        let x1 = a + (w * (1.0 - g)).round() as u32;
+        let x2 = (a + (w * g).round() as u32).max(x1 + 1);
+        if eval(x1) <= eval(x2) {
+            b = x2;
+        } else {
+            a = x1;
+        }
+    }
+    let mut best = known;
+    for x in a..=b {
+        let v = eval(x);
+        if v < best.1 {
+            best = (x, v);
+        }
+    }
+    best.0
 }
 
 /// The spans (taps over the decimation, in output samples) of the averages run faster than the
-/// output that the scan tries at each decimation of [`CIC_DECIMATIONS`]: 1 is the CIC; parts
-/// that set their taps and output rate apart (the ADIS16405's) have powers of two.
-pub const DECIMATED_SPANS: [f64; 5] = [0.5, 1.0, 2.0, 4.0, 8.0];
+/// output that the scan tries at each decimation of [`CIC_DECIMATIONS`] (up to half
+/// [`POLISH_TAPS`] taps): 1 is the CIC; parts that set their taps and output rate apart (the
+/// ADIS16405's) are reached between them by the span polish (docs/gap.md, "Spans between the
+/// powers of two (session 45)").
+pub const DECIMATED_SPANS: [f64; 7] = [0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0];
 
 /// A grid in `ln f_n` (the first order's range of time constants, `1 / (2 pi f_n)`) by
 /// `ln zeta` over [`DAMPING_RANGE`]; then golden sections in each coordinate in turn, within one

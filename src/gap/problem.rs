@@ -471,6 +471,12 @@ impl GapProblem {
             }
             _ => false,
         };
+        tracing::debug!(
+            keep,
+            with = ?with.as_ref().map(|(p, f)| (p, f.chi2)),
+            without,
+            "the rounding after a filter"
+        );
         if !keep {
             self.filter_floor = None;
         }
