@@ -127,6 +127,7 @@
 //!   k_profile.rs           the random walk's K^2 read off the block means
 //!   warmup.rs              a warm-up found in time
 //!   warmup_profile.rs      the warm-up test with the random walk profiled on the block means
+//!   first_block.rs         a first block far off, shorter than a warm-up can be named
 //!   steps.rs               bias jumps found in time
 //!   step_null.rs           the jump rule's level on its own run (bootstrap)
 //!   jump_mixture.rs        spike-and-slab statistics of bias jumps
@@ -182,6 +183,7 @@
 //!   alternative_words.rs   the other explanations about as good as the choice, in words
 //!   band_words.rs          how far a measured curve leaves the ensemble bands, in words
 //!   taken_out.rs           what a diagnosis set aside (outliers, stuck stretches), in words
+//!   first_block_words.rs   a first block far off the rest of the run, in words
 //!   jump_words.rs          the bias jumps a diagnosis named, when and how large, in words
 //!   results.rs             the records `plot` and `report` read, labelled
 //!   plot/                  Allan-deviation figures (SVG)

@@ -415,6 +415,23 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
                 st.first_at_s
             );
         }
+        if let Some(b) = diag.first_block {
+            tracing::warn!(
+                "{}: channel {name}: the block from {:.3} s to {:.3} s averages {:.4e} {}/s off \
+                 the rest of the run (p {:.3}): a start-up transient too short to name as a \
+                 warm-up",
+                a.input,
+                b.start_s,
+                b.start_s + b.seconds,
+                b.offset,
+                if main.units[i].is_empty() {
+                    "u"
+                } else {
+                    &main.units[i]
+                },
+                b.p_value
+            );
+        }
         let holdout = held.as_mut().and_then(|h| {
             let j = h.names.iter().position(|n| n == name)?;
             let snap2 = h.evidence[j].snapshot();

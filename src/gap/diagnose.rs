@@ -47,6 +47,7 @@ use super::alternatives::{
 };
 use super::effects::{effect_column, EffectKind, EffectParams};
 use super::evidence::EvidenceSnapshot;
+use super::first_block::FirstBlock;
 use super::outliers::OutlierCount;
 use super::problem::{GapProblem, GlsFit, ModelSpec};
 use super::quant_limit::{quantization_limit, QuantizationLimit};
@@ -208,6 +209,9 @@ pub struct Diagnosis {
     /// Stretches where the channel did not move, taken out as gaps before the curve was
     /// computed ([`super::stuck`]); `None` when there is none.
     pub stuck: Option<super::stuck::StuckSpan>,
+    /// The block tests' first block, when its mean is far off the rest of the run but the
+    /// transient is too short to name as a warm-up ([`super::first_block`]); `None` otherwise.
+    pub first_block: Option<FirstBlock>,
     /// What the values' step does to the curve, when they are whole multiples of one
     /// ([`super::quantization`]).
     pub quantization: Option<QuantizationFinding>,
@@ -694,6 +698,7 @@ fn diagnose_curve_pass(
     // The curve's upper bound on K^2 for the model found so far, kept while that model stands
     // (the warm-up test and the jump search both take it).
     let mut k_up_kept: Option<f64> = None;
+    let mut first_block: Option<FirstBlock> = None;
     if opts.candidates.contains(&EffectKind::Warmup) {
         let mut c5 = cur.five_terms();
         // The null's random walk: a K fitted low (often 0) leaves the block means' slow wander
@@ -733,6 +738,7 @@ fn diagnose_curve_pass(
         // not told apart (only their product), and one block's excursion of the noise (a slow
         // Gauss-Markov wander) shows the same. Not named (docs/gap.md, "A warm-up at the scan's
         // edge (session 43)").
+        // Its first block is reported when the test passes (super::first_block).
         let warm = warm.filter(|w| {
             let at_edge = w.time_constant_s <= WARMUP_EDGE_BLOCKS * block_s;
             if at_edge {
@@ -741,6 +747,10 @@ fn diagnose_curve_pass(
                     block_s,
                     "a warm-up at the scan's shortest time constant is not named"
                 );
+                if th.warmup_found(w) {
+                    let start_s = lead_samples(snap) as f64 * snap.tau0_s;
+                    first_block = FirstBlock::from_edge_warmup(w, &block_means, block_s, start_s);
+                }
             }
             !at_edge
         });
@@ -1024,6 +1034,7 @@ fn diagnose_curve_pass(
         quantization_limited: dead_band_limit(&prob, snap, &final_spec, &cur),
         outliers: snap.outliers,
         stuck: snap.stuck.span(snap.tau0_s),
+        first_block,
         quantization: snap
             .lsb
             .and_then(|l| judge_quantization(&prob, &final_spec, &cur, l)),

@@ -33,6 +33,7 @@ pub mod ensemble;
 pub mod evidence;
 pub mod filter_cov;
 pub mod filter_scan;
+pub mod first_block;
 pub mod holdout;
 pub mod intervals;
 pub mod jump_mixture;

@@ -223,6 +223,11 @@ pub struct DiagnosisRecord {
     /// absent when there is none.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub stuck: Option<super::stuck::StuckSpan>,
+    /// The block tests' first block when its mean is far off the rest of the run, by a
+    /// transient too short to name as a warm-up (docs/gap.md, "A first block far off (session
+    /// 45)"): `{start_s, seconds, offset, p_value}`, absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub first_block: Option<super::first_block::FirstBlock>,
     /// What the values' step does to the curve (docs/gap.md, "Rate-sample quantization"):
     /// absent when the values are not whole multiples of one step.
     #[serde(skip_serializing_if = "Option::is_none", default)]
@@ -458,6 +463,7 @@ impl DiagnosisRecord {
                 max_size: d.outliers.max_size,
             },
             stuck: d.stuck,
+            first_block: d.first_block,
             quantization: d.quantization,
             alternatives: d.alternatives.iter().map(AlternativeRecord::new).collect(),
             temperature_check: d.temperature_check,

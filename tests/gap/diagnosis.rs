@@ -240,6 +240,35 @@ fn a_first_block_raised_alone_is_no_warmup() {
         "{:?}",
         d.effects
     );
+    // Reported as what it is (session 45): the first block, from the start, 1.2 arcsec/s above
+    // the four blocks after it within three standard deviations of that difference (a block
+    // mean's sd, read from the later blocks' successive differences, is about 0.2 arcsec/s
+    // with the unit's flicker; 0.83 measured), at a small p-value.
+    let later = &snap.block_means[1..];
+    let sd_block = (later.windows(2).map(|w| (w[1] - w[0]).powi(2)).sum::<f64>()
+        / (2.0 * (later.len() - 1) as f64))
+        .sqrt();
+    let b = d.first_block.expect("the first block is reported");
+    assert!(b.start_s.abs() < 1e-9, "start {}", b.start_s);
+    assert!((b.seconds - 8.192).abs() < 1e-6, "length {}", b.seconds);
+    assert!(
+        (b.offset - 1.2).abs() < 3.0 * sd_block * 1.25f64.sqrt(),
+        "offset {} (block sd {sd_block})",
+        b.offset
+    );
+    assert!(b.p_value <= 0.01, "p {}", b.p_value);
+    // The record carries it, and the table says it.
+    let rec = allanscope::gap::record::DiagnosisRecord::new("x", &d, None, true);
+    let json = serde_json::to_value(&rec).expect("json");
+    assert_eq!(json["first_block"]["seconds"].as_f64(), Some(b.seconds));
+    let words = allanscope::sink::first_block_words::first_block_words(&rec, "arcsec", &|v| {
+        format!("{v:.2}")
+    })
+    .expect("words");
+    assert!(
+        words.starts_with("the block from 0.00 s to 8.19 s averages ") && words.contains("above"),
+        "{words}"
+    );
 }
 
 #[test]

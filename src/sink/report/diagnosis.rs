@@ -140,6 +140,9 @@ pub(super) fn diagnosis(h: &mut String, res: &Results) {
                 esc(&w)
             );
         }
+        if let Some(w) = crate::sink::first_block_words::first_block_words(d, &unit, &tick) {
+            let _ = write!(shape, "<br><span class=\"small\">{}</span>", esc(&w));
+        }
         let mut effects_cell = if effects.is_empty() {
             "none".to_string()
         } else {

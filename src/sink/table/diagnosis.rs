@@ -70,6 +70,9 @@ pub fn diagnosis_line(d: &DiagnosisRecord, unit: &str, style: &TableStyle) -> St
     if let Some(w) = crate::sink::taken_out::taken_out_words(d, unit, &sig3) {
         let _ = write!(line, "; set aside: {w}");
     }
+    if let Some(w) = crate::sink::first_block_words::first_block_words(d, unit, &sig3) {
+        let _ = write!(line, "; {w}");
+    }
     if let Some(w) = crate::sink::alternative_words::alternative_words(d, unit, &sig3, " ") {
         let _ = write!(line, "; about as well: {w}");
     }
