@@ -406,11 +406,26 @@ pub fn enter_temperature(
     let block_s = snap.block_len as f64 * snap.tau0_s;
     let blocks_c = temperature_blocks(snap, temp);
     let avar_c2 = temperature_avar(temp, &prob.ms)?;
+    // The block means' noise comes from five terms fitted through the filter of the
+    // covariance when a pass has one: without it a unit's low-pass is taken up by B (twelve
+    // times its value on a review's accelerometer behind a CIC and an 80 Hz first order), and
+    // the block means' covariance, 150 times too wide, put a temperature that the data show at
+    // z 16 at z 1.6 (docs/gap.md, "The temperature behind a filter (session 45)"). The fit
+    // returned is the curve's without the filter, the effects' starting point.
+    let noise_spec = |offset: Option<Vec<f64>>| ModelSpec {
+        offset,
+        filter: prob.cov_filter,
+        ..ModelSpec::default()
+    };
+    let noise_base = match prob.cov_filter {
+        Some(_) => prob.gls(&noise_spec(None)).unwrap_or_else(|| base.clone()),
+        None => base.clone(),
+    };
     let first = fit_temperature(
         &snap.block_means,
         &blocks_c,
         block_s,
-        &base.five_terms(),
+        &noise_base.five_terms(),
         &[],
         &[],
     )?;
@@ -433,7 +448,7 @@ pub fn enter_temperature(
     };
     for _ in 0..TEMPERATURE_ROUNDS {
         let z = t.finding.z;
-        let fit = prob.gls(&spec(&t))?;
+        let fit = prob.gls(&noise_spec(Some(t.curve_offset())))?;
         t.refit(&snap.block_means, block_s, &fit.five_terms(), &[], &[]);
         tracing::debug!(
             coefficient = t.finding.coefficient,
