@@ -81,6 +81,41 @@ fn shapes(p: &EffectParams) -> Vec<(&'static str, f64)> {
     }
 }
 
+/// `iv`, an interval of shape `name` of `p`, held to the values the kind can take where it is
+/// bounded: a second order's damping to the scan's range, its natural frequency to the scan's
+/// grid (the polish is held within it, docs/gap.md "The second-order polish within the grid
+/// (session 44)"), its zero to `[0, MAX_ZERO]`. Where the frequency, the damping and the
+/// zero trade off along one valley the Fisher information is nearly singular, and the three
+/// intervals of a review's accelerometer behind a CIC and a first order ran from 1e-47 to
+/// 1e50 (docs/gap.md, "Intervals within the second order's range (session 45)"); held, they
+/// say the curve leaves the shape open within the model's range. Other shapes are returned as
+/// they are.
+fn within_model(prob: &GapProblem, p: &EffectParams, name: &str, iv: [f64; 2]) -> [f64; 2] {
+    if p.kind() != EffectKind::SecondOrderFilter {
+        return iv;
+    }
+    let (lo, hi) = match name {
+        "damping" => super::filter_scan::DAMPING_RANGE,
+        "zero" => (0.0, crate::model::lowpass::MAX_ZERO),
+        "natural_frequency" => {
+            let g = prob.grid(EffectKind::SecondOrderFilter);
+            (g.lo, g.hi)
+        }
+        _ => return iv,
+    };
+    // A zero's interval is formed in its logarithm, so it never reaches 0 (no zero, the
+    // bilinear form); one that reaches below 1e-6 does, in effect.
+    let floor = if name == "zero" && iv[0] < ZERO_NEGLIGIBLE {
+        0.0
+    } else {
+        iv[0]
+    };
+    [floor.clamp(lo, hi), iv[1].clamp(lo, hi)]
+}
+
+/// A sampled form's zero below this is no zero ([`within_model`]).
+const ZERO_NEGLIGIBLE: f64 = 1e-6;
+
 /// `p` with shape `i` multiplied by `f`.
 fn scaled(p: &EffectParams, i: usize, f: f64) -> EffectParams {
     let mut q = *p;
@@ -258,7 +293,7 @@ pub fn fit_intervals(
             }
             for (i, (name, v)) in shapes(p).iter().enumerate() {
                 if let Some(&c) = shape_col[e].get(i) {
-                    out.push((name, interval(*v, sd(c))));
+                    out.push((name, within_model(prob, p, name, interval(*v, sd(c)))));
                 }
             }
             if let EffectParams::MovingAverage {

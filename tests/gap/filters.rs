@@ -757,3 +757,79 @@ fn a_first_order_is_named_when_the_kinds_tie() {
         d.alternatives
     );
 }
+
+/// A consumer accelerometer as a blind review generated it (session 45): white rate at 800 Hz
+/// (N 0.00265 m/s^2/sqrt(Hz)) through a sinc^3 CIC of 4 read every 4th (200 Hz), then a first
+/// order of 2 ms at the output rate, each sample rounded to 0.000598 m/s^2 (a 16-bit part at
+/// 2 g), one hour. The cascade has no kind of its own and is named a second order, whose
+/// frequency, damping and zero trade off along one valley: the Fisher information is nearly
+/// singular there, and the review's intervals ran from 1e-47 to 1e50. Each of the second
+/// order's intervals now lies within the range the model can take (the damping's scan, the
+/// frequency grid, the zero's `[0, 0.9]`) and holds its estimate (docs/gap.md, "Intervals within
+/// the second order's range (session 45)").
+#[test]
+fn a_second_orders_intervals_stay_within_its_range() {
+    use allanscope::gap::filter_scan::DAMPING_RANGE;
+    use rand::{RngExt, SeedableRng};
+    use rand_distr::StandardNormal;
+    let (tau0, dec, step) = (0.005, 4usize, 0.000598);
+    let sd = 0.00265 * (dec as f64 / tau0).sqrt();
+    let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(45);
+    // sinc^3 of 4: three boxcars of 4 internal samples, DC gain 1
+    let mut h = vec![1.0];
+    for _ in 0..3 {
+        let mut next = vec![0.0; h.len() + dec - 1];
+        for (i, v) in h.iter().enumerate() {
+            for n in next.iter_mut().skip(i).take(dec) {
+                *n += v / dec as f64;
+            }
+        }
+        h = next;
+    }
+    let n = (3600.0 / tau0) as usize;
+    let x: Vec<f64> = (0..n * dec + h.len())
+        .map(|_| sd * rng.sample::<f64, _>(StandardNormal))
+        .collect();
+    let a = (-tau0 / 0.002f64).exp();
+    let mut z = 0.0;
+    let inc: Vec<f64> = (0..n)
+        .map(|k| {
+            let end = k * dec + h.len() - 1 + dec;
+            let y: f64 = h.iter().enumerate().map(|(j, hj)| hj * x[end - j]).sum();
+            z = a * z + (1.0 - a) * y;
+            step * (z / step).round() * tau0
+        })
+        .collect();
+    let mut ev = GapEvidence::from_increments(GapConfig::new(tau0), &inc);
+    let d = diagnose(&ev.snapshot(), &DiagnoseOptions::default()).expect("diagnosis");
+    let so = d
+        .effects
+        .iter()
+        .zip(&d.effect_intervals)
+        .find(|(e, _)| matches!(e.params, EffectParams::SecondOrderFilter { .. }));
+    let Some((e, ivs)) = so else {
+        panic!("no second order: {:?}", d.effects)
+    };
+    let EffectParams::SecondOrderFilter {
+        natural_frequency_hz,
+        damping,
+        zero,
+        ..
+    } = e.params
+    else {
+        unreachable!()
+    };
+    let f_hi = 1.0 / (2.0 * std::f64::consts::PI * 0.4 * tau0);
+    for (name, [lo, hi]) in ivs {
+        let (v, range) = match *name {
+            "natural_frequency" => (natural_frequency_hz, (0.0, f_hi * (1.0 + 1e-9))),
+            "damping" => (damping, DAMPING_RANGE),
+            "zero" => (zero.unwrap_or(0.0), (0.0, 0.9)),
+            other => panic!("{other}"),
+        };
+        assert!(
+            range.0 <= *lo && lo <= &v && &v <= hi && *hi <= range.1,
+            "{name} {v} in [{lo}, {hi}], range {range:?}"
+        );
+    }
+}
