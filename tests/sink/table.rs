@@ -377,6 +377,9 @@ fn the_diagnose_table_gives_effect_parameters_in_datasheet_units() {
     // What the diagnosis set aside, said after the effects: 0.001 deg/s is 3.6 deg/h.
     g1["outliers"] = json!({"count": 3, "rate": 0.005, "rms_size": 0.001, "max_size": 0.002});
     g1["stuck"] = json!({"stretches": 1, "seconds": 60.0, "longest_s": 60.0, "first_at_s": 600.0});
+    // A first block far off (session 45): 0.002 deg/s is 7.2 deg/h, below the rest.
+    g1["first_block"] =
+        json!({"start_s": 0.0, "seconds": 8.192, "offset": -0.002, "p_value": 0.004});
     writeln!(w, "{a1}\n{g1}").unwrap();
     drop(w);
     let t = out.text();
@@ -399,6 +402,20 @@ fn the_diagnose_table_gives_effect_parameters_in_datasheet_units() {
         "{g}"
     );
     assert!(!row(&t, "a1 [m/s]  diagnosis:").contains("set aside"));
+    assert!(
+        g.contains(
+            "; the block from 0 s to 8.19 s averages 7.20 deg/h (0.00200 deg/s) below the rest \
+             of the run (p 0.00400), a start-up transient too short to name as a warm-up"
+        ),
+        "{g}"
+    );
+    assert!(!a.contains("the block from"), "{a}");
+    // The gap's scale, once under the table.
+    assert_eq!(
+        t.matches(allanscope::sink::table::GAP_LEGEND).count(),
+        1,
+        "{t}"
+    );
     assert!(
         g.contains(
             "sinusoid [amplitude 3.60 deg/h (0.00100 deg/s), frequency 0.500 Hz (period 2.00 s)]"

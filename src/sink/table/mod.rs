@@ -118,5 +118,15 @@ pub fn render_with_runs(res: &Results, runs: &Results, style: &TableStyle) -> St
     if let Some(v) = verdict_line(res, style) {
         let _ = writeln!(h, "\n{v}");
     }
+    if !res.diagnoses.is_empty() {
+        let _ = writeln!(h, "{}", style.dim(GAP_LEGEND));
+    }
     h
 }
+
+/// What a diagnosis's `gap` means, under a table that holds one (a blind review's reader saw
+/// gaps in the thousands and near 1 and no scale for them; `G` in docs/gap.md, "Method in one
+/// screen").
+pub const GAP_LEGEND: &str = "(gap: how far the model's Allan curve is from the measured one \
+     against the curve's own noise, r' S^-1 r over its expected value; about 1 where the model \
+     holds, above 1.9 it does not)";
