@@ -145,13 +145,7 @@ fn scan_moving_average(
                 stages,
                 decimation: 1,
             };
-            let f = fit(lp);
-            if let Some(chi2) = f.as_ref().map(|f| f.chi2) {
-                if own.is_none_or(|(_, c)| chi2 < c) {
-                    own = Some((i, chi2));
-                }
-            }
-            best = better(best, lp, f);
+            on_grid(fit, lp, i, &mut own, &mut best);
         }
         if let Some((i, _)) = own {
             per_stage.push((stages, i));
@@ -197,13 +191,7 @@ fn scan_moving_average(
                     stages,
                     decimation: d,
                 };
-                let f = fit(lp);
-                if let Some(chi2) = f.as_ref().map(|f| f.chi2) {
-                    if own.is_none_or(|(_, c)| chi2 < c) {
-                        own = Some((i, chi2));
-                    }
-                }
-                best = better(best, lp, f);
+                on_grid(fit, lp, i, &mut own, &mut best);
             }
         }
         if let Some((i, _)) = own {
@@ -250,6 +238,24 @@ fn scan_moving_average(
         (Some(p), Some(b)) if p.1.chi2 + SPAN_PARAMETER_CHI2 >= b.1.chi2 => Some(b),
         (p, b) => p.or(b),
     }
+}
+
+/// Fits the grid point `lp` (index `i` of its grid): kept in `best` when it fits better, and
+/// in `own` as `(i, chi-squared)` when it is the best of its own stage count so far.
+fn on_grid(
+    fit: &dyn Fn(LowPass) -> Option<GlsFit>,
+    lp: LowPass,
+    i: usize,
+    own: &mut Option<(usize, f64)>,
+    best: &mut Option<(LowPass, GlsFit)>,
+) {
+    let f = fit(lp);
+    if let Some(chi2) = f.as_ref().map(|f| f.chi2) {
+        if own.is_none_or(|(_, c)| chi2 < c) {
+            *own = Some((i, chi2));
+        }
+    }
+    *best = better(best.take(), lp, f);
 }
 
 /// The drop of chi-squared a span between the grid's must bring over the best average on the
