@@ -418,8 +418,8 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
         if let Some(b) = diag.first_block {
             tracing::warn!(
                 "{}: channel {name}: the block from {:.3} s to {:.3} s averages {:.4e} {}/s off \
-                 the rest of the run (p {:.3}): a start-up transient too short to name as a \
-                 warm-up",
+                 the rest of the run (p {:.3}): a start-up transient or one block's excursion \
+                 of slower noise, too short to name as a warm-up",
                 a.input,
                 b.start_s,
                 b.start_s + b.seconds,

@@ -1,5 +1,6 @@
 //! A first block far off the rest of the run: a start-up transient that decays within the
-//! block tests' first block (docs/gap.md, "A first block far off (session 45)").
+//! block tests' first block, or one block's excursion of slower noise, which the block cannot
+//! tell apart (docs/gap.md, "A first block far off (session 45)").
 //!
 //! The warm-up test scans its time constant from half a block up, and a warm-up found at that
 //! edge is not named: it shows in the first block mean alone, so only the product of its

@@ -224,8 +224,9 @@ pub struct DiagnosisRecord {
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub stuck: Option<super::stuck::StuckSpan>,
     /// The block tests' first block when its mean is far off the rest of the run, by a
-    /// transient too short to name as a warm-up (docs/gap.md, "A first block far off (session
-    /// 45)"): `{start_s, seconds, offset, p_value}`, absent otherwise.
+    /// start-up transient or one block's excursion of slower noise, too short to name as a
+    /// warm-up (docs/gap.md, "A first block far off (session 45)"): `{start_s, seconds,
+    /// offset, p_value}`, absent otherwise.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub first_block: Option<super::first_block::FirstBlock>,
     /// What the values' step does to the curve (docs/gap.md, "Rate-sample quantization"):

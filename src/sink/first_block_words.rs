@@ -6,8 +6,9 @@
 use crate::gap::record::DiagnosisRecord;
 use crate::sink::effect_text::rate_words;
 
-/// `the block from 0 s to 8.19 s averages 1.20 u/s above the rest of the run (p 0.001), a
-/// start-up transient too short to name as a warm-up`, or `None` when the record has no
+/// `the block from 0 s to 8.19 s averages 1.20 u/s above the rest of the run (p 0.001): a
+/// start-up transient or one block's excursion of slower noise, too short to name as a
+/// warm-up`, or `None` when the record has no
 /// `first_block`. `unit` is the channel's unit; `number` formats a value.
 pub fn first_block_words(
     d: &DiagnosisRecord,
@@ -16,8 +17,8 @@ pub fn first_block_words(
 ) -> Option<String> {
     let b = d.first_block?;
     Some(format!(
-        "the block from {} s to {} s averages {} {} the rest of the run (p {}), a start-up \
-         transient too short to name as a warm-up",
+        "the block from {} s to {} s averages {} {} the rest of the run (p {}): a start-up \
+         transient or one block's excursion of slower noise, too short to name as a warm-up",
         number(b.start_s),
         number(b.start_s + b.seconds),
         rate_words(b.offset.abs(), unit, number),

@@ -405,7 +405,8 @@ fn the_diagnose_table_gives_effect_parameters_in_datasheet_units() {
     assert!(
         g.contains(
             "; the block from 0 s to 8.19 s averages 7.20 deg/h (0.00200 deg/s) below the rest \
-             of the run (p 0.00400), a start-up transient too short to name as a warm-up"
+             of the run (p 0.00400): a start-up transient or one block's excursion of slower \
+             noise, too short to name as a warm-up"
         ),
         "{g}"
     );
