@@ -210,9 +210,9 @@ impl LowPass {
         }
     }
 
-    /// The impulse response of the causal filters with a finite one (moving averages),
-    /// DC gain 1.
-    fn fir(taps: u32, stages: u32) -> Vec<f64> {
+    /// The impulse response of a moving average of `taps` taps and `stages` stages (its
+    /// internal rate's, for one run faster than the output), DC gain 1.
+    pub fn fir(taps: u32, stages: u32) -> Vec<f64> {
         let m = taps.max(1) as usize;
         let box_h = vec![1.0 / m as f64; m];
         let mut h = vec![1.0];
