@@ -22,7 +22,9 @@ use allanscope::input::text::{TextReader, BATCH_ROWS};
 use allanscope::pipeline::decode::DecodeStage;
 use allanscope::plan::unit::{InputPlan, UnitPlan, UnitRequest};
 use allanscope::sim::model_write::model_toml;
+use allanscope::sink::first_block_words::first_block_words;
 use allanscope::sink::records::Record;
+use allanscope::sink::table::sig3;
 use allanscope::source::{Pace, SourceEvent, SourceSpec};
 
 /// One channel's evidence, gathered from a whole input.
@@ -415,23 +417,6 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
                 st.first_at_s
             );
         }
-        if let Some(b) = diag.first_block {
-            tracing::warn!(
-                "{}: channel {name}: the block from {:.3} s to {:.3} s averages {:.4e} {}/s off \
-                 the rest of the run (p {:.3}): a start-up transient or one block's excursion \
-                 of slower noise, too short to name as a warm-up",
-                a.input,
-                b.start_s,
-                b.start_s + b.seconds,
-                b.offset,
-                if main.units[i].is_empty() {
-                    "u"
-                } else {
-                    &main.units[i]
-                },
-                b.p_value
-            );
-        }
         let holdout = held.as_mut().and_then(|h| {
             let j = h.names.iter().position(|n| n == name)?;
             let snap2 = h.evidence[j].snapshot();
@@ -441,6 +426,10 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
         });
         let mut rec = DiagnosisRecord::new(name, &diag, holdout.as_ref(), true);
         rec.unit = Some(main.units[i].clone());
+        // A first block far off, in the table's words (sink::first_block_words).
+        if let Some(w) = first_block_words(&rec, &main.units[i], &sig3) {
+            tracing::warn!("{}: channel {name}: {w}", a.input);
+        }
         let twin = (a.model_out.is_some() || a.ensemble.is_some()).then(|| {
             let t_run = snap.n_increments as f64 * tau0;
             let mut facts = ChannelFacts {
