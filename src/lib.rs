@@ -141,7 +141,7 @@
 //!   limit_cycle.rs         a named line that is the counter's limit cycle
 //!   sawtooth.rs            the counter's whole sawtooth, in the base model
 //!   segments.rs            homogeneity of the curve across the run's segments
-//!   simplex.rs             a two-parameter Nelder-Mead search (the second-order filter's polish)
+//!   simplex.rs             a Nelder-Mead search in N parameters (the second-order filter's polish)
 //!   thresholds.rs          the decision thresholds, calibrated by simulation
 //!   diagnose.rs            the diagnosis: effects chosen, verdict
 //!   band_noise.rs          the narrow-band noise candidate and its scan

@@ -9,7 +9,7 @@
 
 use super::effects::{EffectKind, EffectParams};
 use super::problem::{golden_section, GapProblem, GlsFit, ModelSpec};
-use super::simplex::{nelder_mead, nelder_mead_2d};
+use super::simplex::nelder_mead;
 use crate::model::lowpass::{
     sampled_zero, LowPass, SecondOrderForm, CONTINUOUS_DECIMATION, MAX_ZERO,
 };
@@ -34,7 +34,7 @@ const DAMPING_PER_DECADE: f64 = 6.0;
 /// Golden-section steps per coordinate, and rounds over the two coordinates.
 const GOLDEN_STEPS: usize = 16;
 const POLISH_ROUNDS: usize = 3;
-/// Evaluations of the second-order scan's closing simplex ([`nelder_mead_2d`]), and its stop:
+/// Evaluations of the second-order scan's closing simplex ([`nelder_mead`]), and its stop:
 /// the simplex's `r' S^-1 r` values within this of each other.
 const SIMPLEX_EVALS: usize = 120;
 const SIMPLEX_TOL: f64 = 1e-3;
@@ -427,7 +427,7 @@ fn scan_second_order_form(
     // sections stop far from its floor (a consumer IMU's filter at 2 pi f tau0 ~ 1: G 45 at the
     // polished point, 2.5 at the true one): a simplex follows it from there. Its best is never
     // worse than the polished point it starts from, so that point needs no fit of its own here.
-    let ([lf, lz], _) = nelder_mead_2d(
+    let ([lf, lz], _) = nelder_mead(
         |p| fit(lp_of(p[0], p[1])).map_or(f64::INFINITY, |r| r.chi2),
         [lf, lz],
         [df / 4.0, dz / 4.0],
@@ -450,7 +450,7 @@ fn scan_second_order_form(
         zero: c.clamp(0.0, MAX_ZERO),
     };
     let c = golden(|x| fit(lp_at(lf, lz, with(x))), 0.0, MAX_ZERO);
-    let ([lf, lz], _) = nelder_mead_2d(
+    let ([lf, lz], _) = nelder_mead(
         |p| fit(lp_at(p[0], p[1], with(c))).map_or(f64::INFINITY, |r| r.chi2),
         [lf, lz],
         [df / 8.0, dz / 8.0],

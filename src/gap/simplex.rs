@@ -5,22 +5,10 @@
 //! with it: the fit's `r' S^-1 r` has a narrow valley along which natural frequency and damping
 //! trade off, which coordinate-wise golden sections cross but do not follow.
 
-/// The lowest point found and its value, after at most `max_evals` evaluations of `f` from the
-/// simplex `x0`, `x0 + (step[0], 0)`, `x0 + (0, step[1])`; it stops early once the simplex's
-/// values all lie within `f_tol` of its best. Non-finite values are taken as worse than any
-/// finite one.
-pub(crate) fn nelder_mead_2d(
-    f: impl Fn([f64; 2]) -> f64,
-    x0: [f64; 2],
-    step: [f64; 2],
-    max_evals: usize,
-    f_tol: f64,
-) -> ([f64; 2], f64) {
-    nelder_mead(f, x0, step, max_evals, f_tol)
-}
-
-/// [`nelder_mead_2d`] in `N` parameters: the simplex `x0` and `x0` plus each step along its
-/// axis, and the same moves with the centroid of the `N` best points.
+/// The lowest point found and its value, after at most `max_evals` evaluations of `f` in `N`
+/// parameters from the simplex `x0` and `x0` plus each step along its axis (`x0 + (step[0], 0)`,
+/// `x0 + (0, step[1])` in two); it stops early once the simplex's values all lie within `f_tol`
+/// of its best. Non-finite values are taken as worse than any finite one.
 pub(crate) fn nelder_mead<const N: usize>(
     f: impl Fn([f64; N]) -> f64,
     x0: [f64; N],
@@ -112,7 +100,7 @@ mod tests {
     #[test]
     fn follows_a_curved_valley() {
         let f = |p: [f64; 2]| 100.0 * (p[1] - p[0] * p[0]).powi(2) + (1.0 - p[0]).powi(2);
-        let (x, v) = nelder_mead_2d(f, [-1.2, 1.0], [0.1, 0.1], 2000, 1e-14);
+        let (x, v) = nelder_mead(f, [-1.2, 1.0], [0.1, 0.1], 2000, 1e-14);
         assert!(
             (x[0] - 1.0).abs() < 1e-4 && (x[1] - 1.0).abs() < 1e-4,
             "{x:?}"
@@ -129,7 +117,7 @@ mod tests {
             let (u, v) = (p[0] - 0.3 + p[1] + 0.2, p[0] - 0.3 - (p[1] + 0.2));
             1e4 * u * u + v * v
         };
-        let (x, _) = nelder_mead_2d(f, [0.0, 0.0], [0.05, 0.05], 400, 1e-12);
+        let (x, _) = nelder_mead(f, [0.0, 0.0], [0.05, 0.05], 400, 1e-12);
         assert!(
             (x[0] - 0.3).abs() < 1e-3 && (x[1] + 0.2).abs() < 1e-3,
             "{x:?}"
