@@ -24,19 +24,34 @@ pub const MAX_FLOORS: usize = 16384;
 
 /// A filter's identity: its kind and the bits of its parameters.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct FilterKey(u8, u64, u64, u64);
+pub struct FilterKey(u8, u64, u64, u64, u64);
 
 impl FilterKey {
     pub fn of(lp: &LowPass) -> Self {
         match *lp {
             LowPass::FirstOrder { time_constant_s } => {
-                FilterKey(0, time_constant_s.to_bits(), 0, 0)
+                FilterKey(0, time_constant_s.to_bits(), 0, 0, 0)
             }
             LowPass::MovingAverage {
                 taps,
                 stages,
                 decimation,
-            } => FilterKey(1, u64::from(taps), u64::from(stages), u64::from(decimation)),
+            } => FilterKey(
+                1,
+                u64::from(taps),
+                u64::from(stages),
+                u64::from(decimation),
+                0,
+            ),
+            // the back's key, its kind moved past the plain ones', and the front packed in the
+            // last place (taps below 2^32, stages below 2^8, decimation below 2^24)
+            LowPass::Cascade { front, back } => {
+                let FilterKey(kind, a, b, c, _) = FilterKey::of(&back.lowpass());
+                let packed = u64::from(front.taps)
+                    | u64::from(front.stages.min(255)) << 32
+                    | u64::from(front.decimation.min((1 << 24) - 1)) << 40;
+                FilterKey(kind + 16, a, b, c, packed)
+            }
             LowPass::SecondOrder {
                 natural_frequency_hz,
                 damping,
@@ -52,9 +67,12 @@ impl FilterKey {
                     natural_frequency_hz.to_bits(),
                     damping.to_bits(),
                     extra,
+                    0,
                 )
             }
-            LowPass::ZeroPhase { time_constant_s } => FilterKey(3, time_constant_s.to_bits(), 0, 0),
+            LowPass::ZeroPhase { time_constant_s } => {
+                FilterKey(3, time_constant_s.to_bits(), 0, 0, 0)
+            }
         }
     }
 }

@@ -470,7 +470,8 @@ fn diagnose_curve(
     let mut tied = tied_filter(&d.effects, &d.first_scores);
     for _ in 0..2 {
         let trial = tied.take();
-        let Some(lp) = d.effects.iter().find_map(|e| e.params.lowpass()).or(trial) else {
+        let Some(lp) = EffectParams::unit_filter(d.effects.iter().map(|e| &e.params)).or(trial)
+        else {
             return Ok(d);
         };
         if used.is_some_and(|u| same_filter(&u, &lp, snap.lsb.is_some(), snap.tau0_s)) {
@@ -1533,14 +1534,28 @@ fn greedy_stationary(
         // The filters' likelihood ratios are taken against the model with white phase noise
         // of either sign (`beyond_tail_reference`), computed once per step.
         let mut tail_ref: Option<f64> = None;
+        // The named filter refitted behind or in front of each cascade's other part scanned
+        // (its index among the effects, its parameters; [`complete_cascade`]).
+        let mut cascade_named: Vec<(EffectKind, (usize, EffectParams))> = Vec::new();
         for &kind in kinds {
-            // One output filter at most (it takes the N column).
+            // One output filter at most (it takes the N column), or a moving average and a
+            // first or second order behind it (a cascade: docs/gap.md, "A low-pass behind a
+            // decimator (session 46)").
             if effects.iter().any(|e| {
-                e.params.kind() == kind || (kind.is_filter() && e.params.kind().is_filter())
+                let named = e.params.kind();
+                let cascade = kind.cascades_with(named) && short_front(&e.params);
+                named == kind || (kind.is_filter() && named.is_filter() && !cascade)
             }) {
                 continue;
             }
-            if let Some((params, f)) = prob.scan_params(&spec, kind) {
+            let scanned = match complete_cascade(prob, offset, effects, kind, cur.chi2) {
+                Some((params, f, named)) => {
+                    cascade_named.push((kind, named));
+                    Some((params, f))
+                }
+                None => prob.scan_params(&spec, kind),
+            };
+            if let Some((params, f)) = scanned {
                 tracing::trace!(?params, chi2 = f.chi2, gap = f.gap(), "candidate");
                 let score = (cur.chi2 - f.chi2) / kind.n_params() as f64;
                 let crit = if flagged_g {
@@ -1691,10 +1706,186 @@ fn greedy_stationary(
         let Some((params, f, _)) = best else {
             break;
         };
+        // a cascade's other part: the named filter takes the parameters it was refitted to
+        if let Some(&(_, (i, named))) = cascade_named.iter().find(|c| c.0 == params.kind()) {
+            effects[i].params = named;
+            spec = spec_from(prob, effects, offset);
+        }
         take_step(prob, effects, &mut spec, &mut cur, params, f);
         added += 1;
     }
+    // A cascade's other part when the gap no longer flags the model: by its own likelihood
+    // ratio, as a first effect is (a sinc^3 decimator in front of a Butterworth named alone,
+    // the pair at G 1.55 and the Butterworth alone, refitted as an overdamped second order at
+    // the top of its scan, at 1.85).
+    if added < opts.max_effects && cur.gap() <= th.gap_crit_given(has_filter(effects)) {
+        let mut best: Option<(EffectParams, GlsFit, (usize, EffectParams), f64)> = None;
+        for &kind in kinds.iter().filter(|k| k.is_filter()) {
+            if effects.iter().any(|e| e.params.kind() == kind) {
+                continue;
+            }
+            let Some((params, f, named)) = complete_cascade(prob, offset, effects, kind, cur.chi2)
+            else {
+                continue;
+            };
+            let score = (cur.chi2 - f.chi2) / kind.n_params() as f64;
+            let passes = th.lr_stat(score, f.gap()) >= th.lr_crit_of(kind);
+            tracing::debug!(
+                ?params,
+                score,
+                passes,
+                "a cascade's other part below the flag"
+            );
+            if passes && best.as_ref().is_none_or(|b| score > b.3) {
+                best = Some((params, f, named, score));
+            }
+        }
+        if let Some((params, f, (i, named), _)) = best {
+            effects[i].params = named;
+            spec = spec_from(prob, effects, offset);
+            take_step(prob, effects, &mut spec, &mut cur, params, f);
+        }
+    }
     (spec, cur, first, passed_first)
+}
+
+/// Whether `p` can be a cascade's front ([`complete_cascade`]): a moving average spanning at
+/// most [`CASCADE_FRONT_SPAN`] output samples (taps times stages over the decimation), as a
+/// CIC decimator of up to four stages does; true for the other kinds.
+fn short_front(p: &EffectParams) -> bool {
+    match *p {
+        EffectParams::MovingAverage {
+            taps,
+            stages,
+            decimation,
+        } => f64::from(taps) * f64::from(stages) <= CASCADE_FRONT_SPAN * f64::from(decimation),
+        _ => true,
+    }
+}
+
+/// The longest front of a cascade, in output samples ([`short_front`]).
+const CASCADE_FRONT_SPAN: f64 = 4.0;
+
+/// Rounds of [`complete_cascade`]'s alternate refits.
+const CASCADE_ROUNDS: usize = 2;
+
+/// The drop of `r' S^-1 r` below the current model's from which [`complete_cascade`]'s start
+/// is refitted in turns (one parameter's price by AIC).
+const CASCADE_PRESCREEN: f64 = 2.0;
+
+/// The decimators (stages, decimation; taps = decimation) [`complete_cascade`] starts from in
+/// front of a named first or second order: sinc^2 to sinc^4 CICs by 8 (at the output rate a CIC
+/// spans as many samples as it has stages, its shape near the longest's from a decimation of 8;
+/// the alternation's scan of every average then sets the decimation).
+const CASCADE_FRONTS: [(u32, u32); 3] = [(2, 8), (3, 8), (4, 8)];
+
+/// The other part of a cascade whose one part is named (a moving average in front of a named
+/// first or second order, or one of those behind a named moving average:
+/// [`crate::model::lowpass::LowPass::Cascade`];
+/// docs/gap.md, "A low-pass behind a decimator (session 46)"): `kind` scanned with the named
+/// filter in, then the named filter scanned again with it in, and so on for
+/// [`CASCADE_ROUNDS`]. The named filter was fitted alone, so it took the other part's share of
+/// the roll-off (a sinc^3 decimator and a Butterworth behind it were named one second order
+/// of damping 1.5): scanned with it fixed, the other part barely lowers the fit, and a
+/// sinusoid near Nyquist took its place. Returns the part's parameters, the joint fit, and
+/// the named filter's index among `effects` with its new parameters. None when `kind` does not
+/// complete a cascade with a named filter.
+fn complete_cascade(
+    prob: &GapProblem,
+    offset: &[f64],
+    effects: &[AddedEffect],
+    kind: EffectKind,
+    cur_chi2: f64,
+) -> Option<(EffectParams, GlsFit, (usize, EffectParams))> {
+    let i = effects
+        .iter()
+        .position(|e| e.params.kind().is_filter() && kind.cascades_with(e.params.kind()))?;
+    let named_kind = effects[i].params.kind();
+    // A long average is no decimator's front (an ADIS16405's Bartlett spans 23 output samples):
+    // its cascades cost tens of seconds and find a low-pass nothing in front of it asked for
+    if !short_front(&effects[i].params) {
+        return None;
+    }
+    // The named filter refitted: a moving average as such; a first or second order behind the
+    // front as either, the first order unless the second's Akaike criterion is better by
+    // AIC_MARGIN (the reference low-pass, as in `greedy_stationary`; an overdamped second
+    // order at the end of its damping scan is a first order by another name).
+    let refit_named = |spec: &ModelSpec| -> Option<(EffectParams, GlsFit)> {
+        if named_kind == EffectKind::MovingAverage {
+            return prob.scan_params(spec, named_kind);
+        }
+        let fo = prob.scan_params(spec, EffectKind::OutputFilter);
+        let so = prob.scan_params(spec, EffectKind::SecondOrderFilter);
+        let extra =
+            (EffectKind::SecondOrderFilter.n_params() - EffectKind::OutputFilter.n_params()) as f64;
+        match (fo, so) {
+            (Some(fo), Some(so)) if so.1.chi2 + 2.0 * extra + AIC_MARGIN < fo.1.chi2 => Some(so),
+            (Some(fo), _) => Some(fo),
+            (None, so) => so,
+        }
+    };
+    let mut trial = effects.to_vec();
+    let others: Vec<AddedEffect> = effects
+        .iter()
+        .enumerate()
+        .filter(|(j, _)| *j != i)
+        .map(|(_, e)| *e)
+        .collect();
+    let base = spec_from(prob, &others, offset);
+    // A front in front of a named back: the back fitted alone is overdamped or at its top
+    // frequency, and the front scanned behind that back is a short average of the output
+    // samples (a boxcar of two for a sinc^3 decimator by 8), which the alternation does not
+    // leave. Each decimator of CASCADE_FRONTS is tried, the back scanned behind it in its form;
+    // the alternation then scans every average. A back behind a named front: scanned.
+    let (mut part, mut fit) = if kind == EffectKind::MovingAverage {
+        let mut best: Option<(EffectParams, GlsFit, EffectParams)> = None;
+        for (stages, decimation) in CASCADE_FRONTS {
+            let front = EffectParams::MovingAverage {
+                taps: decimation,
+                stages,
+                decimation,
+            };
+            let with_front = prob.spec_with_params(&base, &front);
+            let scanned = super::filter_scan::scan_in_form(prob, &with_front, &effects[i].params);
+            if let Some((named, f)) = scanned {
+                if best.as_ref().is_none_or(|b| f.chi2 < b.1.chi2) {
+                    best = Some((front, f, named));
+                }
+            }
+        }
+        let (front, f, named) = best?;
+        trial[i].params = named;
+        (front, f)
+    } else {
+        prob.scan_params(&spec_from(prob, &trial, offset), kind)?
+    };
+    // The alternation only when the start lowers the fit at all (it costs a few scans of
+    // each part, and it lowers the fit further only where the start already did).
+    let rounds = if fit.chi2 < cur_chi2 - CASCADE_PRESCREEN {
+        CASCADE_ROUNDS
+    } else {
+        0
+    };
+    for _ in 0..rounds {
+        let with_part = prob.spec_with_params(&base, &part);
+        let Some((named, f)) = refit_named(&with_part) else {
+            break;
+        };
+        if f.chi2 >= fit.chi2 {
+            break;
+        }
+        trial[i].params = named;
+        fit = f;
+        match prob.scan_params(&spec_from(prob, &trial, offset), kind) {
+            Some((p, f)) if f.chi2 < fit.chi2 && short_front(&p) => {
+                part = p;
+                fit = f;
+            }
+            _ => break,
+        }
+    }
+    tracing::trace!(?part, named = ?trial[i].params, chi2 = fit.chi2, "a cascade completed");
+    Some((part, fit, (i, trial[i].params)))
 }
 
 /// The `r' S^-1 r` against which a filter's likelihood ratio is taken when the model is not

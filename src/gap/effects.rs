@@ -65,6 +65,16 @@ impl EffectKind {
         )
     }
 
+    /// Whether filters of this kind and of `other` make a cascade ([`LowPass::Cascade`]): a
+    /// moving average in front, a first or second order behind it. The diagnosis then names
+    /// both, one effect each; any other two filters exclude each other.
+    pub fn cascades_with(self, other: EffectKind) -> bool {
+        let behind =
+            |k: EffectKind| matches!(k, EffectKind::OutputFilter | EffectKind::SecondOrderFilter);
+        (self == EffectKind::MovingAverage && behind(other))
+            || (other == EffectKind::MovingAverage && behind(self))
+    }
+
     /// The `kind` string of the record.
     pub fn name(self) -> &'static str {
         match self {
@@ -210,6 +220,15 @@ impl EffectParams {
         }
     }
 
+    /// The unit's filter named by `effects`: their filters in cascade ([`LowPass::compose`]; a
+    /// moving average and a first or second order named as two effects are one filter).
+    pub fn unit_filter<'a>(effects: impl IntoIterator<Item = &'a EffectParams>) -> Option<LowPass> {
+        effects
+            .into_iter()
+            .filter_map(|p| p.lowpass())
+            .fold(None, |acc, lp| Some(LowPass::compose(acc, lp)))
+    }
+
     /// The filter of a filter effect (None for the others).
     pub fn lowpass(&self) -> Option<LowPass> {
         match *self {
@@ -246,9 +265,11 @@ impl EffectParams {
         }
     }
 
-    /// The effect of a filter.
+    /// The effect of a filter (of a cascade, its back's: the diagnosis names each part as an
+    /// effect of its own).
     pub fn from_lowpass(lp: LowPass) -> Self {
         match lp {
+            LowPass::Cascade { back, .. } => Self::from_lowpass(back.lowpass()),
             LowPass::FirstOrder { time_constant_s } => {
                 EffectParams::OutputFilter { time_constant_s }
             }

@@ -84,9 +84,10 @@ pub fn scan(
     base: &ModelSpec,
     kind: EffectKind,
 ) -> Option<(EffectParams, GlsFit)> {
+    // (behind or in front of the filter of `base`, when the two make a cascade)
     let fit = |lp: LowPass| {
         prob.gls(&ModelSpec {
-            filter: Some(lp),
+            filter: Some(LowPass::compose(base.filter, lp)),
             ..base.clone()
         })
     };
@@ -95,6 +96,31 @@ pub fn scan(
         EffectKind::SecondOrderFilter => scan_second_order(prob, &fit),
         _ => None,
     }?;
+    Some((EffectParams::from_lowpass(best.0), best.1))
+}
+
+/// The second order's scan in the form of `p` alone, and the sampled form as the pole-mapped
+/// one it holds (its zero left to the full scan: a tenth of [`scan`]'s work, for the cascade's
+/// starts, [`super::diagnose`]); the other kinds' whole scan.
+pub fn scan_in_form(
+    prob: &GapProblem,
+    base: &ModelSpec,
+    p: &EffectParams,
+) -> Option<(EffectParams, GlsFit)> {
+    let Some(LowPass::SecondOrder { form, .. }) = p.lowpass() else {
+        return prob.scan_params(base, p.kind());
+    };
+    let fit = |lp: LowPass| {
+        prob.gls(&ModelSpec {
+            filter: Some(LowPass::compose(base.filter, lp)),
+            ..base.clone()
+        })
+    };
+    let form = match form {
+        SecondOrderForm::Sampled { .. } => SecondOrderForm::PoleMapped,
+        f => f,
+    };
+    let best = scan_second_order_form(prob, &fit, form)?;
     Some((EffectParams::from_lowpass(best.0), best.1))
 }
 
@@ -354,6 +380,10 @@ fn scan_second_order(
     }
 }
 
+/// The bilinear second order's highest natural frequency scanned, times `tau0` (its form is
+/// defined below Nyquist, [`LowPass::check`]: `f tau0 < 0.49`).
+pub const BILINEAR_TOP: f64 = 0.47;
+
 /// The drop in `r' S^-1 r` a third shape parameter must bring to be taken: chi-squared with one
 /// degree of freedom at 99%.
 const EXTRA_SHAPE_CHI2: f64 = 6.63;
@@ -366,13 +396,32 @@ fn scan_second_order_form(
     fit: &dyn Fn(LowPass) -> Option<GlsFit>,
     form: SecondOrderForm,
 ) -> Option<(LowPass, GlsFit)> {
-    let fgrid = prob.grid(EffectKind::SecondOrderFilter).points();
+    let mut fgrid = prob.grid(EffectKind::SecondOrderFilter).points();
     let (z_lo, z_hi) = DAMPING_RANGE;
     let nz = ((z_hi / z_lo).log10() * DAMPING_PER_DECADE).ceil() as usize;
     let zgrid: Vec<f64> = (0..=nz)
         .map(|i| z_lo * (z_hi / z_lo).powf(i as f64 / nz as f64))
         .collect();
-    let f_max = 2.5 / (2.0 * PI * prob.tau0_s);
+    // The pole-mapped poles leave the unit circle's useful part at 2 pi f tau0 = 2.5 (0.40 of
+    // the output rate); the bilinear biquad is defined up to Nyquist, and consumer parts set
+    // their low-pass up to 0.4-0.45 of the output rate (a Butterworth at 40 Hz read at 100 Hz
+    // was named one at the grid's top, 39.8 Hz, with damping 1.5). Its grid goes on at the
+    // same step to BILINEAR_TOP.
+    let f_max = match form {
+        SecondOrderForm::Bilinear => BILINEAR_TOP / prob.tau0_s,
+        _ => 2.5 / (2.0 * PI * prob.tau0_s),
+    };
+    if let (SecondOrderForm::Bilinear, [.., a, b]) = (form, &fgrid[..]) {
+        let (a, b) = (*a, *b);
+        let mut f = b * (b / a);
+        while f < f_max {
+            fgrid.push(f);
+            f *= b / a;
+        }
+        if fgrid.last().is_some_and(|&l| l < f_max) {
+            fgrid.push(f_max);
+        }
+    }
     // The polish stays within the grid's frequencies: below them a lightly damped filter's
     // memory runs to millions of samples, and each of its columns costs as many (a ring-laser
     // gyro's record took 193 s, its simplex walking the frequency down; 4.0 s within them, the

@@ -241,7 +241,12 @@ pub fn holdout_gap_with_temperature(
                     }
                 }
             }
-            _ if kind.is_filter() => trial.filter = e.params.lowpass(),
+            _ if kind.is_filter() => {
+                trial.filter = e
+                    .params
+                    .lowpass()
+                    .map(|lp| crate::model::lowpass::LowPass::compose(trial.filter, lp))
+            }
             _ => {
                 // A warm-up in time too, as the fitting run found it ([`warmup_in_time`]); on
                 // the curve (below) as the other effects.

@@ -99,7 +99,14 @@ fn within_model(prob: &GapProblem, p: &EffectParams, name: &str, iv: [f64; 2]) -
         "zero" => (0.0, crate::model::lowpass::MAX_ZERO),
         "natural_frequency" => {
             let g = prob.grid(EffectKind::SecondOrderFilter);
-            (g.lo, g.hi)
+            // (the bilinear form's grid goes on towards Nyquist)
+            let top = match p {
+                EffectParams::SecondOrderFilter { bilinear: true, .. } => {
+                    super::filter_scan::BILINEAR_TOP / prob.tau0_s
+                }
+                _ => g.hi,
+            };
+            (g.lo, top)
         }
         _ => return iv,
     };

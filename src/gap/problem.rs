@@ -531,6 +531,8 @@ impl GapProblem {
     fn filter_behind_counter(&mut self, snap: &EvidenceSnapshot, lp: LowPass) -> LowPass {
         let tau0_s = self.tau0_s;
         let scaled = |g: f64| match lp {
+            // (a cascade is named in two steps, each part scanned behind the other)
+            LowPass::Cascade { .. } => lp,
             LowPass::FirstOrder { time_constant_s } => LowPass::FirstOrder {
                 time_constant_s: time_constant_s * g,
             },
@@ -1295,12 +1297,13 @@ impl GapProblem {
         }
     }
 
-    /// `base` with one effect added, with all its parameters (a filter in the N column, an
-    /// extra column otherwise).
+    /// `base` with one effect added, with all its parameters (a filter in the N column, with
+    /// the filter of `base` in cascade when one is a moving average and the other a first or
+    /// second order, [`LowPass::compose`]; an extra column otherwise).
     pub(crate) fn spec_with_params(&self, base: &ModelSpec, p: &EffectParams) -> ModelSpec {
         match p.lowpass() {
             Some(lp) => ModelSpec {
-                filter: Some(lp),
+                filter: Some(LowPass::compose(base.filter, lp)),
                 ..base.clone()
             },
             None => {
@@ -1342,7 +1345,10 @@ impl GapProblem {
     pub(crate) fn spec_with(&self, base: &ModelSpec, kind: EffectKind, shape: f64) -> ModelSpec {
         let mut s = base.clone();
         if kind.is_filter() {
-            s.filter = Some(canonical_lowpass(kind, shape));
+            s.filter = Some(LowPass::compose(
+                base.filter,
+                canonical_lowpass(kind, shape),
+            ));
         } else {
             s.extra.push(effect_column(
                 kind,

@@ -99,7 +99,7 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
             size: d.outliers.rms_size() / 5f64.sqrt(),
         }),
     };
-    let filter = d.effects.iter().find_map(|e| e.params.lowpass());
+    let filter = EffectParams::unit_filter(d.effects.iter().map(|e| &e.params));
     for e in &d.effects {
         match e.params {
             EffectParams::GaussMarkov { sigma, tau_c_s } => {
@@ -125,12 +125,15 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
                 frequency_hz,
                 width_hz,
             }),
-            EffectParams::OutputFilter { time_constant_s } => {
+            // A first order alone is the model file's output filter; the filters named, in
+            // cascade, are one (below).
+            EffectParams::OutputFilter { time_constant_s } if filter == e.params.lowpass() => {
                 ch.output_filter = Some(OutputFilterSpec { time_constant_s })
             }
-            EffectParams::MovingAverage { .. }
+            EffectParams::OutputFilter { .. }
+            | EffectParams::MovingAverage { .. }
             | EffectParams::SecondOrderFilter { .. }
-            | EffectParams::ZeroPhaseFilter { .. } => ch.lowpass = e.params.lowpass(),
+            | EffectParams::ZeroPhaseFilter { .. } => ch.lowpass = filter,
             EffectParams::Warmup {
                 amplitude,
                 time_constant_s,

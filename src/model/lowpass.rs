@@ -46,6 +46,63 @@ pub enum LowPass {
     /// The first-order filter run forward then backward over the record: the symmetric impulse
     /// response `(1 - a)/(1 + a) a^|k|`, `|H|^2` the first order's squared, no phase.
     ZeroPhase { time_constant_s: f64 },
+    /// A moving average (a CIC decimator, or an average of output samples) with a first- or
+    /// second-order low-pass behind it at the output rate: the commonest consumer MEMS chain,
+    /// sinc^3 decimation and then the digital low-pass a register sets. Both are linear and
+    /// time-invariant at the output rate, so the output's autocorrelation is the two-sided
+    /// convolution of the parts' and its power gain their product (docs/gap.md, "A low-pass
+    /// behind a decimator (session 46)").
+    Cascade { front: Average, back: Behind },
+}
+
+/// The moving average in front of a [`LowPass::Cascade`] ([`LowPass::MovingAverage`]'s fields).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Average {
+    pub taps: u32,
+    pub stages: u32,
+    pub decimation: u32,
+}
+
+/// The recursive low-pass behind a [`LowPass::Cascade`]'s average, at the output rate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Behind {
+    /// [`LowPass::FirstOrder`].
+    FirstOrder { time_constant_s: f64 },
+    /// [`LowPass::SecondOrder`].
+    SecondOrder {
+        natural_frequency_hz: f64,
+        damping: f64,
+        form: SecondOrderForm,
+    },
+}
+
+impl Average {
+    /// The average alone.
+    pub fn lowpass(self) -> LowPass {
+        LowPass::MovingAverage {
+            taps: self.taps,
+            stages: self.stages,
+            decimation: self.decimation,
+        }
+    }
+}
+
+impl Behind {
+    /// The low-pass alone.
+    pub fn lowpass(self) -> LowPass {
+        match self {
+            Behind::FirstOrder { time_constant_s } => LowPass::FirstOrder { time_constant_s },
+            Behind::SecondOrder {
+                natural_frequency_hz,
+                damping,
+                form,
+            } => LowPass::SecondOrder {
+                natural_frequency_hz,
+                damping,
+                form,
+            },
+        }
+    }
 }
 
 /// How the second order's continuous prototype becomes a filter on the samples
@@ -85,6 +142,64 @@ pub const MAX_STAGES: u32 = 4;
 pub const MAX_DECIMATION: u32 = 1024;
 
 impl LowPass {
+    /// The two parts of a [`LowPass::Cascade`], front then back (None for the others).
+    pub fn parts(&self) -> Option<(LowPass, LowPass)> {
+        match *self {
+            LowPass::Cascade { front, back } => Some((front.lowpass(), back.lowpass())),
+            _ => None,
+        }
+    }
+
+    /// `next` added to the unit's filter `current`: a moving average goes in front of a first
+    /// or second order already there (or takes the front's place in a cascade), a first or
+    /// second order behind a moving average (or in the back's place); otherwise `next`
+    /// replaces `current`. The diagnosis names a cascade as two effects, one per part.
+    pub fn compose(current: Option<LowPass>, next: LowPass) -> LowPass {
+        let (front, back) = match current {
+            Some(LowPass::Cascade { front, back }) => (Some(front), Some(back)),
+            Some(lp) => (lp.as_average(), lp.as_behind()),
+            None => (None, None),
+        };
+        match (next.as_average(), next.as_behind()) {
+            (Some(front), _) => back.map_or(next, |back| LowPass::Cascade { front, back }),
+            (_, Some(back)) => front.map_or(next, |front| LowPass::Cascade { front, back }),
+            _ => next,
+        }
+    }
+
+    /// A moving average as a cascade's front (None for the others).
+    fn as_average(&self) -> Option<Average> {
+        match *self {
+            LowPass::MovingAverage {
+                taps,
+                stages,
+                decimation,
+            } => Some(Average {
+                taps,
+                stages,
+                decimation,
+            }),
+            _ => None,
+        }
+    }
+
+    /// A first or second order as a cascade's back (None for the others).
+    fn as_behind(&self) -> Option<Behind> {
+        match *self {
+            LowPass::FirstOrder { time_constant_s } => Some(Behind::FirstOrder { time_constant_s }),
+            LowPass::SecondOrder {
+                natural_frequency_hz,
+                damping,
+                form,
+            } => Some(Behind::SecondOrder {
+                natural_frequency_hz,
+                damping,
+                form,
+            }),
+            _ => None,
+        }
+    }
+
     /// Whether this is the bilinear second order ([`LowPass::SecondOrder`]).
     pub fn is_bilinear(&self) -> bool {
         matches!(
@@ -119,6 +234,9 @@ impl LowPass {
                 ..
             } => 3,
             LowPass::SecondOrder { .. } => 2,
+            LowPass::Cascade { front, back } => {
+                front.lowpass().n_shape() + back.lowpass().n_shape()
+            }
             _ => 1,
         }
     }
@@ -126,6 +244,10 @@ impl LowPass {
     /// A problem with the parameters, for model files and options (None: fine).
     pub fn check(&self, tau0_s: f64) -> Option<String> {
         match *self {
+            LowPass::Cascade { front, back } => front
+                .lowpass()
+                .check(tau0_s)
+                .or_else(|| back.lowpass().check(tau0_s)),
             LowPass::FirstOrder { time_constant_s } | LowPass::ZeroPhase { time_constant_s } => {
                 (!(time_constant_s > 0.0 && time_constant_s.is_finite()))
                     .then(|| format!("time constant {time_constant_s} must be > 0"))
@@ -255,6 +377,7 @@ impl LowPass {
                 let r = Self::decimated_autocovariance(taps, stages, decimation);
                 1.0 / two_sided_sum(&r).sqrt()
             }
+            LowPass::Cascade { front, .. } => front.lowpass().internal_white_scale(),
             _ => 1.0,
         }
     }
@@ -264,6 +387,10 @@ impl LowPass {
     /// `rho(0) + 2 sum_{k>0} rho(k) = 1` (DC gain 1).
     pub fn autocorrelation(&self, tau0_s: f64) -> Vec<f64> {
         match *self {
+            LowPass::Cascade { front, back } => convolve_even(
+                &front.lowpass().autocorrelation(tau0_s),
+                &back.lowpass().autocorrelation(tau0_s),
+            ),
             LowPass::FirstOrder { time_constant_s } => {
                 let a = (-tau0_s / time_constant_s).exp();
                 let r0 = (1.0 - a) / (1.0 + a);
@@ -408,6 +535,10 @@ impl LowPass {
     pub fn power_gain(&self, tau0_s: f64, frequency_hz: f64) -> f64 {
         let w = 2.0 * PI * frequency_hz * tau0_s;
         match *self {
+            LowPass::Cascade { front, back } => {
+                front.lowpass().power_gain(tau0_s, frequency_hz)
+                    * back.lowpass().power_gain(tau0_s, frequency_hz)
+            }
             LowPass::FirstOrder { time_constant_s } => first_order_gain(time_constant_s, tau0_s, w),
             LowPass::ZeroPhase { time_constant_s } => {
                 first_order_gain(time_constant_s, tau0_s, w).powi(2)
@@ -463,6 +594,10 @@ impl LowPass {
     /// it tends to).
     pub fn memory_s(&self, tau0_s: f64) -> f64 {
         match *self {
+            // the back's memory of the front's output
+            LowPass::Cascade { front, back } => {
+                front.lowpass().memory_s(tau0_s) + back.lowpass().memory_s(tau0_s)
+            }
             LowPass::FirstOrder { time_constant_s } | LowPass::ZeroPhase { time_constant_s } => {
                 time_constant_s
             }
@@ -498,6 +633,24 @@ impl LowPass {
             }
         }
     }
+}
+
+/// The autocorrelation of two filters in cascade from theirs, both given from lag 0 and even:
+/// `c_k = sum_j a_|j| b_|k - j|` over every lag `j` of either sign, `k = 0, 1, ...` up to the
+/// sum of their lengths (the autocorrelation of `h_a * h_b` is that of `h_a` convolved with that
+/// of `h_b`). Two totals of 1 give a total of 1.
+fn convolve_even(a: &[f64], b: &[f64]) -> Vec<f64> {
+    // the shorter one on the outer loop
+    let (a, b) = if a.len() <= b.len() { (a, b) } else { (b, a) };
+    let n = a.len() + b.len() - 1;
+    let at = |k: i64| b.get(k.unsigned_abs() as usize).copied().unwrap_or(0.0);
+    (0..n as i64)
+        .map(|k| {
+            (-(a.len() as i64 - 1)..a.len() as i64)
+                .map(|j| a[j.unsigned_abs() as usize] * at(k - j))
+                .sum()
+        })
+        .collect()
 }
 
 /// `r_0 + 2 sum_{k>0} r_k`: the total over both sides of an even sequence given from lag 0 (an
@@ -930,6 +1083,18 @@ mod tests {
             LowPass::ZeroPhase {
                 time_constant_s: 0.02,
             },
+            LowPass::Cascade {
+                front: Average {
+                    taps: 8,
+                    stages: 3,
+                    decimation: 8,
+                },
+                back: Behind::SecondOrder {
+                    natural_frequency_hz: 40.0,
+                    damping: 0.7,
+                    form: SecondOrderForm::Bilinear,
+                },
+            },
         ] {
             let r = lp.autocorrelation(tau0);
             let s = r[0] + 2.0 * r[1..].iter().sum::<f64>();
@@ -1119,6 +1284,16 @@ mod tests {
             LowPass::ZeroPhase {
                 time_constant_s: 0.01,
             },
+            LowPass::Cascade {
+                front: Average {
+                    taps: 4,
+                    stages: 3,
+                    decimation: 4,
+                },
+                back: Behind::FirstOrder {
+                    time_constant_s: 0.008,
+                },
+            },
         ] {
             let n = 20_000;
             let fs = 1.0 / tau0;
@@ -1179,5 +1354,87 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// A cascade's autocorrelation against its impulse response by brute force: a boxcar of 5
+    /// output samples convolved with a first order's `(1 - a) a^k`, then `sum_i h_i h_{i+k}`;
+    /// and its power gain is the parts' product, its memory their sum.
+    #[test]
+    fn a_cascade_is_its_parts_convolved() {
+        let tau0 = 0.004;
+        let tc = 0.02;
+        let lp = LowPass::Cascade {
+            front: Average {
+                taps: 5,
+                stages: 1,
+                decimation: 1,
+            },
+            back: Behind::FirstOrder {
+                time_constant_s: tc,
+            },
+        };
+        let a = (-tau0 / tc).exp();
+        let h: Vec<f64> = (0..2000)
+            .map(|k| {
+                (0..5usize)
+                    .filter(|&j| j <= k)
+                    .map(|j| 0.2 * (1.0 - a) * a.powi((k - j) as i32))
+                    .sum()
+            })
+            .collect();
+        let r = lp.autocorrelation(tau0);
+        for k in [0usize, 1, 2, 4, 5, 9, 40] {
+            let want: f64 = h.iter().zip(&h[k..]).map(|(x, y)| x * y).sum();
+            assert!(
+                (r[k] / want - 1.0).abs() < 1e-9,
+                "lag {k}: {} vs {want}",
+                r[k]
+            );
+        }
+        let (front, back) = lp.parts().expect("parts");
+        for f in [0.0, 3.0, 41.0, 120.0] {
+            let want = front.power_gain(tau0, f) * back.power_gain(tau0, f);
+            assert!((lp.power_gain(tau0, f) - want).abs() < 1e-15, "{f} Hz");
+        }
+        assert!((lp.memory_s(tau0) - (5.0 * tau0 + tc)).abs() < 1e-15);
+        assert_eq!(lp.n_shape(), 2);
+    }
+
+    /// `compose`: a moving average goes in front of a first or second order, either way round
+    /// and in place of a cascade's own part; any other pair is a replacement.
+    #[test]
+    fn filters_compose_into_a_cascade_front_and_back() {
+        let ma = LowPass::MovingAverage {
+            taps: 4,
+            stages: 3,
+            decimation: 4,
+        };
+        let so = LowPass::SecondOrder {
+            natural_frequency_hz: 20.0,
+            damping: 0.7,
+            form: SecondOrderForm::Bilinear,
+        };
+        let fo = LowPass::FirstOrder {
+            time_constant_s: 0.01,
+        };
+        let zp = LowPass::ZeroPhase {
+            time_constant_s: 0.01,
+        };
+        let both = LowPass::compose(Some(so), ma);
+        assert_eq!(both.parts(), Some((ma, so)));
+        assert_eq!(LowPass::compose(Some(ma), so), both);
+        // the back replaced, then the front
+        assert_eq!(LowPass::compose(Some(both), fo).parts(), Some((ma, fo)));
+        let ma2 = LowPass::MovingAverage {
+            taps: 2,
+            stages: 1,
+            decimation: 1,
+        };
+        assert_eq!(LowPass::compose(Some(both), ma2).parts(), Some((ma2, so)));
+        // no cascade: replaced
+        assert_eq!(LowPass::compose(Some(fo), so), so);
+        assert_eq!(LowPass::compose(Some(zp), ma), ma);
+        assert_eq!(LowPass::compose(Some(ma), zp), zp);
+        assert_eq!(LowPass::compose(None, so), so);
     }
 }

@@ -12,7 +12,7 @@
 
 use std::collections::VecDeque;
 
-use crate::model::lowpass::LowPass;
+use crate::model::lowpass::{Behind, LowPass};
 
 /// A running low-pass filter (DC gain 1).
 #[derive(Debug, Clone)]
@@ -52,6 +52,18 @@ pub enum LowPassGen {
         window: VecDeque<f64>,
         started: bool,
     },
+    /// A moving average with a recursive low-pass behind it at the output rate
+    /// ([`LowPass::Cascade`]): every input goes through the front, and every `decimation`-th
+    /// front output (the output sample the front delivers) through the back; the output is the
+    /// back's last. A first order behind is the recursion with `a2 = 0`.
+    Cascade {
+        front: Box<LowPassGen>,
+        back: Box<LowPassGen>,
+        /// Inputs since the back's last step.
+        phase: usize,
+        /// The back's last output.
+        last: f64,
+    },
 }
 
 impl LowPassGen {
@@ -60,6 +72,31 @@ impl LowPassGen {
     pub fn new(lp: &LowPass, tau0_s: f64) -> Option<Self> {
         match *lp {
             LowPass::FirstOrder { .. } => None,
+            LowPass::Cascade { front, back } => {
+                let back = match back {
+                    Behind::FirstOrder { time_constant_s } => {
+                        let a = (-tau0_s / time_constant_s).exp();
+                        LowPassGen::SecondOrder {
+                            a1: a,
+                            a2: 0.0,
+                            g: 1.0 - a,
+                            y1: 0.0,
+                            y2: 0.0,
+                            b: [1.0, 0.0, 0.0],
+                            x1: 0.0,
+                            x2: 0.0,
+                            started: false,
+                        }
+                    }
+                    Behind::SecondOrder { .. } => LowPassGen::new(&back.lowpass(), tau0_s)?,
+                };
+                Some(LowPassGen::Cascade {
+                    front: Box::new(LowPassGen::new(&front.lowpass(), tau0_s)?),
+                    back: Box::new(back),
+                    phase: 0,
+                    last: 0.0,
+                })
+            }
             LowPass::MovingAverage {
                 taps,
                 stages,
@@ -108,6 +145,7 @@ impl LowPassGen {
     pub fn decimation(&self) -> usize {
         match self {
             LowPassGen::MovingAverage { decimation, .. } => *decimation,
+            LowPassGen::Cascade { front, .. } => front.decimation(),
             _ => 1,
         }
     }
@@ -117,6 +155,7 @@ impl LowPassGen {
     pub fn white_scale(&self) -> f64 {
         match self {
             LowPassGen::MovingAverage { white_scale, .. } => *white_scale,
+            LowPassGen::Cascade { front, .. } => front.white_scale(),
             _ => 1.0,
         }
     }
@@ -127,6 +166,7 @@ impl LowPassGen {
             LowPassGen::MovingAverage { started, .. }
             | LowPassGen::SecondOrder { started, .. }
             | LowPassGen::ZeroPhase { started, .. } => *started,
+            LowPassGen::Cascade { front, .. } => front.is_started(),
         }
     }
 
@@ -137,6 +177,12 @@ impl LowPassGen {
         match self {
             LowPassGen::MovingAverage { taps, stages, .. } => taps * stages.len(),
             LowPassGen::ZeroPhase { weights, .. } => 2 * (weights.len() - 1) + 1,
+            // whole output samples (the phase stays with the output's), the front's and then
+            // the back's
+            LowPassGen::Cascade { front, back, .. } => {
+                let d = front.decimation();
+                (front.memory_steps().div_ceil(d) + back.memory_steps()) * d
+            }
             LowPassGen::SecondOrder { a1, a2, .. } => {
                 // poles: roots of z^2 - a1 z - a2
                 let r = crate::model::lowpass::slow_pole(*a1, *a2);
@@ -226,6 +272,15 @@ impl LowPassGen {
                     window.extend(std::iter::repeat_n(level, 2 * (weights.len() - 1) + 1));
                 }
             }
+            LowPassGen::Cascade {
+                front, back, last, ..
+            } => {
+                if !front.is_started() {
+                    front.start_at(level);
+                    back.start_at(level);
+                    *last = level;
+                }
+            }
         }
     }
 
@@ -290,6 +345,20 @@ impl LowPassGen {
                     acc += weights[i.abs_diff(l)] * x;
                 }
                 acc
+            }
+            LowPassGen::Cascade {
+                front,
+                back,
+                phase,
+                last,
+            } => {
+                let y = front.step(d);
+                *phase += 1;
+                if *phase >= front.decimation() {
+                    *phase = 0;
+                    *last = back.step(y);
+                }
+                *last
             }
         }
     }

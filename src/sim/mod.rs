@@ -302,7 +302,7 @@ impl ChannelSim {
         if self.temp_coeff != 0.0 {
             d += self.temp_coeff * temp_integral;
         }
-        // The filter (at most one per channel in a model file) starts in the stationary state
+        // The filter (one per channel in a model file; a cascade is one generator) starts in the stationary state
         // of this input's level and the white rate (LowPassGen::start_stationary), from a side
         // stream of this channel's generator (a long jump away: the channels are plain jumps
         // apart), so the main stream draws what it drew before.

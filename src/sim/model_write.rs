@@ -135,54 +135,13 @@ fn channel_toml(s: &mut String, c: &ChannelModel) {
             num(f.time_constant_s)
         );
     }
-    match c.lowpass {
-        Some(LowPass::MovingAverage {
-            taps,
-            stages,
-            decimation,
-        }) => {
-            let _ = writeln!(
-                s,
-                "[channel.moving_average]\ntaps = {taps}\nstages = {stages}{}",
-                if decimation > 1 {
-                    format!("\ndecimation = {decimation}")
-                } else {
-                    String::new()
-                }
-            );
-        }
-        Some(LowPass::SecondOrder {
-            natural_frequency_hz,
-            damping,
-            form,
-        }) => {
-            let _ = writeln!(
-                s,
-                "[channel.second_order_filter]\nnatural_frequency = {}\ndamping = {}{}",
-                num(natural_frequency_hz),
-                num(damping),
-                match form {
-                    SecondOrderForm::PoleMapped => String::new(),
-                    SecondOrderForm::Bilinear => "\nbilinear = true".to_string(),
-                    SecondOrderForm::Sampled { zero } => format!("\nzero = {}", num(zero)),
-                }
-            );
-        }
-        Some(LowPass::ZeroPhase { time_constant_s }) => {
-            let _ = writeln!(
-                s,
-                "[channel.zero_phase_filter]\ntime_constant = {}",
-                num(time_constant_s)
-            );
-        }
-        Some(LowPass::FirstOrder { time_constant_s }) => {
-            let _ = writeln!(
-                s,
-                "[channel.output_filter]\ntime_constant = {}",
-                num(time_constant_s)
-            );
-        }
-        None => {}
+    // a cascade as its two parts' tables (the model file reads them back as one)
+    let parts = match c.lowpass {
+        Some(lp @ LowPass::Cascade { .. }) => lp.parts().map(|(a, b)| vec![a, b]),
+        lp => lp.map(|lp| vec![lp]),
+    };
+    for lp in parts.unwrap_or_default() {
+        write_lowpass(s, lp);
     }
     if let Some(w) = c.warmup {
         let _ = writeln!(
@@ -207,6 +166,60 @@ fn channel_toml(s: &mut String, c: &ChannelModel) {
             num(o.rate_per_s),
             num(o.size)
         );
+    }
+}
+
+/// The model file's table of one filter (`[channel.moving_average]`, ...).
+fn write_lowpass(s: &mut String, lp: LowPass) {
+    match lp {
+        LowPass::MovingAverage {
+            taps,
+            stages,
+            decimation,
+        } => {
+            let _ = writeln!(
+                s,
+                "[channel.moving_average]\ntaps = {taps}\nstages = {stages}{}",
+                if decimation > 1 {
+                    format!("\ndecimation = {decimation}")
+                } else {
+                    String::new()
+                }
+            );
+        }
+        LowPass::SecondOrder {
+            natural_frequency_hz,
+            damping,
+            form,
+        } => {
+            let _ = writeln!(
+                s,
+                "[channel.second_order_filter]\nnatural_frequency = {}\ndamping = {}{}",
+                num(natural_frequency_hz),
+                num(damping),
+                match form {
+                    SecondOrderForm::PoleMapped => String::new(),
+                    SecondOrderForm::Bilinear => "\nbilinear = true".to_string(),
+                    SecondOrderForm::Sampled { zero } => format!("\nzero = {}", num(zero)),
+                }
+            );
+        }
+        LowPass::ZeroPhase { time_constant_s } => {
+            let _ = writeln!(
+                s,
+                "[channel.zero_phase_filter]\ntime_constant = {}",
+                num(time_constant_s)
+            );
+        }
+        LowPass::FirstOrder { time_constant_s } => {
+            let _ = writeln!(
+                s,
+                "[channel.output_filter]\ntime_constant = {}",
+                num(time_constant_s)
+            );
+        }
+        // (written as its parts above)
+        LowPass::Cascade { .. } => {}
     }
 }
 
@@ -370,6 +383,69 @@ outliers = { rate = 0.001, size = 3.5 }
             assert!(
                 err.contains("decimation") && err.contains("t.toml"),
                 "{bad}: {err}"
+            );
+        }
+    }
+
+    /// A moving average with a low-pass behind it (a consumer part's chain) is one filter, a
+    /// [`LowPass::Cascade`]: with a second order or with an `output_filter`, written as its two
+    /// tables and read back the same; any other pair of filters is refused at the second's key.
+    #[test]
+    fn a_decimator_with_a_low_pass_behind_round_trips_and_other_pairs_are_refused() {
+        use crate::model::lowpass::{Average, Behind};
+        let head = "tau0_s = 0.01\n[[channel]]\nname = \"gx\"\nunit = \"deg\"\nN = 0.01\n";
+        let cic = Average {
+            taps: 8,
+            stages: 3,
+            decimation: 8,
+        };
+        let ma = "moving_average = { taps = 8, stages = 3, decimation = 8 }\n";
+        for (behind, back) in [
+            (
+                "second_order_filter = { natural_frequency = 40.0, damping = 0.7, bilinear = true }",
+                Behind::SecondOrder {
+                    natural_frequency_hz: 40.0,
+                    damping: 0.7,
+                    form: SecondOrderForm::Bilinear,
+                },
+            ),
+            (
+                "output_filter = { time_constant = 0.008 }",
+                Behind::FirstOrder {
+                    time_constant_s: 0.008,
+                },
+            ),
+        ] {
+            let m = read(&format!("{head}{ma}{behind}\n"));
+            let want = LowPass::Cascade { front: cic, back };
+            assert_eq!(m.channels[0].lowpass, Some(want), "{behind}");
+            assert_eq!(m.channels[0].output_filter, None, "{behind}");
+            let text = model_toml(&m, "t", &[]);
+            assert!(text.contains("[channel.moving_average]"), "{text}");
+            let back = read(&text);
+            assert_eq!(m, back, "{text}");
+        }
+        for (pair, key) in [
+            (
+                "output_filter = { time_constant = 0.008 }\nsecond_order_filter = { natural_frequency = 4.0, damping = 0.7 }",
+                "second_order_filter",
+            ),
+            (
+                "moving_average = { taps = 4 }\nzero_phase_filter = { time_constant = 0.01 }",
+                "zero_phase_filter",
+            ),
+            (
+                "zero_phase_filter = { time_constant = 0.01 }\noutput_filter = { time_constant = 0.008 }",
+                "zero_phase_filter",
+            ),
+        ] {
+            let text = format!("{head}{pair}\n");
+            let err = SimModel::from_toml_str(&text, Path::new("t.toml"))
+                .expect_err(pair)
+                .to_string();
+            assert!(
+                err.contains(key) && err.contains("one filter per channel"),
+                "{pair}: {err}"
             );
         }
     }

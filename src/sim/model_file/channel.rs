@@ -193,7 +193,8 @@ pub(super) fn parse_channel(
         e.finish(errs);
         OutputFilterSpec { time_constant_s }
     });
-    let lowpass = parse_lowpass(&mut k, tau0_s, output_filter.is_some(), errs);
+    let mut output_filter = output_filter;
+    let lowpass = parse_lowpass(&mut k, tau0_s, &mut output_filter, errs);
     let warmup = k.table("warmup", errs).map(|(p, tt)| {
         let mut e = Keys::new(tt, &p);
         let a = e.num("amplitude", errs);
@@ -267,12 +268,13 @@ pub(super) fn parse_channel(
 }
 
 /// The keys `moving_average = {taps, stages}`, `second_order_filter = {natural_frequency,
-/// damping}` and `zero_phase_filter = {time_constant}`: at most one filter per channel
-/// (`output_filter` included).
+/// damping}` and `zero_phase_filter = {time_constant}`: one filter per channel (`output_filter`
+/// included), or a moving average with an `output_filter` or a `second_order_filter` behind it
+/// (a [`LowPass::Cascade`], which then holds the output filter: `output_filter` is taken).
 fn parse_lowpass(
     k: &mut Keys<'_>,
     tau0_s: f64,
-    has_output_filter: bool,
+    output_filter: &mut Option<OutputFilterSpec>,
     errs: &mut Collector,
 ) -> Option<LowPass> {
     let mut found: Vec<(String, LowPass)> = Vec::new();
@@ -372,13 +374,25 @@ fn parse_lowpass(
         e.finish(errs);
         found.push((p, LowPass::ZeroPhase { time_constant_s }));
     }
-    let mut out = None;
-    for (i, (p, lp)) in found.into_iter().enumerate() {
-        if i > 0 || has_output_filter {
+    let behind = output_filter.map(|f| LowPass::FirstOrder {
+        time_constant_s: f.time_constant_s,
+    });
+    let mut out: Option<LowPass> = None;
+    for (p, lp) in found.into_iter() {
+        // a moving average first (its table is read first), with one low-pass behind it
+        let average = |lp: Option<LowPass>| matches!(lp, Some(LowPass::MovingAverage { .. }));
+        let fits = match out {
+            None => behind.is_none() || average(Some(lp)),
+            Some(_) => {
+                behind.is_none() && average(out) && matches!(lp, LowPass::SecondOrder { .. })
+            }
+        };
+        if !fits {
             errs.bad(
                 p,
-                "one filter per channel: output_filter, moving_average, second_order_filter \
-                 and zero_phase_filter exclude each other",
+                "one filter per channel (output_filter, moving_average, second_order_filter \
+                 and zero_phase_filter exclude each other), or a moving_average with one \
+                 output_filter or second_order_filter behind it",
             );
             continue;
         }
@@ -398,7 +412,14 @@ fn parse_lowpass(
                 continue;
             }
         }
-        out = Some(lp);
+        out = Some(LowPass::compose(out, lp));
     }
-    out
+    // an output filter behind the moving average joins it
+    match (out, behind) {
+        (Some(lp @ LowPass::MovingAverage { .. }), Some(fo)) => {
+            *output_filter = None;
+            Some(LowPass::compose(Some(lp), fo))
+        }
+        _ => out,
+    }
 }

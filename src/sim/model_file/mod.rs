@@ -42,6 +42,9 @@
 //!   # ... and optionally bilinear = true (the digital biquad), or zero = 0.27 / decimation = 5
 //!   # (run faster than the output and read every few samples; model::lowpass::SecondOrderForm)
 //! zero_phase_filter = { time_constant = 0.01 }   # s, forward-backward first order
+//!   # One filter per channel, or a moving_average with one output_filter or second_order_filter
+//!   # behind it at the output rate (a CIC decimator and a consumer part's low-pass:
+//!   # model::lowpass::LowPass::Cascade)
 //! warmup = { amplitude = 0.5, time_constant = 600.0 }               # u/s, s
 //! bias_jumps = { mean_interval = 1800.0, rms_size = 0.01 }          # s, u/s
 //! rate_lsb = 0.01                 # optional: each rate sample rounded to this step (u/s), no carry
