@@ -1749,16 +1749,20 @@ fn greedy_stationary(
     (spec, cur, first, passed_first)
 }
 
-/// Whether `p` can be a cascade's front ([`complete_cascade`]): a moving average spanning at
-/// most [`CASCADE_FRONT_SPAN`] output samples (taps times stages over the decimation), as a
-/// CIC decimator of up to four stages does; true for the other kinds.
+/// Whether `p` can be a cascade's front ([`complete_cascade`]): a moving average of more than
+/// one tap (one is no filter) spanning at most [`CASCADE_FRONT_SPAN`] output samples (taps
+/// times stages over the decimation), as a CIC decimator of up to four stages does; true for
+/// the other kinds.
 fn short_front(p: &EffectParams) -> bool {
     match *p {
         EffectParams::MovingAverage {
             taps,
             stages,
             decimation,
-        } => f64::from(taps) * f64::from(stages) <= CASCADE_FRONT_SPAN * f64::from(decimation),
+        } => {
+            taps > 1
+                && f64::from(taps) * f64::from(stages) <= CASCADE_FRONT_SPAN * f64::from(decimation)
+        }
         _ => true,
     }
 }
@@ -1811,7 +1815,10 @@ fn complete_cascade(
     // AIC_MARGIN (the reference low-pass, as in `greedy_stationary`; an overdamped second
     // order at the end of its damping scan is a first order by another name).
     let refit_named = |spec: &ModelSpec| -> Option<(EffectParams, GlsFit)> {
-        if named_kind == EffectKind::MovingAverage {
+        // (a named first order stays one: as a second order it can turn into a resonance
+        // that takes a line beside it, an identity in front; session 46's line behind a first
+        // order of 30 ms)
+        if named_kind != EffectKind::SecondOrderFilter {
             return prob.scan_params(spec, named_kind);
         }
         let fo = prob.scan_params(spec, EffectKind::OutputFilter);
