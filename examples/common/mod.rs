@@ -176,6 +176,9 @@ pub fn effect_toml(effect: Option<EffectParams>) -> String {
         Some(EffectParams::ZeroPhaseFilter { time_constant_s }) => {
             format!("zero_phase_filter = {{ time_constant = {time_constant_s:e} }}\n")
         }
+        Some(EffectParams::FirFilter { cutoff_hz, taps }) => {
+            format!("fir_filter = {{ taps = {taps}, cutoff = {cutoff_hz:e} }}\n")
+        }
         Some(EffectParams::BandNoise {
             frequency_hz,
             sigma,
@@ -369,6 +372,11 @@ pub fn draw_effect_params(
         },
         EffectKind::ZeroPhaseFilter => EffectParams::ZeroPhaseFilter {
             time_constant_s: log_uniform(rng, tau0, FILTER_TAU_PRIOR * tau0),
+        },
+        // 15-95 taps, the cut-off log-uniform from 0.02 to 0.4 of the output rate
+        EffectKind::FirFilter => EffectParams::FirFilter {
+            taps: rng.random_range(15..=95u32),
+            cutoff_hz: log_uniform(rng, 0.02 / tau0, 0.4 / tau0),
         },
         EffectKind::Temperature => EffectParams::Temperature {
             coefficient: 0.0,

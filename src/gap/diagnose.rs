@@ -1652,6 +1652,45 @@ fn greedy_stationary(
                 best_filter = Some(EffectKind::OutputFilter);
             }
         }
+        // A FIR is the one filter that no partner completes: where it is the best filter alone
+        // and a cascade from the best first or second order fits better by Akaike's criterion,
+        // the low-pass is named, and the next step completes it (a CIC + Butterworth was named a
+        // FIR with a sinusoid beside it: docs/gap.md, "A linear-phase FIR low-pass (session
+        // 46)").
+        if best_filter == Some(EffectKind::FirFilter) && !has_filter(effects) {
+            if let Some(fir) = passed_kind(EffectKind::FirFilter) {
+                let fir_aic = aic(fir);
+                let lowpass = [EffectKind::SecondOrderFilter, EffectKind::OutputFilter]
+                    .into_iter()
+                    .filter_map(passed_kind)
+                    .filter(|p| {
+                        let mut with = effects.clone();
+                        with.push(AddedEffect {
+                            params: p.0,
+                            gap_after: p.1.gap(),
+                            delta_chi2: cur.chi2 - p.1.chi2,
+                        });
+                        let pair = complete_cascade(
+                            prob,
+                            offset,
+                            &with,
+                            EffectKind::MovingAverage,
+                            p.1.chi2,
+                        );
+                        let n =
+                            (p.0.kind().n_params() + EffectKind::MovingAverage.n_params()) as f64;
+                        pair.is_some_and(|(_, f, _)| {
+                            (cur.chi2 - f.chi2) - 2.0 * n > fir_aic + AIC_MARGIN
+                        })
+                    })
+                    .map(|p| p.0.kind())
+                    .next();
+                if lowpass.is_some() {
+                    tracing::debug!(?lowpass, "a cascade before a FIR");
+                    best_filter = lowpass;
+                }
+            }
+        }
         let filter_score = passed
             .iter()
             .filter(|p| p.0.kind().is_filter())

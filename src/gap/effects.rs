@@ -25,6 +25,9 @@ pub enum EffectKind {
     MovingAverage,
     SecondOrderFilter,
     ZeroPhaseFilter,
+    /// A linear-phase FIR low-pass, the Hamming-windowed sinc (docs/gap.md, "A linear-phase
+    /// FIR low-pass (session 46)").
+    FirFilter,
     /// Narrow-band random noise: white noise through a resonator, a second-order Gauss-Markov
     /// rate with the damped-cosine autocovariance (docs/gap.md, "Narrow-band noise";
     /// [`crate::sim::band_noise`]).
@@ -32,7 +35,7 @@ pub enum EffectKind {
 }
 
 impl EffectKind {
-    pub const ALL: [EffectKind; 10] = [
+    pub const ALL: [EffectKind; 11] = [
         EffectKind::GaussMarkov,
         EffectKind::Sinusoid,
         EffectKind::OutputFilter,
@@ -42,6 +45,7 @@ impl EffectKind {
         EffectKind::MovingAverage,
         EffectKind::SecondOrderFilter,
         EffectKind::ZeroPhaseFilter,
+        EffectKind::FirFilter,
         EffectKind::BandNoise,
     ];
 
@@ -62,6 +66,7 @@ impl EffectKind {
                 | EffectKind::MovingAverage
                 | EffectKind::SecondOrderFilter
                 | EffectKind::ZeroPhaseFilter
+                | EffectKind::FirFilter
         )
     }
 
@@ -87,6 +92,7 @@ impl EffectKind {
             EffectKind::MovingAverage => "moving_average",
             EffectKind::SecondOrderFilter => "second_order_filter",
             EffectKind::ZeroPhaseFilter => "zero_phase_filter",
+            EffectKind::FirFilter => "fir_filter",
             EffectKind::BandNoise => "band_noise",
         }
     }
@@ -179,6 +185,12 @@ pub enum EffectParams {
         #[serde(rename = "time_constant", deserialize_with = "nullable_f64")]
         time_constant_s: f64,
     },
+    /// [`LowPass::Fir`]: the cut-off (Hz) and the taps.
+    FirFilter {
+        #[serde(rename = "cutoff", deserialize_with = "nullable_f64")]
+        cutoff_hz: f64,
+        taps: u32,
+    },
     /// Narrow-band noise: centre (Hz), rms (u/s), full width at half power (Hz).
     BandNoise {
         #[serde(rename = "frequency", deserialize_with = "nullable_f64")]
@@ -216,6 +228,7 @@ impl EffectParams {
             EffectParams::MovingAverage { .. } => EffectKind::MovingAverage,
             EffectParams::SecondOrderFilter { .. } => EffectKind::SecondOrderFilter,
             EffectParams::ZeroPhaseFilter { .. } => EffectKind::ZeroPhaseFilter,
+            EffectParams::FirFilter { .. } => EffectKind::FirFilter,
             EffectParams::BandNoise { .. } => EffectKind::BandNoise,
         }
     }
@@ -261,6 +274,7 @@ impl EffectParams {
             EffectParams::ZeroPhaseFilter { time_constant_s } => {
                 Some(LowPass::ZeroPhase { time_constant_s })
             }
+            EffectParams::FirFilter { cutoff_hz, taps } => Some(LowPass::Fir { taps, cutoff_hz }),
             _ => None,
         }
     }
@@ -298,6 +312,7 @@ impl EffectParams {
             LowPass::ZeroPhase { time_constant_s } => {
                 EffectParams::ZeroPhaseFilter { time_constant_s }
             }
+            LowPass::Fir { taps, cutoff_hz } => EffectParams::FirFilter { cutoff_hz, taps },
         }
     }
 
@@ -330,9 +345,8 @@ impl EffectParams {
             EffectKind::OutputFilter
             | EffectKind::MovingAverage
             | EffectKind::SecondOrderFilter
-            | EffectKind::ZeroPhaseFilter => {
-                EffectParams::from_lowpass(canonical_lowpass(kind, shape))
-            }
+            | EffectKind::ZeroPhaseFilter
+            | EffectKind::FirFilter => EffectParams::from_lowpass(canonical_lowpass(kind, shape)),
             EffectKind::BandNoise => EffectParams::BandNoise {
                 frequency_hz: shape,
                 sigma: amplitude,
@@ -420,6 +434,9 @@ impl EffectParams {
                 ("sigma", sigma),
                 ("width", width_hz),
             ],
+            EffectParams::FirFilter { cutoff_hz, taps } => {
+                vec![("cutoff", cutoff_hz), ("taps", f64::from(taps))]
+            }
         }
     }
 
@@ -433,6 +450,7 @@ impl EffectParams {
                 ..
             } => natural_frequency_hz,
             EffectParams::ZeroPhaseFilter { time_constant_s } => time_constant_s,
+            EffectParams::FirFilter { cutoff_hz, .. } => cutoff_hz,
             EffectParams::BandNoise { frequency_hz, .. } => frequency_hz,
             EffectParams::GaussMarkov { tau_c_s, .. } => tau_c_s,
             EffectParams::Sinusoid { frequency_hz, .. } => frequency_hz,
@@ -455,7 +473,8 @@ impl EffectParams {
             EffectParams::OutputFilter { .. }
             | EffectParams::MovingAverage { .. }
             | EffectParams::SecondOrderFilter { .. }
-            | EffectParams::ZeroPhaseFilter { .. } => f64::NAN,
+            | EffectParams::ZeroPhaseFilter { .. }
+            | EffectParams::FirFilter { .. } => f64::NAN,
             EffectParams::Warmup { amplitude, .. } => amplitude,
             EffectParams::BiasJumps { rms_size, .. } => rms_size,
             EffectParams::Temperature { coefficient, .. } => coefficient,
@@ -522,6 +541,11 @@ pub fn canonical_lowpass(kind: EffectKind, shape: f64) -> LowPass {
         EffectKind::ZeroPhaseFilter => LowPass::ZeroPhase {
             time_constant_s: shape,
         },
+        // (the cut-off of a 31-tap window)
+        EffectKind::FirFilter => LowPass::Fir {
+            taps: 31,
+            cutoff_hz: shape,
+        },
         _ => LowPass::FirstOrder {
             time_constant_s: shape,
         },
@@ -550,7 +574,8 @@ pub fn effect_column(
                 }
                 EffectKind::MovingAverage
                 | EffectKind::SecondOrderFilter
-                | EffectKind::ZeroPhaseFilter => {
+                | EffectKind::ZeroPhaseFilter
+                | EffectKind::FirFilter => {
                     canonical_lowpass(kind, shape).white_rate_avar(tau0_s, &[m])[0]
                 }
                 EffectKind::Warmup => terms::warmup_avar(1.0, shape, tau0_s, m, n_inc),

@@ -77,6 +77,8 @@ fn shapes(p: &EffectParams) -> Vec<(&'static str, f64)> {
             width_hz,
             ..
         } => vec![("frequency", frequency_hz), ("width", width_hz)],
+        // (its taps are a whole number, as a moving average's)
+        EffectParams::FirFilter { cutoff_hz, .. } => vec![("cutoff", cutoff_hz)],
         _ => Vec::new(),
     }
 }
@@ -132,7 +134,8 @@ fn scaled(p: &EffectParams, i: usize, f: f64) -> EffectParams {
             frequency_hz: x, ..
         }
         | EffectParams::OutputFilter { time_constant_s: x }
-        | EffectParams::ZeroPhaseFilter { time_constant_s: x } => *x *= f,
+        | EffectParams::ZeroPhaseFilter { time_constant_s: x }
+        | EffectParams::FirFilter { cutoff_hz: x, .. } => *x *= f,
         EffectParams::SecondOrderFilter { zero: Some(c), .. } if i == 2 => *c *= f,
         EffectParams::SecondOrderFilter {
             natural_frequency_hz: a,

@@ -533,6 +533,10 @@ impl GapProblem {
         let scaled = |g: f64| match lp {
             // (a cascade is named in two steps, each part scanned behind the other)
             LowPass::Cascade { .. } => lp,
+            LowPass::Fir { taps, cutoff_hz } => LowPass::Fir {
+                taps,
+                cutoff_hz: (cutoff_hz / g).min(0.45 / tau0_s),
+            },
             LowPass::FirstOrder { time_constant_s } => LowPass::FirstOrder {
                 time_constant_s: time_constant_s * g,
             },
@@ -1253,6 +1257,13 @@ impl GapProblem {
                 hi: 30.0 * self.tau0_s,
                 per_decade: 12.0,
             },
+            // The FIR's cut-off (Hz), from a hundredth of the output rate to near Nyquist
+            // ([`super::filter_scan`] scans it with the taps).
+            EffectKind::FirFilter => Grid {
+                lo: 0.01 / self.tau0_s,
+                hi: super::filter_scan::FIR_TOP / self.tau0_s,
+                per_decade: 12.0,
+            },
             // Taps (the moving average) and Hz (the second order's natural frequency, its
             // `1 / (2 pi f)` over the first order's range): [`super::filter_scan`] scans them.
             EffectKind::MovingAverage => Grid {
@@ -1328,7 +1339,7 @@ impl GapProblem {
         kind: EffectKind,
     ) -> Option<(EffectParams, GlsFit)> {
         match kind {
-            EffectKind::MovingAverage | EffectKind::SecondOrderFilter => {
+            EffectKind::MovingAverage | EffectKind::SecondOrderFilter | EffectKind::FirFilter => {
                 super::filter_scan::scan(self, base, kind)
             }
             EffectKind::BandNoise => super::band_noise::scan(self, base),

@@ -546,6 +546,10 @@ mod tests {
             EffectParams::ZeroPhaseFilter {
                 time_constant_s: 0.02,
             },
+            EffectParams::FirFilter {
+                cutoff_hz: 131.0,
+                taps: 47,
+            },
             EffectParams::BandNoise {
                 frequency_hz: 20.5,
                 sigma: 0.25,
@@ -568,6 +572,7 @@ mod tests {
             r#"{"kind":"moving_average","params":{"stages":2,"taps":8},"gap_after":1.5}"#,
             r#"{"kind":"second_order_filter","params":{"damping":0.7,"natural_frequency":20.0},"gap_after":1.5}"#,
             r#"{"kind":"zero_phase_filter","params":{"time_constant":0.02},"gap_after":1.5}"#,
+            r#"{"kind":"fir_filter","params":{"cutoff":131.0,"taps":47},"gap_after":1.5}"#,
             r#"{"kind":"band_noise","params":{"frequency":20.5,"sigma":0.25,"width":2.0},"gap_after":1.5}"#,
         ];
         let kinds = every_kind();

@@ -87,6 +87,8 @@ impl Thresholds {
             EffectKind::MovingAverage => self.lr_crit_filters[0],
             EffectKind::SecondOrderFilter => self.lr_crit_filters[1],
             EffectKind::ZeroPhaseFilter => self.lr_crit_filters[2],
+            // two shape parameters, as the second order
+            EffectKind::FirFilter => self.lr_crit_filters[1],
             EffectKind::BandNoise => super::band_noise::LR_CRIT,
             EffectKind::Warmup | EffectKind::BiasJumps | EffectKind::Temperature => f64::INFINITY,
         }

@@ -133,7 +133,8 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
             EffectParams::OutputFilter { .. }
             | EffectParams::MovingAverage { .. }
             | EffectParams::SecondOrderFilter { .. }
-            | EffectParams::ZeroPhaseFilter { .. } => ch.lowpass = filter,
+            | EffectParams::ZeroPhaseFilter { .. }
+            | EffectParams::FirFilter { .. } => ch.lowpass = filter,
             EffectParams::Warmup {
                 amplitude,
                 time_constant_s,

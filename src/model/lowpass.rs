@@ -53,6 +53,39 @@ pub enum LowPass {
     /// convolution of the parts' and its power gain their product (docs/gap.md, "A low-pass
     /// behind a decimator (session 46)").
     Cascade { front: Average, back: Behind },
+    /// A linear-phase FIR low-pass of `taps` taps at the output rate: the Hamming-windowed sinc
+    /// of cut-off `cutoff_hz` (the window method, scipy's `firwin` and the STIM300's filters),
+    /// scaled to DC gain 1 ([`fir_window_sinc`]; docs/gap.md, "A linear-phase FIR low-pass
+    /// (session 46)").
+    Fir { taps: u32, cutoff_hz: f64 },
+}
+
+/// The impulse response of [`LowPass::Fir`]: `h_n = w_n sin(2 pi f_c t_n) / (pi t_n)` at
+/// `t_n = (n - (taps - 1) / 2) tau0`, `w_n = 0.54 - 0.46 cos(2 pi n / (taps - 1))` (Hamming;
+/// Oppenheim and Schafer, "Discrete-Time Signal Processing", section 7.5), then scaled so that
+/// `sum h_n = 1`. One tap is the identity.
+pub fn fir_window_sinc(taps: u32, cutoff_hz: f64, tau0_s: f64) -> Vec<f64> {
+    let n = taps.max(1) as usize;
+    if n == 1 {
+        return vec![1.0];
+    }
+    let fc = cutoff_hz * tau0_s; // cycles per sample
+    let mid = (n - 1) as f64 / 2.0;
+    let mut h: Vec<f64> = (0..n)
+        .map(|i| {
+            let t = i as f64 - mid;
+            let sinc = if t == 0.0 {
+                2.0 * fc
+            } else {
+                (2.0 * PI * fc * t).sin() / (PI * t)
+            };
+            let w = 0.54 - 0.46 * (2.0 * PI * i as f64 / (n - 1) as f64).cos();
+            w * sinc
+        })
+        .collect();
+    let total: f64 = h.iter().sum();
+    h.iter_mut().for_each(|x| *x /= total);
+    h
 }
 
 /// The moving average in front of a [`LowPass::Cascade`] ([`LowPass::MovingAverage`]'s fields).
@@ -140,6 +173,8 @@ pub const MAX_TAPS: u32 = 100_000;
 pub const MAX_STAGES: u32 = 4;
 /// Largest decimation of a moving average (internal samples per output sample).
 pub const MAX_DECIMATION: u32 = 1024;
+/// Most taps of a [`LowPass::Fir`].
+pub const MAX_FIR_TAPS: u32 = 4096;
 
 impl LowPass {
     /// The two parts of a [`LowPass::Cascade`], front then back (None for the others).
@@ -233,7 +268,7 @@ impl LowPass {
                 form: SecondOrderForm::Sampled { .. },
                 ..
             } => 3,
-            LowPass::SecondOrder { .. } => 2,
+            LowPass::SecondOrder { .. } | LowPass::Fir { .. } => 2,
             LowPass::Cascade { front, back } => {
                 front.lowpass().n_shape() + back.lowpass().n_shape()
             }
@@ -244,6 +279,18 @@ impl LowPass {
     /// A problem with the parameters, for model files and options (None: fine).
     pub fn check(&self, tau0_s: f64) -> Option<String> {
         match *self {
+            LowPass::Fir { taps, cutoff_hz } => {
+                if !(1..=MAX_FIR_TAPS).contains(&taps) {
+                    Some(format!("taps {taps} must be 1..={MAX_FIR_TAPS}"))
+                } else if !(cutoff_hz > 0.0 && cutoff_hz * tau0_s < 0.5) {
+                    Some(format!(
+                        "cutoff {cutoff_hz} Hz must be above 0 and below Nyquist ({} Hz)",
+                        0.5 / tau0_s
+                    ))
+                } else {
+                    None
+                }
+            }
             LowPass::Cascade { front, back } => front
                 .lowpass()
                 .check(tau0_s)
@@ -387,6 +434,13 @@ impl LowPass {
     /// `rho(0) + 2 sum_{k>0} rho(k) = 1` (DC gain 1).
     pub fn autocorrelation(&self, tau0_s: f64) -> Vec<f64> {
         match *self {
+            // `sum_i h_i h_{i+k}`: DC gain 1 makes the two-sided total `(sum h)^2 = 1`
+            LowPass::Fir { taps, cutoff_hz } => {
+                let h = fir_window_sinc(taps, cutoff_hz, tau0_s);
+                (0..h.len())
+                    .map(|k| h.iter().zip(&h[k..]).map(|(a, b)| a * b).sum())
+                    .collect()
+            }
             LowPass::Cascade { front, back } => convolve_even(
                 &front.lowpass().autocorrelation(tau0_s),
                 &back.lowpass().autocorrelation(tau0_s),
@@ -535,6 +589,15 @@ impl LowPass {
     pub fn power_gain(&self, tau0_s: f64, frequency_hz: f64) -> f64 {
         let w = 2.0 * PI * frequency_hz * tau0_s;
         match *self {
+            // `|sum_n h_n e^{-i w n}|^2`
+            LowPass::Fir { taps, cutoff_hz } => {
+                let h = fir_window_sinc(taps, cutoff_hz, tau0_s);
+                let (re, im) = h.iter().enumerate().fold((0.0, 0.0), |(re, im), (n, x)| {
+                    let a = w * n as f64;
+                    (re + x * a.cos(), im - x * a.sin())
+                });
+                re * re + im * im
+            }
             LowPass::Cascade { front, back } => {
                 front.lowpass().power_gain(tau0_s, frequency_hz)
                     * back.lowpass().power_gain(tau0_s, frequency_hz)
@@ -594,6 +657,8 @@ impl LowPass {
     /// it tends to).
     pub fn memory_s(&self, tau0_s: f64) -> f64 {
         match *self {
+            // its span
+            LowPass::Fir { taps, .. } => f64::from(taps) * tau0_s,
             // the back's memory of the front's output
             LowPass::Cascade { front, back } => {
                 front.lowpass().memory_s(tau0_s) + back.lowpass().memory_s(tau0_s)
@@ -1436,5 +1501,40 @@ mod tests {
         assert_eq!(LowPass::compose(Some(zp), ma), ma);
         assert_eq!(LowPass::compose(Some(ma), zp), zp);
         assert_eq!(LowPass::compose(None, so), so);
+    }
+
+    /// The FIR's taps against scipy 1.17's `signal.firwin` (Hamming window, scaled to DC gain 1;
+    /// the values printed by `firwin(31, 100.0, fs=1000.0)` and `firwin(8, 50.0, fs=400.0)`),
+    /// its power gain against `freqz` of the first (0.2482 at the cut-off, 8.646e-5 at 150
+    /// Hz), and its autocorrelation summing to 1.
+    #[test]
+    fn the_fir_is_scipys_firwin() {
+        let h = fir_window_sinc(31, 100.0, 0.001);
+        for (i, want) in [
+            (1usize, 0.001_201_426_375_882_78),
+            (3, 0.004_227_316_085_446_9),
+            (7, -0.018_583_210_130_235_96),
+            (12, 0.091_888_877_020_527_64),
+            (15, 0.199_660_667_298_695_5),
+        ] {
+            assert!((h[i] - want).abs() < 1e-12, "tap {i}: {} vs {want}", h[i]);
+        }
+        let h = fir_window_sinc(8, 50.0, 1.0 / 400.0);
+        for (i, want) in [
+            (0usize, 0.003_560_172_702_628_89),
+            (2, 0.161_031_852_333_115_3),
+            (3, 0.297_324_252_168_556_5),
+        ] {
+            assert!((h[i] - want).abs() < 1e-12, "tap {i}: {} vs {want}", h[i]);
+        }
+        let lp = LowPass::Fir {
+            taps: 31,
+            cutoff_hz: 100.0,
+        };
+        for (f, want) in [(0.0, 1.0), (100.0, 0.248_207_65), (150.0, 8.645_696_86e-5)] {
+            let g = lp.power_gain(0.001, f);
+            assert!((g / want - 1.0).abs() < 1e-6, "{f} Hz: {g} vs {want}");
+        }
+        assert!((two_sided_sum(&lp.autocorrelation(0.001)) - 1.0).abs() < 1e-12);
     }
 }

@@ -52,6 +52,13 @@ pub enum LowPassGen {
         window: VecDeque<f64>,
         started: bool,
     },
+    /// A FIR's taps `h` over a window of its last `h.len()` inputs, newest last
+    /// ([`LowPass::Fir`]).
+    Fir {
+        h: Vec<f64>,
+        window: VecDeque<f64>,
+        started: bool,
+    },
     /// A moving average with a recursive low-pass behind it at the output rate
     /// ([`LowPass::Cascade`]): every input goes through the front, and every `decimation`-th
     /// front output (the output sample the front delivers) through the back; the output is the
@@ -72,6 +79,14 @@ impl LowPassGen {
     pub fn new(lp: &LowPass, tau0_s: f64) -> Option<Self> {
         match *lp {
             LowPass::FirstOrder { .. } => None,
+            LowPass::Fir { taps, cutoff_hz } => {
+                let h = crate::model::lowpass::fir_window_sinc(taps, cutoff_hz, tau0_s);
+                Some(LowPassGen::Fir {
+                    window: VecDeque::with_capacity(h.len()),
+                    h,
+                    started: false,
+                })
+            }
             LowPass::Cascade { front, back } => {
                 let back = match back {
                     Behind::FirstOrder { time_constant_s } => {
@@ -165,7 +180,8 @@ impl LowPassGen {
         match self {
             LowPassGen::MovingAverage { started, .. }
             | LowPassGen::SecondOrder { started, .. }
-            | LowPassGen::ZeroPhase { started, .. } => *started,
+            | LowPassGen::ZeroPhase { started, .. }
+            | LowPassGen::Fir { started, .. } => *started,
             LowPassGen::Cascade { front, .. } => front.is_started(),
         }
     }
@@ -177,6 +193,7 @@ impl LowPassGen {
         match self {
             LowPassGen::MovingAverage { taps, stages, .. } => taps * stages.len(),
             LowPassGen::ZeroPhase { weights, .. } => 2 * (weights.len() - 1) + 1,
+            LowPassGen::Fir { h, .. } => h.len(),
             // whole output samples (the phase stays with the output's), the front's and then
             // the back's
             LowPassGen::Cascade { front, back, .. } => {
@@ -272,6 +289,13 @@ impl LowPassGen {
                     window.extend(std::iter::repeat_n(level, 2 * (weights.len() - 1) + 1));
                 }
             }
+            LowPassGen::Fir { h, window, started } => {
+                if !*started {
+                    *started = true;
+                    // the newest slot is taken by the first input's push
+                    window.extend(std::iter::repeat_n(level, h.len()));
+                }
+            }
             LowPassGen::Cascade {
                 front, back, last, ..
             } => {
@@ -345,6 +369,12 @@ impl LowPassGen {
                     acc += weights[i.abs_diff(l)] * x;
                 }
                 acc
+            }
+            // `y_n = sum_j h_j x_{n - j}`: the newest input meets h_0
+            LowPassGen::Fir { h, window, .. } => {
+                window.pop_front();
+                window.push_back(d);
+                window.iter().rev().zip(h.iter()).map(|(x, w)| x * w).sum()
             }
             LowPassGen::Cascade {
                 front,

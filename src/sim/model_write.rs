@@ -220,6 +220,13 @@ fn write_lowpass(s: &mut String, lp: LowPass) {
         }
         // (written as its parts above)
         LowPass::Cascade { .. } => {}
+        LowPass::Fir { taps, cutoff_hz } => {
+            let _ = writeln!(
+                s,
+                "[channel.fir_filter]\ntaps = {taps}\ncutoff = {}",
+                num(cutoff_hz)
+            );
+        }
     }
 }
 
@@ -447,6 +454,37 @@ outliers = { rate = 0.001, size = 3.5 }
                 err.contains(key) && err.contains("one filter per channel"),
                 "{pair}: {err}"
             );
+        }
+    }
+
+    /// A linear-phase FIR is written as `[channel.fir_filter]` and read back the same; a
+    /// cut-off at or beyond Nyquist and taps that are not whole are refused at their key.
+    #[test]
+    fn the_fir_round_trips_and_bad_ones_are_refused() {
+        let head = "tau0_s = 0.001\n[[channel]]\nname = \"gx\"\nunit = \"deg\"\nN = 0.01\n";
+        let m = read(&format!(
+            "{head}fir_filter = {{ taps = 47, cutoff = 131.0 }}\n"
+        ));
+        assert_eq!(
+            m.channels[0].lowpass,
+            Some(LowPass::Fir {
+                taps: 47,
+                cutoff_hz: 131.0
+            })
+        );
+        let text = model_toml(&m, "t", &[]);
+        assert!(text.contains("[channel.fir_filter]"), "{text}");
+        assert_eq!(read(&text), m);
+        for (extra, key) in [
+            ("taps = 47, cutoff = 500.0", "fir_filter"),
+            ("taps = 4.5, cutoff = 100.0", "taps"),
+            ("cutoff = 100.0", "taps"),
+        ] {
+            let text = format!("{head}fir_filter = {{ {extra} }}\n");
+            let err = SimModel::from_toml_str(&text, Path::new("t.toml"))
+                .expect_err(extra)
+                .to_string();
+            assert!(err.contains(key), "{extra}: {err}");
         }
     }
 }

@@ -79,6 +79,13 @@ fn known(kind: &str) -> Option<(&'static str, &'static [ParamSpec])> {
             "zero-phase (forward-backward) low-pass filter",
             &[("time_constant", "time constant", Dim::Time)],
         ),
+        "fir_filter" => (
+            "output linear-phase FIR low-pass (windowed sinc)",
+            &[
+                ("cutoff", "cut-off", Dim::Freq),
+                ("taps", "taps", Dim::Count),
+            ],
+        ),
         "warmup" => (
             "warm-up drift",
             &[
@@ -329,6 +336,20 @@ mod tests {
         assert_eq!(
             line(16, 2, 1),
             "output moving average (FIR): taps = 16, stages = 2"
+        );
+    }
+
+    /// A FIR is named as one, its cut-off in Hz and its taps counted.
+    #[test]
+    fn a_fir_is_named_with_its_cutoff_and_taps() {
+        let e = RecordedEffect::Known(EffectParams::FirFilter {
+            cutoff_hz: 131.0,
+            taps: 47,
+        });
+        assert_eq!(
+            effect_line(&e, "deg", &|v| format!("{v}")),
+            "output linear-phase FIR low-pass (windowed sinc): cut-off = 131 Hz (period 0.007633587786259542 s), \
+             taps = 47"
         );
     }
 }

@@ -350,6 +350,16 @@ fn a_low_pass_behind_a_decimator_on_white_rate() {
     });
 }
 
+/// A linear-phase FIR (a Hamming-windowed sinc of 31 taps cut at 20 Hz, at 100 Hz: the
+/// STIM300's kind of filter), simulated as the convolution with its taps, against the AVAR of
+/// its autocorrelation (src/model/lowpass.rs, `LowPass::Fir`).
+#[test]
+fn fir_filter_on_white_rate() {
+    check_ensemble("fir", |_| {
+        channel("N = 0.5\nfir_filter = { taps = 31, cutoff = 20.0 }")
+    });
+}
+
 #[test]
 fn zero_phase_filter_on_white_rate() {
     check_ensemble("zero_phase", |s| {

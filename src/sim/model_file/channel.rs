@@ -374,6 +374,27 @@ fn parse_lowpass(
         e.finish(errs);
         found.push((p, LowPass::ZeroPhase { time_constant_s }));
     }
+    if let Some((p, tt)) = k.table("fir_filter", errs) {
+        let mut e = Keys::new(tt, &p);
+        let t = e.num_pos("taps", true, errs);
+        let taps = e.required("taps", t, errs);
+        let c = e.num_pos("cutoff", true, errs);
+        let cutoff_hz = e.required("cutoff", c, errs);
+        e.finish(errs);
+        if taps.is_finite() && taps.fract() != 0.0 {
+            errs.bad(
+                format!("{p}.taps"),
+                format!("must be a whole number, got {taps}"),
+            );
+        }
+        found.push((
+            p,
+            LowPass::Fir {
+                taps: taps.clamp(0.0, u32::MAX as f64) as u32,
+                cutoff_hz,
+            },
+        ));
+    }
     let behind = output_filter.map(|f| LowPass::FirstOrder {
         time_constant_s: f.time_constant_s,
     });
@@ -390,9 +411,9 @@ fn parse_lowpass(
         if !fits {
             errs.bad(
                 p,
-                "one filter per channel (output_filter, moving_average, second_order_filter \
-                 and zero_phase_filter exclude each other), or a moving_average with one \
-                 output_filter or second_order_filter behind it",
+                "one filter per channel (output_filter, moving_average, second_order_filter, \
+                 zero_phase_filter and fir_filter exclude each other), or a moving_average with \
+                 one output_filter or second_order_filter behind it",
             );
             continue;
         }
@@ -404,6 +425,7 @@ fn parse_lowpass(
                 ..
             } => natural_frequency_hz.is_finite() && damping.is_finite(),
             LowPass::ZeroPhase { time_constant_s } => time_constant_s.is_finite(),
+            LowPass::Fir { cutoff_hz, .. } => cutoff_hz.is_finite(),
             _ => true,
         };
         if judged {

@@ -42,6 +42,7 @@
 //!   # ... and optionally bilinear = true (the digital biquad), or zero = 0.27 / decimation = 5
 //!   # (run faster than the output and read every few samples; model::lowpass::SecondOrderForm)
 //! zero_phase_filter = { time_constant = 0.01 }   # s, forward-backward first order
+//! fir_filter = { taps = 47, cutoff = 131.0 }      # a linear-phase FIR: Hamming-windowed sinc, Hz
 //!   # One filter per channel, or a moving_average with one output_filter or second_order_filter
 //!   # behind it at the output rate (a CIC decimator and a consumer part's low-pass:
 //!   # model::lowpass::LowPass::Cascade)
