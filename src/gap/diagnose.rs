@@ -1441,12 +1441,7 @@ fn polish(
         if !kind.is_stationary() {
             continue;
         }
-        let others: Vec<AddedEffect> = effects
-            .iter()
-            .enumerate()
-            .filter(|(j, _)| *j != i)
-            .map(|(_, e)| *e)
-            .collect();
+        let others = all_but(effects, i);
         let Some((p, _)) = prob.scan_params(&spec_from(prob, &others, offset), kind) else {
             continue;
         };
@@ -1473,6 +1468,16 @@ fn polish(
         }
     }
     fit
+}
+
+/// `effects` without the one at `i`.
+fn all_but(effects: &[AddedEffect], i: usize) -> Vec<AddedEffect> {
+    effects
+        .iter()
+        .enumerate()
+        .filter(|(j, _)| *j != i)
+        .map(|(_, e)| *e)
+        .collect()
 }
 
 /// A candidate that passed its threshold at a step: its parameters, its fit, its score.
@@ -1871,13 +1876,7 @@ fn complete_cascade(
         }
     };
     let mut trial = effects.to_vec();
-    let others: Vec<AddedEffect> = effects
-        .iter()
-        .enumerate()
-        .filter(|(j, _)| *j != i)
-        .map(|(_, e)| *e)
-        .collect();
-    let base = spec_from(prob, &others, offset);
+    let base = spec_from(prob, &all_but(effects, i), offset);
     // A front in front of a named back: the back fitted alone is overdamped or at its top
     // frequency, and the front scanned behind that back is a short average of the output
     // samples (a boxcar of two for a sinc^3 decimator by 8), which the alternation does not

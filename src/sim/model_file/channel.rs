@@ -267,6 +267,18 @@ pub(super) fn parse_channel(
     })
 }
 
+/// `v`, the value of `table.key`, as a whole number (reported when it has a fraction; a value
+/// already reported missing or out of range is clamped and judged no further).
+fn whole(table: &str, key: &str, v: f64, errs: &mut Collector) -> u32 {
+    if v.is_finite() && v.fract() != 0.0 {
+        errs.bad(
+            format!("{table}.{key}"),
+            format!("must be a whole number, got {v}"),
+        );
+    }
+    v.clamp(0.0, u32::MAX as f64) as u32
+}
+
 /// The keys `moving_average = {taps, stages}`, `second_order_filter = {natural_frequency,
 /// damping}` and `zero_phase_filter = {time_constant}`: one filter per channel (`output_filter`
 /// included), or a moving average with an `output_filter` or a `second_order_filter` behind it
@@ -287,26 +299,12 @@ fn parse_lowpass(
         // taps = decimation)
         let decimation = e.num_pos("decimation", true, errs).unwrap_or(1.0);
         e.finish(errs);
-        for (key, v) in [
-            ("taps", taps),
-            ("stages", stages),
-            ("decimation", decimation),
-        ] {
-            if v.is_finite() && v.fract() != 0.0 {
-                errs.bad(
-                    format!("{p}.{key}"),
-                    format!("must be a whole number, got {v}"),
-                );
-            }
-        }
-        found.push((
-            p,
-            LowPass::MovingAverage {
-                taps: taps.clamp(0.0, u32::MAX as f64) as u32,
-                stages: stages.clamp(0.0, u32::MAX as f64) as u32,
-                decimation: decimation.clamp(0.0, u32::MAX as f64) as u32,
-            },
-        ));
+        let lp = LowPass::MovingAverage {
+            taps: whole(&p, "taps", taps, errs),
+            stages: whole(&p, "stages", stages, errs),
+            decimation: whole(&p, "decimation", decimation, errs),
+        };
+        found.push((p, lp));
     }
     if let Some((p, tt)) = k.table("second_order_filter", errs) {
         let mut e = Keys::new(tt, &p);
@@ -381,19 +379,11 @@ fn parse_lowpass(
         let c = e.num_pos("cutoff", true, errs);
         let cutoff_hz = e.required("cutoff", c, errs);
         e.finish(errs);
-        if taps.is_finite() && taps.fract() != 0.0 {
-            errs.bad(
-                format!("{p}.taps"),
-                format!("must be a whole number, got {taps}"),
-            );
-        }
-        found.push((
-            p,
-            LowPass::Fir {
-                taps: taps.clamp(0.0, u32::MAX as f64) as u32,
-                cutoff_hz,
-            },
-        ));
+        let lp = LowPass::Fir {
+            taps: whole(&p, "taps", taps, errs),
+            cutoff_hz,
+        };
+        found.push((p, lp));
     }
     let behind = output_filter.map(|f| LowPass::FirstOrder {
         time_constant_s: f.time_constant_s,
