@@ -1854,14 +1854,13 @@ fn complete_cascade(
     if !short_front(&effects[i].params) {
         return None;
     }
-    // The named filter refitted: a moving average as such; a first or second order behind the
-    // front as either, the first order unless the second's Akaike criterion is better by
-    // AIC_MARGIN (the reference low-pass, as in `greedy_stationary`; an overdamped second
-    // order at the end of its damping scan is a first order by another name).
+    // The named filter refitted: a moving average or a first order as such; a second order
+    // behind the front as a first or second order, the first unless the second's Akaike
+    // criterion is better by AIC_MARGIN (the reference low-pass, as in `greedy_stationary`; an
+    // overdamped second order at the end of its damping scan is a first order by another
+    // name). A first order stays one: as a second order it turned into a resonance that took
+    // the line beside it, with a one-tap average in front (tests/gap/line_behind_filter.rs).
     let refit_named = |spec: &ModelSpec| -> Option<(EffectParams, GlsFit)> {
-        // (a named first order stays one: as a second order it can turn into a resonance
-        // that takes a line beside it, an identity in front; session 46's line behind a first
-        // order of 30 ms)
         if named_kind != EffectKind::SecondOrderFilter {
             return prob.scan_params(spec, named_kind);
         }
