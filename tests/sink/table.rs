@@ -287,6 +287,25 @@ fn an_effect_seen_in_time_alone_says_the_gap_is_unchanged() {
     assert!(!line.contains("->"), "{line}");
 }
 
+/// A CIC with a Butterworth behind it, named as two effects, is said to be one filter in series;
+/// a low-pass named alone says nothing of the kind.
+#[test]
+fn a_decimator_and_a_low_pass_are_said_to_be_in_series() {
+    let series = "the moving average and the low-pass are one filter in series, the average first";
+    let cic = json!({"kind": "moving_average", "params": {"decimation": 8, "stages": 3,
+        "taps": 8}, "gap_after": 0.86});
+    let bw = json!({"kind": "second_order_filter", "params": {"bilinear": true,
+        "damping": 0.70, "natural_frequency": 40.0}, "gap_after": 1276.0});
+    for (effects, said) in [(vec![bw.clone(), cic], true), (vec![bw], false)] {
+        let rec = json!({"type": "diagnosis", "channel": "g", "gap_before": 4749.0,
+            "gap_after": 0.86, "verdict": "explained", "regions": [], "effects": effects,
+            "final": true});
+        let d: allanscope::gap::record::DiagnosisRecord = serde_json::from_value(rec).unwrap();
+        let line = allanscope::sink::table::diagnosis_line(&d, "deg", &TableStyle::default());
+        assert_eq!(line.contains(series), said, "{line}");
+    }
+}
+
 #[test]
 fn three_significant_digits() {
     assert_eq!(sig3(0.0041666), "0.00417");

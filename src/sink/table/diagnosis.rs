@@ -64,6 +64,19 @@ pub fn diagnosis_line(d: &DiagnosisRecord, unit: &str, style: &TableStyle) -> St
             s
         }
     };
+    // A moving average and a first or second order named together are one filter in series
+    // (docs/gap.md, "A low-pass behind a decimator (session 46)").
+    let named = |kinds: &[&str]| {
+        d.effects
+            .iter()
+            .any(|e| kinds.contains(&e.effect.kind_name()))
+    };
+    if named(&["moving_average"]) && named(&["output_filter", "second_order_filter"]) {
+        let _ = write!(
+            line,
+            "; the moving average and the low-pass are one filter in series, the average first"
+        );
+    }
     if let Some(w) = crate::sink::jump_words::jump_words(d, unit, &sig3) {
         let _ = write!(line, "; {w}");
     }
