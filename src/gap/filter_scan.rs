@@ -88,13 +88,7 @@ pub fn scan(
     base: &ModelSpec,
     kind: EffectKind,
 ) -> Option<(EffectParams, GlsFit)> {
-    // (behind or in front of the filter of `base`, when the two make a cascade)
-    let fit = |lp: LowPass| {
-        prob.gls(&ModelSpec {
-            filter: Some(LowPass::compose(base.filter, lp)),
-            ..base.clone()
-        })
-    };
+    let fit = |lp: LowPass| fit_with(prob, base, lp);
     let best = match kind {
         EffectKind::MovingAverage => scan_moving_average(prob, &fit),
         EffectKind::SecondOrderFilter => scan_second_order(prob, &fit),
@@ -102,6 +96,15 @@ pub fn scan(
         _ => None,
     }?;
     Some((EffectParams::from_lowpass(best.0), best.1))
+}
+
+/// The fit of `base` with the filter `lp` (behind or in front of the filter of `base` when the
+/// two make a cascade, [`LowPass::compose`]).
+fn fit_with(prob: &GapProblem, base: &ModelSpec, lp: LowPass) -> Option<GlsFit> {
+    prob.gls(&ModelSpec {
+        filter: Some(LowPass::compose(base.filter, lp)),
+        ..base.clone()
+    })
 }
 
 /// The FIR's highest cut-off scanned, times `tau0` (below Nyquist's 0.5).
@@ -194,12 +197,7 @@ pub fn scan_in_form(
     let Some(LowPass::SecondOrder { form, .. }) = p.lowpass() else {
         return prob.scan_params(base, p.kind());
     };
-    let fit = |lp: LowPass| {
-        prob.gls(&ModelSpec {
-            filter: Some(LowPass::compose(base.filter, lp)),
-            ..base.clone()
-        })
-    };
+    let fit = |lp: LowPass| fit_with(prob, base, lp);
     let form = match form {
         SecondOrderForm::Sampled { .. } => SecondOrderForm::PoleMapped,
         f => f,

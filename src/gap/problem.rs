@@ -535,7 +535,7 @@ impl GapProblem {
             LowPass::Cascade { .. } => lp,
             LowPass::Fir { taps, cutoff_hz } => LowPass::Fir {
                 taps,
-                cutoff_hz: (cutoff_hz / g).min(0.45 / tau0_s),
+                cutoff_hz: (cutoff_hz / g).min(super::filter_scan::FIR_TOP / tau0_s),
             },
             LowPass::FirstOrder { time_constant_s } => LowPass::FirstOrder {
                 time_constant_s: time_constant_s * g,

@@ -401,11 +401,7 @@ impl LowPass {
     /// read every `D`-th sample for unit-variance white input at the internal rate (`h` its
     /// impulse response there, DC gain 1).
     fn decimated_autocovariance(taps: u32, stages: u32, decimation: u32) -> Vec<f64> {
-        let h = Self::fir(taps, stages);
-        (0..h.len())
-            .step_by(decimation.max(1) as usize)
-            .map(|k| h.iter().zip(&h[k..]).map(|(a, b)| a * b).sum())
-            .collect()
+        autocovariance_every(&Self::fir(taps, stages), decimation.max(1) as usize)
     }
 
     /// The factor on the output step's white-rate standard deviation that gives the internal
@@ -436,10 +432,7 @@ impl LowPass {
         match *self {
             // `sum_i h_i h_{i+k}`: DC gain 1 makes the two-sided total `(sum h)^2 = 1`
             LowPass::Fir { taps, cutoff_hz } => {
-                let h = fir_window_sinc(taps, cutoff_hz, tau0_s);
-                (0..h.len())
-                    .map(|k| h.iter().zip(&h[k..]).map(|(a, b)| a * b).sum())
-                    .collect()
+                autocovariance_every(&fir_window_sinc(taps, cutoff_hz, tau0_s), 1)
             }
             LowPass::Cascade { front, back } => convolve_even(
                 &front.lowpass().autocorrelation(tau0_s),
@@ -698,6 +691,15 @@ impl LowPass {
             }
         }
     }
+}
+
+/// `sum_i h_i h_{i + step j}`, `j = 0, 1, ...`: the autocovariance of the impulse response `h`
+/// for unit-variance white input, read every `step`-th lag.
+fn autocovariance_every(h: &[f64], step: usize) -> Vec<f64> {
+    (0..h.len())
+        .step_by(step)
+        .map(|k| h.iter().zip(&h[k..]).map(|(a, b)| a * b).sum())
+        .collect()
 }
 
 /// The autocorrelation of two filters in cascade from theirs, both given from lag 0 and even:
