@@ -176,9 +176,13 @@ pub fn effect_toml(effect: Option<EffectParams>) -> String {
         Some(EffectParams::ZeroPhaseFilter { time_constant_s }) => {
             format!("zero_phase_filter = {{ time_constant = {time_constant_s:e} }}\n")
         }
-        Some(EffectParams::FirFilter { cutoff_hz, taps }) => {
-            format!("fir_filter = {{ taps = {taps}, cutoff = {cutoff_hz:e} }}\n")
-        }
+        Some(EffectParams::FirFilter {
+            cutoff_hz,
+            decimation,
+            taps,
+        }) => format!(
+            "fir_filter = {{ taps = {taps}, cutoff = {cutoff_hz:e}, decimation = {decimation} }}\n"
+        ),
         Some(EffectParams::BandNoise {
             frequency_hz,
             sigma,
@@ -377,6 +381,7 @@ pub fn draw_effect_params(
         EffectKind::FirFilter => EffectParams::FirFilter {
             taps: rng.random_range(15..=95u32),
             cutoff_hz: log_uniform(rng, 0.02 / tau0, 0.4 / tau0),
+            decimation: 1,
         },
         EffectKind::Temperature => EffectParams::Temperature {
             coefficient: 0.0,

@@ -73,9 +73,17 @@ impl FilterKey {
             LowPass::ZeroPhase { time_constant_s } => {
                 FilterKey(3, time_constant_s.to_bits(), 0, 0, 0)
             }
-            LowPass::Fir { taps, cutoff_hz } => {
-                FilterKey(6, u64::from(taps), cutoff_hz.to_bits(), 0, 0)
-            }
+            LowPass::Fir {
+                taps,
+                cutoff_hz,
+                decimation,
+            } => FilterKey(
+                6,
+                u64::from(taps),
+                cutoff_hz.to_bits(),
+                u64::from(decimation),
+                0,
+            ),
         }
     }
 }

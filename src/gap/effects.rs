@@ -185,10 +185,12 @@ pub enum EffectParams {
         #[serde(rename = "time_constant", deserialize_with = "nullable_f64")]
         time_constant_s: f64,
     },
-    /// [`LowPass::Fir`]: the cut-off (Hz) and the taps.
+    /// [`LowPass::Fir`]: the cut-off (Hz), the decimation (written only above 1) and the taps.
     FirFilter {
         #[serde(rename = "cutoff", deserialize_with = "nullable_f64")]
         cutoff_hz: f64,
+        #[serde(default = "one", skip_serializing_if = "is_one")]
+        decimation: u32,
         taps: u32,
     },
     /// Narrow-band noise: centre (Hz), rms (u/s), full width at half power (Hz).
@@ -274,7 +276,15 @@ impl EffectParams {
             EffectParams::ZeroPhaseFilter { time_constant_s } => {
                 Some(LowPass::ZeroPhase { time_constant_s })
             }
-            EffectParams::FirFilter { cutoff_hz, taps } => Some(LowPass::Fir { taps, cutoff_hz }),
+            EffectParams::FirFilter {
+                cutoff_hz,
+                decimation,
+                taps,
+            } => Some(LowPass::Fir {
+                taps,
+                cutoff_hz,
+                decimation,
+            }),
             _ => None,
         }
     }
@@ -312,7 +322,15 @@ impl EffectParams {
             LowPass::ZeroPhase { time_constant_s } => {
                 EffectParams::ZeroPhaseFilter { time_constant_s }
             }
-            LowPass::Fir { taps, cutoff_hz } => EffectParams::FirFilter { cutoff_hz, taps },
+            LowPass::Fir {
+                taps,
+                cutoff_hz,
+                decimation,
+            } => EffectParams::FirFilter {
+                cutoff_hz,
+                decimation,
+                taps,
+            },
         }
     }
 
@@ -434,8 +452,17 @@ impl EffectParams {
                 ("sigma", sigma),
                 ("width", width_hz),
             ],
-            EffectParams::FirFilter { cutoff_hz, taps } => {
-                vec![("cutoff", cutoff_hz), ("taps", f64::from(taps))]
+            EffectParams::FirFilter {
+                cutoff_hz,
+                decimation,
+                taps,
+            } => {
+                let mut v = vec![("cutoff", cutoff_hz)];
+                if decimation > 1 {
+                    v.push(("decimation", f64::from(decimation)));
+                }
+                v.push(("taps", f64::from(taps)));
+                v
             }
         }
     }
@@ -545,6 +572,7 @@ pub fn canonical_lowpass(kind: EffectKind, shape: f64) -> LowPass {
         EffectKind::FirFilter => LowPass::Fir {
             taps: 31,
             cutoff_hz: shape,
+            decimation: 1,
         },
         _ => LowPass::FirstOrder {
             time_constant_s: shape,

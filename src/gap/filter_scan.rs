@@ -114,38 +114,93 @@ pub const FIR_TOP: f64 = 0.45;
 /// tries every whole number between the best one's neighbours.
 const FIR_TAPS: [u32; 13] = [5, 7, 9, 11, 15, 19, 23, 31, 39, 47, 63, 95, 127];
 
-/// The linear-phase FIR ([`LowPass::Fir`]): for each of [`FIR_TAPS`] (no more than a tenth of
-/// the curve's longest cluster), the cut-off's grid and a golden section on `ln f_c` within a
-/// grid step of its best point; then a golden section on whole taps between the best count's
-/// neighbours, the cut-off polished at each. The cut-off is polished for every count because
-/// the curve is steep in it: on an hour at 1 kHz, the grid's steps of 21% left every point far
-/// from the truth's fit, and their order said nothing about the taps (a 47-tap filter at 131 Hz
-/// was named with 111 taps and a sinusoid; docs/gap.md, "A linear-phase FIR low-pass (session
-/// 46)").
+/// The linear-phase FIR ([`LowPass::Fir`]) at the output rate ([`scan_fir_at`]); when its best
+/// cut-off is at the scan's top, also the FIR run at twice the output rate and read every
+/// second sample with its cut-off about the output's Nyquist frequency (a half-band
+/// decimator), taken when it lowers the chi-squared by more than [`SPAN_PARAMETER_CHI2`] (the
+/// decimation is one more discrete choice). A half-band decimator's aliasing leaves the
+/// output's spectrum nearly flat to Nyquist, which no output-rate low-pass reaches: a 31-tap
+/// half-band at 1 kHz read at 500 Hz was named a bilinear second order at the grid's top with
+/// a sinusoid at Nyquist (docs/gap.md, "A FIR read every so many samples (session 47)").
 fn scan_fir(
     prob: &GapProblem,
     fit: &dyn Fn(LowPass) -> Option<GlsFit>,
 ) -> Option<(LowPass, GlsFit)> {
-    let m_max = prob.ms.last().copied().unwrap_or(1);
-    let taps: Vec<u32> = FIR_TAPS
-        .into_iter()
-        .filter(|&t| u64::from(t) * 10 <= m_max)
-        .collect();
     let cutoffs = prob.grid(EffectKind::FirFilter).points();
-    if taps.is_empty() || cutoffs.len() < 2 {
+    if cutoffs.len() < 2 {
         return None;
     }
     let c_top = FIR_TOP / prob.tau0_s;
+    let out = scan_fir_at(prob, fit, 1, &cutoffs, c_top);
+    let (cutoff_hz, chi2) = match &out {
+        Some((LowPass::Fir { cutoff_hz, .. }, f)) => (*cutoff_hz, f.chi2),
+        _ => return out,
+    };
+    if cutoff_hz < HALF_BAND_GATE * c_top {
+        return out;
+    }
+    // the same log steps as the output rate's grid, about the output's Nyquist frequency
+    let ratio = cutoffs[1] / cutoffs[0];
+    let (lo, hi) = (
+        HALF_BAND_CUTOFFS.0 / prob.tau0_s,
+        HALF_BAND_CUTOFFS.1 / prob.tau0_s,
+    );
+    let around: Vec<f64> = std::iter::successors(Some(lo), |c| Some(c * ratio))
+        .take_while(|&c| c <= hi)
+        .collect();
+    let half = scan_fir_at(prob, fit, 2, &around, 2.0 * c_top);
+    match half {
+        Some(h) if h.1.chi2 + SPAN_PARAMETER_CHI2 < chi2 => {
+            tracing::trace!(lp = ?h.0, chi2 = h.1.chi2, output_rate = chi2, "a half-band FIR");
+            Some(h)
+        }
+        _ => out,
+    }
+}
+
+/// The output-rate FIR's best cut-off, as a share of the scan's top, from which the half-band
+/// decimator is tried too ([`scan_fir`]).
+const HALF_BAND_GATE: f64 = 0.99;
+
+/// The half-band decimator's cut-offs on its grid, times the output step `tau0` (the output's
+/// Nyquist frequency is 0.5; the polish may leave the range, up to [`FIR_TOP`] of the
+/// internal rate's Nyquist).
+const HALF_BAND_CUTOFFS: (f64, f64) = (0.35, 0.75);
+
+/// The FIR run at `decimation` times the output rate: for each of [`FIR_TAPS`] (no more than a
+/// tenth of the curve's longest cluster, times the decimation), the cut-offs `cutoffs` (Hz)
+/// and a golden section on `ln f_c` within a grid step of its best point, below `c_top` (Hz);
+/// then a golden section on whole taps between the best count's neighbours, the cut-off
+/// polished at each. The cut-off is polished for every count because the curve is steep in
+/// it: on an hour at 1 kHz, the grid's steps of 21% left every point far from the truth's fit,
+/// and their order said nothing about the taps (a 47-tap filter at 131 Hz was named with 111
+/// taps and a sinusoid; docs/gap.md, "A linear-phase FIR low-pass (session 46)").
+fn scan_fir_at(
+    prob: &GapProblem,
+    fit: &dyn Fn(LowPass) -> Option<GlsFit>,
+    decimation: u32,
+    cutoffs: &[f64],
+    c_top: f64,
+) -> Option<(LowPass, GlsFit)> {
+    let m_max = prob.ms.last().copied().unwrap_or(1);
+    let taps: Vec<u32> = FIR_TAPS
+        .into_iter()
+        .filter(|&t| u64::from(t) * 10 <= m_max * u64::from(decimation))
+        .collect();
+    if taps.is_empty() || cutoffs.len() < 2 {
+        return None;
+    }
     let at = |taps: u32, lc: f64| LowPass::Fir {
         taps,
         cutoff_hz: lc.exp().min(c_top),
+        decimation,
     };
     let dc = (cutoffs[1] / cutoffs[0]).ln();
     // the best cut-off (its log) for `t` taps, with the chi-squared there
     let polished = |t: u32| -> (f64, f64) {
         let chi2 = |lc: f64| fit(at(t, lc)).map_or(f64::INFINITY, |f| f.chi2);
         let (mut lc, mut best) = (cutoffs[0].ln(), f64::INFINITY);
-        for &c in &cutoffs {
+        for &c in cutoffs {
             let v = chi2(c.ln());
             if v < best {
                 (lc, best) = (c.ln(), v);

@@ -533,9 +533,15 @@ impl GapProblem {
         let scaled = |g: f64| match lp {
             // (a cascade is named in two steps, each part scanned behind the other)
             LowPass::Cascade { .. } => lp,
-            LowPass::Fir { taps, cutoff_hz } => LowPass::Fir {
+            LowPass::Fir {
                 taps,
-                cutoff_hz: (cutoff_hz / g).min(super::filter_scan::FIR_TOP / tau0_s),
+                cutoff_hz,
+                decimation,
+            } => LowPass::Fir {
+                taps,
+                cutoff_hz: (cutoff_hz / g)
+                    .min(super::filter_scan::FIR_TOP * f64::from(decimation.max(1)) / tau0_s),
+                decimation,
             },
             LowPass::FirstOrder { time_constant_s } => LowPass::FirstOrder {
                 time_constant_s: time_constant_s * g,

@@ -548,6 +548,7 @@ mod tests {
             },
             EffectParams::FirFilter {
                 cutoff_hz: 131.0,
+                decimation: 1,
                 taps: 47,
             },
             EffectParams::BandNoise {
@@ -606,8 +607,9 @@ mod tests {
     }
 
     /// The second order's sampled form writes its zero after the other two parameters, and a
-    /// moving average run faster than the output its decimation before its stages (the record's
-    /// keys sorted); `record_params` names them in that order; read back, each is the same.
+    /// moving average run faster than the output its decimation before its stages, and a FIR
+    /// run faster than the output its decimation between cut-off and taps (the record's keys
+    /// sorted); `record_params` names them in that order; read back, each is the same.
     #[test]
     fn the_sampled_forms_write_their_extra_parameter() {
         for (p, want, names) in [
@@ -629,6 +631,15 @@ mod tests {
                 },
                 r#"{"kind":"moving_average","params":{"decimation":8,"stages":3,"taps":8},"gap_after":1.5}"#,
                 &["decimation", "stages", "taps"][..],
+            ),
+            (
+                EffectParams::FirFilter {
+                    cutoff_hz: 250.0,
+                    decimation: 2,
+                    taps: 31,
+                },
+                r#"{"kind":"fir_filter","params":{"cutoff":250.0,"decimation":2,"taps":31},"gap_after":1.5}"#,
+                &["cutoff", "decimation", "taps"][..],
             ),
         ] {
             let rec = EffectRecord {

@@ -53,11 +53,18 @@ pub enum LowPass {
     /// convolution of the parts' and its power gain their product (docs/gap.md, "A low-pass
     /// behind a decimator (session 46)").
     Cascade { front: Average, back: Behind },
-    /// A linear-phase FIR low-pass of `taps` taps at the output rate: the Hamming-windowed sinc
-    /// of cut-off `cutoff_hz` (the window method, scipy's `firwin` and the STIM300's filters),
-    /// scaled to DC gain 1 ([`fir_window_sinc`]; docs/gap.md, "A linear-phase FIR low-pass
-    /// (session 46)").
-    Fir { taps: u32, cutoff_hz: f64 },
+    /// A linear-phase FIR low-pass of `taps` taps: the Hamming-windowed sinc of cut-off
+    /// `cutoff_hz` (the window method, scipy's `firwin` and the STIM300's filters), scaled to
+    /// DC gain 1 ([`fir_window_sinc`]; docs/gap.md, "A linear-phase FIR low-pass (session
+    /// 46)"). With `decimation` above 1 it runs at `decimation` times the output rate and is
+    /// read every `decimation`-th sample (`taps` counts the internal samples): a half-band
+    /// decimator by 2 (its cut-off at the output's Nyquist), a FIR filtering at 2 kHz read
+    /// at a lower rate (docs/gap.md, "A FIR read every so many samples (session 47)").
+    Fir {
+        taps: u32,
+        cutoff_hz: f64,
+        decimation: u32,
+    },
 }
 
 /// The impulse response of [`LowPass::Fir`]: `h_n = w_n sin(2 pi f_c t_n) / (pi t_n)` at
@@ -279,13 +286,22 @@ impl LowPass {
     /// A problem with the parameters, for model files and options (None: fine).
     pub fn check(&self, tau0_s: f64) -> Option<String> {
         match *self {
-            LowPass::Fir { taps, cutoff_hz } => {
+            LowPass::Fir {
+                taps,
+                cutoff_hz,
+                decimation,
+            } => {
+                let nyquist = 0.5 * f64::from(decimation) / tau0_s;
                 if !(1..=MAX_FIR_TAPS).contains(&taps) {
                     Some(format!("taps {taps} must be 1..={MAX_FIR_TAPS}"))
-                } else if !(cutoff_hz > 0.0 && cutoff_hz * tau0_s < 0.5) {
+                } else if !(1..=MAX_DECIMATION).contains(&decimation) {
                     Some(format!(
-                        "cutoff {cutoff_hz} Hz must be above 0 and below Nyquist ({} Hz)",
-                        0.5 / tau0_s
+                        "decimation {decimation} must be 1..={MAX_DECIMATION}"
+                    ))
+                } else if !(cutoff_hz > 0.0 && cutoff_hz < nyquist) {
+                    Some(format!(
+                        "cutoff {cutoff_hz} Hz must be above 0 and below the Nyquist frequency \
+                         of the rate it runs at ({nyquist} Hz)"
                     ))
                 } else {
                     None
@@ -418,8 +434,8 @@ impl LowPass {
     /// autocovariances then sum to the output step's white variance, so `N` is the output's
     /// low-frequency white level, aliasing included, as the diagnosis fits it. For a CIC
     /// (taps a multiple of `D`) it is `sqrt(D)`: the mean of `D` internal samples has the
-    /// output step's variance.
-    pub fn internal_white_scale(&self) -> f64 {
+    /// output step's variance. `tau0_s` is the output step (a FIR's taps depend on it).
+    pub fn internal_white_scale(&self, tau0_s: f64) -> f64 {
         match *self {
             LowPass::MovingAverage {
                 taps,
@@ -429,7 +445,15 @@ impl LowPass {
                 let r = Self::decimated_autocovariance(taps, stages, decimation);
                 1.0 / two_sided_sum(&r).sqrt()
             }
-            LowPass::Cascade { front, .. } => front.lowpass().internal_white_scale(),
+            LowPass::Fir {
+                taps,
+                cutoff_hz,
+                decimation,
+            } if decimation > 1 => {
+                let r = fir_decimated_autocovariance(taps, cutoff_hz, decimation, tau0_s);
+                1.0 / two_sided_sum(&r).sqrt()
+            }
+            LowPass::Cascade { front, .. } => front.lowpass().internal_white_scale(tau0_s),
             _ => 1.0,
         }
     }
@@ -439,9 +463,20 @@ impl LowPass {
     /// `rho(0) + 2 sum_{k>0} rho(k) = 1` (DC gain 1).
     pub fn autocorrelation(&self, tau0_s: f64) -> Vec<f64> {
         match *self {
-            // `sum_i h_i h_{i+k}`: DC gain 1 makes the two-sided total `(sum h)^2 = 1`
-            LowPass::Fir { taps, cutoff_hz } => {
-                autocovariance_every(&fir_window_sinc(taps, cutoff_hz, tau0_s), 1)
+            // `sum_i h_i h_{i+D k}`: at D = 1 DC gain 1 makes the two-sided total
+            // `(sum h)^2 = 1`; read every D-th sample it is scaled to 1 as the decimated
+            // average's is
+            LowPass::Fir {
+                taps,
+                cutoff_hz,
+                decimation,
+            } => {
+                let r = fir_decimated_autocovariance(taps, cutoff_hz, decimation, tau0_s);
+                if decimation <= 1 {
+                    return r;
+                }
+                let total = two_sided_sum(&r);
+                r.iter().map(|v| v / total).collect()
             }
             LowPass::Cascade { front, back } => convolve_even(
                 &front.lowpass().autocorrelation(tau0_s),
@@ -591,14 +626,32 @@ impl LowPass {
     pub fn power_gain(&self, tau0_s: f64, frequency_hz: f64) -> f64 {
         let w = 2.0 * PI * frequency_hz * tau0_s;
         match *self {
-            // `|sum_n h_n e^{-i w n}|^2`
-            LowPass::Fir { taps, cutoff_hz } => {
-                let h = fir_window_sinc(taps, cutoff_hz, tau0_s);
-                let (re, im) = h.iter().enumerate().fold((0.0, 0.0), |(re, im), (n, x)| {
-                    let a = w * n as f64;
-                    (re + x * a.cos(), im - x * a.sin())
-                });
-                re * re + im * im
+            // `|sum_n h_n e^{-i x n}|^2` at the internal rate; read every D-th sample, the D
+            // images `x = (w + 2 pi a) / D` fold onto `w`, scaled as the autocorrelation is
+            // (as the decimated average's below)
+            LowPass::Fir {
+                taps,
+                cutoff_hz,
+                decimation,
+            } => {
+                let d = decimation.max(1);
+                let h = fir_window_sinc(taps, cutoff_hz, tau0_s / f64::from(d));
+                let internal = |x: f64| {
+                    let (re, im) = h.iter().enumerate().fold((0.0, 0.0), |(re, im), (n, c)| {
+                        let a = x * n as f64;
+                        (re + c * a.cos(), im - c * a.sin())
+                    });
+                    re * re + im * im
+                };
+                if d == 1 {
+                    return internal(w);
+                }
+                let folded = |w: f64| {
+                    (0..d)
+                        .map(|a| internal((w + 2.0 * PI * f64::from(a)) / f64::from(d)))
+                        .sum::<f64>()
+                };
+                folded(w) / folded(0.0)
             }
             LowPass::Cascade { front, back } => {
                 front.lowpass().power_gain(tau0_s, frequency_hz)
@@ -660,7 +713,9 @@ impl LowPass {
     pub fn memory_s(&self, tau0_s: f64) -> f64 {
         match *self {
             // its span
-            LowPass::Fir { taps, .. } => f64::from(taps) * tau0_s,
+            LowPass::Fir {
+                taps, decimation, ..
+            } => f64::from(taps) * tau0_s / f64::from(decimation.max(1)),
             // the back's memory of the front's output
             LowPass::Cascade { front, back } => {
                 front.lowpass().memory_s(tau0_s) + back.lowpass().memory_s(tau0_s)
@@ -705,10 +760,29 @@ impl LowPass {
 /// `sum_i h_i h_{i + step j}`, `j = 0, 1, ...`: the autocovariance of the impulse response `h`
 /// for unit-variance white input, read every `step`-th lag.
 fn autocovariance_every(h: &[f64], step: usize) -> Vec<f64> {
+    if step == 0 {
+        return Vec::new();
+    }
     (0..h.len())
         .step_by(step)
         .map(|k| h.iter().zip(&h[k..]).map(|(a, b)| a * b).sum())
         .collect()
+}
+
+/// [`autocovariance_every`] of [`LowPass::Fir`]'s taps at the internal step `tau0_s / D`,
+/// every `D`-th lag: the autocovariance of its output read every `D`-th sample for unit-variance
+/// white input at the internal rate.
+fn fir_decimated_autocovariance(
+    taps: u32,
+    cutoff_hz: f64,
+    decimation: u32,
+    tau0_s: f64,
+) -> Vec<f64> {
+    let d = decimation.max(1);
+    autocovariance_every(
+        &fir_window_sinc(taps, cutoff_hz, tau0_s / f64::from(d)),
+        d as usize,
+    )
 }
 
 /// The autocorrelation of two filters in cascade from theirs, both given from lag 0 and even:
@@ -1256,6 +1330,66 @@ mod tests {
         assert!((got / want - 1.0).abs() < 1e-12, "{got} vs {want}");
     }
 
+    /// A FIR read every `D`-th sample: its autocorrelation is the internal taps' polyphase sum
+    /// `sum_i h_i h_{i + D k}` (by hand here) scaled to a two-sided total of 1, and its power
+    /// gain is that autocorrelation's transform, `rho_0 + 2 sum_k rho_k cos(w k)` (Wiener-
+    /// Khinchin; the folded images of [`LowPass::power_gain`] are its Poisson sum). A FIR at
+    /// the output rate (`D = 1`) keeps session 46's taps and gains.
+    #[test]
+    fn a_fir_read_every_so_many_samples_is_its_polyphase_sum() {
+        let tau0 = 0.002;
+        for (taps, cutoff, d) in [
+            (31u32, 250.0, 2u32),
+            (64, 60.0, 8),
+            (23, 180.0, 2),
+            (47, 131.0, 1),
+        ] {
+            let lp = LowPass::Fir {
+                taps,
+                cutoff_hz: cutoff,
+                decimation: d,
+            };
+            let h = fir_window_sinc(taps, cutoff, tau0 / f64::from(d));
+            let d = d as usize;
+            let raw: Vec<f64> = (0..h.len().div_ceil(d))
+                .map(|k| {
+                    (0..h.len())
+                        .filter_map(|i| h.get(i + d * k).map(|b| h[i] * b))
+                        .sum()
+                })
+                .collect();
+            let total = raw[0] + 2.0 * raw[1..].iter().sum::<f64>();
+            let rho = lp.autocorrelation(tau0);
+            assert_eq!(rho.len(), raw.len(), "{lp:?}");
+            for (k, (r, w)) in rho.iter().zip(&raw).enumerate() {
+                assert!(
+                    (r - w / total).abs() < 1e-13,
+                    "{lp:?} lag {k}: {r} vs {}",
+                    w / total
+                );
+            }
+            for f in [0.0, 7.0, 60.0, 125.0, 200.0, 249.0] {
+                let w = 2.0 * PI * f * tau0;
+                let s = rho[0]
+                    + 2.0
+                        * rho[1..]
+                            .iter()
+                            .enumerate()
+                            .map(|(k, r)| r * (w * (k + 1) as f64).cos())
+                            .sum::<f64>();
+                let g = lp.power_gain(tau0, f);
+                assert!(
+                    (g - s).abs() < 1e-9 * s.abs().max(1e-3),
+                    "{lp:?} {f} Hz: {g} vs {s}"
+                );
+            }
+            assert!(
+                (lp.memory_s(tau0) - f64::from(taps) * tau0 / d as f64).abs() < 1e-15,
+                "{lp:?}"
+            );
+        }
+    }
+
     /// The running-sum impulse response against closed forms: one stage is `1/m` on `m` taps;
     /// two stages are the Bartlett triangle `(m - |k - (m - 1)|) / m^2` on `2m - 1` taps; three
     /// stages against the direct convolution of the two-stage one with the boxcar.
@@ -1569,6 +1703,7 @@ mod tests {
         let lp = LowPass::Fir {
             taps: 31,
             cutoff_hz: 100.0,
+            decimation: 1,
         };
         for (f, want) in [(0.0, 1.0), (100.0, 0.248_207_65), (150.0, 8.645_696_86e-5)] {
             let g = lp.power_gain(0.001, f);

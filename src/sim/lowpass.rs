@@ -53,11 +53,15 @@ pub enum LowPassGen {
         started: bool,
     },
     /// A FIR's taps `h` over a window of its last `h.len()` inputs, newest last
-    /// ([`LowPass::Fir`]).
+    /// ([`LowPass::Fir`]). With `decimation` above 1 it runs at the internal rate, as the
+    /// decimated moving average does.
     Fir {
         h: Vec<f64>,
         window: VecDeque<f64>,
         started: bool,
+        decimation: usize,
+        /// [`LowPass::internal_white_scale`].
+        white_scale: f64,
     },
     /// A moving average with a recursive low-pass behind it at the output rate
     /// ([`LowPass::Cascade`]): every input goes through the front, and every `decimation`-th
@@ -79,12 +83,20 @@ impl LowPassGen {
     pub fn new(lp: &LowPass, tau0_s: f64) -> Option<Self> {
         match *lp {
             LowPass::FirstOrder { .. } => None,
-            LowPass::Fir { taps, cutoff_hz } => {
-                let h = crate::model::lowpass::fir_window_sinc(taps, cutoff_hz, tau0_s);
+            LowPass::Fir {
+                taps,
+                cutoff_hz,
+                decimation,
+            } => {
+                let d = decimation.max(1);
+                let h =
+                    crate::model::lowpass::fir_window_sinc(taps, cutoff_hz, tau0_s / f64::from(d));
                 Some(LowPassGen::Fir {
                     window: VecDeque::with_capacity(h.len()),
                     h,
                     started: false,
+                    decimation: d as usize,
+                    white_scale: lp.internal_white_scale(tau0_s),
                 })
             }
             LowPass::Cascade { front, back } => {
@@ -122,7 +134,7 @@ impl LowPassGen {
                 since_exact: 0,
                 started: false,
                 decimation: decimation.max(1) as usize,
-                white_scale: lp.internal_white_scale(),
+                white_scale: lp.internal_white_scale(tau0_s),
             }),
             LowPass::SecondOrder { .. } => {
                 // The same poles and zeros as the AVAR's (model::lowpass): its
@@ -159,7 +171,9 @@ impl LowPassGen {
     /// output is every this-many-th one (1 for all but a decimated moving average).
     pub fn decimation(&self) -> usize {
         match self {
-            LowPassGen::MovingAverage { decimation, .. } => *decimation,
+            LowPassGen::MovingAverage { decimation, .. } | LowPassGen::Fir { decimation, .. } => {
+                *decimation
+            }
             LowPassGen::Cascade { front, .. } => front.decimation(),
             _ => 1,
         }
@@ -169,7 +183,9 @@ impl LowPassGen {
     /// ([`LowPass::internal_white_scale`]; 1 but for a decimated moving average).
     pub fn white_scale(&self) -> f64 {
         match self {
-            LowPassGen::MovingAverage { white_scale, .. } => *white_scale,
+            LowPassGen::MovingAverage { white_scale, .. } | LowPassGen::Fir { white_scale, .. } => {
+                *white_scale
+            }
             LowPassGen::Cascade { front, .. } => front.white_scale(),
             _ => 1.0,
         }
@@ -289,7 +305,9 @@ impl LowPassGen {
                     window.extend(std::iter::repeat_n(level, 2 * (weights.len() - 1) + 1));
                 }
             }
-            LowPassGen::Fir { h, window, started } => {
+            LowPassGen::Fir {
+                h, window, started, ..
+            } => {
                 if !*started {
                     *started = true;
                     // the newest slot is taken by the first input's push

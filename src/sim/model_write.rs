@@ -220,11 +220,20 @@ fn write_lowpass(s: &mut String, lp: LowPass) {
         }
         // (written as its parts above)
         LowPass::Cascade { .. } => {}
-        LowPass::Fir { taps, cutoff_hz } => {
+        LowPass::Fir {
+            taps,
+            cutoff_hz,
+            decimation,
+        } => {
             let _ = writeln!(
                 s,
-                "[channel.fir_filter]\ntaps = {taps}\ncutoff = {}",
-                num(cutoff_hz)
+                "[channel.fir_filter]\ntaps = {taps}\ncutoff = {}{}",
+                num(cutoff_hz),
+                if decimation > 1 {
+                    format!("\ndecimation = {decimation}")
+                } else {
+                    String::new()
+                }
             );
         }
     }
@@ -469,14 +478,34 @@ outliers = { rate = 0.001, size = 3.5 }
             m.channels[0].lowpass,
             Some(LowPass::Fir {
                 taps: 47,
-                cutoff_hz: 131.0
+                cutoff_hz: 131.0,
+                decimation: 1
             })
         );
         let text = model_toml(&m, "t", &[]);
         assert!(text.contains("[channel.fir_filter]"), "{text}");
+        assert!(!text.contains("decimation"), "{text}");
+        assert_eq!(read(&text), m);
+        // run at twice the output rate: the cut-off may reach the internal rate's Nyquist
+        let m = read(&format!(
+            "{head}fir_filter = {{ taps = 31, cutoff = 500.0, decimation = 2 }}\n"
+        ));
+        assert_eq!(
+            m.channels[0].lowpass,
+            Some(LowPass::Fir {
+                taps: 31,
+                cutoff_hz: 500.0,
+                decimation: 2
+            })
+        );
+        let text = model_toml(&m, "t", &[]);
+        assert!(text.contains("decimation = 2"), "{text}");
         assert_eq!(read(&text), m);
         for (extra, key) in [
             ("taps = 47, cutoff = 500.0", "fir_filter"),
+            ("taps = 31, cutoff = 1000.0, decimation = 2", "fir_filter"),
+            ("taps = 31, cutoff = 100.0, decimation = 1.5", "decimation"),
+            ("taps = 31, cutoff = 100.0, decimation = 0", "decimation"),
             ("taps = 4.5, cutoff = 100.0", "taps"),
             ("cutoff = 100.0", "taps"),
         ] {

@@ -198,9 +198,10 @@ pub fn effect_parts(
             number(c)
         );
     }
-    // The average run faster than the output (`decimation`): said in its name, with the CIC
-    // decimator named when its taps are the decimation.
-    let decimation = param("decimation").filter(|&d| kind == "moving_average" && d > 1.0);
+    // The average or FIR run faster than the output (`decimation`): said in its name, with the
+    // CIC decimator named when an average's taps are the decimation.
+    let decimation =
+        param("decimation").filter(|&d| matches!(kind, "moving_average" | "fir_filter") && d > 1.0);
     if let Some(d) = decimation {
         name += &format!(
             " run at {d:.0} times the output rate and read every {} sample, taps counted there",
@@ -344,12 +345,25 @@ mod tests {
     fn a_fir_is_named_with_its_cutoff_and_taps() {
         let e = RecordedEffect::Known(EffectParams::FirFilter {
             cutoff_hz: 131.0,
+            decimation: 1,
             taps: 47,
         });
         assert_eq!(
             effect_line(&e, "deg", &|v| format!("{v}")),
             "output linear-phase FIR low-pass (windowed sinc): cut-off = 131 Hz (period 0.007633587786259542 s), \
              taps = 47"
+        );
+        // run at twice the output rate (a half-band decimator)
+        let e = RecordedEffect::Known(EffectParams::FirFilter {
+            cutoff_hz: 250.0,
+            decimation: 2,
+            taps: 31,
+        });
+        assert_eq!(
+            effect_line(&e, "deg", &|v| format!("{v}")),
+            "output linear-phase FIR low-pass (windowed sinc) run at 2 times the output rate and \
+             read every 2nd sample, taps counted there: cut-off = 250 Hz (period 0.004 s), \
+             taps = 31, decimation = 2"
         );
     }
 }

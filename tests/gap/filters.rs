@@ -301,7 +301,54 @@ fn a_linear_phase_fir_is_named_with_taps_and_cutoff() {
         );
         let named: Vec<EffectParams> = d.effects.iter().map(|e| e.params).collect();
         match named[..] {
-            [EffectParams::FirFilter { taps: t, cutoff_hz }] => {
+            [EffectParams::FirFilter {
+                taps: t,
+                cutoff_hz,
+                decimation: 1,
+            }] => {
+                assert!(t.abs_diff(taps) <= 2, "{taps} taps: named {t}");
+                assert!(
+                    rel(cutoff_hz, cutoff) < 0.02,
+                    "{cutoff} Hz: named {cutoff_hz}"
+                );
+            }
+            _ => panic!(
+                "{taps} x {cutoff}: {named:?}, G {} -> {}",
+                d.gap_before, d.gap_after
+            ),
+        }
+        assert_eq!(d.verdict, Verdict::Explained, "{taps} x {cutoff}");
+    }
+}
+
+/// A half-band FIR decimator (a Hamming-windowed sinc cut at the output's Nyquist frequency, run
+/// at twice the output rate and read every second sample, as sigma-delta and MEMS parts
+/// decimate) is named as the FIR with `decimation = 2`, its taps within 2 and its cut-off
+/// within 2%, alone, `explained`: 31 taps read at 500 Hz and 63 read at 1 kHz. Session 46's
+/// build named the first a bilinear second order at the grid's top with a sinusoid at Nyquist
+/// (a blind review's f1_08; docs/gap.md, "A FIR read every so many samples (session 47)").
+#[test]
+fn a_half_band_decimator_is_named_with_its_decimation() {
+    for (tau0, terms, taps, seconds) in [
+        (0.002, "N = 0.003\nB = 0.0004", 31u32, 1800.0),
+        (0.001, "N = 0.002\nB = 0.0003", 63, 1200.0),
+    ] {
+        let cutoff = 0.5 / tau0;
+        let d = unit_diagnosis(
+            tau0,
+            &format!(
+                "{terms}\nfir_filter = {{ taps = {taps}, cutoff = {cutoff}, decimation = 2 }}"
+            ),
+            23,
+            seconds,
+        );
+        let named: Vec<EffectParams> = d.effects.iter().map(|e| e.params).collect();
+        match named[..] {
+            [EffectParams::FirFilter {
+                taps: t,
+                cutoff_hz,
+                decimation: 2,
+            }] => {
                 assert!(t.abs_diff(taps) <= 2, "{taps} taps: named {t}");
                 assert!(
                     rel(cutoff_hz, cutoff) < 0.02,

@@ -378,10 +378,14 @@ fn parse_lowpass(
         let taps = e.required("taps", t, errs);
         let c = e.num_pos("cutoff", true, errs);
         let cutoff_hz = e.required("cutoff", c, errs);
+        // run faster than the output and read every `decimation`-th sample (a half-band
+        // decimator: 2, the cut-off at the output's Nyquist)
+        let decimation = e.num_pos("decimation", true, errs).unwrap_or(1.0);
         e.finish(errs);
         let lp = LowPass::Fir {
             taps: whole(&p, "taps", taps, errs),
             cutoff_hz,
+            decimation: whole(&p, "decimation", decimation, errs),
         };
         found.push((p, lp));
     }
