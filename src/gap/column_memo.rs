@@ -21,6 +21,10 @@ use std::sync::{Arc, Mutex};
 pub const MAX_COLUMNS: usize = 4096;
 /// Rounding floors kept at most (one column each).
 pub const MAX_FLOORS: usize = 16384;
+/// Filters whose autocorrelation is kept at most (the rounding floor's input, asked for at
+/// every white rate the floor is computed at: a tenth of a filtered unit's diagnosis was
+/// recomputing it; at most a few thousand lags each).
+pub const MAX_AUTOCORRELATIONS: usize = 1024;
 
 /// A filter's identity: its kind and the bits of its parameters.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -99,9 +103,21 @@ type FloorKey = (FilterKey, u64, u64);
 pub struct ColumnMemo {
     columns: Mutex<HashMap<FilterKey, FilterColumns>>,
     floors: Mutex<HashMap<FloorKey, Arc<Vec<f64>>>>,
+    autocorrelations: Mutex<HashMap<FilterKey, Arc<Vec<f64>>>>,
 }
 
 impl ColumnMemo {
+    /// The autocorrelation of `lp` ([`LowPass::autocorrelation`] at the problem's step),
+    /// computed by `make` the first time.
+    pub fn autocorrelation(&self, lp: &LowPass, make: impl FnOnce() -> Vec<f64>) -> Arc<Vec<f64>> {
+        kept_or_made(
+            &self.autocorrelations,
+            FilterKey::of(lp),
+            MAX_AUTOCORRELATIONS,
+            make,
+        )
+    }
+
     /// The columns of `lp`, computed by `make` the first time.
     pub fn columns(
         &self,

@@ -88,7 +88,16 @@ pub struct DiagnoseOptions {
     /// the covariance carries no rounding discrepancy ([`super::discrepancy`], which is for
     /// rate samples rounded after the filter).
     pub cov_counter: bool,
+    /// Threads on which the candidates of a step are scanned (at least 1; the record is the
+    /// same for any count: each candidate's scan is computed alone and they are judged in
+    /// order). The default is the machine's parallelism, at most [`MAX_SCAN_THREADS`].
+    pub threads: usize,
 }
+
+/// The most threads [`DiagnoseOptions::threads`] takes by default: a step scans about a dozen
+/// candidates, the second order's the longest (docs/gap.md, "The candidates scanned side by
+/// side (session 47)").
+pub const MAX_SCAN_THREADS: usize = 4;
 
 impl Default for DiagnoseOptions {
     fn default() -> Self {
@@ -102,8 +111,51 @@ impl Default for DiagnoseOptions {
             cov_coef: None,
             cov_filter: None,
             cov_counter: false,
+            threads: std::thread::available_parallelism()
+                .map_or(1, |n| n.get())
+                .min(MAX_SCAN_THREADS),
         }
     }
+}
+
+/// `f` of each item, in the items' order, on up to `threads` scoped threads taking the next
+/// item as they finish (the items are given longest first where that is known, so that no
+/// thread is left with the longest at the end).
+fn map_on_threads<T: Sync, R: Send>(
+    items: &[T],
+    threads: usize,
+    f: impl Fn(&T) -> R + Sync,
+) -> Vec<R> {
+    let threads = threads.clamp(1, items.len().max(1));
+    if threads == 1 {
+        return items.iter().map(f).collect();
+    }
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let mut done: Vec<(usize, R)> = std::thread::scope(|s| {
+        let workers: Vec<_> = (0..threads)
+            .map(|_| {
+                s.spawn(|| {
+                    let mut out = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        let Some(item) = items.get(i) else {
+                            return out;
+                        };
+                        out.push((i, f(item)));
+                    }
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .flat_map(|w| match w.join() {
+                Ok(v) => v,
+                Err(panic) => std::panic::resume_unwind(panic),
+            })
+            .collect()
+    });
+    done.sort_by_key(|(i, _)| *i);
+    done.into_iter().map(|(_, r)| r).collect()
 }
 
 /// Why no diagnosis could be made.
@@ -1369,10 +1421,17 @@ fn other_first_steps(
     let greedy_first = greedy.get(before.len()).map(|e| e.params.kind());
     let mut best_aic = akaike(greedy_fit, &greedy[before.len()..]);
     let mut best = None;
-    for p in passed_first {
-        if Some(p.0.kind()) == greedy_first {
-            continue;
-        }
+    let starts: Vec<&Passed> = passed_first
+        .iter()
+        .filter(|p| Some(p.0.kind()) != greedy_first)
+        .collect();
+    // Each start's search on its own, side by side (their candidates then on one thread
+    // each), then compared in the starts' order.
+    let inner = DiagnoseOptions {
+        threads: if starts.len() > 1 { 1 } else { opts.threads },
+        ..opts.clone()
+    };
+    let searched = map_on_threads(&starts, opts.threads, |p| {
         let mut effs = before.to_vec();
         let (_, cur, _, _) = greedy_stationary(
             prob,
@@ -1380,12 +1439,15 @@ fn other_first_steps(
             offset,
             &mut effs,
             start.clone(),
-            opts,
+            &inner,
             true,
-            Some(p.clone()),
+            Some((*p).clone()),
         );
         let cur = polish(prob, offset, before.len(), &mut effs, cur);
         bookkeeping_order(prob, offset, before.len(), &mut effs);
+        (effs, cur)
+    });
+    for (p, (effs, cur)) in starts.into_iter().zip(searched) {
         let a = akaike(&cur, &effs[before.len()..]);
         if a < best_aic {
             best_aic = a;
@@ -1542,24 +1604,47 @@ fn greedy_stationary(
         // The named filter refitted behind or in front of each cascade's other part scanned
         // (its index among the effects, its parameters; [`complete_cascade`]).
         let mut cascade_named: Vec<(EffectKind, (usize, EffectParams))> = Vec::new();
-        for &kind in kinds {
-            // One output filter at most (it takes the N column), or a moving average and a
-            // first or second order behind it (a cascade: docs/gap.md, "A low-pass behind a
-            // decimator (session 46)").
-            if effects.iter().any(|e| {
-                let named = e.params.kind();
-                let cascade = kind.cascades_with(named) && short_front(&e.params);
-                named == kind || (kind.is_filter() && named.is_filter() && !cascade)
-            }) {
-                continue;
+        // One output filter at most (it takes the N column), or a moving average and a first or
+        // second order behind it (a cascade: docs/gap.md, "A low-pass behind a decimator
+        // (session 46)").
+        let open: Vec<EffectKind> = kinds
+            .iter()
+            .copied()
+            .filter(|&kind| {
+                !effects.iter().any(|e| {
+                    let named = e.params.kind();
+                    let cascade = kind.cascades_with(named) && short_front(&e.params);
+                    named == kind || (kind.is_filter() && named.is_filter() && !cascade)
+                })
+            })
+            .collect();
+        // Each candidate's scan on its own, side by side (the second order's first: it is the
+        // longest), then judged in the kinds' order.
+        let mut order: Vec<usize> = (0..open.len()).collect();
+        order.sort_by_key(|&i| open[i] != EffectKind::SecondOrderFilter);
+        let effects_now: &[AddedEffect] = effects;
+        let (spec_now, chi2_now) = (&spec, cur.chi2);
+        let mut scans = map_on_threads(&order, opts.threads, |&i| {
+            let kind = open[i];
+            match complete_cascade(prob, offset, effects_now, kind, chi2_now) {
+                Some((params, f, named)) => Some((params, f, Some(named))),
+                None => prob
+                    .scan_params(spec_now, kind)
+                    .map(|(params, f)| (params, f, None)),
             }
-            let scanned = match complete_cascade(prob, offset, effects, kind, cur.chi2) {
-                Some((params, f, named)) => {
+        })
+        .into_iter()
+        .zip(&order)
+        .map(|(s, &i)| (i, s))
+        .collect::<Vec<_>>();
+        scans.sort_by_key(|(i, _)| *i);
+        for (kind, (_, scanned)) in open.iter().copied().zip(scans) {
+            let scanned = scanned.map(|(params, f, named)| {
+                if let Some(named) = named {
                     cascade_named.push((kind, named));
-                    Some((params, f))
                 }
-                None => prob.scan_params(&spec, kind),
-            };
+                (params, f)
+            });
             if let Some((params, f)) = scanned {
                 tracing::trace!(?params, chi2 = f.chi2, gap = f.gap(), "candidate");
                 let score = (cur.chi2 - f.chi2) / kind.n_params() as f64;
@@ -1650,6 +1735,21 @@ fn greedy_stationary(
             }
         }
         let passed_kind = |k: EffectKind| passed.iter().find(|p| p.0.kind() == k);
+        // A moving average is named over a FIR unless the FIR is better by more than
+        // AIC_MARGIN: a Bartlett window of ten output samples and a 31-tap windowed sinc cut at
+        // a sixth of Nyquist differ at the shortest taus by less than the curve resolves, and
+        // the average is the part's own simpler filter (family_gap's cntfog, seed 471: the
+        // Bartlett named a FIR, Akaike's criterion 0.4 apart; docs/gap.md, "A FIR read every
+        // so many samples (session 47)").
+        if let (Some(EffectKind::FirFilter), Some(fir), Some(ma)) = (
+            best_filter,
+            passed_kind(EffectKind::FirFilter),
+            passed_kind(EffectKind::MovingAverage),
+        ) {
+            if aic(fir) <= aic(ma) + AIC_MARGIN {
+                best_filter = Some(EffectKind::MovingAverage);
+            }
+        }
         if let (Some(k), Some(fo)) = (best_filter, passed_kind(EffectKind::OutputFilter)) {
             if k != EffectKind::OutputFilter
                 && passed_kind(k).is_some_and(|b| aic(b) <= aic(fo) + AIC_MARGIN)
@@ -1989,6 +2089,28 @@ fn describe(regions: &[Region]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`map_on_threads`] gives `f` of each item in the items' order whatever the thread
+    /// count (more threads than items included), the slow items taken first or last.
+    #[test]
+    fn map_on_threads_keeps_the_items_order() {
+        let items: Vec<u64> = (0..23).collect();
+        let f = |&x: &u64| {
+            if x % 5 == 0 {
+                std::thread::sleep(std::time::Duration::from_millis(3));
+            }
+            x * x + 1
+        };
+        let want: Vec<u64> = items.iter().map(f).collect();
+        for threads in [0, 1, 2, 3, 8, 40] {
+            assert_eq!(
+                map_on_threads(&items, threads, f),
+                want,
+                "{threads} threads"
+            );
+        }
+        assert!(map_on_threads(&Vec::<u64>::new(), 4, f).is_empty());
+    }
     use crate::model::lowpass::LowPass;
 
     fn score(params: EffectParams, gap_alt: f64) -> CandidateScore {

@@ -11,7 +11,7 @@ use super::discrepancy::{floor_harmonics, rounding_discrepancy, RoundingDiscrepa
 use super::effects::{canonical_lowpass, effect_column, EffectKind, EffectParams, Grid};
 use super::evidence::EvidenceSnapshot;
 use super::filter_cov::filter_cov_correction;
-use super::rounding::{filtered_sigma, rounding_avar_on_grid, GridPosition, MIN_SIGMA_STEPS};
+use super::rounding::{filtered_sigma, rounding_avar_with, GridPosition, MIN_SIGMA_STEPS};
 use super::sawtooth::{
     golden_min, Sawtooth, SAWTOOTH_DITHER_STEPS, SAWTOOTH_FREQ_SPAN, SAWTOOTH_GOLDEN_STEPS,
     SAWTOOTH_GRID_DROP, SAWTOOTH_GRID_SHARE, SAWTOOTH_MAX_DITHER, SAWTOOTH_MAX_GAP,
@@ -372,7 +372,11 @@ impl GapProblem {
         }
         if let (Some(lp), Some(fl)) = (spec.filter, self.filter_floor) {
             let r = self.memo.floor(&lp, n2, fl.step, || {
-                rounding_avar_on_grid(&lp, self.tau0_s, fl.step, n2, self.grid.as_ref(), &self.ms)
+                let rho = self
+                    .memo
+                    .autocorrelation(&lp, || lp.autocorrelation(self.tau0_s));
+                let grid = self.grid.as_ref();
+                rounding_avar_with(&rho, &lp, self.tau0_s, fl.step, n2, grid, &self.ms)
             });
             for (o, f) in off.iter_mut().zip(r.iter()) {
                 *o += f;

@@ -43,6 +43,11 @@ fn theta_sum(x: f64) -> f64 {
     let mut s = 0.0;
     for n in 1..64u32 {
         let n2 = (n * n) as f64;
+        // below e^-700 the term is nothing beside the first, and libm's underflow path is slow
+        // (a twentieth of a filtered unit's diagnosis)
+        if n2 * x > 700.0 {
+            break;
+        }
         let t = (-n2 * x).exp() / n2;
         s += t;
         if t < 1e-18 {
@@ -356,7 +361,20 @@ pub fn rounding_avar_on_grid(
     grid: Option<&GridPosition>,
     ms: &[u64],
 ) -> Vec<f64> {
-    let rho = lp.autocorrelation(tau0_s);
+    rounding_avar_with(&lp.autocorrelation(tau0_s), lp, tau0_s, step, n2, grid, ms)
+}
+
+/// [`rounding_avar_on_grid`] with the filter's autocorrelation `rho` ([`LowPass::autocorrelation`]
+/// of `lp` at `tau0_s`) given, as a problem keeps it.
+pub fn rounding_avar_with(
+    rho: &[f64],
+    lp: &LowPass,
+    tau0_s: f64,
+    step: f64,
+    n2: f64,
+    grid: Option<&GridPosition>,
+    ms: &[u64],
+) -> Vec<f64> {
     let rho0 = rho.first().copied().unwrap_or(1.0);
     let sigma2 = n2.max(0.0) * rho0 / tau0_s;
     let x = 4.0 * PI * PI * sigma2 / (step * step);
