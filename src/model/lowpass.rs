@@ -445,12 +445,8 @@ impl LowPass {
                 let r = Self::decimated_autocovariance(taps, stages, decimation);
                 1.0 / two_sided_sum(&r).sqrt()
             }
-            LowPass::Fir {
-                taps,
-                cutoff_hz,
-                decimation,
-            } if decimation > 1 => {
-                let r = fir_decimated_autocovariance(taps, cutoff_hz, decimation, tau0_s);
+            LowPass::Fir { decimation, .. } if decimation > 1 => {
+                let r = self.fir_autocovariance(tau0_s);
                 1.0 / two_sided_sum(&r).sqrt()
             }
             LowPass::Cascade { front, .. } => front.lowpass().internal_white_scale(tau0_s),
@@ -466,12 +462,8 @@ impl LowPass {
             // `sum_i h_i h_{i+D k}`: at D = 1 DC gain 1 makes the two-sided total
             // `(sum h)^2 = 1`; read every D-th sample it is scaled to 1 as the decimated
             // average's is
-            LowPass::Fir {
-                taps,
-                cutoff_hz,
-                decimation,
-            } => {
-                let r = fir_decimated_autocovariance(taps, cutoff_hz, decimation, tau0_s);
+            LowPass::Fir { decimation, .. } => {
+                let r = self.fir_autocovariance(tau0_s);
                 if decimation <= 1 {
                     return r;
                 }
@@ -622,13 +614,10 @@ impl LowPass {
         })
     }
 
-    /// Power gain `|H(f)|^2` at `frequency_hz`.
-    pub fn power_gain(&self, tau0_s: f64, frequency_hz: f64) -> f64 {
-        let w = 2.0 * PI * frequency_hz * tau0_s;
+    /// A [`LowPass::Fir`]'s taps at its internal step `tau0_s / decimation` ([`fir_window_sinc`];
+    /// the output step `tau0_s`), with its decimation; None for the other kinds.
+    pub fn fir_internal(&self, tau0_s: f64) -> Option<(Vec<f64>, usize)> {
         match *self {
-            // `|sum_n h_n e^{-i x n}|^2` at the internal rate; read every D-th sample, the D
-            // images `x = (w + 2 pi a) / D` fold onto `w`, scaled as the autocorrelation is
-            // (as the decimated average's below)
             LowPass::Fir {
                 taps,
                 cutoff_hz,
@@ -636,6 +625,29 @@ impl LowPass {
             } => {
                 let d = decimation.max(1);
                 let h = fir_window_sinc(taps, cutoff_hz, tau0_s / f64::from(d));
+                Some((h, d as usize))
+            }
+            _ => None,
+        }
+    }
+
+    /// [`autocovariance_every`] of a [`LowPass::Fir`]'s internal taps ([`Self::fir_internal`])
+    /// every `D`-th lag: the autocovariance of its output read every `D`-th sample for
+    /// unit-variance white input at the internal rate (empty for the other kinds).
+    fn fir_autocovariance(&self, tau0_s: f64) -> Vec<f64> {
+        self.fir_internal(tau0_s)
+            .map_or_else(Vec::new, |(h, d)| autocovariance_every(&h, d))
+    }
+
+    /// Power gain `|H(f)|^2` at `frequency_hz`.
+    pub fn power_gain(&self, tau0_s: f64, frequency_hz: f64) -> f64 {
+        let w = 2.0 * PI * frequency_hz * tau0_s;
+        match *self {
+            // `|sum_n h_n e^{-i x n}|^2` at the internal rate; read every D-th sample, the D
+            // images `x = (w + 2 pi a) / D` fold onto `w`, scaled as the autocorrelation is
+            // (as the decimated average's below)
+            LowPass::Fir { .. } => {
+                let (h, d) = self.fir_internal(tau0_s).unwrap_or((vec![1.0], 1));
                 let internal = |x: f64| {
                     let (re, im) = h.iter().enumerate().fold((0.0, 0.0), |(re, im), (n, c)| {
                         let a = x * n as f64;
@@ -648,7 +660,7 @@ impl LowPass {
                 }
                 let folded = |w: f64| {
                     (0..d)
-                        .map(|a| internal((w + 2.0 * PI * f64::from(a)) / f64::from(d)))
+                        .map(|a| internal((w + 2.0 * PI * a as f64) / d as f64))
                         .sum::<f64>()
                 };
                 folded(w) / folded(0.0)
@@ -767,22 +779,6 @@ fn autocovariance_every(h: &[f64], step: usize) -> Vec<f64> {
         .step_by(step)
         .map(|k| h.iter().zip(&h[k..]).map(|(a, b)| a * b).sum())
         .collect()
-}
-
-/// [`autocovariance_every`] of [`LowPass::Fir`]'s taps at the internal step `tau0_s / D`,
-/// every `D`-th lag: the autocovariance of its output read every `D`-th sample for unit-variance
-/// white input at the internal rate.
-fn fir_decimated_autocovariance(
-    taps: u32,
-    cutoff_hz: f64,
-    decimation: u32,
-    tau0_s: f64,
-) -> Vec<f64> {
-    let d = decimation.max(1);
-    autocovariance_every(
-        &fir_window_sinc(taps, cutoff_hz, tau0_s / f64::from(d)),
-        d as usize,
-    )
 }
 
 /// The autocorrelation of two filters in cascade from theirs, both given from lag 0 and even:

@@ -83,19 +83,13 @@ impl LowPassGen {
     pub fn new(lp: &LowPass, tau0_s: f64) -> Option<Self> {
         match *lp {
             LowPass::FirstOrder { .. } => None,
-            LowPass::Fir {
-                taps,
-                cutoff_hz,
-                decimation,
-            } => {
-                let d = decimation.max(1);
-                let h =
-                    crate::model::lowpass::fir_window_sinc(taps, cutoff_hz, tau0_s / f64::from(d));
+            LowPass::Fir { .. } => {
+                let (h, d) = lp.fir_internal(tau0_s)?;
                 Some(LowPassGen::Fir {
                     window: VecDeque::with_capacity(h.len()),
                     h,
                     started: false,
-                    decimation: d as usize,
+                    decimation: d,
                     white_scale: lp.internal_white_scale(tau0_s),
                 })
             }
