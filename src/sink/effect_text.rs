@@ -247,9 +247,15 @@ pub fn effect_parts(
             || (bilinear && *k == "bilinear")
             || (zero.is_some() && *k == "zero");
         if !with_rate && !said {
+            // a decimation is a count of samples (`32`, not `32.0`)
+            let value = if *k == "decimation" && v.is_finite() && v.fract() == 0.0 {
+                format!("{v:.0}")
+            } else {
+                shown(*v)
+            };
             out.push(ParamText {
                 name: k.replace('_', " "),
-                value: shown(*v),
+                value,
             });
         }
     }
@@ -337,6 +343,18 @@ mod tests {
         assert_eq!(
             line(16, 2, 1),
             "output moving average (FIR): taps = 16, stages = 2"
+        );
+        // the decimation is a count whatever the numbers' format (a terminal table's three
+        // digits wrote `32.0`)
+        let e = RecordedEffect::Known(EffectParams::MovingAverage {
+            taps: 750,
+            stages: 2,
+            decimation: 32,
+        });
+        assert!(
+            effect_line(&e, "deg", &|v| format!("{v:.1}")).ends_with("decimation = 32"),
+            "{}",
+            effect_line(&e, "deg", &|v| format!("{v:.1}"))
         );
     }
 
