@@ -95,8 +95,8 @@ pub struct DiagnoseOptions {
 }
 
 /// The most threads [`DiagnoseOptions::threads`] takes by default: a step scans about a dozen
-/// candidates, the second order's the longest (docs/gap.md, "The candidates scanned side by
-/// side (session 47)").
+/// candidates, the second order's the longest (docs/gap.md, "Speed (session 47): the
+/// candidates side by side").
 pub const MAX_SCAN_THREADS: usize = 4;
 
 impl Default for DiagnoseOptions {
@@ -2089,6 +2089,7 @@ fn describe(regions: &[Region]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::lowpass::LowPass;
 
     /// [`map_on_threads`] gives `f` of each item in the items' order whatever the thread
     /// count (more threads than items included), the slow items taken first or last.
@@ -2111,7 +2112,6 @@ mod tests {
         }
         assert!(map_on_threads(&Vec::<u64>::new(), 4, f).is_empty());
     }
-    use crate::model::lowpass::LowPass;
 
     fn score(params: EffectParams, gap_alt: f64) -> CandidateScore {
         CandidateScore {

@@ -164,7 +164,7 @@ const HALF_BAND_GATE: f64 = 0.99;
 
 /// The half-band decimator's cut-offs on its grid, times the output step `tau0` (the output's
 /// Nyquist frequency is 0.5; the polish may leave the range, up to [`FIR_TOP`] of the
-/// internal rate's Nyquist).
+/// internal rate, 0.9 of its Nyquist frequency).
 const HALF_BAND_CUTOFFS: (f64, f64) = (0.35, 0.75);
 
 /// The FIR run at `decimation` times the output rate: for each of [`FIR_TAPS`] (no more than a
