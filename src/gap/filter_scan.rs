@@ -110,6 +110,12 @@ fn fit_with(prob: &GapProblem, base: &ModelSpec, lp: LowPass) -> Option<GlsFit> 
 /// The FIR's highest cut-off scanned, times `tau0` (below Nyquist's 0.5).
 pub const FIR_TOP: f64 = 0.45;
 
+/// The highest cut-off (Hz) of a FIR run at `decimation` times the output rate (`tau0_s` the
+/// output step): [`FIR_TOP`] of the rate it runs at.
+pub fn fir_top_hz(decimation: u32, tau0_s: f64) -> f64 {
+    FIR_TOP * f64::from(decimation.max(1)) / tau0_s
+}
+
 /// The FIR's taps on the scan's grid (whole numbers, about four per octave); the polish then
 /// tries every whole number between the best one's neighbours.
 const FIR_TAPS: [u32; 13] = [5, 7, 9, 11, 15, 19, 23, 31, 39, 47, 63, 95, 127];
@@ -130,7 +136,7 @@ fn scan_fir(
     if cutoffs.len() < 2 {
         return None;
     }
-    let c_top = FIR_TOP / prob.tau0_s;
+    let c_top = fir_top_hz(1, prob.tau0_s);
     let out = scan_fir_at(prob, fit, 1, &cutoffs, c_top);
     let (cutoff_hz, chi2) = match &out {
         Some((LowPass::Fir { cutoff_hz, .. }, f)) => (*cutoff_hz, f.chi2),
@@ -148,7 +154,7 @@ fn scan_fir(
     let around: Vec<f64> = std::iter::successors(Some(lo), |c| Some(c * ratio))
         .take_while(|&c| c <= hi)
         .collect();
-    let half = scan_fir_at(prob, fit, 2, &around, 2.0 * c_top);
+    let half = scan_fir_at(prob, fit, 2, &around, fir_top_hz(2, prob.tau0_s));
     match half {
         Some(h) if h.1.chi2 + SPAN_PARAMETER_CHI2 < chi2 => {
             tracing::trace!(lp = ?h.0, chi2 = h.1.chi2, output_rate = chi2, "a half-band FIR");

@@ -543,8 +543,7 @@ impl GapProblem {
                 decimation,
             } => LowPass::Fir {
                 taps,
-                cutoff_hz: (cutoff_hz / g)
-                    .min(super::filter_scan::FIR_TOP * f64::from(decimation.max(1)) / tau0_s),
+                cutoff_hz: (cutoff_hz / g).min(super::filter_scan::fir_top_hz(decimation, tau0_s)),
                 decimation,
             },
             LowPass::FirstOrder { time_constant_s } => LowPass::FirstOrder {
@@ -1271,7 +1270,7 @@ impl GapProblem {
             // ([`super::filter_scan`] scans it with the taps).
             EffectKind::FirFilter => Grid {
                 lo: 0.01 / self.tau0_s,
-                hi: super::filter_scan::FIR_TOP / self.tau0_s,
+                hi: super::filter_scan::fir_top_hz(1, self.tau0_s),
                 per_decade: 12.0,
             },
             // Taps (the moving average) and Hz (the second order's natural frequency, its

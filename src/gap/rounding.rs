@@ -44,7 +44,7 @@ fn theta_sum(x: f64) -> f64 {
     for n in 1..64u32 {
         let n2 = (n * n) as f64;
         // below e^-700 the term is nothing beside the first, and libm's underflow path is slow
-        // (a twentieth of a filtered unit's diagnosis)
+        // (a fifth of a filtered, rounded unit's diagnosis)
         if n2 * x > 700.0 {
             break;
         }

@@ -422,11 +422,35 @@ impl LowPass {
         h
     }
 
-    /// `sum_i h_i h_{i + D j}`, `j = 0, 1, ...`: the autocovariance of a moving average's output
-    /// read every `D`-th sample for unit-variance white input at the internal rate (`h` its
-    /// impulse response there, DC gain 1).
-    fn decimated_autocovariance(taps: u32, stages: u32, decimation: u32) -> Vec<f64> {
-        autocovariance_every(&Self::fir(taps, stages), decimation.max(1) as usize)
+    /// The impulse response of a moving average or a FIR at its internal rate (step
+    /// `tau0_s / D`, `tau0_s` the output step; DC gain 1) with its decimation `D`: the average's
+    /// [`Self::fir`], the FIR's [`fir_window_sinc`]. None for the other kinds.
+    pub fn internal_response(&self, tau0_s: f64) -> Option<(Vec<f64>, usize)> {
+        match *self {
+            LowPass::MovingAverage {
+                taps,
+                stages,
+                decimation,
+            } => Some((Self::fir(taps, stages), decimation.max(1) as usize)),
+            LowPass::Fir {
+                taps,
+                cutoff_hz,
+                decimation,
+            } => {
+                let d = decimation.max(1);
+                let h = fir_window_sinc(taps, cutoff_hz, tau0_s / f64::from(d));
+                Some((h, d as usize))
+            }
+            _ => None,
+        }
+    }
+
+    /// `sum_i h_i h_{i + D j}`, `j = 0, 1, ...` of [`Self::internal_response`]: the
+    /// autocovariance of the output read every `D`-th sample for unit-variance white input at
+    /// the internal rate (empty for the other kinds).
+    fn internal_autocovariance(&self, tau0_s: f64) -> Vec<f64> {
+        self.internal_response(tau0_s)
+            .map_or_else(Vec::new, |(h, d)| autocovariance_every(&h, d))
     }
 
     /// The factor on the output step's white-rate standard deviation that gives the internal
@@ -437,16 +461,10 @@ impl LowPass {
     /// output step's variance. `tau0_s` is the output step (a FIR's taps depend on it).
     pub fn internal_white_scale(&self, tau0_s: f64) -> f64 {
         match *self {
-            LowPass::MovingAverage {
-                taps,
-                stages,
-                decimation,
-            } if decimation > 1 => {
-                let r = Self::decimated_autocovariance(taps, stages, decimation);
-                1.0 / two_sided_sum(&r).sqrt()
-            }
-            LowPass::Fir { decimation, .. } if decimation > 1 => {
-                let r = self.fir_autocovariance(tau0_s);
+            LowPass::MovingAverage { decimation, .. } | LowPass::Fir { decimation, .. }
+                if decimation > 1 =>
+            {
+                let r = self.internal_autocovariance(tau0_s);
                 1.0 / two_sided_sum(&r).sqrt()
             }
             LowPass::Cascade { front, .. } => front.lowpass().internal_white_scale(tau0_s),
@@ -459,17 +477,6 @@ impl LowPass {
     /// `rho(0) + 2 sum_{k>0} rho(k) = 1` (DC gain 1).
     pub fn autocorrelation(&self, tau0_s: f64) -> Vec<f64> {
         match *self {
-            // `sum_i h_i h_{i+D k}`: at D = 1 DC gain 1 makes the two-sided total
-            // `(sum h)^2 = 1`; read every D-th sample it is scaled to 1 as the decimated
-            // average's is
-            LowPass::Fir { decimation, .. } => {
-                let r = self.fir_autocovariance(tau0_s);
-                if decimation <= 1 {
-                    return r;
-                }
-                let total = two_sided_sum(&r);
-                r.iter().map(|v| v / total).collect()
-            }
             LowPass::Cascade { front, back } => convolve_even(
                 &front.lowpass().autocorrelation(tau0_s),
                 &back.lowpass().autocorrelation(tau0_s),
@@ -486,17 +493,15 @@ impl LowPass {
                 }
                 out
             }
-            LowPass::MovingAverage {
-                taps,
-                stages,
-                decimation,
-            } => {
+            // `sum_i h_i h_{i+k}` at D = 1, where DC gain 1 makes the two-sided total
+            // `(sum h)^2 = 1`
+            LowPass::MovingAverage { decimation, .. } | LowPass::Fir { decimation, .. } => {
                 // The impulse response at the internal rate, its autocorrelation read at every
                 // `decimation`-th lag (the output samples are every D-th internal one), scaled
                 // to a two-sided total of 1: the output's low-frequency white level is then the
                 // fitted N, aliasing included. A CIC (taps a multiple of D) needs no scaling
                 // beyond D: its zeros at the output rate's multiples leave nothing to alias.
-                let r = Self::decimated_autocovariance(taps, stages, decimation);
+                let r = self.internal_autocovariance(tau0_s);
                 if decimation <= 1 {
                     return r;
                 }
@@ -614,56 +619,20 @@ impl LowPass {
         })
     }
 
-    /// A [`LowPass::Fir`]'s taps at its internal step `tau0_s / decimation` ([`fir_window_sinc`];
-    /// the output step `tau0_s`), with its decimation; None for the other kinds.
-    pub fn fir_internal(&self, tau0_s: f64) -> Option<(Vec<f64>, usize)> {
-        match *self {
-            LowPass::Fir {
-                taps,
-                cutoff_hz,
-                decimation,
-            } => {
-                let d = decimation.max(1);
-                let h = fir_window_sinc(taps, cutoff_hz, tau0_s / f64::from(d));
-                Some((h, d as usize))
-            }
-            _ => None,
-        }
-    }
-
-    /// [`autocovariance_every`] of a [`LowPass::Fir`]'s internal taps ([`Self::fir_internal`])
-    /// every `D`-th lag: the autocovariance of its output read every `D`-th sample for
-    /// unit-variance white input at the internal rate (empty for the other kinds).
-    fn fir_autocovariance(&self, tau0_s: f64) -> Vec<f64> {
-        self.fir_internal(tau0_s)
-            .map_or_else(Vec::new, |(h, d)| autocovariance_every(&h, d))
-    }
-
     /// Power gain `|H(f)|^2` at `frequency_hz`.
     pub fn power_gain(&self, tau0_s: f64, frequency_hz: f64) -> f64 {
         let w = 2.0 * PI * frequency_hz * tau0_s;
         match *self {
-            // `|sum_n h_n e^{-i x n}|^2` at the internal rate; read every D-th sample, the D
-            // images `x = (w + 2 pi a) / D` fold onto `w`, scaled as the autocorrelation is
-            // (as the decimated average's below)
+            // `|sum_n h_n e^{-i x n}|^2` at the internal rate, folded as the average's below
             LowPass::Fir { .. } => {
-                let (h, d) = self.fir_internal(tau0_s).unwrap_or((vec![1.0], 1));
-                let internal = |x: f64| {
+                let (h, d) = self.internal_response(tau0_s).unwrap_or((vec![1.0], 1));
+                folded_gain(d, w, |x| {
                     let (re, im) = h.iter().enumerate().fold((0.0, 0.0), |(re, im), (n, c)| {
                         let a = x * n as f64;
                         (re + c * a.cos(), im - c * a.sin())
                     });
                     re * re + im * im
-                };
-                if d == 1 {
-                    return internal(w);
-                }
-                let folded = |w: f64| {
-                    (0..d)
-                        .map(|a| internal((w + 2.0 * PI * a as f64) / d as f64))
-                        .sum::<f64>()
-                };
-                folded(w) / folded(0.0)
+                })
             }
             LowPass::Cascade { front, back } => {
                 front.lowpass().power_gain(tau0_s, frequency_hz)
@@ -682,8 +651,7 @@ impl LowPass {
                 // sample, the D images `x = (w + 2 pi a) / D` fold onto `w`, scaled as the
                 // autocorrelation is (`sum_j R(D j) = sum_a |H(2 pi a / D)|^2 / D`, Poisson)
                 let m = taps.max(1) as f64;
-                let d = decimation.max(1);
-                let internal = |x: f64| {
+                folded_gain(decimation.max(1) as usize, w, |x| {
                     let den = m * (x / 2.0).sin();
                     let g = if den.abs() < 1e-300 {
                         1.0
@@ -691,13 +659,7 @@ impl LowPass {
                         (m * x / 2.0).sin() / den
                     };
                     (g * g).powi(stages.max(1) as i32)
-                };
-                let folded = |w: f64| {
-                    (0..d)
-                        .map(|a| internal((w + 2.0 * PI * a as f64) / d as f64))
-                        .sum::<f64>()
-                };
-                folded(w) / folded(0.0)
+                })
             }
             LowPass::SecondOrder { .. } => {
                 let (a1, a2) = self.ar2(tau0_s).unwrap_or((0.0, 0.0));
@@ -779,6 +741,23 @@ fn autocovariance_every(h: &[f64], step: usize) -> Vec<f64> {
         .step_by(step)
         .map(|k| h.iter().zip(&h[k..]).map(|(a, b)| a * b).sum())
         .collect()
+}
+
+/// The power gain at `w` (radians per output sample) of a filter run at `d` times the output
+/// rate with internal gain `internal(x)` (`x` radians per internal sample) and read every `d`-th
+/// sample: the `d` images `x = (w + 2 pi a) / d` folded onto `w` and scaled as its
+/// autocorrelation is, `sum_a |H((w + 2 pi a) / d)|^2 / sum_a |H(2 pi a / d)|^2`
+/// (`sum_j R(d j) = sum_a |H(2 pi a / d)|^2 / d`, Poisson); the internal gain itself at `d = 1`.
+fn folded_gain(d: usize, w: f64, internal: impl Fn(f64) -> f64) -> f64 {
+    if d <= 1 {
+        return internal(w);
+    }
+    let folded = |w: f64| {
+        (0..d)
+            .map(|a| internal((w + 2.0 * PI * a as f64) / d as f64))
+            .sum::<f64>()
+    };
+    folded(w) / folded(0.0)
 }
 
 /// The autocorrelation of two filters in cascade from theirs, both given from lag 0 and even:

@@ -84,7 +84,7 @@ impl LowPassGen {
         match *lp {
             LowPass::FirstOrder { .. } => None,
             LowPass::Fir { .. } => {
-                let (h, d) = lp.fir_internal(tau0_s)?;
+                let (h, d) = lp.internal_response(tau0_s)?;
                 Some(LowPassGen::Fir {
                     window: VecDeque::with_capacity(h.len()),
                     h,
