@@ -122,6 +122,7 @@
 //!   filter_cov.rs          covariance of filtered white rate, exact
 //!   problem.rs             the GLS problem on one measured curve
 //!   filter_scan.rs         shape scans of the filter candidates
+//!   filter_shape.rs        the curve judged beyond the unit's filter's own stretch
 //!   temperature.rs         a bias that follows the unit's temperature
 //!   temperature_check.rs   the temperature's coefficient bounded when none is named
 //!   k_profile.rs           the random walk's K^2 read off the block means

@@ -88,6 +88,11 @@ pub struct DiagnoseOptions {
     /// the covariance carries no rounding discrepancy ([`super::discrepancy`], which is for
     /// rate samples rounded after the filter).
     pub cov_counter: bool,
+    /// A filter every model of the curve carries where no filter is named in its place: the
+    /// unit's filter as the whole curve named it, for the diagnosis beyond that filter's own
+    /// stretch, where its tail (white phase noise of negative size) is still in the curve
+    /// ([`super::filter_shape`]). None: no such filter.
+    pub base_filter: Option<crate::model::lowpass::LowPass>,
     /// Threads on which the candidates of a step are scanned (at least 1; the record is the
     /// same for any count: each candidate's scan is computed alone and they are judged in
     /// order). The default is the machine's parallelism, at most [`MAX_SCAN_THREADS`].
@@ -111,6 +116,7 @@ impl Default for DiagnoseOptions {
             cov_coef: None,
             cov_filter: None,
             cov_counter: false,
+            base_filter: None,
             threads: std::thread::available_parallelism()
                 .map_or(1, |n| n.get())
                 .min(MAX_SCAN_THREADS),
@@ -286,6 +292,10 @@ pub struct Diagnosis {
     /// The counter's sawtooth, when the base model carries it ([`super::sawtooth`]): part of
     /// every model of the curve, not an effect of the unit.
     pub sawtooth: Option<super::sawtooth::Sawtooth>,
+    /// Set when the curve was judged beyond the unit's filter's own stretch
+    /// ([`super::filter_shape`]): the filter the whole curve named, from which tau on, and
+    /// what was set aside.
+    pub filter_shape: Option<super::filter_shape::FilterShape>,
 }
 
 impl Diagnosis {
@@ -348,7 +358,13 @@ fn diagnose_quantized(
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
     let Some(limit) = check_quantization(snap, opts) else {
-        return diagnose_curve(snap, temperature, opts);
+        let d = diagnose_curve(snap, temperature, opts)?;
+        return Ok(super::filter_shape::judge_beyond(
+            snap,
+            temperature,
+            opts,
+            d,
+        ));
     };
     // The counter's sawtooth in the base model is the quantization error's own autocovariance
     // (super::sawtooth): where the base model with it describes the whole curve (`G <=
@@ -499,7 +515,7 @@ const CREDIBLE_FIT_GAP: f64 = 10.0;
 
 /// The diagnosis of the curve (from `opts.min_m` on) and of the block means; when it finds an
 /// output filter, again with the covariance of its five terms ([`DiagnoseOptions::cov_coef`]).
-fn diagnose_curve(
+pub(crate) fn diagnose_curve(
     snap: &EvidenceSnapshot,
     temperature: Option<&EvidenceSnapshot>,
     opts: &DiagnoseOptions,
@@ -1096,6 +1112,7 @@ fn diagnose_curve_pass(
         effect_intervals,
         first_scores,
         limit_cycles: Vec::new(),
+        filter_shape: None,
         sawtooth: prob.sawtooth.as_ref().map(|(st, _)| *st),
     };
     Ok((d, entered))

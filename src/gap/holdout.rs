@@ -167,6 +167,22 @@ pub fn holdout_gap_with_temperature(
     temperature: Option<&EvidenceSnapshot>,
     opts: &DiagnoseOptions,
 ) -> Result<HoldoutGap, DiagnoseError> {
+    // A fitting run judged beyond its filter's stretch (super::filter_shape): the held-out run
+    // from the same tau on, its models carrying that filter as the fitting run's did.
+    let beyond;
+    let opts = match &fitted.filter_shape {
+        Some(f) => {
+            beyond = DiagnoseOptions {
+                min_m: opts
+                    .min_m
+                    .max((f.from_tau_s / snap.tau0_s).round().max(1.0) as u64),
+                base_filter: EffectParams::unit_filter(f.named.iter().map(|e| &e.params)),
+                ..opts.clone()
+            };
+            &beyond
+        }
+        None => opts,
+    };
     let prob = GapProblem::new(snap, opts)?.with_sawtooth(snap, opts, false)?;
     let j = prob.len();
     let base = prob

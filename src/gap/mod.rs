@@ -33,6 +33,7 @@ pub mod ensemble;
 pub mod evidence;
 pub mod filter_cov;
 pub mod filter_scan;
+pub mod filter_shape;
 pub mod first_block;
 pub mod holdout;
 pub mod intervals;

@@ -84,6 +84,8 @@ pub struct GapProblem {
     /// The filter found by an earlier pass whose covariance this problem carries
     /// ([`DiagnoseOptions::cov_filter`]).
     pub cov_filter: Option<LowPass>,
+    /// The filter every model carries where none is named ([`DiagnoseOptions::base_filter`]).
+    pub base_filter: Option<LowPass>,
     /// Where the unit's mean falls on the rounding grid, as the run's block means show it
     /// (None: the values show no step).
     grid: Option<GridPosition>,
@@ -348,6 +350,7 @@ impl GapProblem {
             filter_floor: None,
             discrepancy,
             cov_filter: opts.cov_filter,
+            base_filter: opts.base_filter,
             grid,
             memo: ColumnMemo::default(),
             sawtooth: None,
@@ -961,10 +964,33 @@ impl GapProblem {
     /// `held`: a five-term coefficient held at a value (its column zeroed here, its part in
     /// the spec's offset).
     fn gls_with(&self, spec: &ModelSpec, held: Option<(usize, f64)>) -> Option<GlsFit> {
+        // the base filter where the spec names none (DiagnoseOptions::base_filter)
+        let with_base;
+        let spec = match (spec.filter, self.base_filter) {
+            (None, Some(lp)) => {
+                with_base = ModelSpec {
+                    filter: Some(lp),
+                    ..spec.clone()
+                };
+                &with_base
+            }
+            _ => spec,
+        };
         let j = self.len();
         let mut x = self.columns(spec);
         if let Some((t, _)) = held {
             x.column_mut(t).fill(0.0);
+        }
+        // The columns the caller sees; beside a base filter one more, white phase noise of
+        // negative size, fitted and in the model but not among the returned coefficients: the
+        // base filter is the whole curve's nearest kind, and its tail (the term in 1 / tau^2)
+        // need not be the unit's (DiagnoseOptions::base_filter).
+        let k_out = x.ncols();
+        if self.base_filter.is_some() {
+            x = x.insert_column(k_out, 0.0);
+            for (r, &t) in self.tau.iter().enumerate() {
+                x[(r, k_out)] = -basis(t)[0];
+            }
         }
         let k = x.ncols();
         // The rounding after the filter depends on the fit's own N (`floor_n2`): it starts at
@@ -1056,7 +1082,7 @@ impl GapProblem {
             };
         expected -= n_shape as f64 * tr_m / j as f64;
         Some(GlsFit {
-            coef: coef.iter().copied().collect(),
+            coef: coef.iter().take(k_out).copied().collect(),
             model,
             chi2,
             expected,

@@ -264,6 +264,44 @@ pub struct DiagnosisRecord {
     /// at a steady rate; docs/gap.md, "The counter's sawtooth in the base model (session 23)").
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub counter_sawtooth: Option<SawtoothRecord>,
+    /// Present when the curve was judged beyond the unit's filter's own stretch (docs/gap.md,
+    /// "The filter's own stretch of the curve (session 48)").
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub filter_shape: Option<FilterShapeRecord>,
+}
+
+/// The extra field `filter_shape`: the curve was diagnosed from `from_tau` (s) on, five of its
+/// filter's memories, because on the whole curve the nearest filter kind's misfit left it
+/// `unexplained` or brought effects within that stretch. `filter` is the unit's filter the
+/// whole curve named (`{kind, params, gap_after}` as effects, a cascade's two parts), which
+/// the unit's model keeps; `gap_whole` and `verdict_whole` are the whole curve's final gap and
+/// verdict; `set_aside` the whole curve's effects within the stretch, which the curve beyond
+/// it did not need.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FilterShapeRecord {
+    pub from_tau: f64,
+    pub filter: Vec<EffectRecord>,
+    pub gap_whole: f64,
+    pub verdict_whole: Verdict,
+    pub set_aside: Vec<EffectRecord>,
+}
+
+impl FilterShapeRecord {
+    fn new(f: &super::filter_shape::FilterShape) -> Self {
+        let effect = |e: &super::diagnose::AddedEffect| EffectRecord {
+            effect: RecordedEffect::Known(e.params),
+            gap_after: e.gap_after,
+            intervals: BTreeMap::new(),
+            cause: None,
+        };
+        FilterShapeRecord {
+            from_tau: f.from_tau_s,
+            filter: f.named.iter().map(effect).collect(),
+            gap_whole: f.gap_whole,
+            verdict_whole: f.verdict_whole,
+            set_aside: f.set_aside.iter().map(effect).collect(),
+        }
+    }
 }
 
 /// The extra field `counter_sawtooth`: the counter's LSB (u), the line's frequency (Hz, before
@@ -486,6 +524,7 @@ impl DiagnosisRecord {
                     .filter
                     .map(|lp| RecordedEffect::Known(EffectParams::from_lowpass(lp))),
             }),
+            filter_shape: d.filter_shape.as_ref().map(FilterShapeRecord::new),
         }
     }
 

@@ -99,9 +99,25 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
             size: d.outliers.rms_size() / 5f64.sqrt(),
         }),
     };
-    let filter = EffectParams::unit_filter(d.effects.iter().map(|e| &e.params));
-    for e in &d.effects {
-        match e.params {
+    // The unit's filter: the one the whole curve named when the curve was judged beyond its
+    // stretch (super::filter_shape; the filter named there, if any, fitted only its tail).
+    let filters: Vec<EffectParams> = match &d.filter_shape {
+        Some(f) => f.named.iter().map(|e| e.params).collect(),
+        None => d
+            .effects
+            .iter()
+            .map(|e| e.params)
+            .filter(|p| p.kind().is_filter())
+            .collect(),
+    };
+    let filter = EffectParams::unit_filter(filters.iter());
+    let others = d
+        .effects
+        .iter()
+        .map(|e| e.params)
+        .filter(|p| !p.kind().is_filter());
+    for p in filters.iter().copied().chain(others) {
+        match p {
             EffectParams::GaussMarkov { sigma, tau_c_s } => {
                 ch.gauss_markov.push(GaussMarkov { sigma, tau_c_s })
             }
@@ -127,7 +143,7 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
             }),
             // A first order alone is the model file's output filter; the filters named, in
             // cascade, are one (below).
-            EffectParams::OutputFilter { time_constant_s } if filter == e.params.lowpass() => {
+            EffectParams::OutputFilter { time_constant_s } if filter == p.lowpass() => {
                 ch.output_filter = Some(OutputFilterSpec { time_constant_s })
             }
             EffectParams::OutputFilter { .. }

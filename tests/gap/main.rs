@@ -6,6 +6,7 @@ mod alternatives;
 mod band_noise;
 mod diagnosis;
 mod families;
+mod filter_shape;
 mod filter_tail;
 mod filters;
 mod gm_or_filter;
