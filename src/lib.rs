@@ -184,6 +184,7 @@
 //!   alternative_words.rs   the other explanations about as good as the choice, in words
 //!   band_words.rs          how far a measured curve leaves the ensemble bands, in words
 //!   taken_out.rs           what a diagnosis set aside (outliers, stuck stretches), in words
+//!   filter_shape_words.rs  a diagnosis judged beyond its filter's stretch, in words
 //!   first_block_words.rs   a first block far off the rest of the run, in words
 //!   jump_words.rs          the bias jumps a diagnosis named, when and how large, in words
 //!   results.rs             the records `plot` and `report` read, labelled

@@ -18,6 +18,7 @@ pub mod band_words;
 pub mod dynamic;
 pub mod effect_text;
 pub mod export;
+pub mod filter_shape_words;
 pub mod first_block_words;
 pub mod json;
 pub mod jump_words;

@@ -148,6 +148,10 @@ pub(super) fn diagnosis(h: &mut String, res: &Results) {
         } else {
             effects.join("<br>")
         };
+        if let Some(w) = crate::sink::filter_shape_words::filter_shape_words(d, &unit, &tick, " = ")
+        {
+            let _ = write!(effects_cell, "<br><span class=\"small\">{}</span>", esc(&w));
+        }
         if let Some(w) = crate::sink::alternative_words::alternative_words(d, &unit, &tick, " = ") {
             let _ = write!(
                 effects_cell,

@@ -24,18 +24,21 @@ pub fn diagnosis_line(d: &DiagnosisRecord, unit: &str, style: &TableStyle) -> St
     } else {
         format!("gap {} -> {}", sig3(d.gap_before), sig3(d.gap_after))
     };
-    // When the curve was judged beyond its filter's stretch, the filter the whole curve named
-    // (a filter named beyond it fitted only its tail, and is left to the record).
-    let shape = d.filter_shape.as_ref();
-    let effects: Vec<String> = shape
+    // When the curve was judged beyond its filter's stretch, the unit's filter is the one the
+    // whole curve named (said after the verdict); a filter named beyond it fitted only its
+    // tail, and is left to the record.
+    let shape = d.filter_shape.is_some();
+    let mut effects: Vec<String> = d
+        .effects
         .iter()
-        .flat_map(|f| f.filter.iter())
-        .chain(d.effects.iter().filter(|e| {
-            shape.is_none()
-                || !matches!(&e.effect, RecordedEffect::Known(p) if p.kind().is_filter())
-        }))
+        .filter(|e| {
+            !shape || !matches!(&e.effect, RecordedEffect::Known(p) if p.kind().is_filter())
+        })
         .map(|e| effect_brief(&e.effect, unit))
         .collect();
+    if shape {
+        effects.insert(0, "the unit's filter".into());
+    }
     let misses = || -> String {
         d.regions
             .iter()
@@ -84,27 +87,8 @@ pub fn diagnosis_line(d: &DiagnosisRecord, unit: &str, style: &TableStyle) -> St
             "; the moving average and the low-pass are one filter in series, the average first"
         );
     }
-    if let Some(f) = &d.filter_shape {
-        let _ = write!(
-            line,
-            "; the filter's shape is none of the kinds exactly: the curve judged from tau {} \
-             on (the whole curve {}, gap {})",
-            tau_text(f.from_tau),
-            match f.verdict_whole {
-                crate::gap::diagnose::Verdict::Consistent => "consistent",
-                crate::gap::diagnose::Verdict::Explained => "explained",
-                crate::gap::diagnose::Verdict::Unexplained => "unexplained",
-            },
-            sig3(f.gap_whole)
-        );
-        if !f.set_aside.is_empty() {
-            let aside: Vec<String> = f
-                .set_aside
-                .iter()
-                .map(|e| effect_brief(&e.effect, unit))
-                .collect();
-            let _ = write!(line, ", set aside there: {}", aside.join(" + "));
-        }
+    if let Some(w) = crate::sink::filter_shape_words::filter_shape_words(d, unit, &sig3, " ") {
+        let _ = write!(line, "; {w}");
     }
     if let Some(w) = crate::sink::jump_words::jump_words(d, unit, &sig3) {
         let _ = write!(line, "; {w}");
