@@ -981,17 +981,6 @@ impl GapProblem {
         if let Some((t, _)) = held {
             x.column_mut(t).fill(0.0);
         }
-        // The columns the caller sees; beside a base filter one more, white phase noise of
-        // negative size, fitted and in the model but not among the returned coefficients: the
-        // base filter is the whole curve's nearest kind, and its tail (the term in 1 / tau^2)
-        // need not be the unit's (DiagnoseOptions::base_filter).
-        let k_out = x.ncols();
-        if self.base_filter.is_some() {
-            x = x.insert_column(k_out, 0.0);
-            for (r, &t) in self.tau.iter().enumerate() {
-                x[(r, k_out)] = -basis(t)[0];
-            }
-        }
         let k = x.ncols();
         // The rounding after the filter depends on the fit's own N (`floor_n2`): it starts at
         // the floor's value and is solved for the fixed point where the N it is computed at is
@@ -1082,7 +1071,7 @@ impl GapProblem {
             };
         expected -= n_shape as f64 * tr_m / j as f64;
         Some(GlsFit {
-            coef: coef.iter().take(k_out).copied().collect(),
+            coef: coef.iter().copied().collect(),
             model,
             chi2,
             expected,
