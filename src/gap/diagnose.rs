@@ -199,6 +199,17 @@ pub enum Verdict {
     Unexplained,
 }
 
+impl Verdict {
+    /// The record's word for it (`consistent`, `explained`, `unexplained`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Verdict::Consistent => "consistent",
+            Verdict::Explained => "explained",
+            Verdict::Unexplained => "unexplained",
+        }
+    }
+}
+
 /// A run of taus where the model misses the curve.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Region {
@@ -299,6 +310,24 @@ pub struct Diagnosis {
 }
 
 impl Diagnosis {
+    /// The five terms this diagnosis fitted, squared, as the next pass's covariance takes them
+    /// ([`DiagnoseOptions::cov_coef`]); None when the fit has no white rate or a term is not
+    /// finite.
+    pub(crate) fn fitted_cov_coef(&self) -> Option<[f64; 5]> {
+        let fitted = self.final_coef.map(|c| c * c);
+        (fitted[1] > 0.0 && fitted.iter().all(|v| v.is_finite())).then_some(fitted)
+    }
+
+    /// Whether this diagnosis read the values' step as a counter with carry (a sawtooth kept,
+    /// or the quantization judged white phase), for the next pass's
+    /// [`DiagnoseOptions::cov_counter`].
+    pub(crate) fn read_a_counter(&self) -> bool {
+        self.sawtooth.is_some()
+            || self
+                .quantization
+                .is_some_and(|q| q.kind == super::quantization::QuantKind::Angle)
+    }
+
     /// Whether an effect of this kind is kept in the model.
     pub fn names(&self, kind: EffectKind) -> bool {
         self.effects.iter().any(|e| e.params.kind() == kind)
@@ -554,8 +583,7 @@ pub(crate) fn diagnose_curve(
         // filter (session 19)"). The plain fit beyond ten memories remains for a filter tried
         // beside a Gauss-Markov term (`trial`: its five terms were fitted beside that term,
         // not through the filter) and a pass whose fit has no white rate.
-        let fitted = d.final_coef.map(|c| c * c);
-        let c_cov = if trial.is_none() && fitted[1] > 0.0 && fitted.iter().all(|v| v.is_finite()) {
+        let c_cov = if let Some(fitted) = d.fitted_cov_coef().filter(|_| trial.is_none()) {
             fitted
         } else {
             let m_cut = (10.0 * lp.memory_s(snap.tau0_s) / snap.tau0_s)
@@ -577,9 +605,7 @@ pub(crate) fn diagnose_curve(
             // A pass that kept a counter's sawtooth read a counter (behind the filter, its
             // quantization is neither floor: docs/gap.md, "The counter behind a filter
             // (session 25)"), which has no rate rounding after the filter.
-            cov_counter: d.sawtooth.is_some()
-                || d.quantization
-                    .is_some_and(|q| q.kind == super::quantization::QuantKind::Angle),
+            cov_counter: d.read_a_counter(),
             ..opts.clone()
         };
         match diagnose_curve_once(snap, temperature, &next) {

@@ -9,9 +9,10 @@
 //! Beyond a few of the filter's memories every low-pass leaves the white rate and a term in
 //! `1 / tau^2` (white phase noise of either sign; docs/gap.md, "A filter's tail is white phase
 //! noise"), whatever its shape. So when the whole curve's diagnosis names a filter and is left
-//! unexplained, or names a Gauss-Markov term, band or line whose signature lies within
-//! [`REGION_MEMORIES`] memories of the filter, the curve is diagnosed again from there on
-//! ([`judge_beyond`]); that diagnosis stands when it explains the curve with fewer of the
+//! unexplained, or names a Gauss-Markov term or a broad band whose signature lies within
+//! [`REGION_MEMORIES`] memories of the filter (a line or a narrow band there is the unit's:
+//! `shape_like`), the curve is diagnosed again from there on with that filter in every model
+//! ([`judge_beyond`]); that diagnosis stands when it is not unexplained and needs fewer of the
 //! unit's effects, and the record says from which tau it was judged, which filter the whole
 //! curve named, and what was set aside (docs/gap.md, "The filter's own stretch of the curve
 //! (session 48)").
@@ -110,13 +111,12 @@ pub fn judge_beyond(
     // covariance with the five terms the whole curve fitted through it, as the diagnosis's
     // pass after a filter has them.
     let m_cut = (tau_r / snap.tau0_s).ceil().max(1.0) as u64;
-    let fitted = d.final_coef.map(|c| c * c);
     let beyond = DiagnoseOptions {
         min_m: opts.min_m.max(m_cut),
         base_filter: Some(lp),
         cov_filter: Some(lp),
-        cov_coef: (fitted[1] > 0.0 && fitted.iter().all(|v| v.is_finite())).then_some(fitted),
-        cov_counter: d.sawtooth.is_some(),
+        cov_coef: d.fitted_cov_coef(),
+        cov_counter: d.read_a_counter(),
         ..opts.clone()
     };
     let d2 = match diagnose_curve(snap, temperature, &beyond) {

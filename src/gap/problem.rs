@@ -365,6 +365,15 @@ impl GapProblem {
         self.offset_at(spec, self.floor_n2(coef))
     }
 
+    /// The filter a model of `spec` carries: the one it names, or else the problem's base filter
+    /// ([`DiagnoseOptions::base_filter`]). Every model's columns, fixed part and shape count
+    /// take it from here, so a fit, its intervals and its degrees of freedom agree. (A filter
+    /// candidate added to `spec` takes the base filter's place: `spec_with` composes with the
+    /// named filter only.)
+    fn model_filter(&self, spec: &ModelSpec) -> Option<LowPass> {
+        spec.filter.or(self.base_filter)
+    }
+
     /// [`GapProblem::offset_of`] with the rounding's white rate `N^2 = n2` (u^2/s) given.
     fn offset_at(&self, spec: &ModelSpec, n2: f64) -> Vec<f64> {
         let mut off = spec.offset.clone().unwrap_or_else(|| vec![0.0; self.len()]);
@@ -373,7 +382,7 @@ impl GapProblem {
                 *o += c;
             }
         }
-        if let (Some(lp), Some(fl)) = (spec.filter, self.filter_floor) {
+        if let (Some(lp), Some(fl)) = (self.model_filter(spec), self.filter_floor) {
             let r = self.memo.floor(&lp, n2, fl.step, || {
                 let rho = self
                     .memo
@@ -914,7 +923,7 @@ impl GapProblem {
         let k = 5 + spec.extra.len();
         // The filter's white-rate column, and its flicker-rate column: the unit's filter
         // smooths its flicker floor too (LowPass::flicker_rate_avar). Kept per filter.
-        let cols = spec.filter.map(|lp| {
+        let cols = self.model_filter(spec).map(|lp| {
             self.memo.columns(&lp, || {
                 let white = match lp {
                     LowPass::FirstOrder { time_constant_s } => effect_column(
@@ -964,18 +973,6 @@ impl GapProblem {
     /// `held`: a five-term coefficient held at a value (its column zeroed here, its part in
     /// the spec's offset).
     fn gls_with(&self, spec: &ModelSpec, held: Option<(usize, f64)>) -> Option<GlsFit> {
-        // the base filter where the spec names none (DiagnoseOptions::base_filter)
-        let with_base;
-        let spec = match (spec.filter, self.base_filter) {
-            (None, Some(lp)) => {
-                with_base = ModelSpec {
-                    filter: Some(lp),
-                    ..spec.clone()
-                };
-                &with_base
-            }
-            _ => spec,
-        };
         let j = self.len();
         let mut x = self.columns(spec);
         if let Some((t, _)) = held {
@@ -986,7 +983,7 @@ impl GapProblem {
         // the floor's value and is solved for the fixed point where the N it is computed at is
         // the N fitted with it ([`FloorN2Search`], which says why plain iteration does not
         // reach it; docs/gap.md, "The grid model wired (session 15)").
-        let floor_in = spec.filter.is_some() && self.filter_floor.is_some();
+        let floor_in = self.model_filter(spec).is_some() && self.filter_floor.is_some();
         let n_start = self.floor_n2(&[]);
         // below this N^2 (u^2/s) a raw rate sample's noise is under 0.03 steps: the fit holds
         // no white rate the rounding could act on, and the search stops there
@@ -1063,7 +1060,7 @@ impl GapProblem {
             }
         }
         let n_shape = spec.extra.len()
-            + spec.filter.map_or(0, |f| f.n_shape())
+            + self.model_filter(spec).map_or(0, |f| f.n_shape())
             + if self.sawtooth.is_some() {
                 SAWTOOTH_SHAPES
             } else {

@@ -4,7 +4,6 @@
 //! The record holds it (`filter_shape`: docs/records.md); the terminal table (sink::table) and
 //! the report (sink::report) say it through [`filter_shape_words`].
 
-use crate::gap::diagnose::Verdict;
 use crate::gap::record::DiagnosisRecord;
 use crate::sink::effect_text::effect_bracketed;
 
@@ -24,11 +23,7 @@ pub fn filter_shape_words(
         .iter()
         .map(|e| effect_bracketed(&e.effect, unit, number, eq))
         .collect();
-    let verdict = match f.verdict_whole {
-        Verdict::Consistent => "consistent",
-        Verdict::Explained => "explained",
-        Verdict::Unexplained => "unexplained",
-    };
+    let verdict = f.verdict_whole.name();
     let mut s = format!(
         "the unit's filter, as the whole curve named it: {} (its shape none of the kinds \
          exactly: the curve judged from tau {} s on; the whole curve {verdict}, gap {}",

@@ -113,8 +113,5 @@ pub(super) fn capitalise(s: &str) -> String {
 }
 
 pub(super) fn verdict_word(d: &DiagnosisRecord) -> String {
-    serde_json::to_value(d.verdict)
-        .ok()
-        .and_then(|v| v.as_str().map(String::from))
-        .unwrap_or_default()
+    d.verdict.name().to_string()
 }

@@ -116,10 +116,7 @@ pub(super) fn diagnosis(h: &mut String, res: &Results) {
         if more > 0 {
             regions.push(format!("and {more} more, closer to the model"));
         }
-        let verdict = serde_json::to_value(d.verdict)
-            .ok()
-            .and_then(|v| v.as_str().map(String::from))
-            .unwrap_or_default();
+        let verdict = d.verdict.name();
         let mut shape = d
             .residual_shape
             .as_ref()
@@ -171,7 +168,7 @@ pub(super) fn diagnosis(h: &mut String, res: &Results) {
                 String::new()
             },
             esc(ch),
-            esc(&verdict),
+            esc(verdict),
             d.gap_before,
             d.gap_after,
             effects_cell,
@@ -262,10 +259,7 @@ pub(super) fn interim_table(h: &mut String, interim: &[&Labelled<DiagnosisRecord
                     .find(|d| d.rec.t_data == *t && d.rec.channel == *c)
                 {
                     Some(d) => {
-                        let verdict = serde_json::to_value(d.rec.verdict)
-                            .ok()
-                            .and_then(|v| v.as_str().map(String::from))
-                            .unwrap_or_default();
+                        let verdict = d.rec.verdict.name();
                         let kinds: Vec<&str> = d
                             .rec
                             .effects
@@ -275,7 +269,7 @@ pub(super) fn interim_table(h: &mut String, interim: &[&Labelled<DiagnosisRecord
                         let _ = write!(
                             h,
                             "<td class=\"l\">{} {:.2}&rarr;{:.2}{}</td>",
-                            esc(&verdict),
+                            esc(verdict),
                             d.rec.gap_before,
                             d.rec.gap_after,
                             if kinds.is_empty() {
