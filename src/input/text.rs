@@ -468,6 +468,8 @@ struct Layout {
     /// The format the header (and the file's name) tells, which fixes some columns' units and
     /// roles (`super::format_units`).
     format: Option<super::format_units::FileFormat>,
+    /// The file has no header row: its columns are named `c1..cn` by their numbers.
+    headerless: bool,
 }
 
 fn input_error(path: &Path, line: u64, problem: String) -> UsageError {
@@ -721,6 +723,7 @@ impl Layout {
             dates: Default::default(),
             unread_stamp: Default::default(),
             format,
+            headerless: !header,
         })
     }
 
@@ -779,6 +782,7 @@ impl Layout {
             l
         };
         let l = l.without_index_columns(t, &rows_ahead, opts, path, line);
+        let l = l.with_unnamed_clock(t, &rows_ahead, opts, path, line);
         l.check_interleaved(t, &rows_ahead, opts, path, line)?;
         Ok(match l.parse(t) {
             Ok((v, time)) => ((Ok(v), time), l),
@@ -967,6 +971,108 @@ impl Layout {
             self.keep.remove(k);
             self.names.remove(k);
             self.strict.remove(k);
+        }
+        self
+    }
+
+    /// The layout with a headerless file's first column read as its clock when it steps like
+    /// one: every step from the first data row `t` through the rows `ahead` (at least
+    /// [`INDEX_ROWS`]) positive and within [`CLOCK_STEP_SPREAD`] of their median or of a whole
+    /// number of it (samples missing), nine in ten of them one median, and that
+    /// median `tau0` in seconds, milliseconds, microseconds or nanoseconds (within
+    /// [`CLOCK_TAU0_MATCH`]). No sensor's increments or rates rise so evenly, and by the step
+    /// the run gave; a running sum (`--phase`) may, and is never judged. Before (session 49),
+    /// such a column (`t,gx` exported without its names) was analysed as a channel whose
+    /// covariance was not positive definite. A column that steps as evenly by another step is
+    /// left a channel, and the log says the run's tau0 may be wrong. `--columns`,
+    /// `--channels` naming the column, or `--time-column` (a name, or `none`) leave it alone.
+    fn with_unnamed_clock(
+        mut self,
+        t: &str,
+        ahead: &[String],
+        opts: &TextOptions,
+        path: &Path,
+        line: u64,
+    ) -> Layout {
+        let Some(tau0) = opts.tau0_s else {
+            return self;
+        };
+        if !self.headerless
+            || self.time.is_some()
+            || self.keep.len() < 2
+            || opts.columns.is_some()
+            || opts.phase
+            || opts.time_column.is_some()
+            || self.sep == Sep::Labelled
+            || opts
+                .channels
+                .as_ref()
+                .is_some_and(|c| c.contains(&self.names[0]))
+        {
+            return self;
+        }
+        let Some(rows) = self.rows_to_judge(t, ahead) else {
+            return self;
+        };
+        let i = self.keep[0];
+        let Some(values) = rows
+            .iter()
+            .map(|f| parse_field(f[i]).ok().filter(|v| v.is_finite()))
+            .collect::<Option<Vec<f64>>>()
+        else {
+            return self;
+        };
+        let mut steps: Vec<f64> = values.windows(2).map(|p| p[1] - p[0]).collect();
+        if steps.iter().any(|&d| d <= 0.0 || !d.is_finite()) {
+            return self;
+        }
+        steps.sort_by(f64::total_cmp);
+        let median = steps[steps.len() / 2];
+        // A step over missing samples is a whole number `k` of steps; the clock's step is the
+        // span over the steps so counted (stamps that jitter leave the median off by their
+        // jitter, the span by a share of it).
+        let ks: Vec<f64> = steps
+            .iter()
+            .map(|&d| (d / median).round().max(1.0))
+            .collect();
+        let whole = steps
+            .iter()
+            .zip(&ks)
+            .all(|(&d, &k)| (d - k * median).abs() <= CLOCK_STEP_SPREAD * median);
+        let single = ks.iter().filter(|&&k| k == 1.0).count();
+        if !whole || 10 * single < 9 * steps.len() {
+            return self;
+        }
+        let mean = (values[values.len() - 1] - values[0]) / ks.iter().sum::<f64>();
+        let scale = [1.0, 1e3, 1e6, 1e9]
+            .into_iter()
+            .find(|s| (mean / s - tau0).abs() <= CLOCK_TAU0_MATCH * tau0);
+        // The step to six digits, as the stamps print it (not `0.0050000000000000044`).
+        let digits = 10f64.powi(5 - mean.log10().floor() as i32);
+        let step = crate::ranges::show((mean * digits).round() / digits);
+        match scale {
+            Some(_) => {
+                tracing::info!(
+                    "{}: line {line}: column {} `{}` rises by {step} a row, as a clock stepping \
+                     by tau0 ({tau0} s) does: read as the time column, not a channel (name it \
+                     in --channels, or pass --time-column none, to analyse it)",
+                    path.display(),
+                    i + 1,
+                    self.source_names[i],
+                );
+                self.time = Some(i);
+                self.keep.remove(0);
+                self.names.remove(0);
+                self.strict.remove(0);
+            }
+            None => tracing::warn!(
+                "{}: line {line}: column {} `{}` rises by {step} on every row, as a clock \
+                 does, but --tau0 is {tau0} s: analysed as a channel; if it is the time, check \
+                 the sampling step",
+                path.display(),
+                i + 1,
+                self.source_names[i],
+            ),
         }
         self
     }
@@ -1295,6 +1401,15 @@ const AHEAD_LINES: usize = 256;
 /// Rows (the first data row and those read ahead) a column must number one by one to be taken
 /// as the rows' index ([`Layout::without_index_columns`]).
 const INDEX_ROWS: usize = 16;
+
+/// How far a clock's steps may stray from their median, as a share of it
+/// ([`Layout::with_unnamed_clock`]): a logger's stamps jitter by a few percent of a step, and
+/// a step between two of them by twice that.
+const CLOCK_STEP_SPREAD: f64 = 0.25;
+
+/// How close a headerless clock's median step must come to tau0 (in one of the units
+/// [`Layout::with_unnamed_clock`] tries), as a share of tau0.
+const CLOCK_TAU0_MATCH: f64 = 0.02;
 
 /// Names (lower case, camel case split with `_`) of a column that numbers the sensor a row is
 /// of, when one file holds several ([`Layout::check_interleaved`]): ArduPilot's `I` (`IMU`,
@@ -4405,6 +4520,80 @@ mod tests {
             read_all(&rows(40, 99).replace(",time,gx", "enc [deg],time,gx")).0,
             ["enc [deg]", "gx"]
         );
+    }
+
+    /// A headerless file whose first column steps by tau0 (`t,gx` written without its names)
+    /// reads that column as its clock: a row left out is a missing sample, found, and the
+    /// values are the other column's. In milliseconds and with stamps jittered by 4% too. Kept a
+    /// channel: a step that is not tau0 (the log says so), `--phase`, `--time-column none`, a
+    /// column `--channels` names, fewer than `INDEX_ROWS` rows, one step backwards, a file of
+    /// that column alone, and a header (names are read by their words, not their values).
+    #[test]
+    fn a_headerless_column_stepping_by_tau0_is_the_clock() {
+        let rows = |n: usize, skip: usize, scale: f64, jitter: f64| {
+            let mut t = String::new();
+            for i in (0..n).filter(|&i| i != skip) {
+                let wobble = if i % 2 == 0 { jitter } else { -jitter };
+                let stamp = (i as f64 + wobble) * 0.01 * scale;
+                t += &format!("{stamp:.6},{}\n", 0.25 * ((i * 7919) % 13) as f64);
+            }
+            t
+        };
+        let opts = |f: fn(&mut TextOptions)| {
+            let mut o = TextOptions {
+                tau0_s: Some(0.01),
+                ..TextOptions::default()
+            };
+            f(&mut o);
+            o
+        };
+        let read = |text: &str, o: &TextOptions| {
+            let mut r = TextReader::with_options(text.as_bytes(), Path::new("t.csv"), o).unwrap();
+            let mut out = Vec::new();
+            while r.read_rows(&mut out, 8).unwrap() > 0 {}
+            let missing = r.position().time.map(|t| t.missing);
+            (r.names().to_vec(), out, missing)
+        };
+        let plain = opts(|_| {});
+        for (scale, jitter) in [(1.0, 0.0), (1e3, 0.0), (1.0, 0.04)] {
+            let (names, v, missing) = read(&rows(40, 17, scale, jitter), &plain);
+            assert_eq!(names, ["c2"], "scale {scale} jitter {jitter}");
+            assert_eq!(missing, Some(1), "scale {scale} jitter {jitter}");
+            // 39 rows and the missing sample between rows 16 and 18 as a gap.
+            assert_eq!(v.len(), 40);
+            assert_eq!(
+                (v[3], v[16], v[18]),
+                (
+                    0.25 * ((3 * 7919) % 13) as f64,
+                    0.25 * ((16 * 7919) % 13) as f64,
+                    0.25 * ((18 * 7919) % 13) as f64
+                )
+            );
+            assert!(v[17].is_nan());
+        }
+        let two = vec!["c1".to_string(), "c2".to_string()];
+        let at_002 = TextOptions {
+            tau0_s: Some(0.02),
+            ..TextOptions::default()
+        };
+        assert_eq!(read(&rows(40, 99, 1.0, 0.0), &at_002).0, two);
+        assert_eq!(
+            read(&rows(40, 99, 1.0, 0.0), &opts(|o| o.phase = true)).0,
+            two
+        );
+        let none = opts(|o| o.time_column = Some(NO_TIME_COLUMN.into()));
+        assert_eq!(read(&rows(40, 99, 1.0, 0.0), &none).0, two);
+        let named = opts(|o| o.channels = Some(vec!["c1".into(), "c2".into()]));
+        assert_eq!(read(&rows(40, 99, 1.0, 0.0), &named).0, two);
+        assert_eq!(read(&rows(INDEX_ROWS - 1, 99, 1.0, 0.0), &plain).0, two);
+        let back = rows(40, 99, 1.0, 0.0).replacen("0.070000", "0.050000", 1);
+        assert_eq!(read(&back, &plain).0, two);
+        let alone: String = (0..40)
+            .map(|i| format!("{:.2}\n", i as f64 * 0.01))
+            .collect();
+        assert_eq!(read(&alone, &plain).0, ["c1"]);
+        let headed = format!("a,b\n{}", rows(40, 99, 1.0, 0.0));
+        assert_eq!(read(&headed, &plain).0, ["a", "b"]);
     }
 
     /// What a review of the first version found, each a file that read wrongly or crashed:
