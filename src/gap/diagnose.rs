@@ -1039,11 +1039,13 @@ fn diagnose_curve_pass(
     // Flagged: by `G` on the base model, or by an effect that was kept (the likelihood-ratio
     // candidates and the time-domain tests flag only through the effect they bring).
     // Outliers found in the stream are an effect of their own (docs/gap.md, "Outliers"): a
-    // curve that needs nothing else is then `explained` by them, not `consistent`.
+    // curve that needs nothing else is then `explained` by them, not `consistent`. Not when
+    // they are the far end of the white noise's own heavy tail (session 49): that is the
+    // noise's law, which the curve's terms already hold, not something added to the unit.
     let verdict = if effects.is_empty() {
         if gap_before > th.gap_crit {
             Verdict::Unexplained
-        } else if snap.outliers.count > 0 {
+        } else if snap.outliers.count > 0 && !snap.outliers.heavy_tail() {
             Verdict::Explained
         } else {
             Verdict::Consistent

@@ -37,6 +37,15 @@ const FINE_STEPS: f64 = 8.0;
 /// `Phi^-1(3/4)`: the median of `|e|` over the standard deviation of a normal `e`.
 const MAD_NORMAL: f64 = 0.674_489_750_196_081_7;
 
+/// The shoulder of the tail: both differences beside a sample beyond this many robust standard
+/// deviations (and not both beyond [`OUTLIER_Z`]). Counted, never replaced.
+pub const SHOULDER_Z: f64 = 4.0;
+/// Probability per sample of a shoulder pair under Gaussian white noise: `2 P(X > 4, Y > 4)`,
+/// `(X, Y)` standard bivariate normal with correlation 1/2 (the correlation of `e_k` and
+/// `-e_{k+1}`), less the same beyond 6 (7.8e-13). Computed with scipy's
+/// `multivariate_normal.cdf([-4, -4], cov=[[1, .5], [.5, 1]])` (4.8705e-7, times two).
+pub const SHOULDER_P_NORMAL: f64 = 9.741e-7;
+
 /// What was found (sizes in u/s).
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct OutlierCount {
@@ -45,9 +54,36 @@ pub struct OutlierCount {
     pub sum_sq_size: f64,
     /// Largest absolute size (u/s).
     pub max_size: f64,
+    /// Samples judged (both neighbours and a scale known).
+    #[serde(default)]
+    pub judged: u64,
+    /// Samples in the tail's shoulder ([`SHOULDER_Z`]): both differences beside them beyond 4
+    /// robust standard deviations with opposite signs, not both beyond [`OUTLIER_Z`].
+    #[serde(default)]
+    pub shoulder: u64,
 }
 
 impl OutlierCount {
+    /// The shoulder count a Gaussian white noise gives over the samples judged.
+    pub fn shoulder_normal(&self) -> f64 {
+        SHOULDER_P_NORMAL * self.judged as f64
+    }
+
+    /// Whether the samples beyond [`OUTLIER_Z`] are the far end of the noise's own heavy tail
+    /// rather than isolated glitches (docs/gap.md, "Outliers", "A heavy tail (session 49)").
+    /// Glitches stand apart from the noise: few samples between 4 and 6 robust deviations
+    /// (a Gaussian noise puts [`SHOULDER_P_NORMAL`] of them there, spikes of 8 or more only
+    /// the odd one). A heavy-tailed law (Student's t) fills that shoulder several times over
+    /// what it puts beyond 6 (t with 4 degrees of freedom: about 4 times). So: some samples
+    /// beyond 6, at least half as many in the shoulder as beyond, and a shoulder a normal law
+    /// would reach with probability well below 1e-4 (more than its mean + 4 sqrt(mean) + 4).
+    pub fn heavy_tail(&self) -> bool {
+        let mu = self.shoulder_normal();
+        self.count > 0
+            && 2 * self.shoulder >= self.count
+            && self.shoulder as f64 > mu + 4.0 * mu.sqrt() + 4.0
+    }
+
     /// The rms of the sizes (u/s), 0 when there is none.
     pub fn rms_size(&self) -> f64 {
         if self.count == 0 {
@@ -172,13 +208,25 @@ impl Despiker {
         let keep_last = !all && n >= 2;
         let release = if keep_last { n - 1 } else { n };
         let thr = scale.map(|s| OUTLIER_Z * s);
+        let shoulder = scale.map(|s| SHOULDER_Z * s);
         for k in 0..release {
             let d = self.buf[k];
             let mut v = d;
-            if let (Some(t), Some(l), Some(&r)) = (thr, self.left, self.buf.get(k + 1)) {
+            if let (Some(t), Some(sh), Some(l), Some(&r)) =
+                (thr, shoulder, self.left, self.buf.get(k + 1))
+            {
                 let e_in = d - l;
                 let e_out = r - d;
-                if e_in.abs() > t && e_out.abs() > t && e_in.signum() != e_out.signum() {
+                self.found.judged += 1;
+                let apart = e_in.signum() != e_out.signum();
+                if apart
+                    && e_in.abs() > sh
+                    && e_out.abs() > sh
+                    && !(e_in.abs() > t && e_out.abs() > t)
+                {
+                    self.found.shoulder += 1;
+                }
+                if e_in.abs() > t && e_out.abs() > t && apart {
                     // The right neighbour may be a spike too (two in a row): then use the left.
                     let r_ok = self
                         .buf

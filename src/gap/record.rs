@@ -385,13 +385,24 @@ impl JumpsRecord {
 }
 
 /// The `outliers` object: how many, how often (per second of data), their rms and largest size
-/// (u/s).
+/// (u/s), and the tail's shoulder that tells glitches from a heavy-tailed noise.
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 pub struct OutliersRecord {
     pub count: u64,
     pub rate: f64,
     pub rms_size: f64,
     pub max_size: f64,
+    /// Samples in the tail's shoulder, between 4 and 6 robust deviations
+    /// ([`super::outliers::SHOULDER_Z`]), kept.
+    #[serde(default)]
+    pub shoulder: u64,
+    /// The shoulder a Gaussian white noise gives over as many samples.
+    #[serde(default)]
+    pub shoulder_normal: f64,
+    /// The samples beyond are the noise's own heavy tail, not glitches
+    /// ([`super::outliers::OutlierCount::heavy_tail`]): no effect, the verdict not moved.
+    #[serde(default)]
+    pub heavy_tail: bool,
 }
 
 impl DiagnosisRecord {
@@ -500,6 +511,9 @@ impl DiagnosisRecord {
                 },
                 rms_size: d.outliers.rms_size(),
                 max_size: d.outliers.max_size,
+                shoulder: d.outliers.shoulder,
+                shoulder_normal: d.outliers.shoulder_normal(),
+                heavy_tail: d.outliers.heavy_tail(),
             },
             stuck: d.stuck,
             first_block: d.first_block,

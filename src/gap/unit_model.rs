@@ -93,11 +93,15 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
         warmup: None,
         bias_jumps: None,
         rate_lsb,
-        // The simulator's spikes are `size (1 + E)`, rms `sqrt(5) size`.
-        outliers: (d.outliers.count > 0 && d.t_data_s > 0.0).then(|| Outliers {
-            rate_per_s: d.outliers.count as f64 / d.t_data_s,
-            size: d.outliers.rms_size() / 5f64.sqrt(),
-        }),
+        // The simulator's spikes are `size (1 + E)`, rms `sqrt(5) size`. A heavy-tailed white
+        // noise's far samples are no spike process (their law is the noise's: the twin's white
+        // rate is Gaussian at the fitted N, as the curve they were taken from).
+        outliers: (d.outliers.count > 0 && !d.outliers.heavy_tail() && d.t_data_s > 0.0).then(
+            || Outliers {
+                rate_per_s: d.outliers.count as f64 / d.t_data_s,
+                size: d.outliers.rms_size() / 5f64.sqrt(),
+            },
+        ),
     };
     // The unit's filter: the one the whole curve named when the curve was judged beyond its
     // stretch (super::filter_shape; the filter named there, if any, fitted only its tail).

@@ -18,7 +18,19 @@ pub fn taken_out_words(
 ) -> Option<String> {
     let mut parts = Vec::new();
     let o = &d.outliers;
-    if o.count > 0 {
+    if o.count > 0 && o.heavy_tail {
+        parts.push(format!(
+            "a heavy-tailed white noise, not glitches: {} sample{} beyond 6 standard deviations \
+             (replaced; rms {}, the largest {}) and {} between 4 and 6 where a normal law gives \
+             {}",
+            o.count,
+            if o.count == 1 { "" } else { "s" },
+            rate_words(o.rms_size, unit, number),
+            rate_words(o.max_size, unit, number),
+            o.shoulder,
+            number(o.shoulder_normal)
+        ));
+    } else if o.count > 0 {
         parts.push(format!(
             "{} outlier{} replaced (rms {}, the largest {})",
             o.count,
