@@ -430,12 +430,47 @@ fn diagnose_quantized(
     let mut d = match diagnose_curve(snap, temperature, &restricted) {
         Ok(d) => d,
         Err(e) => {
-            tracing::debug!(error = %e, m_white = limit.m_white, "no diagnosis from the white tau on: the whole curve");
-            diagnose_curve(snap, temperature, opts)?
+            tracing::debug!(error = %e, m_white = limit.m_white, "no diagnosis from the white tau on");
+            nearest_cut(snap, temperature, opts, limit.m_white)?
         }
     };
     d.quantization_limited = Some(limit);
     Ok(d)
+}
+
+/// The diagnosis of a quantization-limited unit whose run ends too soon after `tau_white`
+/// (`m_white` samples) for a curve there: from the longest cut below it, halving, that leaves
+/// a curve to judge (the record's `tau_span` says where it starts); the whole curve only when
+/// none does. Before (session 49), the whole curve at once: a tenth blind review's pendulous
+/// accelerometers (an LSB 100-150 times the per-sample noise, `tau_white` 58-150 s on runs of
+/// an hour) were `unexplained` there, G 23 with a 0.3 Hz line named on a clean unit whose curve
+/// from 10 s on fits the five terms (G 1.2).
+fn nearest_cut(
+    snap: &EvidenceSnapshot,
+    temperature: Option<&EvidenceSnapshot>,
+    opts: &DiagnoseOptions,
+    m_white: u64,
+) -> Result<Diagnosis, DiagnoseError> {
+    let mut m = m_white / 2;
+    while m > opts.min_m.max(1) {
+        let cut = DiagnoseOptions {
+            min_m: m,
+            ..opts.clone()
+        };
+        match diagnose_curve(snap, temperature, &cut) {
+            Ok(d) => {
+                tracing::debug!(
+                    min_m = m,
+                    m_white,
+                    "the curve judged from the nearest cut below the white tau"
+                );
+                return Ok(d);
+            }
+            Err(e) => tracing::trace!(error = %e, min_m = m, "no curve from this cut either"),
+        }
+        m /= 2;
+    }
+    diagnose_curve(snap, temperature, opts)
 }
 
 /// The gap of a diagnosis's model right after the low-pass its sawtooth is behind
