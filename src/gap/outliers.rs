@@ -24,6 +24,11 @@
 //! A flagged increment is replaced by the mean of its neighbours (the left one already
 //! cleaned); its size is `(d_k - replacement) / tau0` in u/s. Work per sample: two
 //! differences and a comparison, plus one selection (O(n)) per chunk.
+//!
+//! The samples whose two differences lie beyond [`SHOULDER_Z`] = 4 deviations (opposite signs,
+//! not both beyond 6) are counted too, and kept: the tail's shoulder, which tells isolated
+//! glitches (few there) from a white noise whose own law is heavy-tailed (many there:
+//! [`OutlierCount::heavy_tail`]; docs/gap.md, "A heavy tail (session 49)").
 
 /// Increments per chunk (the scale is the chunk's own).
 pub const CHUNK: usize = 4096;
@@ -326,8 +331,6 @@ mod tests {
         assert_eq!(found.count, 10, "{found:?}");
     }
 
-    /// A counter whose increments are mostly one value (differences mostly zero) has no
-    /// outlier: the scale's floor is one count.
     /// The heavy-tail rule on the counts the reviews measured: Student's t noise (rev9 E01: 412
     /// beyond, 1664 in the shoulder over 1.86 M samples; E07, t8: 2 and 57 over 336 k) is a
     /// tail; spikes beside a strong line (rev10 M35/ax: 7 and 8 over 248 k) and spikes on a
@@ -352,6 +355,8 @@ mod tests {
         assert!(!c(2, 11, 1_860_000).heavy_tail());
     }
 
+    /// A counter whose increments are mostly one value (differences mostly zero) has no
+    /// outlier: the scale's floor is one count.
     #[test]
     fn a_quiet_counter_has_none() {
         let x: Vec<f64> = (0..50_000)
