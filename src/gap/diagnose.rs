@@ -1521,7 +1521,7 @@ fn other_first_steps(
         .filter(|_| polished_fit.chi2 < greedy_fit.chi2)
         .map(|k| {
             let spec = spec_from(prob, &polished, offset);
-            (polished.clone(), spec, polished_fit.clone(), k)
+            (polished, spec, polished_fit, k)
         });
     let starts: Vec<&Passed> = passed_first
         .iter()

@@ -227,14 +227,11 @@ impl Despiker {
                 let e_out = r - d;
                 self.found.judged += 1;
                 let apart = e_in.signum() != e_out.signum();
-                if apart
-                    && e_in.abs() > sh
-                    && e_out.abs() > sh
-                    && !(e_in.abs() > t && e_out.abs() > t)
-                {
+                let beyond = e_in.abs() > t && e_out.abs() > t;
+                if apart && !beyond && e_in.abs() > sh && e_out.abs() > sh {
                     self.found.shoulder += 1;
                 }
-                if e_in.abs() > t && e_out.abs() > t && apart {
+                if apart && beyond {
                     // The right neighbour may be a spike too (two in a row): then use the left.
                     let r_ok = self
                         .buf

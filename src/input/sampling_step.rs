@@ -169,7 +169,7 @@ fn lvm_step(dx: f64) -> Result<InferredStep, String> {
 /// `x` rounded to `digits` significant decimal digits. A power of ten at or above one
 /// divides, one below it multiplies: each exact, so `999936` to one digit is `1000000`, not
 /// `999999.9999999999`.
-fn round_significant(x: f64, digits: i32) -> f64 {
+pub(crate) fn round_significant(x: f64, digits: i32) -> f64 {
     if x == 0.0 || !x.is_finite() {
         return x;
     }

@@ -1048,8 +1048,7 @@ impl Layout {
             .into_iter()
             .find(|s| (mean / s - tau0).abs() <= CLOCK_TAU0_MATCH * tau0);
         // The step to six digits, as the stamps print it (not `0.0050000000000000044`).
-        let digits = 10f64.powi(5 - mean.log10().floor() as i32);
-        let step = crate::ranges::show((mean * digits).round() / digits);
+        let step = crate::ranges::show(super::sampling_step::round_significant(mean, 6));
         match scale {
             Some(_) => {
                 tracing::info!(
