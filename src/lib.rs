@@ -59,6 +59,7 @@
 //!   text.rs                the column reader: separators, header, rates or increments
 //!   time_column.rs         the time column: gaps found from the sampling step
 //!   sampling_step.rs       the sampling step read off the time column (no --tau0)
+//!   stamp_grid.rs          the sampling grid under a jittered clock's stamps
 //!   header_unit.rs         a data column's unit in its header (`[rad s^-1]`), without --unit
 //!   format_units.rs        units a file's format fixes (Kalibr, Xsens, UZH-FPV, ArduPilot)
 //!   temperature_column.rs  the unit's temperature column (`temp [degC]`): not a channel

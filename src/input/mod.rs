@@ -7,6 +7,7 @@ pub mod header_unit;
 pub mod lvm;
 pub mod px4_export;
 pub mod sampling_step;
+pub mod stamp_grid;
 pub mod temperature_column;
 pub mod text;
 pub mod time_column;

@@ -440,8 +440,25 @@ pub fn infer_tau0<R: BufRead>(
         .filter(|d| all_regular || ((d - median) / median).abs() <= TOLERANCE)
         .collect();
     let n = near.len() as f64;
-    let mean = near.iter().sum::<f64>() / n;
-    let sd = (near.iter().map(|d| (d - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0)).sqrt();
+    let near_mean = near.iter().sum::<f64>() / n;
+    let sd =
+        (near.iter().map(|d| (d - near_mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0)).sqrt();
+    // Jitter past a quarter step leaves steps out, and the mean of those kept no longer
+    // telescopes: a review's 100 Hz stamps jittered by +-28.5% read 0.00999 s. Each stamp is
+    // then placed on the grid the stamps lie on (`super::stamp_grid`, the jitter counted once,
+    // missing samples counted as whole steps) and the step is the stamps' span over the
+    // samples it holds, which telescopes again.
+    let rising = stamps.len() > 2 && stamps.windows(2).all(|w| w[1] > w[0]);
+    let on_grid = (zeros == 0 && !all_regular && rising)
+        .then(|| super::stamp_grid::sample_numbers(&stamps, median))
+        .flatten()
+        .and_then(|k| {
+            let samples = *k.last()? as f64;
+            let span = stamps[stamps.len() - 1] - stamps[0];
+            let step = span / samples;
+            (samples > 0.0 && ((step - median) / median).abs() <= TOLERANCE).then_some(step)
+        });
+    let mean = on_grid.unwrap_or(near_mean);
     // Where the jitter is what limits, the mean step is the estimate (the steps of jittered
     // stamps telescope: their mean's error is about sd / n, not sd / sqrt(n)), and the median
     // only tells whether a round number is within reach.
@@ -800,6 +817,26 @@ mod tests {
         // 104 Hz, not a round step: kept to the digits the stamps tell (0.0096154 s).
         let s = infer(&jittered(1.0 / 104.0)).unwrap();
         assert!((s.tau0_s * 104.0 - 1.0).abs() < 1e-5, "{}", s.tau0_s);
+    }
+
+    /// Stamps of a host that stamps each sample as it receives it, uniform jitter of +-28.5% of
+    /// the step (a review's 100 Hz file, read 0.00999 s: the steps past a quarter of it were
+    /// left out and the mean of the rest no longer telescoped): 0.01 s, also with samples
+    /// missing among them, in five seeds.
+    #[test]
+    fn stamps_jittered_past_a_quarter_step_give_the_nominal_step() {
+        use rand::{RngExt, SeedableRng};
+        for seed in 0..5 {
+            let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed);
+            let mut t = String::from("time,gx\n");
+            for k in 0..4000u64 {
+                let x = 0.01 * (k as f64 + 0.57 * (rng.random::<f64>() - 0.5));
+                if k % 997 != 500 {
+                    t.push_str(&format!("{x:.6},1\n"));
+                }
+            }
+            assert_eq!(infer(&t).unwrap().tau0_s, 0.01, "seed {seed}");
+        }
     }
 
     /// Stamps written more coarsely than the rows come are refused with the rate their mean

@@ -553,6 +553,25 @@ impl Layout {
             .flatten();
         let clock =
             |n: &str| time_name(n).filter(|_| format.and_then(|f| f.temperature(n)).is_none());
+        // (Not when the run names the stamp as a channel.)
+        let stamp_named = |n: &str| {
+            opts.channels
+                .as_ref()
+                .is_some_and(|c| c.iter().any(|x| x == n))
+                || opts
+                    .columns
+                    .as_ref()
+                    .is_some_and(|c| c.iter().any(|p| p.source == n))
+        };
+        let ros_echo_stamp = source_names
+            .iter()
+            .any(|n| n == "%time")
+            .then(|| {
+                source_names
+                    .iter()
+                    .position(|n| n == "field.header.stamp" && !stamp_named(n))
+            })
+            .flatten();
         let time = match opts.time_column.as_deref().filter(|t| *t != NO_TIME_COLUMN) {
             Some(t) => Some(find(t).ok_or_else(|| {
                 err(format!(
@@ -568,6 +587,11 @@ impl Layout {
             {
                 source_names.iter().position(|n| n == "SampleUS")
             }
+            // A ROS 1 `rostopic echo -p` export: the message's own stamp, `field.header.stamp`
+            // (the driver's time of the sample), before `%time`, the time the recorder received
+            // it. A review's 1 kHz exports were refused on `%time`'s latency jitter, and those
+            // read on it had their step 0.1-0.4% off and thousands of samples called missing.
+            None if header && ros_echo_stamp.is_some() => ros_echo_stamp,
             // A column named `time` before one whose name only holds a time word.
             None if header => source_names
                 .iter()
@@ -650,6 +674,28 @@ impl Layout {
                     }
                     keep.push(i);
                     names.push(p.name.clone());
+                }
+                // The unit's temperature, when the input has one the list leaves out, is still
+                // read beside the channels it names (it is no channel: the diagnosis fits the
+                // bias's dependence on it). A review's `--columns "gx=gx [rad/s],..."` lost the
+                // file's `temperature_c` without a word.
+                for (i, n) in source_names.iter().enumerate() {
+                    let temperature = super::temperature_column::temperature_column(n).is_some()
+                        || format.and_then(|f| f.temperature(n)).is_some();
+                    if !header || !temperature || keep.contains(&i) || Some(i) == time {
+                        continue;
+                    }
+                    if names.contains(n) {
+                        continue;
+                    }
+                    tracing::info!(
+                        "{}: column {} `{n}` holds the unit's temperature: read beside the \
+                         channels --columns names",
+                        path.display(),
+                        i + 1
+                    );
+                    keep.push(i);
+                    names.push(n.clone());
                 }
                 (keep, names)
             }
@@ -3102,7 +3148,7 @@ impl<R: BufRead> TextReader<R> {
                         // A sample whose stamp is missing (an empty time cell) takes its step:
                         // the next stamp is then one step on, not a gap of one.
                         Some(c) if p.1.is_nan() => {
-                            c.step_inserted();
+                            c.unstamped();
                             0
                         }
                         Some(c) => c.missing_before(p.1, &self.path, self.line_no),
@@ -3490,14 +3536,16 @@ mod tests {
             while r.read_rows(&mut out, 8).unwrap() > 0 {}
             Ok::<_, UsageError>((r.names().to_vec(), out, r.bad_rows(), r.invalid_values))
         };
-        // Every column: the label column is no channel, nor `field.header.stamp` (a second
-        // time column; `%time` is the time); `ERR` is a gap of its channel alone, counted.
+        // Every column: the label column is no channel, nor `%time` (a second time column:
+        // the time the recorder received the message; the message's own `field.header.stamp`
+        // is the time); `ERR` is a gap of its channel alone, counted.
         let (names, v, bad, invalid) = read(&TextOptions::default()).unwrap();
         assert_eq!(names, ["field.w.x", "field.w.y"]);
         assert_eq!((v.len(), bad, invalid), (6, 0, 0));
         assert_eq!((v[0], v[1], v[3], v[4], v[5]), (0.5, 1.5, 2.5, 0.25, 3.5));
         assert!(v[2].is_nan());
         let mut r = TextReader::new(text.as_bytes(), Path::new("r.csv")).unwrap();
+        assert_eq!(r.time_column_name(), Some("field.header.stamp"));
         while r.read_rows(&mut Vec::new(), 8).unwrap() > 0 {}
         assert_eq!(r.position().words, 1);
         // `--channels field.w.y`: nothing counted; the columns the run leaves out stay in the
@@ -3714,8 +3762,10 @@ mod tests {
             },
         )
         .unwrap();
-        assert_eq!(r.names(), ["ax"]);
+        // The unit's temperature is read beside the column --columns names.
+        assert_eq!(r.names(), ["ax", "Temp [degC]"]);
         assert_eq!(r.channel_columns()[0], (3, "Acc X [g]"));
+        assert_eq!(r.temperatures()[1].map(|t| t.named), Some(true));
         // `ok;ok` is no units row: a first data row of text, an error naming it.
         let e = TextReader::new("a;b\nok;ok\n1;2\n".as_bytes(), Path::new("w.csv"));
         assert!(e.is_ok_and(|r| r.names() == ["a", "b"]));
