@@ -37,6 +37,12 @@ const SPREAD_MEMORY: f64 = 1.0 / 256.0;
 /// Stamps whose phases on the step set a grid from a look at the start ([`sample_numbers`]).
 const CIRCLE_ROWS: usize = 64;
 
+/// How far the grid's step follows the clock from the nominal step (a share of it): a crystal's
+/// drift and a step given a few parts in a thousand off, not a clock that changed its rate (a
+/// file whose rows come twice as often from its middle on is read off the grid there, its rows
+/// counted as not a whole number of steps, as before the grid).
+pub const STEP_FOLLOWED: f64 = 0.01;
+
 /// Rows followed before the grid is trusted.
 pub const LOCK_ROWS: u64 = FADING_ROWS;
 
@@ -50,6 +56,9 @@ pub const LOCK_RMS: f64 = 0.23;
 pub struct StampGrid {
     /// The grid's step (clock units).
     step: f64,
+    /// The nominal step it started from (clock units): the step follows the clock within
+    /// [`STEP_FOLLOWED`] of it.
+    nominal: f64,
     /// Where the grid puts the last sample placed (clock units).
     at: Option<f64>,
     /// The mean square of the stamps' offsets from the grid (steps^2), over [`SPREAD_MEMORY`].
@@ -63,6 +72,7 @@ impl StampGrid {
     pub fn new(step: f64) -> StampGrid {
         StampGrid {
             step,
+            nominal: step,
             ..StampGrid::default()
         }
     }
@@ -110,7 +120,10 @@ impl StampGrid {
         let follow = (1.0 / (n + 1.0)).max(FOLLOW);
         self.at = Some(predicted + follow * offset);
         if self.rows >= FADING_ROWS {
-            self.step += RATE * offset / k;
+            self.step = (self.step + RATE * offset / k).clamp(
+                self.nominal * (1.0 - STEP_FOLLOWED),
+                self.nominal * (1.0 + STEP_FOLLOWED),
+            );
         }
         let steps = offset / self.step;
         self.offset2 += (1.0 / (n + 1.0)).max(SPREAD_MEMORY) * (steps * steps - self.offset2);
@@ -211,6 +224,23 @@ mod tests {
         }
         assert!((g.step() / 0.01 - 1.0).abs() < 1e-4, "{}", g.step());
         assert!(g.locked());
+    }
+
+    /// A clock whose rate doubles halfway is not followed: the grid loses its lock there and
+    /// stays off it (its step held within 1% of the nominal one).
+    #[test]
+    fn a_clock_that_changes_its_rate_is_not_followed() {
+        let mut g = StampGrid::new(0.01);
+        g.set(0.0);
+        for i in 1..1000u64 {
+            g.place(0.01 * i as f64);
+        }
+        assert!(g.locked());
+        for i in 1..1000u64 {
+            g.place(9.99 + 0.005 * i as f64);
+        }
+        assert!(!g.locked(), "step {}", g.step());
+        assert!((g.step() / 0.01 - 1.0).abs() <= STEP_FOLLOWED + 1e-12);
     }
 
     #[test]
