@@ -554,22 +554,13 @@ impl Layout {
         let clock =
             |n: &str| time_name(n).filter(|_| format.and_then(|f| f.temperature(n)).is_none());
         // (Not when the run names the stamp as a channel.)
-        let stamp_named = |n: &str| {
-            opts.channels
-                .as_ref()
-                .is_some_and(|c| c.iter().any(|x| x == n))
-                || opts
-                    .columns
-                    .as_ref()
-                    .is_some_and(|c| c.iter().any(|p| p.source == n))
-        };
         let ros_echo_stamp = source_names
             .iter()
             .any(|n| n == "%time")
             .then(|| {
                 source_names
                     .iter()
-                    .position(|n| n == "field.header.stamp" && !stamp_named(n))
+                    .position(|n| n == "field.header.stamp" && !named_by_run(n, opts))
             })
             .flatten();
         let time = match opts.time_column.as_deref().filter(|t| *t != NO_TIME_COLUMN) {
@@ -1157,15 +1148,7 @@ impl Layout {
         }
         let ardupilot = self.format == Some(super::format_units::FileFormat::ArduPilot);
         // A column the run names is a channel, as the run says.
-        let named = |n: &str| {
-            opts.channels
-                .as_ref()
-                .is_some_and(|c| c.iter().any(|x| x == n))
-                || opts
-                    .columns
-                    .as_ref()
-                    .is_some_and(|c| c.iter().any(|p| p.source == n))
-        };
+        let named = |n: &str| named_by_run(n, opts);
         let Some(rows) = self.rows_to_judge(t, ahead) else {
             return Ok(());
         };
@@ -1529,6 +1512,17 @@ fn is_note(t: &str) -> bool {
 }
 
 /// Whether a column named `n` is one the run analyses (`--channels`, or every column).
+/// Whether the run names the column `n` in `--channels` or `--columns`.
+fn named_by_run(n: &str, opts: &TextOptions) -> bool {
+    opts.channels
+        .as_ref()
+        .is_some_and(|c| c.iter().any(|x| x == n))
+        || opts
+            .columns
+            .as_ref()
+            .is_some_and(|c| c.iter().any(|p| p.source == n))
+}
+
 fn analysed(n: &str, opts: &TextOptions) -> bool {
     opts.channels
         .as_ref()
