@@ -471,7 +471,7 @@ pub fn infer_tau0<R: BufRead>(
     } else if jitter > resolution || sd > resolution {
         // Steps that scatter beyond the stamps' resolution are a jittered clock's, whose median
         // step is no estimate (a review's EuRoC stamps in ns since 1970, resolved to 737 ns,
-        // jittered by +-25%: median 4995712 ns, read 0.004996 s; their mean 5000028 ns).
+        // jittered by about +-18%: median 4995712 ns, read 0.004996 s; their mean 5000028 ns).
         (mean, jitter.max(resolution))
     } else {
         (median, resolution)

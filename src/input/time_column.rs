@@ -27,6 +27,12 @@
 //! row (a stamp written again with other values, a stray stamp): it stays a sample, counted once
 //! backwards, and the clock reads on from the row after it. Before, the clock stayed a step
 //! ahead of every later stamp: each later row was counted backwards (1998 of 2000 in ms).
+//!
+//! A clock's step is measured from the stamp before only until the grid its stamps lie on is
+//! trusted ([`super::stamp_grid`]: a host's stamps jitter about it); from then on each row is
+//! measured from its place on that grid, so jitter of up to about 40% of a step makes no gap
+//! and a stamp off its place counts once as not a whole number of steps, not twice. Before
+//! (session 50) +-28.5% jitter made 5641 missing samples of a file's 34.
 
 use super::sampling_step::SECONDS_PER_DAY;
 use super::stamp_grid::StampGrid;
