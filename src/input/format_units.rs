@@ -38,6 +38,9 @@ pub enum FileFormat {
     SensorLogger { gyro: bool },
     /// ArduPilot's `IMU` messages as `mavlogdump.py --format csv` writes them.
     ArduPilot,
+    /// A ROS 1 `rostopic echo -p` export of `sensor_msgs/Imu` (`field.header.stamp`,
+    /// `field.angular_velocity.x`, ...): its units are the message's (`super::header_unit`).
+    RosImu,
 }
 
 /// What to do with an ArduPilot DataFlash log, binary or text: the reader takes the CSV that
@@ -98,6 +101,11 @@ pub fn file_format<S: AsRef<str>>(names: &[S], file: &Path) -> Option<FileFormat
     if UZH_FPV_COLUMNS.iter().all(|k| has(k)) {
         return Some(FileFormat::UzhFpv);
     }
+    if has("field.header.stamp")
+        && (has("field.angular_velocity.x") || has("field.linear_acceleration.x"))
+    {
+        return Some(FileFormat::RosImu);
+    }
     let exact = names.len() == SENSOR_LOGGER_HEADER.len()
         && names
             .iter()
@@ -151,6 +159,8 @@ impl FileFormat {
                 ("x" | "y" | "z", false) => ("m/s", true, "m/s^2, by Sensor Logger's file"),
                 _ => return None,
             },
+            // The message's units are read off its field names (`super::header_unit`).
+            FileFormat::RosImu => return None,
         };
         Some(HeaderUnit {
             unit: unit.into(),
@@ -167,6 +177,7 @@ impl FileFormat {
             FileFormat::UzhFpv => "UZH-FPV's imu.txt",
             FileFormat::SensorLogger { .. } => "Sensor Logger's file",
             FileFormat::ArduPilot => "ArduPilot's IMU message",
+            FileFormat::RosImu => "its sensor_msgs/Imu export",
         }
     }
 
@@ -185,6 +196,15 @@ impl FileFormat {
     pub fn other_column(self, name: &str) -> Option<&'static str> {
         match (self, name.trim()) {
             (FileFormat::ArduPilot, "I") => Some("the number of the IMU its rows are of"),
+            // A driver's orientation estimate and the covariances the message carries (often
+            // constant, -1 for "not given"): read as channels, a run on a ROS export diagnosed
+            // them in `u` beside the six rates, with a warning for each that never moved.
+            (FileFormat::RosImu, n) if n.contains("_covariance") => {
+                Some("a covariance the message carries, no sample")
+            }
+            (FileFormat::RosImu, n) if n.starts_with("field.orientation.") => {
+                Some("an orientation the driver computes")
+            }
             // Half the angle increment about each axis (and the real part): no angle as it
             // stands, and read as a rate beside `Gyr_X` it would be off by 1/tau0.
             (FileFormat::Xsens { .. }, "dq_W" | "dq_X" | "dq_Y" | "dq_Z") => {

@@ -247,8 +247,9 @@ fn a_text_column_is_left_out_unless_named_and_an_input_without_samples_is_an_err
 /// A ROS 1 `rostopic echo -p` export as robotics users make it: `%time` in ns since 1970, a
 /// `frame_id` label column, orientation and covariance columns that never change, a cell that
 /// is not a number in a column the run does not analyse. With `--rate --channels`, no `--tau0`:
-/// the step is read off `%time`, nothing is lost, and the curves are those of the same rates in
-/// a plain file, to the last bit; without `--rate` too, in rad by the message's units.
+/// the step is read off `field.header.stamp`, nothing is lost, and the curves are those of the
+/// same rates in a plain file, to the last bit; without `--channels` too (the orientation is
+/// no channel); without `--rate` too, in rad by the message's units.
 #[test]
 fn a_rostopic_export_reads_as_the_plain_file() {
     let (a, b) = columns();
@@ -278,6 +279,18 @@ fn a_rostopic_export_reads_as_the_plain_file() {
     assert_eq!((s.tau0, s.bad_rows, s.invalid_values), (0.01, 0, 0));
     assert_eq!(s.samples, ps.samples);
     assert_eq!(c.len(), pc.len());
+    for (x, y) in c.iter().zip(&pc) {
+        assert_eq!(x.sigma, y.sigma);
+    }
+    // Without --channels: the driver's orientation is no channel (by the message), and the
+    // rates are the only channels, their curves the same.
+    let (c, _) = parsed(&analyze_no_tau0(&p, &["--rate"]));
+    let mut channels: Vec<&str> = c.iter().map(|x| x.channel.as_str()).collect();
+    channels.dedup();
+    assert_eq!(
+        channels,
+        ["field.angular_velocity.x", "field.angular_velocity.y"]
+    );
     for (x, y) in c.iter().zip(&pc) {
         assert_eq!(x.sigma, y.sigma);
     }
