@@ -673,10 +673,8 @@ impl Layout {
                 for (i, n) in source_names.iter().enumerate() {
                     let temperature = super::temperature_column::temperature_column(n).is_some()
                         || format.and_then(|f| f.temperature(n)).is_some();
-                    if !header || !temperature || keep.contains(&i) || Some(i) == time {
-                        continue;
-                    }
-                    if names.contains(n) {
+                    let listed = keep.contains(&i) || names.contains(n);
+                    if !header || !temperature || listed || Some(i) == time {
                         continue;
                     }
                     tracing::info!(
@@ -1511,7 +1509,6 @@ fn is_note(t: &str) -> bool {
     t.starts_with('#') || t.starts_with("//")
 }
 
-/// Whether a column named `n` is one the run analyses (`--channels`, or every column).
 /// Whether the run names the column `n` in `--channels` or `--columns`.
 fn named_by_run(n: &str, opts: &TextOptions) -> bool {
     opts.channels
@@ -1523,6 +1520,7 @@ fn named_by_run(n: &str, opts: &TextOptions) -> bool {
             .is_some_and(|c| c.iter().any(|p| p.source == n))
 }
 
+/// Whether a column named `n` is one the run analyses (`--channels`, or every column).
 fn analysed(n: &str, opts: &TextOptions) -> bool {
     opts.channels
         .as_ref()
