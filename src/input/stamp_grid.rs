@@ -138,6 +138,12 @@ impl StampGrid {
         }
     }
 
+    /// The root mean square of the stamps' offsets from the grid (steps), over
+    /// [`SPREAD_MEMORY`]: the clock's jitter about its grid.
+    pub fn spread(&self) -> f64 {
+        self.offset2.sqrt()
+    }
+
     /// The grid's step (clock units) as followed so far.
     pub fn step(&self) -> f64 {
         self.step

@@ -572,10 +572,21 @@ impl TimeColumn {
             tracing::debug!("{}: time column `{}`: uniform", file.display(), self.name);
             return;
         }
+        // Stamps that jitter about a grid it trusts: the rows off their step are that jitter,
+        // not samples taken unevenly (`super::stamp_grid`).
+        let jitter = if !self.counter && self.irregular > 0 && self.grid.locked() {
+            format!(
+                " (its stamps jitter about the sampling grid by {:.0}% of a step, root mean \
+                 square: rows measured from the grid, the samples taken as evenly spaced)",
+                100.0 * self.grid.spread()
+            )
+        } else {
+            String::new()
+        };
         tracing::warn!(
             "{}: {} `{}`: {} jumps, {} missing samples counted as gaps; {} steps \
-             backwards or repeated, {} not a whole number of tau0, {} discontinuities; {} rows \
-             written twice dropped",
+             backwards or repeated, {} not a whole number of tau0{jitter}, {} discontinuities; \
+             {} rows written twice dropped",
             file.display(),
             if self.counter {
                 "counter"
@@ -716,6 +727,14 @@ mod tests {
                 after,
                 [(900, 1), (1999, 3), (3496, 1), (3497, 1)],
                 "seed {seed}"
+            );
+            // The account says the stamps jitter about the grid by their spread: uniform over
+            // +-30% of a step has a root mean square of 0.3 / sqrt(3) = 0.173 step.
+            assert!(c.grid.locked(), "seed {seed}");
+            let spread = c.grid.spread();
+            assert!(
+                (spread - 0.3 / 3f64.sqrt()).abs() < 0.02,
+                "seed {seed}: {spread}"
             );
         }
     }
