@@ -87,7 +87,7 @@ impl StampGrid {
 
     /// Whether the grid is trusted (see the module doc).
     pub fn locked(&self) -> bool {
-        self.at.is_some() && self.rows >= LOCK_ROWS && self.offset2.sqrt() < LOCK_RMS
+        self.at.is_some() && self.rows >= LOCK_ROWS && self.spread() < LOCK_RMS
     }
 
     /// The steps from the last sample placed to a stamp `t`, measured on the grid: `None`
@@ -116,8 +116,8 @@ impl StampGrid {
         // set at one jittered stamp is off by that stamp's jitter), the nominal step kept;
         // from `FADING_ROWS` on, the fading memory of `FOLLOW` for the place and `RATE` for
         // the step.
-        let n = self.rows as f64 + 1.0;
-        let follow = (1.0 / (n + 1.0)).max(FOLLOW);
+        let growing = 1.0 / (self.rows as f64 + 2.0);
+        let follow = growing.max(FOLLOW);
         self.at = Some(predicted + follow * offset);
         if self.rows >= FADING_ROWS {
             self.step = (self.step + RATE * offset / k).clamp(
@@ -126,7 +126,7 @@ impl StampGrid {
             );
         }
         let steps = offset / self.step;
-        self.offset2 += (1.0 / (n + 1.0)).max(SPREAD_MEMORY) * (steps * steps - self.offset2);
+        self.offset2 += growing.max(SPREAD_MEMORY) * (steps * steps - self.offset2);
         self.rows += 1;
         k as u64
     }
@@ -152,31 +152,30 @@ impl StampGrid {
 
 /// Each stamp's sample number from the first (0), placed on a grid of nominal step `step` that
 /// follows them ([`StampGrid`]); every row is at least one step on from the row before. `None`
-/// where a stamp is not finite.
+/// where a stamp is not finite, or there is none.
 pub fn sample_numbers(stamps: &[f64], step: f64) -> Option<Vec<u64>> {
     if stamps.iter().any(|t| !t.is_finite()) || step.is_nan() || step <= 0.0 {
         return None;
     }
+    let &first = stamps.first()?;
+    // The grid's place from the first stamps together, not the first alone: the circular mean
+    // of their phases on the step (jitter under half a step averages out there, where the
+    // offsets from one jittered stamp would wrap).
+    let (s, c) = stamps
+        .iter()
+        .take(CIRCLE_ROWS)
+        .map(|x| (2.0 * std::f64::consts::PI * (x - first) / step).sin_cos())
+        .fold((0.0, 0.0), |(a, b), (x, y)| (a + x, b + y));
+    let phase = s.atan2(c) / (2.0 * std::f64::consts::PI);
     let mut grid = StampGrid::new(step);
+    grid.set(first + phase * step);
+    // Place and step both known: the fading memory from the start.
+    grid.rows = FADING_ROWS;
     let mut out = Vec::with_capacity(stamps.len());
+    out.push(0);
     let mut n = 0u64;
-    for &t in stamps {
-        if out.is_empty() {
-            // The grid's place from the first stamps together, not the first alone: the
-            // circular mean of their phases on the step (jitter under half a step averages
-            // out there, where the offsets from one jittered stamp would wrap).
-            let (s, c) = stamps
-                .iter()
-                .take(CIRCLE_ROWS)
-                .map(|x| (2.0 * std::f64::consts::PI * (x - t) / step).sin_cos())
-                .fold((0.0, 0.0), |(a, b), (x, y)| (a + x, b + y));
-            let phase = s.atan2(c) / (2.0 * std::f64::consts::PI);
-            grid.set(t + phase * step);
-            // Place and step both known: the fading memory from the start.
-            grid.rows = FADING_ROWS;
-        } else {
-            n += grid.place(t);
-        }
+    for &t in &stamps[1..] {
+        n += grid.place(t);
         out.push(n);
     }
     Some(out)

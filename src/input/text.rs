@@ -582,11 +582,13 @@ impl Layout {
             // (the driver's time of the sample), before `%time`, the time the recorder received
             // it. A review's 1 kHz exports were refused on `%time`'s latency jitter, and those
             // read on it had their step 0.1-0.4% off and thousands of samples called missing.
-            None if header && ros_echo_stamp.is_some() => ros_echo_stamp,
-            // A column named `time` before one whose name only holds a time word.
-            None if header => source_names
-                .iter()
-                .position(|n| clock(n).is_some_and(|(plain, _)| plain))
+            // Else a column named `time` before one whose name only holds a time word.
+            None if header => ros_echo_stamp
+                .or_else(|| {
+                    source_names
+                        .iter()
+                        .position(|n| clock(n).is_some_and(|(plain, _)| plain))
+                })
                 .or_else(|| source_names.iter().position(|n| clock(n).is_some())),
             None => None,
         };
@@ -671,8 +673,7 @@ impl Layout {
                 // bias's dependence on it). A review's `--columns "gx=gx [rad/s],..."` lost the
                 // file's `temperature_c` without a word.
                 for (i, n) in source_names.iter().enumerate() {
-                    let temperature = super::temperature_column::temperature_column(n).is_some()
-                        || format.and_then(|f| f.temperature(n)).is_some();
+                    let temperature = input_temperature(n, format).is_some();
                     let listed = keep.contains(&i) || names.contains(n);
                     if !header || !temperature || listed || Some(i) == time {
                         continue;
@@ -1507,6 +1508,15 @@ fn base_name(n: &str) -> &str {
 /// row) or `//` (an exporter's notes, as Xsens MT Manager writes them).
 fn is_note(t: &str) -> bool {
     t.starts_with('#') || t.starts_with("//")
+}
+
+/// The temperature scale of an input column named `n` that holds the unit's temperature: by
+/// its name ([`super::temperature_column`]) or by the file's `format` (ArduPilot's `T`).
+fn input_temperature(
+    n: &str,
+    format: Option<super::format_units::FileFormat>,
+) -> Option<super::temperature_column::TemperatureScale> {
+    super::temperature_column::temperature_column(n).or_else(|| format?.temperature(n))
 }
 
 /// Whether the run names the column `n` in `--channels` or `--columns`.
@@ -3045,16 +3055,13 @@ impl<R: BufRead> TextReader<R> {
     /// "c9=temp [degF]"`), the one that names a unit first, or the format's (ArduPilot's `T`,
     /// [`super::format_units::FileFormat::temperature`]); `None` for the other channels.
     pub fn temperatures(&self) -> Vec<Option<super::temperature_column::TemperatureScale>> {
-        use super::temperature_column::temperature_column;
-        let format = self.layout.format;
         self.layout
             .keep
             .iter()
             .zip(&self.names)
             .map(|(&i, name)| {
-                let source = temperature_column(&self.layout.source_names[i])
-                    .or_else(|| format.and_then(|f| f.temperature(&self.layout.source_names[i])));
-                let given = temperature_column(name);
+                let source = input_temperature(&self.layout.source_names[i], self.layout.format);
+                let given = super::temperature_column::temperature_column(name);
                 match (source, given) {
                     (Some(s), _) if s.named => Some(s),
                     (_, Some(g)) if g.named => Some(g),

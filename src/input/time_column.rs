@@ -127,8 +127,8 @@ pub struct TimeColumn {
     /// and the first step is still to come.
     odd_first: bool,
     /// The grid a jittered clock's stamps lie on ([`StampGrid`]): once locked, a row's steps
-    /// are measured from it, not from the stamp before (a clock, not a counter; not carried
-    /// over a resumed run, where it locks again).
+    /// are measured from it, not from the stamp before (a clock's only: a counter's is never
+    /// given a step, so never locks; not carried over a resumed run, where it locks again).
     grid: StampGrid,
 }
 
@@ -511,12 +511,7 @@ impl TimeColumn {
         }
         // A clock's step measured on the grid its stamps lie on once that is trusted (the
         // jitter counted once, not twice: `super::stamp_grid`), else from the stamp before.
-        let on_grid = if self.counter {
-            None
-        } else {
-            self.grid.steps_to(t)
-        };
-        let k = self.off_step(on_grid.unwrap_or(steps), file, line);
+        let k = self.off_step(self.grid.steps_to(t).unwrap_or(steps), file, line);
         if k < 2.0 {
             self.grid.place(t);
             return 0;
@@ -574,7 +569,7 @@ impl TimeColumn {
         }
         // Stamps that jitter about a grid it trusts: the rows off their step are that jitter,
         // not samples taken unevenly (`super::stamp_grid`).
-        let jitter = if !self.counter && self.irregular > 0 && self.grid.locked() {
+        let jitter = if self.irregular > 0 && self.grid.locked() {
             format!(
                 " (its stamps jitter about the sampling grid by {:.0}% of a step, root mean \
                  square: rows measured from the grid, the samples taken as evenly spaced)",
