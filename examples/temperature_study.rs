@@ -72,6 +72,7 @@ fn run(m: &SimModel, seed: u64, steps: u64) -> Row {
             coefficient,
             lo,
             hi,
+            ..
         } => Some((coefficient, lo, hi)),
         _ => None,
     });

@@ -40,9 +40,11 @@ struct Gathered {
     lsb: Vec<LsbEstimator>,
     sums: Vec<f64>,
     /// The unit's temperature (degC) when the input has one, as evidence fed `T tau0` per step
-    /// (the channels' block layout: gap::temperature), and its sum over the steps.
+    /// (the channels' block layout: gap::temperature), and its sum (degC) and sum of squares
+    /// (degC^2) over the steps.
     temperature: Option<GapEvidence>,
     temperature_sum: f64,
+    temperature_sum2: f64,
     temperature_n: u64,
     /// The last known temperature (degC), held over steps without one (a temperature logged
     /// more slowly than the rates, or a missing value), and how many steps were held.
@@ -83,6 +85,7 @@ impl Gathered {
                 }
                 ev.push_increment(t * tau0);
                 self.temperature_sum += t;
+                self.temperature_sum2 += t * t;
                 self.temperature_n += 1;
                 self.temperature_last = Some(t);
             }
@@ -152,6 +155,7 @@ fn gather(
         sums: Vec::new(),
         temperature: None,
         temperature_sum: 0.0,
+        temperature_sum2: 0.0,
         temperature_n: 0,
         temperature_last: None,
         temperature_held: 0,
@@ -448,16 +452,32 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
                     0.0
                 },
                 temperature_coefficient: 0.0,
+                temperature_quadratic: 0.0,
             };
             // A temperature effect: its coefficient, the bias at the profile's reference.
             let coef = diag.effects.iter().find_map(|e| match e.params {
-                EffectParams::Temperature { coefficient, .. } => Some(coefficient),
+                EffectParams::Temperature {
+                    coefficient,
+                    quadratic,
+                    ..
+                } => Some((coefficient, quadratic)),
                 _ => None,
             });
-            if let (Some(c), Some(p), true) = (coef, &profile, main.temperature_n > 0) {
-                let mean_t = main.temperature_sum / main.temperature_n as f64;
-                facts.temperature_coefficient = c;
-                facts.bias -= c * (mean_t - p.reference_c);
+            if let (Some((c, quadratic)), Some(p), true) = (coef, &profile, main.temperature_n > 0)
+            {
+                let n = main.temperature_n as f64;
+                let mean_t = main.temperature_sum / n;
+                let mean_t2 = main.temperature_sum2 / n;
+                let r = p.reference_c;
+                // `c (T - T_q) + q (T - T_q)^2` about the model's reference `r`:
+                // `(c + 2 q (r - T_q)) (T - r) + q (T - r)^2` and a constant the bias takes.
+                let (slope, q) = match quadratic {
+                    Some(q) => (c + 2.0 * q.coefficient * (r - q.reference_c), q.coefficient),
+                    None => (c, 0.0),
+                };
+                facts.temperature_coefficient = slope;
+                facts.temperature_quadratic = q;
+                facts.bias -= slope * (mean_t - r) + q * (mean_t2 - 2.0 * r * mean_t + r * r);
             }
             fitted_channel(&facts, &diag, tau0)
         });

@@ -1305,10 +1305,15 @@ fn kept_in_time(params: &EffectParams) -> bool {
             coefficient,
             lo,
             hi,
+            quadratic,
         } => {
-            // The interval is c +- Z95 se (temperature.rs).
-            let se = (hi - lo) / (2.0 * super::temperature::Z95);
-            se > 0.0 && (coefficient / se).abs() >= TEMPERATURE_Z_ALONE
+            // Each interval is its term +- Z95 se (temperature.rs).
+            let strong = |v: f64, lo: f64, hi: f64| {
+                let se = (hi - lo) / (2.0 * super::temperature::Z95);
+                se > 0.0 && (v / se).abs() >= TEMPERATURE_Z_ALONE
+            };
+            strong(coefficient, lo, hi)
+                || quadratic.is_some_and(|q| strong(q.coefficient, q.lo, q.hi))
         }
         _ => false,
     }

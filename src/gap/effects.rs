@@ -150,7 +150,8 @@ pub enum EffectParams {
         #[serde(deserialize_with = "nullable_f64")]
         rms_size: f64,
     },
-    /// u/s per degC, with its 95% interval.
+    /// u/s per degC, with its 95% interval; with a second order when the bias bends with the
+    /// temperature (`coefficient` is then the slope at the second order's reference).
     Temperature {
         #[serde(deserialize_with = "nullable_f64")]
         coefficient: f64,
@@ -158,6 +159,8 @@ pub enum EffectParams {
         hi: f64,
         #[serde(deserialize_with = "nullable_f64")]
         lo: f64,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        quadratic: Option<TemperatureQuadratic>,
     },
     /// `decimation` (written only when above 1: the records of output-rate averages are as
     /// before) is [`LowPass::MovingAverage`]'s: `taps` then counts the internal samples.
@@ -214,6 +217,22 @@ fn is_one(v: &u32) -> bool {
 
 /// Reads a number the writer may have printed as `null` (serde_json writes a non-finite f64 so)
 /// back as NaN, so a record holding one still parses.
+/// The second order of a temperature dependence: `q (T - reference)^2` beside the slope.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TemperatureQuadratic {
+    /// `q`, u/s per degC^2.
+    #[serde(deserialize_with = "nullable_f64")]
+    pub coefficient: f64,
+    /// Its 95% interval.
+    #[serde(deserialize_with = "nullable_f64")]
+    pub hi: f64,
+    #[serde(deserialize_with = "nullable_f64")]
+    pub lo: f64,
+    /// The reference temperature (degC): the run's mean block temperature.
+    #[serde(deserialize_with = "nullable_f64")]
+    pub reference_c: f64,
+}
+
 pub fn nullable_f64<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
@@ -359,6 +378,7 @@ impl EffectParams {
                 coefficient: amplitude,
                 lo: f64::NAN,
                 hi: f64::NAN,
+                quadratic: None,
             },
             EffectKind::OutputFilter
             | EffectKind::MovingAverage
@@ -413,7 +433,14 @@ impl EffectParams {
                 coefficient,
                 hi,
                 lo,
-            } => vec![("coefficient", coefficient), ("hi", hi), ("lo", lo)],
+                quadratic,
+            } => {
+                let mut v = vec![("coefficient", coefficient), ("hi", hi), ("lo", lo)];
+                if let Some(q) = quadratic {
+                    v.extend([("quadratic", q.coefficient), ("reference_c", q.reference_c)]);
+                }
+                v
+            }
             EffectParams::MovingAverage {
                 stages,
                 taps,

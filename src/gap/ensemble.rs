@@ -43,6 +43,7 @@ pub fn base_of(ch: &ChannelModel) -> ChannelModel {
         bias_jumps: None,
         outliers: None,
         temperature_coefficient: 0.0,
+        temperature_quadratic: 0.0,
         ..ch.clone()
     }
 }
@@ -64,6 +65,7 @@ pub fn band(
         temperature: None,
         channels: vec![ChannelModel {
             temperature_coefficient: 0.0,
+            temperature_quadratic: 0.0,
             axis_enu: None,
             ..ch.clone()
         }],

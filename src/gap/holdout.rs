@@ -9,8 +9,8 @@ use super::effects::{params_column, EffectKind};
 use super::evidence::EvidenceSnapshot;
 use super::problem::{GapProblem, ModelSpec};
 use super::temperature::{
-    fixed_coefficient_drop, temperature_avar, temperature_blocks, TEMPERATURE_Z,
-    TEMPERATURE_Z_ALONE,
+    block_signal_avar, fixed_coefficient_drop, temperature_avar_without_noise, temperature_blocks,
+    temperature_signal, BlockPlacement, TEMPERATURE_Z, TEMPERATURE_Z_ALONE,
 };
 use super::warmup::warmup_block_means;
 
@@ -205,9 +205,13 @@ pub fn holdout_gap_with_temperature(
         let mut time_drop: Option<TimeDrop> = None;
         match e.params {
             EffectParams::BiasJumps { .. } => continue,
-            EffectParams::Temperature { coefficient, .. } => {
-                let Some((ts, avar)) =
-                    temperature.and_then(|ts| Some((ts, temperature_avar(ts, &prob.ms)?)))
+            EffectParams::Temperature {
+                coefficient,
+                quadratic,
+                ..
+            } => {
+                let Some((ts, avar)) = temperature
+                    .and_then(|ts| Some((ts, temperature_avar_without_noise(ts, &prob.ms)?)))
                 else {
                     tracing::warn!(
                         "the held-out run has no temperature to judge the temperature \
@@ -223,13 +227,16 @@ pub fn holdout_gap_with_temperature(
                 // held constant): `carried: false` would then say the run disowned it.
                 let blocks_c = temperature_blocks(snap, ts);
                 let block_s = snap.block_len as f64 * snap.tau0_s;
+                // The fitted signal, `c T` or with its second order, held fixed as a shape.
+                let quadratic = quadratic.map(|q| (q.coefficient, q.reference_c));
+                let signal = temperature_signal(coefficient, quadratic, &blocks_c);
                 let judged = fixed_coefficient_drop(
                     &snap.block_means,
-                    &blocks_c,
+                    &signal,
                     block_s,
                     &cur.five_terms(),
                     &carried_params,
-                    coefficient,
+                    1.0,
                     super::diagnose::k2_upper(&prob, &spec, &cur),
                 );
                 let Some((drop, scale, expected)) =
@@ -251,9 +258,13 @@ pub fn holdout_gap_with_temperature(
                     TEMPERATURE_Z_ALONE * TEMPERATURE_Z_ALONE,
                     TEMPERATURE_Z * TEMPERATURE_Z,
                 ));
+                let signal_avar: Vec<f64> = match quadratic {
+                    Some(_) => block_signal_avar(&signal, &BlockPlacement::of(&prob, snap)),
+                    None => avar.iter().map(|v| coefficient * coefficient * v).collect(),
+                };
                 if let Some(off) = trial.offset.as_mut() {
-                    for (o, v) in off.iter_mut().zip(avar) {
-                        *o += coefficient * coefficient * v;
+                    for (o, v) in off.iter_mut().zip(signal_avar) {
+                        *o += v;
                     }
                 }
             }

@@ -317,8 +317,14 @@ pub fn fit_intervals(
                     taps_profile(prob, spec, fit, (taps, stages, decimation), scale),
                 ));
             }
-            if let EffectParams::Temperature { lo, hi, .. } = *p {
+            if let EffectParams::Temperature {
+                lo, hi, quadratic, ..
+            } = *p
+            {
                 out.push(("coefficient", [lo, hi]));
+                if let Some(q) = quadratic {
+                    out.push(("quadratic", [q.lo, q.hi]));
+                }
             }
             out
         })

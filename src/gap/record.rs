@@ -584,6 +584,7 @@ mod tests {
                 coefficient: 0.02,
                 lo: f64::NAN,
                 hi: 0.03,
+                quadratic: None,
             },
             EffectParams::MovingAverage {
                 taps: 8,

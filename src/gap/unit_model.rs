@@ -41,6 +41,9 @@ pub struct ChannelFacts {
     pub bias: f64,
     /// Temperature coefficient (u/s per degC) when a temperature effect was accepted.
     pub temperature_coefficient: f64,
+    /// Its second order (u/s per degC^2, about the model's reference temperature), when the
+    /// accepted effect has one.
+    pub temperature_quadratic: f64,
 }
 
 /// The channel model of a diagnosed channel.
@@ -85,6 +88,7 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
         axis_enu: None,
         kind: IncrementUnit::parse(&facts.unit),
         temperature_coefficient: facts.temperature_coefficient,
+        temperature_quadratic: facts.temperature_quadratic,
         gauss_markov: Vec::new(),
         sinusoids: Vec::new(),
         band_noise: Vec::new(),
@@ -212,12 +216,16 @@ pub fn fitted_unit(
     mut channels: Vec<ChannelModel>,
     temperature: Option<TemperatureProfile>,
 ) -> SimModel {
-    let temperature =
-        temperature.filter(|_| channels.iter().any(|c| c.temperature_coefficient != 0.0));
-    if temperature.is_none() {
+    let temperature = temperature.filter(|_| {
         channels
-            .iter_mut()
-            .for_each(|c| c.temperature_coefficient = 0.0);
+            .iter()
+            .any(|c| c.temperature_coefficient != 0.0 || c.temperature_quadratic != 0.0)
+    });
+    if temperature.is_none() {
+        channels.iter_mut().for_each(|c| {
+            c.temperature_coefficient = 0.0;
+            c.temperature_quadratic = 0.0;
+        });
     }
     SimModel {
         tau0_s,

@@ -166,6 +166,8 @@ struct ChannelSim {
     warmup: Option<WarmupGen>,
     jumps: Option<BiasJumpsGen>,
     temp_coeff: f64,
+    /// u/s per degC^2 of `(T - reference)^2`.
+    temp_quad: f64,
     filter: Option<OutputFilter>,
     /// A low-pass beyond first order, in the output filter's place (the model file allows one).
     lowpass: Option<lowpass::LowPassGen>,
@@ -244,6 +246,7 @@ impl ChannelSim {
             warmup,
             jumps,
             temp_coeff: c.temperature_coefficient,
+            temp_quad: c.temperature_quadratic,
             filter: c
                 .output_filter
                 .map(|f| OutputFilter::new(f.time_constant_s, tau0_s)),
@@ -301,6 +304,13 @@ impl ChannelSim {
         }
         if self.temp_coeff != 0.0 {
             d += self.temp_coeff * temp_integral;
+        }
+        // The second order over the step: `q (T - ref)^2` integrated as the square of the
+        // step's mean times the step. The temperature moves over minutes against a step of
+        // milliseconds, and the left-out term, `q tau0 var_step(T)`, is below 1e-9 of it.
+        if self.temp_quad != 0.0 {
+            let mean = temp_integral / self.tau0_s;
+            d += self.temp_quad * mean * mean * self.tau0_s;
         }
         // The filter (one per channel in a model file; a cascade is one generator) starts in the stationary state
         // of this input's level and the white rate (LowPassGen::start_stationary), from a side

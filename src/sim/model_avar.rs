@@ -13,7 +13,7 @@ impl SimModel {
     /// [`crate::model::terms`]: Q (with `lsb / sqrt(12)` added in quadrature), N (through the
     /// output filter when there is one), the flicker bank, K, R, Gauss-Markov, sinusoids (times
     /// the output filter's gain), warm-up, bias jumps (as K) and the temperature-driven bias
-    /// (its settling as a warm-up, its sine as a sinusoid).
+    /// (its settling as a warm-up, two with a second order, its sine as a sinusoid).
     ///
     /// Not included: the output filter's effect on terms other than N and the sinusoids (small
     /// where those terms matter, at tau >> the filter's time constant), and the cross terms
@@ -61,14 +61,25 @@ impl SimModel {
         if let Some(j) = c.bias_jumps {
             v += terms::bias_jumps_avar(j.mean_interval_s, j.rms_size, tau);
         }
-        if let (Some(t), true) = (&self.temperature, c.temperature_coefficient != 0.0) {
-            let a = c.temperature_coefficient * (t.start_c - t.final_c);
+        let bends = c.temperature_quadratic != 0.0;
+        if let (Some(t), true) = (&self.temperature, c.temperature_coefficient != 0.0 || bends) {
+            // With `T - r = (final - r) + d e^{-t/T} + sine`, the settling's part of
+            // `c (T - r) + q (T - r)^2` is `(c + 2 q (final - r)) d e^{-t/T} + q d^2 e^{-2t/T}`:
+            // two warm-ups (the second order's harmonic of the sine left out with the other
+            // cross terms).
+            let q = c.temperature_quadratic;
+            let slope = c.temperature_coefficient + 2.0 * q * (t.final_c - t.reference_c);
+            let d = t.start_c - t.final_c;
+            let a = slope * d;
             if a != 0.0 {
                 v += terms::warmup_avar(a, t.time_constant_s, tau0, m, n_increments);
             }
+            if bends && d != 0.0 {
+                v += terms::warmup_avar(q * d * d, t.time_constant_s / 2.0, tau0, m, n_increments);
+            }
             if t.sine_amplitude_c != 0.0 {
                 let f = 1.0 / t.sine_period_s;
-                let amp = c.temperature_coefficient * t.sine_amplitude_c;
+                let amp = slope * t.sine_amplitude_c;
                 v += gain(f) * terms::sinusoid_avar(amp, f, tau);
             }
         }

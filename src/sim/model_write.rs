@@ -99,6 +99,13 @@ fn channel_toml(s: &mut String, c: &ChannelModel) {
             num(c.temperature_coefficient)
         );
     }
+    if c.temperature_quadratic != 0.0 {
+        let _ = writeln!(
+            s,
+            "temperature_quadratic = {}",
+            num(c.temperature_quadratic)
+        );
+    }
     if let Some(l) = c.rate_lsb {
         let _ = writeln!(s, "rate_lsb = {}", num(l));
     }
@@ -293,6 +300,37 @@ outliers = { rate = 0.001, size = 3.5 }
         let back = read(&model_toml(&m, "quote \" inside", &[]));
         assert_eq!(m, back);
         assert_eq!(back.channels[0].name, "g x\\y");
+    }
+
+    /// A temperature dependence with its second order is written and read back as it was
+    /// (`temperature_quadratic`, session 51), and the simulator's bias follows it: a unit held
+    /// at `reference_c + 10` degC has the mean rate `c 10 + q 100` over its run.
+    #[test]
+    fn a_bent_temperature_dependence_round_trips_and_is_simulated() {
+        let text = r#"
+tau0_s = 0.01
+[temperature]
+start_c = 40.0
+final_c = 40.0
+time_constant_s = 100.0
+reference_c = 30.0
+[[channel]]
+name = "gx"
+unit = "deg"
+N = 1.0e-12
+temperature_coefficient = 0.002
+temperature_quadratic = 3.0e-5
+"#;
+        let m = read(text);
+        assert_eq!(m.channels[0].temperature_quadratic, 3.0e-5);
+        let back = read(&model_toml(&m, "bent", &[]));
+        assert_eq!(m, back);
+        let mut sim = crate::sim::Simulator::new(&back, 7);
+        let steps = 1000;
+        let sum: f64 = (0..steps).map(|_| sim.next_step().increments[0]).sum();
+        let rate = sum / (steps as f64 * 0.01);
+        let truth = 0.002 * 10.0 + 3.0e-5 * 100.0;
+        assert!((rate / truth - 1.0).abs() < 1e-6, "{rate} against {truth}");
     }
 
     /// The second order's bilinear and sampled forms are written (`bilinear = true`,

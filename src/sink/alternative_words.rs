@@ -89,6 +89,7 @@ pub fn temperature_check_words(
                     coefficient: c,
                     lo,
                     hi,
+                    quadratic: None,
                 });
                 let (_, params) = effect_parts(&e, unit, number);
                 params

@@ -208,6 +208,7 @@ fn the_band_survives_the_model_file_round_trip() {
         lsb: None,
         bias: 0.0,
         temperature_coefficient: 0.0,
+        temperature_quadratic: 0.0,
     };
     let unit = fitted_unit(TAU0, vec![fitted_channel(&facts, &d1, TAU0)], None);
     let text = allanscope::sim::model_write::model_toml(&unit, "twin", &[]);

@@ -117,6 +117,7 @@ fn a_clean_third_order_unit_is_judged_beyond_its_filter() {
             lsb: None,
             bias: 0.0,
             temperature_coefficient: 0.0,
+            temperature_quadratic: 0.0,
         };
         let ch = fitted_channel(&facts, &d, TAU0);
         let twin_filter = ch.lowpass.or(ch.output_filter.map(|f| LowPass::FirstOrder {

@@ -208,6 +208,7 @@ fn the_counters_harmonics_are_one_sawtooth_in_the_base_model() {
         lsb: Some(lsb),
         bias: rate,
         temperature_coefficient: 0.0,
+        temperature_quadratic: 0.0,
     };
     let tau0 = 0.0020491803278688526;
     let ch = fitted_channel(&facts, &d, tau0);

@@ -54,6 +54,7 @@ fn mems_rate_rounding_is_named() {
             lsb: Some(q.lsb),
             bias: 0.0,
             temperature_coefficient: 0.0,
+            temperature_quadratic: 0.0,
         };
         let ch = fitted_channel(&facts, &d, 0.005);
         assert_eq!(ch.lsb, None);
@@ -99,6 +100,7 @@ fn a_coarse_counter_whose_sawtooth_the_model_carries_is_not_rate_rounding() {
             lsb: Some(q.lsb),
             bias: 0.0,
             temperature_coefficient: 0.0,
+            temperature_quadratic: 0.0,
         };
         let ch = fitted_channel(&facts, &d, 0.0125);
         assert_eq!(ch.rate_lsb, None, "seed {seed}");

@@ -74,6 +74,7 @@ fn round_trip(filter: &str, filter_kind: EffectKind, f_hz: f64, gain: f64, seed:
         lsb: None,
         bias: 0.0,
         temperature_coefficient: 0.0,
+        temperature_quadratic: 0.0,
     };
     let ch = fitted_channel(&facts, &d1, TAU0);
     let written = ch.sinusoids[0].amplitude;

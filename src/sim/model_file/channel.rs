@@ -135,6 +135,13 @@ pub(super) fn parse_channel(
             "needs a top-level [temperature] profile",
         );
     }
+    let temperature_quadratic = k.num("temperature_quadratic", errs).unwrap_or(0.0);
+    if temperature_quadratic != 0.0 && !has_temperature {
+        errs.bad(
+            k.path("temperature_quadratic"),
+            "needs a top-level [temperature] profile",
+        );
+    }
     let mut gauss_markov = Vec::new();
     for (p, tt) in k.tables("gauss_markov", errs) {
         let mut e = Keys::new(tt, &p);
@@ -255,6 +262,7 @@ pub(super) fn parse_channel(
         axis_enu,
         kind,
         temperature_coefficient,
+        temperature_quadratic,
         gauss_markov,
         sinusoids,
         band_noise,

@@ -31,6 +31,7 @@
 //! R = 0.891e-4                    # u/s^2        rate ramp
 //! flicker_band_s = [0.004, 1.0e4] # optional: tau range where B is flat; default [tau0, 1e6 tau0]
 //! temperature_coefficient = 0.01  # optional: u/s per degC of T(t) - reference_c
+//! temperature_quadratic = 1e-4    # optional: u/s per degC^2 of (T(t) - reference_c)^2
 //! gauss_markov = [{ sigma = 0.1, tau_c = 2.0 }]                     # u/s, s (table or list)
 //! sinusoid = [{ amplitude = 0.05, frequency = 1.3, phase = 0.0 }]   # u/s, Hz, rad (table or list)
 //! band_noise = [{ sigma = 0.3, frequency = 20.7, width = 2.0 }]     # u/s, Hz (< Nyquist), Hz
@@ -125,6 +126,8 @@ pub struct ChannelModel {
     pub kind: Option<IncrementUnit>,
     /// u/s per degC.
     pub temperature_coefficient: f64,
+    /// u/s per degC^2: the bias's second-order dependence, `q (T - reference_c)^2`.
+    pub temperature_quadratic: f64,
     pub gauss_markov: Vec<GaussMarkov>,
     pub sinusoids: Vec<Sinusoid>,
     /// Narrow-band random noise terms ([`super::band_noise`]), added before the filter.
