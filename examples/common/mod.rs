@@ -388,6 +388,7 @@ pub fn draw_effect_params(
             lo: 0.0,
             hi: 0.0,
             quadratic: None,
+            lag: None,
         },
         // Centre log-uniform from 30 periods per run to 0.4 of the sample rate, width 5-50% of
         // it, the rms for the drawn peak ratio of its exact AVAR over the base's ADEV at the

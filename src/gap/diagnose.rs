@@ -1306,6 +1306,7 @@ fn kept_in_time(params: &EffectParams) -> bool {
             lo,
             hi,
             quadratic,
+            ..
         } => {
             // Each interval is its term +- Z95 se (temperature.rs).
             let strong = |v: f64, lo: f64, hi: f64| {

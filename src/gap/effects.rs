@@ -161,6 +161,10 @@ pub enum EffectParams {
         lo: f64,
         #[serde(default, skip_serializing_if = "Option::is_none")]
         quadratic: Option<TemperatureQuadratic>,
+        /// The unit's temperature lagging the one recorded (the coefficients are then the
+        /// lagged temperature's).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        lag: Option<TemperatureLag>,
     },
     /// `decimation` (written only when above 1: the records of output-rate averages are as
     /// before) is [`LowPass::MovingAverage`]'s: `taps` then counts the internal samples.
@@ -231,6 +235,20 @@ pub struct TemperatureQuadratic {
     /// The reference temperature (degC): the run's mean block temperature.
     #[serde(deserialize_with = "nullable_f64")]
     pub reference_c: f64,
+}
+
+/// A first-order lag of the unit's temperature behind the recorded one (a die behind the
+/// chamber air): `dT_unit/dt = (T_recorded - T_unit) / time_constant`.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TemperatureLag {
+    /// s.
+    #[serde(deserialize_with = "nullable_f64")]
+    pub time_constant: f64,
+    /// Its 95% profile interval (s).
+    #[serde(deserialize_with = "nullable_f64")]
+    pub hi: f64,
+    #[serde(deserialize_with = "nullable_f64")]
+    pub lo: f64,
 }
 
 pub fn nullable_f64<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
@@ -379,6 +397,7 @@ impl EffectParams {
                 lo: f64::NAN,
                 hi: f64::NAN,
                 quadratic: None,
+                lag: None,
             },
             EffectKind::OutputFilter
             | EffectKind::MovingAverage
@@ -434,10 +453,14 @@ impl EffectParams {
                 hi,
                 lo,
                 quadratic,
+                lag,
             } => {
                 let mut v = vec![("coefficient", coefficient), ("hi", hi), ("lo", lo)];
                 if let Some(q) = quadratic {
                     v.extend([("quadratic", q.coefficient), ("reference_c", q.reference_c)]);
+                }
+                if let Some(l) = lag {
+                    v.push(("lag", l.time_constant));
                 }
                 v
             }

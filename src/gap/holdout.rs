@@ -9,8 +9,8 @@ use super::effects::{params_column, EffectKind};
 use super::evidence::EvidenceSnapshot;
 use super::problem::{GapProblem, ModelSpec};
 use super::temperature::{
-    block_signal_avar, fixed_coefficient_drop, temperature_avar_without_noise, temperature_blocks,
-    temperature_signal, BlockPlacement, TEMPERATURE_Z, TEMPERATURE_Z_ALONE,
+    block_signal_avar, fixed_coefficient_drop, lagged_blocks, temperature_avar_without_noise,
+    temperature_blocks, temperature_signal, BlockPlacement, TEMPERATURE_Z, TEMPERATURE_Z_ALONE,
 };
 use super::warmup::warmup_block_means;
 
@@ -208,6 +208,7 @@ pub fn holdout_gap_with_temperature(
             EffectParams::Temperature {
                 coefficient,
                 quadratic,
+                lag,
                 ..
             } => {
                 let Some((ts, avar)) = temperature
@@ -225,8 +226,14 @@ pub fn holdout_gap_with_temperature(
                 // there, or one that changes so little that `c T` taken out would lower the
                 // residuals by less than `TEMPERATURE_Z^2` even if the run had it (a chamber
                 // held constant): `carried: false` would then say the run disowned it.
-                let blocks_c = temperature_blocks(snap, ts);
                 let block_s = snap.block_len as f64 * snap.tau0_s;
+                // The unit's temperature: the held-out run's recorded one lagged as found.
+                let blocks_c = match lag {
+                    Some(l) => {
+                        lagged_blocks(&temperature_blocks(snap, ts), block_s, l.time_constant)
+                    }
+                    None => temperature_blocks(snap, ts),
+                };
                 // The fitted signal, `c T` or with its second order, held fixed as a shape.
                 let quadratic = quadratic.map(|q| (q.coefficient, q.reference_c));
                 let signal = temperature_signal(coefficient, quadratic, &blocks_c);
@@ -258,9 +265,10 @@ pub fn holdout_gap_with_temperature(
                     TEMPERATURE_Z_ALONE * TEMPERATURE_Z_ALONE,
                     TEMPERATURE_Z * TEMPERATURE_Z,
                 ));
-                let signal_avar: Vec<f64> = match quadratic {
-                    Some(_) => block_signal_avar(&signal, &BlockPlacement::of(&prob, snap)),
-                    None => avar.iter().map(|v| coefficient * coefficient * v).collect(),
+                let signal_avar: Vec<f64> = if quadratic.is_some() || lag.is_some() {
+                    block_signal_avar(&signal, &BlockPlacement::of(&prob, snap))
+                } else {
+                    avar.iter().map(|v| coefficient * coefficient * v).collect()
                 };
                 if let Some(off) = trial.offset.as_mut() {
                     for (o, v) in off.iter_mut().zip(signal_avar) {

@@ -318,12 +318,19 @@ pub fn fit_intervals(
                 ));
             }
             if let EffectParams::Temperature {
-                lo, hi, quadratic, ..
+                lo,
+                hi,
+                quadratic,
+                lag,
+                ..
             } = *p
             {
                 out.push(("coefficient", [lo, hi]));
                 if let Some(q) = quadratic {
                     out.push(("quadratic", [q.lo, q.hi]));
+                }
+                if let Some(l) = lag {
+                    out.push(("lag", [l.lo, l.hi]));
                 }
             }
             out

@@ -585,6 +585,7 @@ mod tests {
                 lo: f64::NAN,
                 hi: 0.03,
                 quadratic: None,
+                lag: None,
             },
             EffectParams::MovingAverage {
                 taps: 8,

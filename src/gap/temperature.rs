@@ -36,7 +36,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::block_cov::{block_diff_covariance, usable_block_means};
 use super::diagnose::k2_upper;
-use super::effects::{EffectParams, TemperatureQuadratic};
+use super::effects::{EffectParams, TemperatureLag, TemperatureQuadratic};
 use super::evidence::EvidenceSnapshot;
 use super::k_profile::profile_k2;
 use super::problem::{GapProblem, GlsFit, ModelSpec};
@@ -94,9 +94,29 @@ pub struct TemperatureFinding {
     pub scale: f64,
     /// The second order, when fitted.
     pub quadratic: Option<QuadraticFinding>,
+    /// The unit's temperature lagging the recorded one, when found ([`scan_lag`]): the
+    /// coefficients are the lagged temperature's.
+    pub lag: Option<TemperatureLag>,
+    /// The coefficient's standard error from the lag's own uncertainty (u/s per degC), in
+    /// quadrature in `std_error` and `z` ([`TemperatureFinding::with_lag_spread`]); 0 without
+    /// a lag.
+    pub lag_se: f64,
 }
 
 impl TemperatureFinding {
+    /// With `lag_se` (u/s per degC) in quadrature in its standard error and `z`: the
+    /// coefficient is fitted at the lag found, and moves with it (a longer lag, a smaller gain
+    /// at the temperature's changes, a larger coefficient); half the spread of the
+    /// coefficients at the lag interval's ends over 1.96 is that part of its error (the delta
+    /// method). Without it, a simulated unit's 95% interval (0.503-0.569) excluded its truth
+    /// (0.5) at a lag of 680 s (571-809) against 600.
+    pub fn with_lag_spread(mut self, lag_se: f64) -> Self {
+        self.std_error = self.std_error.hypot(lag_se);
+        self.z = self.coefficient / self.std_error;
+        self.lag_se = lag_se;
+        self
+    }
+
     /// The largest `|z|` of its terms: the temperature is named when it passes the threshold.
     pub fn strongest_z(&self) -> f64 {
         self.quadratic
@@ -125,6 +145,7 @@ impl TemperatureFinding {
                 hi: q.coefficient + Z95 * q.std_error,
                 reference_c: q.reference_c,
             }),
+            lag: self.lag,
         }
     }
 
@@ -311,7 +332,7 @@ impl TemperatureInModel {
     /// half its truth, the column's white noise times `c^2` taken out of the curve (docs/gap.md,
     /// "A temperature that bends (session 51)").
     pub fn curve_offset(&self) -> Vec<f64> {
-        if self.finding.quadratic.is_some() {
+        if self.finding.quadratic.is_some() || self.finding.lag.is_some() {
             return block_signal_avar(&self.finding.block_curve(&self.blocks_c), &self.placement);
         }
         let c2 = self.finding.coefficient.powi(2);
@@ -365,7 +386,11 @@ impl TemperatureInModel {
             extra,
             reference,
         ) {
-            self.finding = f;
+            self.finding = TemperatureFinding {
+                lag: self.finding.lag,
+                ..f
+            }
+            .with_lag_spread(self.finding.lag_se);
         }
     }
 }
@@ -658,7 +683,84 @@ pub fn enter_temperature(
         }
         Some(c)
     };
-    let c_linear = settle(&mut t)?;
+    let mut c_linear = settle(&mut t)?;
+    let fidelity = block_fidelity(&t);
+    tracing::debug!(fidelity, "the temperature read between block centres");
+    // A bend in temperature is told from a bend in time (a warm-up, a settling) only where the
+    // temperature comes back over its own range: a settling temperature's square and lag are
+    // other settlings, which took a review's accelerometer warm-up (no temperature effect) as a
+    // second order at `|z|` 5.3 and halved the warm-up found beside it.
+    let turns = temperature_turns(&t.blocks_c);
+    let faithful = fidelity.is_some_and(|e| e <= BLOCK_FIDELITY) && turns >= 1;
+    tracing::debug!(turns, "the temperature's turns");
+    // And a bend or a lag is kept only if it still stands beside the warm-up that fits the
+    // block means best (its block shape a column beside the temperature's): the review's
+    // accelerometer warm-up of 165 s, under a temperature that turned twice, had the second
+    // order at `|z|` 5.3 alone.
+    let warmup_shape = best_warmup_time_constant(&snap.block_means, block_s, &c_linear, &[])
+        .map(|tc| warmup_block_curve(snap.block_means.len(), block_s, tc));
+    let beside_warmup = |blocks: &[f64], c5: &[f64; 5], reference: Option<f64>| {
+        let shape = warmup_shape.as_ref()?;
+        fit_temperature_in(
+            &snap.block_means,
+            blocks,
+            block_s,
+            c5,
+            &[],
+            std::slice::from_ref(shape),
+            reference,
+        )
+    };
+    // The unit's temperature lagging the recorded one (docs/gap.md, "A temperature that lags
+    // (session 51)"): the lagged temperature in the recorded one's place, refitted as the
+    // slope is, kept when its settled `|z|` passes the threshold.
+    if let Some(lag) =
+        scan_lag(&snap.block_means, &t.blocks_c, block_s, &c_linear).filter(|_| faithful)
+    {
+        let mut lagged = t.clone();
+        lagged.blocks_c = lagged_blocks(&t.blocks_c, block_s, lag.time_constant);
+        tracing::debug!(?lag, "the temperature's lag");
+        if let Some(f) = fit_temperature(
+            &snap.block_means,
+            &lagged.blocks_c,
+            block_s,
+            &c_linear,
+            &[],
+            &[],
+        ) {
+            lagged.finding = TemperatureFinding {
+                lag: Some(lag),
+                ..f
+            };
+            // Beside the warm-up: the lagged coefficient still named, and still beating the
+            // recorded temperature by LAG_DROP.
+            let lagged_c = lagged.blocks_c.clone();
+            let stands = |c5: &[f64; 5]| {
+                let with = beside_warmup(&lagged_c, c5, None);
+                let without = beside_warmup(&t.blocks_c, c5, None);
+                match (with, without) {
+                    (Some(w), Some(o)) => w.z.abs() > z_crit && w.z * w.z - o.z * o.z >= LAG_DROP,
+                    _ => true,
+                }
+            };
+            if let Some(c) =
+                settle(&mut lagged).filter(|c| lagged.finding.z.abs() > z_crit && stands(c))
+            {
+                let at = |tc: f64| {
+                    let blocks = lagged_blocks(&t.blocks_c, block_s, tc);
+                    fit_temperature(&snap.block_means, &blocks, block_s, &c, &[], &[])
+                        .map(|f| f.coefficient)
+                };
+                let spread = match (at(lag.lo), at(lag.hi)) {
+                    (Some(a), Some(b)) => (a - b).abs() / (2.0 * Z95),
+                    _ => 0.0,
+                };
+                lagged.finding = lagged.finding.with_lag_spread(spread);
+                t = lagged;
+                c_linear = c;
+            }
+        }
+    }
     // The second order, fitted from the linear's last noise and refitted as the slope is, kept
     // when its own settled `|z|` passes the threshold (docs/gap.md, "A temperature that bends
     // (session 51)"): a quadratic over -40..85 degC was a sinusoid, a warm-up and 16 jumps.
@@ -671,9 +773,7 @@ pub fn enter_temperature(
             .collect();
         finite.iter().sum::<f64>() / finite.len().max(1) as f64
     };
-    let fidelity = block_fidelity(&t);
-    tracing::debug!(fidelity, "the temperature read between block centres");
-    if let Some(f) = fidelity.filter(|e| *e <= BLOCK_FIDELITY).and_then(|_| {
+    if let Some(f) = Some(faithful).filter(|ok| *ok).and_then(|_| {
         fit_temperature_in(
             &snap.block_means,
             &t.blocks_c,
@@ -685,11 +785,20 @@ pub fn enter_temperature(
         )
     }) {
         let mut bent = t.clone();
-        bent.finding = f;
+        bent.finding = TemperatureFinding {
+            lag: t.finding.lag,
+            ..f
+        }
+        .with_lag_spread(t.finding.lag_se);
         tracing::debug!(quadratic = ?f.quadratic, "the temperature's second order, first fit");
-        if settle(&mut bent).is_some()
-            && bent.finding.quadratic.is_some_and(|q| q.z().abs() > z_crit)
-        {
+        let bent_c = bent.blocks_c.clone();
+        let stands = |c5: &[f64; 5]| {
+            beside_warmup(&bent_c, c5, Some(reference_c))
+                .is_none_or(|f| f.quadratic.is_some_and(|q| q.z().abs() > z_crit))
+        };
+        if settle(&mut bent).is_some_and(|c| {
+            bent.finding.quadratic.is_some_and(|q| q.z().abs() > z_crit) && stands(&c)
+        }) {
             t = bent;
         }
     }
@@ -698,6 +807,151 @@ pub fn enter_temperature(
     }
     let fit = prob.gls(&spec(&t))?;
     Some((t, fit))
+}
+
+/// The share of its range by which the temperature must come back for a turn
+/// ([`temperature_turns`]).
+pub const TURN_SHARE: f64 = 0.2;
+
+/// How many times the temperature's block means (degC) turn back by at least [`TURN_SHARE`] of
+/// their range (a walk with that hysteresis): 0 for a ramp or a settling, 1 for a chamber
+/// taken up and down, two per cycle after.
+pub fn temperature_turns(blocks_c: &[f64]) -> usize {
+    let finite: Vec<f64> = blocks_c.iter().copied().filter(|t| t.is_finite()).collect();
+    let (lo, hi) = finite
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &t| {
+            (a.min(t), b.max(t))
+        });
+    let h = TURN_SHARE * (hi - lo);
+    if h.is_nan() || h <= 0.0 {
+        return 0;
+    }
+    // The extremes before a first move of `h`, then the direction (+1 up, -1 down) and the
+    // running extreme since the last turn.
+    let (mut low, mut high) = (finite[0], finite[0]);
+    let (mut dir, mut ext, mut turns) = (0i32, finite[0], 0usize);
+    for &t in &finite[1..] {
+        if dir == 0 {
+            low = low.min(t);
+            high = high.max(t);
+            if t - low >= h {
+                (dir, ext) = (1, t);
+            } else if high - t >= h {
+                (dir, ext) = (-1, t);
+            }
+        } else if (dir == 1 && t > ext) || (dir == -1 && t < ext) {
+            ext = t;
+        } else if (t - ext).abs() >= h {
+            turns += 1;
+            (dir, ext) = (-dir, t);
+        }
+    }
+    turns
+}
+
+/// The recorded temperature's block means (degC) as a unit lagging it by a first order of
+/// `time_constant_s` would see them: `D_j = D_{j-1} + (1 - e^{-block / time_constant}) (T_j -
+/// D_{j-1})`, `D_0 = T_0` (the first order stepped at the block means: exact for a temperature
+/// constant over each block).
+pub fn lagged_blocks(blocks_c: &[f64], block_s: f64, time_constant_s: f64) -> Vec<f64> {
+    let a = -(-block_s / time_constant_s).exp_m1();
+    let mut d = blocks_c.first().copied().unwrap_or(f64::NAN);
+    blocks_c
+        .iter()
+        .map(|&t| {
+            d += a * (t - d);
+            d
+        })
+        .collect()
+}
+
+/// The whitened residual sum of squares a lag must take off the straight coefficient's (on the
+/// scale of the residuals) to be named: `4^2`, the temperature's own bar squared; the scan's
+/// look-elsewhere over its correlated time constants is well inside it on white noise (tests).
+pub const LAG_DROP: f64 = 16.0;
+
+/// Lags scanned per octave, from half a block to half the run.
+const LAG_PER_OCTAVE: f64 = 8.0;
+
+/// The lag of the unit's temperature behind the recorded one: the time constant whose lagged
+/// temperature ([`lagged_blocks`]) takes the most off the whitened residual sum of squares of
+/// the block-mean differences (a drift and the lagged temperature's differences fitted, the
+/// noise of `c`), scanned on a log grid from half a block to half the run. Returned when that
+/// beats the recorded temperature's own by [`LAG_DROP`] on the scale of the best fit's
+/// residuals, with the 95% profile interval (the time constants within 3.84 of the best,
+/// widened to the grid's next points, 9% apart). A review's FOG whose die lagged the chamber air
+/// by 30 minutes had the slope read at half its truth, its interval excluding it, or not named
+/// (docs/gap.md, "A temperature that lags (session 51)").
+pub fn scan_lag(
+    block_means: &[f64],
+    blocks_c: &[f64],
+    block_s: f64,
+    c: &[f64; 5],
+) -> Option<TemperatureLag> {
+    let nb = block_means.len();
+    if !usable_block_means(block_means)
+        || blocks_c.len() != nb
+        || !blocks_c.iter().all(|t| t.is_finite())
+    {
+        return None;
+    }
+    let diff = |v: &[f64]| DVector::from_iterator(nb - 1, v.windows(2).map(|p| p[1] - p[0]));
+    let chol = block_diff_covariance(nb, block_s, c, &[])?.cholesky()?;
+    let l = chol.l();
+    let u = l.solve_lower_triangular(&DVector::from_element(nb - 1, 1.0))?;
+    let uu = u.norm_squared();
+    if uu <= 0.0 {
+        return None;
+    }
+    let drift_out = |v: DVector<f64>| -> DVector<f64> {
+        let k = u.dot(&v) / uu;
+        v - &u * k
+    };
+    let y = drift_out(l.solve_lower_triangular(&diff(block_means))?);
+    let yy = y.norm_squared();
+    // The whitened rss taken off by a temperature series.
+    let drop = |t: &[f64]| -> Option<f64> {
+        let x = drift_out(l.solve_lower_triangular(&diff(t))?);
+        let xx = x.norm_squared();
+        (xx > 0.0).then(|| x.dot(&y).powi(2) / xx)
+    };
+    let plain = drop(blocks_c)?;
+    let run_s = nb as f64 * block_s;
+    let octaves = (run_s / block_s).log2();
+    let steps = (octaves * LAG_PER_OCTAVE).ceil().max(1.0) as usize;
+    let grid: Vec<f64> = (0..=steps)
+        .map(|k| 0.5 * block_s * 2f64.powf(k as f64 / LAG_PER_OCTAVE))
+        .filter(|tc| *tc <= 0.5 * run_s * (1.0 + 1e-9))
+        .collect();
+    let drops: Vec<f64> = grid
+        .iter()
+        .map(|&tc| drop(&lagged_blocks(blocks_c, block_s, tc)).unwrap_or(0.0))
+        .collect();
+    let best = (0..grid.len()).max_by(|&a, &b| drops[a].total_cmp(&drops[b]))?;
+    let dof = (nb - 1).saturating_sub(2).max(1) as f64;
+    let scale = ((yy - drops[best]) / dof).max(1.0);
+    if (drops[best] - plain) / scale < LAG_DROP {
+        return None;
+    }
+    // The interval's ends are the first grid points outside it (the profile crosses 3.84
+    // between them and the last inside), or the grid's ends.
+    let within = |k: usize| (drops[best] - drops[k]) / scale <= 3.84;
+    let lo = (0..=best)
+        .rev()
+        .take_while(|&k| within(k))
+        .last()
+        .unwrap_or(best);
+    let hi = (best..grid.len())
+        .take_while(|&k| within(k))
+        .last()
+        .unwrap_or(best);
+    let (lo, hi) = (lo.saturating_sub(1), (hi + 1).min(grid.len() - 1));
+    Some(TemperatureLag {
+        time_constant: grid[best],
+        lo: grid[lo],
+        hi: grid[hi],
+    })
 }
 
 /// The largest relative error allowed of the temperature's AVAR read between block centres
@@ -848,6 +1102,8 @@ pub fn fit_temperature_in(
         z: beta[1] / se,
         scale,
         quadratic,
+        lag: None,
+        lag_se: 0.0,
     })
 }
 
@@ -1026,6 +1282,66 @@ mod tests {
             let truth = x.sin().powi(4) / (x * x);
             assert!((v / truth - 1.0).abs() < 0.01, "m {m}: {v} against {truth}");
         }
+    }
+
+    /// A step of the recorded temperature reaches the lagged one as `1 - e^{-t/tau}` at the
+    /// block ends; turns are counted with their hysteresis.
+    #[test]
+    fn lagged_blocks_and_turns() {
+        let (tb, tau) = (10.0, 120.0);
+        let t: Vec<f64> = (0..50).map(|i| if i < 5 { 20.0 } else { 30.0 }).collect();
+        let d = lagged_blocks(&t, tb, tau);
+        for (i, v) in d.iter().enumerate().skip(5) {
+            let truth = 30.0 - 10.0 * (-((i - 4) as f64) * tb / tau).exp();
+            assert!((v - truth).abs() < 1e-9, "block {i}: {v} against {truth}");
+        }
+        assert_eq!(temperature_turns(&t), 0);
+        let cycle: Vec<f64> = (0..400).map(|i| (i as f64 / 40.0).sin()).collect();
+        // sin(x / 40) over 400 blocks turns at x = 20 pi, 60 pi, 100 pi, 140 pi (blocks 63,
+        // 188, 314): three turns; a ripple under a fifth of the range is none.
+        assert_eq!(temperature_turns(&cycle), 3);
+        let ripple: Vec<f64> = (0..400)
+            .map(|i| i as f64 / 400.0 + 0.05 * (i as f64).sin())
+            .collect();
+        assert_eq!(temperature_turns(&ripple), 0);
+    }
+
+    /// The lag scan on white noise: a chamber cycling 10 degC every 2000 s, the bias following
+    /// the temperature lagged by 300 s (0.05 u/s per degC). Over 100 draws the lag is found in
+    /// every one, its interval covering 300 s in at least 90; with no lag (the bias on the
+    /// recorded temperature itself) it is found in at most 2 of 100.
+    #[test]
+    fn the_lag_is_found_with_its_interval_and_not_invented() {
+        let (nb, tb) = (400, 20.0);
+        let c5 = [0.0, 1.0, 0.0, 0.0, 0.0];
+        let temp: Vec<f64> = (0..nb)
+            .map(|i| {
+                25.0 + 10.0 * ((i as f64 + 0.5) * tb * 2.0 * std::f64::consts::PI / 2000.0).sin()
+            })
+            .collect();
+        let die = lagged_blocks(&temp, tb, 300.0);
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(31);
+        let (mut found, mut covered, mut invented) = (0, 0, 0);
+        for _ in 0..100 {
+            let mut draw = |t: &[f64]| -> Vec<f64> {
+                t.iter()
+                    .map(|t| {
+                        let e: f64 = StandardNormal.sample(&mut rng);
+                        0.05 * t + e / tb.sqrt()
+                    })
+                    .collect()
+            };
+            let lagged = draw(&die);
+            if let Some(l) = scan_lag(&lagged, &temp, tb, &c5) {
+                found += 1;
+                covered += usize::from(l.lo <= 300.0 && 300.0 <= l.hi);
+            }
+            let plain = draw(&temp);
+            invented += usize::from(scan_lag(&plain, &temp, tb, &c5).is_some());
+        }
+        assert_eq!(found, 100);
+        assert!(covered >= 90, "covered {covered}/100");
+        assert!(invented <= 2, "invented {invented}/100");
     }
 
     /// Too few blocks, a constant temperature or missing blocks give no fit.

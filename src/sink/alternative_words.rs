@@ -90,6 +90,7 @@ pub fn temperature_check_words(
                     lo,
                     hi,
                     quadratic: None,
+                    lag: None,
                 });
                 let (_, params) = effect_parts(&e, unit, number);
                 params
