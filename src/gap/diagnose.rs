@@ -936,7 +936,7 @@ fn diagnose_curve_pass(
                 let c5 = cur.five_terms();
                 let entered_offset = t.curve_offset();
                 t.refit(&snap.block_means, block_s, &c5, &stat_params, &[shape]);
-                if t.finding.z.abs() > TEMPERATURE_Z {
+                if t.finding.strongest_z() > TEMPERATURE_Z {
                     block_means = t.remove_from(&snap.block_means);
                     if let Some(e) = effects
                         .iter_mut()

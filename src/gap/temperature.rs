@@ -30,7 +30,11 @@
 //! second column, `q ((T_{i+1} - T_ref)^2 - (T_i - T_ref)^2)`, `T_ref` the run's mean block
 //! temperature, so `c` is the slope there. It is taken in when its own settled `|z|` passes the
 //! same threshold; its AVAR on the curve is then that of the fitted signal read between block
-//! centres ([`block_signal_avar`]; docs/gap.md, "A temperature that bends (session 51)").
+//! centres ([`block_signal_avar`]; docs/gap.md, "A temperature that bends (session 51)"). A
+//! unit whose temperature lags the recorded one has the recorded block means lagged through a
+//! first order of a scanned time constant in their place ([`scan_lag`]; "A temperature that
+//! lags (session 51)"). Both are tried only where the temperature turns back over its range
+//! and kept only where they stand beside the best warm-up.
 
 use nalgebra::{DMatrix, DVector};
 
