@@ -1117,6 +1117,15 @@ mod tests {
     use rand::SeedableRng;
     use rand_distr::{Distribution, StandardNormal};
 
+    /// Errors over their standard errors that are N(0, 1): mean within 0.1, sd within 10% of 1.
+    fn assert_standard_normal(zs: &[f64]) {
+        let n = zs.len() as f64;
+        let mean = zs.iter().sum::<f64>() / n;
+        let sd = (zs.iter().map(|z| (z - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+        assert!(mean.abs() < 0.1, "mean z {mean}");
+        assert!((sd - 1.0).abs() < 0.1, "sd z {sd}");
+    }
+
     /// White rate noise only (N = 1 u/sqrt(s)): the block-mean rate is white with variance
     /// `N^2 / tb`, so the GLS of the block means is ordinary least squares and its estimate can be
     /// checked against a known coefficient over many draws: the z score of the error is N(0, 1)
@@ -1148,11 +1157,7 @@ mod tests {
             let (lo, hi) = f.interval();
             covered += usize::from(lo <= truth && truth <= hi);
         }
-        let n = zs.len() as f64;
-        let mean = zs.iter().sum::<f64>() / n;
-        let sd = (zs.iter().map(|z| (z - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
-        assert!(mean.abs() < 0.1, "mean z {mean}");
-        assert!((sd - 1.0).abs() < 0.1, "sd z {sd}");
+        assert_standard_normal(&zs);
         assert!((360..=396).contains(&covered), "covered {covered}/400");
     }
 
@@ -1228,11 +1233,7 @@ mod tests {
             let (lo, hi) = f.interval();
             slope_covered += usize::from(lo <= slope_true && slope_true <= hi);
         }
-        let n = zs.len() as f64;
-        let mean = zs.iter().sum::<f64>() / n;
-        let sd = (zs.iter().map(|z| (z - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
-        assert!(mean.abs() < 0.1, "mean z {mean}");
-        assert!((sd - 1.0).abs() < 0.1, "sd z {sd}");
+        assert_standard_normal(&zs);
         assert!((360..=396).contains(&covered), "covered {covered}/400");
         assert!(
             (360..=396).contains(&slope_covered),
