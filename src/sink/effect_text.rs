@@ -19,6 +19,10 @@ enum Dim {
     Rate,
     /// u/s per deg C.
     RatePerC,
+    /// u/s per deg C^2 (a temperature's second order).
+    RatePerC2,
+    /// deg C.
+    Celsius,
     /// s.
     Time,
     /// Hz.
@@ -100,9 +104,19 @@ fn known(kind: &str) -> Option<(&'static str, &'static [ParamSpec])> {
                 ("rms_size", "rms size", Dim::Rate),
             ],
         ),
+        // The second order and the lag only when the record has them (session 51).
         "temperature" => (
             "temperature sensitivity",
-            &[("coefficient", "coefficient", Dim::RatePerC)],
+            &[
+                ("coefficient", "coefficient", Dim::RatePerC),
+                ("quadratic", "second order", Dim::RatePerC2),
+                ("reference_c", "about", Dim::Celsius),
+                (
+                    "lag",
+                    "unit's temperature lagging the recorded one by",
+                    Dim::Time,
+                ),
+            ],
         ),
         _ => return None,
     })
@@ -213,8 +227,23 @@ pub fn effect_parts(
             }
         }
     }
+    // A rate per deg C^2 without the interval of the kind's one rate.
+    let rate_per_c2 = |v: f64| -> String {
+        match ds {
+            Some((f, du)) => format!(
+                "{} {du} per deg C^2 ({} {ru} per deg C^2)",
+                number(v * f),
+                number(v)
+            ),
+            None => format!("{} {ru} per deg C^2", number(v)),
+        }
+    };
+    let optional = |key: &str| kind == "temperature" && key != "coefficient";
     let mut out = Vec::new();
     for (key, pname, dim) in keys {
+        if optional(key) && param(key).is_none() {
+            continue;
+        }
         let text = match (dim, param(key)) {
             (_, None) => "?".to_string(),
             (Dim::Count, Some(x)) if x >= 0.0 && x.fract() == 0.0 => format!("{x:.0}"),
@@ -222,6 +251,8 @@ pub fn effect_parts(
             (Dim::Plain, Some(x)) => number(x),
             (Dim::Rate, Some(x)) => rate(x, ""),
             (Dim::RatePerC, Some(x)) => rate(x, " per deg C"),
+            (Dim::RatePerC2, Some(x)) => rate_per_c2(x),
+            (Dim::Celsius, Some(x)) => format!("{} deg C", number(x)),
             (Dim::Time, Some(x)) => format!("{} s", number(x)),
             (Dim::Freq, Some(x)) if x > 0.0 => {
                 format!("{} Hz (period {} s)", number(x), number(1.0 / x))
@@ -355,6 +386,50 @@ mod tests {
             effect_line(&e, "deg", &|v| format!("{v:.1}")).ends_with("decimation = 32"),
             "{}",
             effect_line(&e, "deg", &|v| format!("{v:.1}"))
+        );
+    }
+
+    /// A temperature sensitivity says its second order (u/s per deg C^2, about its reference)
+    /// and its lag (s) when the record has them, and nothing of them when it has not.
+    #[test]
+    fn a_temperature_says_its_second_order_and_lag_when_it_has_them() {
+        let straight = EffectParams::Temperature {
+            coefficient: 0.2,
+            lo: 0.1,
+            hi: 0.3,
+            quadratic: None,
+            lag: None,
+        };
+        assert_eq!(
+            effect_line(&RecordedEffect::Known(straight), "arcsec", &|v| format!(
+                "{v}"
+            )),
+            "temperature sensitivity: coefficient = 0.2 [0.1, 0.3] deg/h per deg C \
+             (0.2 [0.1, 0.3] arcsec/s per deg C)"
+        );
+        let bent = EffectParams::Temperature {
+            coefficient: 0.2,
+            lo: 0.1,
+            hi: 0.3,
+            quadratic: Some(crate::gap::effects::TemperatureQuadratic {
+                coefficient: 0.004,
+                lo: 0.003,
+                hi: 0.005,
+                reference_c: 22.5,
+            }),
+            lag: Some(crate::gap::effects::TemperatureLag {
+                time_constant: 1800.0,
+                lo: 1500.0,
+                hi: 2100.0,
+            }),
+        };
+        let text = effect_line(&RecordedEffect::Known(bent), "arcsec", &|v| format!("{v}"));
+        assert!(
+            text.ends_with(
+                "second order = 0.004 deg/h per deg C^2 (0.004 arcsec/s per deg C^2), \
+                 about = 22.5 deg C, unit's temperature lagging the recorded one by = 1800 s"
+            ),
+            "{text}"
         );
     }
 
