@@ -228,11 +228,10 @@ pub fn holdout_gap_with_temperature(
                 // held constant): `carried: false` would then say the run disowned it.
                 let block_s = snap.block_len as f64 * snap.tau0_s;
                 // The unit's temperature: the held-out run's recorded one lagged as found.
+                let recorded = temperature_blocks(snap, ts);
                 let blocks_c = match lag {
-                    Some(l) => {
-                        lagged_blocks(&temperature_blocks(snap, ts), block_s, l.time_constant)
-                    }
-                    None => temperature_blocks(snap, ts),
+                    Some(l) => lagged_blocks(&recorded, block_s, l.time_constant),
+                    None => recorded,
                 };
                 // The fitted signal, `c T` or with its second order, held fixed as a shape.
                 let quadratic = quadratic.map(|q| (q.coefficient, q.reference_c));

@@ -121,6 +121,16 @@ impl TemperatureFinding {
         self
     }
 
+    /// A refit of `fitted` (a finding of the same temperature) with `fitted`'s lag and the lag's
+    /// part of the error: the fits themselves are of the lagged series and know no lag.
+    pub fn with_lag_of(self, fitted: &TemperatureFinding) -> Self {
+        TemperatureFinding {
+            lag: fitted.lag,
+            ..self
+        }
+        .with_lag_spread(fitted.lag_se)
+    }
+
     /// The largest `|z|` of its terms: the temperature is named when it passes the threshold.
     pub fn strongest_z(&self) -> f64 {
         self.quadratic
@@ -390,11 +400,7 @@ impl TemperatureInModel {
             extra,
             reference,
         ) {
-            self.finding = TemperatureFinding {
-                lag: self.finding.lag,
-                ..f
-            }
-            .with_lag_spread(self.finding.lag_se);
+            self.finding = f.with_lag_of(&self.finding);
         }
     }
 }
@@ -548,6 +554,39 @@ fn with_block_random_walk(
     c
 }
 
+/// The first differences of block series whitened by the noise model's block-difference
+/// covariance ([`block_diff_covariance`]), a drift projected out: a series' squared norm is its
+/// whitened residual sum of squares with the drift fitted, and two series' dot product their
+/// whitened cross product ([`fixed_coefficient_drop`], [`scan_lag`]).
+struct DiffWhitening {
+    /// The covariance's Cholesky factor `L`.
+    l: DMatrix<f64>,
+    /// `L^-1 1`, the drift whitened, and its squared norm.
+    u: DVector<f64>,
+    uu: f64,
+}
+
+impl DiffWhitening {
+    /// For `nb` block means of `block_s` s under the five terms `c` and the stationary
+    /// `effects`; `None` when the covariance is not positive definite.
+    fn new(nb: usize, block_s: f64, c: &[f64; 5], effects: &[EffectParams]) -> Option<Self> {
+        let l = block_diff_covariance(nb, block_s, c, effects)?
+            .cholesky()?
+            .l();
+        let u = l.solve_lower_triangular(&DVector::from_element(nb - 1, 1.0))?;
+        let uu = u.norm_squared();
+        (uu > 0.0).then_some(DiffWhitening { l, u, uu })
+    }
+
+    /// `v`'s first differences, whitened, the drift projected out.
+    fn apply(&self, v: &[f64]) -> Option<DVector<f64>> {
+        let d = DVector::from_iterator(v.len() - 1, v.windows(2).map(|p| p[1] - p[0]));
+        let y = self.l.solve_lower_triangular(&d)?;
+        let k = self.u.dot(&y) / self.uu;
+        Some(y - &self.u * k)
+    }
+}
+
 /// The time-domain test of a coefficient fitted on another run, held fixed on a held-out run
 /// (`gap::holdout`): the drop of the whitened residual sum of squares of the held-out block
 /// means' first differences when `c (T_{i+1} - T_i)` is taken out, the drift fitted either way,
@@ -583,20 +622,9 @@ pub fn fixed_coefficient_drop(
         .map(|(b, t)| b - coefficient * t)
         .collect();
     let c = with_block_random_walk(c5, &rest, block_s, effects, k2_hi);
-    let diff = |v: &[f64]| DVector::from_iterator(nb - 1, v.windows(2).map(|p| p[1] - p[0]));
-    let chol = block_diff_covariance(nb, block_s, &c, effects)?.cholesky()?;
-    let l = chol.l();
-    let u = l.solve_lower_triangular(&DVector::from_element(nb - 1, 1.0))?;
-    let uu = u.norm_squared();
-    if uu <= 0.0 {
-        return None;
-    }
+    let w = DiffWhitening::new(nb, block_s, &c, effects)?;
     // The whitened residual sum of squares with the drift fitted.
-    let rss = |v: &[f64]| -> Option<f64> {
-        let y = l.solve_lower_triangular(&diff(v))?;
-        let uy = u.dot(&y);
-        Some(y.norm_squared() - uy * uy / uu)
-    };
+    let rss = |v: &[f64]| Some(w.apply(v)?.norm_squared());
     let (rss0, rss1) = (rss(block_means)?, rss(&rest)?);
     let signal: Vec<f64> = temperature.iter().map(|t| coefficient * t).collect();
     let expected = rss(&signal)?;
@@ -789,11 +817,7 @@ pub fn enter_temperature(
         )
     }) {
         let mut bent = t.clone();
-        bent.finding = TemperatureFinding {
-            lag: t.finding.lag,
-            ..f
-        }
-        .with_lag_spread(t.finding.lag_se);
+        bent.finding = f.with_lag_of(&t.finding);
         tracing::debug!(quadratic = ?f.quadratic, "the temperature's second order, first fit");
         let bent_c = bent.blocks_c.clone();
         let stands = |c5: &[f64; 5]| {
@@ -900,23 +924,12 @@ pub fn scan_lag(
     {
         return None;
     }
-    let diff = |v: &[f64]| DVector::from_iterator(nb - 1, v.windows(2).map(|p| p[1] - p[0]));
-    let chol = block_diff_covariance(nb, block_s, c, &[])?.cholesky()?;
-    let l = chol.l();
-    let u = l.solve_lower_triangular(&DVector::from_element(nb - 1, 1.0))?;
-    let uu = u.norm_squared();
-    if uu <= 0.0 {
-        return None;
-    }
-    let drift_out = |v: DVector<f64>| -> DVector<f64> {
-        let k = u.dot(&v) / uu;
-        v - &u * k
-    };
-    let y = drift_out(l.solve_lower_triangular(&diff(block_means))?);
+    let w = DiffWhitening::new(nb, block_s, c, &[])?;
+    let y = w.apply(block_means)?;
     let yy = y.norm_squared();
     // The whitened rss taken off by a temperature series.
     let drop = |t: &[f64]| -> Option<f64> {
-        let x = drift_out(l.solve_lower_triangular(&diff(t))?);
+        let x = w.apply(t)?;
         let xx = x.norm_squared();
         (xx > 0.0).then(|| x.dot(&y).powi(2) / xx)
     };

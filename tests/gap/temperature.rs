@@ -77,14 +77,27 @@ fn run_in(coef: f64, chamber: &Chamber, seconds: f64, seed: u64) -> (Diagnosis, 
 /// `seconds` of `m` simulated at `seed` through the library: the first channel's evidence and
 /// the temperature's (fed `T tau0` per step, printed with three decimals as the CSV writer does).
 fn evidence_of(m: &SimModel, seconds: f64, seed: u64) -> (EvidenceSnapshot, EvidenceSnapshot) {
+    evidence_through(m, seconds, seed, |increment, t| {
+        (increment, (t * 1000.0).round() / 1000.0)
+    })
+}
+
+/// [`evidence_of`] with each step's first increment and the unit's temperature (degC) turned
+/// into the increment and the temperature recorded by `record`.
+fn evidence_through(
+    m: &SimModel,
+    seconds: f64,
+    seed: u64,
+    mut record: impl FnMut(f64, f64) -> (f64, f64),
+) -> (EvidenceSnapshot, EvidenceSnapshot) {
     let tau0 = m.tau0_s;
     let cfg = GapConfig::new(tau0);
     let (mut ch, mut te) = (GapEvidence::new(cfg.clone()), GapEvidence::new(cfg));
     let mut sim = Simulator::new(m, seed);
     for _ in 0..(seconds / tau0) as u64 {
         let s = sim.next_step();
-        ch.push_increment(s.increments[0]);
-        let t = (s.temperature_c.expect("profile") * 1000.0).round() / 1000.0;
+        let (increment, t) = record(s.increments[0], s.temperature_c.expect("profile"));
+        ch.push_increment(increment);
         te.push_increment(t * tau0);
     }
     (ch.snapshot(), te.snapshot())
@@ -142,23 +155,13 @@ fn a_noisy_temperature_column_leaves_the_white_rate_alone() {
          sine_amplitude_c = 5.0\nsine_period_s = 600.0\n[[channel]]\nname = \"g\"\nunit = \"arcsec\"\n\
          N = 0.01\ntemperature_coefficient = 0.5\n";
     let m = SimModel::from_toml_str(text, Path::new("<test>")).expect("model");
-    let cfg = GapConfig::new(0.1);
-    let (mut ch, mut te) = (GapEvidence::new(cfg.clone()), GapEvidence::new(cfg));
-    let mut sim = Simulator::new(&m, 5);
     let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(9);
-    for _ in 0..(4.0 * 3600.0 / 0.1) as u64 {
-        let s = sim.next_step();
-        ch.push_increment(s.increments[0]);
+    let (a, b) = evidence_through(&m, 4.0 * 3600.0, 5, |increment, t| {
         let e: f64 = rand_distr::StandardNormal.sample(&mut rng);
-        let t = ((s.temperature_c.expect("profile") + 0.05 * e) * 100.0).round() / 100.0;
-        te.push_increment(t * 0.1);
-    }
-    let d = diagnose_with_temperature(
-        &ch.snapshot(),
-        Some(&te.snapshot()),
-        &DiagnoseOptions::default(),
-    )
-    .expect("diagnosis");
+        (increment, ((t + 0.05 * e) * 100.0).round() / 100.0)
+    });
+    let d =
+        diagnose_with_temperature(&a, Some(&b), &DiagnoseOptions::default()).expect("diagnosis");
     let (c, _, _) = temperature_of(&d).unwrap_or_else(|| panic!("{d:?}"));
     assert!((c / 0.5 - 1.0).abs() < 0.1, "coefficient {c}");
     let n = d.final_coef[1];
@@ -184,27 +187,20 @@ fn a_unit_lagging_the_recorded_temperature_is_named_with_its_lag() {
     let (coef, lag_s) = (0.5, 600.0);
     let a = -(-TAU0 / lag_s).exp_m1();
     for seed in [1, 2] {
-        let cfg = GapConfig::new(TAU0);
-        let (mut ch, mut te) = (GapEvidence::new(cfg.clone()), GapEvidence::new(cfg));
-        let mut sim = Simulator::new(&m, seed);
         let mut die = f64::NAN;
-        for _ in 0..(4.0 * 3600.0 / TAU0) as u64 {
-            let s = sim.next_step();
-            let air = s.temperature_c.expect("profile");
+        let (ch, te) = evidence_through(&m, 4.0 * 3600.0, seed, |increment, air| {
             die = if die.is_nan() {
                 air
             } else {
                 die + a * (air - die)
             };
-            ch.push_increment(s.increments[0] + coef * die * TAU0);
-            te.push_increment((air * 1000.0).round() / 1000.0 * TAU0);
-        }
-        let d = diagnose_with_temperature(
-            &ch.snapshot(),
-            Some(&te.snapshot()),
-            &DiagnoseOptions::default(),
-        )
-        .expect("diagnosis");
+            (
+                increment + coef * die * TAU0,
+                (air * 1000.0).round() / 1000.0,
+            )
+        });
+        let d = diagnose_with_temperature(&ch, Some(&te), &DiagnoseOptions::default())
+            .expect("diagnosis");
         let lag = d
             .effects
             .iter()
