@@ -2,8 +2,18 @@
 //! delivers values that are all integer multiples of one step. Streaming and bounded: the
 //! smallest non-zero difference between consecutive values is the candidate (one LSB apart is
 //! common in any noisy counter), and the first [`KEEP`] values are kept to check that every one
-//! of them is a whole multiple of it. Unquantized (floating) values fail the check.
+//! of them is a whole multiple of it. Unquantized (floating) values fail the check. Two values
+//! that differ by less than [`PRINT_REL`] of the largest value seen are the same count written
+//! twice: a logger that forms each increment as the difference of two accumulated products
+//! `k q` and prints ten significant digits writes one LSB as `5e-05` and as `4.999999999e-05`.
 
+/// Differences of consecutive values below this fraction of the largest `|value|` seen are
+/// printing, not a step. A rev13 review's delta-velocity counter (an LSB of 5e-5 m/s, increments
+/// differenced from an accumulated velocity near 72 m/s and printed with ten digits) differed by
+/// 1e-14 between its `5e-05` and `4.999999999e-05`, and no LSB was found; the diagnosis then read
+/// the counter's sub-LSB rounding (per-sample noise 0.3 LSB) as a 159 Hz second-order filter.
+/// At 2e-8 a one-LSB step is still seen at counts up to 5e7, beyond [`MAX_COUNT`].
+const PRINT_REL: f64 = 2e-8;
 /// Values kept for the check.
 pub const KEEP: usize = 20_000;
 /// Fewest values for an estimate.
@@ -33,6 +43,8 @@ pub struct LsbEstimator {
     /// The first finite value, and whether any later one differed from it.
     first: Option<f64>,
     varies: bool,
+    /// The largest `|value|` seen.
+    scale: f64,
 }
 
 impl LsbEstimator {
@@ -57,9 +69,10 @@ impl LsbEstimator {
         if self.kept.len() < KEEP {
             self.kept.push(v);
         }
+        self.scale = self.scale.max(v.abs());
         if let Some(p) = self.last {
             let d = (v - p).abs();
-            if d > 0.0 && d < self.min_step {
+            if d > PRINT_REL * self.scale && d < self.min_step {
                 self.min_step = d;
             }
         }
@@ -149,6 +162,32 @@ mod tests {
         assert!(f.min_step < 1e-7, "{}", f.min_step);
         assert_eq!(f.estimate(), None);
         let est = q.estimate().expect("counted");
+        assert!((est / lsb - 1.0).abs() < 1e-9, "{est}");
+    }
+
+    /// Increments formed as differences of an accumulated count times the LSB, printed with ten
+    /// significant digits (`4.999999999e-05` beside `5e-05`, as a review's logger wrote them):
+    /// the LSB is found; without the printing tolerance the smallest difference was 1e-14.
+    #[test]
+    fn a_count_printed_through_accumulated_products_keeps_its_step() {
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(11);
+        let lsb = 5e-5;
+        let mut q = LsbEstimator::new();
+        // An accumulated velocity near 72 m/s (1.44e6 counts), moving 0-2 counts a sample.
+        let mut k: i64 = 1_440_000;
+        let mut printed_off = 0;
+        for _ in 0..50_000 {
+            let k1 = k + rng.random_range(0..=2);
+            let text = format!("{:.9e}", k1 as f64 * lsb - k as f64 * lsb);
+            printed_off += usize::from(text != format!("{:.9e}", (k1 - k) as f64 * lsb));
+            q.push(text.parse::<f64>().unwrap());
+            k = k1;
+        }
+        assert!(
+            printed_off > 1000,
+            "the printing leaves its mark: {printed_off}"
+        );
+        let est = q.estimate().expect("the count's step");
         assert!((est / lsb - 1.0).abs() < 1e-9, "{est}");
     }
 
