@@ -649,3 +649,50 @@ fn record_carries_the_base_model_and_the_model_with_effects() {
     let back: DiagnosisRecord = serde_json::from_str(&rec.to_json_line()).expect("parse back");
     assert_eq!(back.model_effects.len(), n);
 }
+
+/// A run cut into 17 stretches by 16 single missing samples (a review's channel with 16 empty
+/// cells over an hour): at the longest taus few second differences fit in a stretch, and an
+/// AVAR read off one or two of them is no Gaussian log the fit can weigh. Those taus are not
+/// diagnosed (each point's differences must span 4 clusters, `MIN_SPAN_CLUSTERS`; a whole
+/// run's span at least 7.5), and the sinusoid the unit has is named, nothing beside it. Before,
+/// the rev15 review's channel got five bias jumps and `unexplained` (G 6.6) from its point at
+/// 328 s, one difference whose ADEV was 0.03 of the truth.
+#[test]
+fn taus_starved_by_gaps_are_not_diagnosed() {
+    use allanscope::gap::problem::MIN_SPAN_CLUSTERS;
+    let inc = simulate(
+        "sinusoid = { amplitude = 0.3, frequency = 0.8, phase = 0.0 }",
+        3,
+    );
+    // The review's gaps, as fractions of the run.
+    let at = [
+        0.045, 0.119, 0.199, 0.283, 0.365, 0.423, 0.508, 0.571, 0.622, 0.708, 0.771, 0.818, 0.866,
+        0.906, 0.951, 0.989,
+    ];
+    let gaps: Vec<usize> = at.iter().map(|f| (f * inc.len() as f64) as usize).collect();
+    let mut ev = GapEvidence::new(GapConfig::new(TAU0));
+    for (k, &x) in inc.iter().enumerate() {
+        if gaps.contains(&k) {
+            ev.push_gap(1);
+        } else {
+            ev.push_increment(x);
+        }
+    }
+    let snap = ev.snapshot();
+    let n = snap.n_increments;
+    let starved: Vec<u64> = snap
+        .curve
+        .iter()
+        .filter(|p| p.m * 10 <= n && p.count > 0)
+        .filter(|p| p.count * p.stride.max(1) < MIN_SPAN_CLUSTERS * p.m)
+        .map(|p| p.m)
+        .collect();
+    assert!(!starved.is_empty(), "the gaps starve the longest taus");
+    let d = diagnose(&snap, &DiagnoseOptions::default()).expect("diagnosis");
+    assert_bookkeeping(&d);
+    let m_last = (d.tau_span_s.1 / TAU0).round() as u64;
+    assert!(m_last < starved[0], "{m_last} vs {starved:?}");
+    let kinds: Vec<EffectKind> = d.effects.iter().map(|e| e.params.kind()).collect();
+    assert_eq!(kinds, vec![EffectKind::Sinusoid], "{:?}", d.effects);
+    assert_eq!(d.verdict, Verdict::Explained);
+}
