@@ -6,6 +6,7 @@ pub mod format_units;
 pub mod header_unit;
 pub mod lvm;
 pub mod px4_export;
+pub mod row_ties;
 pub mod sampling_step;
 pub mod stamp_grid;
 pub mod temperature_column;

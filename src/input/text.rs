@@ -1590,6 +1590,8 @@ pub struct TextReader<R> {
     time_reported: bool,
     /// The values and stamp of the last row handed out, to tell a row written twice.
     last_row: Option<(Vec<f64>, f64)>,
+    /// Rows that repeat the one before in every column, a logger's ([`super::row_ties`]).
+    ties: super::row_ties::RowTies,
     line: Vec<u8>,
     /// The text of the last data row read whole, to tell a last line cut while the file was
     /// written ([`TextReader::cut_last_line`]).
@@ -1648,6 +1650,9 @@ pub struct TextPosition {
     /// against ([`TextReader::cut_last_line`]) after a resume as in one reading.
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub last_text: String,
+    /// The account of rows tied to the one before in every column ([`super::row_ties`]).
+    #[serde(default)]
+    pub ties: super::row_ties::RowTies,
 }
 
 /// Cells that mark a value as missing, read as gaps like an empty cell (any case): a logger's
@@ -2864,6 +2869,7 @@ impl<R: BufRead> TextReader<R> {
                 gap_left: 0,
                 time_reported: false,
                 last_row: None,
+                ties: Default::default(),
                 prev_text: String::from_utf8_lossy(&raw).trim().to_string(),
                 cut_last: false,
                 line: raw,
@@ -2902,6 +2908,7 @@ impl<R: BufRead> TextReader<R> {
             gap_left: pos.gap_left,
             time_reported: false,
             last_row: pos.last_row.clone(),
+            ties: pos.ties.clone(),
             line: Vec::new(),
             prev_text: pos.last_text.clone(),
             cut_last: false,
@@ -2929,6 +2936,7 @@ impl<R: BufRead> TextReader<R> {
             gap_left: self.gap_left,
             clocked: self.pending.is_some(),
             last_row: self.last_row.clone(),
+            ties: self.ties.clone(),
             dates: self.layout.dates.get(),
             last_text: self.prev_text.clone(),
         }
@@ -3143,6 +3151,17 @@ impl<R: BufRead> TextReader<R> {
                         }
                         continue;
                     }
+                    if let Ok(v) = &p.0 {
+                        if self.ties.observe(v, &self.layout.strict) {
+                            // A logger's repeat (super::row_ties): not a sample, and no gap
+                            // either. Its stamp goes on the clock (with any gap before it), so
+                            // the next row is a step on and the slot it held is gone.
+                            if let Some(c) = &mut self.time {
+                                self.gap_left = c.missing_before(p.1, &self.path, self.line_no);
+                            }
+                            continue;
+                        }
+                    }
                     let gap = match &mut self.time {
                         // A sample whose stamp is missing (an empty time cell) takes its step:
                         // the next stamp is then one step on, not a gap of one.
@@ -3189,8 +3208,34 @@ impl<R: BufRead> TextReader<R> {
             if let Some(c) = &self.time {
                 c.report(&self.path);
             }
+            self.report_ties();
         }
         Ok(n)
+    }
+
+    /// Says, at the end of the input, what [`super::row_ties`] made of rows tied to the one
+    /// before in every column.
+    fn report_ties(&self) {
+        use super::row_ties::TieVerdict;
+        let share = 100.0 * self.ties.share();
+        let chance = 100.0 * self.ties.chance_share;
+        match self.ties.verdict {
+            TieVerdict::Chance => {}
+            TieVerdict::Logger => tracing::warn!(
+                "{}: {} rows repeat the row before them in every column ({share:.2}% of rows, \
+                 where chance gives {chance:.1e}%): a logger's stale or doubled sample, dropped \
+                 as not samples of the unit (no gap; the run is that many samples shorter)",
+                self.path.display(),
+                self.ties.dropped
+            ),
+            TieVerdict::HeldOutput => tracing::warn!(
+                "{}: {share:.1}% of rows repeat the row before them in every column (chance \
+                 gives {chance:.1e}%): the unit's output may be slower than the rows (each \
+                 sample held for more than one row); kept as they are, and the shortest taus \
+                 then show the hold, not the unit",
+                self.path.display()
+            ),
+        }
     }
 
     /// Whether `p` repeats the last row handed out, stamp and values (NaN equal to NaN), where

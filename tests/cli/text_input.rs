@@ -1214,3 +1214,71 @@ fn a_first_step_that_is_not_tau0_does_not_rule_the_time_column_out() {
         (4.01, [393, 393].as_slice())
     );
 }
+
+/// Rows that repeat the row before them in every column, the stamp moved on (a logger's stale
+/// sample: 2% of 20 000 rows of two near-continuous channels). Those after the first 2000
+/// pairs, once the repeats are judged the logger's (`input::row_ties`), are dropped without a
+/// gap: the curves are, to the last bit, those of the same file with those rows left out and
+/// the stamps closed up. The ones before stay (not judged by then), and a file without repeats
+/// is read as it is.
+#[test]
+fn a_loggers_stale_rows_are_dropped_without_a_gap() {
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(52);
+    let n = 20_000;
+    let mut fresh = Vec::with_capacity(n);
+    for _ in 0..n {
+        let a: f64 = rng.random::<f64>() - 0.5;
+        let b: f64 = rng.random::<f64>() - 0.5;
+        fresh.push((a, b));
+    }
+    // No two in a row: a run of equal rows is the stuck filter's.
+    let mut stale = vec![false; n];
+    for i in 1..n {
+        stale[i] = !stale[i - 1] && rng.random::<f64>() < 0.02;
+    }
+    let mut rows = Vec::with_capacity(n);
+    for i in 0..n {
+        let v = if stale[i] { rows[i - 1] } else { fresh[i] };
+        rows.push(v);
+    }
+    let text = |keep: &dyn Fn(usize) -> bool| {
+        let mut s = String::from("time,gx,gy\n");
+        for (k, i) in (0..n).filter(|&i| keep(i)).enumerate() {
+            s += &format!(
+                "{:.2},{:.9e},{:.9e}\n",
+                k as f64 * 0.01,
+                rows[i].0,
+                rows[i].1
+            );
+        }
+        s
+    };
+    // Row i makes pair i; the verdict is made at pair 2000.
+    let late = |i: usize| stale[i] && i > 2000;
+    let dropped = (0..n).filter(|&i| late(i)).count();
+    let out = analyze(&write("stale.csv", text(&|_| true).as_bytes()), &[]);
+    let err = String::from_utf8_lossy(&out.stderr).to_string();
+    let (c1, s1) = parsed(&out);
+    let (c2, s2) = parsed(&analyze(
+        &write("stale_closed.csv", text(&|i| !late(i)).as_bytes()),
+        &[],
+    ));
+    assert!(dropped > 300, "{dropped}");
+    assert!(
+        err.contains(&format!("{dropped} rows repeat the row before them")),
+        "{err}"
+    );
+    let t = s1.time_column.as_ref().expect("summary.time_column");
+    assert_eq!((t.gaps, t.missing_samples, t.backwards), (0, 0, 0));
+    assert_eq!((s1.t_data, &s1.samples), (s2.t_data, &s2.samples));
+    assert_eq!(c1.len(), c2.len());
+    for (x, y) in c1.iter().zip(&c2) {
+        assert_eq!((&x.channel, &x.tau), (&y.channel, &y.tau));
+        assert_eq!(x.sigma, y.sigma);
+    }
+    // Without the repeats nothing is said or dropped.
+    let clean = analyze(&write("fresh.csv", text(&|i| !stale[i]).as_bytes()), &[]);
+    let err = String::from_utf8_lossy(&clean.stderr);
+    assert!(!err.contains("rows repeat"), "{err}");
+}
