@@ -70,8 +70,8 @@ pub struct QuantizationFinding {
     /// The same step as a rate, `lsb / tau0` (u/s).
     #[serde(deserialize_with = "nullable_f64")]
     pub rate_lsb: f64,
-    /// `N_q^2 / N^2` of the final fit (the share of the white rate that is rounding); not a
-    /// number (`null`) when the kind is `angle`.
+    /// `N_q^2 / N^2` of the final fit (the share of the white rate that is rounding), at most 1
+    /// (since session 52); not a number (`null`) when the kind is `angle`.
     #[serde(deserialize_with = "nullable_f64")]
     pub share_of_n2: f64,
 }
@@ -136,7 +136,10 @@ pub fn judge_quantization(
     let share = if angle {
         f64::NAN
     } else if n2 > 0.0 {
-        n_q * n_q / n2
+        // At most 1: a white rate fitted below `N_q` (a step coarse against the noise, two or
+        // three values in all: the rounding error is then no uniform one of variance
+        // `lsb^2 / 12`) is all rounding, not 139% of it (a rev15 review's reading).
+        (n_q * n_q / n2).min(1.0)
     } else {
         f64::INFINITY
     };

@@ -112,3 +112,24 @@ fn a_coarse_counter_whose_sawtooth_the_model_carries_is_not_rate_rounding() {
         );
     }
 }
+
+/// Rate samples rounded to a step four times their noise (two or three values in all, N 0.005
+/// deg/sqrt(s) at 200 Hz on a 0.3 deg/s step): the rounding error is no uniform one of variance
+/// `lsb^2 / 12`, and the fitted white rate lies below that formula's `N_q`. The share of the
+/// white rate that is rounding is then all of it, 1, not above (a review read 1.39), and the
+/// unit's own white rate left beside it is 0.
+#[test]
+fn a_step_coarse_against_the_noise_is_at_most_all_of_the_white_rate() {
+    let text = "tau0_s = 0.005\n[[channel]]\nname = \"gx\"\nunit = \"deg\"\nN = 0.005\nB = 2.0e-4\nK = 1.0e-5\nrate_lsb = 0.3\n";
+    let d = run(text, 1800.0, 3);
+    let q = d.quantization.expect("values on a grid");
+    let n_q = 0.3 * (0.005f64 / 12.0).sqrt();
+    assert!(rel(q.n_q, n_q) < 1e-9);
+    assert!(
+        d.final_coef[1] < n_q,
+        "N {} below N_q {n_q}",
+        d.final_coef[1]
+    );
+    assert_eq!(q.share_of_n2, 1.0, "{q:?}");
+    assert_eq!(q.n_unit, 0.0, "{q:?}");
+}
