@@ -1601,6 +1601,8 @@ pub struct TextReader<R> {
     bad_rows: u64,
     /// Values infinite or beyond `MAX_ABS_VALUE`, read as gaps.
     invalid_values: u64,
+    /// Cells of the analysed channels that were empty or not a number (`NaN`, `N/A`), gaps.
+    missing_cells: u64,
     rows: u64,
     /// Values that are numbers (not gaps) read so far.
     samples: u64,
@@ -1629,6 +1631,9 @@ pub struct TextPosition {
     /// Cells that held a word, not a number (`ERR`), read as gaps.
     #[serde(default)]
     pub words: u64,
+    /// Cells of the analysed channels that were empty or not a number, read as gaps.
+    #[serde(default)]
+    pub missing_cells: u64,
     /// The time column's clock, when it is used to find gaps.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub time: Option<TimeState>,
@@ -2875,6 +2880,7 @@ impl<R: BufRead> TextReader<R> {
                 line: raw,
                 bad_rows: 0,
                 invalid_values: 0,
+                missing_cells: 0,
                 rows: 0,
                 samples: 0,
                 offset,
@@ -2914,6 +2920,7 @@ impl<R: BufRead> TextReader<R> {
             cut_last: false,
             bad_rows: pos.bad_rows,
             invalid_values: pos.invalid_values,
+            missing_cells: pos.missing_cells,
             rows: pos.rows,
             samples: pos.samples,
             offset: pos.offset,
@@ -2931,6 +2938,7 @@ impl<R: BufRead> TextReader<R> {
             bad_rows: self.bad_rows,
             samples: self.samples,
             invalid_values: self.invalid_values,
+            missing_cells: self.missing_cells,
             words: self.words,
             time: self.time.as_ref().map(TimeColumn::state),
             gap_left: self.gap_left,
@@ -3209,6 +3217,19 @@ impl<R: BufRead> TextReader<R> {
                 c.report(&self.path);
             }
             self.report_ties();
+            if self.missing_cells > 0 && !self.sparse {
+                let (what, were) = if self.missing_cells == 1 {
+                    ("cell", "was")
+                } else {
+                    ("cells", "were")
+                };
+                tracing::info!(
+                    "{}: {} {what} of the analysed channels {were} empty or not a number: gaps \
+                     of their channels",
+                    self.path.display(),
+                    self.missing_cells
+                );
+            }
         }
         Ok(n)
     }
@@ -3395,6 +3416,8 @@ impl<R: BufRead> TextReader<R> {
                         self.invalid_values += u64::from(counted);
                     } else if !x.is_nan() {
                         self.samples += u64::from(counted);
+                    } else {
+                        self.missing_cells += u64::from(counted);
                     }
                 }
             }
