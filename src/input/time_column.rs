@@ -567,7 +567,8 @@ impl TimeColumn {
             if self.irregular <= LOGGED {
                 tracing::warn!(
                     "{}: line {line}: the time column `{}` steps by {:.3} tau0, not a whole number \
-                     of steps (the data are not uniformly sampled there)",
+                     of steps (stamps that jitter about the sampling grid, or samples not evenly \
+                     spaced there; the account at the end of the input tells which)",
                     file.display(),
                     self.name,
                     steps
