@@ -65,6 +65,7 @@
 //!   temperature_column.rs  the unit's temperature column (`temp [degC]`): not a channel
 //!   px4_export.rs          PX4's CSV export: us stamps, fields that describe samples
 //!   row_ties.rs            rows repeating the one before in every column: a logger's
+//!   phase_hint.rs          a column that looks like accumulated angle or velocity
 //!   lvm.rs                 LabVIEW Measurement files: tagged headers, Delta_X, units
 //! frame/                   frames (pure: no I/O)                          bytes -> FrameEvent
 //!   descriptor/            the descriptor language (TOML) and its checked types

@@ -5,6 +5,7 @@
 pub mod format_units;
 pub mod header_unit;
 pub mod lvm;
+pub mod phase_hint;
 pub mod px4_export;
 pub mod row_ties;
 pub mod sampling_step;

@@ -660,7 +660,6 @@ mod tests {
     /// missing): the mean step is read as 5.0075 ms; at the stated step it is 5 ms to 1e-12.
     #[test]
     fn the_stamps_mean_step_is_read_over_the_run() {
-        let p = Path::new("x.csv");
         for (step, want) in [(0.005_007_5, 0.005_007_5), (0.005, 0.005)] {
             let mut c = TimeColumn::new("time", 0.005);
             let stamps: Vec<f64> = (0..3600)

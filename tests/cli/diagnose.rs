@@ -777,3 +777,43 @@ fn a_held_out_run_without_the_input_s_channels_is_a_usage_error() {
     assert!(!line.contains("  "), "{line}");
     assert!(out.stdout.is_empty(), "{out:?}");
 }
+
+/// A column of accumulated velocity (the running sum of increments near 0.049 m/s, gravity at
+/// 200 Hz) read without `--phase` is said to look like one, with where it went; with `--phase`
+/// it is read as the phase it is and nothing is said; its increments are not taken for one.
+#[test]
+fn a_phase_column_read_as_increments_is_said() {
+    let (mut v, mut text, mut incs) = (0.0, String::from("vz\n"), String::from("dvz\n"));
+    for i in 0..40_000u64 {
+        let d = 0.049 + ((i * 7919 % 1000) as f64 / 1000.0 - 0.5) * 1e-4;
+        v += d;
+        text += &format!("{v:.9e}\n");
+        incs += &format!("{d:.9e}\n");
+    }
+    let (phase, inc) = (tmp("vz_phase.csv"), tmp("dvz.csv"));
+    std::fs::write(&phase, text).unwrap();
+    std::fs::write(&inc, incs).unwrap();
+    let run = |path: &std::path::Path, extra: &[&str]| {
+        let out = exe()
+            .args([
+                "diagnose",
+                path.to_str().unwrap(),
+                "--tau0",
+                "0.005",
+                "--unit",
+                "m/s",
+            ])
+            .args(extra)
+            .output()
+            .unwrap();
+        String::from_utf8_lossy(&out.stderr).to_string()
+    };
+    let err = run(&phase, &[]);
+    assert!(
+        err.contains("channel vz: its values move steadily from 4.8950e-2 to 1.9600e3")
+            && err.contains("give --phase if it is one"),
+        "{err}"
+    );
+    assert!(!run(&phase, &["--phase"]).contains("move steadily"));
+    assert!(!run(&inc, &[]).contains("move steadily"));
+}
