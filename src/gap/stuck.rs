@@ -10,7 +10,8 @@
 //!
 //! Runs of bit-identical increments are held (their value and length only: O(1) memory) until
 //! a different value, a gap or a snapshot ends them. With `p` the share of equal consecutive
-//! increments in what the filter has passed on (`(equal + 1) / (pairs + 2)`), a run of `L`
+//! increments in what the filter has passed on (`(equal + 1) / (pairs + 2)`; since session 52
+//! the larger of that and the same over about the last [`RECENT_PAIRS`] pairs), a run of `L`
 //! equal values holds `L - 1` equal pairs, which under independent samples has probability
 //! `p^(L-1)` at a given start. The run is stuck when it is at least [`MIN_STUCK`] long and
 //! `n p^(L-1) <` [`STUCK_P`] with `n` the pairs seen (a Bonferroni bound over the starts), and
@@ -35,6 +36,13 @@ pub const STUCK_P: f64 = 1e-9;
 pub const MAX_EQUAL_SHARE: f64 = 0.05;
 /// Pairs passed on before any run is judged.
 pub const MIN_PAIRS: u64 = 1000;
+/// The pairs over which the recent share of equal neighbours is read (exponential forgetting).
+/// A rev15 review's accelerometer switched range 40% into its run (its LSB from 5.98e-4 to
+/// 1.2e-2 m/s^2, the noise 0.59 of the new step): with the share of the whole run so far, a run
+/// of 16 equal samples after the switch, which that step gives by chance, was taken out as
+/// stuck. The recent share follows a switch within a few hundred pairs; a run right after it
+/// can still be taken.
+pub const RECENT_PAIRS: f64 = 4096.0;
 
 /// What was found (durations in samples).
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
@@ -101,6 +109,11 @@ pub struct StuckFilter {
     /// Consecutive pairs passed on, and how many were equal.
     pairs: u64,
     equal: u64,
+    /// The same over about the last [`RECENT_PAIRS`] pairs (exponentially forgotten).
+    #[serde(default)]
+    recent_pairs: f64,
+    #[serde(default)]
+    recent_equal: f64,
     /// Samples of the held run's value already passed on, and taken out, at earlier
     /// snapshots (the run is judged on its whole length).
     passed: u64,
@@ -143,8 +156,7 @@ impl StuckFilter {
             Some(v) if v.to_bits() == d.to_bits() => {
                 // The equal pair joining a run passed on at a snapshot to its continuation.
                 if self.len == 0 && self.last_passed {
-                    self.pairs += 1;
-                    self.equal += 1;
+                    self.count(1, 1);
                 }
                 self.len += 1;
             }
@@ -152,7 +164,7 @@ impl StuckFilter {
                 out = self.end_run();
                 // The pair joining the new run to the one passed on before it (unequal).
                 if self.last_passed {
-                    self.pairs += 1;
+                    self.count(1, 0);
                 }
                 self.value = Some(d);
                 self.len = 1;
@@ -209,8 +221,7 @@ impl StuckFilter {
             Release::Stuck(len)
         } else {
             // Its pairs, and the unequal one joining it to what followed, if anything did.
-            self.pairs += len - 1 + u64::from(!lead.after.is_empty());
-            self.equal += len - 1;
+            self.count(len - 1 + u64::from(!lead.after.is_empty()), len - 1);
             Release::Values(lead.value, len)
         };
         self.queue.extend(lead.after);
@@ -258,9 +269,23 @@ impl StuckFilter {
         Ok(())
     }
 
-    /// The share of equal neighbours so far, `(equal + 1) / (pairs + 2)`.
+    /// `pairs` more pairs passed on, `equal` of them equal.
+    fn count(&mut self, pairs: u64, equal: u64) {
+        self.pairs += pairs;
+        self.equal += equal;
+        let keep = (1.0 - 1.0 / RECENT_PAIRS).powf(pairs as f64);
+        self.recent_pairs = self.recent_pairs * keep + pairs as f64;
+        self.recent_equal = self.recent_equal * keep + equal as f64;
+    }
+
+    /// The share of equal neighbours, `(equal + 1) / (pairs + 2)`: the larger of the share so
+    /// far and the share over about the last [`RECENT_PAIRS`] pairs, so that a channel whose
+    /// step grew coarse (a range switch) is judged by its ties there, not by those of its finer
+    /// start.
     pub fn equal_share(&self) -> f64 {
-        (self.equal + 1) as f64 / (self.pairs + 2) as f64
+        let all = (self.equal + 1) as f64 / (self.pairs + 2) as f64;
+        let recent = (self.recent_equal + 1.0) / (self.recent_pairs + 2.0);
+        all.max(recent)
     }
 
     fn is_stuck(&self) -> bool {
@@ -316,8 +341,7 @@ impl StuckFilter {
             self.found.longest = self.found.longest.max(self.taken);
             out = Some(Release::Stuck(n));
         } else if let Some(v) = self.value {
-            self.pairs += n - 1;
-            self.equal += n - 1;
+            self.count(n - 1, n - 1);
             self.passed += n;
             out = Some(Release::Values(v, n));
         }
@@ -382,6 +406,34 @@ mod tests {
                 (z * 1e6).round() / 1e6
             })
             .collect()
+    }
+
+    /// A channel whose step grows coarse 40% into its run (a range switch: white noise at six
+    /// decimals, then the same noise on a step 3 times its sd, where runs of 16 equal samples
+    /// come by chance): nothing after the switch is taken out, where the share of ties over the
+    /// whole run so far took six such runs for stuck; 40 samples frozen before the switch still
+    /// are. (The recent share takes a few hundred pairs to follow the switch: on a step 2.5 times
+    /// the sd one run of 16 right after it is still taken, against 23.)
+    #[test]
+    fn a_step_grown_coarse_is_judged_by_its_own_ties() {
+        let n = 400_000;
+        let mut x = six_decimals(21, n);
+        let switch = 160_000;
+        for v in &mut x[switch..] {
+            *v = ((*v + 8.0) / 3.0).round() * 3.0;
+        }
+        for v in &mut x[50_000..50_040] {
+            *v = 0.0;
+        }
+        let longest_tie = x[switch..]
+            .chunk_by(|a, b| a == b)
+            .map(|c| c.len())
+            .max()
+            .unwrap();
+        assert!(longest_tie >= 16, "ties by chance: {longest_tie}");
+        let (out, found) = run(&x, None);
+        assert_eq!((found.stretches, found.samples), (1, 40), "{found:?}");
+        assert!(out[switch..].iter().all(Option::is_some));
     }
 
     /// White noise at six decimals with 3000 samples frozen at 0.37 from sample 10000 and 40
