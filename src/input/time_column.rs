@@ -633,9 +633,7 @@ impl TimeColumn {
             self.duplicates
         );
     }
-}
 
-impl TimeColumn {
     /// The stamps' mean step (s) over the rows read, from the first stamp to the last, the
     /// gaps' missing steps and the unstamped rows counted: `None` for a counter, before
     /// [`MEAN_STEP_MIN`] steps, or once a stamp went back or the clock restarted.
