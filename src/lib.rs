@@ -22,6 +22,7 @@
 //! plan: the checked plan of a run (RunPlan of UnitPlans: input, channels, analysis options,
 //!   checkpoint setup), from a stand config or the command line; option values (`FromStr`)
 //! stats: the chi-squared quantile behind every interval
+//! smallest_step: the smallest step between consecutive values (an LSB's candidate)
 //! toml_check: the one error collector of every TOML file read (file, line, key, problem)
 //! ranges: the bounds every user-given number is checked against where it is parsed, and the
 //!   largest sample accepted
@@ -232,6 +233,7 @@
 //!   units.rs               `[[unit]]` tables and what two units may not share
 //!   check.rs               typed reads and the collector
 //! stats.rs                 the chi-squared quantile behind every interval
+//! smallest_step.rs         the smallest step between consecutive values, printing passed over
 //! toml_check.rs            the one error collector of every TOML file read
 //! ranges.rs                the bounds every user-given number is checked against
 //! error.rs                 errors that reach the user and their exit statuses
@@ -257,6 +259,7 @@
 //! model: the five-term model, its fit, units and limits
 //! allan: the accumulators and curves
 //! stats: the chi-squared quantile
+//! smallest_step: a column's smallest step
 //! toml_check: the TOML error collector
 //! error: user-facing errors
 //! ranges: bounds of numbers
@@ -287,6 +290,7 @@ pub mod plan;
 pub mod ranges;
 pub mod sim;
 pub mod sink;
+pub mod smallest_step;
 pub mod source;
 pub mod stand;
 pub mod stats;

@@ -3,17 +3,11 @@
 //! smallest non-zero difference between consecutive values is the candidate (one LSB apart is
 //! common in any noisy counter), and the first [`KEEP`] values are kept to check that every one
 //! of them is a whole multiple of it. Unquantized (floating) values fail the check. Two values
-//! that differ by less than [`PRINT_REL`] of the largest value seen are the same count written
-//! twice: a logger that forms each increment as the difference of two accumulated products
-//! `k q` and prints ten significant digits writes one LSB as `5e-05` and as `4.999999999e-05`.
+//! that differ by less than [`PRINT_REL`](crate::smallest_step::PRINT_REL) of the largest value
+//! seen are the same count written twice ([`crate::smallest_step`]).
 
-/// Differences of consecutive values below this fraction of the largest `|value|` seen are
-/// printing, not a step. A rev13 review's delta-velocity counter (an LSB of 5e-5 m/s, increments
-/// differenced from an accumulated velocity near 72 m/s and printed with ten digits) differed by
-/// 1e-14 between its `5e-05` and `4.999999999e-05`, and no LSB was found; the diagnosis then read
-/// the counter's sub-LSB rounding (per-sample noise 0.3 LSB) as a 159 Hz second-order filter.
-/// At 2e-8 a one-LSB step is still seen at counts up to 5e7, beyond [`MAX_COUNT`].
-const PRINT_REL: f64 = 2e-8;
+use crate::smallest_step::SmallestStep;
+
 /// Values kept for the check.
 pub const KEEP: usize = 20_000;
 /// Fewest values for an estimate.
@@ -38,21 +32,16 @@ const MAX_COUNT: f64 = 16_777_216.0;
 pub struct LsbEstimator {
     kept: Vec<f64>,
     last: Option<f64>,
-    min_step: f64,
+    step: SmallestStep,
     n: u64,
     /// The first finite value, and whether any later one differed from it.
     first: Option<f64>,
     varies: bool,
-    /// The largest `|value|` seen.
-    scale: f64,
 }
 
 impl LsbEstimator {
     pub fn new() -> Self {
-        Self {
-            min_step: f64::INFINITY,
-            ..Self::default()
-        }
+        Self::default()
     }
 
     /// One value (non-finite values are skipped and break the chain of differences).
@@ -69,12 +58,8 @@ impl LsbEstimator {
         if self.kept.len() < KEEP {
             self.kept.push(v);
         }
-        self.scale = self.scale.max(v.abs());
         if let Some(p) = self.last {
-            let d = (v - p).abs();
-            if d > PRINT_REL * self.scale && d < self.min_step {
-                self.min_step = d;
-            }
+            self.step.push(p, v);
         }
         self.last = Some(v);
     }
@@ -96,10 +81,11 @@ impl LsbEstimator {
     /// smallest difference seen (its shortest decimal, [`snap_decimal`]), and the counts are not
     /// so large that the check means nothing (at most [`MAX_COUNT`]); `None` otherwise.
     pub fn estimate(&self) -> Option<f64> {
-        if self.kept.len() < MIN_VALUES || !(self.min_step.is_finite() && self.min_step > 0.0) {
+        let min_step = self.step.get()?;
+        if self.kept.len() < MIN_VALUES {
             return None;
         }
-        let q = snap_decimal(self.min_step);
+        let q = snap_decimal(min_step);
         let whole = self.kept.iter().all(|&v| {
             let k = v / q;
             k.abs() <= MAX_COUNT && (k - k.round()).abs() <= TOL + TOL_REL * k.abs()
@@ -159,7 +145,8 @@ mod tests {
             let count: i64 = 30_000 + rng.random_range(-40..=40);
             q.push(format!("{}", count as f64 * lsb).parse::<f64>().unwrap());
         }
-        assert!(f.min_step < 1e-7, "{}", f.min_step);
+        let smallest = f.step.get().unwrap();
+        assert!(smallest < 1e-7, "{smallest}");
         assert_eq!(f.estimate(), None);
         let est = q.estimate().expect("counted");
         assert!((est / lsb - 1.0).abs() < 1e-9, "{est}");

@@ -10,7 +10,7 @@
 //! are near continuous, so the rule compares the share of rows tied in every column with the
 //! share chance gives: for a column whose consecutive differences have standard deviation
 //! `sigma` and whose values are written in steps of `res` (the smallest difference seen, printing
-//! noise below [`PRINT_REL`] of the values passed over), a Gaussian difference falls within half
+//! noise passed over: [`SmallestStep`]), a Gaussian difference falls within half
 //! a step of 0 with probability about `res / (sigma sqrt(2 pi))`, at most 1; the columns'
 //! chances multiply (independent noise). Once [`MIN_PAIRS`] pairs have been seen, the repeats
 //! are the logger's when there are at least [`MIN_TIES`] of them at [`EXCESS`] times that chance
@@ -25,6 +25,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::smallest_step::SmallestStep;
+
 /// Pairs of rows seen before the repeats are judged.
 pub const MIN_PAIRS: u64 = 2000;
 /// Fewest tied rows, by then, for the repeats to be the logger's.
@@ -33,31 +35,29 @@ pub const MIN_TIES: u64 = 10;
 pub const EXCESS: f64 = 50.0;
 /// Largest share of tied rows dropped as a logger's repeats.
 pub const MAX_SHARE: f64 = 0.05;
-/// Differences below this fraction of the largest `|value|` of the column are printing noise
-/// (as [`crate::gap::lsb`]'s).
-const PRINT_REL: f64 = 2e-8;
 
-/// One column's account: its smallest difference, the sum of squared differences, the largest
-/// `|value|`.
+/// One column's account: its smallest difference and the sum of squared differences.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 struct ColumnTies {
-    min_step: f64,
+    /// Flattened: a checkpoint keeps the fields `min_step` and `scale` it had before the step
+    /// was shared with [`crate::gap::lsb`].
+    #[serde(flatten)]
+    step: SmallestStep,
     sum_d2: f64,
     n_d: u64,
-    scale: f64,
 }
 
 impl ColumnTies {
     /// The chance that two consecutive values are equal.
     fn chance(&self) -> f64 {
-        if self.n_d == 0 || !(self.min_step.is_finite() && self.min_step > 0.0) {
+        let Some(res) = self.step.get().filter(|_| self.n_d > 0) else {
             return 1.0;
-        }
+        };
         let sigma = (self.sum_d2 / self.n_d as f64).sqrt();
         if sigma <= 0.0 {
             return 1.0;
         }
-        (self.min_step / (sigma * (2.0 * std::f64::consts::PI).sqrt())).min(1.0)
+        (res / (sigma * (2.0 * std::f64::consts::PI).sqrt())).min(1.0)
     }
 }
 
@@ -94,13 +94,7 @@ impl RowTies {
     /// column, or whose counted columns (`counted`) are all gaps, are passed over.
     pub fn observe(&mut self, v: &[f64], counted: &[bool]) -> bool {
         if self.columns.len() != v.len() {
-            self.columns = vec![
-                ColumnTies {
-                    min_step: f64::INFINITY,
-                    ..ColumnTies::default()
-                };
-                v.len()
-            ];
+            self.columns = vec![ColumnTies::default(); v.len()];
             self.last.clear();
         }
         let usable = v.iter().all(|x| x.is_finite())
@@ -127,11 +121,7 @@ impl RowTies {
             }
         } else if !tied {
             for ((c, &x), &p) in self.columns.iter_mut().zip(v).zip(&self.last) {
-                c.scale = c.scale.max(x.abs());
-                let d = (x - p).abs();
-                if d > PRINT_REL * c.scale && d < c.min_step {
-                    c.min_step = d;
-                }
+                let d = c.step.push(p, x);
                 c.sum_d2 += d * d;
                 c.n_d += 1;
             }
@@ -237,5 +227,46 @@ mod tests {
         }
         assert_eq!(t.verdict, TieVerdict::HeldOutput);
         assert!((t.share() - 0.5).abs() < 0.01, "{}", t.share());
+    }
+
+    /// A checkpoint taken part way (CBOR, as the pipeline writes it) resumes to the same
+    /// verdict and the same rows dropped as one reading, and keeps each column's fields under
+    /// the names a checkpoint of session 52 wrote (`min_step`, `scale`).
+    #[test]
+    fn a_checkpoint_resumes_the_same_account() {
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(5);
+        let noise = Normal::new(0.0, 1e-3).unwrap();
+        let counted = [true, true];
+        let mut row = [0.0; 2];
+        let rows: Vec<[f64; 2]> = (0..6000)
+            .map(|_| {
+                if rand::RngExt::random::<f64>(&mut rng) >= 0.03 {
+                    row = std::array::from_fn(|c| {
+                        ((c as f64 + noise.sample(&mut rng)) * 1e7).round() / 1e7
+                    });
+                }
+                row
+            })
+            .collect();
+        let mut whole = RowTies::default();
+        let mut part = RowTies::default();
+        let mut dropped_whole = Vec::new();
+        let mut dropped_resumed = Vec::new();
+        for (i, r) in rows.iter().enumerate() {
+            dropped_whole.push(whole.observe(r, &counted));
+            if i == 1500 {
+                let mut bytes = Vec::new();
+                ciborium::into_writer(&part, &mut bytes).unwrap();
+                let value: ciborium::Value = ciborium::from_reader(&bytes[..]).unwrap();
+                let text = format!("{value:?}");
+                assert!(text.contains("min_step") && text.contains("scale"), "{text}");
+                part = ciborium::from_reader(&bytes[..]).unwrap();
+            }
+            dropped_resumed.push(part.observe(r, &counted));
+        }
+        assert_eq!(whole.verdict, TieVerdict::Logger);
+        assert!(whole.dropped > 100, "{}", whole.dropped);
+        assert_eq!(dropped_whole, dropped_resumed);
+        assert_eq!(whole, part);
     }
 }
