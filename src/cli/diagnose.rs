@@ -18,7 +18,6 @@ use allanscope::gap::EffectParams;
 use allanscope::gap::{
     holdout_gap_with_temperature, DiagnoseOptions, DiagnosisRecord, GapConfig, GapEvidence,
 };
-use allanscope::input::phase_hint::PhaseHint;
 use allanscope::input::text::{TextReader, BATCH_ROWS};
 use allanscope::pipeline::decode::DecodeStage;
 use allanscope::plan::unit::{InputPlan, UnitPlan, UnitRequest};
@@ -213,9 +212,6 @@ fn gather(
             }
             let width = reader.names().len();
             let mut last_phase: Vec<Option<f64>> = vec![None; columns.len()];
-            // Columns read as increments or rates that look like a phase (input::phase_hint).
-            let mut hints = vec![PhaseHint::default(); columns.len()];
-            let hinting = kind != allanscope::analysis::InputKind::Phase;
             let mut rows = Vec::with_capacity(BATCH_ROWS * width);
             loop {
                 rows.clear();
@@ -229,9 +225,6 @@ fn gather(
                 for row in rows.chunks_exact(width) {
                     let mut stepped = false;
                     for (k, &col) in columns.iter().enumerate() {
-                        if hinting {
-                            hints[k].push(row[col]);
-                        }
                         match kind.step(row[col], tau0, &mut last_phase[k]) {
                             Some(d) if d.is_finite() => g.push(k, d),
                             Some(_) => g.gap(k, 1),
@@ -247,17 +240,6 @@ fn gather(
                             tau0,
                         );
                     }
-                }
-            }
-            for (k, h) in hints.iter().enumerate() {
-                if let Some((first, last, ratio)) = h.looks_like_phase() {
-                    tracing::warn!(
-                        "{input}: channel {}: its values move steadily from {first:.4e} to \
-                         {last:.4e}, {ratio:.0e} times their change from one sample to the next: \
-                         an accumulated angle or velocity? Read as {}; give --phase if it is one",
-                        g.names.get(k).map_or("?", |n| n.as_str()),
-                        if g.rate { "rate samples" } else { "increments" }
-                    );
                 }
             }
             let invalid = reader.position().invalid_values;

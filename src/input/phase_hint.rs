@@ -17,7 +17,7 @@ pub const RANGE_STEPS: f64 = 1e4;
 const MIN_VALUES: u64 = 1000;
 
 /// One column's account.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct PhaseHint {
     first: Option<f64>,
     last: f64,

@@ -1592,6 +1592,11 @@ pub struct TextReader<R> {
     last_row: Option<(Vec<f64>, f64)>,
     /// Rows that repeat the one before in every column, a logger's ([`super::row_ties`]).
     ties: super::row_ties::RowTies,
+    /// The values are phase (`--phase`): no column is judged by [`super::phase_hint`].
+    phase: bool,
+    /// Each column's account of how far its values move ([`super::phase_hint`]), filled as
+    /// rows are handed out; empty with `--phase`.
+    hints: Vec<super::phase_hint::PhaseHint>,
     line: Vec<u8>,
     /// The text of the last data row read whole, to tell a last line cut while the file was
     /// written ([`TextReader::cut_last_line`]).
@@ -1658,6 +1663,9 @@ pub struct TextPosition {
     /// The account of rows tied to the one before in every column ([`super::row_ties`]).
     #[serde(default)]
     pub ties: super::row_ties::RowTies,
+    /// Each column's account of how far its values move ([`super::phase_hint`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub hints: Vec<super::phase_hint::PhaseHint>,
 }
 
 /// Cells that mark a value as missing, read as gaps like an empty cell (any case): a logger's
@@ -2875,6 +2883,8 @@ impl<R: BufRead> TextReader<R> {
                 time_reported: false,
                 last_row: None,
                 ties: Default::default(),
+                phase: opts.phase,
+                hints: Vec::new(),
                 prev_text: String::from_utf8_lossy(&raw).trim().to_string(),
                 cut_last: false,
                 line: raw,
@@ -2915,6 +2925,8 @@ impl<R: BufRead> TextReader<R> {
             time_reported: false,
             last_row: pos.last_row.clone(),
             ties: pos.ties.clone(),
+            phase: self.phase,
+            hints: pos.hints.clone(),
             line: Vec::new(),
             prev_text: pos.last_text.clone(),
             cut_last: false,
@@ -2945,6 +2957,7 @@ impl<R: BufRead> TextReader<R> {
             clocked: self.pending.is_some(),
             last_row: self.last_row.clone(),
             ties: self.ties.clone(),
+            hints: self.hints.clone(),
             dates: self.layout.dates.get(),
             last_text: self.prev_text.clone(),
         }
@@ -3121,6 +3134,10 @@ impl<R: BufRead> TextReader<R> {
                 // Steps the time column says are missing: gaps in every channel.
                 let k = self.gap_left.min((max_rows - n) as u64);
                 out.extend(std::iter::repeat_n(f64::NAN, k as usize * width));
+                // A gap breaks each column's chain of changes.
+                for h in &mut self.hints {
+                    h.push(f64::NAN);
+                }
                 if let Some(c) = &mut self.time {
                     for _ in 0..k {
                         c.step_inserted();
@@ -3217,6 +3234,7 @@ impl<R: BufRead> TextReader<R> {
                 c.report(&self.path);
             }
             self.report_ties();
+            self.report_phase_hints();
             if self.missing_cells > 0 && !self.sparse {
                 let (what, were) = if self.missing_cells == 1 {
                     ("cell", "was")
@@ -3232,6 +3250,27 @@ impl<R: BufRead> TextReader<R> {
             }
         }
         Ok(n)
+    }
+
+    /// Warns, at the end of the input, of each analysed column read as increments or rate
+    /// samples whose values look like an accumulated angle or velocity ([`super::phase_hint`]);
+    /// a temperature column is left alone.
+    fn report_phase_hints(&self) {
+        let temperatures = self.temperatures();
+        for (k, h) in self.hints.iter().enumerate() {
+            let judged = self.layout.strict.get(k).copied().unwrap_or(false)
+                && temperatures.get(k).is_some_and(Option::is_none);
+            if let Some((first, last, ratio)) = h.looks_like_phase().filter(|_| judged) {
+                tracing::warn!(
+                    "{}: channel {}: its values move steadily from {first:.4e} to {last:.4e}, \
+                     {ratio:.0e} times their change from one sample to the next: an accumulated \
+                     angle or velocity? Read as increments or rate samples; give --phase if it \
+                     is one",
+                    self.path.display(),
+                    self.names.get(k).map_or("?", String::as_str),
+                );
+            }
+        }
     }
 
     /// Says, at the end of the input, what [`super::row_ties`] made of rows tied to the one
@@ -3390,6 +3429,13 @@ impl<R: BufRead> TextReader<R> {
                 // `inf`, `1e308`, `1e-300`: counted, and a gap like `nan`.
                 let start = out.len();
                 out.extend_from_slice(&v);
+                if !self.phase {
+                    self.hints.resize(v.len(), Default::default());
+                    for (h, &x) in self.hints.iter_mut().zip(&v) {
+                        // A value out of range is a gap (a word cell's marker is a NaN too).
+                        h.push(super::plausible(x).unwrap_or(f64::NAN));
+                    }
+                }
                 // Only the columns the run analyses are counted (`--channels`).
                 for (k, (x, &counted)) in
                     out[start..].iter_mut().zip(&self.layout.strict).enumerate()
@@ -3423,6 +3469,9 @@ impl<R: BufRead> TextReader<R> {
             }
             Err(problem) => {
                 self.bad_rows += 1;
+                for h in &mut self.hints {
+                    h.push(f64::NAN);
+                }
                 if self.bad_rows <= BAD_ROWS_LOGGED || self.cut_last {
                     tracing::warn!(
                         "{}: line {}: {problem}; row skipped as a gap",

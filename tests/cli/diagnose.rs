@@ -793,10 +793,10 @@ fn a_phase_column_read_as_increments_is_said() {
     let (phase, inc) = (tmp("vz_phase.csv"), tmp("dvz.csv"));
     std::fs::write(&phase, text).unwrap();
     std::fs::write(&inc, incs).unwrap();
-    let run = |path: &std::path::Path, extra: &[&str]| {
+    let run_as = |command: &str, path: &std::path::Path, extra: &[&str]| {
         let out = exe()
             .args([
-                "diagnose",
+                command,
                 path.to_str().unwrap(),
                 "--tau0",
                 "0.005",
@@ -808,12 +808,17 @@ fn a_phase_column_read_as_increments_is_said() {
             .unwrap();
         String::from_utf8_lossy(&out.stderr).to_string()
     };
+    let run = |path: &std::path::Path, extra: &[&str]| run_as("diagnose", path, extra);
+    let said = "channel vz: its values move steadily from 4.8950e-2 to 1.9600e3";
     let err = run(&phase, &[]);
     assert!(
-        err.contains("channel vz: its values move steadily from 4.8950e-2 to 1.9600e3")
-            && err.contains("give --phase if it is one"),
+        err.matches(said).count() == 1 && err.contains("give --phase if it is one"),
         "{err}"
     );
     assert!(!run(&phase, &["--phase"]).contains("move steadily"));
     assert!(!run(&inc, &[]).contains("move steadily"));
+    // `analyze` reads text through the same reader and says it too, once.
+    let err = run_as("analyze", &phase, &[]);
+    assert_eq!(err.matches(said).count(), 1, "{err}");
+    assert!(!run_as("analyze", &phase, &["--phase"]).contains("move steadily"));
 }
