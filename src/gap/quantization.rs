@@ -27,6 +27,20 @@ use serde::{Deserialize, Serialize};
 /// deviations of a chi-square with one degree of freedom at the boundary.
 pub const QUANT_CHI2: f64 = 9.0;
 
+/// Least ratio of the whole white rate's per-sample deviation to the step,
+/// `sqrt(N^2 tau0) / lsb`, at which the unit's own white rate is told from the rounding's
+/// (`n_unit`). The inversion `N_unit^2 = N^2 - N_q^2` holds where the rounding error is
+/// uniform and independent of the signal; for a Gaussian sample of deviation `r` steps that
+/// fails as `exp(-2 pi^2 r^2)` grows (the quantization theorem's first term, Widrow and Kollar
+/// 2008, ch. 4), and how it fails depends on where the mean sits on the grid: a sample of
+/// 0.3 steps on a mean half a step off the grid takes two values, equally often, whose
+/// deviation is half a step whatever the unit's is (the inversion reads 1.37 times the truth),
+/// and on a mean on the grid reads 0.37 times it. Worked through the Gaussian's level
+/// probabilities: at an output ratio of 0.55 or more (the unit's own 0.45 or more) the
+/// inversion is within 4% wherever the mean sits; at 0.52 it is 9% off (a rev15 review's two
+/// value data read 1.5-1.6 times the truth). Below it `n_unit` is not determined.
+pub const UNIFORM_MIN_RATIO: f64 = 0.55;
+
 /// The verdict on the values' step.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -61,7 +75,8 @@ pub struct QuantizationFinding {
     #[serde(deserialize_with = "nullable_f64")]
     pub n_q: f64,
     /// The unit's own white rate: `sqrt(N^2 - N_q^2)` (u/sqrt(s)); `N` itself when the kind is
-    /// `angle` (nothing rounds the rate).
+    /// `angle` (nothing rounds the rate); not determined (NaN, `null`) when the step is coarse
+    /// against the whole white rate ([`UNIFORM_MIN_RATIO`]), since session 53.
     #[serde(deserialize_with = "nullable_f64")]
     pub n_unit: f64,
     /// White phase of a counter with carry, `lsb / sqrt(12)` (u).
@@ -154,6 +169,8 @@ pub fn judge_quantization(
         share_of_n2: share,
         n_unit: if angle {
             n2.sqrt()
+        } else if (n2 * tau0).sqrt() < UNIFORM_MIN_RATIO * lsb {
+            f64::NAN
         } else {
             (n2 - n_q * n_q).max(0.0).sqrt()
         },
