@@ -115,6 +115,12 @@ pub struct HoldoutGap {
     /// The fitting run's effects in their order (bias jumps, events of one run, are left out;
     /// so is a temperature when the held-out run has none to judge it by).
     pub effects: Vec<HeldEffect>,
+    /// The fitting run's effects this run could not judge, in their order: a temperature
+    /// without the held-out run's temperature, or one (or a warm-up) that this run could not
+    /// show at the level the fitting run asks even if it had it (since session 53; before they
+    /// were only left out, and a record with no other effect read `carried: false`, as if the
+    /// run had disowned them).
+    pub not_judged: Vec<EffectKind>,
 }
 
 impl HoldoutGap {
@@ -195,6 +201,7 @@ pub fn holdout_gap_with_temperature(
     // The fit of the model with the effects that carried so far.
     let mut cur = base.clone();
     let mut effects = Vec::new();
+    let mut not_judged = Vec::new();
     // The stationary effects that carried, in the noise covariance of the time-domain test.
     let mut carried_params: Vec<EffectParams> = Vec::new();
     for e in &fitted.effects {
@@ -216,8 +223,9 @@ pub fn holdout_gap_with_temperature(
                 else {
                     tracing::warn!(
                         "the held-out run has no temperature to judge the temperature \
-                         coefficient fitted on the other run by: left out of the held-out effects"
+                         coefficient fitted on the other run by: not judged there"
                     );
+                    not_judged.push(kind);
                     continue;
                 };
                 // In time: the held-out block means with `c T` out, under the model kept so
@@ -248,14 +256,26 @@ pub fn holdout_gap_with_temperature(
                 let Some((drop, scale, expected)) =
                     judged.filter(|j| j.2 >= TEMPERATURE_Z * TEMPERATURE_Z)
                 else {
+                    // Why: no block means to judge by, or a signal `c T` too small there (a
+                    // weak coefficient, a small swing, a short run) to reach the fitting run's
+                    // `|z|` even if the run had it.
+                    let why = match judged {
+                        Some((_, _, e)) => format!(
+                            "even with it, its block means would show it at an expected z of \
+                             {:.1} (the coefficient fitted, {coefficient:.3e} per degC, against \
+                             that run's temperature and length), below the {TEMPERATURE_Z} that \
+                             names one",
+                            e.max(0.0).sqrt()
+                        ),
+                        None => "its block means are too few, or its temperature is missing \
+                                 there"
+                            .to_string(),
+                    };
                     tracing::warn!(
-                        expected = judged.map(|j| j.2),
-                        "the held-out run's temperature cannot show the temperature coefficient \
-                         fitted on the other run (too short, missing, or changing too little: a \
-                         carried one would lower its block means' residuals by less than {}): \
-                         left out of the held-out effects",
-                        TEMPERATURE_Z * TEMPERATURE_Z
+                        "the held-out run cannot judge the temperature coefficient fitted on the \
+                         other run: {why}; not judged there"
                     );
+                    not_judged.push(kind);
                     continue;
                 };
                 tracing::debug!(drop, scale, expected, "the held-out temperature in time");
@@ -347,9 +367,10 @@ pub fn holdout_gap_with_temperature(
                         "the held-out run's block means neither show the {} fitted on the other \
                          run as plainly as that run needs (a drop of {bar}) nor disown it (a drop \
                          below 0), and they could not have shown it reliably: left out of the \
-                         held-out effects",
+                         held-out effects (not judged)",
                         kind.name()
                     );
+                    not_judged.push(kind);
                     continue;
                 }
                 (d >= bar, true)
@@ -382,5 +403,6 @@ pub fn holdout_gap_with_temperature(
         gap_before: base.gap(),
         gap_after: cur.gap(),
         effects,
+        not_judged,
     })
 }

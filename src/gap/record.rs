@@ -140,6 +140,10 @@ pub struct HoldoutRecord {
     /// Each effect of the fitting run on the held-out run, in order (bias jumps left out).
     #[serde(default)]
     pub effects: Vec<HeldEffectRecord>,
+    /// The kinds of the fitting run's effects the held-out run could not judge
+    /// (`gap::holdout::HoldoutGap::not_judged`); absent when none (and before session 53).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub not_judged: Vec<String>,
 }
 
 /// One effect on the held-out run.
@@ -461,6 +465,7 @@ impl DiagnosisRecord {
                         delta_chi2: e.delta_chi2.is_finite().then_some(e.delta_chi2),
                     })
                     .collect(),
+                not_judged: h.not_judged.iter().map(|k| k.name().into()).collect(),
             }),
             is_final,
             t_data: d.t_data_s,

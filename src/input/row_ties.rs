@@ -259,7 +259,10 @@ mod tests {
                 ciborium::into_writer(&part, &mut bytes).unwrap();
                 let value: ciborium::Value = ciborium::from_reader(&bytes[..]).unwrap();
                 let text = format!("{value:?}");
-                assert!(text.contains("min_step") && text.contains("scale"), "{text}");
+                assert!(
+                    text.contains("min_step") && text.contains("scale"),
+                    "{text}"
+                );
                 part = ciborium::from_reader(&bytes[..]).unwrap();
             }
             dropped_resumed.push(part.observe(r, &counted));

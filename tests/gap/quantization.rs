@@ -152,7 +152,9 @@ fn two_value_rate_samples_leave_the_units_noise_undetermined() {
         let coarse = run(&model(per_sample(0.3)), 1800.0, seed);
         let q = coarse.quantization.expect("values on a grid");
         assert!(rel(q.rate_lsb, 0.1) < 1e-9, "{q:?}");
-        let naive = (coarse.final_coef[1].powi(2) - q.n_q * q.n_q).max(0.0).sqrt();
+        let naive = (coarse.final_coef[1].powi(2) - q.n_q * q.n_q)
+            .max(0.0)
+            .sqrt();
         assert!(
             naive > 1.25 * per_sample(0.3),
             "seed {seed}: the uniform model's reading {naive} is off"

@@ -515,6 +515,8 @@ fn a_temperature_kept_in_time_is_judged_in_time_on_the_held_out_run() {
             .effects
             .iter()
             .all(|e| e.kind != EffectKind::Temperature));
+        assert_eq!(none.not_judged, vec![EffectKind::Temperature], "{none:?}");
+        assert!(h.not_judged.is_empty(), "seed {seed}: {h:?}");
     }
     // Nor with a temperature held constant on the held-out run (session 37: before, it read
     // `carried: false`, as if the run had disowned a coefficient it could not show): the same
@@ -525,6 +527,7 @@ fn a_temperature_kept_in_time_is_judged_in_time_on_the_held_out_run() {
         h.effects.iter().all(|e| e.kind != EffectKind::Temperature),
         "{h:?}"
     );
+    assert_eq!(h.not_judged, vec![EffectKind::Temperature], "{h:?}");
     // A chamber settling from 27 degC (18 degC, not 25, in the two hours): with the coefficient
     // the held-out block means drop by 24-56 when `c T` is taken out (expected 20-53), short of
     // the fitting run's 64 and far above the drops of a run without it (-10 to -27); before
@@ -536,6 +539,11 @@ fn a_temperature_kept_in_time_is_judged_in_time_on_the_held_out_run() {
             let h = holdout_gap_with_temperature(&d, &a, Some(&b), &opts).expect("held out");
             let t = h.effect(EffectKind::Temperature);
             assert_eq!(t.is_some(), judged, "seed {seed}, {coef}: {h:?}");
+            assert_eq!(
+                h.not_judged.contains(&EffectKind::Temperature),
+                !judged,
+                "seed {seed}, {coef}: {h:?}"
+            );
             assert!(t.is_none_or(|e| !e.carried), "seed {seed}, {coef}: {h:?}");
         }
     }

@@ -624,7 +624,8 @@ fn the_diagnose_table_says_how_far_the_twin_matches() {
 }
 
 /// The held-out run in words (session 39): which of the fitting run's effects carried, since
-/// one carried in time (a warm-up, a temperature) leaves the held-out gap as it was.
+/// one carried in time (a warm-up, a temperature) leaves the held-out gap as it was; and which
+/// the run could not judge (session 53).
 #[test]
 fn the_diagnose_table_says_which_effects_carried_to_the_held_out_run() {
     let rec = |holdout: serde_json::Value| {
@@ -655,6 +656,12 @@ fn the_diagnose_table_says_which_effects_carried_to_the_held_out_run() {
         (
             json!({"gap_before": 1.41, "gap_after": 1.41, "carried": false}),
             "on the held-out run gap 1.41 -> 1.41 (did not carry)",
+        ),
+        // A warm-up the held-out run could not show (session 53): not `did not carry`.
+        (
+            json!({"gap_before": 1.41, "gap_after": 1.41, "carried": false,
+                   "not_judged": ["warmup"]}),
+            "on the held-out run gap 1.41 -> 1.41 (not judged there: warm-up drift)",
         ),
     ] {
         let out = Shared::default();

@@ -123,13 +123,24 @@ pub fn diagnosis_line(d: &DiagnosisRecord, unit: &str, style: &TableStyle) -> St
                 .join(", ")
         };
         let (yes, no) = (kinds(true), kinds(false));
+        // Effects the held-out run could not judge (too weak there to show, or no temperature):
+        // neither carried nor disowned.
+        let unjudged = ho
+            .not_judged
+            .iter()
+            .map(|k| crate::sink::effect_text::kind_words(k))
+            .collect::<Vec<_>>()
+            .join(", ");
         let _ = match (yes.is_empty(), no.is_empty()) {
-            (true, true) if !ho.carried => write!(line, " (did not carry)"),
+            (true, true) if !ho.carried && unjudged.is_empty() => write!(line, " (did not carry)"),
             (true, true) => Ok(()),
             (false, true) => write!(line, " (carried: {yes})"),
             (true, false) => write!(line, " (did not carry: {no})"),
             (false, false) => write!(line, " (carried: {yes}; did not carry: {no})"),
         };
+        if !unjudged.is_empty() {
+            let _ = write!(line, " (not judged there: {unjudged})");
+        }
     }
     // `diagnose --ensemble N`: how far the five terms alone and the twin match the curve.
     if let (Some(e), Some(words)) = (&d.ensemble, crate::sink::band_words::band_sentence(d)) {
