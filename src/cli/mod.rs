@@ -913,7 +913,10 @@ impl DataArgs {
             } else {
                 "another temperature, left out (diagnose reads the first)"
             };
-            let named = settings.channels.as_ref().is_some_and(|w| w.contains(n));
+            let named = settings.channels.as_ref().is_some_and(|w| {
+                w.iter()
+                    .any(|x| allanscope::input::header_unit::names_channel(x, n))
+            });
             let channel = if named {
                 "a channel too, as --channels names it"
             } else {

@@ -65,6 +65,16 @@ pub fn option_rate_unit(unit: &str) -> Option<String> {
     (label != t && IncrementUnit::parse(&label).is_some()).then_some(label)
 }
 
+/// Whether `wanted` (a name `--channels` or a stand config's `channels.include` gives) names
+/// the channel `name`: the whole name, or the name without the unit in brackets that ends it
+/// (`gx` names `gx [deg/s]`, as a person types it; before session 53 only the whole name did,
+/// and a review's `--channels dvx` on a header `dvx [m/s]` was refused).
+pub fn names_channel(wanted: &str, name: &str) -> bool {
+    let wanted = wanted.trim();
+    wanted == name.trim()
+        || bracketed(name).is_some_and(|(bare, _)| !bare.is_empty() && bare == wanted)
+}
+
 /// A column's name split at the brackets that end it: the name before them and what they hold,
 /// both trimmed (`gyro_x (deg/s)` -> `gyro_x`, `deg/s`); `None` when the name does not end in a
 /// bracket, or holds nothing before it. The one reading of a unit in brackets: the header's

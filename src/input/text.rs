@@ -986,7 +986,10 @@ impl Layout {
             .iter()
             .zip(&self.names)
             .map(|(&i, n)| {
-                let named = opts.channels.as_ref().is_some_and(|c| c.contains(n));
+                let named = opts
+                    .channels
+                    .as_ref()
+                    .is_some_and(|c| c.iter().any(|x| super::header_unit::names_channel(x, n)));
                 let unit = super::header_unit::bracketed(&self.source_names[i]).is_some();
                 !named && !unit && counts_rows(i)
             })
@@ -1534,7 +1537,7 @@ fn named_by_run(n: &str, opts: &TextOptions) -> bool {
 fn analysed(n: &str, opts: &TextOptions) -> bool {
     opts.channels
         .as_ref()
-        .is_none_or(|c| c.iter().any(|x| x == n))
+        .is_none_or(|c| c.iter().any(|x| super::header_unit::names_channel(x, n)))
 }
 
 /// Whether a row holds no value in any column the run analyses (`strict`): empty cells, `nan`

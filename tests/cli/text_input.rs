@@ -414,6 +414,32 @@ fn a_temperature_column_is_not_a_channel_unless_named() {
     }
 }
 
+/// `--channels gy` names the column `gy [deg]` (the name without its unit, as a person types
+/// it): the curve is that column's, bit for bit the plain file's `gy`, under its whole name; a
+/// bare name two columns share is refused, naming both (session 53; before, `gy` was refused).
+#[test]
+fn a_channel_is_picked_by_its_name_without_the_unit() {
+    let (_, plain_summary) = plain();
+    let (plain_curves, _) = plain();
+    let p = write(
+        "units.csv",
+        format!("gx [deg],gy [deg]\n{}", rows(",", false)).as_bytes(),
+    );
+    let (c, s) = parsed(&analyze(&p, &["--channels", "gy"]));
+    assert_eq!(s.channels, ["gy [deg]"]);
+    assert_eq!(s.samples, vec![plain_summary.samples[1]]);
+    assert_eq!(c.len(), 1);
+    assert_eq!(c[0].sigma, plain_curves[1].sigma);
+    let twice = write(
+        "units_twice.csv",
+        format!("gy [deg],gy [rad]\n{}", rows(",", false)).as_bytes(),
+    );
+    usage_error(
+        &analyze(&twice, &["--channels", "gy"]),
+        &["`gy` names 2 channels", "gy [deg], gy [rad]"],
+    );
+}
+
 /// A channel that never moves (a rate of 1.25 throughout, an orientation's `w` of 1): its
 /// curves are exactly 0, nothing is fitted, and a warning says so with the rate. Before, the
 /// rounding of the running sums (about 1e-19 u/s) was fitted as a "determined" noise term.
