@@ -424,6 +424,8 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
         let holdout = held.as_mut().and_then(|h| {
             let j = h.names.iter().position(|n| n == name)?;
             let snap2 = h.evidence[j].snapshot();
+            // What the held-out judgement says (an effect it could not judge) names the channel.
+            let _channel = tracing::info_span!("holdout", channel = %name).entered();
             holdout_gap_with_temperature(&diag, &snap2, held_temp.as_ref(), &opts)
                 .map_err(|e| tracing::warn!("{}: holdout channel {name}: {e}", a.input))
                 .ok()
