@@ -436,6 +436,23 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
         if let Some(w) = first_block_words(&rec, &main.units[i], &sig3) {
             tracing::warn!("{}: channel {name}: {w}", a.input);
         }
+        // The twin is the unit: an effect the held-out run judged and disowned (it did not
+        // carry there) was this run's, not the unit's, and is left out of it (a filter, the
+        // unit's own shaping, is kept). Before (session 53), a rev16 review's accelerometer had
+        // a 0.04 Hz sinusoid beside its Gauss-Markov term that the held-out run rejected and
+        // the twin still drew.
+        let disowned: Vec<_> = holdout
+            .iter()
+            .flat_map(|h| &h.effects)
+            .filter(|e| !e.carried && !e.kind.is_filter())
+            .map(|e| e.kind)
+            .collect();
+        let twin_diag = (!disowned.is_empty()).then(|| {
+            let mut d = diag.clone();
+            d.effects.retain(|e| !disowned.contains(&e.params.kind()));
+            d
+        });
+        let twin_diag = twin_diag.as_ref().unwrap_or(&diag);
         let twin = (a.model_out.is_some() || a.ensemble.is_some()).then(|| {
             let t_run = snap.n_increments as f64 * tau0;
             let mut facts = ChannelFacts {
@@ -457,7 +474,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
                 temperature_quadratic: 0.0,
             };
             // A temperature effect: its coefficient, the bias at the profile's reference.
-            let coef = diag.effects.iter().find_map(|e| match e.params {
+            let coef = twin_diag.effects.iter().find_map(|e| match e.params {
                 EffectParams::Temperature {
                     coefficient,
                     quadratic,
@@ -481,7 +498,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
                 facts.temperature_quadratic = q;
                 facts.bias -= slope * (mean_t - r) + q * (mean_t2 - 2.0 * r * mean_t + r * r);
             }
-            fitted_channel(&facts, &diag, tau0)
+            fitted_channel(&facts, twin_diag, tau0)
         });
         if let (Some(runs), Some(ch)) = (a.ensemble, twin.as_ref()) {
             rec.ensemble = Some(ensemble_record(
@@ -497,6 +514,15 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
         if a.model_out.is_some() && twin.is_some() {
             if let Some(n) = undetermined_note(name, &main.units[i], &diag) {
                 notes.push(n);
+            }
+            if !disowned.is_empty() {
+                let kinds: Vec<&str> = disowned.iter().map(|k| k.name()).collect();
+                notes.push(format!(
+                    "{name}: left out, found on this run but not carried to the held-out run {}: \
+                     {}",
+                    a.holdout.as_deref().unwrap_or("?"),
+                    kinds.join(", ")
+                ));
             }
             fitted.extend(twin);
         }

@@ -475,3 +475,59 @@ fn a_model_out_in_a_missing_folder_is_refused_before_the_diagnosis() {
     assert!(out.stdout.is_empty(), "diagnosed before the refusal");
     assert!(!tmp("nodir").exists());
 }
+
+/// `--model-out` with `--holdout` (session 53): the twin is the unit, so an effect this run
+/// showed and the held-out run judged and disowned is left out of it, and the file says so.
+/// VOG4 with a sinusoid (0.3 arcsec/s at 0.8 Hz): held out on a run of the same unit it
+/// carries and the twin draws it; held out on a run of the unit without it, it does not carry
+/// and the twin has no sinusoid.
+#[test]
+fn an_effect_the_held_out_run_disowns_is_left_out_of_the_twin() {
+    let truth = model(
+        "ho-truth.toml",
+        "sinusoid = { amplitude = 0.3, frequency = 0.8, phase = 0.0 }",
+    );
+    let clean = model("ho-clean.toml", "");
+    let run = simulate(&truth, 3, "ho-run.csv");
+    let twin_of = |held: &Path, name: &str| -> (serde_json::Value, String) {
+        let out = tmp(name);
+        let _ = std::fs::remove_file(&out);
+        let d = first_record(
+            exe()
+                .arg("diagnose")
+                .arg(&run)
+                .args(["--tau0", "0.004", "--unit", "arcsec", "--holdout"])
+                .arg(held)
+                .arg("--model-out")
+                .arg(&out),
+        );
+        (d, std::fs::read_to_string(&out).unwrap())
+    };
+    let carried = |d: &serde_json::Value| {
+        d["holdout"]["effects"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|e| e["kind"] == "sinusoid")
+            .unwrap_or_else(|| panic!("the sinusoid judged: {d}"))["carried"]
+            .as_bool()
+            .unwrap()
+    };
+    let note = "left out, found on this run but not carried to the held-out run";
+    let same = simulate(&truth, 5, "ho-same.csv");
+    let (d, text) = twin_of(&same, "ho-twin-same.toml");
+    assert!(rel(param(&d, "sinusoid", "frequency"), 0.8) < 0.02, "{d}");
+    assert!(carried(&d), "{d}");
+    assert!(text.contains("[[channel.sinusoid]]"), "{text}");
+    assert!(!text.contains(note), "{text}");
+    let other = simulate(&clean, 4, "ho-clean.csv");
+    let (d, text) = twin_of(&other, "ho-twin-clean.toml");
+    assert!(rel(param(&d, "sinusoid", "frequency"), 0.8) < 0.02, "{d}");
+    assert!(!carried(&d), "{d}");
+    assert!(!text.contains("[[channel.sinusoid]]"), "{text}");
+    assert!(
+        text.lines()
+            .any(|l| l.starts_with("# ") && l.contains(note) && l.ends_with(": sinusoid")),
+        "{text}"
+    );
+}
