@@ -421,6 +421,42 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
                 st.first_at_s
             );
         }
+        // The values' step changed during the run (gap::lsb::StepChange): a range switched or
+        // a new output format; the quantization is judged with one step for the whole run.
+        let (changes, more) = main.lsb[i].step_changes();
+        // Rate samples' steps as rates (the values read), increments' as increments.
+        let per = if main.rate { 1.0 / tau0 } else { 1.0 };
+        if !changes.is_empty() {
+            let all: Vec<String> = changes
+                .iter()
+                .map(|c| {
+                    format!(
+                        "{} -> {} after about {:.0} s",
+                        sig3(c.from * per),
+                        sig3(c.to * per),
+                        c.at_value as f64 * tau0
+                    )
+                })
+                .collect();
+            tracing::warn!(
+                "{}: channel {name}: the values' step changed during the run ({}{}): a range \
+                 switched or a new output format? The run is diagnosed as one unit; its \
+                 quantization is judged with {}",
+                a.input,
+                all.join(", "),
+                if more > 0 {
+                    format!(", and {more} more")
+                } else {
+                    String::new()
+                },
+                main.lsb[i]
+                    .estimate()
+                    .map_or("no single step".to_string(), |q| format!(
+                        "one step, {}",
+                        sig3(q * per)
+                    ))
+            );
+        }
         let holdout = held.as_mut().and_then(|h| {
             let j = h.names.iter().position(|n| n == name)?;
             let snap2 = h.evidence[j].snapshot();

@@ -5,6 +5,11 @@
 //! of them is a whole multiple of it. Unquantized (floating) values fail the check. Two values
 //! that differ by less than [`PRINT_REL`](crate::smallest_step::PRINT_REL) of the largest value
 //! seen are the same count written twice ([`crate::smallest_step`]).
+//!
+//! A unit whose step changes during the run (a range switched, a new output format) is told
+//! too: the step of each window of [`WINDOW`] values is read the same way, and a step that
+//! differs from the one held before it for [`PERSIST`] windows in a row is a change
+//! ([`StepChange`]; before session 53 a rev15 review's range switch was not said).
 
 use crate::smallest_step::SmallestStep;
 
@@ -27,6 +32,96 @@ const TOL_REL: f64 = 1e-9;
 /// a quantization of 1.6e-8 deg (a review, session 39).
 const MAX_COUNT: f64 = 16_777_216.0;
 
+/// Values per window whose step is read for [`StepChange`]s.
+pub const WINDOW: usize = 4096;
+/// Windows in a row a new step must hold to be a change.
+pub const PERSIST: u32 = 2;
+/// Changes kept (more are counted).
+pub const MAX_CHANGES: usize = 8;
+
+/// The values' step changed: from `from` to `to` (u), after the `at_value`-th finite value (the
+/// end of the last window with the old step: the change falls within the next window or so).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepChange {
+    pub at_value: u64,
+    pub from: f64,
+    pub to: f64,
+}
+
+/// The step of consecutive windows of values, and its changes.
+#[derive(Debug, Clone, Default)]
+struct WindowSteps {
+    values: Vec<f64>,
+    step: SmallestStep,
+    last: Option<f64>,
+    /// Finite values before the window began.
+    start: u64,
+    /// The step held, and a new one seen in the windows since (its first window's start and
+    /// how many windows in a row).
+    held: Option<f64>,
+    /// The end of the last window with the held step (finite values).
+    held_end: u64,
+    candidate: Option<(f64, u64, u32)>,
+    changes: Vec<StepChange>,
+    more: u64,
+}
+
+impl WindowSteps {
+    /// One finite value, `n_before` finite values before it.
+    fn push(&mut self, v: f64, n_before: u64) {
+        if self.values.is_empty() {
+            self.start = n_before;
+        }
+        if let Some(p) = self.last {
+            self.step.push(p, v);
+        }
+        self.last = Some(v);
+        self.values.push(v);
+        if self.values.len() == WINDOW {
+            let q = self.step.get().and_then(|m| whole_step(&self.values, m));
+            self.judge(q);
+            self.values.clear();
+            self.step = SmallestStep::default();
+        }
+    }
+
+    /// A window's step (`None`: the window shows none, as floating values or a stuck stretch).
+    fn judge(&mut self, q: Option<f64>) {
+        let Some(q) = q else { return };
+        let same = |a: f64, b: f64| ((a - b) / b).abs() <= 1e-6;
+        let end = self.start + WINDOW as u64;
+        let Some(held) = self.held else {
+            self.held = Some(q);
+            self.held_end = end;
+            return;
+        };
+        if same(q, held) {
+            self.candidate = None;
+            self.held_end = end;
+            return;
+        }
+        let (start, count) = match self.candidate {
+            Some((c, start, count)) if same(q, c) => (start, count + 1),
+            _ => (self.start, 1),
+        };
+        self.candidate = Some((q, start, count));
+        if count >= PERSIST {
+            if self.changes.len() < MAX_CHANGES {
+                self.changes.push(StepChange {
+                    at_value: self.held_end,
+                    from: held,
+                    to: q,
+                });
+            } else {
+                self.more += 1;
+            }
+            self.held = Some(q);
+            self.held_end = end;
+            self.candidate = None;
+        }
+    }
+}
+
 /// Estimates the LSB of one channel's values (increments, or rate samples).
 #[derive(Debug, Clone, Default)]
 pub struct LsbEstimator {
@@ -37,6 +132,7 @@ pub struct LsbEstimator {
     /// The first finite value, and whether any later one differed from it.
     first: Option<f64>,
     varies: bool,
+    windows: WindowSteps,
 }
 
 impl LsbEstimator {
@@ -48,6 +144,7 @@ impl LsbEstimator {
     pub fn push(&mut self, v: f64) {
         if !v.is_finite() {
             self.last = None;
+            self.windows.last = None;
             return;
         }
         self.n += 1;
@@ -62,6 +159,7 @@ impl LsbEstimator {
             self.step.push(p, v);
         }
         self.last = Some(v);
+        self.windows.push(v, self.n - 1);
     }
 
     /// The value every one of at least two finite values had, bit for bit (a channel that
@@ -81,17 +179,29 @@ impl LsbEstimator {
     /// smallest difference seen (its shortest decimal, [`snap_decimal`]), and the counts are not
     /// so large that the check means nothing (at most [`MAX_COUNT`]); `None` otherwise.
     pub fn estimate(&self) -> Option<f64> {
-        let min_step = self.step.get()?;
-        if self.kept.len() < MIN_VALUES {
-            return None;
-        }
-        let q = snap_decimal(min_step);
-        let whole = self.kept.iter().all(|&v| {
-            let k = v / q;
-            k.abs() <= MAX_COUNT && (k - k.round()).abs() <= TOL + TOL_REL * k.abs()
-        });
-        whole.then_some(q)
+        whole_step(&self.kept, self.step.get()?)
     }
+
+    /// The changes of the values' step over the run (at most [`MAX_CHANGES`]) and how many
+    /// more there were.
+    pub fn step_changes(&self) -> (&[StepChange], u64) {
+        (&self.windows.changes, self.windows.more)
+    }
+}
+
+/// `min_step` as the step of `values` (its shortest decimal, [`snap_decimal`]) when there are
+/// at least [`MIN_VALUES`] of them, every one a whole multiple of it at counts of at most
+/// [`MAX_COUNT`].
+fn whole_step(values: &[f64], min_step: f64) -> Option<f64> {
+    if values.len() < MIN_VALUES {
+        return None;
+    }
+    let q = snap_decimal(min_step);
+    let whole = values.iter().all(|&v| {
+        let k = v / q;
+        k.abs() <= MAX_COUNT && (k - k.round()).abs() <= TOL + TOL_REL * k.abs()
+    });
+    whole.then_some(q)
 }
 
 /// The shortest decimal within 1e-9 (relative) of `q`: the smallest difference of two decimal
@@ -191,5 +301,38 @@ mod tests {
             s.push(i as f64);
         }
         assert_eq!(s.estimate(), None);
+    }
+
+    /// A counter whose step changes from 0.01 to 0.025 (not a multiple) after 30 000 values
+    /// (a range switched): one change, from 0.01 to 0.025, at the window the switch falls in.
+    /// A counter of large noise (consecutive counts up to two thousand steps apart), a float
+    /// stream, and a counter whose step never changes, give none.
+    #[test]
+    fn a_step_that_changes_is_told_and_noise_is_not() {
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(13);
+        let text = |k: i64, q: f64| format!("{}", k as f64 * q).parse::<f64>().unwrap();
+        let mut switched = LsbEstimator::new();
+        let mut wide = LsbEstimator::new();
+        let mut floats = LsbEstimator::new();
+        let mut steady = LsbEstimator::new();
+        for i in 0..60_000 {
+            let q = if i < 30_000 { 0.01 } else { 0.025 };
+            switched.push(text(40 + rng.random_range(-3..=3), q));
+            wide.push(text(rng.random_range(-1000..=1000), 0.01));
+            floats.push(rng.random::<f64>() * 0.1);
+            steady.push(text(rng.random_range(-3..=3), 0.004));
+        }
+        let (changes, more) = switched.step_changes();
+        assert_eq!(more, 0);
+        assert_eq!(changes.len(), 1, "{changes:?}");
+        let c = changes[0];
+        assert!((c.from / 0.01 - 1.0).abs() < 1e-9 && (c.to / 0.025 - 1.0).abs() < 1e-9);
+        assert!(
+            c.at_value <= 30_000 && 30_000 - c.at_value < WINDOW as u64,
+            "{c:?}"
+        );
+        for e in [&wide, &floats, &steady] {
+            assert!(e.step_changes().0.is_empty(), "{:?}", e.step_changes());
+        }
     }
 }

@@ -822,3 +822,44 @@ fn a_phase_column_read_as_increments_is_said() {
     assert_eq!(err.matches(said).count(), 1, "{err}");
     assert!(!run_as("analyze", &phase, &["--phase"]).contains("move steadily"));
 }
+
+/// A counter whose step changes from 0.01 to 0.025 deg at row 20 000 of 40 000 (200 Hz, a
+/// range switched) is said, with both steps and about when (after the last whole window of
+/// 4096 values with the old step, 81.92 s); the same counts at one step say nothing.
+#[test]
+fn a_step_that_changes_during_the_run_is_said() {
+    let (mut switched, mut steady) = (String::from("g\n"), String::from("g\n"));
+    let mut x = 1u64;
+    for i in 0..40_000u64 {
+        // counts -3..=3 from a linear congruential generator (Knuth's MMIX constants)
+        x = x
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        let k = ((x >> 33) % 7) as f64 - 3.0;
+        let q = if i < 20_000 { 0.01 } else { 0.025 };
+        switched += &format!("{}\n", k * q);
+        steady += &format!("{}\n", k * 0.01);
+    }
+    let (a, b) = (tmp("step_switch.csv"), tmp("step_steady.csv"));
+    std::fs::write(&a, switched).unwrap();
+    std::fs::write(&b, steady).unwrap();
+    let run = |path: &std::path::Path| {
+        let out = exe()
+            .args([
+                "diagnose",
+                path.to_str().unwrap(),
+                "--tau0",
+                "0.005",
+                "--unit",
+                "deg",
+            ])
+            .output()
+            .unwrap();
+        String::from_utf8_lossy(&out.stderr).to_string()
+    };
+    let err = run(&a);
+    let said = "channel g: the values' step changed during the run (";
+    assert_eq!(err.matches(said).count(), 1, "{err}");
+    assert!(err.contains(" after about 82 s)"), "{err}");
+    assert!(!run(&b).contains("step changed"));
+}
