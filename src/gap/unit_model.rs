@@ -119,10 +119,15 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
             .collect(),
     };
     let filter = EffectParams::unit_filter(filters.iter());
+    // A line attributed to the counter's limit cycle (super::limit_cycle) is the counter's,
+    // which the twin's own counter (its `lsb` and `bias`) draws: drawn again as the unit's, the
+    // twin's line was twice the run's (session 53).
     let others = d
         .effects
         .iter()
-        .map(|e| e.params)
+        .enumerate()
+        .filter(|(i, _)| !d.limit_cycles.iter().any(|c| c.effect == *i))
+        .map(|(_, e)| e.params)
         .filter(|p| !p.kind().is_filter());
     for p in filters.iter().copied().chain(others) {
         match p {

@@ -93,6 +93,36 @@ fn a_real_vibration_of_a_counter_unit_is_not_attributed() {
     assert!(allanscope::gap::limit_cycle::unit_effects(&d)
         .any(|e| e.params.kind() == EffectKind::Sinusoid));
     assert_ne!(d.verdict, Verdict::Consistent);
+    // The twin draws the unit's line; a line the counter makes it does not draw again, its own
+    // counter (lsb, bias) drawing it (session 53): the same diagnosis with the 2.1 Hz line
+    // marked as the counter's gives a twin without it.
+    let facts = ChannelFacts {
+        name: "r".into(),
+        unit: "arcsec".into(),
+        lsb: Some(LSB),
+        bias: RATE,
+        temperature_coefficient: 0.0,
+        temperature_quadratic: 0.0,
+    };
+    let drawn = |d: &Diagnosis| {
+        fitted_channel(&facts, d, TAU0)
+            .sinusoids
+            .iter()
+            .filter(|s| (s.frequency_hz / 2.1 - 1.0).abs() < 0.01)
+            .count()
+    };
+    assert_eq!(drawn(&d), 1);
+    let mut counter = d.clone();
+    counter
+        .limit_cycles
+        .push(allanscope::gap::limit_cycle::LimitCycle {
+            effect: real.0,
+            harmonic: 1,
+            expected_hz: real.1,
+            mean_rate: RATE,
+            lsb: LSB,
+        });
+    assert_eq!(drawn(&counter), 0);
 }
 
 /// A line the angle's random walk widened is still the counter's (docs/gap.md, "Every family on
