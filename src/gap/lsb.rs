@@ -53,43 +53,36 @@ pub struct StepChange {
 struct WindowSteps {
     values: Vec<f64>,
     step: SmallestStep,
-    last: Option<f64>,
-    /// Finite values before the window began.
-    start: u64,
-    /// The step held, and a new one seen in the windows since (its first window's start and
-    /// how many windows in a row).
+    /// The step held, and a new one seen in the windows since (how many windows in a row).
     held: Option<f64>,
     /// The end of the last window with the held step (finite values).
     held_end: u64,
-    candidate: Option<(f64, u64, u32)>,
+    candidate: Option<(f64, u32)>,
     changes: Vec<StepChange>,
     more: u64,
 }
 
 impl WindowSteps {
-    /// One finite value, `n_before` finite values before it.
-    fn push(&mut self, v: f64, n_before: u64) {
-        if self.values.is_empty() {
-            self.start = n_before;
-        }
-        if let Some(p) = self.last {
+    /// One finite value `v`, the `n`-th, after `prev` (the finite value before it, `None` after
+    /// a gap: [`LsbEstimator`]'s chain of differences).
+    fn push(&mut self, prev: Option<f64>, v: f64, n: u64) {
+        if let Some(p) = prev {
             self.step.push(p, v);
         }
-        self.last = Some(v);
         self.values.push(v);
         if self.values.len() == WINDOW {
             let q = self.step.get().and_then(|m| whole_step(&self.values, m));
-            self.judge(q);
+            self.judge(q, n);
             self.values.clear();
             self.step = SmallestStep::default();
         }
     }
 
-    /// A window's step (`None`: the window shows none, as floating values or a stuck stretch).
-    fn judge(&mut self, q: Option<f64>) {
+    /// A window's step (`None`: the window shows none, as floating values or a stuck stretch),
+    /// the window ending at the `end`-th finite value.
+    fn judge(&mut self, q: Option<f64>, end: u64) {
         let Some(q) = q else { return };
         let same = |a: f64, b: f64| ((a - b) / b).abs() <= 1e-6;
-        let end = self.start + WINDOW as u64;
         let Some(held) = self.held else {
             self.held = Some(q);
             self.held_end = end;
@@ -100,11 +93,11 @@ impl WindowSteps {
             self.held_end = end;
             return;
         }
-        let (start, count) = match self.candidate {
-            Some((c, start, count)) if same(q, c) => (start, count + 1),
-            _ => (self.start, 1),
+        let count = match self.candidate {
+            Some((c, count)) if same(q, c) => count + 1,
+            _ => 1,
         };
-        self.candidate = Some((q, start, count));
+        self.candidate = Some((q, count));
         if count >= PERSIST {
             if self.changes.len() < MAX_CHANGES {
                 self.changes.push(StepChange {
@@ -144,7 +137,6 @@ impl LsbEstimator {
     pub fn push(&mut self, v: f64) {
         if !v.is_finite() {
             self.last = None;
-            self.windows.last = None;
             return;
         }
         self.n += 1;
@@ -158,8 +150,8 @@ impl LsbEstimator {
         if let Some(p) = self.last {
             self.step.push(p, v);
         }
+        self.windows.push(self.last, v, self.n);
         self.last = Some(v);
-        self.windows.push(v, self.n - 1);
     }
 
     /// The value every one of at least two finite values had, bit for bit (a channel that
