@@ -183,6 +183,9 @@ pub fn effect_toml(effect: Option<EffectParams>) -> String {
         }) => format!(
             "fir_filter = {{ taps = {taps}, cutoff = {cutoff_hz:e}, decimation = {decimation} }}\n"
         ),
+        Some(EffectParams::ButterworthFilter { cutoff_hz, order }) => {
+            format!("butterworth_filter = {{ order = {order}, cutoff = {cutoff_hz:e} }}\n")
+        }
         Some(EffectParams::BandNoise {
             frequency_hz,
             sigma,
@@ -382,6 +385,11 @@ pub fn draw_effect_params(
             taps: rng.random_range(15..=95u32),
             cutoff_hz: log_uniform(rng, 0.02 / tau0, 0.4 / tau0),
             decimation: 1,
+        },
+        // orders 3-6, the cut-off log-uniform from 0.02 to 0.3 of the output rate
+        EffectKind::ButterworthFilter => EffectParams::ButterworthFilter {
+            order: rng.random_range(3..=6u32),
+            cutoff_hz: log_uniform(rng, 0.02 / tau0, 0.3 / tau0),
         },
         EffectKind::Temperature => EffectParams::Temperature {
             coefficient: 0.0,

@@ -77,6 +77,9 @@ impl FilterKey {
             LowPass::ZeroPhase { time_constant_s } => {
                 FilterKey(3, time_constant_s.to_bits(), 0, 0, 0)
             }
+            LowPass::Butterworth { order, cutoff_hz } => {
+                FilterKey(7, u64::from(order), cutoff_hz.to_bits(), 0, 0)
+            }
             LowPass::Fir {
                 taps,
                 cutoff_hz,

@@ -32,10 +32,13 @@ pub enum EffectKind {
     /// rate with the damped-cosine autocovariance (docs/gap.md, "Narrow-band noise";
     /// [`crate::sim::band_noise`]).
     BandNoise,
+    /// An n-th order digital Butterworth low-pass ([`LowPass::Butterworth`]; docs/gap.md,
+    /// "An n-th order Butterworth (session 54)").
+    ButterworthFilter,
 }
 
 impl EffectKind {
-    pub const ALL: [EffectKind; 11] = [
+    pub const ALL: [EffectKind; 12] = [
         EffectKind::GaussMarkov,
         EffectKind::Sinusoid,
         EffectKind::OutputFilter,
@@ -47,6 +50,7 @@ impl EffectKind {
         EffectKind::ZeroPhaseFilter,
         EffectKind::FirFilter,
         EffectKind::BandNoise,
+        EffectKind::ButterworthFilter,
     ];
 
     /// Stationary effects are fitted on the curve as columns; warm-ups and jumps are found in
@@ -67,6 +71,7 @@ impl EffectKind {
                 | EffectKind::SecondOrderFilter
                 | EffectKind::ZeroPhaseFilter
                 | EffectKind::FirFilter
+                | EffectKind::ButterworthFilter
         )
     }
 
@@ -74,8 +79,14 @@ impl EffectKind {
     /// moving average in front, a first or second order behind it. The diagnosis then names
     /// both, one effect each; any other two filters exclude each other.
     pub fn cascades_with(self, other: EffectKind) -> bool {
-        let behind =
-            |k: EffectKind| matches!(k, EffectKind::OutputFilter | EffectKind::SecondOrderFilter);
+        let behind = |k: EffectKind| {
+            matches!(
+                k,
+                EffectKind::OutputFilter
+                    | EffectKind::SecondOrderFilter
+                    | EffectKind::ButterworthFilter
+            )
+        };
         (self == EffectKind::MovingAverage && behind(other))
             || (other == EffectKind::MovingAverage && behind(self))
     }
@@ -94,6 +105,7 @@ impl EffectKind {
             EffectKind::ZeroPhaseFilter => "zero_phase_filter",
             EffectKind::FirFilter => "fir_filter",
             EffectKind::BandNoise => "band_noise",
+            EffectKind::ButterworthFilter => "butterworth_filter",
         }
     }
 
@@ -200,6 +212,12 @@ pub enum EffectParams {
         decimation: u32,
         taps: u32,
     },
+    /// [`LowPass::Butterworth`]: the cut-off (Hz, half power) and the order.
+    ButterworthFilter {
+        #[serde(rename = "cutoff", deserialize_with = "nullable_f64")]
+        cutoff_hz: f64,
+        order: u32,
+    },
     /// Narrow-band noise: centre (Hz), rms (u/s), full width at half power (Hz).
     BandNoise {
         #[serde(rename = "frequency", deserialize_with = "nullable_f64")]
@@ -269,6 +287,7 @@ impl EffectParams {
             EffectParams::ZeroPhaseFilter { .. } => EffectKind::ZeroPhaseFilter,
             EffectParams::FirFilter { .. } => EffectKind::FirFilter,
             EffectParams::BandNoise { .. } => EffectKind::BandNoise,
+            EffectParams::ButterworthFilter { .. } => EffectKind::ButterworthFilter,
         }
     }
 
@@ -322,6 +341,9 @@ impl EffectParams {
                 cutoff_hz,
                 decimation,
             }),
+            EffectParams::ButterworthFilter { cutoff_hz, order } => {
+                Some(LowPass::Butterworth { order, cutoff_hz })
+            }
             _ => None,
         }
     }
@@ -368,6 +390,9 @@ impl EffectParams {
                 decimation,
                 taps,
             },
+            LowPass::Butterworth { order, cutoff_hz } => {
+                EffectParams::ButterworthFilter { cutoff_hz, order }
+            }
         }
     }
 
@@ -403,7 +428,10 @@ impl EffectParams {
             | EffectKind::MovingAverage
             | EffectKind::SecondOrderFilter
             | EffectKind::ZeroPhaseFilter
-            | EffectKind::FirFilter => EffectParams::from_lowpass(canonical_lowpass(kind, shape)),
+            | EffectKind::FirFilter
+            | EffectKind::ButterworthFilter => {
+                EffectParams::from_lowpass(canonical_lowpass(kind, shape))
+            }
             EffectKind::BandNoise => EffectParams::BandNoise {
                 frequency_hz: shape,
                 sigma: amplitude,
@@ -514,6 +542,9 @@ impl EffectParams {
                 v.push(("taps", f64::from(taps)));
                 v
             }
+            EffectParams::ButterworthFilter { cutoff_hz, order } => {
+                vec![("cutoff", cutoff_hz), ("order", f64::from(order))]
+            }
         }
     }
 
@@ -527,7 +558,8 @@ impl EffectParams {
                 ..
             } => natural_frequency_hz,
             EffectParams::ZeroPhaseFilter { time_constant_s } => time_constant_s,
-            EffectParams::FirFilter { cutoff_hz, .. } => cutoff_hz,
+            EffectParams::FirFilter { cutoff_hz, .. }
+            | EffectParams::ButterworthFilter { cutoff_hz, .. } => cutoff_hz,
             EffectParams::BandNoise { frequency_hz, .. } => frequency_hz,
             EffectParams::GaussMarkov { tau_c_s, .. } => tau_c_s,
             EffectParams::Sinusoid { frequency_hz, .. } => frequency_hz,
@@ -551,7 +583,8 @@ impl EffectParams {
             | EffectParams::MovingAverage { .. }
             | EffectParams::SecondOrderFilter { .. }
             | EffectParams::ZeroPhaseFilter { .. }
-            | EffectParams::FirFilter { .. } => f64::NAN,
+            | EffectParams::FirFilter { .. }
+            | EffectParams::ButterworthFilter { .. } => f64::NAN,
             EffectParams::Warmup { amplitude, .. } => amplitude,
             EffectParams::BiasJumps { rms_size, .. } => rms_size,
             EffectParams::Temperature { coefficient, .. } => coefficient,
@@ -624,6 +657,11 @@ pub fn canonical_lowpass(kind: EffectKind, shape: f64) -> LowPass {
             cutoff_hz: shape,
             decimation: 1,
         },
+        // (the cut-off of a fourth order)
+        EffectKind::ButterworthFilter => LowPass::Butterworth {
+            order: 4,
+            cutoff_hz: shape,
+        },
         _ => LowPass::FirstOrder {
             time_constant_s: shape,
         },
@@ -653,7 +691,8 @@ pub fn effect_column(
                 EffectKind::MovingAverage
                 | EffectKind::SecondOrderFilter
                 | EffectKind::ZeroPhaseFilter
-                | EffectKind::FirFilter => {
+                | EffectKind::FirFilter
+                | EffectKind::ButterworthFilter => {
                     canonical_lowpass(kind, shape).white_rate_avar(tau0_s, &[m])[0]
                 }
                 EffectKind::Warmup => terms::warmup_avar(1.0, shape, tau0_s, m, n_inc),

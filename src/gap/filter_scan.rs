@@ -61,7 +61,8 @@ pub fn at_memory_end(prob: &GapProblem, p: &EffectParams) -> bool {
             decimation == 1 && taps as u64 >= (MAX_TAPS as u64).min(m_max / 10).max(2)
         }
         // the lowest cut-off: the longest memory
-        EffectParams::FirFilter { cutoff_hz, .. } => {
+        EffectParams::FirFilter { cutoff_hz, .. }
+        | EffectParams::ButterworthFilter { cutoff_hz, .. } => {
             cutoff_hz <= grid.lo || near(cutoff_hz, grid.lo)
         }
         EffectParams::SecondOrderFilter {
@@ -93,6 +94,7 @@ pub fn scan(
         EffectKind::MovingAverage => scan_moving_average(prob, &fit),
         EffectKind::SecondOrderFilter => scan_second_order(prob, &fit),
         EffectKind::FirFilter => scan_fir(prob, &fit),
+        EffectKind::ButterworthFilter => scan_butterworth(prob, &fit),
         _ => None,
     }?;
     Some((EffectParams::from_lowpass(best.0), best.1))
@@ -114,6 +116,61 @@ pub const FIR_TOP: f64 = 0.45;
 /// output step): [`FIR_TOP`] of the rate it runs at.
 pub fn fir_top_hz(decimation: u32, tau0_s: f64) -> f64 {
     FIR_TOP * f64::from(decimation.max(1)) / tau0_s
+}
+
+/// The Butterworth's highest cut-off scanned, times `tau0` (below Nyquist's 0.5, where the
+/// prewarping's `tan` grows without bound).
+pub const BUTTERWORTH_TOP: f64 = 0.45;
+
+/// The Butterworth orders scanned: from 3 (order 1 is near the first order, order 2 the
+/// bilinear second order at damping `1/sqrt 2`, both scanned as their own kinds) to
+/// [`MAX_BUTTERWORTH_ORDER`](crate::model::lowpass::MAX_BUTTERWORTH_ORDER).
+pub const BUTTERWORTH_ORDERS: std::ops::RangeInclusive<u32> =
+    3..=crate::model::lowpass::MAX_BUTTERWORTH_ORDER;
+
+/// The n-th order Butterworth ([`LowPass::Butterworth`]): for each order of
+/// [`BUTTERWORTH_ORDERS`] its cut-off over the grid, then a golden section in `ln f_c` within
+/// a grid step of the best; the order with the least chi-squared is taken (docs/gap.md, "An
+/// n-th order Butterworth (session 54)").
+fn scan_butterworth(
+    prob: &GapProblem,
+    fit: &dyn Fn(LowPass) -> Option<GlsFit>,
+) -> Option<(LowPass, GlsFit)> {
+    let cutoffs = prob.grid(EffectKind::ButterworthFilter).points();
+    if cutoffs.len() < 2 {
+        return None;
+    }
+    let top = BUTTERWORTH_TOP / prob.tau0_s;
+    let at = |order: u32, lc: f64| LowPass::Butterworth {
+        order,
+        cutoff_hz: lc.exp().min(top),
+    };
+    let dc = (cutoffs[1] / cutoffs[0]).ln();
+    let chi2 = |order: u32, lc: f64| fit(at(order, lc)).map_or(f64::INFINITY, |f| f.chi2);
+    let mut best: Option<(u32, f64, f64)> = None;
+    for order in BUTTERWORTH_ORDERS {
+        let (mut lc, mut v) = (cutoffs[0].ln(), f64::INFINITY);
+        for &c in &cutoffs {
+            let here = chi2(order, c.ln());
+            if here < v {
+                (lc, v) = (c.ln(), here);
+            }
+        }
+        if !v.is_finite() {
+            continue;
+        }
+        let x = golden(|x| fit(at(order, x)), lc - dc, lc + dc);
+        let vx = chi2(order, x);
+        if vx < v {
+            (lc, v) = (x, vx);
+        }
+        if best.is_none_or(|(_, _, b)| v < b) {
+            best = Some((order, lc, v));
+        }
+    }
+    let (order, lc, _) = best?;
+    let lp = at(order, lc);
+    fit(lp).map(|f| (lp, f))
 }
 
 /// The FIR's taps on the scan's grid (whole numbers, about four per octave); the polish then

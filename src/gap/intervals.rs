@@ -78,7 +78,9 @@ fn shapes(p: &EffectParams) -> Vec<(&'static str, f64)> {
             ..
         } => vec![("frequency", frequency_hz), ("width", width_hz)],
         // (its taps are a whole number, as a moving average's)
-        EffectParams::FirFilter { cutoff_hz, .. } => vec![("cutoff", cutoff_hz)],
+        // (the Butterworth's order too)
+        EffectParams::FirFilter { cutoff_hz, .. }
+        | EffectParams::ButterworthFilter { cutoff_hz, .. } => vec![("cutoff", cutoff_hz)],
         _ => Vec::new(),
     }
 }
@@ -135,7 +137,8 @@ fn scaled(p: &EffectParams, i: usize, f: f64) -> EffectParams {
         }
         | EffectParams::OutputFilter { time_constant_s: x }
         | EffectParams::ZeroPhaseFilter { time_constant_s: x }
-        | EffectParams::FirFilter { cutoff_hz: x, .. } => *x *= f,
+        | EffectParams::FirFilter { cutoff_hz: x, .. }
+        | EffectParams::ButterworthFilter { cutoff_hz: x, .. } => *x *= f,
         EffectParams::SecondOrderFilter { zero: Some(c), .. } if i == 2 => *c *= f,
         EffectParams::SecondOrderFilter {
             natural_frequency_hz: a,

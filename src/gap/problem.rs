@@ -568,6 +568,10 @@ impl GapProblem {
                 cutoff_hz: (cutoff_hz / g).min(super::filter_scan::fir_top_hz(decimation, tau0_s)),
                 decimation,
             },
+            LowPass::Butterworth { order, cutoff_hz } => LowPass::Butterworth {
+                order,
+                cutoff_hz: (cutoff_hz / g).min(super::filter_scan::BUTTERWORTH_TOP / tau0_s),
+            },
             LowPass::FirstOrder { time_constant_s } => LowPass::FirstOrder {
                 time_constant_s: time_constant_s * g,
             },
@@ -1295,6 +1299,12 @@ impl GapProblem {
                 hi: super::filter_scan::fir_top_hz(1, self.tau0_s),
                 per_decade: 12.0,
             },
+            // The Butterworth's cut-off (Hz), as the FIR's.
+            EffectKind::ButterworthFilter => Grid {
+                lo: 0.01 / self.tau0_s,
+                hi: super::filter_scan::BUTTERWORTH_TOP / self.tau0_s,
+                per_decade: 12.0,
+            },
             // Taps (the moving average) and Hz (the second order's natural frequency, its
             // `1 / (2 pi f)` over the first order's range): [`super::filter_scan`] scans them.
             EffectKind::MovingAverage => Grid {
@@ -1370,9 +1380,10 @@ impl GapProblem {
         kind: EffectKind,
     ) -> Option<(EffectParams, GlsFit)> {
         match kind {
-            EffectKind::MovingAverage | EffectKind::SecondOrderFilter | EffectKind::FirFilter => {
-                super::filter_scan::scan(self, base, kind)
-            }
+            EffectKind::MovingAverage
+            | EffectKind::SecondOrderFilter
+            | EffectKind::FirFilter
+            | EffectKind::ButterworthFilter => super::filter_scan::scan(self, base, kind),
             EffectKind::BandNoise => super::band_noise::scan(self, base),
             _ => {
                 let (sh, f) = self.scan(base, kind)?;

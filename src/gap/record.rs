@@ -611,6 +611,10 @@ mod tests {
                 decimation: 1,
                 taps: 47,
             },
+            EffectParams::ButterworthFilter {
+                cutoff_hz: 21.5,
+                order: 4,
+            },
             EffectParams::BandNoise {
                 frequency_hz: 20.5,
                 sigma: 0.25,
@@ -634,6 +638,7 @@ mod tests {
             r#"{"kind":"second_order_filter","params":{"damping":0.7,"natural_frequency":20.0},"gap_after":1.5}"#,
             r#"{"kind":"zero_phase_filter","params":{"time_constant":0.02},"gap_after":1.5}"#,
             r#"{"kind":"fir_filter","params":{"cutoff":131.0,"taps":47},"gap_after":1.5}"#,
+            r#"{"kind":"butterworth_filter","params":{"cutoff":21.5,"order":4},"gap_after":1.5}"#,
             r#"{"kind":"band_noise","params":{"frequency":20.5,"sigma":0.25,"width":2.0},"gap_after":1.5}"#,
         ];
         let kinds = every_kind();

@@ -88,7 +88,7 @@ impl Thresholds {
             EffectKind::SecondOrderFilter => self.lr_crit_filters[1],
             EffectKind::ZeroPhaseFilter => self.lr_crit_filters[2],
             // two shape parameters, as the second order
-            EffectKind::FirFilter => self.lr_crit_filters[1],
+            EffectKind::FirFilter | EffectKind::ButterworthFilter => self.lr_crit_filters[1],
             EffectKind::BandNoise => super::band_noise::LR_CRIT,
             EffectKind::Warmup | EffectKind::BiasJumps | EffectKind::Temperature => f64::INFINITY,
         }

@@ -163,7 +163,8 @@ pub fn fitted_channel(facts: &ChannelFacts, d: &Diagnosis, tau0_s: f64) -> Chann
             | EffectParams::MovingAverage { .. }
             | EffectParams::SecondOrderFilter { .. }
             | EffectParams::ZeroPhaseFilter { .. }
-            | EffectParams::FirFilter { .. } => ch.lowpass = filter,
+            | EffectParams::FirFilter { .. }
+            | EffectParams::ButterworthFilter { .. } => ch.lowpass = filter,
             EffectParams::Warmup {
                 amplitude,
                 time_constant_s,

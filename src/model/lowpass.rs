@@ -65,7 +65,131 @@ pub enum LowPass {
         cutoff_hz: f64,
         decimation: u32,
     },
+    /// The digital Butterworth low-pass of `order` and cut-off (half power) `cutoff_hz`: the
+    /// analog prototype's poles `w_c e^{i pi (2k + n - 1) / (2n)}` taken by the bilinear
+    /// transform with the cut-off prewarped, `K = tan(pi f_c tau0)`, so that
+    /// `|H|^2 = 1 / (1 + (tan(pi f tau0) / K)^(2n))` (Oppenheim and Schafer, "Discrete-Time
+    /// Signal Processing", section 7.1; scipy's `signal.butter(n, f_c, fs=1/tau0)`). It is run
+    /// as [`butterworth_sections`]: a biquad per pole pair, damping `sin((2k - 1) pi / (2n))`,
+    /// and for an odd order a first-order section. The selectable-order digital low-pass of
+    /// consumer MEMS IMUs (the "UI filter" of orders 1 to 3 and beyond); order 2 is
+    /// [`LowPass::SecondOrder`]'s bilinear form at damping `1/sqrt 2` (docs/gap.md, "An n-th
+    /// order Butterworth (session 54)").
+    Butterworth { order: u32, cutoff_hz: f64 },
 }
+
+/// One section of a recursive filter on the increments, DC gain 1:
+/// `y_k = a1 y_{k-1} + a2 y_{k-2} + (1 - a1 - a2) (b0 d_k + b1 d_{k-1} + b2 d_{k-2})`,
+/// `b0 + b1 + b2 = 1`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Biquad {
+    pub a1: f64,
+    pub a2: f64,
+    pub b: [f64; 3],
+}
+
+/// The sections of [`LowPass::Butterworth`] at step `tau0_s`, pole pairs from the least damped:
+/// the pair `k = 1..=n/2` is the bilinear second order of natural frequency `f_c` and damping
+/// `zeta_k = sin((2k - 1) pi / (2n))` (`D = 1 + 2 zeta K + K^2`, `a1 = 2 (1 - K^2) / D`,
+/// `a2 = -(1 - 2 zeta K + K^2) / D`, numerator `(1, 2, 1) / 4`), and an odd order's real pole
+/// `w_c` is `p = (1 - K) / (1 + K)` with the numerator `(1, 1) / 2`; `K = tan(pi f_c tau0)`.
+/// The product of the sections is the bilinear transform of the whole prototype, since the
+/// transform maps each factor of `H(s)` on its own.
+pub fn butterworth_sections(order: u32, cutoff_hz: f64, tau0_s: f64) -> Vec<Biquad> {
+    let n = order.max(1);
+    let k = (PI * cutoff_hz * tau0_s).tan();
+    let mut out: Vec<Biquad> = (1..=n / 2)
+        .map(|i| {
+            let zeta = ((2 * i - 1) as f64 * PI / (2 * n) as f64).sin();
+            let d = 1.0 + 2.0 * zeta * k + k * k;
+            Biquad {
+                a1: 2.0 * (1.0 - k * k) / d,
+                a2: -(1.0 - 2.0 * zeta * k + k * k) / d,
+                b: [0.25, 0.5, 0.25],
+            }
+        })
+        .collect();
+    if n % 2 == 1 {
+        out.push(Biquad {
+            a1: (1.0 - k) / (1.0 + k),
+            a2: 0.0,
+            b: [0.5, 0.5, 0.0],
+        });
+    }
+    out
+}
+
+impl Biquad {
+    /// The normalised autocorrelation of the section's output for white input (total over
+    /// both sides 1), from lag 0 to where the slower pole's decay falls below [`TAIL`].
+    /// Yule-Walker for the all-pole part: `rho_1 = a1 / (1 - a2)`,
+    /// `rho_k = a1 rho_{k-1} + a2 rho_{k-2}`; `gamma_0` of `y_k = a1 y_{k-1} + a2 y_{k-2} + g e_k`
+    /// (unit-variance `e`) is `g^2 (1 - a2) / ((1 + a2)((1 - a2)^2 - a1^2))` (Box, Jenkins and
+    /// Reinsel, "Time Series Analysis", section 3.2.4); the numerator's own autocorrelation
+    /// `q_j = sum_i b_i b_{i+j}` is then convolved with it.
+    pub fn autocorrelation(&self) -> Vec<f64> {
+        let (a1, a2) = (self.a1, self.a2);
+        let g = 1.0 - a1 - a2;
+        let g0 = g * g * (1.0 - a2) / ((1.0 + a2) * ((1.0 - a2).powi(2) - a1 * a1));
+        // the slowest pole sets the decay
+        let n = lags_for(slow_pole(a1, a2));
+        let mut out = Vec::with_capacity(n + 2);
+        let (mut r_prev, mut r) = (f64::NAN, 1.0);
+        for k in 0..n + 2 {
+            out.push(g0 * r);
+            let next = if k == 0 {
+                a1 / (1.0 - a2)
+            } else {
+                a1 * r + a2 * r_prev
+            };
+            r_prev = r;
+            r = next;
+        }
+        let b = self.b;
+        if b == [1.0, 0.0, 0.0] {
+            out.truncate(n);
+            return out;
+        }
+        // The numerator on the all-pole part: its autocorrelation `q_j = sum_i b_i b_{i+j}` at
+        // lags 0, +-1, +-2 (bilinear (6, 4, 1) / 16) convolved with the all-pole part's (even
+        // in the lag).
+        let q = [
+            b[0] * b[0] + b[1] * b[1] + b[2] * b[2],
+            b[0] * b[1] + b[1] * b[2],
+            b[0] * b[2],
+        ];
+        let at = |k: i64| out[k.unsigned_abs() as usize];
+        (0..n as i64)
+            .map(|k| q[0] * at(k) + q[1] * (at(k - 1) + at(k + 1)) + q[2] * (at(k - 2) + at(k + 2)))
+            .collect()
+    }
+
+    /// `|H(w)|^2` at `w` radians per sample:
+    /// `g^2 |b0 + b1 e^{-iw} + b2 e^{-2iw}|^2 / |1 - a1 e^{-iw} - a2 e^{-2iw}|^2`.
+    pub fn power_gain(&self, w: f64) -> f64 {
+        let (a1, a2, b) = (self.a1, self.a2, self.b);
+        let g = 1.0 - a1 - a2;
+        let re = 1.0 - a1 * w.cos() - a2 * (2.0 * w).cos();
+        let im = a1 * w.sin() + a2 * (2.0 * w).sin();
+        let nre = b[0] + b[1] * w.cos() + b[2] * (2.0 * w).cos();
+        let nim = b[1] * w.sin() + b[2] * (2.0 * w).sin();
+        (nre * nre + nim * nim) * g * g / (re * re + im * im)
+    }
+
+    /// The slower pole's time constant in steps, `-1 / ln |z|` (one step for a modulus outside
+    /// (0, 1)).
+    pub fn memory_steps(&self) -> f64 {
+        let slow = slow_pole(self.a1, self.a2);
+        if slow > 0.0 && slow < 1.0 {
+            -1.0 / slow.ln()
+        } else {
+            1.0
+        }
+    }
+}
+
+/// Highest order of [`LowPass::Butterworth`] accepted.
+pub const MAX_BUTTERWORTH_ORDER: u32 = 8;
 
 /// The impulse response of [`LowPass::Fir`]: `h_n = w_n sin(2 pi f_c t_n) / (pi t_n)` at
 /// `t_n = (n - (taps - 1) / 2) tau0`, `w_n = 0.54 - 0.46 cos(2 pi n / (taps - 1))` (Hamming;
@@ -114,6 +238,8 @@ pub enum Behind {
         damping: f64,
         form: SecondOrderForm,
     },
+    /// [`LowPass::Butterworth`].
+    Butterworth { order: u32, cutoff_hz: f64 },
 }
 
 impl Average {
@@ -141,6 +267,7 @@ impl Behind {
                 damping,
                 form,
             },
+            Behind::Butterworth { order, cutoff_hz } => LowPass::Butterworth { order, cutoff_hz },
         }
     }
 }
@@ -238,6 +365,9 @@ impl LowPass {
                 damping,
                 form,
             }),
+            LowPass::Butterworth { order, cutoff_hz } => {
+                Some(Behind::Butterworth { order, cutoff_hz })
+            }
             _ => None,
         }
     }
@@ -275,7 +405,8 @@ impl LowPass {
                 form: SecondOrderForm::Sampled { .. },
                 ..
             } => 3,
-            LowPass::SecondOrder { .. } | LowPass::Fir { .. } => 2,
+            // the Butterworth's order as the FIR's taps: a discrete choice counted as one
+            LowPass::SecondOrder { .. } | LowPass::Fir { .. } | LowPass::Butterworth { .. } => 2,
             LowPass::Cascade { front, back } => {
                 front.lowpass().n_shape() + back.lowpass().n_shape()
             }
@@ -311,6 +442,18 @@ impl LowPass {
                 .lowpass()
                 .check(tau0_s)
                 .or_else(|| back.lowpass().check(tau0_s)),
+            LowPass::Butterworth { order, cutoff_hz } => {
+                if !(1..=MAX_BUTTERWORTH_ORDER).contains(&order) {
+                    Some(format!("order {order} must be 1..={MAX_BUTTERWORTH_ORDER}"))
+                } else if !(cutoff_hz > 0.0 && cutoff_hz * tau0_s < 0.49) {
+                    Some(format!(
+                        "cutoff {cutoff_hz} Hz must be above 0 and below Nyquist \
+                         (f tau0 must be < 0.49)"
+                    ))
+                } else {
+                    None
+                }
+            }
             LowPass::FirstOrder { time_constant_s } | LowPass::ZeroPhase { time_constant_s } => {
                 (!(time_constant_s > 0.0 && time_constant_s.is_finite()))
                     .then(|| format!("time constant {time_constant_s} must be > 0"))
@@ -510,48 +653,16 @@ impl LowPass {
             }
             LowPass::SecondOrder { .. } | LowPass::ZeroPhase { .. } => {
                 let (a1, a2) = self.ar2(tau0_s).unwrap_or((0.0, 0.0));
-                // Yule-Walker: rho_1 = a1 / (1 - a2), rho_k = a1 rho_{k-1} + a2 rho_{k-2};
-                // gamma_0 of y_k = a1 y_{k-1} + a2 y_{k-2} + g e_k (unit-variance e) is
-                // g^2 (1 - a2) / ((1 + a2)((1 - a2)^2 - a1^2)).
-                let g = 1.0 - a1 - a2;
-                let g0 = g * g * (1.0 - a2) / ((1.0 + a2) * ((1.0 - a2).powi(2) - a1 * a1));
-                // the slowest pole sets the decay
-                let n = lags_for(slow_pole(a1, a2));
-                let mut out = Vec::with_capacity(n + 2);
-                let (mut r_prev, mut r) = (f64::NAN, 1.0);
-                for k in 0..n + 2 {
-                    out.push(g0 * r);
-                    let next = if k == 0 {
-                        a1 / (1.0 - a2)
-                    } else {
-                        a1 * r + a2 * r_prev
-                    };
-                    r_prev = r;
-                    r = next;
-                }
-                let b = match self.numerator() {
-                    Some(b) if b != [1.0, 0.0, 0.0] => b,
-                    _ => {
-                        out.truncate(n);
-                        return out;
-                    }
-                };
-                // The numerator on the all-pole part: its autocorrelation
-                // `q_j = sum_i b_i b_{i+j}` at lags 0, +-1, +-2 (bilinear (6, 4, 1) / 16)
-                // convolved with the all-pole part's (even in the lag).
-                let q = [
-                    b[0] * b[0] + b[1] * b[1] + b[2] * b[2],
-                    b[0] * b[1] + b[1] * b[2],
-                    b[0] * b[2],
-                ];
-                let at = |k: i64| out[k.unsigned_abs() as usize];
-                (0..n as i64)
-                    .map(|k| {
-                        q[0] * at(k)
-                            + q[1] * (at(k - 1) + at(k + 1))
-                            + q[2] * (at(k - 2) + at(k + 2))
-                    })
-                    .collect()
+                let b = self.numerator().unwrap_or([1.0, 0.0, 0.0]);
+                Biquad { a1, a2, b }.autocorrelation()
+            }
+            // the sections' autocorrelations convolved (a cascade's)
+            LowPass::Butterworth { order, cutoff_hz } => {
+                butterworth_sections(order, cutoff_hz, tau0_s)
+                    .iter()
+                    .map(Biquad::autocorrelation)
+                    .reduce(|acc, r| convolve_even(&acc, &r))
+                    .unwrap_or_else(|| vec![1.0])
             }
         }
     }
@@ -662,17 +773,21 @@ impl LowPass {
                 })
             }
             LowPass::SecondOrder { .. } => {
+                // for the bilinear form the numerator's gain is cos^4(w / 2), its zeros at
+                // Nyquist
                 let (a1, a2) = self.ar2(tau0_s).unwrap_or((0.0, 0.0));
-                let g = 1.0 - a1 - a2;
-                // |1 - a1 e^{-iw} - a2 e^{-2iw}|^2
-                let re = 1.0 - a1 * w.cos() - a2 * (2.0 * w).cos();
-                let im = a1 * w.sin() + a2 * (2.0 * w).sin();
-                // |b0 + b1 e^{-iw} + b2 e^{-2iw}|^2: for the bilinear form
-                // cos^4(w / 2), its zeros at Nyquist
                 let b = self.numerator().unwrap_or([1.0, 0.0, 0.0]);
-                let nre = b[0] + b[1] * w.cos() + b[2] * (2.0 * w).cos();
-                let nim = b[1] * w.sin() + b[2] * (2.0 * w).sin();
-                (nre * nre + nim * nim) * g * g / (re * re + im * im)
+                Biquad { a1, a2, b }.power_gain(w)
+            }
+            // the closed form of the bilinear Butterworth (its sections' product)
+            LowPass::Butterworth { order, cutoff_hz } => {
+                let k = (PI * cutoff_hz * tau0_s).tan();
+                let x = (w / 2.0).tan() / k;
+                if x.is_finite() {
+                    1.0 / (1.0 + x.abs().powi(2 * order.max(1) as i32))
+                } else {
+                    0.0
+                }
             }
         }
     }
@@ -690,6 +805,14 @@ impl LowPass {
             LowPass::Fir {
                 taps, decimation, ..
             } => f64::from(taps) * tau0_s / f64::from(decimation.max(1)),
+            // the sections' slower poles' time constants, one after the other
+            LowPass::Butterworth { order, cutoff_hz } => {
+                tau0_s
+                    * butterworth_sections(order, cutoff_hz, tau0_s)
+                        .iter()
+                        .map(Biquad::memory_steps)
+                        .sum::<f64>()
+            }
             // the back's memory of the front's output
             LowPass::Cascade { front, back } => {
                 front.lowpass().memory_s(tau0_s) + back.lowpass().memory_s(tau0_s)
@@ -1685,5 +1808,159 @@ mod tests {
             assert!((g / want - 1.0).abs() < 1e-6, "{f} Hz: {g} vs {want}");
         }
         assert!((two_sided_sum(&lp.autocorrelation(0.001)) - 1.0).abs() < 1e-12);
+    }
+
+    /// The Butterworth against scipy 1.17: `signal.butter(n, fc, fs=fs)` run by `lfilter` on a
+    /// unit impulse gave the first six taps below, and `freqz` the power gains at 0, fc / 2, fc,
+    /// 1.5 fc and 0.4 fs (fc's is the half-power 0.5). The sections, run one after the other,
+    /// give the same impulse response; the power gain's closed form is `freqz`'s; the
+    /// autocorrelation is `sum_i h_i h_{i+k}` of the impulse response (DC gain 1: total 1).
+    #[test]
+    fn the_butterworth_is_scipys_butter() {
+        type Case = (u32, f64, f64, [f64; 6], [f64; 5]);
+        let cases: [Case; 3] = [
+            (
+                4,
+                20.0,
+                200.0,
+                [
+                    0.004_824_343_357_716_228,
+                    0.030_728_717_768_085_785,
+                    0.090_594_681_954_882_88,
+                    0.167_944_821_844_737_2,
+                    0.224_641_271_344_028_14,
+                    0.233_457_187_867_600_56,
+                ],
+                [
+                    1.0,
+                    0.996_822_324_381_951_5,
+                    0.5,
+                    0.026_617_352_843_484_39,
+                    1.543_180_084_737_900_8e-8,
+                ],
+            ),
+            (
+                3,
+                45.0,
+                400.0,
+                [
+                    0.024_371_051_873_211_4,
+                    0.112_326_860_915_706_96,
+                    0.228_528_853_331_987_52,
+                    0.281_100_611_992_742_44,
+                    0.241_255_230_220_811_94,
+                    0.149_828_317_392_187_13,
+                ],
+                [
+                    1.0,
+                    0.987_299_594_732_506_7,
+                    0.5,
+                    0.058_548_026_216_874_924,
+                    2.966_500_660_753_5e-6,
+                ],
+            ),
+            (
+                5,
+                130.0,
+                1000.0,
+                [
+                    0.003_857_535_132_406_283,
+                    0.028_447_460_099_693_35,
+                    0.095_955_732_266_906_32,
+                    0.197_477_819_615_139_8,
+                    0.277_918_197_958_029_1,
+                    0.279_752_808_201_990_8,
+                ],
+                [
+                    1.0,
+                    0.999_370_404_064_685_7,
+                    0.5,
+                    0.007_771_026_992_440_986_5,
+                    3.020_071_084_298_559e-9,
+                ],
+            ),
+        ];
+        for (order, fc, fs, taps, gains) in cases {
+            let tau0 = 1.0 / fs;
+            let lp = LowPass::Butterworth {
+                order,
+                cutoff_hz: fc,
+            };
+            assert_eq!(lp.check(tau0), None);
+            // the impulse response through the sections
+            let mut h: Vec<f64> = (0..6000).map(|i| if i == 0 { 1.0 } else { 0.0 }).collect();
+            for q in butterworth_sections(order, fc, tau0) {
+                let g = 1.0 - q.a1 - q.a2;
+                let (mut x1, mut x2, mut y1, mut y2) = (0.0, 0.0, 0.0, 0.0);
+                for v in h.iter_mut() {
+                    let y = q.a1 * y1 + q.a2 * y2 + g * (q.b[0] * *v + q.b[1] * x1 + q.b[2] * x2);
+                    (x2, x1, y2, y1) = (x1, *v, y1, y);
+                    *v = y;
+                }
+            }
+            for (i, want) in taps.iter().enumerate() {
+                assert!(
+                    (h[i] - want).abs() < 1e-13,
+                    "order {order} tap {i}: {} vs {want}",
+                    h[i]
+                );
+            }
+            for (f, want) in [0.0, 0.5 * fc, fc, 1.5 * fc, 0.4 * fs]
+                .into_iter()
+                .zip(gains)
+            {
+                let g = lp.power_gain(tau0, f);
+                assert!(
+                    (g - want).abs() <= 1e-9 * want,
+                    "order {order} at {f} Hz: {g} vs {want}"
+                );
+            }
+            let rho = lp.autocorrelation(tau0);
+            assert!((two_sided_sum(&rho) - 1.0).abs() < 1e-12, "order {order}");
+            for k in [0usize, 1, 2, 5, 17, 60] {
+                let want: f64 = h.iter().zip(&h[k..]).map(|(a, b)| a * b).sum();
+                assert!(
+                    (rho[k] - want).abs() < 1e-13,
+                    "order {order} lag {k}: {} vs {want}",
+                    rho[k]
+                );
+            }
+            // Parseval: the mean power gain over the band is rho_0
+            let n = 20_000;
+            let mean = (0..n)
+                .map(|i| lp.power_gain(tau0, (i as f64 + 0.5) / n as f64 * fs / 2.0))
+                .sum::<f64>()
+                / n as f64;
+            assert!(
+                (mean / rho[0] - 1.0).abs() < 1e-6,
+                "order {order}: {mean} vs {}",
+                rho[0]
+            );
+        }
+        // order 2 is the bilinear second order at damping 1/sqrt 2
+        let two = LowPass::Butterworth {
+            order: 2,
+            cutoff_hz: 20.0,
+        };
+        let so = LowPass::SecondOrder {
+            natural_frequency_hz: 20.0,
+            damping: std::f64::consts::FRAC_1_SQRT_2,
+            form: SecondOrderForm::Bilinear,
+        };
+        let (a, b) = (two.autocorrelation(0.005), so.autocorrelation(0.005));
+        assert_eq!(a.len(), b.len());
+        assert!(a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-15));
+        assert!(LowPass::Butterworth {
+            order: 9,
+            cutoff_hz: 20.0
+        }
+        .check(0.005)
+        .is_some());
+        assert!(LowPass::Butterworth {
+            order: 4,
+            cutoff_hz: 100.0
+        }
+        .check(0.005)
+        .is_some());
     }
 }

@@ -75,6 +75,10 @@ pub enum LowPassGen {
         /// The back's last output.
         last: f64,
     },
+    /// Second-order sections one after the other at the output rate, each a
+    /// [`LowPassGen::SecondOrder`] ([`LowPass::Butterworth`]'s
+    /// [`butterworth_sections`](crate::model::lowpass::butterworth_sections)).
+    Sections(Vec<LowPassGen>),
 }
 
 impl LowPassGen {
@@ -83,6 +87,22 @@ impl LowPassGen {
     pub fn new(lp: &LowPass, tau0_s: f64) -> Option<Self> {
         match *lp {
             LowPass::FirstOrder { .. } => None,
+            LowPass::Butterworth { order, cutoff_hz } => Some(LowPassGen::Sections(
+                crate::model::lowpass::butterworth_sections(order, cutoff_hz, tau0_s)
+                    .into_iter()
+                    .map(|q| LowPassGen::SecondOrder {
+                        a1: q.a1,
+                        a2: q.a2,
+                        g: 1.0 - q.a1 - q.a2,
+                        y1: 0.0,
+                        y2: 0.0,
+                        b: q.b,
+                        x1: 0.0,
+                        x2: 0.0,
+                        started: false,
+                    })
+                    .collect(),
+            )),
             LowPass::Fir { .. } => {
                 let (h, d) = lp.internal_response(tau0_s)?;
                 Some(LowPassGen::Fir {
@@ -109,7 +129,9 @@ impl LowPassGen {
                             started: false,
                         }
                     }
-                    Behind::SecondOrder { .. } => LowPassGen::new(&back.lowpass(), tau0_s)?,
+                    Behind::SecondOrder { .. } | Behind::Butterworth { .. } => {
+                        LowPassGen::new(&back.lowpass(), tau0_s)?
+                    }
                 };
                 Some(LowPassGen::Cascade {
                     front: Box::new(LowPassGen::new(&front.lowpass(), tau0_s)?),
@@ -193,6 +215,7 @@ impl LowPassGen {
             | LowPassGen::ZeroPhase { started, .. }
             | LowPassGen::Fir { started, .. } => *started,
             LowPassGen::Cascade { front, .. } => front.is_started(),
+            LowPassGen::Sections(parts) => parts.iter().all(LowPassGen::is_started),
         }
     }
 
@@ -210,6 +233,7 @@ impl LowPassGen {
                 let d = front.decimation();
                 (front.memory_steps().div_ceil(d) + back.memory_steps()) * d
             }
+            LowPassGen::Sections(parts) => parts.iter().map(LowPassGen::memory_steps).sum(),
             LowPassGen::SecondOrder { a1, a2, .. } => {
                 // poles: roots of z^2 - a1 z - a2
                 let r = crate::model::lowpass::slow_pole(*a1, *a2);
@@ -317,6 +341,8 @@ impl LowPassGen {
                     *last = level;
                 }
             }
+            // DC gain 1: every section's input is the level
+            LowPassGen::Sections(parts) => parts.iter_mut().for_each(|q| q.start_at(level)),
         }
     }
 
@@ -402,6 +428,7 @@ impl LowPassGen {
                 }
                 *last
             }
+            LowPassGen::Sections(parts) => parts.iter_mut().fold(d, |x, q| q.step(x)),
         }
     }
 }

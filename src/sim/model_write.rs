@@ -227,6 +227,13 @@ fn write_lowpass(s: &mut String, lp: LowPass) {
         }
         // (written as its parts above)
         LowPass::Cascade { .. } => {}
+        LowPass::Butterworth { order, cutoff_hz } => {
+            let _ = writeln!(
+                s,
+                "[channel.butterworth_filter]\norder = {order}\ncutoff = {}",
+                num(cutoff_hz)
+            );
+        }
         LowPass::Fir {
             taps,
             cutoff_hz,
@@ -467,6 +474,13 @@ temperature_quadratic = 3.0e-5
                 "output_filter = { time_constant = 0.008 }",
                 Behind::FirstOrder {
                     time_constant_s: 0.008,
+                },
+            ),
+            (
+                "butterworth_filter = { order = 3, cutoff = 25.0 }",
+                Behind::Butterworth {
+                    order: 3,
+                    cutoff_hz: 25.0,
                 },
             ),
         ] {

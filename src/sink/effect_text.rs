@@ -90,6 +90,13 @@ fn known(kind: &str) -> Option<(&'static str, &'static [ParamSpec])> {
                 ("taps", "taps", Dim::Count),
             ],
         ),
+        "butterworth_filter" => (
+            "output Butterworth low-pass",
+            &[
+                ("order", "order", Dim::Count),
+                ("cutoff", "cut-off (half power)", Dim::Freq),
+            ],
+        ),
         "warmup" => (
             "warm-up drift",
             &[
@@ -457,6 +464,19 @@ mod tests {
             "output linear-phase FIR low-pass (windowed sinc) run at 2 times the output rate and \
              read every 2nd sample, taps counted there: cut-off = 250 Hz (period 0.004 s), \
              taps = 31, decimation = 2"
+        );
+    }
+
+    /// A Butterworth is named with its order and its half-power cut-off.
+    #[test]
+    fn a_butterworth_is_named_with_its_order_and_cutoff() {
+        let e = RecordedEffect::Known(EffectParams::ButterworthFilter {
+            cutoff_hz: 25.0,
+            order: 4,
+        });
+        assert_eq!(
+            effect_line(&e, "deg", &|v| format!("{v}")),
+            "output Butterworth low-pass: order = 4, cut-off (half power) = 25 Hz (period 0.04 s)"
         );
     }
 }

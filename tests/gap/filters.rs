@@ -274,6 +274,35 @@ fn a_low_pass_behind_a_decimator_is_named_as_both() {
     assert_eq!(d.verdict, Verdict::Explained);
 }
 
+/// A consumer part's n-th order low-pass behind its decimator: a sinc^3 CIC by 8 with a third
+/// order Butterworth at 20 Hz behind it at 100 Hz, rate samples rounded, 40 minutes (docs/gap.md,
+/// "An n-th order Butterworth (session 54)"). Both are named, the CIC with three stages and
+/// taps equal to its decimation, the Butterworth of order 3 within 3% in cut-off, nothing else,
+/// `explained`.
+#[test]
+fn an_nth_order_butterworth_behind_a_decimator_is_named_as_both() {
+    let d = unit_diagnosis(
+        0.01,
+        "N = 0.0069\nB = 0.0012\nrate_lsb = 0.0076\n\
+         moving_average = { taps = 8, stages = 3, decimation = 8 }\n\
+         butterworth_filter = { order = 3, cutoff = 20.0 }",
+        12,
+        2400.0,
+    );
+    let named: Vec<EffectParams> = d.effects.iter().map(|e| e.params).collect();
+    let cic = named.iter().any(|p| {
+        matches!(p, EffectParams::MovingAverage { taps, stages: 3, decimation } if taps == decimation)
+    });
+    let butterworth = named.iter().find_map(|p| match *p {
+        EffectParams::ButterworthFilter { cutoff_hz, order } => Some((cutoff_hz, order)),
+        _ => None,
+    });
+    let ok =
+        named.len() == 2 && cic && butterworth.is_some_and(|(f, o)| o == 3 && rel(f, 20.0) < 0.03);
+    assert!(ok, "{named:?}, G {} -> {}", d.gap_before, d.gap_after);
+    assert_eq!(d.verdict, Verdict::Explained);
+}
+
 /// A linear-phase FIR, the STIM300's kind of filter (docs/gap.md, "A linear-phase FIR low-pass
 /// (session 46)"): Hamming-windowed sincs of 47 taps cut at 131 Hz at 1 kHz (20 minutes), of 41
 /// at 100 Hz (off the scan's taps, 20 minutes) and of 31 at 62 Hz at 250 Hz with the rate
@@ -300,6 +329,53 @@ fn a_linear_phase_fir_is_named_with_taps_and_cutoff() {
             seconds,
         );
         assert_named_fir(&d, taps, cutoff, 1);
+    }
+}
+
+/// The selectable-order digital low-pass of consumer MEMS IMUs, an n-th order Butterworth
+/// (scipy's `butter(n, fc)` by the bilinear transform; docs/gap.md, "An n-th order Butterworth
+/// (session 54)"): a gyro at 400 Hz with its rate samples rounded, 20 minutes, behind orders 3,
+/// 4 and 6 cut at 50, 20 and 30 Hz, and an accelerometer at 100 Hz behind a fifth order at 12
+/// Hz. Each is named a Butterworth alone, its order exact and its cut-off within 2%,
+/// `explained`, and N within 3%. Session 53's build had no such kind: a blind review's consumer
+/// MEMS behind third and fourth orders were named a FIR or a second order with a moving
+/// average, and the fourth orders' whole curves stayed `unexplained` (G 4-11).
+#[test]
+fn an_nth_order_butterworth_is_named_with_its_order_and_cutoff() {
+    let gyro = "N = 0.01\nB = 0.0014\nK = 2e-5\nrate_lsb = 0.0153";
+    let accel = "N = 0.0015\nB = 0.0004\nrate_lsb = 0.0006";
+    for (tau0, terms, n_true, order, cutoff) in [
+        (0.0025, gyro, 0.01, 3u32, 50.0),
+        (0.0025, gyro, 0.01, 4, 20.0),
+        (0.0025, gyro, 0.01, 6, 30.0),
+        (0.01, accel, 0.0015, 5, 12.0),
+    ] {
+        let d = unit_diagnosis(
+            tau0,
+            &format!("{terms}\nbutterworth_filter = {{ order = {order}, cutoff = {cutoff} }}"),
+            31,
+            1200.0,
+        );
+        let named: Vec<EffectParams> = d.effects.iter().map(|e| e.params).collect();
+        match named[..] {
+            [EffectParams::ButterworthFilter {
+                cutoff_hz,
+                order: o,
+            }] => {
+                assert_eq!(o, order, "order {order} at {cutoff} Hz: named {o}");
+                assert!(
+                    rel(cutoff_hz, cutoff) < 0.02,
+                    "order {order} at {cutoff} Hz: named {cutoff_hz}"
+                );
+            }
+            _ => panic!(
+                "order {order} at {cutoff} Hz: {named:?}, G {} -> {}",
+                d.gap_before, d.gap_after
+            ),
+        }
+        assert_eq!(d.verdict, Verdict::Explained, "order {order}");
+        let n = d.final_coef[1];
+        assert!(rel(n, n_true) < 0.03, "order {order}: N {n} for {n_true}");
     }
 }
 

@@ -372,6 +372,20 @@ fn fir_read_every_second_sample_on_white_rate() {
     });
 }
 
+/// A fourth-order Butterworth cut at 12 Hz at 100 Hz (a consumer MEMS part's selectable-order
+/// low-pass), simulated as its two biquads one after the other, against the AVAR of its
+/// autocorrelation (src/model/lowpass.rs, `LowPass::Butterworth`), and a fifth order (two
+/// biquads and a first-order section) cut near Nyquist.
+#[test]
+fn butterworth_filter_on_white_rate() {
+    check_ensemble("butterworth4", |_| {
+        channel("N = 0.5\nbutterworth_filter = { order = 4, cutoff = 12.0 }")
+    });
+    check_ensemble("butterworth5", |_| {
+        channel("N = 0.5\nbutterworth_filter = { order = 5, cutoff = 40.0 }")
+    });
+}
+
 #[test]
 fn zero_phase_filter_on_white_rate() {
     check_ensemble("zero_phase", |s| {
@@ -410,6 +424,10 @@ fn filters_start_in_their_stationary_state() {
             "second_order_filter = { natural_frequency = 2.0, damping = 0.3 }",
         ),
         ("zero_phase", "zero_phase_filter = { time_constant = 0.05 }"),
+        (
+            "butterworth",
+            "butterworth_filter = { order = 4, cutoff = 3.0 }",
+        ),
     ] {
         let m = model(&channel(&format!("N = 0.5\nbias = 9.8\n{filter}")));
         let base = fnv1a(name.as_bytes()) % 1_000_000;

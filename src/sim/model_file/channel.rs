@@ -288,9 +288,11 @@ fn whole(table: &str, key: &str, v: f64, errs: &mut Collector) -> u32 {
 }
 
 /// The keys `moving_average = {taps, stages}`, `second_order_filter = {natural_frequency,
-/// damping}` and `zero_phase_filter = {time_constant}`: one filter per channel (`output_filter`
-/// included), or a moving average with an `output_filter` or a `second_order_filter` behind it
-/// (a [`LowPass::Cascade`], which then holds the output filter: `output_filter` is taken).
+/// damping}`, `zero_phase_filter = {time_constant}`, `fir_filter = {taps, cutoff}` and
+/// `butterworth_filter = {order, cutoff}`: one filter per channel (`output_filter` included), or
+/// a moving average with an `output_filter`, a `second_order_filter` or a `butterworth_filter`
+/// behind it (a [`LowPass::Cascade`], which then holds the output filter: `output_filter` is
+/// taken).
 fn parse_lowpass(
     k: &mut Keys<'_>,
     tau0_s: f64,
@@ -397,6 +399,19 @@ fn parse_lowpass(
         };
         found.push((p, lp));
     }
+    if let Some((p, tt)) = k.table("butterworth_filter", errs) {
+        let mut e = Keys::new(tt, &p);
+        let o = e.num_pos("order", true, errs);
+        let order = e.required("order", o, errs);
+        let c = e.num_pos("cutoff", true, errs);
+        let cutoff_hz = e.required("cutoff", c, errs);
+        e.finish(errs);
+        let lp = LowPass::Butterworth {
+            order: whole(&p, "order", order, errs),
+            cutoff_hz,
+        };
+        found.push((p, lp));
+    }
     let behind = output_filter.map(|f| LowPass::FirstOrder {
         time_constant_s: f.time_constant_s,
     });
@@ -407,15 +422,21 @@ fn parse_lowpass(
         let fits = match out {
             None => behind.is_none() || average(Some(lp)),
             Some(_) => {
-                behind.is_none() && average(out) && matches!(lp, LowPass::SecondOrder { .. })
+                behind.is_none()
+                    && average(out)
+                    && matches!(
+                        lp,
+                        LowPass::SecondOrder { .. } | LowPass::Butterworth { .. }
+                    )
             }
         };
         if !fits {
             errs.bad(
                 p,
                 "one filter per channel (output_filter, moving_average, second_order_filter, \
-                 zero_phase_filter and fir_filter exclude each other), or a moving_average with \
-                 one output_filter or second_order_filter behind it",
+                 zero_phase_filter, fir_filter and butterworth_filter exclude each other), or a \
+                 moving_average with one output_filter, second_order_filter or \
+                 butterworth_filter behind it",
             );
             continue;
         }
@@ -427,7 +448,9 @@ fn parse_lowpass(
                 ..
             } => natural_frequency_hz.is_finite() && damping.is_finite(),
             LowPass::ZeroPhase { time_constant_s } => time_constant_s.is_finite(),
-            LowPass::Fir { cutoff_hz, .. } => cutoff_hz.is_finite(),
+            LowPass::Fir { cutoff_hz, .. } | LowPass::Butterworth { cutoff_hz, .. } => {
+                cutoff_hz.is_finite()
+            }
             _ => true,
         };
         if judged {
