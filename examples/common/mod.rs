@@ -183,9 +183,13 @@ pub fn effect_toml(effect: Option<EffectParams>) -> String {
         }) => format!(
             "fir_filter = {{ taps = {taps}, cutoff = {cutoff_hz:e}, decimation = {decimation} }}\n"
         ),
-        Some(EffectParams::ButterworthFilter { cutoff_hz, order }) => {
-            format!("butterworth_filter = {{ order = {order}, cutoff = {cutoff_hz:e} }}\n")
-        }
+        Some(EffectParams::ButterworthFilter {
+            cutoff_hz,
+            decimation,
+            order,
+        }) => format!(
+            "butterworth_filter = {{ order = {order}, cutoff = {cutoff_hz:e}, decimation = {decimation} }}\n"
+        ),
         Some(EffectParams::BandNoise {
             frequency_hz,
             sigma,
@@ -388,6 +392,7 @@ pub fn draw_effect_params(
         },
         // orders 3-6, the cut-off log-uniform from 0.02 to 0.3 of the output rate
         EffectKind::ButterworthFilter => EffectParams::ButterworthFilter {
+            decimation: 1,
             order: rng.random_range(3..=6u32),
             cutoff_hz: log_uniform(rng, 0.02 / tau0, 0.3 / tau0),
         },

@@ -77,9 +77,17 @@ impl FilterKey {
             LowPass::ZeroPhase { time_constant_s } => {
                 FilterKey(3, time_constant_s.to_bits(), 0, 0, 0)
             }
-            LowPass::Butterworth { order, cutoff_hz } => {
-                FilterKey(7, u64::from(order), cutoff_hz.to_bits(), 0, 0)
-            }
+            LowPass::Butterworth {
+                order,
+                cutoff_hz,
+                decimation,
+            } => FilterKey(
+                7,
+                u64::from(order),
+                cutoff_hz.to_bits(),
+                u64::from(decimation),
+                0,
+            ),
             LowPass::Fir {
                 taps,
                 cutoff_hz,

@@ -2095,6 +2095,10 @@ fn complete_cascade(
     // name). A first order stays one: as a second order it turned into a resonance that took
     // the line beside it, with a one-tap average in front (tests/gap/line_behind_filter.rs).
     let refit_named = |spec: &ModelSpec| -> Option<(EffectParams, GlsFit)> {
+        // (a Butterworth in its order, its cut-off about the named one)
+        if named_kind == EffectKind::ButterworthFilter {
+            return super::filter_scan::scan_in_form(prob, spec, &effects[i].params);
+        }
         if named_kind != EffectKind::SecondOrderFilter {
             return prob.scan_params(spec, named_kind);
         }

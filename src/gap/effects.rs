@@ -212,10 +212,13 @@ pub enum EffectParams {
         decimation: u32,
         taps: u32,
     },
-    /// [`LowPass::Butterworth`]: the cut-off (Hz, half power) and the order.
+    /// [`LowPass::Butterworth`]: the cut-off (Hz, half power), the decimation (written only
+    /// above 1) and the order.
     ButterworthFilter {
         #[serde(rename = "cutoff", deserialize_with = "nullable_f64")]
         cutoff_hz: f64,
+        #[serde(default = "one", skip_serializing_if = "is_one")]
+        decimation: u32,
         order: u32,
     },
     /// Narrow-band noise: centre (Hz), rms (u/s), full width at half power (Hz).
@@ -341,9 +344,15 @@ impl EffectParams {
                 cutoff_hz,
                 decimation,
             }),
-            EffectParams::ButterworthFilter { cutoff_hz, order } => {
-                Some(LowPass::Butterworth { order, cutoff_hz })
-            }
+            EffectParams::ButterworthFilter {
+                cutoff_hz,
+                decimation,
+                order,
+            } => Some(LowPass::Butterworth {
+                order,
+                cutoff_hz,
+                decimation,
+            }),
             _ => None,
         }
     }
@@ -390,9 +399,15 @@ impl EffectParams {
                 decimation,
                 taps,
             },
-            LowPass::Butterworth { order, cutoff_hz } => {
-                EffectParams::ButterworthFilter { cutoff_hz, order }
-            }
+            LowPass::Butterworth {
+                order,
+                cutoff_hz,
+                decimation,
+            } => EffectParams::ButterworthFilter {
+                cutoff_hz,
+                decimation,
+                order,
+            },
         }
     }
 
@@ -542,8 +557,17 @@ impl EffectParams {
                 v.push(("taps", f64::from(taps)));
                 v
             }
-            EffectParams::ButterworthFilter { cutoff_hz, order } => {
-                vec![("cutoff", cutoff_hz), ("order", f64::from(order))]
+            EffectParams::ButterworthFilter {
+                cutoff_hz,
+                decimation,
+                order,
+            } => {
+                let mut v = vec![("cutoff", cutoff_hz)];
+                if decimation > 1 {
+                    v.push(("decimation", f64::from(decimation)));
+                }
+                v.push(("order", f64::from(order)));
+                v
             }
         }
     }
@@ -661,6 +685,7 @@ pub fn canonical_lowpass(kind: EffectKind, shape: f64) -> LowPass {
         EffectKind::ButterworthFilter => LowPass::Butterworth {
             order: 4,
             cutoff_hz: shape,
+            decimation: 1,
         },
         _ => LowPass::FirstOrder {
             time_constant_s: shape,

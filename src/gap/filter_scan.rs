@@ -128,10 +128,32 @@ pub const BUTTERWORTH_TOP: f64 = 0.45;
 pub const BUTTERWORTH_ORDERS: std::ops::RangeInclusive<u32> =
     3..=crate::model::lowpass::MAX_BUTTERWORTH_ORDER;
 
+/// The decimations of a Butterworth run faster than the output that are tried
+/// ([`scan_butterworth`]): a part filtering at its internal rate, 2 to 32 times the output's.
+/// At the output rate the shapes of neighbouring decimations differ little (as a CIC's tend to
+/// a B-spline's), so a factor of four between them serves: a 16x third order is named at 8x
+/// or 32x with its cut-off within 0.3%.
+pub const BUTTERWORTH_DECIMATIONS: [u32; 3] = [2, 8, 32];
+
+/// Grid steps each side of the output-rate cut-off scanned at each decimation.
+const BUTTERWORTH_AROUND: i32 = 3;
+
+/// The gap of the model with the output-rate Butterworth above which the decimated forms are
+/// tried ([`scan_butterworth`]): the critical gap beside a filter (`gap_crit_filtered`'s
+/// default). The first pass's covariance, the base model's, leaves nearly every filtered run's
+/// model flagged; the gate spares the later passes, where the output-rate form leaves the gap
+/// near 1 on the seventeenth review's output-rate files.
+pub const BUTTERWORTH_DECIMATION_GATE: f64 = 2.2;
+
 /// The n-th order Butterworth ([`LowPass::Butterworth`]): for each order of
-/// [`BUTTERWORTH_ORDERS`] its cut-off over the grid, then a golden section in `ln f_c` within
-/// a grid step of the best; the order with the least chi-squared is taken (docs/gap.md, "An
-/// n-th order Butterworth (session 54)").
+/// [`BUTTERWORTH_ORDERS`] its cut-off over the grid at the output rate, then a golden section in
+/// `ln f_c` within a grid step of the best; the order with the least chi-squared is taken.
+/// Where that leaves the model's gap above [`BUTTERWORTH_DECIMATION_GATE`], the same order is
+/// tried run at each of [`BUTTERWORTH_DECIMATIONS`] times the output rate and read every so many
+/// samples, its cut-off scanned within [`BUTTERWORTH_AROUND`] grid steps of the output rate's
+/// and polished the same way; the best decimation is taken where it lowers the chi-squared by
+/// more than [`SPAN_PARAMETER_CHI2`] (one more discrete choice), as the FIR's half-band
+/// decimator is (docs/gap.md, "An n-th order Butterworth (session 54)").
 fn scan_butterworth(
     prob: &GapProblem,
     fit: &dyn Fn(LowPass) -> Option<GlsFit>,
@@ -140,36 +162,102 @@ fn scan_butterworth(
     if cutoffs.len() < 2 {
         return None;
     }
-    let top = BUTTERWORTH_TOP / prob.tau0_s;
-    let at = |order: u32, lc: f64| LowPass::Butterworth {
-        order,
-        cutoff_hz: lc.exp().min(top),
-    };
     let dc = (cutoffs[1] / cutoffs[0]).ln();
-    let chi2 = |order: u32, lc: f64| fit(at(order, lc)).map_or(f64::INFINITY, |f| f.chi2);
-    let mut best: Option<(u32, f64, f64)> = None;
-    for order in BUTTERWORTH_ORDERS {
-        let (mut lc, mut v) = (cutoffs[0].ln(), f64::INFINITY);
-        for &c in &cutoffs {
-            let here = chi2(order, c.ln());
+    let at = |order: u32, decimation: u32, lc: f64| LowPass::Butterworth {
+        order,
+        cutoff_hz: lc
+            .exp()
+            .min(BUTTERWORTH_TOP * f64::from(decimation) / prob.tau0_s),
+        decimation,
+    };
+    let chi2 = |lp: LowPass| fit(lp).map_or(f64::INFINITY, |f| f.chi2);
+    // the best log cut-off over `grid` (logs) for `order` at `decimation`, polished
+    let best_cutoff = |order: u32, decimation: u32, grid: &[f64]| -> Option<(f64, f64)> {
+        let (mut lc, mut v) = (f64::NAN, f64::INFINITY);
+        for &x in grid {
+            let here = chi2(at(order, decimation, x));
             if here < v {
-                (lc, v) = (c.ln(), here);
+                (lc, v) = (x, here);
             }
         }
         if !v.is_finite() {
-            continue;
+            return None;
         }
-        let x = golden(|x| fit(at(order, x)), lc - dc, lc + dc);
-        let vx = chi2(order, x);
-        if vx < v {
-            (lc, v) = (x, vx);
-        }
-        if best.is_none_or(|(_, _, b)| v < b) {
-            best = Some((order, lc, v));
+        let x = golden(|x| fit(at(order, decimation, x)), lc - dc, lc + dc);
+        let vx = chi2(at(order, decimation, x));
+        Some(if vx < v { (x, vx) } else { (lc, v) })
+    };
+    let logs: Vec<f64> = cutoffs.iter().map(|c| c.ln()).collect();
+    let mut best: Option<(u32, f64, f64)> = None;
+    for order in BUTTERWORTH_ORDERS {
+        if let Some((lc, v)) = best_cutoff(order, 1, &logs) {
+            if best.is_none_or(|(_, _, b)| v < b) {
+                best = Some((order, lc, v));
+            }
         }
     }
-    let (order, lc, _) = best?;
-    let lp = at(order, lc);
+    let (order, lc, v) = best?;
+    let mut chosen = (1u32, lc, v);
+    // the decimated forms only where the output-rate form leaves the model flagged
+    let flagged = fit(at(order, 1, lc)).is_some_and(|f| f.gap() > BUTTERWORTH_DECIMATION_GATE);
+    let decimations = if flagged {
+        &BUTTERWORTH_DECIMATIONS[..]
+    } else {
+        &[]
+    };
+    for &d in decimations {
+        let around: Vec<f64> = (-BUTTERWORTH_AROUND..=BUTTERWORTH_AROUND)
+            .map(|i| lc + f64::from(i) * dc)
+            .collect();
+        if let Some((x, vx)) = best_cutoff(order, d, &around) {
+            if vx < chosen.2 {
+                chosen = (d, x, vx);
+            }
+        }
+    }
+    if chosen.0 > 1 && chosen.2 + SPAN_PARAMETER_CHI2 >= v {
+        chosen = (1, lc, v);
+    }
+    let lp = at(order, chosen.0, chosen.1);
+    fit(lp).map(|f| (lp, f))
+}
+
+/// The Butterworth of `order` and `decimation` with its cut-off scanned within
+/// [`BUTTERWORTH_AROUND`] grid steps of `cutoff_hz` and polished by a golden section in
+/// `ln f_c` ([`scan_in_form`]: a cascade's named back refitted behind each front tried, a tenth
+/// of [`scan_butterworth`]'s work).
+fn scan_butterworth_about(
+    prob: &GapProblem,
+    fit: &dyn Fn(LowPass) -> Option<GlsFit>,
+    order: u32,
+    decimation: u32,
+    cutoff_hz: f64,
+) -> Option<(LowPass, GlsFit)> {
+    let g = prob.grid(EffectKind::ButterworthFilter);
+    let dc = std::f64::consts::LN_10 / g.per_decade;
+    let top = BUTTERWORTH_TOP * f64::from(decimation) / prob.tau0_s;
+    let at = |lc: f64| LowPass::Butterworth {
+        order,
+        cutoff_hz: lc.exp().min(top),
+        decimation,
+    };
+    let chi2 = |lc: f64| fit(at(lc)).map_or(f64::INFINITY, |f| f.chi2);
+    let (mut lc, mut v) = (f64::NAN, f64::INFINITY);
+    for i in -BUTTERWORTH_AROUND..=BUTTERWORTH_AROUND {
+        let x = cutoff_hz.ln() + f64::from(i) * dc;
+        let here = chi2(x);
+        if here < v {
+            (lc, v) = (x, here);
+        }
+    }
+    if !v.is_finite() {
+        return None;
+    }
+    let x = golden(|x| fit(at(x)), lc - dc, lc + dc);
+    if chi2(x) < v {
+        lc = x;
+    }
+    let lp = at(lc);
     fit(lp).map(|f| (lp, f))
 }
 
@@ -312,6 +400,17 @@ pub fn scan_in_form(
     base: &ModelSpec,
     p: &EffectParams,
 ) -> Option<(EffectParams, GlsFit)> {
+    if let Some(LowPass::Butterworth {
+        order,
+        cutoff_hz,
+        decimation,
+    }) = p.lowpass()
+    {
+        // its order and decimation kept, its cut-off scanned about the named one
+        let fit = |lp: LowPass| fit_with(prob, base, lp);
+        let best = scan_butterworth_about(prob, &fit, order, decimation, cutoff_hz)?;
+        return Some((EffectParams::from_lowpass(best.0), best.1));
+    }
     let Some(LowPass::SecondOrder { form, .. }) = p.lowpass() else {
         return prob.scan_params(base, p.kind());
     };

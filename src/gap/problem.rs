@@ -568,9 +568,15 @@ impl GapProblem {
                 cutoff_hz: (cutoff_hz / g).min(super::filter_scan::fir_top_hz(decimation, tau0_s)),
                 decimation,
             },
-            LowPass::Butterworth { order, cutoff_hz } => LowPass::Butterworth {
+            LowPass::Butterworth {
                 order,
-                cutoff_hz: (cutoff_hz / g).min(super::filter_scan::BUTTERWORTH_TOP / tau0_s),
+                cutoff_hz,
+                decimation,
+            } => LowPass::Butterworth {
+                order,
+                cutoff_hz: (cutoff_hz / g)
+                    .min(super::filter_scan::BUTTERWORTH_TOP * f64::from(decimation) / tau0_s),
+                decimation,
             },
             LowPass::FirstOrder { time_constant_s } => LowPass::FirstOrder {
                 time_constant_s: time_constant_s * g,

@@ -613,6 +613,7 @@ mod tests {
             },
             EffectParams::ButterworthFilter {
                 cutoff_hz: 21.5,
+                decimation: 1,
                 order: 4,
             },
             EffectParams::BandNoise {

@@ -74,8 +74,14 @@ pub enum LowPass {
     /// and for an odd order a first-order section. The selectable-order digital low-pass of
     /// consumer MEMS IMUs (the "UI filter" of orders 1 to 3 and beyond); order 2 is
     /// [`LowPass::SecondOrder`]'s bilinear form at damping `1/sqrt 2` (docs/gap.md, "An n-th
-    /// order Butterworth (session 54)").
-    Butterworth { order: u32, cutoff_hz: f64 },
+    /// order Butterworth (session 54)"). With `decimation` above 1 it runs at `decimation` times
+    /// the output rate and is read every `decimation`-th sample, as parts that filter at their
+    /// internal rate deliver ([`butterworth_internal_autocovariance`]).
+    Butterworth {
+        order: u32,
+        cutoff_hz: f64,
+        decimation: u32,
+    },
 }
 
 /// One section of a recursive filter on the increments, DC gain 1:
@@ -188,6 +194,48 @@ impl Biquad {
     }
 }
 
+/// `sum_i h_i h_{i + D j}`, `j = 0, 1, ...`, of [`LowPass::Butterworth`] run at `D` times the
+/// output rate (step `tau0_s / D`, DC gain 1): the autocovariance of its output read every
+/// `D`-th sample for unit-variance white input at the internal rate. The impulse response is
+/// run through the sections until every section's slower pole has decayed below [`TAIL`], and
+/// its autocorrelation is taken by the FFT (`|H_k|^2` transformed back, the record zero-padded
+/// to twice its length so that no lag wraps; Wiener-Khinchin), the internal lags being `D` times
+/// the output's.
+pub fn butterworth_internal_autocovariance(
+    order: u32,
+    cutoff_hz: f64,
+    tau0_s: f64,
+    decimation: u32,
+) -> Vec<f64> {
+    use rustfft::{num_complex::Complex64 as C, FftPlanner};
+    let d = decimation.max(1) as usize;
+    let sections = butterworth_sections(order, cutoff_hz, tau0_s / d as f64);
+    let len = sections
+        .iter()
+        .map(|q| lags_for(slow_pole(q.a1, q.a2)))
+        .sum::<usize>()
+        .clamp(2, MAX_LAGS);
+    let mut h = vec![0.0; len];
+    h[0] = 1.0;
+    for q in &sections {
+        let g = 1.0 - q.a1 - q.a2;
+        let (mut x1, mut x2, mut y1, mut y2) = (0.0, 0.0, 0.0, 0.0);
+        for v in h.iter_mut() {
+            let y = q.a1 * y1 + q.a2 * y2 + g * (q.b[0] * *v + q.b[1] * x1 + q.b[2] * x2);
+            (x2, x1, y2, y1) = (x1, *v, y1, y);
+            *v = y;
+        }
+    }
+    let n = (2 * len).next_power_of_two();
+    let mut buf: Vec<C> = h.iter().map(|&v| C::new(v, 0.0)).collect();
+    buf.resize(n, C::new(0.0, 0.0));
+    let mut planner = FftPlanner::new();
+    planner.plan_fft_forward(n).process(&mut buf);
+    buf.iter_mut().for_each(|c| *c = C::new(c.norm_sqr(), 0.0));
+    planner.plan_fft_inverse(n).process(&mut buf);
+    (0..len).step_by(d).map(|k| buf[k].re / n as f64).collect()
+}
+
 /// Highest order of [`LowPass::Butterworth`] accepted.
 pub const MAX_BUTTERWORTH_ORDER: u32 = 8;
 
@@ -267,7 +315,11 @@ impl Behind {
                 damping,
                 form,
             },
-            Behind::Butterworth { order, cutoff_hz } => LowPass::Butterworth { order, cutoff_hz },
+            Behind::Butterworth { order, cutoff_hz } => LowPass::Butterworth {
+                order,
+                cutoff_hz,
+                decimation: 1,
+            },
         }
     }
 }
@@ -365,9 +417,12 @@ impl LowPass {
                 damping,
                 form,
             }),
-            LowPass::Butterworth { order, cutoff_hz } => {
-                Some(Behind::Butterworth { order, cutoff_hz })
-            }
+            // (at the output rate only: the back of a cascade runs at the output rate)
+            LowPass::Butterworth {
+                order,
+                cutoff_hz,
+                decimation: 1,
+            } => Some(Behind::Butterworth { order, cutoff_hz }),
             _ => None,
         }
     }
@@ -442,13 +497,22 @@ impl LowPass {
                 .lowpass()
                 .check(tau0_s)
                 .or_else(|| back.lowpass().check(tau0_s)),
-            LowPass::Butterworth { order, cutoff_hz } => {
+            LowPass::Butterworth {
+                order,
+                cutoff_hz,
+                decimation,
+            } => {
+                let nyquist = 0.49 * f64::from(decimation) / tau0_s;
                 if !(1..=MAX_BUTTERWORTH_ORDER).contains(&order) {
                     Some(format!("order {order} must be 1..={MAX_BUTTERWORTH_ORDER}"))
-                } else if !(cutoff_hz > 0.0 && cutoff_hz * tau0_s < 0.49) {
+                } else if !(1..=MAX_DECIMATION).contains(&decimation) {
                     Some(format!(
-                        "cutoff {cutoff_hz} Hz must be above 0 and below Nyquist \
-                         (f tau0 must be < 0.49)"
+                        "decimation {decimation} must be 1..={MAX_DECIMATION}"
+                    ))
+                } else if !(cutoff_hz > 0.0 && cutoff_hz < nyquist) {
+                    Some(format!(
+                        "cutoff {cutoff_hz} Hz must be above 0 and below 0.49 of the rate it \
+                         runs at ({nyquist} Hz)"
                     ))
                 } else {
                     None
@@ -610,6 +674,14 @@ impl LowPass {
                 let r = self.internal_autocovariance(tau0_s);
                 1.0 / two_sided_sum(&r).sqrt()
             }
+            LowPass::Butterworth {
+                order,
+                cutoff_hz,
+                decimation,
+            } if decimation > 1 => {
+                let r = butterworth_internal_autocovariance(order, cutoff_hz, tau0_s, decimation);
+                1.0 / two_sided_sum(&r).sqrt()
+            }
             LowPass::Cascade { front, .. } => front.lowpass().internal_white_scale(tau0_s),
             _ => 1.0,
         }
@@ -656,13 +728,23 @@ impl LowPass {
                 let b = self.numerator().unwrap_or([1.0, 0.0, 0.0]);
                 Biquad { a1, a2, b }.autocorrelation()
             }
-            // the sections' autocorrelations convolved (a cascade's)
-            LowPass::Butterworth { order, cutoff_hz } => {
-                butterworth_sections(order, cutoff_hz, tau0_s)
-                    .iter()
-                    .map(Biquad::autocorrelation)
-                    .reduce(|acc, r| convolve_even(&acc, &r))
-                    .unwrap_or_else(|| vec![1.0])
+            // the sections' autocorrelations convolved (a cascade's); run faster than the output,
+            // read every D-th lag and scaled to a two-sided total of 1, as the FIR's
+            LowPass::Butterworth {
+                order,
+                cutoff_hz,
+                decimation,
+            } => {
+                if decimation <= 1 {
+                    return butterworth_sections(order, cutoff_hz, tau0_s)
+                        .iter()
+                        .map(Biquad::autocorrelation)
+                        .reduce(|acc, r| convolve_even(&acc, &r))
+                        .unwrap_or_else(|| vec![1.0]);
+                }
+                let r = butterworth_internal_autocovariance(order, cutoff_hz, tau0_s, decimation);
+                let total = two_sided_sum(&r);
+                r.iter().map(|v| v / total).collect()
             }
         }
     }
@@ -779,15 +861,23 @@ impl LowPass {
                 let b = self.numerator().unwrap_or([1.0, 0.0, 0.0]);
                 Biquad { a1, a2, b }.power_gain(w)
             }
-            // the closed form of the bilinear Butterworth (its sections' product)
-            LowPass::Butterworth { order, cutoff_hz } => {
-                let k = (PI * cutoff_hz * tau0_s).tan();
-                let x = (w / 2.0).tan() / k;
-                if x.is_finite() {
-                    1.0 / (1.0 + x.abs().powi(2 * order.max(1) as i32))
-                } else {
-                    0.0
-                }
+            // the closed form of the bilinear Butterworth (its sections' product) at the rate it
+            // runs at, its images folded as the average's
+            LowPass::Butterworth {
+                order,
+                cutoff_hz,
+                decimation,
+            } => {
+                let d = decimation.max(1);
+                let k = (PI * cutoff_hz * tau0_s / f64::from(d)).tan();
+                folded_gain(d as usize, w, |x| {
+                    let r = (x / 2.0).tan() / k;
+                    if r.is_finite() {
+                        1.0 / (1.0 + r.abs().powi(2 * order.max(1) as i32))
+                    } else {
+                        0.0
+                    }
+                })
             }
         }
     }
@@ -805,13 +895,18 @@ impl LowPass {
             LowPass::Fir {
                 taps, decimation, ..
             } => f64::from(taps) * tau0_s / f64::from(decimation.max(1)),
-            // the sections' slower poles' time constants, one after the other
-            LowPass::Butterworth { order, cutoff_hz } => {
-                tau0_s
-                    * butterworth_sections(order, cutoff_hz, tau0_s)
-                        .iter()
-                        .map(Biquad::memory_steps)
-                        .sum::<f64>()
+            // the sections' slower poles' time constants, one after the other, at the rate it
+            // runs at
+            LowPass::Butterworth {
+                order,
+                cutoff_hz,
+                decimation,
+            } => {
+                let step = tau0_s / f64::from(decimation.max(1));
+                step * butterworth_sections(order, cutoff_hz, step)
+                    .iter()
+                    .map(Biquad::memory_steps)
+                    .sum::<f64>()
             }
             // the back's memory of the front's output
             LowPass::Cascade { front, back } => {
@@ -1885,6 +1980,7 @@ mod tests {
             let lp = LowPass::Butterworth {
                 order,
                 cutoff_hz: fc,
+                decimation: 1,
             };
             assert_eq!(lp.check(tau0), None);
             // the impulse response through the sections
@@ -1941,6 +2037,7 @@ mod tests {
         let two = LowPass::Butterworth {
             order: 2,
             cutoff_hz: 20.0,
+            decimation: 1,
         };
         let so = LowPass::SecondOrder {
             natural_frequency_hz: 20.0,
@@ -1952,15 +2049,103 @@ mod tests {
         assert!(a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-15));
         assert!(LowPass::Butterworth {
             order: 9,
-            cutoff_hz: 20.0
+            cutoff_hz: 20.0,
+            decimation: 1,
         }
         .check(0.005)
         .is_some());
         assert!(LowPass::Butterworth {
             order: 4,
-            cutoff_hz: 100.0
+            cutoff_hz: 100.0,
+            decimation: 1,
         }
         .check(0.005)
         .is_some());
+    }
+
+    /// A Butterworth run `D` times faster than the output and read every `D`-th sample: its
+    /// output autocorrelation is the internal impulse response's `sum_i h_i h_{i + D j}`, the
+    /// impulse response here run sample by sample through the sections (not by the FFT of
+    /// [`butterworth_internal_autocovariance`]), scaled to a two-sided total of 1; its power
+    /// gain is that autocorrelation's transform (Wiener-Khinchin), and at `D = 1` it is the
+    /// output-rate filter's.
+    #[test]
+    fn a_butterworth_read_every_so_many_samples_is_its_polyphase_sum() {
+        let tau0 = 0.01;
+        for (order, fc, d) in [(4u32, 20.0, 16u32), (3, 45.0, 4), (5, 8.0, 2)] {
+            let lp = LowPass::Butterworth {
+                order,
+                cutoff_hz: fc,
+                decimation: d,
+            };
+            assert_eq!(lp.check(tau0), None);
+            let step = tau0 / f64::from(d);
+            let mut h: Vec<f64> = (0..60_000)
+                .map(|i| if i == 0 { 1.0 } else { 0.0 })
+                .collect();
+            for q in butterworth_sections(order, fc, step) {
+                let g = 1.0 - q.a1 - q.a2;
+                let (mut x1, mut x2, mut y1, mut y2) = (0.0, 0.0, 0.0, 0.0);
+                for v in h.iter_mut() {
+                    let y = q.a1 * y1 + q.a2 * y2 + g * (q.b[0] * *v + q.b[1] * x1 + q.b[2] * x2);
+                    (x2, x1, y2, y1) = (x1, *v, y1, y);
+                    *v = y;
+                }
+            }
+            let d = d as usize;
+            let raw: Vec<f64> = (0..rho_len(&lp, tau0).min(40))
+                .map(|j| h.iter().zip(&h[d * j..]).map(|(a, b)| a * b).sum())
+                .collect();
+            let rho = lp.autocorrelation(tau0);
+            let total = two_sided_sum(&rho);
+            assert!((total - 1.0).abs() < 1e-12, "{lp:?}: total {total}");
+            // the scale: the internal total read every D-th lag
+            let full = two_sided_sum(&butterworth_internal_autocovariance(
+                order, fc, tau0, d as u32,
+            ));
+            for (j, w) in raw.iter().enumerate() {
+                assert!(
+                    (rho[j] - w / full).abs() < 1e-12,
+                    "{lp:?} lag {j}: {} vs {}",
+                    rho[j],
+                    w / full
+                );
+            }
+            for f in [0.0, 3.0, 12.0, 30.0, 49.0] {
+                let w = 2.0 * PI * f * tau0;
+                let s = rho[0]
+                    + 2.0
+                        * rho[1..]
+                            .iter()
+                            .enumerate()
+                            .map(|(k, r)| r * (w * (k + 1) as f64).cos())
+                            .sum::<f64>();
+                let g = lp.power_gain(tau0, f);
+                assert!(
+                    (g - s).abs() < 1e-9 * s.abs().max(1e-3),
+                    "{lp:?} {f} Hz: {g} vs {s}"
+                );
+            }
+            assert!((lp.internal_white_scale(tau0) - 1.0 / full.sqrt()).abs() < 1e-12);
+        }
+        fn rho_len(lp: &LowPass, tau0: f64) -> usize {
+            lp.autocorrelation(tau0).len()
+        }
+        // at D = 1 the FFT's autocovariance is the sections' convolved
+        let one = LowPass::Butterworth {
+            order: 4,
+            cutoff_hz: 20.0,
+            decimation: 1,
+        };
+        let fft = butterworth_internal_autocovariance(4, 20.0, 0.01, 1);
+        let conv = one.autocorrelation(0.01);
+        for k in 0..50 {
+            assert!(
+                (fft[k] - conv[k]).abs() < 1e-14,
+                "lag {k}: {} vs {}",
+                fft[k],
+                conv[k]
+            );
+        }
     }
 }

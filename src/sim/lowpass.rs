@@ -77,8 +77,14 @@ pub enum LowPassGen {
     },
     /// Second-order sections one after the other at the output rate, each a
     /// [`LowPassGen::SecondOrder`] ([`LowPass::Butterworth`]'s
-    /// [`butterworth_sections`](crate::model::lowpass::butterworth_sections)).
-    Sections(Vec<LowPassGen>),
+    /// [`butterworth_sections`](crate::model::lowpass::butterworth_sections)). With
+    /// `decimation` above 1 they run at the internal rate, as the decimated FIR does.
+    Sections {
+        parts: Vec<LowPassGen>,
+        decimation: usize,
+        /// [`LowPass::internal_white_scale`].
+        white_scale: f64,
+    },
 }
 
 impl LowPassGen {
@@ -87,22 +93,32 @@ impl LowPassGen {
     pub fn new(lp: &LowPass, tau0_s: f64) -> Option<Self> {
         match *lp {
             LowPass::FirstOrder { .. } => None,
-            LowPass::Butterworth { order, cutoff_hz } => Some(LowPassGen::Sections(
-                crate::model::lowpass::butterworth_sections(order, cutoff_hz, tau0_s)
-                    .into_iter()
-                    .map(|q| LowPassGen::SecondOrder {
-                        a1: q.a1,
-                        a2: q.a2,
-                        g: 1.0 - q.a1 - q.a2,
-                        y1: 0.0,
-                        y2: 0.0,
-                        b: q.b,
-                        x1: 0.0,
-                        x2: 0.0,
-                        started: false,
-                    })
-                    .collect(),
-            )),
+            LowPass::Butterworth {
+                order,
+                cutoff_hz,
+                decimation,
+            } => {
+                let d = decimation.max(1);
+                let step = tau0_s / f64::from(d);
+                Some(LowPassGen::Sections {
+                    parts: crate::model::lowpass::butterworth_sections(order, cutoff_hz, step)
+                        .into_iter()
+                        .map(|q| LowPassGen::SecondOrder {
+                            a1: q.a1,
+                            a2: q.a2,
+                            g: 1.0 - q.a1 - q.a2,
+                            y1: 0.0,
+                            y2: 0.0,
+                            b: q.b,
+                            x1: 0.0,
+                            x2: 0.0,
+                            started: false,
+                        })
+                        .collect(),
+                    decimation: d as usize,
+                    white_scale: lp.internal_white_scale(tau0_s),
+                })
+            }
             LowPass::Fir { .. } => {
                 let (h, d) = lp.internal_response(tau0_s)?;
                 Some(LowPassGen::Fir {
@@ -187,9 +203,9 @@ impl LowPassGen {
     /// output is every this-many-th one (1 for all but a decimated moving average).
     pub fn decimation(&self) -> usize {
         match self {
-            LowPassGen::MovingAverage { decimation, .. } | LowPassGen::Fir { decimation, .. } => {
-                *decimation
-            }
+            LowPassGen::MovingAverage { decimation, .. }
+            | LowPassGen::Fir { decimation, .. }
+            | LowPassGen::Sections { decimation, .. } => *decimation,
             LowPassGen::Cascade { front, .. } => front.decimation(),
             _ => 1,
         }
@@ -199,9 +215,9 @@ impl LowPassGen {
     /// ([`LowPass::internal_white_scale`]; 1 but for a decimated moving average).
     pub fn white_scale(&self) -> f64 {
         match self {
-            LowPassGen::MovingAverage { white_scale, .. } | LowPassGen::Fir { white_scale, .. } => {
-                *white_scale
-            }
+            LowPassGen::MovingAverage { white_scale, .. }
+            | LowPassGen::Fir { white_scale, .. }
+            | LowPassGen::Sections { white_scale, .. } => *white_scale,
             LowPassGen::Cascade { front, .. } => front.white_scale(),
             _ => 1.0,
         }
@@ -215,7 +231,7 @@ impl LowPassGen {
             | LowPassGen::ZeroPhase { started, .. }
             | LowPassGen::Fir { started, .. } => *started,
             LowPassGen::Cascade { front, .. } => front.is_started(),
-            LowPassGen::Sections(parts) => parts.iter().all(LowPassGen::is_started),
+            LowPassGen::Sections { parts, .. } => parts.iter().all(LowPassGen::is_started),
         }
     }
 
@@ -233,7 +249,7 @@ impl LowPassGen {
                 let d = front.decimation();
                 (front.memory_steps().div_ceil(d) + back.memory_steps()) * d
             }
-            LowPassGen::Sections(parts) => parts.iter().map(LowPassGen::memory_steps).sum(),
+            LowPassGen::Sections { parts, .. } => parts.iter().map(LowPassGen::memory_steps).sum(),
             LowPassGen::SecondOrder { a1, a2, .. } => {
                 // poles: roots of z^2 - a1 z - a2
                 let r = crate::model::lowpass::slow_pole(*a1, *a2);
@@ -342,7 +358,7 @@ impl LowPassGen {
                 }
             }
             // DC gain 1: every section's input is the level
-            LowPassGen::Sections(parts) => parts.iter_mut().for_each(|q| q.start_at(level)),
+            LowPassGen::Sections { parts, .. } => parts.iter_mut().for_each(|q| q.start_at(level)),
         }
     }
 
@@ -428,7 +444,7 @@ impl LowPassGen {
                 }
                 *last
             }
-            LowPassGen::Sections(parts) => parts.iter_mut().fold(d, |x, q| q.step(x)),
+            LowPassGen::Sections { parts, .. } => parts.iter_mut().fold(d, |x, q| q.step(x)),
         }
     }
 }

@@ -227,11 +227,20 @@ fn write_lowpass(s: &mut String, lp: LowPass) {
         }
         // (written as its parts above)
         LowPass::Cascade { .. } => {}
-        LowPass::Butterworth { order, cutoff_hz } => {
+        LowPass::Butterworth {
+            order,
+            cutoff_hz,
+            decimation,
+        } => {
             let _ = writeln!(
                 s,
-                "[channel.butterworth_filter]\norder = {order}\ncutoff = {}",
-                num(cutoff_hz)
+                "[channel.butterworth_filter]\norder = {order}\ncutoff = {}{}",
+                num(cutoff_hz),
+                if decimation > 1 {
+                    format!("\ndecimation = {decimation}")
+                } else {
+                    String::new()
+                }
             );
         }
         LowPass::Fir {
@@ -515,6 +524,51 @@ temperature_quadratic = 3.0e-5
                 err.contains(key) && err.contains("one filter per channel"),
                 "{pair}: {err}"
             );
+        }
+    }
+
+    /// A Butterworth, at the output rate and run 16 times faster, is written as
+    /// `[channel.butterworth_filter]` and read back the same; a bad order, cut-off or decimation
+    /// is refused naming its key.
+    #[test]
+    fn the_butterworth_round_trips_and_bad_ones_are_refused() {
+        let head = "tau0_s = 0.01\n[[channel]]\nname = \"gx\"\nunit = \"deg\"\nN = 0.01\n";
+        for (extra, want) in [
+            (
+                "order = 4, cutoff = 20.0",
+                LowPass::Butterworth {
+                    order: 4,
+                    cutoff_hz: 20.0,
+                    decimation: 1,
+                },
+            ),
+            (
+                "order = 3, cutoff = 10.0, decimation = 16",
+                LowPass::Butterworth {
+                    order: 3,
+                    cutoff_hz: 10.0,
+                    decimation: 16,
+                },
+            ),
+        ] {
+            let m = read(&format!("{head}butterworth_filter = {{ {extra} }}\n"));
+            assert_eq!(m.channels[0].lowpass, Some(want), "{extra}");
+            let text = model_toml(&m, "t", &[]);
+            assert!(text.contains("[channel.butterworth_filter]"), "{text}");
+            assert_eq!(read(&text), m, "{text}");
+        }
+        for (extra, key) in [
+            ("order = 9, cutoff = 20.0", "butterworth_filter"),
+            ("order = 4, cutoff = 60.0", "butterworth_filter"),
+            ("order = 2.5, cutoff = 20.0", "order"),
+            ("order = 4, cutoff = 20.0, decimation = 0", "decimation"),
+            ("cutoff = 20.0", "order"),
+        ] {
+            let text = format!("{head}butterworth_filter = {{ {extra} }}\n");
+            let err = SimModel::from_toml_str(&text, Path::new("t.toml"))
+                .expect_err(extra)
+                .to_string();
+            assert!(err.contains(key), "{extra}: {err}");
         }
     }
 

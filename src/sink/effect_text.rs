@@ -219,14 +219,20 @@ pub fn effect_parts(
             number(c)
         );
     }
-    // The average or FIR run faster than the output (`decimation`): said in its name, with the
-    // CIC decimator named when an average's taps are the decimation.
-    let decimation =
-        param("decimation").filter(|&d| matches!(kind, "moving_average" | "fir_filter") && d > 1.0);
+    // The average, FIR or Butterworth run faster than the output (`decimation`): said in its
+    // name, with the CIC decimator named when an average's taps are the decimation.
+    let decimation = param("decimation").filter(|&d| {
+        matches!(kind, "moving_average" | "fir_filter" | "butterworth_filter") && d > 1.0
+    });
     if let Some(d) = decimation {
         name += &format!(
-            " run at {d:.0} times the output rate and read every {} sample, taps counted there",
-            crate::input::sampling_step::ordinal(d as usize)
+            " run at {d:.0} times the output rate and read every {} sample{}",
+            crate::input::sampling_step::ordinal(d as usize),
+            if kind == "butterworth_filter" {
+                ""
+            } else {
+                ", taps counted there"
+            }
         );
         if let (Some(t), Some(st)) = (param("taps"), param("stages")) {
             if t == d && st >= 2.0 {
@@ -472,11 +478,23 @@ mod tests {
     fn a_butterworth_is_named_with_its_order_and_cutoff() {
         let e = RecordedEffect::Known(EffectParams::ButterworthFilter {
             cutoff_hz: 25.0,
+            decimation: 1,
             order: 4,
         });
         assert_eq!(
             effect_line(&e, "deg", &|v| format!("{v}")),
             "output Butterworth low-pass: order = 4, cut-off (half power) = 25 Hz (period 0.04 s)"
+        );
+        // run at 16 times the output rate
+        let e = RecordedEffect::Known(EffectParams::ButterworthFilter {
+            cutoff_hz: 25.0,
+            decimation: 16,
+            order: 3,
+        });
+        assert_eq!(
+            effect_line(&e, "deg", &|v| format!("{v}")),
+            "output Butterworth low-pass run at 16 times the output rate and read every 16th \
+             sample: order = 3, cut-off (half power) = 25 Hz (period 0.04 s), decimation = 16"
         );
     }
 }

@@ -294,7 +294,11 @@ fn an_nth_order_butterworth_behind_a_decimator_is_named_as_both() {
         matches!(p, EffectParams::MovingAverage { taps, stages: 3, decimation } if taps == decimation)
     });
     let butterworth = named.iter().find_map(|p| match *p {
-        EffectParams::ButterworthFilter { cutoff_hz, order } => Some((cutoff_hz, order)),
+        EffectParams::ButterworthFilter {
+            cutoff_hz,
+            order,
+            decimation: 1,
+        } => Some((cutoff_hz, order)),
         _ => None,
     });
     let ok =
@@ -361,6 +365,7 @@ fn an_nth_order_butterworth_is_named_with_its_order_and_cutoff() {
             [EffectParams::ButterworthFilter {
                 cutoff_hz,
                 order: o,
+                decimation: 1,
             }] => {
                 assert_eq!(o, order, "order {order} at {cutoff} Hz: named {o}");
                 assert!(
@@ -377,6 +382,36 @@ fn an_nth_order_butterworth_is_named_with_its_order_and_cutoff() {
         let n = d.final_coef[1];
         assert!(rel(n, n_true) < 0.03, "order {order}: N {n} for {n_true}");
     }
+}
+
+/// A Butterworth run faster than the output and read every so many samples (a part filtering at
+/// its internal rate): a third order at 10 Hz run at 1.6 kHz, every 16th sample kept (100 Hz),
+/// an accelerometer's rate samples rounded, 40 minutes. Named a third order run faster than the
+/// output (at the output rate the shapes of 8, 16 and 32 times differ little), its cut-off within
+/// 3%, alone, `explained`. Read at the output rate alone it was a fourth order or a cascade, its
+/// whole curve flagged (the seventeenth review's dec16 file: whole-curve G 2.8, or G 2.08 with a
+/// second order behind a moving average; docs/gap.md, "An n-th order Butterworth (session 54)").
+#[test]
+fn a_butterworth_run_faster_than_the_output_is_named_with_its_decimation() {
+    let d = unit_diagnosis(
+        0.01,
+        "N = 0.0015\nB = 0.0004\nrate_lsb = 0.0006\n\
+         butterworth_filter = { order = 3, cutoff = 10.0, decimation = 16 }",
+        41,
+        2400.0,
+    );
+    let named: Vec<EffectParams> = d.effects.iter().map(|e| e.params).collect();
+    match named[..] {
+        [EffectParams::ButterworthFilter {
+            cutoff_hz,
+            decimation,
+            order: 3,
+        }] if decimation >= 4 => {
+            assert!(rel(cutoff_hz, 10.0) < 0.03, "cut-off {cutoff_hz}")
+        }
+        _ => panic!("{named:?}, G {} -> {}", d.gap_before, d.gap_after),
+    }
+    assert_eq!(d.verdict, Verdict::Explained);
 }
 
 /// `d` names one FIR alone, of `decimation`, its taps within 2 of `taps` and its cut-off

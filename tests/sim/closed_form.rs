@@ -384,6 +384,11 @@ fn butterworth_filter_on_white_rate() {
     check_ensemble("butterworth5", |_| {
         channel("N = 0.5\nbutterworth_filter = { order = 5, cutoff = 40.0 }")
     });
+    // run at 8 times the output rate and read every 8th sample: the simulator's internal-rate
+    // sections against the model's decimated autocorrelation
+    check_ensemble("butterworth4_by8", |_| {
+        channel("N = 0.5\nbutterworth_filter = { order = 4, cutoff = 20.0, decimation = 8 }")
+    });
 }
 
 #[test]

@@ -405,10 +405,13 @@ fn parse_lowpass(
         let order = e.required("order", o, errs);
         let c = e.num_pos("cutoff", true, errs);
         let cutoff_hz = e.required("cutoff", c, errs);
+        // run faster than the output and read every `decimation`-th sample
+        let decimation = e.num_pos("decimation", true, errs).unwrap_or(1.0);
         e.finish(errs);
         let lp = LowPass::Butterworth {
             order: whole(&p, "order", order, errs),
             cutoff_hz,
+            decimation: whole(&p, "decimation", decimation, errs),
         };
         found.push((p, lp));
     }
