@@ -236,6 +236,12 @@ pub fn butterworth_internal_autocovariance(
     (0..len).step_by(d).map(|k| buf[k].re / n as f64).collect()
 }
 
+/// The problem with a filter's decimation (internal samples per output sample), if any.
+fn decimation_problem(decimation: u32) -> Option<String> {
+    (!(1..=MAX_DECIMATION).contains(&decimation))
+        .then(|| format!("decimation {decimation} must be 1..={MAX_DECIMATION}"))
+}
+
 /// Highest order of [`LowPass::Butterworth`] accepted.
 pub const MAX_BUTTERWORTH_ORDER: u32 = 8;
 
@@ -480,10 +486,8 @@ impl LowPass {
                 let nyquist = 0.5 * f64::from(decimation) / tau0_s;
                 if !(1..=MAX_FIR_TAPS).contains(&taps) {
                     Some(format!("taps {taps} must be 1..={MAX_FIR_TAPS}"))
-                } else if !(1..=MAX_DECIMATION).contains(&decimation) {
-                    Some(format!(
-                        "decimation {decimation} must be 1..={MAX_DECIMATION}"
-                    ))
+                } else if let Some(problem) = decimation_problem(decimation) {
+                    Some(problem)
                 } else if !(cutoff_hz > 0.0 && cutoff_hz < nyquist) {
                     Some(format!(
                         "cutoff {cutoff_hz} Hz must be above 0 and below the Nyquist frequency \
@@ -505,10 +509,8 @@ impl LowPass {
                 let nyquist = 0.49 * f64::from(decimation) / tau0_s;
                 if !(1..=MAX_BUTTERWORTH_ORDER).contains(&order) {
                     Some(format!("order {order} must be 1..={MAX_BUTTERWORTH_ORDER}"))
-                } else if !(1..=MAX_DECIMATION).contains(&decimation) {
-                    Some(format!(
-                        "decimation {decimation} must be 1..={MAX_DECIMATION}"
-                    ))
+                } else if let Some(problem) = decimation_problem(decimation) {
+                    Some(problem)
                 } else if !(cutoff_hz > 0.0 && cutoff_hz < nyquist) {
                     Some(format!(
                         "cutoff {cutoff_hz} Hz must be above 0 and below 0.49 of the rate it \
@@ -531,12 +533,8 @@ impl LowPass {
                     Some(format!("taps {taps} must be 1..={MAX_TAPS}"))
                 } else if !(1..=MAX_STAGES).contains(&stages) {
                     Some(format!("stages {stages} must be 1..={MAX_STAGES}"))
-                } else if !(1..=MAX_DECIMATION).contains(&decimation) {
-                    Some(format!(
-                        "decimation {decimation} must be 1..={MAX_DECIMATION}"
-                    ))
                 } else {
-                    None
+                    decimation_problem(decimation)
                 }
             }
             LowPass::SecondOrder {
