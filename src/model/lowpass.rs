@@ -170,6 +170,19 @@ impl Biquad {
             .collect()
     }
 
+    /// The section run over `x` in place from rest (its impulse response when `x` is a unit
+    /// impulse): `y_k = a1 y_{k-1} + a2 y_{k-2} + (1 - a1 - a2)(b0 x_k + b1 x_{k-1} + b2 x_{k-2})`.
+    pub fn run(&self, x: &mut [f64]) {
+        let g = 1.0 - self.a1 - self.a2;
+        let b = self.b;
+        let (mut x1, mut x2, mut y1, mut y2) = (0.0, 0.0, 0.0, 0.0);
+        for v in x.iter_mut() {
+            let y = self.a1 * y1 + self.a2 * y2 + g * (b[0] * *v + b[1] * x1 + b[2] * x2);
+            (x2, x1, y2, y1) = (x1, *v, y1, y);
+            *v = y;
+        }
+    }
+
     /// `|H(w)|^2` at `w` radians per sample:
     /// `g^2 |b0 + b1 e^{-iw} + b2 e^{-2iw}|^2 / |1 - a1 e^{-iw} - a2 e^{-2iw}|^2`.
     pub fn power_gain(&self, w: f64) -> f64 {
@@ -217,15 +230,7 @@ pub fn butterworth_internal_autocovariance(
         .clamp(2, MAX_LAGS);
     let mut h = vec![0.0; len];
     h[0] = 1.0;
-    for q in &sections {
-        let g = 1.0 - q.a1 - q.a2;
-        let (mut x1, mut x2, mut y1, mut y2) = (0.0, 0.0, 0.0, 0.0);
-        for v in h.iter_mut() {
-            let y = q.a1 * y1 + q.a2 * y2 + g * (q.b[0] * *v + q.b[1] * x1 + q.b[2] * x2);
-            (x2, x1, y2, y1) = (x1, *v, y1, y);
-            *v = y;
-        }
-    }
+    sections.iter().for_each(|q| q.run(&mut h));
     let n = (2 * len).next_power_of_two();
     let mut buf: Vec<C> = h.iter().map(|&v| C::new(v, 0.0)).collect();
     buf.resize(n, C::new(0.0, 0.0));
@@ -1190,6 +1195,18 @@ mod tests {
     use super::*;
     use crate::model::terms;
 
+    /// `rho_0 + 2 sum_k rho_k cos(w k)`: the power spectrum of the even sequence `rho` at `w`
+    /// radians per sample (Wiener-Khinchin).
+    fn transform(rho: &[f64], w: f64) -> f64 {
+        rho[0]
+            + 2.0
+                * rho[1..]
+                    .iter()
+                    .enumerate()
+                    .map(|(k, r)| r * (w * (k + 1) as f64).cos())
+                    .sum::<f64>()
+    }
+
     /// Cluster sizes all beyond 200 memories, asked first on a fresh thread (whose flicker
     /// table is empty): the unfiltered flicker AVAR `2 ln 2 / pi`, not an index out of the
     /// table (it panicked there in session 22, family_gap's rlg on a quantization-limited cut).
@@ -1560,14 +1577,7 @@ mod tests {
                 );
             }
             for f in [0.0, 7.0, 60.0, 125.0, 200.0, 249.0] {
-                let w = 2.0 * PI * f * tau0;
-                let s = rho[0]
-                    + 2.0
-                        * rho[1..]
-                            .iter()
-                            .enumerate()
-                            .map(|(k, r)| r * (w * (k + 1) as f64).cos())
-                            .sum::<f64>();
+                let s = transform(&rho, 2.0 * PI * f * tau0);
                 let g = lp.power_gain(tau0, f);
                 assert!(
                     (g - s).abs() < 1e-9 * s.abs().max(1e-3),
@@ -1984,13 +1994,7 @@ mod tests {
             // the impulse response through the sections
             let mut h: Vec<f64> = (0..6000).map(|i| if i == 0 { 1.0 } else { 0.0 }).collect();
             for q in butterworth_sections(order, fc, tau0) {
-                let g = 1.0 - q.a1 - q.a2;
-                let (mut x1, mut x2, mut y1, mut y2) = (0.0, 0.0, 0.0, 0.0);
-                for v in h.iter_mut() {
-                    let y = q.a1 * y1 + q.a2 * y2 + g * (q.b[0] * *v + q.b[1] * x1 + q.b[2] * x2);
-                    (x2, x1, y2, y1) = (x1, *v, y1, y);
-                    *v = y;
-                }
+                q.run(&mut h);
             }
             for (i, want) in taps.iter().enumerate() {
                 assert!(
@@ -2082,19 +2086,13 @@ mod tests {
                 .map(|i| if i == 0 { 1.0 } else { 0.0 })
                 .collect();
             for q in butterworth_sections(order, fc, step) {
-                let g = 1.0 - q.a1 - q.a2;
-                let (mut x1, mut x2, mut y1, mut y2) = (0.0, 0.0, 0.0, 0.0);
-                for v in h.iter_mut() {
-                    let y = q.a1 * y1 + q.a2 * y2 + g * (q.b[0] * *v + q.b[1] * x1 + q.b[2] * x2);
-                    (x2, x1, y2, y1) = (x1, *v, y1, y);
-                    *v = y;
-                }
+                q.run(&mut h);
             }
             let d = d as usize;
-            let raw: Vec<f64> = (0..rho_len(&lp, tau0).min(40))
+            let rho = lp.autocorrelation(tau0);
+            let raw: Vec<f64> = (0..rho.len().min(40))
                 .map(|j| h.iter().zip(&h[d * j..]).map(|(a, b)| a * b).sum())
                 .collect();
-            let rho = lp.autocorrelation(tau0);
             let total = two_sided_sum(&rho);
             assert!((total - 1.0).abs() < 1e-12, "{lp:?}: total {total}");
             // the scale: the internal total read every D-th lag
@@ -2110,14 +2108,7 @@ mod tests {
                 );
             }
             for f in [0.0, 3.0, 12.0, 30.0, 49.0] {
-                let w = 2.0 * PI * f * tau0;
-                let s = rho[0]
-                    + 2.0
-                        * rho[1..]
-                            .iter()
-                            .enumerate()
-                            .map(|(k, r)| r * (w * (k + 1) as f64).cos())
-                            .sum::<f64>();
+                let s = transform(&rho, 2.0 * PI * f * tau0);
                 let g = lp.power_gain(tau0, f);
                 assert!(
                     (g - s).abs() < 1e-9 * s.abs().max(1e-3),
@@ -2125,9 +2116,6 @@ mod tests {
                 );
             }
             assert!((lp.internal_white_scale(tau0) - 1.0 / full.sqrt()).abs() < 1e-12);
-        }
-        fn rho_len(lp: &LowPass, tau0: f64) -> usize {
-            lp.autocorrelation(tau0).len()
         }
         // at D = 1 the FFT's autocovariance is the sections' convolved
         let one = LowPass::Butterworth {
