@@ -163,63 +163,88 @@ fn scan_butterworth(
         return None;
     }
     let dc = (cutoffs[1] / cutoffs[0]).ln();
-    let at = |order: u32, decimation: u32, lc: f64| LowPass::Butterworth {
-        order,
-        cutoff_hz: lc
-            .exp()
-            .min(BUTTERWORTH_TOP * f64::from(decimation) / prob.tau0_s),
-        decimation,
-    };
-    let chi2 = |lp: LowPass| fit(lp).map_or(f64::INFINITY, |f| f.chi2);
-    // the best log cut-off over `grid` (logs) for `order` at `decimation`, polished
-    let best_cutoff = |order: u32, decimation: u32, grid: &[f64]| -> Option<(f64, f64)> {
-        let (mut lc, mut v) = (f64::NAN, f64::INFINITY);
-        for &x in grid {
-            let here = chi2(at(order, decimation, x));
-            if here < v {
-                (lc, v) = (x, here);
-            }
-        }
-        if !v.is_finite() {
-            return None;
-        }
-        let x = golden(|x| fit(at(order, decimation, x)), lc - dc, lc + dc);
-        let vx = chi2(at(order, decimation, x));
-        Some(if vx < v { (x, vx) } else { (lc, v) })
-    };
     let logs: Vec<f64> = cutoffs.iter().map(|c| c.ln()).collect();
     let mut best: Option<(u32, f64, f64)> = None;
     for order in BUTTERWORTH_ORDERS {
-        if let Some((lc, v)) = best_cutoff(order, 1, &logs) {
+        if let Some((lc, v)) = butterworth_cutoff(prob, fit, order, 1, &logs, dc) {
             if best.is_none_or(|(_, _, b)| v < b) {
                 best = Some((order, lc, v));
             }
         }
     }
     let (order, lc, v) = best?;
-    let mut chosen = (1u32, lc, v);
+    let output_rate = butterworth_at(prob, order, 1, lc);
+    let output_fit = fit(output_rate);
     // the decimated forms only where the output-rate form leaves the model flagged
-    let flagged = fit(at(order, 1, lc)).is_some_and(|f| f.gap() > BUTTERWORTH_DECIMATION_GATE);
+    let flagged = output_fit
+        .as_ref()
+        .is_some_and(|f| f.gap() > BUTTERWORTH_DECIMATION_GATE);
     let decimations = if flagged {
         &BUTTERWORTH_DECIMATIONS[..]
     } else {
         &[]
     };
+    let mut chosen = (1u32, lc, v);
     for &d in decimations {
-        let around: Vec<f64> = (-BUTTERWORTH_AROUND..=BUTTERWORTH_AROUND)
-            .map(|i| lc + f64::from(i) * dc)
-            .collect();
-        if let Some((x, vx)) = best_cutoff(order, d, &around) {
+        let around = about(lc, dc);
+        if let Some((x, vx)) = butterworth_cutoff(prob, fit, order, d, &around, dc) {
             if vx < chosen.2 {
                 chosen = (d, x, vx);
             }
         }
     }
-    if chosen.0 > 1 && chosen.2 + SPAN_PARAMETER_CHI2 >= v {
-        chosen = (1, lc, v);
+    if chosen.0 == 1 || chosen.2 + SPAN_PARAMETER_CHI2 >= v {
+        return output_fit.map(|f| (output_rate, f));
     }
-    let lp = at(order, chosen.0, chosen.1);
+    let lp = butterworth_at(prob, order, chosen.0, chosen.1);
     fit(lp).map(|f| (lp, f))
+}
+
+/// The Butterworth of `order` and `decimation` at the log cut-off `lc`, the cut-off held below
+/// [`BUTTERWORTH_TOP`] of the rate it runs at.
+fn butterworth_at(prob: &GapProblem, order: u32, decimation: u32, lc: f64) -> LowPass {
+    LowPass::Butterworth {
+        order,
+        cutoff_hz: lc
+            .exp()
+            .min(BUTTERWORTH_TOP * f64::from(decimation) / prob.tau0_s),
+        decimation,
+    }
+}
+
+/// The log cut-offs within [`BUTTERWORTH_AROUND`] steps of `dc` each side of `lc`.
+fn about(lc: f64, dc: f64) -> Vec<f64> {
+    (-BUTTERWORTH_AROUND..=BUTTERWORTH_AROUND)
+        .map(|i| lc + f64::from(i) * dc)
+        .collect()
+}
+
+/// The best log cut-off of the Butterworth of `order` and `decimation` over the log cut-offs
+/// `logs`, polished by a golden section in `ln f_c` within `dc` of it, with its chi-squared
+/// (None where no point fits).
+fn butterworth_cutoff(
+    prob: &GapProblem,
+    fit: &dyn Fn(LowPass) -> Option<GlsFit>,
+    order: u32,
+    decimation: u32,
+    logs: &[f64],
+    dc: f64,
+) -> Option<(f64, f64)> {
+    let at = |lc: f64| butterworth_at(prob, order, decimation, lc);
+    let chi2 = |lc: f64| fit(at(lc)).map_or(f64::INFINITY, |f| f.chi2);
+    let (mut lc, mut v) = (f64::NAN, f64::INFINITY);
+    for &x in logs {
+        let here = chi2(x);
+        if here < v {
+            (lc, v) = (x, here);
+        }
+    }
+    if !v.is_finite() {
+        return None;
+    }
+    let x = golden(|x| fit(at(x)), lc - dc, lc + dc);
+    let vx = chi2(x);
+    Some(if vx < v { (x, vx) } else { (lc, v) })
 }
 
 /// The Butterworth of `order` and `decimation` with its cut-off scanned within
@@ -233,31 +258,10 @@ fn scan_butterworth_about(
     decimation: u32,
     cutoff_hz: f64,
 ) -> Option<(LowPass, GlsFit)> {
-    let g = prob.grid(EffectKind::ButterworthFilter);
-    let dc = std::f64::consts::LN_10 / g.per_decade;
-    let top = BUTTERWORTH_TOP * f64::from(decimation) / prob.tau0_s;
-    let at = |lc: f64| LowPass::Butterworth {
-        order,
-        cutoff_hz: lc.exp().min(top),
-        decimation,
-    };
-    let chi2 = |lc: f64| fit(at(lc)).map_or(f64::INFINITY, |f| f.chi2);
-    let (mut lc, mut v) = (f64::NAN, f64::INFINITY);
-    for i in -BUTTERWORTH_AROUND..=BUTTERWORTH_AROUND {
-        let x = cutoff_hz.ln() + f64::from(i) * dc;
-        let here = chi2(x);
-        if here < v {
-            (lc, v) = (x, here);
-        }
-    }
-    if !v.is_finite() {
-        return None;
-    }
-    let x = golden(|x| fit(at(x)), lc - dc, lc + dc);
-    if chi2(x) < v {
-        lc = x;
-    }
-    let lp = at(lc);
+    let dc = std::f64::consts::LN_10 / prob.grid(EffectKind::ButterworthFilter).per_decade;
+    let around = about(cutoff_hz.ln(), dc);
+    let (lc, _) = butterworth_cutoff(prob, fit, order, decimation, &around, dc)?;
+    let lp = butterworth_at(prob, order, decimation, lc);
     fit(lp).map(|f| (lp, f))
 }
 
