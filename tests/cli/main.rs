@@ -17,6 +17,7 @@ mod model_out;
 mod odd_inputs;
 mod outputs;
 mod plot_report;
+mod scratch;
 mod stop;
 mod terminal;
 mod text_input;

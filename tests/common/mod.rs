@@ -119,9 +119,14 @@ pub fn process_token() -> String {
 }
 
 /// A scratch folder of this test process for `tag` (named by [`process_token`]), emptied the
-/// first time this process asks for it.
+/// first time this process asks for it. A test run's folders stay after it ends, for a look at a
+/// failure; the first folder asked for in a later run removes those of processes gone by then
+/// ([`sweep_stale_scratch`]), so runs do not pile up in the temporary folder (a full run leaves
+/// about 300 MB, most of it the model-file and diagnosis tests' captures).
 pub fn fresh_dir(tag: &str) -> PathBuf {
     static SEEN: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+    static SWEPT: std::sync::Once = std::sync::Once::new();
+    SWEPT.call_once(|| sweep_stale_scratch(&std::env::temp_dir()));
     let d = std::env::temp_dir().join(format!("allanscope-{tag}-{}", process_token()));
     let mut seen = SEEN.lock().unwrap_or_else(|e| e.into_inner());
     if !seen.iter().any(|t| t == tag) {
@@ -130,6 +135,49 @@ pub fn fresh_dir(tag: &str) -> PathBuf {
     }
     std::fs::create_dir_all(&d).unwrap();
     d
+}
+
+/// The process id in a scratch folder's name `allanscope-TAG-PID-NS` ([`fresh_dir`]), or `None`
+/// for any other name.
+pub fn scratch_owner(name: &str) -> Option<u32> {
+    let rest = name.strip_prefix("allanscope-")?;
+    let mut parts = rest.rsplitn(3, '-');
+    let ns = parts.next()?;
+    let pid = parts.next()?;
+    let tag = parts.next()?;
+    let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    if tag.is_empty() || !digits(pid) || !digits(ns) || ns.len() < 15 {
+        return None;
+    }
+    pid.parse().ok()
+}
+
+/// Removes the scratch folders in `temp` of test processes no longer running: by `/proc` where
+/// there is one (a process id in use again keeps its folder, harmlessly); elsewhere, those not
+/// touched for a day.
+pub fn sweep_stale_scratch(temp: &Path) {
+    let Ok(entries) = std::fs::read_dir(temp) else {
+        return;
+    };
+    let proc_fs = Path::new("/proc/self").exists();
+    let me = std::process::id();
+    for e in entries.flatten() {
+        let Some(pid) = e.file_name().to_str().and_then(scratch_owner) else {
+            continue;
+        };
+        let stale = if proc_fs {
+            pid != me && !Path::new("/proc").join(pid.to_string()).exists()
+        } else {
+            e.metadata()
+                .and_then(|m| m.modified())
+                .ok()
+                .and_then(|t| t.elapsed().ok())
+                .is_some_and(|age| age > std::time::Duration::from_secs(86_400))
+        };
+        if stale && e.file_type().is_ok_and(|t| t.is_dir()) {
+            let _ = std::fs::remove_dir_all(e.path());
+        }
+    }
 }
 
 /// `name` in a scratch folder of this test process, `tag` telling the test files apart.

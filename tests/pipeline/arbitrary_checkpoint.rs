@@ -16,9 +16,7 @@ use proptest::prelude::*;
 const PREFIX_LEN: usize = 16 + 4 + 8 + 4;
 
 fn scratch() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("allanscope-arbck-{}", std::process::id()));
-    std::fs::create_dir_all(&d).expect("scratch");
-    d
+    crate::common::fresh_dir("arbck")
 }
 
 /// A checkpoint written by the binary, `args` after `analyze`, in a scratch folder.
