@@ -191,6 +191,7 @@
 //!   filter_shape_words.rs  a diagnosis judged beyond its filter's stretch, in words
 //!   first_block_words.rs   a first block far off the rest of the run, in words
 //!   jump_words.rs          the bias jumps a diagnosis named, when and how large, in words
+//!   step_change_words.rs   a step of the values that changed during the run, in words
 //!   results.rs             the records `plot` and `report` read, labelled
 //!   plot/                  Allan-deviation figures (SVG)
 //!     panel.rs             one panel per unit: curves, heading, legend

@@ -13,7 +13,10 @@ use crate::sink::records::{
     CoefRecord, CurveRecord, DatasheetRecord, FitRecord, ReadoutsRecord, Record,
 };
 
-use super::{analyze_channel, AnalysisOptions, ChannelState};
+use crate::sink::step_change_words::step_change_words;
+use crate::sink::table::sig3;
+
+use super::{analyze_channel, AnalysisOptions, ChannelState, InputKind};
 
 /// One channel's results as of `t_data_s` ([`super::RunAnalysis::reports`]).
 #[derive(Debug, Clone)]
@@ -160,7 +163,25 @@ pub(super) fn channel_reports(
         // The diagnosis refreshed with the fits (docs/theory.md section 5); a run still too
         // short for it gives none yet.
         let diagnosis = ch.gap.as_mut().and_then(|g| {
-            diagnose(&g.snapshot(), &DiagnoseOptions::default())
+            let snap = g.snapshot();
+            // A range switched during the run is said once, with the final records, as
+            // `diagnose` says it (sink::step_change_words).
+            let per = match opts.kind {
+                InputKind::Rate => 1.0 / opts.accum.tau0_s,
+                InputKind::Increments | InputKind::Phase => 1.0,
+            };
+            let words = step_change_words(
+                &snap.step_changes,
+                snap.step_changes_more,
+                snap.lsb,
+                per,
+                opts.accum.tau0_s,
+                &sig3,
+            );
+            if let Some(w) = words.filter(|_| final_) {
+                tracing::warn!("channel {}: {w}", ch.setup.name);
+            }
+            diagnose(&snap, &DiagnoseOptions::default())
                 .map_err(|e| tracing::debug!("{}: {e}", ch.setup.name))
                 .ok()
         });

@@ -11,7 +11,6 @@ use super::{format_and_tau0, open_input, usage, DiagnoseArgs};
 use allanscope::analysis::ChannelSetup;
 use allanscope::frame::{FrameDescriptor, FrameEvent};
 use allanscope::gap::diagnose::diagnose_with_temperature;
-use allanscope::gap::lsb::LsbEstimator;
 use allanscope::gap::temperature::settling_profile;
 use allanscope::gap::unit_model::{fitted_channel, fitted_unit, ChannelFacts};
 use allanscope::gap::EffectParams;
@@ -24,6 +23,7 @@ use allanscope::plan::unit::{InputPlan, UnitPlan, UnitRequest};
 use allanscope::sim::model_write::model_toml;
 use allanscope::sink::first_block_words::first_block_words;
 use allanscope::sink::records::Record;
+use allanscope::sink::step_change_words::step_change_words;
 use allanscope::sink::table::sig3;
 use allanscope::source::{Pace, SourceEvent, SourceSpec};
 
@@ -36,8 +36,7 @@ struct Gathered {
     /// The values were rate samples (`--rate`, a rate `--unit` or the headers' units), whose
     /// step is no LSB of the increments.
     rate: bool,
-    /// The quantization step of each channel's increments and their sum (u), for the model file.
-    lsb: Vec<LsbEstimator>,
+    /// The sum of each channel's increments (u), for the model file's bias.
     sums: Vec<f64>,
     /// The unit's temperature (degC) when the input has one, as evidence fed `T tau0` per step
     /// (the channels' block layout: gap::temperature), and its sum (degC) and sum of squares
@@ -58,14 +57,12 @@ impl Gathered {
     /// One increment (u) of channel `k`.
     fn push(&mut self, k: usize, d: f64) {
         self.evidence[k].push_increment(d);
-        self.lsb[k].push(d);
         self.sums[k] += d;
     }
 
     /// A missing increment of channel `k`.
     fn gap(&mut self, k: usize, missing: u64) {
         self.evidence[k].push_gap(missing);
-        self.lsb[k].push(f64::NAN);
     }
 
     /// The temperature of one step (NaN or None: not known for this step). A step without one
@@ -130,7 +127,6 @@ impl Gathered {
         self.names.push(name.to_string());
         self.units.push(unit.to_string());
         self.evidence.push(GapEvidence::new(cfg.clone()));
-        self.lsb.push(LsbEstimator::new());
         self.sums.push(0.0);
     }
 }
@@ -151,7 +147,6 @@ fn gather(
         units: Vec::new(),
         rate: a.data.rate,
         evidence: Vec::new(),
-        lsb: Vec::new(),
         sums: Vec::new(),
         temperature: None,
         temperature_sum: 0.0,
@@ -423,39 +418,17 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
         }
         // The values' step changed during the run (gap::lsb::StepChange): a range switched or
         // a new output format; the quantization is judged with one step for the whole run.
-        let (changes, more) = main.lsb[i].step_changes();
         // Rate samples' steps as rates (the values read), increments' as increments.
         let per = if main.rate { 1.0 / tau0 } else { 1.0 };
-        if !changes.is_empty() {
-            let all: Vec<String> = changes
-                .iter()
-                .map(|c| {
-                    format!(
-                        "{} -> {} after about {:.0} s",
-                        sig3(c.from * per),
-                        sig3(c.to * per),
-                        c.at_value as f64 * tau0
-                    )
-                })
-                .collect();
-            tracing::warn!(
-                "{}: channel {name}: the values' step changed during the run ({}{}): a range \
-                 switched or a new output format? The run is diagnosed as one unit; its \
-                 quantization is judged with {}",
-                a.input,
-                all.join(", "),
-                if more > 0 {
-                    format!(", and {more} more")
-                } else {
-                    String::new()
-                },
-                main.lsb[i]
-                    .estimate()
-                    .map_or("no single step".to_string(), |q| format!(
-                        "one step, {}",
-                        sig3(q * per)
-                    ))
-            );
+        if let Some(w) = step_change_words(
+            &snap.step_changes,
+            snap.step_changes_more,
+            snap.lsb,
+            per,
+            tau0,
+            &sig3,
+        ) {
+            tracing::warn!("{}: channel {name}: {w}", a.input);
         }
         let holdout = held.as_mut().and_then(|h| {
             let j = h.names.iter().position(|n| n == name)?;
@@ -496,11 +469,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<()> {
                 unit: main.units[i].clone(),
                 // The step of rate samples is not a phase LSB (it is the rate-sample
                 // quantization of a MEMS part), so only increments and phase give one.
-                lsb: if main.rate {
-                    None
-                } else {
-                    main.lsb[i].estimate()
-                },
+                lsb: if main.rate { None } else { snap.lsb },
                 bias: if t_run > 0.0 {
                     main.sums[i] / t_run
                 } else {

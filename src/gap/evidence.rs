@@ -16,7 +16,7 @@
 //! Block means: each segment is split into [`BLOCKS_PER_SEGMENT`] blocks whose rate means are
 //! kept (they merge with the segments), the time series on which warm-ups and bias jumps show.
 
-use super::lsb::LsbEstimator;
+use super::lsb::{LsbEstimator, StepChange};
 use super::outliers::{Despiker, OutlierCount, CHUNK};
 use super::stuck::{Release, StuckCount, StuckFilter};
 use crate::allan::accum::{AccumConfig, Engine, FloatRepr, Overlap, StatSet, TauSpec};
@@ -174,6 +174,12 @@ pub struct EvidenceSnapshot {
     /// move, and its curve is rounding ([`super::lsb::LsbEstimator::constant`]; None when they
     /// vary, or for evidence restored from a checkpoint).
     pub constant: Option<f64>,
+    /// Where the increments' step changed during the run (a range switched), at most
+    /// [`super::lsb::MAX_CHANGES`], and how many more there were
+    /// ([`super::lsb::LsbEstimator::step_changes`]; none for evidence restored from a
+    /// checkpoint).
+    pub step_changes: Vec<StepChange>,
+    pub step_changes_more: u64,
 }
 
 /// The streaming evidence of one channel.
@@ -421,6 +427,9 @@ impl GapEvidence {
         if missing == 0 {
             return;
         }
+        // the step is read on the values as received: a stretch the stuck filter takes out
+        // later is no gap of theirs
+        self.lsb.push(f64::NAN);
         if let Some(r) = self.stuck.as_mut().and_then(|f| f.gap(missing)) {
             self.take(r);
             self.take_queued();
@@ -434,7 +443,6 @@ impl GapEvidence {
             return;
         }
         self.release(true, true);
-        self.lsb.push(f64::NAN);
         self.main.push_gap(missing);
         // Walk the gap through segment and block boundaries.
         let mut left = missing;
@@ -593,6 +601,8 @@ impl GapEvidence {
                 .lsb
                 .constant()
                 .filter(|_| self.lsb.count() >= self.n_received),
+            step_changes: self.lsb.step_changes().0.to_vec(),
+            step_changes_more: self.lsb.step_changes().1,
         }
     }
 }

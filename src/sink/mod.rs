@@ -32,6 +32,7 @@ pub mod records;
 pub mod report;
 pub mod results;
 pub mod status_area;
+pub mod step_change_words;
 pub mod table;
 pub mod taken_out;
 pub mod unit_record;

@@ -860,6 +860,26 @@ fn a_step_that_changes_during_the_run_is_said() {
     let err = run(&a);
     let said = "channel g: the values' step changed during the run (";
     assert_eq!(err.matches(said).count(), 1, "{err}");
-    assert!(err.contains(" after about 82 s)"), "{err}");
+    assert!(err.contains("(0.0100 -> 0.0250 after about 82 s)"), "{err}");
+    assert!(err.contains("judged with one step, 0.0100"), "{err}");
     assert!(!run(&b).contains("step changed"));
+    // `analyze --diagnose` reads the same evidence and says it once, with its final records
+    // (not with each interim one), in the values' unit: rate samples' steps as rates.
+    let analyze = |path: &std::path::Path, extra: &[&str]| {
+        let out = exe()
+            .arg("analyze")
+            .arg(path)
+            .args(["--tau0", "0.005", "--diagnose", "--every", "50"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        String::from_utf8_lossy(&out.stderr).to_string()
+    };
+    let err = analyze(&a, &["--unit", "deg"]);
+    assert_eq!(err.matches(said).count(), 1, "{err}");
+    assert!(err.contains("(0.0100 -> 0.0250 after about 82 s)"), "{err}");
+    let err = analyze(&a, &["--unit", "deg/s", "--rate"]);
+    assert!(err.contains("(0.0100 -> 0.0250 after about 82 s)"), "{err}");
+    assert!(!analyze(&b, &["--unit", "deg"]).contains("step changed"));
 }
