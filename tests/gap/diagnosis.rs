@@ -371,6 +371,54 @@ fn a_jump_the_curve_does_not_show_is_kept_on_its_time_domain_evidence() {
     assert_eq!(d.verdict, Verdict::Explained);
 }
 
+/// A warm-up of 3 arcsec/s over 300 s beside a jump of 2.5 arcsec/s at 2000.3 s (one hour of
+/// the VOG4-like base). The jump, not yet taken out when the warm-up is tested, raised the
+/// random walk of the warm-up's null (on the block means and on the curve), and on seeds 2 and 5
+/// the warm-up passed for wander: session 54's build named the jump alone (these increments
+/// written out and read by its `diagnose`; 5 of 8 seeds so). Since session 55 the warm-up is
+/// tested again with the jumps out, and the jumps searched again with the warm-up out: 7 of the
+/// 8 seeds name it (seed 4 does not).
+#[test]
+fn a_warmup_beside_a_jump_is_tested_with_the_jump_out() {
+    let (t_step, size) = (2000.3, 2.5);
+    for seed in [2, 5] {
+        let mut inc = simulate("warmup = { amplitude = 3.0, time_constant = 300.0 }", seed);
+        for (k, d) in inc.iter_mut().enumerate() {
+            let (t0, t1) = (k as f64 * TAU0, (k + 1) as f64 * TAU0);
+            if t1 > t_step {
+                *d += size * (t1 - t_step.max(t0));
+            }
+        }
+        let d = diagnosed(&inc);
+        let warm = d
+            .effects
+            .iter()
+            .find(|e| e.params.kind() == EffectKind::Warmup)
+            .unwrap_or_else(|| panic!("seed {seed}: no warm-up in {:?}", d.effects));
+        match warm.params {
+            EffectParams::Warmup {
+                amplitude,
+                time_constant_s,
+            } => {
+                assert!(rel(amplitude, 3.0) < TOL_AMP, "seed {seed}: A {amplitude}");
+                assert!(
+                    rel(time_constant_s, 300.0) < TOL_WARMUP_T,
+                    "seed {seed}: T {time_constant_s}"
+                );
+            }
+            p => panic!("{p:?}"),
+        }
+        let j = d.jumps.as_ref().expect("jump search ran");
+        assert_eq!(j.sizes.len(), 1, "seed {seed}: {j:?}");
+        assert!(
+            (j.times_s[0] - t_step).abs() <= j.block_s,
+            "seed {seed}: {j:?}"
+        );
+        assert!(rel(j.sizes[0], size) < TOL_AMP, "seed {seed}: {j:?}");
+        assert_eq!(d.verdict, Verdict::Explained);
+    }
+}
+
 #[test]
 fn the_record_gives_each_jump_its_time_from_the_first_sample_and_its_size() {
     // The run of the test above behind a leading gap of 2.6 blocks (a logger that started
