@@ -1011,6 +1011,11 @@ fn diagnose_curve_pass(
             .map(|&m| terms::steps_avar(&positions, &sizes, m, prob.n_inc))
             .collect()
     };
+    // The jumps as the record's effect: their count and rms size (u/s).
+    let jump_params = |f: &JumpFinding| EffectParams::BiasJumps {
+        count: f.sizes.len() as u64,
+        rms_size: (f.sizes.iter().map(|s| s * s).sum::<f64>() / f.sizes.len() as f64).sqrt(),
+    };
     let mut jumps = if opts.candidates.contains(&EffectKind::BiasJumps) {
         let resid: Vec<f64> = match &warm_curve {
             Some(wc) => block_means.iter().zip(wc).map(|(b, w)| b - w).collect(),
@@ -1025,7 +1030,6 @@ fn diagnose_curve_pass(
         None
     };
     if let Some(f) = jumps.as_ref().filter(|f| !f.sizes.is_empty()) {
-        let rms = (f.sizes.iter().map(|s| s * s).sum::<f64>() / f.sizes.len() as f64).sqrt();
         // In law the jumps are part of K (a rate random walk's), but a few large ones leave
         // their own shape on this record's curve, which a stationary candidate may have taken
         // (a slow sinusoid, typically). Their exact AVAR on the record enters as a fixed offset,
@@ -1033,20 +1037,10 @@ fn diagnose_curve_pass(
         let j_offset = jump_offset(f);
         let offset_j: Vec<f64> = offset.iter().zip(&j_offset).map(|(o, j)| o + j).collect();
         time_offsets.push((EffectKind::BiasJumps, j_offset));
-        let kept = still_needed(&prob, &effects, &offset_j, opts);
         let before = cur.chi2;
-        if let Some(fit) = prob.gls(&spec_from(&prob, &kept, &offset_j)) {
-            effects = kept;
-            for e in effects.iter_mut() {
-                e.gap_after = fit.gap();
-            }
-            cur = fit;
-        }
+        keep_needed(&prob, &mut effects, &mut cur, &offset_j, opts);
         effects.push(AddedEffect {
-            params: EffectParams::BiasJumps {
-                count: f.sizes.len() as u64,
-                rms_size: rms,
-            },
+            params: jump_params(f),
             gap_after: cur.gap(),
             delta_chi2: before - cur.chi2,
         });
@@ -1060,15 +1054,14 @@ fn diagnose_curve_pass(
     // jumps out of the block means and their AVAR in the curve's model, the warm-up is tested
     // once more; when it is named, the jumps are searched again with it out (docs/gap.md, "A
     // warm-up beside jumps (session 55)").
-    let jumps_found = jumps.as_ref().is_some_and(|f| !f.sizes.is_empty());
     // Not beside a temperature, which step 2 refits jointly with a warm-up.
-    if jumps_found
-        && warm_curve.is_none()
-        && temp_in.is_none()
-        && opts.candidates.contains(&EffectKind::Warmup)
-    {
-        let f = jumps.as_ref().expect("jumps found");
-        let resid = f.remove_from(&block_means);
+    let hid = jumps.as_ref().filter(|f| {
+        !f.sizes.is_empty()
+            && warm_curve.is_none()
+            && temp_in.is_none()
+            && opts.candidates.contains(&EffectKind::Warmup)
+    });
+    if let Some(resid) = hid.map(|f| f.remove_from(&block_means)) {
         let c5 = cur.five_terms();
         let k_up = k2_upper(&prob, &spec, &cur);
         let stat_params: Vec<EffectParams> = effects
@@ -1119,14 +1112,7 @@ fn diagnose_curve_pass(
                 }
                 time_offsets.push((EffectKind::BiasJumps, j_offset));
             }
-            let kept = still_needed(&prob, &effects, &offset_w, opts);
-            if let Some(fit) = prob.gls(&spec_from(&prob, &kept, &offset_w)) {
-                effects = kept;
-                for e in effects.iter_mut() {
-                    e.gap_after = fit.gap();
-                }
-                cur = fit;
-            }
+            keep_needed(&prob, &mut effects, &mut cur, &offset_w, opts);
             effects.push(AddedEffect {
                 params: EffectParams::Warmup {
                     amplitude: w.amplitude,
@@ -1136,13 +1122,8 @@ fn diagnose_curve_pass(
                 delta_chi2: before - cur.chi2,
             });
             if let Some(j) = again.as_ref().filter(|j| !j.sizes.is_empty()) {
-                let rms =
-                    (j.sizes.iter().map(|s| s * s).sum::<f64>() / j.sizes.len() as f64).sqrt();
                 effects.push(AddedEffect {
-                    params: EffectParams::BiasJumps {
-                        count: j.sizes.len() as u64,
-                        rms_size: rms,
-                    },
+                    params: jump_params(j),
                     gap_after: cur.gap(),
                     delta_chi2: 0.0,
                 });
@@ -1158,7 +1139,6 @@ fn diagnose_curve_pass(
         spec: final_spec,
         in_curve,
     } = settle(&prob, &effects, &time_offsets, &base);
-    let mut jumps = jumps;
     if !effects
         .iter()
         .any(|e| e.params.kind() == EffectKind::BiasJumps)
@@ -1463,6 +1443,25 @@ const WARMUP_EDGE_BLOCKS: f64 = 0.5 * (1.0 + 1e-9);
 /// blocks at the start are left out): their time 0 is this far into the record.
 fn lead_samples(snap: &EvidenceSnapshot) -> u64 {
     snap.block_first as u64 * snap.block_len
+}
+
+/// `effects` cut to those [`still_needed`] beside `offset`, and `cur` the fit of that model, each
+/// effect's `gap_after` its gap (both left as they were when that model cannot be fitted).
+fn keep_needed(
+    prob: &GapProblem,
+    effects: &mut Vec<AddedEffect>,
+    cur: &mut GlsFit,
+    offset: &[f64],
+    opts: &DiagnoseOptions,
+) {
+    let kept = still_needed(prob, effects, offset, opts);
+    if let Some(fit) = prob.gls(&spec_from(prob, &kept, offset)) {
+        *effects = kept;
+        for e in effects.iter_mut() {
+            e.gap_after = fit.gap();
+        }
+        *cur = fit;
+    }
 }
 
 /// The stationary effects of `effects` still needed once `offset` (a warm-up's or jumps' exact
@@ -1796,11 +1795,24 @@ fn greedy_stationary(
         take_step(prob, effects, &mut spec, &mut cur, params, f);
         added += 1;
     }
+    // The first effect of the search may be added on its own likelihood ratio; so may the
+    // first after a low-pass, which is the unit's own shaping rather than something beside it:
+    // a MEMS part's filter always comes first, and a Gauss-Markov term beside it that the
+    // filter's pass left below the flag was never weighed (a review's accelerometer behind a
+    // third-order Butterworth: its 3 s term named on the first pass at G 2.56, lost on the
+    // second at 1.92; docs/gap.md, "An effect beside the unit's filter (session 55)").
+    let lr_open = |effects: &[AddedEffect], added: usize| {
+        lr_first
+            && effects[effects.len() - added..]
+                .iter()
+                .all(|e| e.params.kind().is_filter())
+    };
     while added < opts.max_effects
-        && (cur.gap() > th.gap_crit_given(has_filter(effects)) || (lr_first && added == 0))
+        && (cur.gap() > th.gap_crit_given(has_filter(effects)) || lr_open(effects, added))
     {
         // Below gap_crit only a candidate's own likelihood-ratio threshold can add (the
-        // first) effect; among those that pass, the largest drop per parameter wins. Beside a
+        // first effect, or the first after the unit's filter: `lr_open`); among those that
+        // pass, the largest drop per parameter wins. Beside a
         // filter the model's G is judged against `gap_crit_filtered`.
         let flagged_g = cur.gap() > th.gap_crit_given(has_filter(effects));
         let mut best: Option<(EffectParams, GlsFit, f64)> = None;
