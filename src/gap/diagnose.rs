@@ -1050,7 +1050,8 @@ fn diagnose_curve_pass(
     // 3b. A warm-up the jumps hid: the warm-up's null takes its random walk from the block
     // means and the curve, and jumps not yet taken out raise both, so that a warm-up beside a
     // jump passed for wander (a review's accelerometer: a 200 s warm-up of 6.7e-5 g beside a
-    // jump, found to 1% in both parameters at p 0.02 with K^2 at the curve's bound). With the
+    // jump, found to 1% in amplitude and 12% in T at p 0.02, above the level of 0.01, with K^2
+    // at the curve's bound). With the
     // jumps out of the block means and their AVAR in the curve's model, the warm-up is tested
     // once more; when it is named, the jumps are searched again with it out (docs/gap.md, "A
     // warm-up beside jumps (session 55)").
