@@ -170,15 +170,17 @@ pub(super) fn channel_reports(
                 InputKind::Rate => 1.0 / opts.accum.tau0_s,
                 InputKind::Increments | InputKind::Phase => 1.0,
             };
-            let words = step_change_words(
-                &snap.step_changes,
-                snap.step_changes_more,
-                snap.lsb,
-                per,
-                opts.accum.tau0_s,
-                &sig3,
-            );
-            if let Some(w) = words.filter(|_| final_) {
+            let words = final_.then(|| {
+                step_change_words(
+                    &snap.step_changes,
+                    snap.step_changes_more,
+                    snap.lsb,
+                    per,
+                    opts.accum.tau0_s,
+                    &sig3,
+                )
+            });
+            if let Some(w) = words.flatten() {
                 tracing::warn!("channel {}: {w}", ch.setup.name);
             }
             diagnose(&snap, &DiagnoseOptions::default())

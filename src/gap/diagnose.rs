@@ -1044,18 +1044,15 @@ fn diagnose_curve_pass(
             gap_after: cur.gap(),
             delta_chi2: before - cur.chi2,
         });
-        offset = offset_j;
-        spec = spec_from(&prob, &effects, &offset);
     }
     // 3b. A warm-up the jumps hid: the warm-up's null takes its random walk from the block
     // means and the curve, and jumps not yet taken out raise both, so that a warm-up beside a
     // jump passed for wander (a review's accelerometer: a 200 s warm-up of 6.7e-5 g beside a
     // jump, found to 1% in amplitude and 12% in T at p 0.02, above the level of 0.01, with K^2
-    // at the curve's bound). With the
-    // jumps out of the block means and their AVAR in the curve's model, the warm-up is tested
-    // once more; when it is named, the jumps are searched again with it out (docs/gap.md, "A
-    // warm-up beside jumps (session 55)").
-    // Not beside a temperature, which step 2 refits jointly with a warm-up.
+    // at the curve's bound). With the jumps out of the block means and their AVAR in the
+    // curve's model, the warm-up is tested once more; when it is named, the jumps are searched
+    // again with it out (docs/gap.md, "A warm-up beside jumps (session 55)"). Not beside a
+    // temperature, which step 2 refits jointly with a warm-up.
     let hid = jumps.as_ref().filter(|f| {
         !f.sizes.is_empty()
             && warm_curve.is_none()
@@ -1063,8 +1060,19 @@ fn diagnose_curve_pass(
             && opts.candidates.contains(&EffectKind::Warmup)
     });
     if let Some(resid) = hid.map(|f| f.remove_from(&block_means)) {
+        // the model `cur` was fitted to: the offsets so far and the jumps' (step 3)
+        let jumps_offset = time_offsets
+            .iter()
+            .find(|(k, _)| *k == EffectKind::BiasJumps)
+            .map(|(_, o)| o.clone())
+            .unwrap_or_default();
+        let with_jumps: Vec<f64> = offset
+            .iter()
+            .zip(&jumps_offset)
+            .map(|(o, j)| o + j)
+            .collect();
         let c5 = cur.five_terms();
-        let k_up = k2_upper(&prob, &spec, &cur);
+        let k_up = k2_upper(&prob, &spec_from(&prob, &effects, &with_jumps), &cur);
         let stat_params: Vec<EffectParams> = effects
             .iter()
             .filter(|e| e.params.kind() != EffectKind::BiasJumps)
@@ -1087,26 +1095,22 @@ fn diagnose_curve_pass(
             let wc = w.block_curve(snap.block_means.len(), block_s);
             // the jumps again, with the warm-up out of the block means
             let without_warm: Vec<f64> = block_means.iter().zip(&wc).map(|(b, w)| b - w).collect();
-            let old_j = time_offsets
-                .iter()
-                .position(|(k, _)| *k == EffectKind::BiasJumps)
-                .map(|i| time_offsets.remove(i).1)
-                .unwrap_or_default();
             let mut offset_w: Vec<f64> = offset
                 .iter()
                 .zip(&warm_offset)
-                .enumerate()
-                .map(|(i, (o, w))| o - old_j.get(i).copied().unwrap_or(0.0) + w)
+                .map(|(o, w)| o + w)
                 .collect();
             let warm_spec = spec_from(&prob, &effects, &offset_w);
             let again = prob.gls(&warm_spec).and_then(|fit| {
                 let k_up = k2_upper(&prob, &warm_spec, &fit);
                 jump_search(&without_warm, &effects, k_up, &fit.five_terms())
             });
+            let found = again.as_ref().filter(|j| !j.sizes.is_empty());
             effects.retain(|e| e.params.kind() != EffectKind::BiasJumps);
+            time_offsets.retain(|(k, _)| *k != EffectKind::BiasJumps);
             time_offsets.push((EffectKind::Warmup, warm_offset));
             let before = cur.chi2;
-            if let Some(j) = again.as_ref().filter(|j| !j.sizes.is_empty()) {
+            if let Some(j) = found {
                 let j_offset = jump_offset(j);
                 for (o, x) in offset_w.iter_mut().zip(&j_offset) {
                     *o += x;
@@ -1122,7 +1126,7 @@ fn diagnose_curve_pass(
                 gap_after: cur.gap(),
                 delta_chi2: before - cur.chi2,
             });
-            if let Some(j) = again.as_ref().filter(|j| !j.sizes.is_empty()) {
+            if let Some(j) = found {
                 effects.push(AddedEffect {
                     params: jump_params(j),
                     gap_after: cur.gap(),

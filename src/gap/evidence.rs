@@ -583,6 +583,7 @@ impl GapEvidence {
             .count()
             .min(block_means.len());
         block_means.drain(..block_first);
+        let (changes, more) = self.lsb.step_changes();
         EvidenceSnapshot {
             tau0_s: tau0,
             n_increments: self.n_increments,
@@ -601,8 +602,8 @@ impl GapEvidence {
                 .lsb
                 .constant()
                 .filter(|_| self.lsb.count() >= self.n_received),
-            step_changes: self.lsb.step_changes().0.to_vec(),
-            step_changes_more: self.lsb.step_changes().1,
+            step_changes: changes.to_vec(),
+            step_changes_more: more,
         }
     }
 }

@@ -185,8 +185,8 @@ fn scan_butterworth(
         &[]
     };
     let mut chosen = (1u32, lc, v);
+    let around = about(lc, dc);
     for &d in decimations {
-        let around = about(lc, dc);
         if let Some((x, vx)) = butterworth_cutoff(prob, fit, order, d, &around, dc) {
             if vx < chosen.2 {
                 chosen = (d, x, vx);

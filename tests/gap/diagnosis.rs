@@ -51,17 +51,23 @@ pub(crate) fn simulate_text(text: &str, tau0: f64, seconds: f64, seed: u64) -> V
     out
 }
 
-/// [`simulate`]`("", seed)` with one step of `size` (u/s) in the rate at `t_step` (s), exact
-/// within the increment it falls in.
+/// [`simulate`]`("", seed)` with one step of `size` (u/s) in the rate at `t_step` (s)
+/// ([`add_step`]).
 fn clean_with_step(seed: u64, t_step: f64, size: f64) -> Vec<f64> {
     let mut inc = simulate("", seed);
+    add_step(&mut inc, t_step, size);
+    inc
+}
+
+/// One step of `size` (u/s) in the rate at `t_step` (s) added to increments at [`TAU0`], exact
+/// within the increment it falls in.
+fn add_step(inc: &mut [f64], t_step: f64, size: f64) {
     for (k, d) in inc.iter_mut().enumerate() {
         let (t0, t1) = (k as f64 * TAU0, (k + 1) as f64 * TAU0);
         if t1 > t_step {
             *d += size * (t1 - t_step.max(t0));
         }
     }
-    inc
 }
 
 /// `inc` diagnosed with the default options, the bookkeeping's rules checked on the result.
@@ -383,12 +389,7 @@ fn a_warmup_beside_a_jump_is_tested_with_the_jump_out() {
     let (t_step, size) = (2000.3, 2.5);
     for seed in [2, 5] {
         let mut inc = simulate("warmup = { amplitude = 3.0, time_constant = 300.0 }", seed);
-        for (k, d) in inc.iter_mut().enumerate() {
-            let (t0, t1) = (k as f64 * TAU0, (k + 1) as f64 * TAU0);
-            if t1 > t_step {
-                *d += size * (t1 - t_step.max(t0));
-            }
-        }
+        add_step(&mut inc, t_step, size);
         let d = diagnosed(&inc);
         let warm = d
             .effects
